@@ -1,0 +1,174 @@
+//! The hybrid-system abstraction every walker implements and every integrator consumes.
+//!
+//! A hybrid system is a set of *modes*; in each mode the state `x ∈ ℝᵈ` follows an autonomous
+//! flow `ẋ = f_m(x)`. Each mode has guards `g_k(x)`; when a guard crosses zero in its stated
+//! direction *and* its admissibility test holds, the integrator stops (`StopReason::Guard`).
+//! The caller then applies the reset map `x⁺ = R_{m,k}(x⁻)` (a separate call) or, for a terminal
+//! guard (a fall), ends the trajectory.
+
+use faer::{MatMut, MatRef};
+
+/// Direction in which a guard function must cross zero to count as an event.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Crossing {
+    /// g goes from negative to non-negative.
+    Rising,
+    /// g goes from positive to non-positive.
+    Falling,
+    /// Either direction.
+    Either,
+}
+
+/// What a guard means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GuardKind {
+    /// An impact or switch: the caller applies [`HybridSystem::reset`] and continues.
+    Reset,
+    /// The trajectory ends here (a fall); the code is a model-defined fall kind.
+    Terminal(u8),
+}
+
+/// Static description of one guard of one mode.
+#[derive(Clone, Copy, Debug)]
+pub struct GuardSpec {
+    /// Short name, e.g. `"heel_strike"`, `"hip_below_ground"`.
+    pub name: &'static str,
+    pub crossing: Crossing,
+    pub kind: GuardKind,
+}
+
+/// A hybrid dynamical system with autonomous flows.
+///
+/// State vectors are plain slices of length [`dim`](HybridSystem::dim). Batched state is a faer
+/// matrix of shape `(lanes × dim)`, one column per state component, lanes contiguous in each
+/// column (use `col_as_slice`; faer pads the column stride).
+pub trait HybridSystem: Send + Sync {
+    /// State dimension d.
+    fn dim(&self) -> usize;
+
+    /// Number of modes (default 1).
+    fn n_modes(&self) -> usize {
+        1
+    }
+
+    /// The guards of `mode`, in a fixed order; guard indices refer to this slice.
+    fn guards(&self, mode: usize) -> &[GuardSpec];
+
+    /// Vector field: `dx = f_mode(x)`.
+    fn flow(&self, mode: usize, x: &[f64], dx: &mut [f64]);
+
+    /// Batched vector field over lanes that are all in `mode`: `x`, `dx` are `(lanes × dim)`.
+    ///
+    /// The default gathers each lane and calls [`flow`](HybridSystem::flow). Models override it
+    /// with a vectorised loop; an override must give, per lane, exactly the same bits as `flow`.
+    fn flow_batch(&self, mode: usize, x: MatRef<'_, f64>, mut dx: MatMut<'_, f64>) {
+        let d = self.dim();
+        let lanes = x.nrows();
+        let mut xi = vec![0.0; d];
+        let mut dxi = vec![0.0; d];
+        for l in 0..lanes {
+            for j in 0..d {
+                xi[j] = x[(l, j)];
+            }
+            self.flow(mode, &xi, &mut dxi);
+            for j in 0..d {
+                dx[(l, j)] = dxi[j];
+            }
+        }
+    }
+
+    /// Value of guard `k` of `mode` at `x`.
+    fn guard(&self, mode: usize, k: usize, x: &[f64]) -> f64;
+
+    /// Whether a crossing of guard `k` at `x` counts (e.g. the simplest walker's heel strike only
+    /// with the swing foot ahead of the stance foot; the mid-stance scuffing crossing does not).
+    fn admissible(&self, _mode: usize, _k: usize, _x: &[f64]) -> bool {
+        true
+    }
+
+    /// Reset map of guard `k` of `mode`: writes `x⁺` into `out`, returns the new mode.
+    /// Only called for guards of kind [`GuardKind::Reset`].
+    fn reset(&self, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize;
+
+    /// Jacobian of the flow, `jac[i*d + j] = ∂f_i/∂x_j` (row-major d×d).
+    ///
+    /// Default: central differences with a step of ε^(1/3)·max(1, |x_j|) (truncation and
+    /// roundoff both ~1e-10 relative). Models with closed-form Jacobians override it.
+    fn flow_jacobian(&self, mode: usize, x: &[f64], jac: &mut [f64]) {
+        let d = self.dim();
+        let mut xp = x.to_vec();
+        let mut fp = vec![0.0; d];
+        let mut fm = vec![0.0; d];
+        for j in 0..d {
+            let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
+            xp[j] = x[j] + h;
+            self.flow(mode, &xp, &mut fp);
+            xp[j] = x[j] - h;
+            self.flow(mode, &xp, &mut fm);
+            xp[j] = x[j];
+            for i in 0..d {
+                jac[i * d + j] = (fp[i] - fm[i]) / (2.0 * h);
+            }
+        }
+    }
+
+    /// Gradient of guard `k`: `grad[j] = ∂g/∂x_j`. Default: central differences.
+    fn guard_gradient(&self, mode: usize, k: usize, x: &[f64], grad: &mut [f64]) {
+        let mut xp = x.to_vec();
+        for j in 0..self.dim() {
+            let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
+            xp[j] = x[j] + h;
+            let gp = self.guard(mode, k, &xp);
+            xp[j] = x[j] - h;
+            let gm = self.guard(mode, k, &xp);
+            xp[j] = x[j];
+            grad[j] = (gp - gm) / (2.0 * h);
+        }
+    }
+
+    /// Jacobian of the reset map of guard `k`, row-major d×d. Default: central differences.
+    fn reset_jacobian(&self, mode: usize, k: usize, x: &[f64], jac: &mut [f64]) {
+        let d = self.dim();
+        let mut xp = x.to_vec();
+        let mut rp = vec![0.0; d];
+        let mut rm = vec![0.0; d];
+        for j in 0..d {
+            let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
+            xp[j] = x[j] + h;
+            self.reset(mode, k, &xp, &mut rp);
+            xp[j] = x[j] - h;
+            self.reset(mode, k, &xp, &mut rm);
+            xp[j] = x[j];
+            for i in 0..d {
+                jac[i * d + j] = (rp[i] - rm[i]) / (2.0 * h);
+            }
+        }
+    }
+}
+
+/// A hybrid system with a Poincaré section: the state just after one designated reset (the
+/// heel strike). A *stride* runs from the section to the next firing of that reset, through
+/// any intermediate resets (e.g. the kneed walker's knee strike).
+pub trait Section: HybridSystem {
+    /// Dimension of the reduced section coordinates.
+    fn section_dim(&self) -> usize;
+
+    /// Names of the reduced coordinates, e.g. `["theta", "thetadot"]`.
+    fn section_names(&self) -> &[&'static str];
+
+    /// Mode in which a stride starts (the mode the section reset leads to).
+    fn section_mode(&self) -> usize;
+
+    /// `(mode, guard)` whose reset ends a stride.
+    fn section_guard(&self) -> (usize, usize);
+
+    /// Full state on the section from reduced coordinates `s` (post-reset state).
+    fn lift(&self, s: &[f64], x: &mut [f64]);
+
+    /// Reduced coordinates of a full post-reset state.
+    fn project(&self, x: &[f64], s: &mut [f64]);
+
+    /// Upper bound on the duration of one stride (model time units); a stride that takes longer
+    /// is a fall of kind "no heel strike in time".
+    fn max_stride_time(&self) -> f64;
+}
