@@ -64,13 +64,20 @@ pub trait HybridSystem: Send + Sync {
     fn flow_batch(&self, mode: usize, x: MatRef<'_, f64>, mut dx: MatMut<'_, f64>) {
         let d = self.dim();
         let lanes = x.nrows();
-        let mut xi = vec![0.0; d];
-        let mut dxi = vec![0.0; d];
+        let (mut sx, mut sdx) = ([0.0; 16], [0.0; 16]);
+        let (mut hx, mut hdx) = (Vec::new(), Vec::new());
+        let (xi, dxi): (&mut [f64], &mut [f64]) = if d <= 16 {
+            (&mut sx[..d], &mut sdx[..d])
+        } else {
+            hx.resize(d, 0.0);
+            hdx.resize(d, 0.0);
+            (&mut hx, &mut hdx)
+        };
         for l in 0..lanes {
             for j in 0..d {
                 xi[j] = x[(l, j)];
             }
-            self.flow(mode, &xi, &mut dxi);
+            self.flow(mode, xi, dxi);
             for j in 0..d {
                 dx[(l, j)] = dxi[j];
             }
@@ -80,10 +87,45 @@ pub trait HybridSystem: Send + Sync {
     /// Value of guard `k` of `mode` at `x`.
     fn guard(&self, mode: usize, k: usize, x: &[f64]) -> f64;
 
+    /// Batched guard values over lanes that are all in `mode`: `x` is `(lanes × dim)`,
+    /// `out[l] = g_k(x_l)` for every lane.
+    ///
+    /// The default gathers each lane and calls [`guard`](HybridSystem::guard). An override must
+    /// give, per lane, exactly the same bits as `guard`.
+    fn guard_batch(&self, mode: usize, k: usize, x: MatRef<'_, f64>, out: &mut [f64]) {
+        let d = self.dim();
+        let mut sx = [0.0; 16];
+        let mut hx = Vec::new();
+        let xi: &mut [f64] = if d <= 16 {
+            &mut sx[..d]
+        } else {
+            hx.resize(d, 0.0);
+            &mut hx
+        };
+        for (l, o) in out.iter_mut().enumerate().take(x.nrows()) {
+            for (j, v) in xi.iter_mut().enumerate() {
+                *v = x[(l, j)];
+            }
+            *o = self.guard(mode, k, xi);
+        }
+    }
+
     /// Whether a crossing of guard `k` at `x` counts (e.g. the simplest walker's heel strike only
     /// with the swing foot ahead of the stance foot; the mid-stance scuffing crossing does not).
     fn admissible(&self, _mode: usize, _k: usize, _x: &[f64]) -> bool {
         true
+    }
+
+    /// Magnitude below which the value of guard `k` at the *start* of an integration counts as
+    /// exactly zero (default `1e-12`, for guards that are O(1) quantities in model units).
+    ///
+    /// A reset typically places the state on a guard surface (the simplest walker's
+    /// `φ − 2θ = 0` right after heel strike), where roundoff leaves the guard a few ulps on
+    /// either side. Counting such a start value as zero means a crossing is only reported after
+    /// the guard has been seen strictly on its pre-crossing side later in the integration, so
+    /// the event just handled cannot fire again at `t₀ + ε`.
+    fn guard_tolerance(&self, _mode: usize, _k: usize) -> f64 {
+        1e-12
     }
 
     /// Reset map of guard `k` of `mode`: writes `x⁺` into `out`, returns the new mode.

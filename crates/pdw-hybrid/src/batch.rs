@@ -1,0 +1,540 @@
+//! Batched lockstep integration over lanes, with lane refill from a queue of work items.
+//!
+//! **Lockstep.** All active lanes make one step attempt together: the stage inputs
+//! `x₀ + h ⊙ Σ a_{qp} k_p` are column kernels over lanes (h is a column: every lane has its own
+//! t, h and controller state), the flow is one [`HybridSystem::flow_batch`] call per mode and
+//! stage, and the error norm is a column kernel. Then every lane, one after another, accepts or
+//! rejects its attempt, locates events on an accepted step, and commits. A lane that stops
+//! (guard, end time, failure) is handed to the [`LaneDriver`]: it applies a reset and continues
+//! the same work item, or finishes it, in which case the lane is refilled with the next item of
+//! the queue, so lanes stay busy until the queue is empty.
+//!
+//! **Modes.** Lanes are kept grouped by mode: the rows of the batch are partitioned into
+//! contiguous ranges, one per mode (plus a last range of idle lanes), and each stage calls
+//! `flow_batch` once per non-empty range on a row-range view. A lane whose mode changes at an
+//! event is moved to its new range by row swaps (an in-place bucket partition, O(lanes) per
+//! lockstep iteration in which some lane changed mode), so no flow is ever evaluated in a mode a
+//! lane is not in and no gather/scatter is needed per stage.
+//!
+//! **Reproducibility.** A lane's arithmetic is the scalar integrator's arithmetic (see the
+//! `engine` module): a work item gives bit-for-bit the same output whichever lane runs it, with
+//! whichever neighbours, for any lane count, chunk size or thread count, and the same as
+//! [`run_scalar`] — provided the model's `flow_batch` agrees with its `flow` bit for bit, as the
+//! trait requires.
+//!
+//! **Memory.** All buffers are allocated once per [`run_batch`] call (sized `lanes × dim`);
+//! the lockstep loop allocates nothing (drivers may, in `start`/`on_stop`/`finish`).
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use faer::{MatMut, MatRef};
+use rayon::prelude::*;
+
+use crate::engine::{self, After, Ctl, LaneScratch, Store};
+use crate::options::{Options, Stats, StopReason};
+use crate::tableau::Tableau;
+use crate::{HybridError, HybridSystem, Integrator};
+
+/// What a lane does after a stop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Control {
+    /// Integrate on in `mode` (the driver has written the post-reset state) until `t_end`.
+    Continue { mode: usize, t_end: f64 },
+    /// The work item is done: [`LaneDriver::finish`] is called and the lane is refilled.
+    Finish,
+}
+
+/// Per-work-item logic of a batched run: initial state, resets, and the result.
+pub trait LaneDriver<S: HybridSystem + ?Sized>: Sync {
+    type Item: Sync;
+    type Output: Send;
+    /// Per-lane bookkeeping owned by the driver (reset to `Default` for every item).
+    type Lane: Send + Default;
+    /// Set up a lane for `item`: write the initial state into x; return (mode, t_end). t starts at 0.
+    fn start(
+        &self,
+        sys: &S,
+        item: &Self::Item,
+        lane: &mut Self::Lane,
+        x: &mut [f64],
+    ) -> (usize, f64);
+    /// Called when the lane stops. The driver may rewrite x (apply a reset) and return
+    /// Control::Continue, or return Control::Finish after which `finish` is called.
+    #[allow(clippy::too_many_arguments)]
+    fn on_stop(
+        &self,
+        sys: &S,
+        item: &Self::Item,
+        lane: &mut Self::Lane,
+        stop: StopReason,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+    ) -> Control;
+    /// Produce the item's result from the final lane state.
+    fn finish(
+        &self,
+        sys: &S,
+        item: &Self::Item,
+        lane: Self::Lane,
+        t: f64,
+        x: &[f64],
+    ) -> Self::Output;
+}
+
+/// Options of a batched run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BatchOptions {
+    /// Lanes stepped in lockstep (the batch never uses more lanes than there are items).
+    pub lanes: usize,
+    pub integrator: Options,
+}
+
+impl BatchOptions {
+    /// Reject invalid options.
+    pub fn validate(&self) -> Result<(), HybridError> {
+        if self.lanes == 0 {
+            return Err(HybridError::NoLanes { lanes: 0 });
+        }
+        self.integrator.validate()
+    }
+}
+
+fn check_mode<S: HybridSystem + ?Sized>(sys: &S, mode: usize) -> Result<(), HybridError> {
+    let n_modes = sys.n_modes();
+    if mode < n_modes {
+        Ok(())
+    } else {
+        Err(HybridError::ModeOutOfRange { mode, n_modes })
+    }
+}
+
+/// Run one work item through the scalar [`Integrator`] (the reference path of [`run_batch`]).
+pub fn run_scalar<S, D>(
+    sys: &S,
+    driver: &D,
+    item: &D::Item,
+    opts: &Options,
+) -> Result<D::Output, HybridError>
+where
+    S: HybridSystem + ?Sized,
+    D: LaneDriver<S>,
+{
+    let mut integ = Integrator::new(sys.dim(), *opts)?;
+    run_scalar_with(&mut integ, sys, driver, item)
+}
+
+/// [`run_scalar`] with a caller-owned integrator (no allocation but the state vector).
+pub fn run_scalar_with<S, D>(
+    integ: &mut Integrator,
+    sys: &S,
+    driver: &D,
+    item: &D::Item,
+) -> Result<D::Output, HybridError>
+where
+    S: HybridSystem + ?Sized,
+    D: LaneDriver<S>,
+{
+    let d = integ.dim();
+    if sys.dim() != d {
+        return Err(HybridError::DimensionMismatch {
+            expected: d,
+            got: sys.dim(),
+        });
+    }
+    let mut lane = D::Lane::default();
+    let mut x = vec![0.0; d];
+    let (mut mode, mut t_end) = driver.start(sys, item, &mut lane, &mut x);
+    let mut t = 0.0;
+    loop {
+        check_mode(sys, mode)?;
+        let stop = integ.integrate(sys, mode, &mut t, &mut x, t_end);
+        match driver.on_stop(sys, item, &mut lane, stop, mode, t, &mut x) {
+            Control::Continue { mode: m, t_end: te } => {
+                mode = m;
+                t_end = te;
+            }
+            Control::Finish => return Ok(driver.finish(sys, item, lane, t, &x)),
+        }
+    }
+}
+
+/// Serial lockstep batch over all items with lane refill; outputs in item order.
+pub fn run_batch<S, D>(
+    sys: &S,
+    driver: &D,
+    items: &[D::Item],
+    opts: &BatchOptions,
+) -> Result<Vec<D::Output>, HybridError>
+where
+    S: HybridSystem + ?Sized,
+    D: LaneDriver<S>,
+{
+    run_batch_counted(sys, driver, items, opts).map(|(out, _)| out)
+}
+
+/// [`run_batch`], also returning the work counters summed over all lanes.
+pub fn run_batch_counted<S, D>(
+    sys: &S,
+    driver: &D,
+    items: &[D::Item],
+    opts: &BatchOptions,
+) -> Result<(Vec<D::Output>, Stats), HybridError>
+where
+    S: HybridSystem + ?Sized,
+    D: LaneDriver<S>,
+{
+    opts.validate()?;
+    let d = sys.dim();
+    if d == 0 {
+        return Err(HybridError::ZeroDimension { dim: 0 });
+    }
+    if items.is_empty() {
+        return Ok((Vec::new(), Stats::default()));
+    }
+    let mut b = Batch::new(sys, driver, items, opts);
+    b.run()?;
+    let stats = b.stats;
+    let mut out = Vec::with_capacity(items.len());
+    for o in b.outputs {
+        // Every item is finished before the loop ends: a lane only goes idle when the queue is
+        // empty, and the loop runs until no lane is active.
+        out.extend(o);
+    }
+    Ok((out, stats))
+}
+
+/// Parallel: split items into fixed chunks (chunk size independent of the thread count), each
+/// chunk a [`run_batch`] on the given rayon pool; `progress(n_done_items)` is called as chunks
+/// finish. Results are identical for any thread count, lane count and chunk size.
+pub fn run_batch_par<S, D>(
+    sys: &S,
+    driver: &D,
+    items: &[D::Item],
+    opts: &BatchOptions,
+    pool: &rayon::ThreadPool,
+    chunk: usize,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<D::Output>, HybridError>
+where
+    S: HybridSystem + ?Sized,
+    D: LaneDriver<S>,
+{
+    if chunk == 0 {
+        return Err(HybridError::ZeroChunk { chunk });
+    }
+    opts.validate()?;
+    let done = AtomicUsize::new(0);
+    let parts: Vec<Result<Vec<D::Output>, HybridError>> = pool.install(|| {
+        items
+            .par_chunks(chunk)
+            .map(|c| {
+                let r = run_batch(sys, driver, c, opts);
+                let n = done.fetch_add(c.len(), Ordering::Relaxed) + c.len();
+                progress(n);
+                r
+            })
+            .collect()
+    });
+    let mut out = Vec::with_capacity(items.len());
+    for p in parts {
+        out.extend(p?);
+    }
+    Ok(out)
+}
+
+/// State of one [`run_batch`] call.
+struct Batch<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> {
+    sys: &'a S,
+    driver: &'a D,
+    items: &'a [D::Item],
+    opts: Options,
+    tab: &'static Tableau,
+    n_modes: usize,
+    st: Store,
+    sc: LaneScratch,
+    /// `(lanes)` driver-facing state vector of the lane being handled.
+    xd: Vec<f64>,
+    /// Per-row controller state.
+    ctl: Vec<Ctl>,
+    /// Per-row driver bookkeeping.
+    lane: Vec<D::Lane>,
+    /// Per-row index of the work item.
+    item_of: Vec<usize>,
+    /// Per-row target range: the lane's mode, or `n_modes` for an idle lane.
+    target: Vec<usize>,
+    /// Row ranges: rows `range[m]..range[m+1]` are in mode m; the last range is idle.
+    range: Vec<usize>,
+    /// Scratch of the partition (`n_modes + 1`).
+    next: Vec<usize>,
+    dirty: bool,
+    next_item: usize,
+    outputs: Vec<Option<D::Output>>,
+    stats: Stats,
+}
+
+impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
+    fn new(sys: &'a S, driver: &'a D, items: &'a [D::Item], opts: &BatchOptions) -> Self {
+        let d = sys.dim();
+        let n_modes = sys.n_modes();
+        let ng = (0..n_modes).map(|m| sys.guards(m).len()).max().unwrap_or(0);
+        let nl = opts.lanes.min(items.len());
+        let tab = engine::tableau_of(opts.integrator.method);
+        Self {
+            sys,
+            driver,
+            items,
+            opts: opts.integrator,
+            tab,
+            n_modes,
+            st: Store::new(d, nl, ng, tab),
+            sc: LaneScratch::new(d, ng),
+            xd: vec![0.0; d],
+            ctl: vec![Ctl::default(); nl],
+            lane: (0..nl).map(|_| D::Lane::default()).collect(),
+            item_of: vec![usize::MAX; nl],
+            target: vec![n_modes; nl],
+            range: vec![0; n_modes + 2],
+            next: vec![0; n_modes + 1],
+            dirty: true,
+            next_item: 0,
+            outputs: (0..items.len()).map(|_| None).collect(),
+            stats: Stats::default(),
+        }
+    }
+
+    fn run(&mut self) -> Result<(), HybridError> {
+        let nl = self.st.lanes;
+        for l in 0..nl {
+            if let Some(r) = self.assign(l)? {
+                self.handle_stop(l, r)?;
+            }
+        }
+        self.partition();
+        let stride = self.st.stride;
+        let d = self.st.dim;
+        let blk = self.st.blk();
+        let n_stages = self.tab.n_stages;
+        loop {
+            // Next step size of every active lane; lanes that cannot step are stopped here.
+            let n_active = self.range[self.n_modes];
+            for l in 0..n_active {
+                loop {
+                    if self.target[l] == self.n_modes {
+                        self.st.h[l] = 0.0;
+                        break;
+                    }
+                    match engine::prepare(&self.opts, &mut self.ctl[l]) {
+                        Ok(h) => {
+                            self.st.h[l] = h;
+                            break;
+                        }
+                        Err(r) => self.handle_stop(l, r)?,
+                    }
+                }
+            }
+            if self.dirty {
+                self.partition();
+            }
+            let n_active = self.range[self.n_modes];
+            if n_active == 0 {
+                break;
+            }
+            // Stages: column kernels over all active lanes, one flow_batch per mode range.
+            for q in 1..n_stages {
+                engine::stage_input(&mut self.st, self.tab, n_active, q);
+                let st = &mut self.st;
+                let input: &[f64] = if q + 1 == n_stages { &st.xn } else { &st.y };
+                let kq = &mut st.k[q * blk..(q + 1) * blk];
+                for m in 0..self.n_modes {
+                    let (a, b) = (self.range[m], self.range[m + 1]);
+                    if b > a {
+                        let xv = MatRef::from_column_major_slice_with_stride(
+                            &input[a..],
+                            b - a,
+                            d,
+                            stride,
+                        );
+                        let kv = MatMut::from_column_major_slice_with_stride_mut(
+                            &mut kq[a..],
+                            b - a,
+                            d,
+                            stride,
+                        );
+                        self.sys.flow_batch(m, xv, kv);
+                    }
+                }
+            }
+            engine::error_norm(
+                &mut self.st,
+                self.opts.method,
+                self.tab,
+                &self.opts,
+                n_active,
+            );
+            // Guard values at the Hermite samples and at x₁: one guard_batch per mode range.
+            let m_cols = crate::event::N_COLS;
+            for i in 1..m_cols {
+                if i + 1 < m_cols {
+                    engine::hermite_sample(&mut self.st, self.tab, n_active, i);
+                }
+                let Store { y, xn, gs, .. } = &mut self.st;
+                let src: &[f64] = if i + 1 < m_cols { y } else { xn };
+                for m in 0..self.n_modes {
+                    let (a, b) = (self.range[m], self.range[m + 1]);
+                    if b > a {
+                        let xv = MatRef::from_column_major_slice_with_stride(
+                            &src[a..],
+                            b - a,
+                            d,
+                            stride,
+                        );
+                        for k in 0..self.sys.guards(m).len() {
+                            let col = (k * m_cols + i) * stride;
+                            self.sys.guard_batch(m, k, xv, &mut gs[col + a..col + b]);
+                        }
+                    }
+                }
+            }
+            // Per-lane accept/reject, events, commit; stopped lanes go to the driver.
+            for l in 0..n_active {
+                let r = engine::after_attempt(
+                    self.sys,
+                    self.opts.method,
+                    self.tab,
+                    &self.opts,
+                    &mut self.st,
+                    l,
+                    &mut self.ctl[l],
+                    &mut self.sc,
+                );
+                if let After::Stop(r) = r {
+                    self.handle_stop(l, r)?;
+                }
+            }
+        }
+        for c in &self.ctl {
+            self.stats += c.stats;
+        }
+        Ok(())
+    }
+
+    /// Put the next item of the queue into lane `l` and start its first segment; `Ok(None)` if
+    /// the queue is empty (the lane becomes idle) or the segment started.
+    fn assign(&mut self, l: usize) -> Result<Option<StopReason>, HybridError> {
+        if self.next_item >= self.items.len() {
+            self.set_target(l, self.n_modes);
+            return Ok(None);
+        }
+        let i = self.next_item;
+        self.next_item += 1;
+        self.item_of[l] = i;
+        self.lane[l] = D::Lane::default();
+        self.xd.fill(0.0);
+        let (mode, t_end) =
+            self.driver
+                .start(self.sys, &self.items[i], &mut self.lane[l], &mut self.xd);
+        self.begin(l, mode, 0.0, t_end)
+    }
+
+    /// Write the driver's state into lane `l` and start a segment there.
+    fn begin(
+        &mut self,
+        l: usize,
+        mode: usize,
+        t: f64,
+        t_end: f64,
+    ) -> Result<Option<StopReason>, HybridError> {
+        check_mode(self.sys, mode)?;
+        let stride = self.st.stride;
+        Store::scatter(&mut self.st.x, stride, l, &self.xd);
+        self.set_target(l, mode);
+        Ok(engine::start_segment(
+            self.sys,
+            &self.opts,
+            self.tab,
+            &mut self.st,
+            l,
+            &mut self.ctl[l],
+            mode,
+            t,
+            t_end,
+            &mut self.sc,
+        ))
+    }
+
+    fn set_target(&mut self, l: usize, b: usize) {
+        if self.target[l] != b {
+            self.target[l] = b;
+            self.dirty = true;
+        }
+    }
+
+    /// Hand a stopped lane to the driver until it is running again or idle.
+    fn handle_stop(&mut self, l: usize, mut reason: StopReason) -> Result<(), HybridError> {
+        let stride = self.st.stride;
+        loop {
+            Store::gather(&self.st.x, stride, l, &mut self.xd);
+            let i = self.item_of[l];
+            let (mode, t) = (self.ctl[l].mode, self.ctl[l].t);
+            let item = &self.items[i];
+            let ctrl = self.driver.on_stop(
+                self.sys,
+                item,
+                &mut self.lane[l],
+                reason,
+                mode,
+                t,
+                &mut self.xd,
+            );
+            let next = match ctrl {
+                Control::Continue { mode, t_end } => self.begin(l, mode, t, t_end)?,
+                Control::Finish => {
+                    let lane = std::mem::take(&mut self.lane[l]);
+                    self.outputs[i] = Some(self.driver.finish(self.sys, item, lane, t, &self.xd));
+                    self.assign(l)?
+                }
+            };
+            match next {
+                None => return Ok(()),
+                Some(r) => reason = r,
+            }
+        }
+    }
+
+    /// Regroup rows by target range (in-place bucket partition by row swaps).
+    fn partition(&mut self) {
+        let nb = self.n_modes + 1;
+        self.range.fill(0);
+        for &t in &self.target {
+            self.range[t + 1] += 1;
+        }
+        for b in 0..nb {
+            self.range[b + 1] += self.range[b];
+        }
+        self.next.copy_from_slice(&self.range[..nb]);
+        for b in 0..nb {
+            while self.next[b] < self.range[b + 1] {
+                let r = self.next[b];
+                let tb = self.target[r];
+                if tb == b {
+                    self.next[b] += 1;
+                } else {
+                    let dst = self.next[tb];
+                    self.swap_rows(r, dst);
+                    self.next[tb] += 1;
+                }
+            }
+        }
+        self.dirty = false;
+    }
+
+    fn swap_rows(&mut self, a: usize, b: usize) {
+        self.st.swap_lanes(a, b);
+        self.st.h.swap(a, b);
+        self.ctl.swap(a, b);
+        self.lane.swap(a, b);
+        self.item_of.swap(a, b);
+        self.target.swap(a, b);
+    }
+}

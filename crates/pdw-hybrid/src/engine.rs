@@ -1,0 +1,746 @@
+//! The step machinery shared by the scalar [`Integrator`](crate::Integrator) and the batched
+//! lockstep runner: storage, the column kernels of one step attempt, and the per-lane decisions.
+//!
+//! Storage is structure-of-arrays: a block of shape `(lanes × dim)` is a column-major `Vec<f64>`
+//! with column stride `stride ≥ lanes` (component `j` of lane `l` at `j·stride + l`). The scalar
+//! integrator is the same storage with one lane and stride 1, so that *every* arithmetic
+//! operation a lane sees — stage sums, error norm, step-size control, dense output, event
+//! location — is the same code on the same operands in both paths, and the results are equal bit
+//! for bit (Rust never contracts `a·b + c` into an FMA, so a vectorised loop over lanes rounds
+//! exactly as the scalar loop). A one-lane call (`n = 1`) takes a branch with compile-time stage
+//! rows that performs the same operations in the same order (the batch tests compare both
+//! branches bit for bit). The only other difference is the model call: `flow_batch` and
+//! `guard_batch` in the batch, `flow` and `guard` in the scalar path, which
+//! [`HybridSystem::flow_batch`] and [`HybridSystem::guard_batch`] require to agree bit for bit.
+//! Flow evaluations that concern a single lane (`f(x₀)` at a segment start, the starting-step
+//! trial, DOP853's three dense-output stages) use `flow` in both paths.
+
+// `!(a > b)` is deliberate throughout: it is also true when an operand is NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use crate::event::{self, EventScratch};
+use crate::options::{Method, Options, Stats, StopReason};
+use crate::tableau::{self, Tableau};
+use crate::HybridSystem;
+
+/// The tableau of a method.
+pub(crate) fn tableau_of(method: Method) -> &'static Tableau {
+    match method {
+        Method::Rk4 { .. } => &tableau::RK4,
+        Method::Dopri5 => &tableau::DOPRI5,
+        Method::Dop853 => &tableau::DOP853,
+    }
+}
+
+/// Lane-major block storage for one batch (or one scalar integrator: `lanes = stride = 1`).
+pub(crate) struct Store {
+    pub dim: usize,
+    pub lanes: usize,
+    pub stride: usize,
+    /// Largest number of guards of any mode.
+    pub ng: usize,
+    /// `(lanes × dim)` current accepted state x₀; filled at segment start and on acceptance.
+    pub x: Vec<f64>,
+    /// `(lanes × dim)` input of the current stage.
+    pub y: Vec<f64>,
+    /// `(lanes × dim)` proposed new state x₁ (input of the last stage).
+    pub xn: Vec<f64>,
+    /// `n_stages` blocks of `(lanes × dim)`: stage derivatives. Block 0 is `f(x₀)` (persists
+    /// across steps), the last block is `f(x₁)`.
+    pub k: Vec<f64>,
+    /// `(lanes × ng)` guard values at x₀ (zero band applied at segment start), used as the left
+    /// end of the next step's crossing scan.
+    pub g: Vec<f64>,
+    /// `(lanes × ng·(N_SAMPLES + 2))` guard values of the attempt at θ = i/(N_SAMPLES + 1):
+    /// column `k·(N_SAMPLES + 2) + i` for i = 1..=N_SAMPLES (Hermite samples) and
+    /// i = N_SAMPLES + 1 (x₁); column i = 0 is unused (the left values are in `g`).
+    pub gs: Vec<f64>,
+    /// `(lanes)` step of the current attempt.
+    pub h: Vec<f64>,
+    /// `(lanes)` error norm of the current attempt (0 or NaN for RK4: a finiteness check).
+    pub err: Vec<f64>,
+    /// `(lanes)` scratch columns for the error kernels.
+    pub s1: Vec<f64>,
+    pub s2: Vec<f64>,
+    pub s3: Vec<f64>,
+}
+
+impl Store {
+    pub fn new(dim: usize, lanes: usize, ng: usize, tab: &Tableau) -> Self {
+        let stride = lanes;
+        let blk = dim * stride;
+        Self {
+            dim,
+            lanes,
+            stride,
+            ng,
+            x: vec![0.0; blk],
+            y: vec![0.0; blk],
+            xn: vec![0.0; blk],
+            k: vec![0.0; blk * tab.n_stages],
+            g: vec![0.0; ng * stride],
+            gs: vec![0.0; ng * event::N_COLS * stride],
+            h: vec![0.0; lanes],
+            err: vec![0.0; lanes],
+            s1: vec![0.0; lanes],
+            s2: vec![0.0; lanes],
+            s3: vec![0.0; lanes],
+        }
+    }
+
+    /// Size of one `(lanes × dim)` block.
+    #[inline]
+    pub fn blk(&self) -> usize {
+        self.dim * self.stride
+    }
+
+    /// Copy lane `l` of a block into a contiguous vector.
+    #[inline]
+    pub fn gather(block: &[f64], stride: usize, l: usize, out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = block[j * stride + l];
+        }
+    }
+
+    /// Write a contiguous vector into lane `l` of a block.
+    #[inline]
+    pub fn scatter(block: &mut [f64], stride: usize, l: usize, v: &[f64]) {
+        for (j, &vj) in v.iter().enumerate() {
+            block[j * stride + l] = vj;
+        }
+    }
+
+    /// Exchange two lanes in every persistent block (x, f(x), guard values).
+    pub fn swap_lanes(&mut self, a: usize, b: usize) {
+        let s = self.stride;
+        for j in 0..self.dim {
+            self.x.swap(j * s + a, j * s + b);
+            self.k.swap(j * s + a, j * s + b);
+        }
+        for k in 0..self.ng {
+            self.g.swap(k * s + a, k * s + b);
+        }
+    }
+}
+
+/// 0 for a finite value, NaN for ±∞ or NaN: added to an error sum it flags non-finite states.
+#[inline(always)]
+#[allow(clippy::eq_op)]
+fn poison(v: f64) -> f64 {
+    v - v
+}
+
+// ---------------------------------------------------------------------------------------------
+// Column kernels over lanes 0..n. Loops run lanes innermost over contiguous column slices.
+// ---------------------------------------------------------------------------------------------
+
+/// `acc = 0 + Σ_q w_q k_q` over the nonzero weights, in increasing q, for column `off` of every
+/// stage block, lanes `0..n`.
+#[inline]
+fn weighted_sum(n: usize, k: &[f64], blk: usize, off: usize, w: &[f64], acc: &mut [f64]) {
+    let acc = &mut acc[..n];
+    acc.fill(0.0);
+    for (q, &wq) in w.iter().enumerate() {
+        if wq == 0.0 {
+            continue;
+        }
+        let kq = &k[q * blk + off..q * blk + off + n];
+        for (a, &kv) in acc.iter_mut().zip(kq) {
+            *a += wq * kv;
+        }
+    }
+}
+
+/// One lane of [`weighted_sum`]: the same terms, skipped and ordered identically.
+#[inline(always)]
+fn lane_sum(k: &[f64], blk: usize, off: usize, w: &[f64]) -> f64 {
+    let mut acc = 0.0;
+    for (q, &wq) in w.iter().enumerate() {
+        if wq != 0.0 {
+            acc += wq * k[q * blk + off];
+        }
+    }
+    acc
+}
+
+/// The method a tableau belongs to (for the one-lane dispatch).
+#[inline]
+fn method_of(tab: &Tableau) -> Method {
+    match tab.n_stages {
+        5 => Method::Rk4 { h: 0.0 },
+        7 => Method::Dopri5,
+        _ => Method::Dop853,
+    }
+}
+
+/// One lane of [`stage_input`] with a compile-time row `w` (lets the compiler unroll the sum
+/// and drop the zero weights; the surviving operations and their order are unchanged).
+#[inline(always)]
+fn one_lane_row(st: &mut Store, last: bool, w: &[f64]) {
+    let (blk, stride, h) = (st.blk(), st.stride, st.h[0]);
+    for j in 0..st.dim {
+        let off = j * stride;
+        let v = st.x[off] + h * lane_sum(&st.k, blk, off, w);
+        if last {
+            st.xn[off] = v;
+        } else {
+            st.y[off] = v;
+        }
+    }
+}
+
+/// [`stage_input`] for one lane, dispatched to constant rows.
+fn stage_input_one(st: &mut Store, method: Method, q: usize) {
+    use tableau::*;
+    match (method, q) {
+        (Method::Rk4 { .. }, 1) => one_lane_row(st, false, &RK4_A1),
+        (Method::Rk4 { .. }, 2) => one_lane_row(st, false, &RK4_A2),
+        (Method::Rk4 { .. }, 3) => one_lane_row(st, false, &RK4_A3),
+        (Method::Rk4 { .. }, _) => one_lane_row(st, true, &RK4_A4),
+        (Method::Dopri5, 1) => one_lane_row(st, false, &DP5_A1),
+        (Method::Dopri5, 2) => one_lane_row(st, false, &DP5_A2),
+        (Method::Dopri5, 3) => one_lane_row(st, false, &DP5_A3),
+        (Method::Dopri5, 4) => one_lane_row(st, false, &DP5_A4),
+        (Method::Dopri5, 5) => one_lane_row(st, false, &DP5_A5),
+        (Method::Dopri5, _) => one_lane_row(st, true, &DP5_A6),
+        (Method::Dop853, 1) => one_lane_row(st, false, &DOP_A1),
+        (Method::Dop853, 2) => one_lane_row(st, false, &DOP_A2),
+        (Method::Dop853, 3) => one_lane_row(st, false, &DOP_A3),
+        (Method::Dop853, 4) => one_lane_row(st, false, &DOP_A4),
+        (Method::Dop853, 5) => one_lane_row(st, false, &DOP_A5),
+        (Method::Dop853, 6) => one_lane_row(st, false, &DOP_A6),
+        (Method::Dop853, 7) => one_lane_row(st, false, &DOP_A7),
+        (Method::Dop853, 8) => one_lane_row(st, false, &DOP_A8),
+        (Method::Dop853, 9) => one_lane_row(st, false, &DOP_A9),
+        (Method::Dop853, 10) => one_lane_row(st, false, &DOP_A10),
+        (Method::Dop853, 11) => one_lane_row(st, false, &DOP_A11),
+        (Method::Dop853, _) => one_lane_row(st, true, &DOP_A12),
+    }
+}
+
+/// Input of stage `q ≥ 1`: `x₀ + h ⊙ Σ_p a_{qp} k_p`, written to `y`, or to `xn` for the last
+/// stage (whose row is b, so that the input is x₁).
+pub(crate) fn stage_input(st: &mut Store, tab: &Tableau, n: usize, q: usize) {
+    let blk = st.blk();
+    let stride = st.stride;
+    let a = tab.a[q];
+    let last = q + 1 == tab.n_stages;
+    if n == 1 {
+        stage_input_one(st, method_of(tab), q);
+        return;
+    }
+    for j in 0..st.dim {
+        let off = j * stride;
+        weighted_sum(n, &st.k, blk, off, a, &mut st.s1);
+        let x = &st.x[off..off + n];
+        let out = if last { &mut st.xn } else { &mut st.y };
+        let out = &mut out[off..off + n];
+        let h = &st.h[..n];
+        let acc = &st.s1[..n];
+        for l in 0..n {
+            out[l] = x[l] + h[l] * acc[l];
+        }
+    }
+}
+
+/// Per-lane error norm of the attempt into `st.err` (HNW I, eq. II.4.11, weights
+/// `sk = atol + rtol·max(|x₀|, |x₁|)`):
+/// - DOPRI5: `err = √(1/d · Σ_i (h·Σ_q e_q k_{q,i} / sk_i)²)`;
+/// - DOP853: the stretched combination of the 5th- and 3rd-order estimates of the code DOP853
+///   (HNW I §II.10): `err = |h|·E₅ / √(d·(E₅ + 0.01·E₃))` with `E₅ = Σ (err5_i/sk_i)²`,
+///   `E₃ = Σ (err3_i/sk_i)²`;
+/// - RK4: 0.
+///
+/// In every method a non-finite x₁ or f(x₁) makes the norm NaN (`v − v` is 0 for finite v).
+pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &Options, n: usize) {
+    let blk = st.blk();
+    let stride = st.stride;
+    let dim = st.dim;
+    let last = tab.n_stages - 1;
+    let (rtol, atol) = (opts.rtol, opts.atol);
+    if n == 1 {
+        st.err[0] = error_norm_one(st, method, opts);
+        controller_power(st, tab, 1);
+        return;
+    }
+    st.err[..n].fill(0.0);
+    st.s3[..n].fill(0.0);
+    for j in 0..dim {
+        let off = j * stride;
+        match method {
+            Method::Rk4 { .. } => {}
+            Method::Dopri5 => weighted_sum(n, &st.k, blk, off, &tableau::DOPRI5_E, &mut st.s1),
+            Method::Dop853 => {
+                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_ER, &mut st.s1);
+                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_B, &mut st.s2);
+            }
+        }
+        let x0 = &st.x[off..off + n];
+        let x1 = &st.xn[off..off + n];
+        let f1 = &st.k[last * blk + off..last * blk + off + n];
+        let h = &st.h[..n];
+        let e = &st.s1[..n];
+        let acc = &mut st.err[..n];
+        match method {
+            Method::Rk4 { .. } => {
+                for l in 0..n {
+                    acc[l] += poison(x1[l]) + poison(f1[l]);
+                }
+            }
+            Method::Dopri5 => {
+                for l in 0..n {
+                    let sk = atol + rtol * x0[l].abs().max(x1[l].abs());
+                    let r = h[l] * e[l] / sk;
+                    acc[l] += r * r + poison(x1[l]) + poison(f1[l]);
+                }
+            }
+            Method::Dop853 => {
+                let [b1, b9, b12] = tableau::DOP853_BHH;
+                let k0 = &st.k[off..off + n];
+                let k8 = &st.k[8 * blk + off..8 * blk + off + n];
+                let k11 = &st.k[11 * blk + off..11 * blk + off + n];
+                let bs = &st.s2[..n];
+                let acc3 = &mut st.s3[..n];
+                for l in 0..n {
+                    let sk = atol + rtol * x0[l].abs().max(x1[l].abs());
+                    let e3 = bs[l] - b1 * k0[l] - b9 * k8[l] - b12 * k11[l];
+                    let r5 = e[l] / sk;
+                    let r3 = e3 / sk;
+                    acc[l] += r5 * r5 + poison(x1[l]) + poison(f1[l]);
+                    acc3[l] += r3 * r3;
+                }
+            }
+        }
+    }
+    match method {
+        Method::Rk4 { .. } => {}
+        Method::Dopri5 => {
+            let inv_d = 1.0 / dim as f64;
+            for e in &mut st.err[..n] {
+                *e = (*e * inv_d).sqrt();
+            }
+        }
+        Method::Dop853 => {
+            let d = dim as f64;
+            let (err, e3) = (&mut st.err[..n], &st.s3[..n]);
+            let h = &st.h[..n];
+            for l in 0..n {
+                let e5 = err[l];
+                let mut deno = e5 + 0.01 * e3[l];
+                if deno <= 0.0 {
+                    deno = 1.0;
+                }
+                err[l] = h[l].abs() * e5 * (1.0 / (d * deno)).sqrt();
+            }
+        }
+    }
+    controller_power(st, tab, n);
+}
+
+/// [`error_norm`] for a single lane (lane 0): the same operations in the same order.
+fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
+    let blk = st.blk();
+    let stride = st.stride;
+    let dim = st.dim;
+    let last = engine_last(method);
+    let (rtol, atol) = (opts.rtol, opts.atol);
+    let h = st.h[0];
+    let mut acc = 0.0;
+    let mut acc3 = 0.0;
+    for j in 0..dim {
+        let off = j * stride;
+        let (x0, x1, f1) = (st.x[off], st.xn[off], st.k[last * blk + off]);
+        match method {
+            Method::Rk4 { .. } => {
+                acc += poison(x1) + poison(f1);
+            }
+            Method::Dopri5 => {
+                let e = lane_sum(&st.k, blk, off, &tableau::DOPRI5_E);
+                let sk = atol + rtol * x0.abs().max(x1.abs());
+                let r = h * e / sk;
+                acc += r * r + poison(x1) + poison(f1);
+            }
+            Method::Dop853 => {
+                let [b1, b9, b12] = tableau::DOP853_BHH;
+                let e = lane_sum(&st.k, blk, off, &tableau::DOP853_ER);
+                let bs = lane_sum(&st.k, blk, off, &tableau::DOP853_B);
+                let sk = atol + rtol * x0.abs().max(x1.abs());
+                let e3 =
+                    bs - b1 * st.k[off] - b9 * st.k[8 * blk + off] - b12 * st.k[11 * blk + off];
+                let r5 = e / sk;
+                let r3 = e3 / sk;
+                acc += r5 * r5 + poison(x1) + poison(f1);
+                acc3 += r3 * r3;
+            }
+        }
+    }
+    match method {
+        Method::Rk4 { .. } => acc,
+        Method::Dopri5 => {
+            let inv_d = 1.0 / dim as f64;
+            (acc * inv_d).sqrt()
+        }
+        Method::Dop853 => {
+            let d = dim as f64;
+            let mut deno = acc + 0.01 * acc3;
+            if deno <= 0.0 {
+                deno = 1.0;
+            }
+            h.abs() * acc * (1.0 / (d * deno)).sqrt()
+        }
+    }
+}
+
+/// Index of the `f(x₁)` block.
+#[inline]
+fn engine_last(method: Method) -> usize {
+    tableau_of(method).n_stages - 1
+}
+
+/// `err^α` of every lane into `st.s2` (the controller's `fac11`; HNW I eq. II.4.13), as a column
+/// kernel so that it vectorises; α = 1/8 (DOP853) as three square roots.
+pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
+    let (err, out) = (&st.err[..n], &mut st.s2[..n]);
+    if tab.alpha == 0.125 {
+        for l in 0..n {
+            out[l] = err[l].sqrt().sqrt().sqrt();
+        }
+    } else if tab.alpha != 0.0 {
+        for l in 0..n {
+            out[l] = err[l].powf(tab.alpha);
+        }
+    }
+}
+
+/// Cubic Hermite sample `i` (θ = i/(N_SAMPLES + 1)) of the attempt into `st.y`, lanes `0..n`:
+/// `x(θ) = c₀₀ x₀ + c₀₁ x₁ + h (c₁₀ f₀ + c₁₁ f₁)` with the Hermite basis
+/// `c₀₀ = (1+2θ)(1−θ)²`, `c₀₁ = θ²(3−2θ)`, `c₁₀ = θ(1−θ)²`, `c₁₁ = −θ²(1−θ)` (HNW I, II.6).
+pub(crate) fn hermite_sample(st: &mut Store, tab: &Tableau, n: usize, i: usize) {
+    let theta = i as f64 / (event::N_SAMPLES + 1) as f64;
+    let c = event::hermite_basis(theta);
+    let blk = st.blk();
+    let stride = st.stride;
+    let last = tab.n_stages - 1;
+    for j in 0..st.dim {
+        let off = j * stride;
+        let x0 = &st.x[off..off + n];
+        let x1 = &st.xn[off..off + n];
+        let f0 = &st.k[off..off + n];
+        let f1 = &st.k[last * blk + off..last * blk + off + n];
+        let h = &st.h[..n];
+        let y = &mut st.y[off..off + n];
+        for l in 0..n {
+            y[l] = event::hermite_point(c, x0[l], x1[l], f0[l], f1[l], h[l]);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Per-lane control.
+// ---------------------------------------------------------------------------------------------
+
+/// Control state of one lane's current integration segment.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Ctl {
+    pub t: f64,
+    pub t_end: f64,
+    pub mode: usize,
+    /// Step to attempt next (before clipping to `t_end`).
+    pub h: f64,
+    /// Step of the attempt in flight.
+    pub h_used: f64,
+    /// The attempt in flight ends exactly at `t_end`.
+    pub last: bool,
+    /// Previous accepted error norm (PI controller memory, HNW's `facold`).
+    pub facold: f64,
+    /// The previous attempt was rejected (then h may not grow: HNW II.4).
+    pub rejected: bool,
+    /// The previous rejection was caused by non-finite values.
+    pub nonfinite: bool,
+    /// Step attempts in this segment.
+    pub attempts: usize,
+    pub stats: Stats,
+}
+
+/// Outcome of one attempt for one lane.
+pub(crate) enum After {
+    Rejected,
+    Accepted,
+    Stop(StopReason),
+}
+
+/// Per-lane contiguous scratch (one set per batch: lanes are processed one after another here).
+pub(crate) struct LaneScratch {
+    pub xg: Vec<f64>,
+    pub fg: Vec<f64>,
+    pub ytmp: Vec<f64>,
+    pub ev: EventScratch,
+}
+
+impl LaneScratch {
+    pub fn new(dim: usize, ng: usize) -> Self {
+        Self {
+            xg: vec![0.0; dim],
+            fg: vec![0.0; dim],
+            ytmp: vec![0.0; dim],
+            ev: EventScratch::new(dim, ng),
+        }
+    }
+}
+
+/// Start a segment for lane `l` whose state is already in `st.x`: evaluate `f(x₀)` into block 0,
+/// choose the first step, and record the guard values at x₀. A guard value with
+/// `|g| ≤ guard_tolerance` is stored as exactly 0: a crossing then needs the guard to be seen
+/// strictly on its pre-crossing side at a later point first, so that a state placed on a guard
+/// surface by a reset (with roundoff on either side) cannot re-trigger the same event.
+///
+/// Returns a stop reason when the segment cannot start: `NonFinite` if t is not finite,
+/// `EndTime` if `t_end ≤ t` (or NaN), `NonFinite` if x₀ or f(x₀) is not finite.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
+    sys: &S,
+    opts: &Options,
+    tab: &Tableau,
+    st: &mut Store,
+    l: usize,
+    ctl: &mut Ctl,
+    mode: usize,
+    t: f64,
+    t_end: f64,
+    sc: &mut LaneScratch,
+) -> Option<StopReason> {
+    *ctl = Ctl {
+        t,
+        t_end,
+        mode,
+        facold: 1e-4,
+        stats: ctl.stats,
+        ..Ctl::default()
+    };
+    if !t.is_finite() {
+        return Some(StopReason::NonFinite);
+    }
+    if !(t_end > t) {
+        return Some(StopReason::EndTime);
+    }
+    let stride = st.stride;
+    Store::gather(&st.x, stride, l, &mut sc.xg);
+    if !sc.xg.iter().all(|v| v.is_finite()) {
+        return Some(StopReason::NonFinite);
+    }
+    sys.flow(mode, &sc.xg, &mut sc.fg);
+    ctl.stats.rhs_evals += 1;
+    Store::scatter(&mut st.k, stride, l, &sc.fg);
+    if !sc.fg.iter().all(|v| v.is_finite()) {
+        return Some(StopReason::NonFinite);
+    }
+    let h = match opts.method {
+        Method::Rk4 { h } => h,
+        _ => match opts.h_init {
+            Some(h) => h,
+            None => initial_step(sys, mode, tab, opts, ctl, sc),
+        },
+    };
+    ctl.h = h.min(opts.h_max);
+    let ng = sys.guards(mode).len();
+    for k in 0..ng {
+        let g = sys.guard(mode, k, &sc.xg);
+        st.g[k * stride + l] = if g.abs() <= sys.guard_tolerance(mode, k) {
+            0.0
+        } else {
+            g
+        };
+    }
+    None
+}
+
+/// Starting step (HNW I, §II.4, "starting step size", in the form of the codes DOPRI5/DOP853):
+/// `h₀ = 0.01·‖x₀‖/‖f₀‖` (or 10⁻⁶), one explicit Euler step to estimate ‖f'‖ ≈ ‖f(x₀+h₀f₀) − f₀‖/h₀,
+/// `h₁ = (0.01/max(‖f₀‖, ‖f'‖))^{1/p}`, `h = min(100·h₀, h₁, h_max)`; norms weighted by
+/// `atol + rtol·|x₀ᵢ|`. Reads x₀ from `sc.xg` and f₀ from `sc.fg`; one flow evaluation.
+fn initial_step<S: HybridSystem + ?Sized>(
+    sys: &S,
+    mode: usize,
+    tab: &Tableau,
+    opts: &Options,
+    ctl: &mut Ctl,
+    sc: &mut LaneScratch,
+) -> f64 {
+    let (rtol, atol) = (opts.rtol, opts.atol);
+    let (mut dnf, mut dny) = (0.0, 0.0);
+    for (&x, &f) in sc.xg.iter().zip(&sc.fg) {
+        let sk = atol + rtol * x.abs();
+        dnf += (f / sk) * (f / sk);
+        dny += (x / sk) * (x / sk);
+    }
+    let mut h = if dnf <= 1e-10 || dny <= 1e-10 {
+        1e-6
+    } else {
+        (dny / dnf).sqrt() * 0.01
+    };
+    h = h.min(opts.h_max).min(ctl.t_end - ctl.t);
+    for ((y, &x), &f) in sc.ytmp.iter_mut().zip(&sc.xg).zip(&sc.fg) {
+        *y = x + h * f;
+    }
+    let mut f1 = std::mem::take(&mut sc.ev.f1);
+    sys.flow(mode, &sc.ytmp, &mut f1);
+    ctl.stats.rhs_evals += 1;
+    let mut der2 = 0.0;
+    for ((&a, &b), &x) in f1.iter().zip(&sc.fg).zip(&sc.xg) {
+        let sk = atol + rtol * x.abs();
+        der2 += ((a - b) / sk) * ((a - b) / sk);
+    }
+    sc.ev.f1 = f1;
+    let der2 = der2.sqrt() / h;
+    // f64::max ignores a NaN operand: a non-finite trial derivative falls back on ‖f₀‖.
+    let der12 = der2.max(dnf.sqrt());
+    let h1 = if der12 <= 1e-15 {
+        (h * 1e-3).max(1e-6)
+    } else {
+        (0.01 / der12).powf(1.0 / tab.hinit_order)
+    };
+    let h = (100.0 * h).min(h1).min(opts.h_max);
+    if h.is_finite() && h > 0.0 {
+        h
+    } else {
+        1e-6
+    }
+}
+
+/// Step for the next attempt of a lane, or the reason it cannot continue (`MaxSteps`;
+/// `StepTooSmall`/`NonFinite` when `h < h_min` or `0.1·h ≤ ε·|t|`, HNW's criterion). The last
+/// step is stretched to land exactly on `t_end` when `t + 1.01·h ≥ t_end` (as in DOPRI5).
+#[inline]
+pub(crate) fn prepare(opts: &Options, ctl: &mut Ctl) -> Result<f64, StopReason> {
+    if ctl.attempts >= opts.max_steps {
+        return Err(StopReason::MaxSteps);
+    }
+    let h = ctl.h;
+    if !(h > 0.0) || h < opts.h_min || 0.1 * h <= f64::EPSILON * ctl.t.abs() {
+        return Err(if ctl.nonfinite {
+            StopReason::NonFinite
+        } else {
+            StopReason::StepTooSmall
+        });
+    }
+    if ctl.t + 1.01 * h >= ctl.t_end {
+        ctl.h_used = ctl.t_end - ctl.t;
+        ctl.last = true;
+    } else {
+        ctl.h_used = h;
+        ctl.last = false;
+    }
+    Ok(ctl.h_used)
+}
+
+/// Accept or reject an attempt with error norm `err` and choose the next step (HNW I,
+/// eq. II.4.13 with the PI stabilisation `fac = err^α / facold^β`, safety factor, clamps
+/// `h_new/h ∈ [fac_min, fac_max]`, and no growth right after a rejection). A non-finite norm
+/// is a rejection with `h ← h/10`. RK4 accepts every finite step and stops on a non-finite one.
+#[inline]
+fn decide(
+    method: Method,
+    tab: &Tableau,
+    opts: &Options,
+    ctl: &mut Ctl,
+    err: f64,
+    fac11: f64,
+) -> After {
+    ctl.attempts += 1;
+    let h = ctl.h_used;
+    if let Method::Rk4 { .. } = method {
+        return if err.is_finite() {
+            ctl.stats.accepted += 1;
+            After::Accepted
+        } else {
+            ctl.stats.rejected += 1;
+            After::Stop(StopReason::NonFinite)
+        };
+    }
+    if !err.is_finite() {
+        ctl.stats.rejected += 1;
+        ctl.rejected = true;
+        ctl.nonfinite = true;
+        ctl.h = 0.1 * h;
+        return After::Rejected;
+    }
+    ctl.nonfinite = false;
+    if err <= 1.0 {
+        let fac = if tab.beta == 0.0 {
+            fac11
+        } else {
+            fac11 / ctl.facold.powf(tab.beta)
+        };
+        let fac = (fac / tab.safety).clamp(1.0 / tab.fac_max, 1.0 / tab.fac_min);
+        let mut h_new = h / fac;
+        if ctl.rejected {
+            h_new = h_new.min(h);
+        }
+        ctl.facold = err.max(1e-4);
+        ctl.rejected = false;
+        ctl.h = h_new.min(opts.h_max);
+        ctl.stats.accepted += 1;
+        After::Accepted
+    } else {
+        ctl.h = h / (fac11 / tab.safety).min(1.0 / tab.fac_min);
+        ctl.rejected = true;
+        ctl.stats.rejected += 1;
+        After::Rejected
+    }
+}
+
+/// Everything that happens to lane `l` after the stage and error kernels: accept/reject, event
+/// location on the accepted step, and commit of the new point. On `Stop(Guard)` the lane's `x`
+/// holds the event state and `ctl.t` the event time; on `Stop(EndTime)` `x = x₁`, `t = t_end`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
+    sys: &S,
+    method: Method,
+    tab: &Tableau,
+    opts: &Options,
+    st: &mut Store,
+    l: usize,
+    ctl: &mut Ctl,
+    sc: &mut LaneScratch,
+) -> After {
+    let err = st.err[l];
+    ctl.stats.rhs_evals += (tab.n_stages - 1) as u64;
+    match decide(method, tab, opts, ctl, err, st.s2[l]) {
+        After::Accepted => {}
+        other => return other,
+    }
+    let h = ctl.h_used;
+    let t0 = ctl.t;
+    let t1 = if ctl.last { ctl.t_end } else { t0 + h };
+    let stride = st.stride;
+    let blk = st.blk();
+    let last = tab.n_stages - 1;
+    if let Some((guard, theta)) = event::locate(
+        sys,
+        method,
+        ctl.mode,
+        st,
+        l,
+        h,
+        t0,
+        t1,
+        &mut sc.ev,
+        &mut ctl.stats,
+    ) {
+        ctl.t = if theta == 1.0 { t1 } else { t0 + theta * h };
+        Store::scatter(&mut st.x, stride, l, &sc.ev.xbest);
+        return After::Stop(StopReason::Guard { guard });
+    }
+    // Commit x₀ ← x₁, f(x₀) ← f(x₁).
+    for j in 0..st.dim {
+        let i = j * stride + l;
+        st.x[i] = st.xn[i];
+        st.k[i] = st.k[last * blk + i];
+    }
+    ctl.t = t1;
+    if ctl.last {
+        After::Stop(StopReason::EndTime)
+    } else {
+        After::Accepted
+    }
+}
