@@ -1,0 +1,46 @@
+//! # pdw-soa — planar spatial operator algebra kernel
+//!
+//! Planar serial chains (revolute and prismatic joints, base to tip) in the spatial operator
+//! algebra of the seed thesis §3.3: 3-component motion vectors `[ω, v_y, v_z]`, force vectors
+//! `[τ, f_y, f_z]`, the rigid-body transform Φ (eq. 3.10), joint maps H (eq. 3.4–3.5), spatial
+//! inertias M_k (eq. 3.16 plus a rotational inertia about the COM), gravity as the base
+//! acceleration (eq. 3.12). See [`chain`] for the conventions and [`spatial`] for the algebra.
+//!
+//! The model ([`Chain`]) is immutable; a [`Workspace`] sized from it holds every intermediate;
+//! algorithms are free functions, one per file.
+
+pub mod aba;
+pub mod batch;
+pub mod batch_aba;
+pub mod batch_rnea;
+pub mod chain;
+pub mod closed_chain;
+pub mod crba;
+pub mod energy;
+pub mod error;
+pub mod impact;
+pub mod kinematics;
+pub mod naive;
+pub mod pseudo_joint;
+pub mod rnea;
+pub mod spatial;
+pub mod workspace;
+
+pub use aba::aba;
+pub use batch::BatchWorkspace;
+pub use batch_aba::batch_aba;
+pub use batch_rnea::batch_rnea;
+pub use chain::{Chain, ChainBuilder, JointKind, Link};
+pub use closed_chain::{closed_chain_dynamics, ClosedChainForces};
+pub use crba::{crba, forward_dynamics_crba};
+pub use energy::{angular_momentum_about, kinetic_energy, linear_momentum, potential_energy, total_energy};
+pub use error::SoaError;
+pub use impact::{impulsive_constraint, joint_lock_impact, tip_impact};
+pub use kinematics::{
+    forward_kinematics, inverse_kinematics, pseudo_inverse_rates, tip_acceleration, tip_jacobian,
+    tip_jacobian_linear, tip_position, tip_velocity,
+};
+pub use naive::{naive_forward_dynamics, naive_mass_matrix, NaiveWorkspace};
+pub use pseudo_joint::pseudo_joint_dynamics;
+pub use rnea::{base_reaction, bias_forces, rnea};
+pub use workspace::Workspace;
