@@ -1,0 +1,1088 @@
+//! The basin-of-attraction file: header, streaming writer with resume, reader.
+//!
+//! A basin grid assigns each cell `(x[j], y[i])` of two section coordinates an outcome code (see
+//! the `legend`), the number of strides until it was classified and the last section state.
+//! # Crash safety
+//! Rows are produced in any order by the engine and handed to [`BasinWriter::write_rows`] in
+//! any grouping. The writer buffers them until a whole chunk block ([`BLOCK_ROWS`] rows) is
+//! present, then writes that block once, flushes, marks its rows in `/basin/rows_done` and
+//! flushes again: a row is marked done only after its data is on disk. Each compressed chunk is
+//! written exactly once (rewriting a partly filled deflated chunk reallocates it, and a kill in
+//! between can leave the chunk index pointing at overwritten bytes — observed in testing), and
+//! the file is created with HDF5's file-space strategy `NONE` (no reuse of freed space), so
+//! nothing the last flushed state refers to is overwritten before the next flush. A run killed
+//! at any moment (SIGKILL included, tested) therefore leaves a file whose marked rows are valid;
+//! rows of blocks not yet complete are lost and recomputed. [`BasinWriter::resume`] reopens the
+//! file and reports the rows still to compute. Since the engine's labels do not depend on batch
+//! size, thread count or order, a resumed run yields the same datasets as an uninterrupted one.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use hdf5::{Dataset, File, Group};
+use ndarray::{s, Array2, Array3, ArrayView2, ArrayView3};
+
+use crate::h5util::{create_file, get_attr, get_str, has_attr, open_file, set_attr, set_str, At};
+use crate::shard::{shard_rows, ShardSpec};
+use crate::{time, Result, StoreError};
+
+/// Value of the root attribute `format` of a basin file.
+pub const BASIN_FORMAT: &str = "pdw-sweep basin v1";
+/// Rows per chunk of the 2-D/3-D datasets, and per shard block (see [`shard_rows`]).
+/// Writing blocks aligned to it (`row0` a multiple, `BLOCK_ROWS` rows) writes whole chunks.
+pub const BLOCK_ROWS: usize = 16;
+/// Outcome code of a cell not (yet) computed: the fill value of `/basin/outcome`.
+pub const NOT_COMPUTED: u8 = 255;
+const DEFLATE_LEVEL: u8 = 4;
+const KIND: &str = "pdw-sweep basin";
+
+/// Everything that identifies a basin run: what `resume` and `merge` compare.
+///
+/// Floating-point fields are compared bit for bit; `params` and `tolerances` as JSON text, so
+/// serialise them the same way each time (e.g. `serde_json::to_string` of the same value).
+/// `command` is recorded but not compared (a resumed run's command line differs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BasinHeader {
+    /// The command line that made the file.
+    pub command: String,
+    /// Model name, e.g. `"simplest"`.
+    pub model: String,
+    /// Slope γ in radians.
+    pub slope: f64,
+    /// Model parameters as a JSON object text.
+    pub params: String,
+    /// Integrator name, e.g. `"dopri5"`.
+    pub integrator: String,
+    /// Integrator tolerances as a JSON object text, e.g. `{"rtol":1e-10,"atol":1e-12}`.
+    pub tolerances: String,
+    /// Stride budget per cell.
+    pub max_strides: u32,
+    /// Section coordinate along x, e.g. `"theta"`.
+    pub x_name: String,
+    /// Grid abscissae (nx), finite.
+    pub x: Vec<f64>,
+    /// Section coordinate along y, e.g. `"thetadot"`.
+    pub y_name: String,
+    /// Grid ordinates (ny), finite.
+    pub y: Vec<f64>,
+    /// Names of the d section coordinates stored in `/basin/final`.
+    pub state_names: Vec<String>,
+    /// Outcome codes and names, e.g. `(0, "gait")`; codes unique and not [`NOT_COMPUTED`].
+    pub legend: Vec<(u8, String)>,
+    /// `Some` for a shard file holding only [`shard_rows`]`(ny, index, count)`.
+    pub shard: Option<ShardSpec>,
+}
+
+impl BasinHeader {
+    /// Number of grid columns.
+    pub fn nx(&self) -> usize {
+        self.x.len()
+    }
+    /// Number of grid rows.
+    pub fn ny(&self) -> usize {
+        self.y.len()
+    }
+    /// Dimension of the stored section state.
+    pub fn d(&self) -> usize {
+        self.state_names.len()
+    }
+    /// Outcome name of `code`, if in the legend.
+    pub fn outcome_name(&self, code: u8) -> Option<&str> {
+        self.legend
+            .iter()
+            .find(|(c, _)| *c == code)
+            .map(|(_, n)| n.as_str())
+    }
+    /// Rows this file is responsible for: all rows, or its shard's.
+    pub fn own_rows(&self) -> Vec<usize> {
+        match self.shard {
+            None => (0..self.ny()).collect(),
+            Some(s) => shard_rows(self.ny(), s.index, s.count).unwrap_or_default(),
+        }
+    }
+
+    /// Rejects empty or non-finite grids, empty names, a malformed legend, non-JSON params.
+    pub fn validate(&self) -> Result<()> {
+        for (axis, name, v) in [("x", &self.x_name, &self.x), ("y", &self.y_name, &self.y)] {
+            if name.is_empty() {
+                return Err(StoreError::invalid(
+                    "grid",
+                    format!("{axis} axis has no name"),
+                ));
+            }
+            if v.is_empty() {
+                return Err(StoreError::invalid(
+                    "grid",
+                    format!("{axis} axis ({name}) has no points"),
+                ));
+            }
+            if let Some(bad) = v.iter().find(|a| !a.is_finite()) {
+                return Err(StoreError::invalid(
+                    "grid",
+                    format!("{axis} axis ({name}) holds {bad}"),
+                ));
+            }
+        }
+        if self.state_names.is_empty() || self.state_names.iter().any(|n| n.is_empty()) {
+            return Err(StoreError::invalid(
+                "state names",
+                format!(
+                    "need at least one non-empty name, got {:?}",
+                    self.state_names
+                ),
+            ));
+        }
+        if self.legend.is_empty() {
+            return Err(StoreError::invalid("legend", "empty"));
+        }
+        for (i, (c, n)) in self.legend.iter().enumerate() {
+            if *c == NOT_COMPUTED {
+                return Err(StoreError::invalid(
+                    "legend",
+                    format!("code {NOT_COMPUTED} is reserved for cells not computed ({n})"),
+                ));
+            }
+            if n.is_empty() || n.contains('/') {
+                return Err(StoreError::invalid(
+                    "legend",
+                    format!("bad outcome name {n:?}"),
+                ));
+            }
+            if self.legend[..i].iter().any(|(c2, n2)| c2 == c || n2 == n) {
+                return Err(StoreError::invalid(
+                    "legend",
+                    format!("duplicate code {c} or name {n:?}"),
+                ));
+            }
+        }
+        for (what, text) in [("params", &self.params), ("tolerances", &self.tolerances)] {
+            match serde_json::from_str::<serde_json::Value>(text) {
+                Ok(serde_json::Value::Object(_)) => {}
+                _ => {
+                    return Err(StoreError::invalid(
+                        "header",
+                        format!("{what} must be a JSON object, got {text:?}"),
+                    ))
+                }
+            }
+        }
+        if !self.slope.is_finite() {
+            return Err(StoreError::invalid(
+                "header",
+                format!("slope {}", self.slope),
+            ));
+        }
+        if let Some(s) = self.shard {
+            s.validate()?;
+        }
+        Ok(())
+    }
+
+    /// The first field in which `found` (read from `path`) differs from `self`, as an error.
+    pub(crate) fn check_matches(&self, found: &BasinHeader, path: &Path) -> Result<()> {
+        let mism = |field: &str, f: String, e: String| StoreError::Mismatch {
+            path: path.to_path_buf(),
+            field: field.to_string(),
+            found: f,
+            expected: e,
+        };
+        let bits = |v: &[f64]| v.iter().map(|a| a.to_bits()).collect::<Vec<_>>();
+        if found.model != self.model {
+            return Err(mism("model", found.model.clone(), self.model.clone()));
+        }
+        if found.slope.to_bits() != self.slope.to_bits() {
+            return Err(mism(
+                "slope",
+                found.slope.to_string(),
+                self.slope.to_string(),
+            ));
+        }
+        if found.params != self.params {
+            return Err(mism("params", found.params.clone(), self.params.clone()));
+        }
+        if found.integrator != self.integrator {
+            return Err(mism(
+                "integrator",
+                found.integrator.clone(),
+                self.integrator.clone(),
+            ));
+        }
+        if found.tolerances != self.tolerances {
+            return Err(mism(
+                "tolerances",
+                found.tolerances.clone(),
+                self.tolerances.clone(),
+            ));
+        }
+        if found.max_strides != self.max_strides {
+            return Err(mism(
+                "max_strides",
+                found.max_strides.to_string(),
+                self.max_strides.to_string(),
+            ));
+        }
+        for (axis, fname, fv, ename, ev) in [
+            ("x", &found.x_name, &found.x, &self.x_name, &self.x),
+            ("y", &found.y_name, &found.y, &self.y_name, &self.y),
+        ] {
+            if fname != ename {
+                return Err(mism(
+                    &format!("{axis} coordinate"),
+                    fname.clone(),
+                    ename.clone(),
+                ));
+            }
+            if bits(fv) != bits(ev) {
+                let desc = |v: &[f64]| {
+                    format!(
+                        "{} points {}..{}",
+                        v.len(),
+                        v.first().copied().unwrap_or(f64::NAN),
+                        v.last().copied().unwrap_or(f64::NAN)
+                    )
+                };
+                return Err(mism(&format!("{axis} grid"), desc(fv), desc(ev)));
+            }
+        }
+        if found.state_names != self.state_names {
+            return Err(mism(
+                "section coordinates",
+                format!("{:?}", found.state_names),
+                format!("{:?}", self.state_names),
+            ));
+        }
+        if found.legend != self.legend {
+            return Err(mism(
+                "legend",
+                legend_json(&found.legend),
+                legend_json(&self.legend),
+            ));
+        }
+        if found.shard != self.shard {
+            let show = |s: Option<ShardSpec>| s.map_or("no shard".to_string(), |s| s.to_string());
+            return Err(mism("shard", show(found.shard), show(self.shard)));
+        }
+        Ok(())
+    }
+}
+
+/// Basin metrics of a finished grid (computed by the caller).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BasinMetrics {
+    /// Fraction of the file's cells per outcome name.
+    pub fractions: Vec<(String, f64)>,
+    /// Basin entropy S_b (Daza et al. 2016, Sci. Rep. 6:31416, eq. 3): mean over ε-boxes of
+    /// −Σ p log p of the outcome frequencies in the box.
+    pub basin_entropy: f64,
+    /// Basin-boundary entropy S_bb (Daza et al. 2016, eq. 4): the same sum averaged over the
+    /// boxes holding more than one outcome only.
+    pub boundary_entropy: f64,
+    /// Side ε of the boxes, in cells.
+    pub entropy_box: usize,
+}
+
+/// An attractor used to classify cells (the selected gait, a period-2 orbit…).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Attractor {
+    /// Name, e.g. `"gait"`; unique in a file, no `/`.
+    pub name: String,
+    /// Strides per period (1 for a fixed point of the stride map).
+    pub period_strides: u32,
+    /// Duration of one period (model time units).
+    pub period_time: f64,
+    /// The `period_strides` points of the orbit on the section, each of length d.
+    pub section: Vec<Vec<f64>>,
+    /// Floquet multipliers `(re, im)`, by decreasing modulus.
+    pub multipliers: Vec<(f64, f64)>,
+}
+
+/// A basin file read back whole.
+#[derive(Clone, Debug)]
+pub struct BasinData {
+    pub header: BasinHeader,
+    /// pdw-store version that wrote the file.
+    pub version: String,
+    /// RFC 3339 UTC creation time.
+    pub created: String,
+    /// Computing time over all sessions (s).
+    pub elapsed_s: f64,
+    /// Whether every row of the file (or shard) was written and `finish` was called.
+    pub complete: bool,
+    /// (ny × nx) outcome codes; [`NOT_COMPUTED`] where no row was written.
+    pub outcome: Array2<u8>,
+    /// (ny × nx) strides until classified.
+    pub strides: Array2<u16>,
+    /// (ny × nx × d) last section state.
+    pub final_state: Array3<f64>,
+    /// (ny) whether each row is on disk.
+    pub rows_done: Vec<bool>,
+    /// Present once finished.
+    pub metrics: Option<BasinMetrics>,
+    pub attractors: Vec<Attractor>,
+}
+
+pub(crate) fn legend_json(legend: &[(u8, String)]) -> String {
+    let m: BTreeMap<String, serde_json::Value> = legend
+        .iter()
+        .map(|(c, n)| (c.to_string(), serde_json::Value::String(n.clone())))
+        .collect();
+    serde_json::to_string(&m).unwrap_or_default()
+}
+
+fn parse_legend(path: &Path, text: &str) -> Result<Vec<(u8, String)>> {
+    let bad = |d: String| StoreError::Format {
+        path: path.to_path_buf(),
+        expected: KIND,
+        detail: format!("legend {text:?}: {d}"),
+    };
+    let m: BTreeMap<String, String> = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+    let mut v = m
+        .into_iter()
+        .map(|(k, n)| {
+            k.parse::<u8>()
+                .map(|c| (c, n))
+                .map_err(|e| bad(e.to_string()))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    v.sort_by_key(|(c, _)| *c);
+    Ok(v)
+}
+
+fn format_err(path: &Path, detail: impl Into<String>) -> StoreError {
+    StoreError::Format {
+        path: path.to_path_buf(),
+        expected: KIND,
+        detail: detail.into(),
+    }
+}
+
+/// Reads and checks the header of an open basin file.
+fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
+    let fmt = get_str(path, KIND, f, "format")?;
+    if fmt != BASIN_FORMAT {
+        return Err(format_err(
+            path,
+            format!("format is {fmt:?}, expected {BASIN_FORMAT:?}"),
+        ));
+    }
+    let g = |name: &str| -> Result<Group> {
+        f.group(name)
+            .map_err(|e| format_err(path, format!("group /{name}: {e}")))
+    };
+    let ds = |grp: &Group, name: &str| -> Result<Dataset> {
+        grp.dataset(name)
+            .map_err(|e| format_err(path, format!("dataset {}/{name}: {e}", grp.name())))
+    };
+    let grid = g("grid")?;
+    let basin = g("basin")?;
+    let xd = ds(&grid, "x")?;
+    let yd = ds(&grid, "y")?;
+    let x = xd.read_raw::<f64>().at(path, "reading /grid/x")?;
+    let y = yd.read_raw::<f64>().at(path, "reading /grid/y")?;
+    let outcome = ds(&basin, "outcome")?;
+    let fin = ds(&basin, "final")?;
+    let names_text = get_str(path, KIND, &fin, "names")?;
+    let state_names: Vec<String> = serde_json::from_str(&names_text)
+        .map_err(|e| format_err(path, format!("/basin/final names {names_text:?}: {e}")))?;
+    let shard = if has_attr(f, "shard_count") {
+        let s = ShardSpec {
+            index: get_attr::<u64>(path, KIND, f, "shard_index")? as usize,
+            count: get_attr::<u64>(path, KIND, f, "shard_count")? as usize,
+        };
+        s.validate().map_err(|e| format_err(path, e.to_string()))?;
+        Some(s)
+    } else {
+        None
+    };
+    let h = BasinHeader {
+        command: get_str(path, KIND, f, "command")?,
+        model: get_str(path, KIND, f, "model")?,
+        slope: get_attr(path, KIND, f, "slope")?,
+        params: get_str(path, KIND, f, "params")?,
+        integrator: get_str(path, KIND, f, "integrator")?,
+        tolerances: get_str(path, KIND, f, "tolerances")?,
+        max_strides: get_attr(path, KIND, f, "max_strides")?,
+        x_name: get_str(path, KIND, &xd, "name")?,
+        x,
+        y_name: get_str(path, KIND, &yd, "name")?,
+        y,
+        state_names,
+        legend: parse_legend(path, &get_str(path, KIND, &outcome, "legend")?)?,
+        shard,
+    };
+    let (nx, ny, d) = (h.nx(), h.ny(), h.d());
+    for (name, dset, want) in [
+        ("outcome", &outcome, vec![ny, nx]),
+        ("strides", &ds(&basin, "strides")?, vec![ny, nx]),
+        ("final", &fin, vec![ny, nx, d]),
+        ("rows_done", &ds(&basin, "rows_done")?, vec![ny]),
+    ] {
+        if dset.shape() != want {
+            return Err(format_err(
+                path,
+                format!(
+                    "/basin/{name} has shape {:?}, expected {want:?}",
+                    dset.shape()
+                ),
+            ));
+        }
+    }
+    h.validate().map_err(|e| format_err(path, e.to_string()))?;
+    Ok(h)
+}
+
+fn read_rows_done(path: &Path, f: &File) -> Result<Vec<bool>> {
+    let v = f
+        .dataset("basin/rows_done")
+        .and_then(|d| d.read_raw::<u8>())
+        .at(path, "reading /basin/rows_done")?;
+    Ok(v.into_iter().map(|b| b != 0).collect())
+}
+
+/// Streams a basin grid into an HDF5 file, row block by row block.
+///
+/// Dropping the writer without [`finish`](Self::finish) leaves a valid, resumable file with
+/// `complete = false`.
+pub struct BasinWriter {
+    path: PathBuf,
+    file: File,
+    header: BasinHeader,
+    outcome: Dataset,
+    strides: Dataset,
+    final_state: Dataset,
+    rows_done_ds: Dataset,
+    /// (ny) rows on disk.
+    rows_done: Vec<bool>,
+    /// (ny) rows this file may hold (its shard's, or all).
+    own: Vec<bool>,
+    /// Blocks with some rows received but not yet written, by block index.
+    pending: BTreeMap<usize, PendingBlock>,
+    elapsed_before: f64,
+    started: Instant,
+}
+
+impl std::fmt::Debug for BasinWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BasinWriter")
+            .field("path", &self.path)
+            .field("rows_done", &self.rows_done.iter().filter(|b| **b).count())
+            .finish()
+    }
+}
+
+impl BasinWriter {
+    /// Creates a new basin file at `path` with `complete = false` and no rows.
+    ///
+    /// An existing file is an error ([`StoreError::Exists`], file untouched) unless `force`,
+    /// which replaces it.
+    pub fn create(path: impl AsRef<Path>, header: &BasinHeader, force: bool) -> Result<Self> {
+        let path = path.as_ref();
+        header.validate()?;
+        let file = create_file(path, force)?;
+        match Self::init(path, file, header) {
+            Ok(w) => Ok(w),
+            Err(e) => {
+                // A half-initialised file is useless: do not leave it behind.
+                let _ = std::fs::remove_file(path);
+                Err(e)
+            }
+        }
+    }
+
+    fn init(path: &Path, file: File, h: &BasinHeader) -> Result<Self> {
+        let (nx, ny, d) = (h.nx(), h.ny(), h.d());
+        for (k, v) in [
+            ("format", BASIN_FORMAT),
+            ("version", env!("CARGO_PKG_VERSION")),
+            ("command", &h.command),
+            ("created", &time::now_rfc3339()),
+            ("model", &h.model),
+            ("params", &h.params),
+            ("integrator", &h.integrator),
+            ("tolerances", &h.tolerances),
+        ] {
+            set_str(path, &file, k, v)?;
+        }
+        set_attr(path, &file, "slope", &h.slope)?;
+        set_attr(path, &file, "max_strides", &h.max_strides)?;
+        set_attr(path, &file, "elapsed_s", &0.0f64)?;
+        set_attr(path, &file, "complete", &false)?;
+        if let Some(s) = h.shard {
+            set_attr(path, &file, "shard_index", &(s.index as u64))?;
+            set_attr(path, &file, "shard_count", &(s.count as u64))?;
+        }
+        let grid = file.create_group("grid").at(path, "creating /grid")?;
+        for (name, coord, v) in [("x", &h.x_name, &h.x), ("y", &h.y_name, &h.y)] {
+            let ds = grid
+                .new_dataset::<f64>()
+                .shape([v.len()])
+                .create(name)
+                .at(path, "creating the grid")?;
+            ds.write_raw(v.as_slice()).at(path, "writing the grid")?;
+            set_str(path, &ds, "name", coord)?;
+        }
+        let basin = file.create_group("basin").at(path, "creating /basin")?;
+        let rb = BLOCK_ROWS.min(ny);
+        let outcome = basin
+            .new_dataset::<u8>()
+            .shape([ny, nx])
+            .chunk([rb, nx])
+            .deflate(DEFLATE_LEVEL)
+            .fill_value(NOT_COMPUTED)
+            .create("outcome")
+            .at(path, "creating /basin/outcome")?;
+        set_str(path, &outcome, "legend", &legend_json(&h.legend))?;
+        let strides = basin
+            .new_dataset::<u16>()
+            .shape([ny, nx])
+            .chunk([rb, nx])
+            .shuffle()
+            .deflate(DEFLATE_LEVEL)
+            .create("strides")
+            .at(path, "creating /basin/strides")?;
+        let final_state = basin
+            .new_dataset::<f64>()
+            .shape([ny, nx, d])
+            .chunk([rb, nx, d])
+            .shuffle()
+            .deflate(DEFLATE_LEVEL)
+            .fill_value(f64::NAN)
+            .create("final")
+            .at(path, "creating /basin/final")?;
+        let names = serde_json::to_string(&h.state_names).unwrap_or_default();
+        set_str(path, &final_state, "names", &names)?;
+        let rows_done_ds = basin
+            .new_dataset::<u8>()
+            .shape([ny])
+            .create("rows_done")
+            .at(path, "creating /basin/rows_done")?;
+        rows_done_ds
+            .write_raw(&vec![0u8; ny])
+            .at(path, "writing /basin/rows_done")?;
+        file.flush().at(path, "flushing")?;
+        let own = own_mask(h);
+        Ok(BasinWriter {
+            path: path.to_path_buf(),
+            file,
+            header: h.clone(),
+            outcome,
+            strides,
+            final_state,
+            rows_done_ds,
+            rows_done: vec![false; ny],
+            own,
+            pending: BTreeMap::new(),
+            elapsed_before: 0.0,
+            started: Instant::now(),
+        })
+    }
+
+    /// Reopens an incomplete file made for the same run as `expected` (same model, slope,
+    /// params, integrator, tolerances, stride budget, grid, coordinates, legend, shard).
+    ///
+    /// A file that does not match gives [`StoreError::Mismatch`], a complete one
+    /// [`StoreError::AlreadyComplete`], a corrupt one [`StoreError::Format`] or
+    /// [`StoreError::Hdf5`]; in every error case the file is only opened read-only, never
+    /// modified. Rows still to do: [`rows_todo`](Self::rows_todo).
+    pub fn resume(path: impl AsRef<Path>, expected: &BasinHeader) -> Result<Self> {
+        let path = path.as_ref();
+        expected.validate()?;
+        {
+            let f = open_file(path, false)?;
+            let found = read_header(path, &f)?;
+            expected.check_matches(&found, path)?;
+            if get_attr::<bool>(path, KIND, &f, "complete")? {
+                return Err(StoreError::AlreadyComplete {
+                    path: path.to_path_buf(),
+                });
+            }
+            read_rows_done(path, &f)?;
+        }
+        let file = open_file(path, true)?;
+        let header = read_header(path, &file)?;
+        let mut rows_done = read_rows_done(path, &file)?;
+        // Only whole blocks are ever written; a partly marked block (not made by this writer)
+        // is redone whole.
+        for b in 0..header.ny().div_ceil(BLOCK_ROWS) {
+            let r = block_range(b, header.ny());
+            if !rows_done[r.clone()].iter().all(|d| *d) {
+                rows_done[r].iter_mut().for_each(|d| *d = false);
+            }
+        }
+        let elapsed_before = get_attr::<f64>(path, KIND, &file, "elapsed_s")?;
+        let basin = file.group("basin").at(path, "opening /basin")?;
+        let open = |n: &str| basin.dataset(n).at(path, "opening the basin datasets");
+        let own = own_mask(&header);
+        Ok(BasinWriter {
+            path: path.to_path_buf(),
+            outcome: open("outcome")?,
+            strides: open("strides")?,
+            final_state: open("final")?,
+            rows_done_ds: open("rows_done")?,
+            file,
+            header,
+            rows_done,
+            own,
+            pending: BTreeMap::new(),
+            elapsed_before,
+            started: Instant::now(),
+        })
+    }
+
+    /// What the CLI's `--resume` / `--force` mean: with `resume`, continue `path` if it exists
+    /// ([`resume`](Self::resume); `force` is ignored, a mismatched file is an error, never
+    /// replaced) or create it if it does not; without `resume`, [`create`](Self::create) with
+    /// `force`.
+    pub fn start(
+        path: impl AsRef<Path>,
+        header: &BasinHeader,
+        resume: bool,
+        force: bool,
+    ) -> Result<Self> {
+        let path = path.as_ref();
+        if resume && path.exists() {
+            Self::resume(path, header)
+        } else {
+            Self::create(path, header, resume || force)
+        }
+    }
+
+    /// Flushes and closes the file without finishing it (`complete` stays false; rows of
+    /// incomplete blocks are dropped). Dropping the writer does the same but cannot report
+    /// errors.
+    pub fn close(self) -> Result<()> {
+        let p = self.path.clone();
+        set_attr(&p, &self.file, "elapsed_s", &self.elapsed())?;
+        self.file.flush().at(&p, "flushing")?;
+        let BasinWriter {
+            file,
+            outcome,
+            strides,
+            final_state,
+            rows_done_ds,
+            ..
+        } = self;
+        drop((outcome, strides, final_state, rows_done_ds));
+        file.close().at(&p, "closing")
+    }
+
+    /// The file's header.
+    pub fn header(&self) -> &BasinHeader {
+        &self.header
+    }
+
+    /// The file path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// (ny) whether each row is on disk.
+    pub fn rows_done(&self) -> &[bool] {
+        &self.rows_done
+    }
+
+    /// Rows of this file (its shard's, or all) not yet on disk, ascending (rows waiting in an
+    /// incomplete block count as not on disk).
+    pub fn rows_todo(&self) -> Vec<usize> {
+        (0..self.header.ny())
+            .filter(|&i| self.own[i] && !self.rows_done[i])
+            .collect()
+    }
+
+    /// Hands over rows `row0 .. row0 + k`; every chunk block they complete is written and
+    /// flushed, then marked done and flushed again. Returns the number of rows that reached the
+    /// disk in this call.
+    ///
+    /// `outcome` and `strides` are (k × nx) row-major, `final_state` (k × nx × d) row-major.
+    /// Every row must belong to this file (its shard) and not be on disk already; outcome codes
+    /// must be in the legend. Rows of incomplete blocks wait in memory (at most
+    /// [`BLOCK_ROWS`]` − 1` rows per block); they are lost if the writer is dropped, and
+    /// [`rows_todo`](Self::rows_todo) lists them again after [`resume`](Self::resume).
+    pub fn write_rows(
+        &mut self,
+        row0: usize,
+        outcome: &[u8],
+        strides: &[u16],
+        final_state: &[f64],
+    ) -> Result<usize> {
+        let (nx, ny, d) = (self.header.nx(), self.header.ny(), self.header.d());
+        if outcome.is_empty() || (outcome.len() / nx) * nx != outcome.len() {
+            return Err(StoreError::invalid(
+                "row block",
+                format!(
+                    "outcome has {} values, not a positive multiple of nx = {nx}",
+                    outcome.len()
+                ),
+            ));
+        }
+        let k = outcome.len() / nx;
+        if strides.len() != k * nx || final_state.len() != k * nx * d {
+            return Err(StoreError::invalid(
+                "row block",
+                format!(
+                    "{k} rows of {nx} cells need {} strides and {} final values (d = {d}), got {} and {}",
+                    k * nx,
+                    k * nx * d,
+                    strides.len(),
+                    final_state.len()
+                ),
+            ));
+        }
+        if row0 + k > ny {
+            return Err(StoreError::invalid(
+                "row block",
+                format!("rows {row0}..{} outside the grid's {ny} rows", row0 + k),
+            ));
+        }
+        if let Some(r) = (row0..row0 + k).find(|&r| !self.own[r]) {
+            return Err(StoreError::invalid(
+                "row block",
+                format!("row {r} does not belong to this shard"),
+            ));
+        }
+        if let Some(r) = (row0..row0 + k).find(|&r| self.rows_done[r]) {
+            return Err(StoreError::invalid(
+                "row block",
+                format!("row {r} is already on disk"),
+            ));
+        }
+        if let Some(c) = outcome
+            .iter()
+            .find(|c| !self.header.legend.iter().any(|(l, _)| l == *c))
+        {
+            return Err(StoreError::invalid(
+                "row block",
+                format!(
+                    "outcome code {c} is not in the legend {}",
+                    legend_json(&self.header.legend)
+                ),
+            ));
+        }
+        let mut complete = Vec::new();
+        for r in row0..row0 + k {
+            let b = r / BLOCK_ROWS;
+            let range = block_range(b, ny);
+            let kb = range.len();
+            let pb = self.pending.entry(b).or_insert_with(|| PendingBlock {
+                outcome: vec![0; kb * nx],
+                strides: vec![0; kb * nx],
+                final_state: vec![0.0; kb * nx * d],
+                have: vec![false; kb],
+            });
+            let (i, src) = (r - range.start, r - row0);
+            pb.outcome[i * nx..(i + 1) * nx].copy_from_slice(&outcome[src * nx..(src + 1) * nx]);
+            pb.strides[i * nx..(i + 1) * nx].copy_from_slice(&strides[src * nx..(src + 1) * nx]);
+            pb.final_state[i * nx * d..(i + 1) * nx * d]
+                .copy_from_slice(&final_state[src * nx * d..(src + 1) * nx * d]);
+            pb.have[i] = true;
+            if pb.have.iter().all(|h| *h) && complete.last() != Some(&b) {
+                complete.push(b);
+            }
+        }
+        let mut written = 0;
+        for b in complete {
+            let pb = self.pending.remove(&b).expect("block is pending");
+            written += self.write_block(b, &pb)?;
+        }
+        Ok(written)
+    }
+
+    /// Writes one whole chunk block, flushes, marks it done, flushes.
+    fn write_block(&mut self, b: usize, pb: &PendingBlock) -> Result<usize> {
+        let (nx, d) = (self.header.nx(), self.header.d());
+        let range = block_range(b, self.header.ny());
+        let (r0, r1, k) = (range.start, range.end, range.len());
+        let p = &self.path;
+        let o = ArrayView2::from_shape((k, nx), &pb.outcome).expect("block shape");
+        let st = ArrayView2::from_shape((k, nx), &pb.strides).expect("block shape");
+        let fs = ArrayView3::from_shape((k, nx, d), &pb.final_state).expect("block shape");
+        self.outcome
+            .write_slice(o, s![r0..r1, ..])
+            .at(p, "writing /basin/outcome")?;
+        self.strides
+            .write_slice(st, s![r0..r1, ..])
+            .at(p, "writing /basin/strides")?;
+        self.final_state
+            .write_slice(fs, s![r0..r1, .., ..])
+            .at(p, "writing /basin/final")?;
+        set_attr(p, &self.file, "elapsed_s", &self.elapsed())?;
+        self.file.flush().at(p, "flushing")?;
+        let ones = vec![1u8; k];
+        self.rows_done_ds
+            .write_slice(&ones, s![r0..r1])
+            .at(p, "writing /basin/rows_done")?;
+        self.file.flush().at(p, "flushing")?;
+        self.rows_done[r0..r1].iter_mut().for_each(|b| *b = true);
+        Ok(k)
+    }
+
+    /// Reads back the (ny × nx) outcome codes written so far ([`NOT_COMPUTED`] elsewhere), e.g.
+    /// to compute metrics before [`finish`](Self::finish).
+    pub fn read_outcome(&self) -> Result<Array2<u8>> {
+        self.outcome
+            .read_2d::<u8>()
+            .at(&self.path, "reading /basin/outcome")
+    }
+
+    pub(crate) fn set_elapsed_before(&mut self, s: f64) {
+        self.elapsed_before = s;
+    }
+
+    fn elapsed(&self) -> f64 {
+        self.elapsed_before + self.started.elapsed().as_secs_f64()
+    }
+
+    /// Writes `/metrics` and `/attractors`, sets `complete = true` and closes the file.
+    ///
+    /// Every row of the file (or shard) must be on disk ([`StoreError::Incomplete`] otherwise).
+    pub fn finish(self, metrics: &BasinMetrics, attractors: &[Attractor]) -> Result<()> {
+        let todo = self.rows_todo().len();
+        if todo > 0 {
+            let expected = self.own.iter().filter(|b| **b).count();
+            return Err(StoreError::Incomplete {
+                path: self.path.clone(),
+                done: expected - todo,
+                expected,
+            });
+        }
+        let p = self.path.clone();
+        write_metrics(&p, &self.file, metrics)?;
+        write_attractors(&p, &self.file, attractors, self.header.d())?;
+        set_attr(&p, &self.file, "elapsed_s", &self.elapsed())?;
+        set_attr(&p, &self.file, "complete", &true)?;
+        self.file.flush().at(&p, "flushing")?;
+        let BasinWriter {
+            file,
+            outcome,
+            strides,
+            final_state,
+            rows_done_ds,
+            ..
+        } = self;
+        drop((outcome, strides, final_state, rows_done_ds));
+        file.close().at(&p, "closing")
+    }
+}
+
+/// Rows of one chunk block received so far.
+struct PendingBlock {
+    /// (k × nx) outcome codes, k = rows in the block.
+    outcome: Vec<u8>,
+    /// (k × nx) strides.
+    strides: Vec<u16>,
+    /// (k × nx × d) final states.
+    final_state: Vec<f64>,
+    /// (k) rows received.
+    have: Vec<bool>,
+}
+
+/// Rows `start .. end` of chunk block `b` of a grid of `ny` rows.
+fn block_range(b: usize, ny: usize) -> std::ops::Range<usize> {
+    b * BLOCK_ROWS..((b + 1) * BLOCK_ROWS).min(ny)
+}
+
+fn own_mask(h: &BasinHeader) -> Vec<bool> {
+    let mut own = vec![false; h.ny()];
+    for r in h.own_rows() {
+        own[r] = true;
+    }
+    own
+}
+
+pub(crate) fn write_metrics(path: &Path, file: &File, m: &BasinMetrics) -> Result<()> {
+    if file.link_exists("metrics") {
+        file.unlink("metrics").at(path, "replacing /metrics")?;
+    }
+    let g = file.create_group("metrics").at(path, "creating /metrics")?;
+    set_attr(path, &g, "basin_entropy", &m.basin_entropy)?;
+    set_attr(path, &g, "boundary_entropy", &m.boundary_entropy)?;
+    set_attr(path, &g, "entropy_box", &(m.entropy_box as u64))?;
+    let mut obj = serde_json::Map::new();
+    for (name, f) in &m.fractions {
+        if name.is_empty() || name.contains('/') {
+            return Err(StoreError::invalid(
+                "metrics",
+                format!("bad outcome name {name:?}"),
+            ));
+        }
+        obj.insert(name.clone(), serde_json::json!(f));
+        set_attr(path, &g, &format!("fraction_{name}"), f)?;
+    }
+    set_str(
+        path,
+        &g,
+        "fractions",
+        &serde_json::Value::Object(obj).to_string(),
+    )
+}
+
+pub(crate) fn write_attractors(
+    path: &Path,
+    file: &File,
+    list: &[Attractor],
+    d: usize,
+) -> Result<()> {
+    for (i, a) in list.iter().enumerate() {
+        if a.name.is_empty() || a.name.contains('/') || a.name == "." || a.name == ".." {
+            return Err(StoreError::invalid(
+                "attractor",
+                format!("bad name {:?}", a.name),
+            ));
+        }
+        if list[..i].iter().any(|b| b.name == a.name) {
+            return Err(StoreError::invalid(
+                "attractor",
+                format!("duplicate name {:?}", a.name),
+            ));
+        }
+        if a.section.is_empty() || a.section.iter().any(|p| p.len() != d) {
+            return Err(StoreError::invalid(
+                "attractor",
+                format!("{}: section points must each have d = {d} values", a.name),
+            ));
+        }
+    }
+    if file.link_exists("attractors") {
+        file.unlink("attractors")
+            .at(path, "replacing /attractors")?;
+    }
+    let g = file
+        .create_group("attractors")
+        .at(path, "creating /attractors")?;
+    for a in list {
+        let ga = g.create_group(&a.name).at(path, "creating an attractor")?;
+        set_attr(path, &ga, "period_strides", &a.period_strides)?;
+        set_attr(path, &ga, "period_time", &a.period_time)?;
+        let k = a.section.len();
+        let flat: Vec<f64> = a.section.iter().flatten().copied().collect();
+        let sec = Array2::from_shape_vec((k, d), flat).expect("lengths checked");
+        ga.new_dataset_builder()
+            .with_data(&sec)
+            .create("section")
+            .at(path, "writing an attractor")?;
+        let re: Vec<f64> = a.multipliers.iter().map(|m| m.0).collect();
+        let im: Vec<f64> = a.multipliers.iter().map(|m| m.1).collect();
+        for (n, v) in [("multipliers_re", re), ("multipliers_im", im)] {
+            ga.new_dataset_builder()
+                .with_data(&v)
+                .create(n)
+                .at(path, "writing an attractor")?;
+        }
+    }
+    Ok(())
+}
+
+fn read_metrics(path: &Path, f: &File, legend: &[(u8, String)]) -> Result<Option<BasinMetrics>> {
+    if !f.link_exists("metrics") {
+        return Ok(None);
+    }
+    let g = f.group("metrics").at(path, "opening /metrics")?;
+    let text = get_str(path, KIND, &g, "fractions")?;
+    let obj: serde_json::Map<String, serde_json::Value> = serde_json::from_str(&text)
+        .map_err(|e| format_err(path, format!("/metrics fractions: {e}")))?;
+    // Names from the JSON object, exact values from the f64 attributes, in legend order.
+    let rank = |n: &str| {
+        legend
+            .iter()
+            .position(|(_, l)| l == n)
+            .unwrap_or(usize::MAX)
+    };
+    let mut names: Vec<String> = obj.keys().cloned().collect();
+    names.sort_by_key(|n| rank(n));
+    let fractions = names
+        .into_iter()
+        .map(|n| {
+            let v = get_attr::<f64>(path, KIND, &g, &format!("fraction_{n}"))?;
+            Ok((n, v))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Some(BasinMetrics {
+        fractions,
+        basin_entropy: get_attr(path, KIND, &g, "basin_entropy")?,
+        boundary_entropy: get_attr(path, KIND, &g, "boundary_entropy")?,
+        entropy_box: get_attr::<u64>(path, KIND, &g, "entropy_box")? as usize,
+    }))
+}
+
+pub(crate) fn read_attractors(path: &Path, f: &File) -> Result<Vec<Attractor>> {
+    if !f.link_exists("attractors") {
+        return Ok(Vec::new());
+    }
+    let g = f.group("attractors").at(path, "opening /attractors")?;
+    let mut out = Vec::new();
+    for ga in g.groups().at(path, "listing /attractors")? {
+        let name = ga.name().rsplit('/').next().unwrap_or_default().to_string();
+        let sec = ga
+            .dataset("section")
+            .and_then(|d| d.read_2d::<f64>())
+            .at(path, "reading an attractor")?;
+        let rd = |n: &str| {
+            ga.dataset(n)
+                .and_then(|d| d.read_raw::<f64>())
+                .at(path, "reading an attractor")
+        };
+        let (re, im) = (rd("multipliers_re")?, rd("multipliers_im")?);
+        out.push(Attractor {
+            name,
+            period_strides: get_attr(path, KIND, &ga, "period_strides")?,
+            period_time: get_attr(path, KIND, &ga, "period_time")?,
+            section: sec.rows().into_iter().map(|r| r.to_vec()).collect(),
+            multipliers: re.into_iter().zip(im).collect(),
+        });
+    }
+    Ok(out)
+}
+
+/// Reads only the header of a basin file (cheap; for checks and plots).
+pub fn read_basin_header(path: impl AsRef<Path>) -> Result<BasinHeader> {
+    let path = path.as_ref();
+    let f = open_file(path, false)?;
+    read_header(path, &f)
+}
+
+/// Reads the header and the (ny × nx) outcome codes only (for plotting large files without
+/// loading `/basin/final`).
+pub fn read_basin_outcome(path: impl AsRef<Path>) -> Result<(BasinHeader, Array2<u8>)> {
+    let path = path.as_ref();
+    let f = open_file(path, false)?;
+    let h = read_header(path, &f)?;
+    let o = f
+        .dataset("basin/outcome")
+        .and_then(|d| d.read_2d::<u8>())
+        .at(path, "reading /basin/outcome")?;
+    Ok((h, o))
+}
+
+/// Reads a whole basin file.
+pub fn read_basin(path: impl AsRef<Path>) -> Result<BasinData> {
+    let path = path.as_ref();
+    let f = open_file(path, false)?;
+    let header = read_header(path, &f)?;
+    let basin = f.group("basin").at(path, "opening /basin")?;
+    let outcome = basin
+        .dataset("outcome")
+        .and_then(|d| d.read_2d::<u8>())
+        .at(path, "reading /basin/outcome")?;
+    let strides = basin
+        .dataset("strides")
+        .and_then(|d| d.read_2d::<u16>())
+        .at(path, "reading /basin/strides")?;
+    let final_state = basin
+        .dataset("final")
+        .and_then(|d| d.read::<f64, ndarray::Ix3>())
+        .at(path, "reading /basin/final")?;
+    Ok(BasinData {
+        version: get_str(path, KIND, &f, "version")?,
+        created: get_str(path, KIND, &f, "created")?,
+        elapsed_s: get_attr(path, KIND, &f, "elapsed_s")?,
+        complete: get_attr(path, KIND, &f, "complete")?,
+        rows_done: read_rows_done(path, &f)?,
+        metrics: read_metrics(path, &f, &header.legend)?,
+        attractors: read_attractors(path, &f)?,
+        header,
+        outcome,
+        strides,
+        final_state,
+    })
+}

@@ -1,0 +1,80 @@
+//! HDF5 files and plots for pdw-sweep.
+//!
+//! * [`basin`]: the basin-of-attraction file (`pdw-sweep basin`): written row block by row block
+//!   as the grid is computed, flushed after each block, resumable after a kill, split into
+//!   shards and merged back ([`shard`]).
+//! * [`sweep`]: the parameter-continuation file (`pdw-sweep fixedpoint --sweep`): branches of
+//!   fixed points, their Floquet multipliers and stability, detected bifurcations and an optional
+//!   brute-force orbit diagram.
+//! * [`plot`]: PNG heatmaps of basins, two-panel bifurcation diagrams, line charts (log axes for
+//!   work-precision charts) and animated GIFs of a gait, drawn with `plotters`' pure-Rust bitmap
+//!   backend and an embedded DejaVu font (no system libraries).
+//!
+//! # Boundary
+//! This crate does not depend on the dynamics crates. It defines plain result types
+//! ([`BasinHeader`], [`BasinMetrics`], [`Attractor`], [`SweepData`], [`Frame`]) that the CLI fills
+//! from the limit-cycle crate's results. That keeps the one crate linking HDF5 (a C library built
+//! from source) off the critical path of the numerical crates: both build in parallel, and the
+//! kernel's tests never wait for HDF5. Plots take the same plain types, so they can be redrawn
+//! from a file without linking the kernel.
+//!
+//! # Basin file schema (`format = "pdw-sweep basin v1"`)
+//! ```text
+//! /                 attrs: format, version, command, created (RFC 3339, UTC), model, slope,
+//!                          params (JSON object), integrator, tolerances (JSON object),
+//!                          max_strides, elapsed_s, complete (bool);
+//!                          shard_index, shard_count (shard files only)
+//! /grid/x, /grid/y  f64 [nx], [ny]; attr `name` (a section coordinate, e.g. "theta")
+//! /basin/outcome    u8  [ny, nx]; attr `legend` = JSON object code → name; 255 = not computed
+//! /basin/strides    u16 [ny, nx]; strides until classified
+//! /basin/final      f64 [ny, nx, d]; last section state; attr `names` = JSON list of the d
+//!                   section coordinate names
+//! /basin/rows_done  u8  [ny]; 1 once a row is on disk (what `--resume` skips)
+//! /attractors/NAME  attrs period_strides, period_time; section f64 [k, d] (the k points of the
+//!                   orbit on the section), multipliers_re / multipliers_im f64 [m]
+//! /metrics          attrs basin_entropy, boundary_entropy, entropy_box, fractions (JSON object
+//!                   name → fraction), fraction_NAME (one f64 per outcome)
+//! ```
+//! `outcome`, `strides` and `final` are chunked by blocks of [`BLOCK_ROWS`] rows and
+//! deflate-compressed (`strides` and `final` byte-shuffled first). Row `i` of every 2-D dataset
+//! belongs to `y[i]`, column `j` to `x[j]`. Files are created with HDF5's file-space strategy
+//! `NONE` (see [`basin`] on crash safety), which HDF5 ≥ 1.10 reads (checked with h5py 3.16 /
+//! HDF5 2.0 and Debian's h5dump 1.10.8); `experiments/read_basin.py` reads and checks a file
+//! with h5py.
+//!
+//! # Example
+//! ```no_run
+//! use pdw_store::{BasinHeader, BasinMetrics, BasinWriter};
+//! # fn header() -> BasinHeader { unimplemented!() }
+//! # fn compute_row(i: usize) -> (Vec<u8>, Vec<u16>, Vec<f64>) { unimplemented!() }
+//! let h: BasinHeader = header();
+//! let mut w = BasinWriter::create("basin.h5", &h, false)?; // or BasinWriter::resume(path, &h)
+//! for i in w.rows_todo() {
+//!     let (outcome, strides, final_state) = compute_row(i); // nx, nx, nx·d values
+//!     w.write_rows(i, &outcome, &strides, &final_state)?;
+//! }
+//! let outcome = w.read_outcome()?; // (ny × nx), for the metrics
+//! # let metrics: BasinMetrics = unimplemented!();
+//! w.finish(&metrics, &[])?;
+//! # Ok::<(), pdw_store::StoreError>(())
+//! ```
+
+pub mod basin;
+mod error;
+mod h5util;
+pub mod plot;
+pub mod shard;
+pub mod sweep;
+mod time;
+
+pub use basin::{
+    read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
+    BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
+};
+pub use error::StoreError;
+pub use plot::{animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, Frame};
+pub use shard::{merge, shard_rows, ShardSpec};
+pub use sweep::{read_sweep, write_sweep, Bifurcation, Branch, OrbitDiagram, SweepData};
+
+/// Result type of this crate.
+pub type Result<T> = std::result::Result<T, StoreError>;

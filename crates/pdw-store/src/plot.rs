@@ -1,0 +1,893 @@
+//! Pictures: basin heatmaps, bifurcation diagrams, line charts (PNG) and gait animations (GIF).
+//!
+//! Drawn with `plotters`' pure-Rust bitmap backend. Text uses DejaVu Sans embedded in the
+//! binary (`dejavu` crate) and registered with `plotters::style::register_font`, so nothing is
+//! looked up on the system.
+
+use std::path::Path;
+use std::sync::Once;
+
+use ndarray::ArrayView2;
+use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+use crate::basin::{BasinHeader, NOT_COMPUTED};
+use crate::sweep::SweepData;
+use crate::{Result, StoreError};
+
+/// Pixel size of [`plot_basin`]'s PNG.
+pub const BASIN_PNG_SIZE: (u32, u32) = (960, 720);
+/// Pixel size of [`plot_bifurcation`]'s PNG.
+pub const BIFURCATION_PNG_SIZE: (u32, u32) = (900, 960);
+/// Pixel size of [`plot_lines`]' PNG.
+pub const LINES_PNG_SIZE: (u32, u32) = (900, 640);
+
+const FONT: &str = "sans-serif";
+
+fn register_fonts() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The embedded fonts are valid TrueType files; failure would only disable text.
+        let _ = plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular());
+        let _ = plotters::style::register_font(FONT, FontStyle::Bold, dejavu::sans::bold());
+    });
+}
+
+fn pe<E: std::fmt::Display>(path: &Path, e: E) -> StoreError {
+    StoreError::Plot {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    }
+}
+
+/// Compact tick label: plain decimals for 1e-3 ≤ |v| < 1e4 (up to 4 decimals, trailing zeros
+/// dropped), otherwise `1.5e-7` style.
+fn tick(v: &f64) -> String {
+    let a = v.abs();
+    if *v == 0.0 {
+        "0".into()
+    } else if (1e-3..1e4).contains(&a) {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        if s == "-0" || s.is_empty() {
+            "0".into()
+        } else {
+            s.to_string()
+        }
+    } else {
+        let s = format!("{v:.1e}");
+        s.replace(".0e", "e")
+    }
+}
+
+/// Tick label on a log axis: only 1, 2 and 5 times a power of ten are labelled (plotters puts
+/// a tick at every integer multiple, which crowds the labels).
+fn tick_log(v: &f64) -> String {
+    if *v <= 0.0 {
+        return String::new();
+    }
+    let m = v / 10f64.powf(v.log10().floor());
+    if [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .any(|k| (m - k).abs() < 1e-6 * k)
+    {
+        tick(v)
+    } else {
+        String::new()
+    }
+}
+
+fn rgb(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
+/// Colours for the outcomes of a legend: `gait` green, `other` blue, names containing
+/// `fall` reds and oranges (in legend order), `timeout` grey, `nonfinite` black, anything else
+/// purple/teal/pink. Returned in legend order as `(code, [r, g, b])`.
+pub fn outcome_colours(legend: &[(u8, String)]) -> Vec<(u8, [u8; 3])> {
+    const FALLS: [[u8; 3]; 6] = [
+        [214, 39, 40],
+        [255, 127, 14],
+        [166, 54, 3],
+        [250, 170, 100],
+        [140, 20, 40],
+        [240, 90, 70],
+    ];
+    const OTHERS: [[u8; 3]; 4] = [
+        [148, 103, 189],
+        [23, 190, 207],
+        [227, 119, 194],
+        [188, 189, 34],
+    ];
+    let (mut nf, mut no) = (0, 0);
+    legend
+        .iter()
+        .map(|(c, name)| {
+            let n = name.to_ascii_lowercase();
+            let col = if n == "gait" {
+                [44, 160, 44]
+            } else if n == "other" {
+                [31, 119, 180]
+            } else if n.contains("fall") {
+                nf += 1;
+                FALLS[(nf - 1) % FALLS.len()]
+            } else if n == "timeout" {
+                [150, 150, 150]
+            } else if n == "nonfinite" {
+                [0, 0, 0]
+            } else {
+                no += 1;
+                OTHERS[(no - 1) % OTHERS.len()]
+            };
+            (*c, col)
+        })
+        .collect()
+}
+
+/// Index of the grid point nearest to `v` (grid monotone, ascending or descending).
+fn nearest(grid: &[f64], v: f64) -> usize {
+    let asc = grid.len() < 2 || grid[0] <= grid[grid.len() - 1];
+    let k = if asc {
+        grid.partition_point(|&g| g < v)
+    } else {
+        grid.partition_point(|&g| g > v)
+    };
+    match k {
+        0 => 0,
+        k if k >= grid.len() => grid.len() - 1,
+        k => {
+            if (grid[k] - v).abs() < (v - grid[k - 1]).abs() {
+                k
+            } else {
+                k - 1
+            }
+        }
+    }
+}
+
+/// Extent of a grid of cell centres: from half a spacing before the first to half after the last.
+fn cell_extent(g: &[f64]) -> (f64, f64) {
+    let (lo, hi) = g
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let half = if g.len() > 1 {
+        (hi - lo) / (g.len() - 1) as f64 / 2.0
+    } else {
+        0.5
+    };
+    let half = if half > 0.0 { half } else { 0.5 };
+    (lo - half, hi + half)
+}
+
+/// Writes a PNG ([`BASIN_PNG_SIZE`]) heatmap of the outcome codes `outcome` (ny × nx, row i =
+/// `header.y[i]`), axes labelled with the header's coordinate names, a legend of the outcomes
+/// present with their fractions, and `marker` (e.g. the fixed point) as a ringed cross.
+pub fn plot_basin(
+    path: impl AsRef<Path>,
+    header: &BasinHeader,
+    outcome: ArrayView2<u8>,
+    marker: Option<(f64, f64)>,
+    title: &str,
+) -> Result<()> {
+    let path = path.as_ref();
+    let (ny, nx) = outcome.dim();
+    if ny != header.ny() || nx != header.nx() {
+        return Err(StoreError::invalid(
+            "basin plot",
+            format!(
+                "outcome is {ny} × {nx} but the grid is {} × {}",
+                header.ny(),
+                header.nx()
+            ),
+        ));
+    }
+    register_fonts();
+    let root = BitMapBackend::new(path, BASIN_PNG_SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| pe(path, x))?;
+    let (left, right) = root.split_horizontally(BASIN_PNG_SIZE.0 - 220);
+    let (x0, x1) = cell_extent(&header.x);
+    let (y0, y1) = cell_extent(&header.y);
+    let mut chart = ChartBuilder::on(&left)
+        .caption(title, (FONT, 22))
+        .margin(12)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|x| pe(path, x))?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .x_desc(header.x_name.as_str())
+        .y_desc(header.y_name.as_str())
+        .label_style((FONT, 15))
+        .axis_desc_style((FONT, 18))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+
+    let colours = outcome_colours(&header.legend);
+    let mut lut = [[255u8, 255, 255]; 256];
+    for (c, col) in &colours {
+        lut[*c as usize] = *col;
+    }
+    // One pixel at a time: each pixel shows the cell whose centre is nearest (works for grids
+    // coarser or finer than the picture).
+    {
+        let area = chart.plotting_area();
+        let (pxr, pyr) = area.get_pixel_range();
+        let (w, h) = ((pxr.end - pxr.start) as f64, (pyr.end - pyr.start) as f64);
+        let pix = area.strip_coord_spec();
+        let cols: Vec<usize> = (0..w as i32)
+            .map(|i| nearest(&header.x, x0 + (i as f64 + 0.5) / w * (x1 - x0)))
+            .collect();
+        for j in 0..h as i32 {
+            let row = nearest(&header.y, y1 - (j as f64 + 0.5) / h * (y1 - y0));
+            for (i, &col) in cols.iter().enumerate() {
+                let c = lut[outcome[[row, col]] as usize];
+                pix.draw_pixel((i as i32, j), &rgb(c))
+                    .map_err(|x| pe(path, x))?;
+            }
+        }
+    }
+    if let Some((mx, my)) = marker {
+        chart
+            .draw_series([
+                EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, WHITE.filled()),
+                EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, BLACK.stroke_width(2)),
+            ])
+            .map_err(|x| pe(path, x))?;
+        chart
+            .draw_series([Cross::new((mx, my), 6, BLACK.stroke_width(2))])
+            .map_err(|x| pe(path, x))?;
+    }
+
+    // Legend: outcomes present, with their fraction of computed cells.
+    let total = outcome.len().max(1) as f64;
+    let mut counts = [0usize; 256];
+    outcome.iter().for_each(|&c| counts[c as usize] += 1);
+    let mut entries: Vec<(String, [u8; 3])> = colours
+        .iter()
+        .filter(|(c, _)| counts[*c as usize] > 0)
+        .map(|(c, col)| {
+            let name = header.outcome_name(*c).unwrap_or("?");
+            (
+                format!("{name} {:.1}%", 100.0 * counts[*c as usize] as f64 / total),
+                *col,
+            )
+        })
+        .collect();
+    if counts[NOT_COMPUTED as usize] > 0 {
+        entries.push((
+            format!(
+                "not computed {:.1}%",
+                100.0 * counts[NOT_COMPUTED as usize] as f64 / total
+            ),
+            [255, 255, 255],
+        ));
+    }
+    let legend_top = 60;
+    for (k, (label, col)) in entries.iter().enumerate() {
+        let y = legend_top + 30 * k as i32;
+        right
+            .draw(&Rectangle::new([(10, y), (32, y + 20)], rgb(*col).filled()))
+            .map_err(|x| pe(path, x))?;
+        right
+            .draw(&Rectangle::new(
+                [(10, y), (32, y + 20)],
+                BLACK.stroke_width(1),
+            ))
+            .map_err(|x| pe(path, x))?;
+        right
+            .draw(&Text::new(
+                label.clone(),
+                (40, y + 2),
+                (FONT, 16).into_font(),
+            ))
+            .map_err(|x| pe(path, x))?;
+    }
+    if marker.is_some() {
+        let y = legend_top + 30 * entries.len() as i32 + 10;
+        right
+            .draw(&Circle::new((21, y + 10), 8, BLACK.stroke_width(2)))
+            .map_err(|x| pe(path, x))?;
+        right
+            .draw(&Cross::new((21, y + 10), 5, BLACK.stroke_width(2)))
+            .map_err(|x| pe(path, x))?;
+        right
+            .draw(&Text::new(
+                "fixed point",
+                (40, y + 2),
+                (FONT, 16).into_font(),
+            ))
+            .map_err(|x| pe(path, x))?;
+    }
+    root.present().map_err(|x| pe(path, x))?;
+    Ok(())
+}
+
+const BRANCH_COLOURS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+
+/// Splits a branch into maximal runs of equal stability; consecutive runs share their boundary
+/// point so the curve stays connected.
+fn stability_runs(stable: &[bool]) -> Vec<(std::ops::Range<usize>, bool)> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for i in 1..=stable.len() {
+        if i == stable.len() || stable[i] != stable[start] {
+            out.push((start..(i + 1).min(stable.len()), stable[start]));
+            start = i;
+        }
+    }
+    out
+}
+
+fn range_of(vals: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = vals
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if lo.is_finite() {
+        Some(if hi > lo {
+            (lo, hi)
+        } else {
+            (lo - 0.5 * lo.abs().max(1e-3), hi + 0.5 * hi.abs().max(1e-3))
+        })
+    } else {
+        None
+    }
+}
+
+fn pad((lo, hi): (f64, f64), f: f64) -> (f64, f64) {
+    let d = (hi - lo) * f;
+    (lo - d, hi + d)
+}
+
+/// Writes a two-panel PNG ([`BIFURCATION_PNG_SIZE`]): top, the moduli of the Floquet multipliers
+/// against the swept parameter (log scale) with the stability boundary |λ| = 1; bottom, section
+/// coordinate number `coordinate` against the parameter, with the orbit diagram's samples as grey
+/// dots if present. Stable stretches solid, unstable dashed; period doublings marked by red
+/// triangles, other bifurcations by black diamonds.
+pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: usize) -> Result<()> {
+    let path = path.as_ref();
+    data.validate()?;
+    if coordinate >= data.section_names.len() {
+        return Err(StoreError::invalid(
+            "bifurcation plot",
+            format!(
+                "coordinate {coordinate} out of range: section has {:?}",
+                data.section_names
+            ),
+        ));
+    }
+    register_fonts();
+    let root = BitMapBackend::new(path, BIFURCATION_PNG_SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| pe(path, x))?;
+    let panels = root.split_evenly((2, 1));
+
+    let orbit_params = data.orbit.iter().flat_map(|o| o.parameter.iter().copied());
+    let pr = range_of(
+        data.branches
+            .iter()
+            .flat_map(|b| b.parameter.iter().copied())
+            .chain(orbit_params),
+    )
+    .unwrap_or((0.0, 1.0));
+    let pr = pad(pr, 0.02);
+
+    // Top: |λ|.
+    let mods = data.branches.iter().flat_map(|b| {
+        b.multipliers
+            .iter()
+            .flat_map(|v| v.iter().map(|z| z.0.hypot(z.1)))
+    });
+    let (mlo, mhi) = range_of(mods.filter(|m| *m > 0.0)).unwrap_or((0.1, 10.0));
+    let (mlo, mhi) = ((mlo.min(0.5) / 1.5).max(1e-8), (mhi.max(2.0) * 1.5));
+    let mut top = ChartBuilder::on(&panels[0])
+        .caption(format!("{}: Floquet multipliers", data.model), (FONT, 20))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d(pr.0..pr.1, (mlo..mhi).log_scale())
+        .map_err(|x| pe(path, x))?;
+    top.configure_mesh()
+        .y_labels(12)
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick_log)
+        .x_desc(data.parameter.as_str())
+        .y_desc("|λ|")
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    top.draw_series(LineSeries::new(
+        [(pr.0, 1.0), (pr.1, 1.0)],
+        BLACK.stroke_width(1),
+    ))
+    .map_err(|x| pe(path, x))?
+    .label("|λ| = 1")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK));
+    // Bottom: section coordinate.
+    let sec_vals = data
+        .branches
+        .iter()
+        .flat_map(|b| b.section.iter().map(move |s| s[coordinate]))
+        .chain(
+            data.orbit
+                .iter()
+                .flat_map(|o| o.points.iter().flatten().copied()),
+        );
+    let sr = pad(range_of(sec_vals).unwrap_or((0.0, 1.0)), 0.05);
+    let mut bot = ChartBuilder::on(&panels[1])
+        .caption(
+            format!("{} on the section", data.section_names[coordinate]),
+            (FONT, 20),
+        )
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d(pr.0..pr.1, sr.0..sr.1)
+        .map_err(|x| pe(path, x))?;
+    bot.configure_mesh()
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .x_desc(data.parameter.as_str())
+        .y_desc(data.section_names[coordinate].as_str())
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    if let Some(o) = &data.orbit {
+        let pts = o.parameter.iter().zip(&o.points).flat_map(|(&p, row)| {
+            row.iter()
+                .filter(|v| v.is_finite())
+                .map(move |&v| Circle::new((p, v), 1, RGBColor(110, 110, 110).filled()))
+        });
+        bot.draw_series(pts)
+            .map_err(|x| pe(path, x))?
+            .label(format!("orbit diagram ({})", o.coordinate))
+            .legend(|(x, y)| Circle::new((x + 10, y), 2, RGBColor(110, 110, 110).filled()));
+    }
+
+    for (bi, b) in data.branches.iter().enumerate() {
+        let col = BRANCH_COLOURS[bi % BRANCH_COLOURS.len()];
+        let m = b.multipliers.first().map_or(0, |v| v.len());
+        for (run, stable) in stability_runs(&b.stable) {
+            let style = col.stroke_width(if stable { 2 } else { 1 });
+            for k in 0..m {
+                let pts: Vec<(f64, f64)> = run
+                    .clone()
+                    .map(|i| {
+                        (
+                            b.parameter[i],
+                            b.multipliers[i][k].0.hypot(b.multipliers[i][k].1),
+                        )
+                    })
+                    .filter(|p| p.1 > 0.0 && p.1.is_finite())
+                    .collect();
+                if stable {
+                    top.draw_series(LineSeries::new(pts, style))
+                        .map_err(|x| pe(path, x))?;
+                } else {
+                    top.draw_series(DashedLineSeries::new(pts, 6, 4, style))
+                        .map_err(|x| pe(path, x))?;
+                }
+            }
+            let pts: Vec<(f64, f64)> = run
+                .map(|i| (b.parameter[i], b.section[i][coordinate]))
+                .collect();
+            if stable {
+                bot.draw_series(LineSeries::new(pts, style))
+                    .map_err(|x| pe(path, x))?;
+            } else {
+                bot.draw_series(DashedLineSeries::new(pts, 6, 4, style))
+                    .map_err(|x| pe(path, x))?;
+            }
+        }
+        // Legend entries (empty series carry the label).
+        let label = format!("{} (solid stable, dashed unstable)", b.name);
+        bot.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(|x| pe(path, x))?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
+    }
+    let is_pd = |k: &str| k.to_ascii_lowercase().contains("period");
+    // Bifurcations: on the |λ| = 1 line above, on the branch below.
+    for z in &data.bifurcations {
+        let x = z.parameter;
+        let y = z.section[coordinate];
+        if is_pd(&z.kind) {
+            top.draw_series([TriangleMarker::new((x, 1.0), 8, RED.filled())])
+                .map_err(|x| pe(path, x))?;
+            bot.draw_series([TriangleMarker::new((x, y), 8, RED.filled())])
+                .map_err(|x| pe(path, x))?;
+        } else {
+            let diamond = || Polygon::new(vec![(0, -7), (7, 0), (0, 7), (-7, 0)], BLACK.filled());
+            top.draw_series([EmptyElement::at((x, 1.0)) + diamond()])
+                .map_err(|x| pe(path, x))?;
+            bot.draw_series([EmptyElement::at((x, y)) + diamond()])
+                .map_err(|x| pe(path, x))?;
+        }
+    }
+    if data.bifurcations.iter().any(|z| is_pd(&z.kind)) {
+        bot.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(|x| pe(path, x))?
+            .label("period doubling")
+            .legend(|(x, y)| TriangleMarker::new((x + 10, y), 7, RED.filled()));
+    }
+    if data.bifurcations.iter().any(|z| !is_pd(&z.kind)) {
+        bot.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(|x| pe(path, x))?
+            .label("fold / Neimark–Sacker")
+            .legend(|(x, y)| {
+                EmptyElement::at((x + 10, y))
+                    + Polygon::new(vec![(0, -6), (6, 0), (0, 6), (-6, 0)], BLACK.filled())
+            });
+    }
+    top.configure_series_labels()
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    bot.configure_series_labels()
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    root.present().map_err(|x| pe(path, x))?;
+    Ok(())
+}
+
+/// Title and axis labels of a chart.
+struct Labels<'a> {
+    title: &'a str,
+    x: &'a str,
+    y: &'a str,
+    log_x: bool,
+    log_y: bool,
+}
+
+fn draw_lines<XR, YR>(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    path: &Path,
+    labels: &Labels<'_>,
+    series: &[(String, Vec<(f64, f64)>)],
+    xr: XR,
+    yr: YR,
+) -> Result<()>
+where
+    XR: AsRangedCoord<Value = f64>,
+    YR: AsRangedCoord<Value = f64>,
+    XR::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    YR::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(labels.title, (FONT, 22))
+        .margin(14)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d(xr, yr)
+        .map_err(|x| pe(path, x))?;
+    chart
+        .configure_mesh()
+        .x_labels(10)
+        .y_labels(10)
+        .x_label_formatter(if labels.log_x { &tick_log } else { &tick })
+        .y_label_formatter(if labels.log_y { &tick_log } else { &tick })
+        .x_desc(labels.x)
+        .y_desc(labels.y)
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    for (k, (name, pts)) in series.iter().enumerate() {
+        let col = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), col.stroke_width(2)))
+            .map_err(|x| pe(path, x))?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, col.filled())))
+            .map_err(|x| pe(path, x))?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    Ok(())
+}
+
+/// Writes a PNG ([`LINES_PNG_SIZE`]) of named polylines with point markers, optionally on
+/// logarithmic axes (work-precision charts: error vs time). With a log axis, points with a
+/// non-positive coordinate on it are dropped; non-finite points are always dropped.
+pub fn plot_lines(
+    path: impl AsRef<Path>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    log_x: bool,
+    log_y: bool,
+) -> Result<()> {
+    let path = path.as_ref();
+    let keep = |p: &(f64, f64)| {
+        p.0.is_finite() && p.1.is_finite() && (!log_x || p.0 > 0.0) && (!log_y || p.1 > 0.0)
+    };
+    let series: Vec<(String, Vec<(f64, f64)>)> = series
+        .iter()
+        .map(|(n, v)| (n.clone(), v.iter().copied().filter(keep).collect()))
+        .collect();
+    let all = || series.iter().flat_map(|(_, v)| v.iter().copied());
+    let (xr, yr) = match (range_of(all().map(|p| p.0)), range_of(all().map(|p| p.1))) {
+        (Some(x), Some(y)) => (x, y),
+        _ => {
+            return Err(StoreError::invalid(
+                "line plot",
+                format!("{title}: no finite points to draw"),
+            ))
+        }
+    };
+    let widen = |(lo, hi): (f64, f64), log: bool| {
+        if log {
+            (lo / 1.3, hi * 1.3)
+        } else {
+            pad((lo, hi), 0.04)
+        }
+    };
+    let (xr, yr) = (widen(xr, log_x), widen(yr, log_y));
+    register_fonts();
+    let root = BitMapBackend::new(path, LINES_PNG_SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| pe(path, x))?;
+    let labels = Labels {
+        title,
+        x: x_label,
+        y: y_label,
+        log_x,
+        log_y,
+    };
+    let (xa, xb, ya, yb) = (xr.0, xr.1, yr.0, yr.1);
+    let lin = |a: f64, b: f64| a..b;
+    match (log_x, log_y) {
+        (false, false) => draw_lines(&root, path, &labels, &series, lin(xa, xb), lin(ya, yb)),
+        (true, false) => draw_lines(
+            &root,
+            path,
+            &labels,
+            &series,
+            lin(xa, xb).log_scale(),
+            lin(ya, yb),
+        ),
+        (false, true) => draw_lines(
+            &root,
+            path,
+            &labels,
+            &series,
+            lin(xa, xb),
+            lin(ya, yb).log_scale(),
+        ),
+        (true, true) => draw_lines(
+            &root,
+            path,
+            &labels,
+            &series,
+            lin(xa, xb).log_scale(),
+            lin(ya, yb).log_scale(),
+        ),
+    }?;
+    root.present().map_err(|x| pe(path, x))?;
+    Ok(())
+}
+
+/// One picture of a walker, in world coordinates (metres or leg lengths; x along the ground's
+/// horizontal, y up).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Frame {
+    /// Links as segments from one joint to the next.
+    pub links: Vec<((f64, f64), (f64, f64))>,
+    /// Joint and point-mass positions (drawn as dots).
+    pub joints: Vec<(f64, f64)>,
+    /// Two points on the slope line (drawn across the whole picture).
+    pub slope: ((f64, f64), (f64, f64)),
+    /// The swing foot's path so far.
+    pub trace: Vec<(f64, f64)>,
+    /// Caption of this frame, e.g. `"t = 1.23"`.
+    pub label: String,
+}
+
+/// Clips the infinite line through `a`, `b` to the box `[x0, x1] × [y0, y1]` (Liang–Barsky on
+/// the parametric line).
+fn clip_line(
+    a: (f64, f64),
+    b: (f64, f64),
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+) -> Option<[(f64, f64); 2]> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    for (p, q) in [
+        (-dx, a.0 - x0),
+        (dx, x1 - a.0),
+        (-dy, a.1 - y0),
+        (dy, y1 - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some({
+        [
+            (a.0 + t0 * dx, a.1 + t0 * dy),
+            (a.0 + t1 * dx, a.1 + t1 * dy),
+        ]
+    })
+}
+
+/// Writes an animated GIF of `frames` at `size` pixels, `delay_ms` per frame, with the same
+/// axes in every frame (the bounding box of all links, joints and traces, padded, with equal
+/// scales on x and y): slope in brown, links black, joints as dots, swing-foot trace in blue.
+pub fn animate_gif(
+    path: impl AsRef<Path>,
+    frames: &[Frame],
+    size: (u32, u32),
+    delay_ms: u32,
+    title: &str,
+) -> Result<()> {
+    let path = path.as_ref();
+    if frames.is_empty() || size.0 < 64 || size.1 < 64 {
+        return Err(StoreError::invalid(
+            "animation",
+            format!(
+                "need at least one frame and at least 64 × 64 pixels (got {} frames, {size:?})",
+                frames.len()
+            ),
+        ));
+    }
+    let pts = || {
+        frames.iter().flat_map(|f| {
+            f.links
+                .iter()
+                .flat_map(|(a, b)| [*a, *b])
+                .chain(f.joints.iter().copied())
+                .chain(f.trace.iter().copied())
+        })
+    };
+    let (xr, yr) = match (range_of(pts().map(|p| p.0)), range_of(pts().map(|p| p.1))) {
+        (Some(x), Some(y)) => (pad(x, 0.1), pad(y, 0.15)),
+        _ => {
+            return Err(StoreError::invalid(
+                "animation",
+                "no finite coordinates in the frames",
+            ))
+        }
+    };
+    // Equal scales: widen the narrower extent to the picture's aspect ratio (the plotting area
+    // is the picture minus the caption band).
+    let caption_h = 40.0;
+    let (w, h) = (size.0 as f64 - 20.0, size.1 as f64 - caption_h - 20.0);
+    let (sx, sy) = ((xr.1 - xr.0) / w, (yr.1 - yr.0) / h);
+    let s = sx.max(sy);
+    let (cx, cy) = ((xr.0 + xr.1) / 2.0, (yr.0 + yr.1) / 2.0);
+    let (x0, x1) = (cx - s * w / 2.0, cx + s * w / 2.0);
+    let (y0, y1) = (cy - s * h / 2.0, cy + s * h / 2.0);
+    register_fonts();
+    let root = BitMapBackend::gif(path, size, delay_ms)
+        .map_err(|x| pe(path, x))?
+        .into_drawing_area();
+    for f in frames {
+        root.fill(&WHITE).map_err(|x| pe(path, x))?;
+        let caption = if f.label.is_empty() {
+            title.to_string()
+        } else {
+            format!("{title}   {}", f.label)
+        };
+        let mut chart = ChartBuilder::on(&root)
+            .caption(caption, (FONT, 18))
+            .margin(10)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|x| pe(path, x))?;
+        if let Some(seg) = clip_line(f.slope.0, f.slope.1, x0, x1, y0, y1) {
+            chart
+                .draw_series(LineSeries::new(seg, RGBColor(140, 90, 40).stroke_width(3)))
+                .map_err(|x| pe(path, x))?;
+        }
+        chart
+            .draw_series(LineSeries::new(
+                f.trace.iter().copied(),
+                RGBColor(31, 119, 180).stroke_width(1),
+            ))
+            .map_err(|x| pe(path, x))?;
+        chart
+            .draw_series(
+                f.links
+                    .iter()
+                    .map(|&(a, b)| PathElement::new([a, b], BLACK.stroke_width(3))),
+            )
+            .map_err(|x| pe(path, x))?;
+        chart
+            .draw_series(
+                f.joints
+                    .iter()
+                    .map(|&p| Circle::new(p, 5, RGBColor(214, 39, 40).filled())),
+            )
+            .map_err(|x| pe(path, x))?;
+        root.present().map_err(|x| pe(path, x))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_compact() {
+        assert_eq!(tick(&0.001), "0.001");
+        assert_eq!(tick(&0.25), "0.25");
+        assert_eq!(tick(&-0.15), "-0.15");
+        assert_eq!(tick(&0.0100000001), "0.01");
+        assert_eq!(tick(&9.999999999e-5), "1e-4");
+        assert_eq!(tick(&1.5e-7), "1.5e-7");
+        assert_eq!(tick(&0.0), "0");
+        assert_eq!(tick_log(&0.005), "0.005");
+        assert_eq!(tick_log(&0.007), "");
+        assert_eq!(tick_log(&2e-9), "2e-9");
+    }
+
+    #[test]
+    fn nearest_picks_closest_grid_point_in_either_order() {
+        let g = [0.0, 1.0, 2.0, 3.0];
+        assert_eq!(nearest(&g, -5.0), 0);
+        assert_eq!(nearest(&g, 1.4), 1);
+        assert_eq!(nearest(&g, 1.6), 2);
+        assert_eq!(nearest(&g, 9.0), 3);
+        let r = [3.0, 2.0, 1.0, 0.0];
+        assert_eq!(nearest(&r, 1.4), 2);
+        assert_eq!(nearest(&r, 2.9), 0);
+    }
+
+    #[test]
+    fn stability_runs_share_boundary_points_and_cover_branch() {
+        let runs = stability_runs(&[true, true, false, false, true]);
+        assert_eq!(runs, vec![(0..3, true), (2..5, false), (4..5, true)]);
+    }
+
+    #[test]
+    fn clipped_slope_line_ends_on_box_edges() {
+        // Line y = −0.1 x through the box [−1, 1] × [−1, 1]: enters at x = −1, leaves at x = 1.
+        let s = clip_line((0.0, 0.0), (1.0, -0.1), -1.0, 1.0, -1.0, 1.0).unwrap();
+        assert!((s[0].0 + 1.0).abs() < 1e-15 && (s[0].1 - 0.1).abs() < 1e-15);
+        assert!((s[1].0 - 1.0).abs() < 1e-15 && (s[1].1 + 0.1).abs() < 1e-15);
+        assert!(clip_line((0.0, 5.0), (1.0, 5.0), -1.0, 1.0, -1.0, 1.0).is_none());
+    }
+}

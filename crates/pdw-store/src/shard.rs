@@ -1,0 +1,262 @@
+//! Splitting a basin grid across processes and joining the pieces.
+//!
+//! # Split
+//! Rows are dealt out in blocks of [`BLOCK_ROWS`] (the chunk height of the datasets),
+//! round-robin: block `b = row / BLOCK_ROWS` goes to shard `b mod N`. Round-robin balances the
+//! load (cells near the basin's thin band take many strides, cells far from it fall at once, so
+//! contiguous halves of a grid can differ in cost by a large factor), and aligning to chunks means
+//! each shard writes whole chunks only. Every shard file has the full grid shape; rows of other
+//! shards stay at the fill value and take no space (HDF5 allocates chunks on first write).
+//!
+//! # Merge: a copy, not a virtual dataset
+//! [`merge`] copies the shards' rows into one new file rather than building an HDF5 virtual
+//! dataset over them: the result is a single self-contained file that can be moved, archived or
+//! mailed without its shards; a virtual dataset resolves its source files by path at read time
+//! (a moved or deleted shard silently reads as fill values) and is not understood by every
+//! reader of HDF5 (netCDF-4 tools, older MATLAB), while a plain chunked dataset is; the copy
+//! keeps chunking and compression, so the merged file is about the size of the shards together;
+//! and the merged file gets whole-grid metrics, which no shard has. The cost is one pass over
+//! the data, small next to computing it.
+
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+
+use ndarray::{s, ArrayView2};
+
+use crate::basin::{read_attractors, BasinHeader, BasinMetrics, BasinWriter, BLOCK_ROWS};
+use crate::h5util::{check_target, get_attr, open_file, rename_into_place, temp_sibling, At};
+use crate::{Result, StoreError};
+
+/// Shard `index` of `count` (0-based: `index` in `0..count`); written and parsed as `"I/N"`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ShardSpec {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl ShardSpec {
+    /// Checks `count ≥ 1` and `index < count`.
+    pub fn validate(&self) -> Result<()> {
+        if self.count == 0 || self.index >= self.count {
+            return Err(StoreError::invalid(
+                "shard",
+                format!(
+                    "{}/{}: need I/N with N ≥ 1 and 0 ≤ I < N (shards are numbered from 0)",
+                    self.index, self.count
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for ShardSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl FromStr for ShardSpec {
+    type Err = StoreError;
+    /// Parses `"I/N"`, e.g. `"0/4"`.
+    fn from_str(s: &str) -> Result<Self> {
+        let bad = || {
+            StoreError::invalid(
+                "shard",
+                format!("{s:?}: expected I/N, e.g. 0/4 (shards are numbered from 0 to N-1)"),
+            )
+        };
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let spec = ShardSpec {
+            index: i.trim().parse().map_err(|_| bad())?,
+            count: n.trim().parse().map_err(|_| bad())?,
+        };
+        spec.validate()?;
+        Ok(spec)
+    }
+}
+
+/// Rows of a grid of `ny` rows that shard `index` of `count` computes, ascending: the rows of
+/// blocks `b ≡ index (mod count)`, blocks being [`BLOCK_ROWS`] consecutive rows.
+///
+/// Over `index = 0..count` every row appears exactly once.
+pub fn shard_rows(ny: usize, index: usize, count: usize) -> Result<Vec<usize>> {
+    ShardSpec { index, count }.validate()?;
+    Ok((0..ny)
+        .filter(|r| (r / BLOCK_ROWS) % count == index)
+        .collect())
+}
+
+/// Joins complete shard files into one new basin file at `out`.
+///
+/// Checks that every shard is complete, that all were made for the same run (model, slope,
+/// params, grid, legend, … as [`BasinWriter::resume`] compares) with the same shard count and
+/// the same attractors, and that their indices are `0..N` exactly once — so together they cover
+/// every row exactly once. Then copies the rows into a temporary file beside `out`, computes the
+/// whole grid's metrics with `metrics(header, outcome)` (outcome (ny × nx)), finishes the file
+/// (`complete = true`, `elapsed_s` = the shards' sum, attractors of the shards) and renames it
+/// onto `out`. An existing `out` is refused unless `force`, and is replaced only by a finished
+/// file; on any error `out` and the shards are untouched. `command` is recorded in the new file.
+pub fn merge<P: AsRef<Path>>(
+    shards: &[P],
+    out: impl AsRef<Path>,
+    force: bool,
+    command: &str,
+    metrics: impl FnOnce(&BasinHeader, ArrayView2<u8>) -> BasinMetrics,
+) -> Result<BasinHeader> {
+    let out = out.as_ref();
+    check_target(out, force)?;
+    if shards.is_empty() {
+        return Err(StoreError::Coverage {
+            detail: "no shard files given".into(),
+        });
+    }
+    let out_canon = std::fs::canonicalize(out).ok();
+    struct Shard {
+        header: BasinHeader,
+        elapsed: f64,
+    }
+    let mut list: Vec<Shard> = Vec::new();
+    let mut attractors = None;
+    for p in shards {
+        let p = p.as_ref();
+        if out_canon.is_some() && std::fs::canonicalize(p).ok() == out_canon {
+            return Err(StoreError::invalid(
+                "merge",
+                format!("output {} is also one of the shards", out.display()),
+            ));
+        }
+        let f = open_file(p, false)?;
+        let header = crate::basin::read_basin_header(p)?;
+        let spec = header.shard.ok_or_else(|| StoreError::Coverage {
+            detail: format!(
+                "{} is not a shard file (no shard_index/shard_count)",
+                p.display()
+            ),
+        })?;
+        let done = f
+            .dataset("basin/rows_done")
+            .and_then(|d| d.read_raw::<u8>())
+            .at(p, "reading /basin/rows_done")?;
+        let own = shard_rows(header.ny(), spec.index, spec.count)?;
+        let n_done = own.iter().filter(|&&r| done[r] != 0).count();
+        let complete: bool = get_attr(p, "pdw-sweep basin", &f, "complete")?;
+        if n_done != own.len() || !complete {
+            return Err(StoreError::Incomplete {
+                path: p.to_path_buf(),
+                done: n_done,
+                expected: own.len(),
+            });
+        }
+        let att = read_attractors(p, &f)?;
+        if let Some(first) = list.first() {
+            let first_count = first.header.shard.map_or(0, |s| s.count);
+            if spec.count != first_count {
+                return Err(StoreError::Mismatch {
+                    path: p.to_path_buf(),
+                    field: "shard".into(),
+                    found: spec.to_string(),
+                    expected: format!("a shard of {first_count}"),
+                });
+            }
+            let mut want = first.header.clone();
+            want.shard = header.shard;
+            want.check_matches(&header, p)?;
+            if attractors.as_ref() != Some(&att) {
+                return Err(StoreError::Mismatch {
+                    path: p.to_path_buf(),
+                    field: "attractors".into(),
+                    found: format!("{att:?}"),
+                    expected: format!("{:?}", attractors.unwrap_or_default()),
+                });
+            }
+        } else {
+            attractors = Some(att);
+        }
+        if list.iter().any(|s| s.header.shard == Some(spec)) {
+            return Err(StoreError::Coverage {
+                detail: format!("shard {spec} given twice ({})", p.display()),
+            });
+        }
+        let elapsed: f64 = get_attr(p, "pdw-sweep basin", &f, "elapsed_s")?;
+        list.push(Shard { header, elapsed });
+    }
+    let count = list[0].header.shard.map_or(0, |s| s.count);
+    if list.len() != count {
+        let have: Vec<String> = list
+            .iter()
+            .filter_map(|s| s.header.shard.map(|x| x.to_string()))
+            .collect();
+        return Err(StoreError::Coverage {
+            detail: format!(
+                "{count} shards needed, got {} ({})",
+                list.len(),
+                have.join(", ")
+            ),
+        });
+    }
+    // Count matching and uniqueness imply indices are exactly 0..count.
+
+    let mut header = list[0].header.clone();
+    header.shard = None;
+    header.command = command.to_string();
+    let tmp = temp_sibling(out);
+    let result = (|| -> Result<BasinHeader> {
+        let mut w = BasinWriter::create(&tmp, &header, true)?;
+        w.set_elapsed_before(list.iter().map(|s| s.elapsed).sum());
+        let (nx, d) = (header.nx(), header.d());
+        for (s, p) in list.iter().zip(shards) {
+            let p = p.as_ref();
+            let f = open_file(p, false)?;
+            let ds = |n: &str| f.dataset(n).at(p, "opening the basin datasets");
+            let (o, st, fs) = (
+                ds("basin/outcome")?,
+                ds("basin/strides")?,
+                ds("basin/final")?,
+            );
+            let spec = s.header.shard.expect("checked above");
+            let rows = shard_rows(header.ny(), spec.index, spec.count)?;
+            for block in rows.chunks(BLOCK_ROWS) {
+                // Blocks of a shard are runs of consecutive rows.
+                let (r0, r1) = (block[0], block[block.len() - 1] + 1);
+                debug_assert_eq!(r1 - r0, block.len());
+                let ob = o
+                    .read_slice_2d::<u8, _>(s![r0..r1, ..])
+                    .at(p, "reading rows")?;
+                let sb = st
+                    .read_slice_2d::<u16, _>(s![r0..r1, ..])
+                    .at(p, "reading rows")?;
+                let fb = fs
+                    .read_slice::<f64, _, ndarray::Ix3>(s![r0..r1, .., ..])
+                    .at(p, "reading rows")?;
+                let k = r1 - r0;
+                let ov: Vec<u8> = ob.iter().copied().collect();
+                let sv: Vec<u16> = sb.iter().copied().collect();
+                let fv: Vec<f64> = fb.iter().copied().collect();
+                if ov.len() != k * nx || fv.len() != k * nx * d {
+                    return Err(StoreError::Format {
+                        path: p.to_path_buf(),
+                        expected: "pdw-sweep basin",
+                        detail: "row block of unexpected size".into(),
+                    });
+                }
+                w.write_rows(r0, &ov, &sv, &fv)?;
+            }
+        }
+        let outcome = w.read_outcome()?;
+        let m = metrics(&header, outcome.view());
+        w.finish(&m, attractors.as_deref().unwrap_or(&[]))?;
+        Ok(header.clone())
+    })();
+    match result {
+        Ok(h) => {
+            rename_into_place(&tmp, out)?;
+            Ok(h)
+        }
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}

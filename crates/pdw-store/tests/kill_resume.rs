@@ -1,0 +1,102 @@
+//! A writer process killed with SIGKILL at arbitrary moments leaves a file that resumes to the
+//! same datasets as an uninterrupted run.
+
+mod common;
+
+use std::process::Command;
+use std::time::Duration;
+
+use common::*;
+use pdw_store::{read_basin, BasinWriter};
+
+const NX: usize = 300;
+const NY: usize = 3200;
+
+/// Child process body: resume the file named by `PDW_STORE_CHILD` and write its remaining rows
+/// one at a time (run by `killed_writer_resumes_to_uninterrupted_result`, not on its own).
+#[test]
+#[ignore = "child process of killed_writer_resumes_to_uninterrupted_result"]
+fn child_writer_process() {
+    let path = std::env::var("PDW_STORE_CHILD").expect("run by the parent test");
+    let h = header(NX, NY);
+    let mut w = BasinWriter::resume(&path, &h).unwrap();
+    for r in w.rows_todo() {
+        write_block(&mut w, r, 1);
+    }
+}
+
+#[test]
+fn killed_writer_resumes_to_uninterrupted_result() {
+    let dir = scratch("kill");
+    let h = header(NX, NY);
+    let reference = dir.join("reference.h5");
+    let mut w = BasinWriter::create(&reference, &h, false).unwrap();
+    for r0 in (0..NY).step_by(16) {
+        write_block(&mut w, r0, 16.min(NY - r0));
+    }
+    let (o, _, _) = block(&h, 0, NY);
+    w.finish(&fractions(&h, &o), &attractors()).unwrap();
+
+    let p = dir.join("killed.h5");
+    BasinWriter::create(&p, &h, false).unwrap();
+    let exe = std::env::current_exe().unwrap();
+    let mut kills = 0;
+    for delay_ms in [40u64, 75, 20, 110, 55, 90, 30, 140, 65, 25, 85, 45] {
+        let mut child = Command::new(&exe)
+            .args([
+                "--exact",
+                "child_writer_process",
+                "--ignored",
+                "--nocapture",
+                "--test-threads=1",
+            ])
+            .env("PDW_STORE_CHILD", &p)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(delay_ms));
+        if child.try_wait().unwrap().is_none() {
+            child.kill().unwrap(); // SIGKILL: no destructor, no flush
+            kills += 1;
+        }
+        child.wait().unwrap();
+        // Whatever the moment, the file must reopen, and every row marked done must be right.
+        let d = read_basin(&p).unwrap();
+        let (o, s, _) = block(&h, 0, NY);
+        for i in (0..NY).filter(|&i| d.rows_done[i]) {
+            assert_eq!(
+                d.outcome.row(i).to_vec(),
+                o[i * NX..(i + 1) * NX].to_vec(),
+                "row {i}"
+            );
+            assert_eq!(
+                d.strides.row(i).to_vec(),
+                s[i * NX..(i + 1) * NX].to_vec(),
+                "row {i}"
+            );
+        }
+    }
+    assert!(
+        kills >= 4,
+        "the writer always finished before being killed: grid too small"
+    );
+    let mut w = BasinWriter::resume(&p, &h).unwrap();
+    for r in w.rows_todo() {
+        write_block(&mut w, r, 1);
+    }
+    w.finish(&fractions(&h, &o), &attractors()).unwrap();
+    let (a, b) = (read_basin(&reference).unwrap(), read_basin(&p).unwrap());
+    assert_eq!(a.outcome, b.outcome);
+    assert_eq!(a.strides, b.strides);
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(
+        bits(a.final_state.as_slice().unwrap()),
+        bits(b.final_state.as_slice().unwrap())
+    );
+    assert_eq!(a.metrics, b.metrics);
+    eprintln!(
+        "killed {kills} times; file size {} bytes",
+        std::fs::metadata(&p).unwrap().len()
+    );
+}

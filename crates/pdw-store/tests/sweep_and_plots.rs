@@ -1,0 +1,259 @@
+//! The sweep file round trip, and the pictures: size, format, and colours where they matter.
+
+mod common;
+
+use common::*;
+use pdw_store::plot::{BASIN_PNG_SIZE, BIFURCATION_PNG_SIZE, LINES_PNG_SIZE};
+use pdw_store::{
+    animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, read_basin, read_sweep,
+    write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram, StoreError, SweepData,
+};
+
+fn sweep() -> SweepData {
+    let n = 40;
+    let g: Vec<f64> = linspace(0.001, 0.019, n);
+    let stable: Vec<bool> = g.iter().map(|&x| x < 0.0151).collect();
+    SweepData {
+        command: "pdw-sweep fixedpoint --sweep slope=0.001:0.019:40".into(),
+        model: "simplest".into(),
+        parameter: "slope".into(),
+        params: "{}".into(),
+        section_names: vec!["theta".into(), "thetadot".into()],
+        branches: vec![
+            Branch {
+                name: "period-1".into(),
+                period_strides: 1,
+                parameter: g.clone(),
+                section: g
+                    .iter()
+                    .map(|&x| vec![0.97 * x.cbrt(), -0.97 * x.cbrt()])
+                    .collect(),
+                multipliers: g
+                    .iter()
+                    .map(|&x| {
+                        let r = 0.4 + 40.0 * x;
+                        vec![(-r, 0.1), (-r, -0.1)]
+                    })
+                    .collect(),
+                stable,
+            },
+            Branch {
+                name: "period-2".into(),
+                period_strides: 2,
+                parameter: vec![0.0152, 0.016, 0.017],
+                section: vec![vec![0.25, -0.24], vec![0.26, -0.25], vec![0.27, -0.26]],
+                multipliers: vec![vec![(0.9, 0.0)], vec![(0.5, 0.0)], vec![(0.2, 0.0)]],
+                stable: vec![true, true, true],
+            },
+        ],
+        bifurcations: vec![
+            Bifurcation {
+                kind: "period-doubling".into(),
+                parameter: 0.0151,
+                branch: 0,
+                section: vec![0.24, -0.24],
+            },
+            Bifurcation {
+                kind: "fold".into(),
+                parameter: 0.0185,
+                branch: 0,
+                section: vec![0.26, -0.26],
+            },
+        ],
+        orbit: Some(OrbitDiagram {
+            coordinate: "theta".into(),
+            parameter: linspace(0.012, 0.019, 30),
+            points: (0..30)
+                .map(|k| {
+                    (0..8)
+                        .map(|s| {
+                            if k > 25 && s == 3 {
+                                f64::NAN
+                            } else {
+                                0.2 + 0.001 * (k * s) as f64
+                            }
+                        })
+                        .collect()
+                })
+                .collect(),
+        }),
+    }
+}
+
+#[test]
+fn sweep_file_round_trips_and_is_not_overwritten_without_force() {
+    let dir = scratch("sweep");
+    let p = dir.join("bif.h5");
+    let s = sweep();
+    write_sweep(&p, false, &s).unwrap();
+    let r = read_sweep(&p).unwrap();
+    // NaN ≠ NaN: compare the orbit diagram bitwise, the rest structurally.
+    let bits = |o: &OrbitDiagram| {
+        o.points
+            .iter()
+            .flatten()
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        bits(r.orbit.as_ref().unwrap()),
+        bits(s.orbit.as_ref().unwrap())
+    );
+    let (mut a, mut b) = (r.clone(), s.clone());
+    a.orbit = None;
+    b.orbit = None;
+    assert_eq!(a, b);
+
+    let before = bytes(&p);
+    let err = write_sweep(&p, false, &s).unwrap_err();
+    assert!(matches!(err, StoreError::Exists { .. }), "{err}");
+    assert_eq!(bytes(&p), before);
+    write_sweep(&p, true, &s).unwrap();
+
+    let mut bad = s.clone();
+    bad.branches[0].stable.pop();
+    assert!(matches!(
+        write_sweep(dir.join("x.h5"), false, &bad),
+        Err(StoreError::Invalid { .. })
+    ));
+    assert!(!dir.join("x.h5").exists());
+}
+
+/// Width, height and RGBA pixels of a PNG.
+fn decode_png(p: &std::path::Path) -> (u32, u32, Vec<u8>, png::ColorType) {
+    let dec = png::Decoder::new(std::fs::File::open(p).unwrap());
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf, info.color_type)
+}
+
+#[test]
+fn basin_png_has_stated_size_and_paints_cells_in_outcome_colours() {
+    let dir = scratch("basinpng");
+    let (nx, ny) = (60, 45);
+    let h = header(nx, ny);
+    let p = dir.join("b.h5");
+    let mut w = BasinWriter::create(&p, &h, false).unwrap();
+    write_block(&mut w, 0, 32); // rows 32.. stay "not computed"
+    drop(w);
+    let d = read_basin(&p).unwrap();
+    let png_path = dir.join("basin.png");
+    plot_basin(
+        &png_path,
+        &d.header,
+        d.outcome.view(),
+        Some((0.2003, -0.1998)),
+        "simplest, γ = 0.009",
+    )
+    .unwrap();
+    let (w, hgt, px, ct) = decode_png(&png_path);
+    assert_eq!((w, hgt), BASIN_PNG_SIZE);
+    assert_eq!(ct, png::ColorType::Rgb);
+    // Every outcome colour present in the grid appears in the picture, and the gait colour
+    // covers a share of the picture's pixels comparable to its share of the cells.
+    let colours = outcome_colours(&d.header.legend);
+    let count = |c: [u8; 3]| px.chunks(3).filter(|q| q == &c).count();
+    for (code, c) in &colours {
+        if d.outcome.iter().any(|o| o == code) {
+            assert!(count(*c) > 0, "colour of outcome {code} missing");
+        }
+    }
+    let gait_cells = d.outcome.iter().filter(|o| **o == 0).count() as f64 / (nx * ny) as f64;
+    let plot_px = 0.55 * (w * hgt) as f64; // rough plotting-area share of the picture
+    let gait_px = count(colours[0].1) as f64 / plot_px;
+    assert!(
+        (gait_px / gait_cells - 1.0).abs() < 0.35,
+        "gait share: cells {gait_cells:.3}, pixels {gait_px:.3}"
+    );
+
+    // Wrong shape is refused.
+    let err = plot_basin(
+        dir.join("x.png"),
+        &h,
+        d.outcome.slice(ndarray::s![..10, ..]),
+        None,
+        "",
+    );
+    assert!(matches!(err, Err(StoreError::Invalid { .. })));
+}
+
+#[test]
+fn bifurcation_and_line_pngs_have_stated_sizes() {
+    let dir = scratch("otherpng");
+    let p = dir.join("bif.png");
+    plot_bifurcation(&p, &sweep(), 0).unwrap();
+    let (w, h, px, _) = decode_png(&p);
+    assert_eq!((w, h), BIFURCATION_PNG_SIZE);
+    // Period-doubling markers are pure red.
+    assert!(
+        px.chunks(3).any(|q| q == [255, 0, 0]),
+        "no period-doubling marker drawn"
+    );
+    assert!(plot_bifurcation(dir.join("x.png"), &sweep(), 2).is_err());
+
+    let series = vec![
+        (
+            "dopri5".to_string(),
+            vec![(1e-3, 1e-4), (3e-3, 1e-7), (1e-2, 1e-10)],
+        ),
+        (
+            "rk4".to_string(),
+            vec![(2e-3, 1e-3), (8e-3, 1e-6), (3e-2, 1e-9), (0.05, 0.0)],
+        ),
+    ];
+    for (lx, ly) in [(false, false), (true, false), (false, true), (true, true)] {
+        let q = dir.join(format!("lines-{lx}-{ly}.png"));
+        plot_lines(
+            &q,
+            "work-precision",
+            "time per stride (s)",
+            "error",
+            &series,
+            lx,
+            ly,
+        )
+        .unwrap();
+        let (w, h, _, _) = decode_png(&q);
+        assert_eq!((w, h), LINES_PNG_SIZE);
+    }
+    let empty = vec![("none".to_string(), vec![(0.0, f64::NAN)])];
+    assert!(plot_lines(dir.join("e.png"), "t", "x", "y", &empty, false, false).is_err());
+}
+
+#[test]
+fn gait_gif_has_one_frame_per_input_frame_at_stated_size() {
+    let dir = scratch("gif");
+    let p = dir.join("gait.gif");
+    let n = 12;
+    let gamma: f64 = 0.05;
+    let frames: Vec<Frame> = (0..n)
+        .map(|k| {
+            let t = k as f64 / n as f64;
+            let hip = (t, 1.0 - 0.05 * (std::f64::consts::TAU * t).sin());
+            let stance = (0.0, 0.0);
+            let swing = (2.0 * t - 0.3, 0.02);
+            Frame {
+                links: vec![(stance, hip), (hip, swing)],
+                joints: vec![hip, stance, swing],
+                slope: ((0.0, 0.0), (gamma.cos(), -gamma.sin())),
+                trace: (0..=k)
+                    .map(|j| (2.0 * j as f64 / n as f64 - 0.3, 0.02))
+                    .collect(),
+                label: format!("t = {t:.2}"),
+            }
+        })
+        .collect();
+    animate_gif(&p, &frames, (480, 360), 50, "compass gait").unwrap();
+    let mut opts = gif::DecodeOptions::new();
+    opts.set_color_output(gif::ColorOutput::RGBA);
+    let mut dec = opts.read_info(std::fs::File::open(&p).unwrap()).unwrap();
+    assert_eq!((dec.width(), dec.height()), (480, 360));
+    let mut count = 0;
+    while dec.read_next_frame().unwrap().is_some() {
+        count += 1;
+    }
+    assert_eq!(count, n);
+    assert!(animate_gif(dir.join("e.gif"), &[], (480, 360), 50, "").is_err());
+}
