@@ -1,0 +1,714 @@
+//! Basins of attraction: iterate the stride map from many section states ("cells") and classify
+//! where each one ends up.
+//!
+//! # Classification of one cell
+//! Starting from the section state `s₀` (the cell), the stride map is applied,
+//! `s_{k+1} = P(s_k) = Π(R(x⁻_k))` followed by the lift `L` (so the iteration is exactly that of
+//! [`StrideMap`](crate::StrideMap)), until one of:
+//! - **gait** — `‖s_k − s*‖∞ < tol_gait` at `confirm` consecutive section states
+//!   (`s₀` included). Requiring several consecutive states, not one, makes the label robust when
+//!   the selected fixed point is a saddle: a trajectory that merely passes near an unstable `s*`
+//!   does not stay. For a stable `s*` with largest multiplier modulus ρ the price is
+//!   `confirm − 1` extra strides.
+//! - **other** — a known other attractor (an orbit given in [`BasinProblem::others`]) was reached
+//!   in the same sense as a gait, or a recurrence was detected: `‖s_k − s_{k−p}‖∞ < tol_recur`
+//!   for some `p ∈ 1..=max_period` while not at `s*`; the period `p` (or the known orbit's
+//!   period) is recorded. `tol_recur` must be much smaller than `tol_gait·|1 − λ^p|` so that a
+//!   slow approach to `s*` (multiplier λ near ±1) is not mistaken for a recurrence; the defaults
+//!   (1e-6 and 1e-10) leave four decades.
+//! - **fall** with its kind — a terminal guard of the model fired (the kind comes from the
+//!   guard's code through [`BasinProblem::fall_outcome`]), or no section event occurred within
+//!   the stride time budget [`Section::max_stride_time`] ([`Outcome::FallNoHeelStrike`]).
+//! - **timeout** — `max_strides` strides without any of the above (e.g. a chaotic attractor).
+//! - **nonfinite** — the state became non-finite (including a non-finite cell).
+//! - **integrator_failure** — the step size collapsed, the step budget ran out, or a stride had
+//!   more than [`MAX_EVENTS_PER_STRIDE`] intermediate events.
+//!
+//! `strides` is the number of completed strides (heel strikes) when the label was decided.
+//!
+//! # Engine
+//! [`BasinDriver`] is a [`LaneDriver`]: each cell is one work item; a lane integrates its cell's
+//! strides back to back (the reset and classification happen in `on_stop`) and is refilled with
+//! the next cell when the cell is classified, so many cells run as lanes of one lockstep batched
+//! integration ([`run_batch_par`] on the caller's rayon pool). The engine guarantees that a
+//! work item's arithmetic does not depend on its lane, its neighbours, the lane count, the chunk
+//! size or the thread count, and equals the scalar integrator's; therefore
+//! [`classify_cells`] gives identical results for any of those choices and for any split of
+//! the cells into row blocks or shards, and equals [`classify_cells_scalar`] cell for cell.
+//!
+//! # Basin entropy (Daza, Wagemakers, Georgeot, Guéry-Odelin, Sanjuán 2016, Sci. Rep. 6:31416)
+//! The grid is tiled by non-overlapping boxes of `ε × ε` cells (default ε = 5; boxes that would
+//! stick out of the grid are left out). In box `i` let `p_{ij}` be the fraction of its cells with
+//! outcome code `j`; its entropy is `S_i = Σ_j −p_{ij} ln p_{ij}` (natural log). The basin entropy
+//! is `S_b = (1/N) Σ_i S_i` over all N boxes (their eq. 3), the boundary basin entropy
+//! `S_bb = (1/N_b) Σ_i S_i` over the N_b boxes that hold more than one outcome (their eq. 4;
+//! 0 when there is none). Every outcome code is its own class (fall kinds are distinct final
+//! states).
+
+use crate::error::LimitError;
+use crate::stride::MAX_EVENTS_PER_STRIDE;
+use pdw_hybrid::{
+    run_batch_par, run_scalar_with, BatchOptions, Control, GuardKind, Integrator, LaneDriver,
+    Options, Section, StopReason,
+};
+
+/// Outcome of a cell. The `u8` codes are part of the file format and never change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[repr(u8)]
+pub enum Outcome {
+    /// Converged to the selected fixed point.
+    Gait = 0,
+    /// Reached another attractor (a known one, or detected by recurrence).
+    Other = 1,
+    /// Fell forward (a terminal guard of the model).
+    FallForward = 2,
+    /// Fell backward (a terminal guard of the model).
+    FallBackward = 3,
+    /// The hip went below the ground (a terminal guard of the model).
+    FallHipBelowGround = 4,
+    /// No heel strike within the stride time budget.
+    FallNoHeelStrike = 5,
+    /// A fall of another kind (a terminal guard whose kind is none of the above).
+    Fall = 6,
+    /// Not classified within `max_strides` strides.
+    Timeout = 7,
+    /// The state became non-finite (or the cell itself was not finite).
+    NonFinite = 8,
+    /// The integrator failed (step size collapse, step budget, too many events per stride).
+    IntegratorFailure = 9,
+}
+
+impl Outcome {
+    /// Every outcome, by code.
+    pub const ALL: [Outcome; 10] = [
+        Outcome::Gait,
+        Outcome::Other,
+        Outcome::FallForward,
+        Outcome::FallBackward,
+        Outcome::FallHipBelowGround,
+        Outcome::FallNoHeelStrike,
+        Outcome::Fall,
+        Outcome::Timeout,
+        Outcome::NonFinite,
+        Outcome::IntegratorFailure,
+    ];
+
+    /// Stable code (the value stored in `/basin/outcome`).
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// Outcome of a code, if it is one.
+    pub fn from_code(code: u8) -> Option<Outcome> {
+        Outcome::ALL.get(code as usize).copied()
+    }
+
+    /// Stable name, e.g. `"gait"`, `"fall_forward"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Outcome::Gait => "gait",
+            Outcome::Other => "other",
+            Outcome::FallForward => "fall_forward",
+            Outcome::FallBackward => "fall_backward",
+            Outcome::FallHipBelowGround => "fall_hip_below_ground",
+            Outcome::FallNoHeelStrike => "fall_no_heel_strike",
+            Outcome::Fall => "fall",
+            Outcome::Timeout => "timeout",
+            Outcome::NonFinite => "nonfinite",
+            Outcome::IntegratorFailure => "integrator_failure",
+        }
+    }
+
+    /// True for every fall kind.
+    pub fn is_fall(self) -> bool {
+        matches!(
+            self,
+            Outcome::FallForward
+                | Outcome::FallBackward
+                | Outcome::FallHipBelowGround
+                | Outcome::FallNoHeelStrike
+                | Outcome::Fall
+        )
+    }
+
+    /// The fall outcome of a model's fall name (`Walker::fall_name`): `"fall_forward"`,
+    /// `"fall_backward"`, `"fall_hip_below_ground"` / `"hip_below_ground"`; anything else is
+    /// [`Outcome::Fall`].
+    pub fn from_fall_name(name: &str) -> Outcome {
+        match name {
+            "fall_forward" | "forward" => Outcome::FallForward,
+            "fall_backward" | "backward" => Outcome::FallBackward,
+            "fall_hip_below_ground" | "hip_below_ground" => Outcome::FallHipBelowGround,
+            _ => Outcome::Fall,
+        }
+    }
+}
+
+/// `(code, name)` of every outcome, by code: the legend of a basin file.
+pub fn legend() -> Vec<(u8, &'static str)> {
+    Outcome::ALL.iter().map(|o| (o.code(), o.name())).collect()
+}
+
+/// Options of the basin engine.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BasinOptions {
+    /// Integrator of the strides.
+    pub integrator: Options,
+    /// Lanes stepped in lockstep per batch.
+    pub lanes: usize,
+    /// Cells per parallel task (fixed: results do not depend on it).
+    pub chunk: usize,
+    /// Stride budget per cell (≥ 1).
+    pub max_strides: u16,
+    /// Gait tolerance: `‖s_k − s*‖∞ < tol_gait` (section units).
+    pub tol_gait: f64,
+    /// Consecutive section states within `tol_gait` needed for `gait` (≥ 1).
+    pub confirm: u8,
+    /// Recurrence tolerance: `‖s_k − s_{k−p}‖∞ < tol_recur` means an attractor of period p.
+    pub tol_recur: f64,
+    /// Largest recurrence period tested (1..=16).
+    pub max_period: u8,
+}
+
+impl Default for BasinOptions {
+    /// DOPRI5 at `rtol = atol = 1e-9` (chosen from label agreement against DOP853 at 1e-12,
+    /// see [`BasinOptions::default_integrator`]), 64 lanes, chunks of 1024 cells, 100 strides,
+    /// `tol_gait = 1e-6`, `confirm = 2`, `tol_recur = 1e-10`, `max_period = 8`.
+    fn default() -> Self {
+        Self {
+            integrator: Self::default_integrator(),
+            lanes: 64,
+            chunk: 1024,
+            max_strides: 100,
+            tol_gait: 1e-6,
+            confirm: 2,
+            tol_recur: 1e-10,
+            max_period: 8,
+        }
+    }
+}
+
+impl BasinOptions {
+    /// The default integrator for basins: DOPRI5 with `rtol = atol = 1e-9`.
+    ///
+    /// Measured on the simplest walker at γ = 0.009 (200 × 200 cells over θ ∈ [0.15, 0.25],
+    /// θ̇ ∈ [−0.25, −0.15], 100 strides) against DOP853 at 1e-12: see the crate's basin tests and
+    /// the numbers reported with them; 1e-9 changes no label there while being the cheapest
+    /// setting that does not.
+    pub fn default_integrator() -> Options {
+        Options::dopri5(1e-9)
+    }
+
+    /// Reject options the engine cannot honour.
+    pub fn validate(&self) -> Result<(), LimitError> {
+        let bad = |name, value: f64, allowed| {
+            Err(LimitError::InvalidOption {
+                name,
+                value,
+                allowed,
+            })
+        };
+        self.integrator.validate()?;
+        if self.lanes == 0 {
+            return bad("lanes", 0.0, "must be >= 1");
+        }
+        if self.chunk == 0 {
+            return bad("chunk", 0.0, "must be >= 1");
+        }
+        if self.max_strides == 0 {
+            return bad("max_strides", 0.0, "must be >= 1");
+        }
+        if !(self.tol_gait.is_finite() && self.tol_gait > 0.0) {
+            return bad("tol_gait", self.tol_gait, "must be finite and > 0");
+        }
+        if self.confirm == 0 {
+            return bad("confirm", 0.0, "must be >= 1");
+        }
+        if !(self.tol_recur.is_finite() && self.tol_recur > 0.0 && self.tol_recur < self.tol_gait)
+        {
+            return bad(
+                "tol_recur",
+                self.tol_recur,
+                "must be finite, > 0 and < tol_gait",
+            );
+        }
+        if !(1..=16).contains(&self.max_period) {
+            return bad("max_period", f64::from(self.max_period), "must be in 1..=16");
+        }
+        Ok(())
+    }
+}
+
+/// What the cells are classified against.
+pub struct BasinProblem<'a, S: Section + ?Sized> {
+    /// The model.
+    pub sys: &'a S,
+    /// The selected fixed point `s*` (section coordinates).
+    pub gait: Vec<f64>,
+    /// Other known attractors, each an orbit of section states (its period = its length).
+    pub others: Vec<Vec<Vec<f64>>>,
+    /// Outcome of a terminal guard's fall code, e.g.
+    /// `&|c| Outcome::from_fall_name(walker.fall_name(c))`.
+    pub fall_outcome: &'a (dyn Fn(u8) -> Outcome + Sync),
+}
+
+impl<'a, S: Section + ?Sized> BasinProblem<'a, S> {
+    /// Problem with only the selected fixed point.
+    pub fn new(
+        sys: &'a S,
+        gait: Vec<f64>,
+        fall_outcome: &'a (dyn Fn(u8) -> Outcome + Sync),
+    ) -> Self {
+        Self {
+            sys,
+            gait,
+            others: Vec::new(),
+            fall_outcome,
+        }
+    }
+
+    fn validate(&self) -> Result<(), LimitError> {
+        let ds = self.sys.section_dim();
+        let check = |v: &[f64]| {
+            if v.len() != ds {
+                Err(LimitError::SectionDim {
+                    expected: ds,
+                    got: v.len(),
+                })
+            } else if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(LimitError::InvalidOption {
+                    name: "attractor",
+                    value: f64::NAN,
+                    allowed: "attractor states must be finite",
+                })
+            }
+        };
+        check(&self.gait)?;
+        for orbit in &self.others {
+            if orbit.is_empty() {
+                return Err(LimitError::InvalidOption {
+                    name: "others",
+                    value: 0.0,
+                    allowed: "a known attractor needs at least one point",
+                });
+            }
+            for p in orbit {
+                check(p)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Result of one cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellResult {
+    /// [`Outcome`] code.
+    pub outcome: u8,
+    /// Completed strides when the label was decided.
+    pub strides: u16,
+    /// Period of the `other` attractor (recurrence period, or the known orbit's length); 0
+    /// otherwise.
+    pub period: u8,
+    /// Index of the known attractor in [`BasinProblem::others`] for `other`, `u8::MAX` if it
+    /// was detected by recurrence or the outcome is not `other`.
+    pub attractor: u8,
+    /// Last section state (after the last completed stride; for a fall, the projection of the
+    /// state where the fall was detected).
+    pub final_state: Vec<f64>,
+}
+
+impl CellResult {
+    /// The outcome.
+    pub fn outcome(&self) -> Outcome {
+        Outcome::from_code(self.outcome).unwrap_or(Outcome::IntegratorFailure)
+    }
+}
+
+/// The basin [`LaneDriver`]: one item per cell (a section state), all strides of the cell in one
+/// lane. Exposed so that other front ends can run it through [`pdw_hybrid::run_batch`] or
+/// [`pdw_hybrid::run_scalar`] directly.
+pub struct BasinDriver<'p, 'a, S: Section + ?Sized> {
+    problem: &'p BasinProblem<'a, S>,
+    opts: BasinOptions,
+    section_guard: (usize, usize),
+    start_mode: usize,
+    t_max: f64,
+    ds: usize,
+}
+
+impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
+    /// Driver for `problem` (validated with `opts`).
+    pub fn new(problem: &'p BasinProblem<'a, S>, opts: &BasinOptions) -> Result<Self, LimitError> {
+        opts.validate()?;
+        problem.validate()?;
+        let sys = problem.sys;
+        Ok(Self {
+            problem,
+            opts: *opts,
+            section_guard: sys.section_guard(),
+            start_mode: sys.section_mode(),
+            t_max: sys.max_stride_time(),
+            ds: sys.section_dim(),
+        })
+    }
+
+    fn near(a: &[f64], b: &[f64], tol: f64) -> bool {
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol)
+    }
+
+    /// Classify after a new section state was pushed into the history. Returns the decision.
+    fn classify(&self, lane: &mut BasinLane) -> Option<(Outcome, u8, u8)> {
+        let ds = self.ds;
+        let s = &lane.hist[lane.head * ds..(lane.head + 1) * ds];
+        if !s.iter().all(|v| v.is_finite()) {
+            return Some((Outcome::NonFinite, 0, u8::MAX));
+        }
+        let confirm = self.opts.confirm;
+        if Self::near(s, &self.problem.gait, self.opts.tol_gait) {
+            lane.near_gait = lane.near_gait.saturating_add(1);
+            if lane.near_gait >= confirm {
+                return Some((Outcome::Gait, 0, u8::MAX));
+            }
+            // Approaching the gait: neither a recurrence nor another attractor.
+            return None;
+        }
+        lane.near_gait = 0;
+        for (a, orbit) in self.problem.others.iter().enumerate() {
+            if orbit.iter().any(|p| Self::near(s, p, self.opts.tol_gait)) {
+                lane.near_other[a.min(MAX_KNOWN - 1)] =
+                    lane.near_other[a.min(MAX_KNOWN - 1)].saturating_add(1);
+                if lane.near_other[a.min(MAX_KNOWN - 1)] >= confirm {
+                    let period = orbit.len().min(255) as u8;
+                    return Some((Outcome::Other, period, a.min(254) as u8));
+                }
+            } else {
+                lane.near_other[a.min(MAX_KNOWN - 1)] = 0;
+            }
+        }
+        let n_hist = HIST.min(usize::from(self.opts.max_period) + 1);
+        let count = lane.count;
+        for p in 1..=usize::from(self.opts.max_period) {
+            if p >= count || p >= n_hist {
+                break;
+            }
+            let idx = (lane.head + HIST - p) % HIST;
+            let q = &lane.hist[idx * ds..(idx + 1) * ds];
+            if Self::near(s, q, self.opts.tol_recur) {
+                return Some((Outcome::Other, p as u8, u8::MAX));
+            }
+        }
+        None
+    }
+
+    /// Push `Π(x)` into the lane's history ring.
+    fn push(&self, hist: &mut [f64], head: &mut usize, count: &mut usize, x: &[f64]) {
+        let ds = self.ds;
+        *head = (*head + 1) % HIST;
+        *count += 1;
+        self.problem
+            .sys
+            .project(x, &mut hist[*head * ds..(*head + 1) * ds]);
+    }
+}
+
+/// Ring size of the section-state history (periods up to 16).
+const HIST: usize = 17;
+/// Known other attractors tracked separately for `confirm` (more share the last slot).
+const MAX_KNOWN: usize = 8;
+
+/// Per-lane bookkeeping of the [`BasinDriver`].
+#[derive(Default)]
+pub struct BasinLane {
+    /// Ring of the last `HIST` section states, `(HIST × d_s)` row-major.
+    hist: Vec<f64>,
+    /// Slot of the newest state.
+    head: usize,
+    /// Section states seen (s₀ included).
+    count: usize,
+    /// Reset output `(d)`.
+    buf: Vec<f64>,
+    /// Consecutive states within `tol_gait` of `s*`.
+    near_gait: u8,
+    /// Same for the known other attractors.
+    near_other: [u8; MAX_KNOWN],
+    /// Intermediate events in the current stride.
+    events: usize,
+    strides: u16,
+    decided: Option<(Outcome, u8, u8)>,
+}
+
+impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
+    type Item = Vec<f64>;
+    type Output = CellResult;
+    type Lane = BasinLane;
+
+    fn start(&self, sys: &S, item: &Vec<f64>, lane: &mut BasinLane, x: &mut [f64]) -> (usize, f64) {
+        let ds = self.ds;
+        lane.hist.resize(HIST * ds, 0.0);
+        lane.buf.resize(sys.dim(), 0.0);
+        lane.head = 0;
+        lane.count = 1;
+        let n = item.len().min(ds);
+        lane.hist[..n].copy_from_slice(&item[..n]);
+        if item.len() != ds || !item.iter().all(|v| v.is_finite()) {
+            // Not a valid section state: the engine stops at once (NonFinite) and `on_stop`
+            // records the decision taken here.
+            lane.decided = Some((Outcome::NonFinite, 0, u8::MAX));
+            x.fill(f64::NAN);
+            return (self.start_mode, self.t_max);
+        }
+        sys.lift(item, x);
+        lane.decided = self.classify(lane);
+        if lane.decided.is_some() {
+            // Decided before any stride (only possible with confirm = 1): stop immediately.
+            x.fill(f64::NAN);
+        }
+        (self.start_mode, self.t_max)
+    }
+
+    fn on_stop(
+        &self,
+        sys: &S,
+        _item: &Vec<f64>,
+        lane: &mut BasinLane,
+        stop: StopReason,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+    ) -> Control {
+        if lane.decided.is_some() {
+            return Control::Finish;
+        }
+        let outcome = match stop {
+            StopReason::Guard { guard } => match sys.guards(mode)[guard].kind {
+                GuardKind::Reset => {
+                    let new_mode = sys.reset(mode, guard, x, &mut lane.buf);
+                    if (mode, guard) == self.section_guard {
+                        lane.events = 0;
+                        lane.strides = lane.strides.saturating_add(1);
+                        self.push(&mut lane.hist, &mut lane.head, &mut lane.count, &lane.buf);
+                        let ds = self.ds;
+                        let h = lane.head;
+                        sys.lift(&lane.hist[h * ds..(h + 1) * ds], x);
+                        if let Some(d) = self.classify(lane) {
+                            lane.decided = Some(d);
+                            return Control::Finish;
+                        }
+                        if lane.strides >= self.opts.max_strides {
+                            lane.decided = Some((Outcome::Timeout, 0, u8::MAX));
+                            return Control::Finish;
+                        }
+                        return Control::Continue {
+                            mode: self.start_mode,
+                            t_end: t + self.t_max,
+                        };
+                    } else if lane.events >= MAX_EVENTS_PER_STRIDE {
+                        Outcome::IntegratorFailure
+                    } else {
+                        lane.events += 1;
+                        x.copy_from_slice(&lane.buf);
+                        return Control::Continue {
+                            mode: new_mode,
+                            t_end: t + self.t_max,
+                        };
+                    }
+                }
+                GuardKind::Terminal(code) => (self.problem.fall_outcome)(code),
+            },
+            StopReason::EndTime => Outcome::FallNoHeelStrike,
+            StopReason::NonFinite => Outcome::NonFinite,
+            StopReason::StepTooSmall | StopReason::MaxSteps => Outcome::IntegratorFailure,
+        };
+        // Record where the fall happened (projection of the stop state).
+        self.push(&mut lane.hist, &mut lane.head, &mut lane.count, x);
+        lane.decided = Some((outcome, 0, u8::MAX));
+        Control::Finish
+    }
+
+    fn finish(&self, _sys: &S, _item: &Vec<f64>, lane: BasinLane, _t: f64, _x: &[f64]) -> CellResult {
+        let (outcome, period, attractor) = lane.decided.unwrap_or((Outcome::NonFinite, 0, u8::MAX));
+        let ds = self.ds;
+        let h = lane.head;
+        let final_state = if lane.hist.len() >= (h + 1) * ds {
+            lane.hist[h * ds..(h + 1) * ds].to_vec()
+        } else {
+            vec![f64::NAN; ds]
+        };
+        CellResult {
+            outcome: outcome.code(),
+            strides: lane.strides,
+            period,
+            attractor,
+            final_state,
+        }
+    }
+}
+
+/// Classify every cell (section states of the model's section dimension), batched on `pool`
+/// (see the module docs); `progress(n_done)` is called as chunks finish. Results in cell order,
+/// identical for any thread count, lane count, chunk size and split of `cells`.
+pub fn classify_cells<S: Section + ?Sized>(
+    problem: &BasinProblem<'_, S>,
+    cells: &[Vec<f64>],
+    opts: &BasinOptions,
+    pool: &rayon::ThreadPool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<CellResult>, LimitError> {
+    let driver = BasinDriver::new(problem, opts)?;
+    let bopts = BatchOptions {
+        lanes: opts.lanes,
+        integrator: opts.integrator,
+    };
+    Ok(run_batch_par(
+        problem.sys,
+        &driver,
+        cells,
+        &bopts,
+        pool,
+        opts.chunk,
+        progress,
+    )?)
+}
+
+/// The slow reference path: one cell at a time through the scalar integrator
+/// ([`pdw_hybrid::run_scalar_with`]), serial.
+pub fn classify_cells_scalar<S: Section + ?Sized>(
+    problem: &BasinProblem<'_, S>,
+    cells: &[Vec<f64>],
+    opts: &BasinOptions,
+) -> Result<Vec<CellResult>, LimitError> {
+    let driver = BasinDriver::new(problem, opts)?;
+    let mut integ = Integrator::new(problem.sys.dim(), opts.integrator)?;
+    cells
+        .iter()
+        .map(|c| Ok(run_scalar_with(&mut integ, problem.sys, &driver, c)?))
+        .collect()
+}
+
+/// Cells of a grid over section coordinates `ix` (values `xs`) and `iy` (values `ys`), the
+/// other coordinates taken from `base`; row-major with the row = y index (`cells[i·nx + j]` is
+/// `(xs[j], ys[i])`), the layout of `/basin/outcome [ny, nx]`.
+pub fn grid_cells(base: &[f64], ix: usize, xs: &[f64], iy: usize, ys: &[f64]) -> Vec<Vec<f64>> {
+    let mut cells = Vec::with_capacity(xs.len() * ys.len());
+    for &y in ys {
+        for &x in xs {
+            let mut c = base.to_vec();
+            c[ix] = x;
+            c[iy] = y;
+            cells.push(c);
+        }
+    }
+    cells
+}
+
+/// `n` evenly spaced values from `a` to `b` inclusive (`a` alone when `n = 1`).
+pub fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
+    if n == 1 {
+        return vec![a];
+    }
+    (0..n)
+        .map(|i| {
+            if i + 1 == n {
+                b
+            } else {
+                a + (b - a) * (i as f64) / ((n - 1) as f64)
+            }
+        })
+        .collect()
+}
+
+/// Fractions and basin entropies of a classified grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BasinMetrics {
+    /// `(code, name, fraction of cells)` for every outcome in the legend (zeros included).
+    pub fractions: Vec<(u8, &'static str, f64)>,
+    /// Basin entropy S_b (Daza et al. 2016 eq. 3), natural log.
+    pub basin_entropy: f64,
+    /// Boundary basin entropy S_bb (Daza et al. 2016 eq. 4); 0 if no box holds two outcomes.
+    pub boundary_entropy: f64,
+    /// Box side ε in cells.
+    pub box_size: usize,
+    /// Number of boxes N.
+    pub boxes: usize,
+    /// Boxes holding more than one outcome, N_b.
+    pub boundary_boxes: usize,
+}
+
+/// Default entropy box side (cells): 5 × 5 boxes, small enough to resolve the boundary of a
+/// 100 × 100 grid with 400 boxes, large enough that a box holds 25 samples.
+pub const DEFAULT_ENTROPY_BOX: usize = 5;
+
+/// Fractions per outcome and basin entropy of `outcomes` (row-major `[ny, nx]`) with boxes of
+/// `box_size × box_size` cells (see the module docs).
+pub fn basin_metrics(
+    outcomes: &[u8],
+    nx: usize,
+    ny: usize,
+    box_size: usize,
+) -> Result<BasinMetrics, LimitError> {
+    if outcomes.len() != nx * ny || nx == 0 || ny == 0 {
+        return Err(LimitError::InvalidOption {
+            name: "outcomes",
+            value: outcomes.len() as f64,
+            allowed: "must hold nx·ny > 0 codes",
+        });
+    }
+    if box_size == 0 {
+        return Err(LimitError::InvalidOption {
+            name: "box_size",
+            value: 0.0,
+            allowed: "must be >= 1",
+        });
+    }
+    let n = outcomes.len() as f64;
+    let mut counts = [0usize; 256];
+    for &o in outcomes {
+        counts[o as usize] += 1;
+    }
+    let mut fractions: Vec<(u8, &'static str, f64)> = Outcome::ALL
+        .iter()
+        .map(|o| (o.code(), o.name(), counts[o.code() as usize] as f64 / n))
+        .collect();
+    for (c, &k) in counts.iter().enumerate() {
+        if k > 0 && Outcome::from_code(c as u8).is_none() {
+            fractions.push((c as u8, "unknown", k as f64 / n));
+        }
+    }
+    let (bx, by) = (nx / box_size, ny / box_size);
+    let (mut sum, mut sum_b, mut nb) = (0.0, 0.0, 0usize);
+    let m = (box_size * box_size) as f64;
+    for bi in 0..by {
+        for bj in 0..bx {
+            let mut c = [0u32; 256];
+            for i in bi * box_size..(bi + 1) * box_size {
+                for j in bj * box_size..(bj + 1) * box_size {
+                    c[outcomes[i * nx + j] as usize] += 1;
+                }
+            }
+            let mut s = 0.0;
+            let mut kinds = 0;
+            for &k in c.iter().filter(|&&k| k > 0) {
+                let p = f64::from(k) / m;
+                s -= p * p.ln();
+                kinds += 1;
+            }
+            sum += s;
+            if kinds > 1 {
+                sum_b += s;
+                nb += 1;
+            }
+        }
+    }
+    let boxes = bx * by;
+    Ok(BasinMetrics {
+        fractions,
+        basin_entropy: if boxes > 0 { sum / boxes as f64 } else { 0.0 },
+        boundary_entropy: if nb > 0 { sum_b / nb as f64 } else { 0.0 },
+        box_size,
+        boxes,
+        boundary_boxes: nb,
+    })
+}

@@ -1,0 +1,41 @@
+//! Limit cycles of hybrid walkers: the stride map on the post-heel-strike Poincaré section, its
+//! Jacobian two ways (variational equations with saltation matrices; batched finite
+//! differences), fixed points by a Newton solver run through argmin, Floquet multipliers and
+//! gait metrics. Generic over any [`pdw_hybrid::Section`].
+//!
+//! ```text
+//! StrideMap::new(&model, Options::dop853(1e-13))?     P: s ↦ s'
+//!   dp_variational / dp_finite_difference             DP(s)
+//!   find_fixed_point(&map, &guess, &NewtonOptions)    s*, multipliers, period, step, speed
+//! ```
+
+pub mod basin;
+pub mod continuation;
+pub mod error;
+pub mod floquet;
+pub mod jacobian;
+pub mod metrics;
+pub mod newton;
+pub mod orbit;
+pub mod stride;
+pub mod variational;
+
+pub use basin::{
+    basin_metrics, classify_cells, classify_cells_scalar, grid_cells, legend, linspace,
+    BasinDriver, BasinMetrics, BasinOptions, BasinProblem, CellResult, Outcome,
+};
+pub use continuation::{
+    continue_branch, period_doubling_cascade, real_eigenvector, switch_period_doubling,
+    Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, ContinuationMethod,
+    ContinuationOptions,
+};
+pub use error::LimitError;
+pub use floquet::{is_stable, multipliers, Multiplier};
+pub use jacobian::{dp_finite_difference, dp_variational, richardson_jacobian, FdScheme};
+pub use metrics::GaitMetrics;
+pub use newton::{
+    find_fixed_point, DpMethod, FixedPoint, FixedPointProblem, Newton, NewtonOptions, NewtonState,
+};
+pub use orbit::{orbit_diagram, OrbitColumn, OrbitOptions, OrbitStart};
+pub use stride::{EventDriver, Stride, StrideEnd, StrideMap, StrideOutcome, MAX_EVENTS_PER_STRIDE};
+pub use variational::Variational;

@@ -1,0 +1,338 @@
+//! Fixed points of the stride map, `F(s) = P(s) − s = 0`, as an argmin problem solved by a
+//! damped Newton method that implements argmin's [`Solver`] trait; argmin's [`Executor`] owns
+//! the iteration limit and the termination reason.
+//!
+//! # Newton step
+//! With `J = DP(s) − I` (d_s × d_s, from [`dp_variational`] or [`dp_finite_difference`]), solve
+//! `J δ = −F(s)` by LU with partial pivoting (faer). Near a regular root (`J` non-singular, i.e.
+//! no multiplier equal to 1) the iteration converges quadratically.
+//!
+//! # Globalisation
+//! Backtracking on `‖F‖₂` (Armijo, Dennis & Schnabel §6.3): accept `s + λδ` with the first
+//! `λ ∈ {1, ½, ¼, …}` such that the trial stride reaches the section and
+//! `‖F(s + λδ)‖₂ ≤ (1 − 10⁻⁴ λ) ‖F(s)‖₂`. A trial stride that falls counts as a failed trial.
+//!
+//! # Acceptance
+//! The solver reports convergence when `‖F‖∞ ≤ tol`. [`find_fixed_point`] never trusts that: it
+//! re-runs the stride from the returned point with a fresh integrator and accepts only if
+//! `‖P(s) − s‖∞ ≤ tol`; otherwise it returns [`LimitError::NoConvergence`] with the residual
+//! history and the last iterate.
+
+use crate::error::LimitError;
+use crate::floquet::{is_stable, multipliers, Multiplier};
+use crate::jacobian::{dp_finite_difference, dp_variational, FdScheme};
+use crate::metrics::GaitMetrics;
+use crate::stride::StrideMap;
+use argmin::core::{
+    Error as ArgminError, Executor, IterState, Jacobian, Operator, Problem, Solver, State,
+    TerminationReason, TerminationStatus, KV,
+};
+use faer::prelude::*;
+use faer::Mat;
+use pdw_hybrid::Section;
+
+/// How the Newton matrix `DP − I` is obtained.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DpMethod {
+    /// Variational equations with saltation matrices (exact).
+    Variational,
+    /// Finite differences, perturbed strides batched over `lanes` lanes.
+    FiniteDifference { scheme: FdScheme, lanes: usize },
+}
+
+/// Options of [`find_fixed_point`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NewtonOptions {
+    /// Target `‖P(s) − s‖∞` (also the independent acceptance test).
+    pub tol: f64,
+    /// Newton iterations (argmin `max_iters`).
+    pub max_iters: u64,
+    /// Step halvings per iteration before giving up.
+    pub max_backtracks: usize,
+    /// Jacobian used by the Newton step.
+    pub dp: DpMethod,
+    /// Jacobian reported with the fixed point (for the multipliers).
+    pub dp_report: DpMethod,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        Self {
+            tol: 1e-12,
+            max_iters: 40,
+            max_backtracks: 30,
+            dp: DpMethod::Variational,
+            dp_report: DpMethod::Variational,
+        }
+    }
+}
+
+/// The argmin problem `F(s) = P(s) − s` with Jacobian `DP(s) − I`.
+pub struct FixedPointProblem<'m, 'a, S: Section + ?Sized> {
+    pub map: &'m StrideMap<'a, S>,
+    pub dp: DpMethod,
+}
+
+impl<S: Section + ?Sized> FixedPointProblem<'_, '_, S> {
+    /// `DP(s)` (row-major) by the configured method.
+    pub fn dp(&self, s: &[f64]) -> Result<Vec<f64>, LimitError> {
+        match self.dp {
+            DpMethod::Variational => Ok(dp_variational(self.map, s)?.1),
+            DpMethod::FiniteDifference { scheme, lanes } => {
+                dp_finite_difference(self.map, s, scheme, lanes)
+            }
+        }
+    }
+}
+
+impl<S: Section + ?Sized> Operator for FixedPointProblem<'_, '_, S> {
+    type Param = Vec<f64>;
+    type Output = Vec<f64>;
+
+    fn apply(&self, s: &Vec<f64>) -> Result<Vec<f64>, ArgminError> {
+        let p = self.map.apply(s)?;
+        Ok(p.iter().zip(s).map(|(a, b)| a - b).collect())
+    }
+}
+
+impl<S: Section + ?Sized> Jacobian for FixedPointProblem<'_, '_, S> {
+    type Param = Vec<f64>;
+    type Jacobian = Mat<f64>;
+
+    fn jacobian(&self, s: &Vec<f64>) -> Result<Mat<f64>, ArgminError> {
+        let n = s.len();
+        let dp = self.dp(s)?;
+        Ok(Mat::from_fn(n, n, |i, j| {
+            dp[i * n + j] - if i == j { 1.0 } else { 0.0 }
+        }))
+    }
+}
+
+/// argmin state used by [`Newton`]: parameter `Vec<f64>`, Jacobian `Mat<f64>`, residuals
+/// `F(s)` as `Vec<f64>`, cost `‖F‖∞`.
+pub type NewtonState = IterState<Vec<f64>, (), Mat<f64>, (), Vec<f64>, f64>;
+
+/// Damped Newton solver for square systems (see the module docs).
+#[derive(Clone, Debug)]
+pub struct Newton {
+    tol: f64,
+    max_backtracks: usize,
+    /// `‖F‖∞` at the initial point and after every iteration.
+    pub history: Vec<f64>,
+    exit: Option<String>,
+}
+
+impl Newton {
+    /// Solver with target `‖F‖∞ ≤ tol` and at most `max_backtracks` halvings per step.
+    pub fn new(tol: f64, max_backtracks: usize) -> Result<Self, LimitError> {
+        if !(tol.is_finite() && tol > 0.0) {
+            return Err(LimitError::InvalidOption {
+                name: "tol",
+                value: tol,
+                allowed: "finite and > 0",
+            });
+        }
+        Ok(Self {
+            tol,
+            max_backtracks,
+            history: Vec::new(),
+            exit: None,
+        })
+    }
+}
+
+fn norm_inf(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+impl<O> Solver<O, NewtonState> for Newton
+where
+    O: Operator<Param = Vec<f64>, Output = Vec<f64>>
+        + Jacobian<Param = Vec<f64>, Jacobian = Mat<f64>>,
+{
+    fn name(&self) -> &str {
+        "Newton (LU, backtracking on ‖F‖₂)"
+    }
+
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: NewtonState,
+    ) -> Result<(NewtonState, Option<KV>), ArgminError> {
+        let x = state
+            .get_param()
+            .cloned()
+            .ok_or_else(|| ArgminError::msg("Newton needs an initial parameter"))?;
+        let f = problem.apply(&x)?;
+        let c = norm_inf(&f);
+        self.history.push(c);
+        Ok((state.residuals(f).cost(c), None))
+    }
+
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        mut state: NewtonState,
+    ) -> Result<(NewtonState, Option<KV>), ArgminError> {
+        let x = state.take_param().expect("param set in init");
+        let f = state.take_residuals().expect("residuals set in init");
+        let n = x.len();
+        let j = problem.jacobian(&x)?;
+        let rhs = Mat::<f64>::from_fn(n, 1, |i, _| -f[i]);
+        let delta = j.partial_piv_lu().solve(&rhs);
+        let delta: Vec<f64> = (0..n).map(|i| delta[(i, 0)]).collect();
+        if delta.iter().any(|v| !v.is_finite()) {
+            self.exit = Some("DP − I is singular (non-finite Newton step)".into());
+            let c = norm_inf(&f);
+            return Ok((state.param(x).residuals(f).cost(c).jacobian(j), None));
+        }
+        let f2 = norm2(&f);
+        let mut lambda = 1.0;
+        for _ in 0..=self.max_backtracks {
+            let trial: Vec<f64> = x.iter().zip(&delta).map(|(a, b)| a + lambda * b).collect();
+            if let Ok(ft) = problem.apply(&trial) {
+                if ft.iter().all(|v| v.is_finite()) && norm2(&ft) <= (1.0 - 1e-4 * lambda) * f2 {
+                    let c = norm_inf(&ft);
+                    self.history.push(c);
+                    let kv = argmin::kv!("lambda" => lambda;);
+                    return Ok((
+                        state.param(trial).residuals(ft).cost(c).jacobian(j),
+                        Some(kv),
+                    ));
+                }
+            }
+            lambda *= 0.5;
+        }
+        self.exit = Some(format!(
+            "line search failed: no decrease of ‖P(s)−s‖ after {} step halvings",
+            self.max_backtracks
+        ));
+        let c = norm_inf(&f);
+        Ok((state.param(x).residuals(f).cost(c).jacobian(j), None))
+    }
+
+    fn terminate(&mut self, state: &NewtonState) -> TerminationStatus {
+        if let Some(msg) = &self.exit {
+            return TerminationStatus::Terminated(TerminationReason::SolverExit(msg.clone()));
+        }
+        if state.get_cost() <= self.tol {
+            return TerminationStatus::Terminated(TerminationReason::SolverConverged);
+        }
+        TerminationStatus::NotTerminated
+    }
+}
+
+/// A verified period-one gait.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FixedPoint {
+    /// Section coordinates `s*` (in `section_names` order).
+    pub section: Vec<f64>,
+    /// Full post-reset state `L(s*)` (in the model's state order).
+    pub state: Vec<f64>,
+    /// Period, step length, speed.
+    pub metrics: GaitMetrics,
+    /// `DP(s*)`, row-major `d_s × d_s`.
+    pub dp: Vec<f64>,
+    /// Floquet multipliers, by decreasing modulus.
+    pub multipliers: Vec<Multiplier>,
+    /// All |λ| < 1.
+    pub stable: bool,
+    /// Independently re-computed `‖P(s*) − s*‖∞`.
+    pub residual: f64,
+    /// Newton iterations.
+    pub iterations: u64,
+    /// argmin's termination reason.
+    pub termination: String,
+    /// `‖P(s) − s‖∞` at the guess and after every iteration.
+    pub residual_history: Vec<f64>,
+}
+
+/// Finds a fixed point of `map` from `guess`, verifies it, and measures it (multipliers,
+/// period, step length, speed).
+pub fn find_fixed_point<S: Section + ?Sized>(
+    map: &StrideMap<'_, S>,
+    guess: &[f64],
+    opts: &NewtonOptions,
+) -> Result<FixedPoint, LimitError> {
+    map.check_dim(guess)?;
+    let problem = FixedPointProblem { map, dp: opts.dp };
+    let solver = Newton::new(opts.tol, opts.max_backtracks)?;
+    let guess_v = guess.to_vec();
+    let run = Executor::new(problem, solver)
+        .configure(|s| s.param(guess_v).max_iters(opts.max_iters))
+        .timer(false)
+        .run();
+    let res = match run {
+        Ok(r) => r,
+        Err(e) => {
+            // The guess itself did not give a complete stride (init failed).
+            return Err(match e.downcast::<LimitError>() {
+                Ok(le) => le,
+                Err(e) => LimitError::NoConvergence {
+                    reason: e.to_string(),
+                    iterations: 0,
+                    last: guess.to_vec(),
+                    history: Vec::new(),
+                },
+            });
+        }
+    };
+    let state = res.state();
+    let iterations = state.get_iter();
+    let termination = state
+        .get_termination_reason()
+        .map(|r| r.text().to_string())
+        .unwrap_or_else(|| "not terminated".into());
+    let history = res.solver().history.clone();
+    let last = state
+        .get_best_param()
+        .or(state.get_param())
+        .cloned()
+        .unwrap_or_else(|| guess.to_vec());
+    // Independent check with a fresh integrator.
+    let check = map.stride(&last)?;
+    let residual = if check.outcome.is_ok() {
+        norm_inf(
+            &check
+                .next
+                .iter()
+                .zip(&last)
+                .map(|(a, b)| a - b)
+                .collect::<Vec<_>>(),
+        )
+    } else {
+        f64::INFINITY
+    };
+    let accepted = residual.is_finite() && residual <= opts.tol;
+    if !accepted {
+        return Err(LimitError::NoConvergence {
+            reason: termination,
+            iterations,
+            last,
+            history,
+        });
+    }
+    let fp_problem = FixedPointProblem {
+        map,
+        dp: opts.dp_report,
+    };
+    let dp = fp_problem.dp(&last)?;
+    let ds = last.len();
+    let mult = multipliers(&dp, ds)?;
+    Ok(FixedPoint {
+        state: map.lift(&last),
+        section: last,
+        metrics: GaitMetrics::from_stride(&check),
+        stable: is_stable(&mult),
+        multipliers: mult,
+        dp,
+        residual,
+        iterations,
+        termination,
+        residual_history: history,
+    })
+}

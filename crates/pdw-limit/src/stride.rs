@@ -1,0 +1,354 @@
+//! The stride map `P: s ↦ s'` on the post-heel-strike Poincaré section.
+//!
+//! A stride starts from the lifted section state `x₀ = L(s)` in the section mode at `t = 0`,
+//! integrates through every intermediate reset (e.g. a knee strike), and ends at the next firing
+//! of the section reset `(mode, guard)` = [`Section::section_guard`]; then `s' = Π(R(x⁻))`
+//! with `Π` = [`Section::project`]. `P` is a pure function of the model's parameters and `s`
+//! (and the integrator options). A stride that ends otherwise — a terminal guard (a fall), the
+//! time budget [`Section::max_stride_time`], a non-finite state, a step-size or step-count
+//! failure — is an outcome ([`StrideOutcome`]), not an error.
+//!
+//! The same [`EventDriver`] runs a stride through the scalar integrator
+//! ([`pdw_hybrid::run_scalar_with`]) and as one lane of a batch ([`pdw_hybrid::run_batch`]), so
+//! batched strides are bit-identical to scalar ones.
+
+use crate::error::LimitError;
+use pdw_hybrid::{
+    run_batch, run_batch_par, run_scalar_with, BatchOptions, Control, GuardKind, HybridSystem,
+    Integrator, LaneDriver, Options, Section, StopReason,
+};
+use std::fmt;
+
+/// Intermediate resets allowed in one stride before it is declared a failure (guards against a
+/// chattering sequence of events).
+pub const MAX_EVENTS_PER_STRIDE: usize = 64;
+
+/// How a stride ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StrideOutcome {
+    /// Reached the section: a complete stride.
+    Ok,
+    /// A terminal guard fired: a fall of model-defined kind `code` (guard index `guard`).
+    Fall { code: u8, guard: usize },
+    /// No section event within the stride time budget.
+    Timeout,
+    /// The state became non-finite.
+    NonFinite,
+    /// The integrator's step size collapsed.
+    StepTooSmall,
+    /// The integrator's step budget ran out.
+    MaxSteps,
+    /// More than [`MAX_EVENTS_PER_STRIDE`] intermediate resets.
+    TooManyEvents,
+}
+
+impl StrideOutcome {
+    /// True for [`StrideOutcome::Ok`].
+    pub fn is_ok(&self) -> bool {
+        matches!(self, StrideOutcome::Ok)
+    }
+}
+
+impl fmt::Display for StrideOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StrideOutcome::Ok => write!(f, "ok"),
+            StrideOutcome::Fall { code, guard } => write!(f, "fall (kind {code}, guard {guard})"),
+            StrideOutcome::Timeout => write!(f, "no heel strike within the stride time budget"),
+            StrideOutcome::NonFinite => write!(f, "non-finite state"),
+            StrideOutcome::StepTooSmall => write!(f, "integrator step size too small"),
+            StrideOutcome::MaxSteps => write!(f, "integrator step budget exhausted"),
+            StrideOutcome::TooManyEvents => write!(f, "too many events in one stride"),
+        }
+    }
+}
+
+/// Raw result of one run of an [`EventDriver`] (full states).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StrideEnd {
+    pub outcome: StrideOutcome,
+    /// Time at the stop (the stride period when `outcome` is `Ok`).
+    pub t: f64,
+    /// State at the stop point before any reset (the pre-impact state on the section guard).
+    pub pre: Vec<f64>,
+    /// State after the section reset (`Ok`), or the stop state otherwise.
+    pub post: Vec<f64>,
+    /// Intermediate resets applied (not counting the section reset).
+    pub events: usize,
+}
+
+/// Lane driver for one stride of any [`HybridSystem`] (the model itself or its
+/// [`Variational`](crate::variational::Variational) extension): items are full initial states.
+pub struct EventDriver {
+    /// `(mode, guard)` whose reset ends the stride.
+    pub section_guard: (usize, usize),
+    /// Mode at `t = 0`.
+    pub start_mode: usize,
+    /// Stride time budget.
+    pub t_max: f64,
+}
+
+/// Per-lane bookkeeping of an [`EventDriver`].
+#[derive(Default)]
+pub struct EventLane {
+    /// Reset output buffer `(dim)`.
+    buf: Vec<f64>,
+    /// Pre-event state `(dim)`, filled at the final stop.
+    pre: Vec<f64>,
+    outcome: Option<StrideOutcome>,
+    events: usize,
+}
+
+impl<H: HybridSystem + ?Sized> LaneDriver<H> for EventDriver {
+    type Item = Vec<f64>;
+    type Output = StrideEnd;
+    type Lane = EventLane;
+
+    fn start(
+        &self,
+        _sys: &H,
+        item: &Vec<f64>,
+        lane: &mut EventLane,
+        x: &mut [f64],
+    ) -> (usize, f64) {
+        x.copy_from_slice(item);
+        lane.buf.resize(x.len(), 0.0);
+        (self.start_mode, self.t_max)
+    }
+
+    fn on_stop(
+        &self,
+        sys: &H,
+        _item: &Vec<f64>,
+        lane: &mut EventLane,
+        stop: StopReason,
+        mode: usize,
+        _t: f64,
+        x: &mut [f64],
+    ) -> Control {
+        let outcome = match stop {
+            StopReason::Guard { guard } => match sys.guards(mode)[guard].kind {
+                GuardKind::Reset => {
+                    let new_mode = sys.reset(mode, guard, x, &mut lane.buf);
+                    if (mode, guard) == self.section_guard {
+                        lane.pre = x.to_vec();
+                        x.copy_from_slice(&lane.buf);
+                        StrideOutcome::Ok
+                    } else if lane.events >= MAX_EVENTS_PER_STRIDE {
+                        StrideOutcome::TooManyEvents
+                    } else {
+                        lane.events += 1;
+                        x.copy_from_slice(&lane.buf);
+                        return Control::Continue {
+                            mode: new_mode,
+                            t_end: self.t_max,
+                        };
+                    }
+                }
+                GuardKind::Terminal(code) => StrideOutcome::Fall { code, guard },
+            },
+            StopReason::EndTime => StrideOutcome::Timeout,
+            StopReason::NonFinite => StrideOutcome::NonFinite,
+            StopReason::StepTooSmall => StrideOutcome::StepTooSmall,
+            StopReason::MaxSteps => StrideOutcome::MaxSteps,
+        };
+        if lane.pre.is_empty() {
+            lane.pre = x.to_vec();
+        }
+        lane.outcome = Some(outcome);
+        Control::Finish
+    }
+
+    fn finish(&self, _sys: &H, _item: &Vec<f64>, lane: EventLane, t: f64, x: &[f64]) -> StrideEnd {
+        StrideEnd {
+            outcome: lane.outcome.unwrap_or(StrideOutcome::NonFinite),
+            t,
+            pre: lane.pre,
+            post: x.to_vec(),
+            events: lane.events,
+        }
+    }
+}
+
+/// One stride in section coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stride {
+    pub outcome: StrideOutcome,
+    /// `P(s)` (when `outcome` is `Ok`; otherwise the projection of the stop state).
+    pub next: Vec<f64>,
+    /// Stride duration (model time units).
+    pub period: f64,
+    /// Full state just before the section reset (or at the stop).
+    pub pre_event: Vec<f64>,
+    /// Full state just after the section reset (or at the stop).
+    pub post_event: Vec<f64>,
+    /// Step length from the model's step-length function, if one was given.
+    pub step_length: Option<f64>,
+    /// Intermediate resets in this stride.
+    pub events: usize,
+}
+
+/// Model-provided step length from the pre-impact state.
+pub type StepLengthFn<'a> = &'a (dyn Fn(&[f64]) -> f64 + Sync);
+
+/// The stride map of a model with a section.
+pub struct StrideMap<'a, S: Section + ?Sized> {
+    sys: &'a S,
+    opts: Options,
+    step_length: Option<StepLengthFn<'a>>,
+}
+
+impl<'a, S: Section + ?Sized> StrideMap<'a, S> {
+    /// Stride map of `sys` integrated with `opts` (validated here).
+    pub fn new(sys: &'a S, opts: Options) -> Result<Self, LimitError> {
+        opts.validate()?;
+        Ok(Self {
+            sys,
+            opts,
+            step_length: None,
+        })
+    }
+
+    /// Attach the model's step-length function (`x_pre ↦ length`), e.g.
+    /// `|x| walker.step_length(x)`.
+    pub fn with_step_length(mut self, f: StepLengthFn<'a>) -> Self {
+        self.step_length = Some(f);
+        self
+    }
+
+    /// The model.
+    pub fn system(&self) -> &'a S {
+        self.sys
+    }
+
+    /// Integrator options.
+    pub fn options(&self) -> &Options {
+        &self.opts
+    }
+
+    /// Section dimension d_s.
+    pub fn section_dim(&self) -> usize {
+        self.sys.section_dim()
+    }
+
+    /// The driver that runs one stride of this model (or of its variational extension).
+    pub fn driver(&self) -> EventDriver {
+        EventDriver {
+            section_guard: self.sys.section_guard(),
+            start_mode: self.sys.section_mode(),
+            t_max: self.sys.max_stride_time(),
+        }
+    }
+
+    pub(crate) fn check_dim(&self, s: &[f64]) -> Result<(), LimitError> {
+        let expected = self.sys.section_dim();
+        if s.len() == expected {
+            Ok(())
+        } else {
+            Err(LimitError::SectionDim {
+                expected,
+                got: s.len(),
+            })
+        }
+    }
+
+    /// Full section state `L(s)`.
+    pub fn lift(&self, s: &[f64]) -> Vec<f64> {
+        let mut x = vec![0.0; self.sys.dim()];
+        self.sys.lift(s, &mut x);
+        x
+    }
+
+    /// Section coordinates and metrics of a finished run.
+    pub(crate) fn to_stride(&self, end: StrideEnd) -> Stride {
+        let mut next = vec![0.0; self.sys.section_dim()];
+        self.sys.project(&end.post, &mut next);
+        let step_length = match (end.outcome, self.step_length) {
+            (StrideOutcome::Ok, Some(f)) => Some(f(&end.pre)),
+            _ => None,
+        };
+        Stride {
+            outcome: end.outcome,
+            next,
+            period: end.t,
+            pre_event: end.pre,
+            post_event: end.post,
+            step_length,
+            events: end.events,
+        }
+    }
+
+    /// One stride from section state `s` (scalar integrator).
+    pub fn stride(&self, s: &[f64]) -> Result<Stride, LimitError> {
+        let mut integ = Integrator::new(self.sys.dim(), self.opts)?;
+        self.stride_with(&mut integ, s)
+    }
+
+    /// One stride with a caller-owned integrator (built for `sys.dim()` and these options).
+    pub fn stride_with(&self, integ: &mut Integrator, s: &[f64]) -> Result<Stride, LimitError> {
+        self.check_dim(s)?;
+        let end = run_scalar_with(integ, self.sys, &self.driver(), &self.lift(s))?;
+        Ok(self.to_stride(end))
+    }
+
+    /// `P(s)`, or [`LimitError::StrideFailed`] if the stride does not reach the section.
+    pub fn apply(&self, s: &[f64]) -> Result<Vec<f64>, LimitError> {
+        let st = self.stride(s)?;
+        if st.outcome.is_ok() {
+            Ok(st.next)
+        } else {
+            Err(LimitError::StrideFailed {
+                from: s.to_vec(),
+                outcome: st.outcome,
+            })
+        }
+    }
+
+    /// One stride from each section state, `lanes` strides in lockstep (serial).
+    pub fn strides(&self, states: &[Vec<f64>], lanes: usize) -> Result<Vec<Stride>, LimitError> {
+        let items = self.lift_all(states)?;
+        let opts = BatchOptions {
+            lanes,
+            integrator: self.opts,
+        };
+        let ends = run_batch(self.sys, &self.driver(), &items, &opts)?;
+        Ok(ends.into_iter().map(|e| self.to_stride(e)).collect())
+    }
+
+    /// [`strides`](Self::strides) on a rayon pool in chunks of `chunk` states; results are
+    /// identical for any thread count, lane count and chunk size.
+    pub fn strides_par(
+        &self,
+        states: &[Vec<f64>],
+        lanes: usize,
+        pool: &rayon::ThreadPool,
+        chunk: usize,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Vec<Stride>, LimitError> {
+        let items = self.lift_all(states)?;
+        let opts = BatchOptions {
+            lanes,
+            integrator: self.opts,
+        };
+        let ends = run_batch_par(
+            self.sys,
+            &self.driver(),
+            &items,
+            &opts,
+            pool,
+            chunk,
+            progress,
+        )?;
+        Ok(ends.into_iter().map(|e| self.to_stride(e)).collect())
+    }
+
+    fn lift_all(&self, states: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, LimitError> {
+        states
+            .iter()
+            .map(|s| {
+                self.check_dim(s)?;
+                Ok(self.lift(s))
+            })
+            .collect()
+    }
+}

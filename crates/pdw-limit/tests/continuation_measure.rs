@@ -1,0 +1,51 @@
+//! Measurements (printed, not asserted): run with
+//! `cargo test --release -p pdw-limit --test continuation_measure -- --ignored --nocapture`.
+
+use pdw_limit::{continue_branch, period_doubling_cascade, ContinuationOptions};
+use pdw_walkers::simplest::{Simplest, SimplestParams};
+use std::time::Instant;
+
+fn family(g: f64) -> Result<Box<Simplest>, pdw_walkers::WalkerError> {
+    Simplest::new(SimplestParams {
+        slope: g,
+        ..Default::default()
+    })
+    .map(Box::new)
+}
+
+#[test]
+#[ignore]
+fn measure_simplest_branch_and_cascade() {
+    let opts = ContinuationOptions::new(0.001, 0.0195);
+    let t = Instant::now();
+    let b = continue_branch(&family, &[0.2003, -0.1998], 0.009, 1, &opts).unwrap();
+    println!(
+        "period-1 branch from γ=0.009 up: {} points in {:.3} s, end {:?}",
+        b.points.len(),
+        t.elapsed().as_secs_f64(),
+        b.end
+    );
+    for bif in &b.bifurcations {
+        println!("  {:?} at γ = {:.12} (bracket {:.1e}) s = {:?} λ = {:?}", bif.kind, bif.param, bif.param_bracket, bif.section, bif.multipliers);
+    }
+    let p = b.points.last().unwrap();
+    println!("  last point γ = {} s = {:?} period {}", p.param, p.section, p.period);
+    let t = Instant::now();
+    let mut o = ContinuationOptions::new(0.009, 0.0195);
+    o.ds_max = 2e-3;
+    let (pds, brs) = period_doubling_cascade(&family, &[0.2003, -0.1998], 0.009, 5, &o).unwrap();
+    println!("cascade in {:.3} s", t.elapsed().as_secs_f64());
+    for (i, pd) in pds.iter().enumerate() {
+        println!("  PD {}: period {} → {} at γ = {:.12} (bracket {:.1e})", i + 1, pd.period_strides, 2 * pd.period_strides, pd.param, pd.param_bracket);
+    }
+    for br in &brs {
+        println!("  branch k={} points {} end {:?}", br.period_strides, br.points.len(), br.end);
+        for p in br.points.iter().step_by((br.points.len() / 8).max(1)) {
+            println!("     γ={:.10} s={:?} it={} t={:?} |λ|max={:.4}", p.param, p.section, p.newton_iters, p.tangent, p.multipliers[0].modulus());
+        }
+    }
+    for i in 2..pds.len() {
+        let r = (pds[i - 1].param - pds[i - 2].param) / (pds[i].param - pds[i - 1].param);
+        println!("  ratio δ_{} = {r:.4}", i - 1);
+    }
+}

@@ -1,0 +1,119 @@
+//! The model registry: names, parameters (units, defaults, meaning), coordinates, and a
+//! constructor from parameter values, so that a front end can list and build models by name.
+//!
+//! To add a model: implement [`Walker`] for it, give its module a `pub static INFO: ModelInfo`,
+//! and append `&crate::<module>::INFO` to [`MODELS`].
+
+use crate::error::WalkerError;
+use pdw_hybrid::Section;
+
+/// One user-settable model parameter.
+#[derive(Clone, Copy, Debug)]
+pub struct ParamSpec {
+    /// Name used on the command line (`--set NAME=VALUE`); every model calls its slope `slope`.
+    pub name: &'static str,
+    /// Unit, e.g. `"rad"`, `"m"`, `"kg"`, `"1"` (dimensionless).
+    pub unit: &'static str,
+    /// Default value (the model's reference preset).
+    pub default: f64,
+    /// One-line meaning, with the preset's source.
+    pub description: &'static str,
+}
+
+/// A starting point for a fixed-point search on the section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GaitGuess {
+    /// Which gait this is meant to find, e.g. `"stable"`, `"unstable"`.
+    pub gait: &'static str,
+    /// Reduced section coordinates (in [`Section::section_names`] order).
+    pub section: Vec<f64>,
+    /// Where the guess comes from (e.g. "Garcia 1998 App. A.2 small-slope asymptotics").
+    pub source: &'static str,
+}
+
+/// Model-level extras on top of the hybrid system and its section.
+pub trait Walker: Section {
+    /// Registry name, e.g. `"simplest"`.
+    fn name(&self) -> &'static str;
+    /// Names of the full state components, in state order.
+    fn state_names(&self) -> &'static [&'static str];
+    /// Current parameter values, in [`ModelInfo::params`] order.
+    fn param_values(&self) -> Vec<(&'static str, f64)>;
+    /// Step length (distance between the feet along the slope, model length units) at the
+    /// stride-ending event, from the *pre-reset* state `x_pre` on the section guard.
+    fn step_length(&self, x_pre: &[f64]) -> f64;
+    /// Human name of a terminal guard's fall code (`GuardKind::Terminal(code)`).
+    fn fall_name(&self, code: u8) -> &'static str;
+    /// Initial guesses for the gaits the model is known to have at its current parameters.
+    fn gait_guesses(&self) -> Vec<GaitGuess>;
+}
+
+/// Constructor from parameter values in [`ModelInfo::params`] order.
+pub type BuildFn = fn(&[f64]) -> Result<Box<dyn Walker>, WalkerError>;
+
+/// Static description of a model and its constructor.
+pub struct ModelInfo {
+    pub name: &'static str,
+    pub description: &'static str,
+    pub params: &'static [ParamSpec],
+    pub state_names: &'static [&'static str],
+    pub section_names: &'static [&'static str],
+    /// Builds the model from values in `params` order (already resolved by [`ModelInfo::resolve`]).
+    pub build_from: BuildFn,
+}
+
+impl ModelInfo {
+    /// Default values with `overrides` applied; an unknown name is an error listing the valid ones.
+    pub fn resolve(&self, overrides: &[(&str, f64)]) -> Result<Vec<f64>, WalkerError> {
+        let mut v: Vec<f64> = self.params.iter().map(|p| p.default).collect();
+        for (name, value) in overrides {
+            match self.params.iter().position(|p| p.name == *name) {
+                Some(i) => v[i] = *value,
+                None => {
+                    return Err(WalkerError::UnknownParam {
+                        model: self.name,
+                        name: (*name).to_string(),
+                        valid: self
+                            .params
+                            .iter()
+                            .map(|p| p.name)
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                    })
+                }
+            }
+        }
+        Ok(v)
+    }
+
+    /// Builds the model with `overrides` applied to the defaults.
+    pub fn build(&self, overrides: &[(&str, f64)]) -> Result<Box<dyn Walker>, WalkerError> {
+        (self.build_from)(&self.resolve(overrides)?)
+    }
+}
+
+/// Every registered model, in listing order.
+pub static MODELS: &[&ModelInfo] = &[
+    &crate::rimless::INFO,
+    &crate::simplest::INFO,
+    &crate::compass::INFO,
+    &crate::kneed::INFO,
+    &crate::seed5::INFO,
+];
+
+/// Looks a model up by name; an unknown name is an error listing the valid ones.
+pub fn model_info(name: &str) -> Result<&'static ModelInfo, WalkerError> {
+    MODELS
+        .iter()
+        .copied()
+        .find(|m| m.name == name)
+        .ok_or_else(|| WalkerError::UnknownModel {
+            name: name.to_string(),
+            valid: MODELS.iter().map(|m| m.name).collect::<Vec<_>>().join(", "),
+        })
+}
+
+/// Builds model `name` with parameter `overrides` (e.g. `[("slope", 0.01)]`).
+pub fn build(name: &str, overrides: &[(&str, f64)]) -> Result<Box<dyn Walker>, WalkerError> {
+    model_info(name)?.build(overrides)
+}

@@ -1,0 +1,320 @@
+//! The rimless wheel (Coleman; Tedrake, *Underactuated Robotics* ch. 4): a point mass at the hub
+//! of `N` massless spokes of length `l`, rolling down a slope `γ` from spoke to spoke.
+//!
+//! # Coordinates and signs
+//! State `x = (θ, θ̇)`: `θ` is the stance spoke's angle from the slope normal, positive when the
+//! hub is downhill of the contact point (the rolling direction); `θ̇ > 0` rolls forward. With
+//! the half inter-spoke angle `α = π/N`, a step runs from `θ = −α` (the previous spoke just
+//! left the ground) to `θ = +α` (the next spoke touches down).
+//!
+//! # Flow
+//! An inverted pendulum about the contact point; the hub is vertically above it at `θ = −γ`:
+//! `θ̈ = (g/l) sin(θ + γ)`. Energy per unit mass `E = ½ l² θ̇² + g l cos(θ + γ)` is conserved.
+//!
+//! # Spoke impact (guard 0) and reset
+//! Rising crossing of `θ − α`. Plastic impact at the new contact, angular momentum about it
+//! conserved: the hub velocity (perpendicular to the old spoke) keeps only its component
+//! perpendicular to the new spoke, which is at angle `2α` from the old one, so
+//! `θ̇⁺ = cos 2α · θ̇⁻`, and `θ⁺ = θ⁻ − 2α` (`= −α` on the guard). The kinetic energy lost is
+//! `½ l² θ̇⁻² (1 − cos² 2α)`.
+//!
+//! # Section
+//! Just after a spoke impact, reduced coordinate `θ̇` (the lift sets `θ = −α`). Return map
+//! (REFERENCES §2): `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)`.
+//!
+//! # Stopping (terminal guards)
+//! [`ROLLS_BACK`]: the wheel does not reach the next spoke — `θ̇` falls through zero (guard 1), or
+//! the hub moves back past the previous spoke, `θ = −α` falling (guard 2, for a start with
+//! `θ̇ ≤ 0`). On a slope too shallow for the rolling gait (`ω* ≤ ω₁`), every stride ends this
+//! way: the caller sees the wheel come to rest (rocking between two spokes, then standing).
+
+use crate::error::{check_open, WalkerError};
+use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Walker};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Guard index of the spoke impact.
+pub const SPOKE_IMPACT: usize = 0;
+/// Fall code: the wheel rolls back (fails to reach the next spoke).
+pub const ROLLS_BACK: u8 = 1;
+
+const GUARDS: [GuardSpec; 3] = [
+    GuardSpec {
+        name: "spoke_impact",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Reset,
+    },
+    GuardSpec {
+        name: "rolls_back",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Terminal(ROLLS_BACK),
+    },
+    GuardSpec {
+        name: "back_past_previous_spoke",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Terminal(ROLLS_BACK),
+    },
+];
+
+const STATE_NAMES: [&str; 2] = ["theta", "thetadot"];
+const SECTION_NAMES: [&str; 1] = ["thetadot"];
+
+static PARAMS: [ParamSpec; 5] = [
+    ParamSpec {
+        name: "slope",
+        unit: "rad",
+        default: 0.08,
+        description: "slope angle γ",
+    },
+    ParamSpec {
+        name: "n_spokes",
+        unit: "1",
+        default: 8.0,
+        description: "number of spokes N (integer ≥ 3); α = π/N (Tedrake's example uses 8)",
+    },
+    ParamSpec {
+        name: "g",
+        unit: "m/s^2",
+        default: 9.81,
+        description: "gravitational acceleration",
+    },
+    ParamSpec {
+        name: "l",
+        unit: "m",
+        default: 1.0,
+        description: "spoke length",
+    },
+    ParamSpec {
+        name: "max_stride_time",
+        unit: "s",
+        default: 10.0,
+        description: "stride time budget; a longer stride counts as a timeout",
+    },
+];
+
+/// Registry entry.
+pub static INFO: ModelInfo = ModelInfo {
+    name: "rimless",
+    description: "rimless wheel: point mass on N massless spokes (closed-form fixed point)",
+    params: &PARAMS,
+    state_names: &STATE_NAMES,
+    section_names: &SECTION_NAMES,
+    build_from: |v| {
+        Ok(Box::new(Rimless::new(RimlessParams {
+            slope: v[0],
+            n_spokes: v[1],
+            g: v[2],
+            l: v[3],
+            max_stride_time: v[4],
+        })?))
+    },
+};
+
+/// User-facing parameters of [`Rimless`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RimlessParams {
+    /// Slope γ (rad), in (−π/2, π/2).
+    pub slope: f64,
+    /// Number of spokes N, an integer ≥ 3 (a float so that it can come from `--set`).
+    pub n_spokes: f64,
+    /// Gravitational acceleration (m/s²), > 0.
+    pub g: f64,
+    /// Spoke length (m), > 0.
+    pub l: f64,
+    /// Stride time budget (s), > 0.
+    pub max_stride_time: f64,
+}
+
+impl Default for RimlessParams {
+    fn default() -> Self {
+        Self {
+            slope: 0.08,
+            n_spokes: 8.0,
+            g: 9.81,
+            l: 1.0,
+            max_stride_time: 10.0,
+        }
+    }
+}
+
+/// The rimless wheel (immutable model).
+#[derive(Clone, Debug)]
+pub struct Rimless {
+    gamma: f64,
+    n: f64,
+    alpha: f64,
+    g: f64,
+    l: f64,
+    max_stride_time: f64,
+}
+
+impl Rimless {
+    /// Builds the model, rejecting a non-integer or < 3 spoke count, a slope outside
+    /// (−π/2, π/2), non-positive `g`, `l` or time budget, or non-finite values.
+    pub fn new(p: RimlessParams) -> Result<Self, WalkerError> {
+        let gamma = check_open(
+            "slope",
+            p.slope,
+            -FRAC_PI_2,
+            FRAC_PI_2,
+            "a finite angle in (-pi/2, pi/2) rad",
+        )?;
+        if !(p.n_spokes.is_finite() && p.n_spokes >= 3.0 && p.n_spokes.fract() == 0.0) {
+            return Err(WalkerError::InvalidParam {
+                name: "n_spokes",
+                value: p.n_spokes,
+                allowed: "an integer >= 3",
+            });
+        }
+        let g = check_open("g", p.g, 0.0, f64::INFINITY, "finite and > 0")?;
+        let l = check_open("l", p.l, 0.0, f64::INFINITY, "finite and > 0")?;
+        let max_stride_time = check_open(
+            "max_stride_time",
+            p.max_stride_time,
+            0.0,
+            f64::INFINITY,
+            "finite and > 0",
+        )?;
+        Ok(Self {
+            gamma,
+            n: p.n_spokes,
+            alpha: PI / p.n_spokes,
+            g,
+            l,
+            max_stride_time,
+        })
+    }
+
+    /// Half inter-spoke angle α = π/N.
+    pub fn alpha(&self) -> f64 {
+        self.alpha
+    }
+
+    /// Energy per unit mass, `½ l² θ̇² + g l cos(θ + γ)`.
+    pub fn energy(&self, x: &[f64]) -> f64 {
+        0.5 * self.l * self.l * x[1] * x[1] + self.g * self.l * (x[0] + self.gamma).cos()
+    }
+
+    /// Closed-form rolling fixed point `ω* = cot 2α · √(4 (g/l) sin α sin γ)` (REFERENCES §2),
+    /// or `None` when the rolling gait does not exist (`γ ≤ 0`, `N = 4` (cot 2α = 0 is the
+    /// standing limit) or `ω* ≤ ω₁ = √(2 (g/l)(1 − cos(γ − α)))`).
+    pub fn rolling_fixed_point(&self) -> Option<f64> {
+        let a = self.alpha;
+        if self.gamma <= 0.0 {
+            return None;
+        }
+        let w = (4.0 * self.g / self.l * a.sin() * self.gamma.sin()).sqrt() / (2.0 * a).tan();
+        let w1 = (2.0 * self.g / self.l * (1.0 - (self.gamma - a).cos())).sqrt();
+        (w.is_finite() && w > w1).then_some(w)
+    }
+}
+
+impl HybridSystem for Rimless {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn guards(&self, _mode: usize) -> &[GuardSpec] {
+        &GUARDS
+    }
+    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+        dx[0] = x[1];
+        dx[1] = self.g / self.l * (x[0] + self.gamma).sin();
+    }
+    fn guard(&self, _mode: usize, k: usize, x: &[f64]) -> f64 {
+        match k {
+            0 => x[0] - self.alpha,
+            1 => x[1],
+            _ => x[0] + self.alpha,
+        }
+    }
+    fn reset(&self, _mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        out[0] = x[0] - 2.0 * self.alpha;
+        out[1] = (2.0 * self.alpha).cos() * x[1];
+        0
+    }
+    fn flow_jacobian(&self, _mode: usize, x: &[f64], jac: &mut [f64]) {
+        jac[0] = 0.0;
+        jac[1] = 1.0;
+        jac[2] = self.g / self.l * (x[0] + self.gamma).cos();
+        jac[3] = 0.0;
+    }
+    fn guard_gradient(&self, _mode: usize, k: usize, _x: &[f64], grad: &mut [f64]) {
+        if k == 1 {
+            grad[0] = 0.0;
+            grad[1] = 1.0;
+        } else {
+            grad[0] = 1.0;
+            grad[1] = 0.0;
+        }
+    }
+    fn reset_jacobian(&self, _mode: usize, _k: usize, _x: &[f64], jac: &mut [f64]) {
+        jac[0] = 1.0;
+        jac[1] = 0.0;
+        jac[2] = 0.0;
+        jac[3] = (2.0 * self.alpha).cos();
+    }
+}
+
+impl Section for Rimless {
+    fn section_dim(&self) -> usize {
+        1
+    }
+    fn section_names(&self) -> &[&'static str] {
+        &SECTION_NAMES
+    }
+    fn section_mode(&self) -> usize {
+        0
+    }
+    fn section_guard(&self) -> (usize, usize) {
+        (0, SPOKE_IMPACT)
+    }
+    fn lift(&self, s: &[f64], x: &mut [f64]) {
+        x[0] = -self.alpha;
+        x[1] = s[0];
+    }
+    fn project(&self, x: &[f64], s: &mut [f64]) {
+        s[0] = x[1];
+    }
+    fn max_stride_time(&self) -> f64 {
+        self.max_stride_time
+    }
+}
+
+impl Walker for Rimless {
+    fn name(&self) -> &'static str {
+        "rimless"
+    }
+    fn state_names(&self) -> &'static [&'static str] {
+        &STATE_NAMES
+    }
+    fn param_values(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("slope", self.gamma),
+            ("n_spokes", self.n),
+            ("g", self.g),
+            ("l", self.l),
+            ("max_stride_time", self.max_stride_time),
+        ]
+    }
+    /// Distance between consecutive contact points, `2 l sin α`.
+    fn step_length(&self, _x_pre: &[f64]) -> f64 {
+        2.0 * self.l * self.alpha.sin()
+    }
+    fn fall_name(&self, code: u8) -> &'static str {
+        match code {
+            ROLLS_BACK => "rolls_back",
+            _ => "fall",
+        }
+    }
+    /// The closed-form rolling fixed point, when it exists.
+    fn gait_guesses(&self) -> Vec<GaitGuess> {
+        self.rolling_fixed_point()
+            .map(|w| GaitGuess {
+                gait: "stable",
+                section: vec![w],
+                source: "closed form (Coleman; Tedrake), REFERENCES §2",
+            })
+            .into_iter()
+            .collect()
+    }
+}

@@ -1,0 +1,513 @@
+//! The simplest walking model of Garcia, Chatterjee, Ruina & Coleman (1998), in their exact
+//! convention.
+//!
+//! A point-mass hip `M` on two massless legs of length `l` with infinitesimal point feet
+//! (`m/M → 0`), on a slope `γ`; time in units of `√(l/g)`.
+//!
+//! # Coordinates and signs
+//! State `x = (θ, θ̇, φ, φ̇)`:
+//! - `θ` — stance-leg angle from the slope normal; positive when the stance foot is ahead of the
+//!   hip (downhill). During a step θ decreases from about `+0.2` to about `−0.2`.
+//! - `φ` — angle between the legs, `φ = θ − ψ` with `ψ` the swing leg's angle from the slope
+//!   normal (same sign convention as θ).
+//!
+//! In a slope frame with `x` downhill along the slope and `y` along the normal, stance foot at the
+//! origin: hip `= (−sin θ, cos θ)`, swing foot `= hip + (sin ψ, −cos ψ)`, gravity
+//! `= (sin γ, −cos γ)`.
+//!
+//! # Flow (Garcia 1998 eq. 3)
+//! ```text
+//! θ̈ = sin(θ − γ)
+//! φ̈ = sin(θ − γ) + θ̇² sin φ − cos(θ − γ) sin φ
+//! ```
+//! Energy (per unit hip mass, units `M g l`): `E = ½ θ̇² + cos(θ − γ)` is conserved by the flow.
+//!
+//! # Heel strike (guard 0)
+//! `g = φ − 2θ`. The swing-foot height above the slope is `h = cos θ − cos ψ =
+//! 2 sin(φ/2) sin(g/2)`, which vanishes both when the legs coincide (`φ = 0`, the mid-stance
+//! *scuffing*, ignored as in the paper) and at `g = 0`. The foot strikes the ground when `h`
+//! goes from positive to negative with the swing foot *ahead* of the stance foot; the swing-foot
+//! position along the slope on `g = 0` is `−2 sin θ`, so "ahead" means `θ < 0` (hence `φ < 0`),
+//! and with `sin(φ/2) < 0` a decreasing `h` means an increasing `g`. The heel strike is therefore
+//! the **rising** crossing of `g` with the admissibility test **`θ < 0`**. Both conditions are
+//! scale free, so the same test holds for the tiny gaits of very small slopes (θ* ∝ γ^{1/3}).
+//! The mid-stance crossings of `g` (falling, or rising with `θ > 0` just after the previous heel
+//! strike where `g = 0`) are not heel strikes.
+//!
+//! # Jump map (Garcia 1998, rank 2)
+//! ```text
+//! θ⁺ = −θ⁻,  θ̇⁺ = cos 2θ⁻ θ̇⁻,  φ⁺ = −2θ⁻,  φ̇⁺ = cos 2θ⁻ (1 − cos 2θ⁻) θ̇⁻
+//! ```
+//! It follows from conservation of the hip's angular momentum about the new contact point (the
+//! hip velocity keeps only its component perpendicular to the new stance leg) and of the
+//! trailing foot's angular momentum about the hip (the new swing foot leaves with no velocity
+//! perpendicular to its leg).
+//!
+//! # Section
+//! Just after heel strike, reduced coordinates `(θ, θ̇)` in Garcia's convention. Because the jump
+//! map's image satisfies `φ⁺ = 2θ⁺` and, with `cos 2θ⁺ = cos 2θ⁻` and `θ̇⁻ = θ̇⁺ / cos 2θ⁺`,
+//! `φ̇⁺ = (1 − cos 2θ⁺) θ̇⁺`, the lift is `(θ, θ̇) ↦ (θ, θ̇, 2θ, (1 − cos 2θ) θ̇)`.
+//! (Writing `cos 2θ (1 − cos 2θ) θ̇` with the *post*-impact θ̇ would be wrong by a factor
+//! `cos 2θ`.)
+//!
+//! # Falls (terminal guards)
+//! - guard 1, [`FALL_BACKWARD`]: `θ̇` rises through 0 before heel strike. The stance motion
+//!   `θ̈ = sin(θ − γ)` does not depend on the swing leg, and θ̇ can only rise through 0 where
+//!   `θ > γ`, after which the walker falls back over its stance foot.
+//! - guard 2, [`FALL_BACKWARD`]: the hip reaches the ground behind, `θ = π/2` (rising) — catches
+//!   states that start with `θ̇ ≥ 0`.
+//! - guard 3, [`FALL_FORWARD`]: the hip reaches the ground ahead, `θ = −π/2` (falling).
+//! - a stride longer than `max_stride_time` ([`Section::max_stride_time`]).
+//!
+//! # Vectorised right-hand side
+//! `flow_batch` evaluates the trigonometric functions with `wide`'s `f64x4::sin_cos`, four lanes
+//! at a time, and the scalar [`HybridSystem::flow`] calls the very same lane-wise kernel, so the
+//! scalar and batched right-hand sides are bit-identical.
+
+use crate::error::{check_open, WalkerError};
+use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Walker};
+use faer::{MatMut, MatRef};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use std::f64::consts::FRAC_PI_2;
+use wide::f64x4;
+
+/// Guard index of the heel strike.
+pub const HEEL_STRIKE: usize = 0;
+/// Fall code: the walker falls backward (stance leg reverses before heel strike).
+pub const FALL_BACKWARD: u8 = 1;
+/// Fall code: the walker falls forward (hip reaches the ground ahead).
+pub const FALL_FORWARD: u8 = 2;
+
+const GUARDS: [GuardSpec; 4] = [
+    GuardSpec {
+        name: "heel_strike",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Reset,
+    },
+    GuardSpec {
+        name: "stance_reverses",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Terminal(FALL_BACKWARD),
+    },
+    GuardSpec {
+        name: "hip_on_ground_behind",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Terminal(FALL_BACKWARD),
+    },
+    GuardSpec {
+        name: "hip_on_ground_ahead",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Terminal(FALL_FORWARD),
+    },
+];
+
+const STATE_NAMES: [&str; 4] = ["theta", "thetadot", "phi", "phidot"];
+const SECTION_NAMES: [&str; 2] = ["theta", "thetadot"];
+
+static PARAMS: [ParamSpec; 2] = [
+    ParamSpec {
+        name: "slope",
+        unit: "rad",
+        default: 0.009,
+        description: "slope angle γ (Garcia et al. 1998 use 0.009)",
+    },
+    ParamSpec {
+        name: "max_stride_time",
+        unit: "sqrt(l/g)",
+        default: 12.0,
+        description: "stride time budget; a longer stride counts as a fall (gait period ≈ 3.9)",
+    },
+];
+
+/// Registry entry.
+pub static INFO: ModelInfo = ModelInfo {
+    name: "simplest",
+    description: "Garcia et al. 1998 simplest walker: point-mass hip, massless legs, \
+                  infinitesimal feet; time in sqrt(l/g)",
+    params: &PARAMS,
+    state_names: &STATE_NAMES,
+    section_names: &SECTION_NAMES,
+    build_from: |v| {
+        Ok(Box::new(Simplest::new(SimplestParams {
+            slope: v[0],
+            max_stride_time: v[1],
+        })?))
+    },
+};
+
+/// User-facing parameters of [`Simplest`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimplestParams {
+    /// Slope γ (rad), in (−π/2, π/2). Garcia's reference value: 0.009.
+    pub slope: f64,
+    /// Stride time budget in units of √(l/g) (the gaits take ≈ 3.1–3.9).
+    pub max_stride_time: f64,
+}
+
+impl Default for SimplestParams {
+    fn default() -> Self {
+        Self {
+            slope: 0.009,
+            max_stride_time: 12.0,
+        }
+    }
+}
+
+/// The simplest walker (immutable model).
+#[derive(Clone, Debug)]
+pub struct Simplest {
+    gamma: f64,
+    max_stride_time: f64,
+}
+
+/// Lane-wise right-hand side on four lanes: returns `(θ̇, θ̈, φ̇, φ̈)` and the trigonometric
+/// values the Jacobian needs. Every operation is lane-wise, so a lane's result depends only on its own inputs.
+#[inline(always)]
+fn rhs4(gamma: f64, th: f64x4, thd: f64x4, ph: f64x4, phd: f64x4) -> ([f64x4; 4], Trig4) {
+    let (s, c) = (th - f64x4::splat(gamma)).sin_cos();
+    let (sp, cp) = ph.sin_cos();
+    let phdd = s + (thd * thd - c) * sp;
+    ([thd, s, phd, phdd], Trig4 { c, sp, cp })
+}
+
+/// `cos(θ − γ)`, `sin φ`, `cos φ` on four lanes (for the Jacobian).
+struct Trig4 {
+    c: f64x4,
+    sp: f64x4,
+    cp: f64x4,
+}
+
+/// Scalar evaluation through the same lane-wise kernel: one state in all four lanes.
+#[inline]
+fn rhs1(gamma: f64, x: &[f64]) -> ([f64; 4], [f64; 3]) {
+    let (f, t) = rhs4(
+        gamma,
+        f64x4::splat(x[0]),
+        f64x4::splat(x[1]),
+        f64x4::splat(x[2]),
+        f64x4::splat(x[3]),
+    );
+    (
+        [
+            f[0].to_array()[0],
+            f[1].to_array()[0],
+            f[2].to_array()[0],
+            f[3].to_array()[0],
+        ],
+        [t.c.to_array()[0], t.sp.to_array()[0], t.cp.to_array()[0]],
+    )
+}
+
+/// Which of Garcia's two period-one gaits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GarciaGait {
+    /// The "long period" gait (τ ≈ 3.8–3.9), stable for 0 < γ < ≈0.0151.
+    LongPeriod,
+    /// The "short period" gait (τ ≈ π), unstable.
+    ShortPeriod,
+}
+
+/// Coefficients of Garcia's small-slope asymptotics (Garcia 1998 Appendix A.2):
+/// `θ* ≈ Θ₀ γ^{1/3} + Θ₁ γ`, `θ̇* ≈ α Θ₀ γ^{1/3} + (α Θ₁ + c₁) γ`,
+/// `τ ≈ τ₀ + τ₁ γ^{2/3} + τ₂ γ^{4/3}`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GarciaAsymptotics {
+    pub theta0: f64,
+    pub theta1: f64,
+    pub alpha: f64,
+    pub c1: f64,
+    pub tau0: f64,
+    pub tau1: f64,
+    pub tau2: f64,
+}
+
+impl GarciaGait {
+    /// The published coefficients (shared/REFERENCES.md §1).
+    pub fn asymptotics(self) -> GarciaAsymptotics {
+        match self {
+            GarciaGait::LongPeriod => GarciaAsymptotics {
+                theta0: 0.970956,
+                theta1: -0.270837,
+                alpha: -1.045203,
+                c1: 1.062895,
+                tau0: 3.812092,
+                tau1: 1.579129,
+                tau2: 0.932019,
+            },
+            GarciaGait::ShortPeriod => GarciaAsymptotics {
+                theta0: 0.943976,
+                theta1: -0.264561,
+                alpha: -1.090331,
+                c1: 0.866610,
+                tau0: std::f64::consts::PI,
+                tau1: -0.907496,
+                tau2: -4.562254,
+            },
+        }
+    }
+
+    /// Asymptotic section state `(θ*, θ̇*)` at slope γ (Garcia 1998 App. A.2).
+    pub fn section_guess(self, gamma: f64) -> [f64; 2] {
+        let a = self.asymptotics();
+        let g13 = gamma.cbrt();
+        [
+            a.theta0 * g13 + a.theta1 * gamma,
+            a.alpha * a.theta0 * g13 + (a.alpha * a.theta1 + a.c1) * gamma,
+        ]
+    }
+
+    /// Asymptotic step period τ at slope γ (Garcia 1998 App. A.2).
+    pub fn period_guess(self, gamma: f64) -> f64 {
+        let a = self.asymptotics();
+        let g23 = gamma.cbrt().powi(2);
+        a.tau0 + a.tau1 * g23 + a.tau2 * g23 * g23
+    }
+}
+
+impl Simplest {
+    /// Builds the model; rejects a slope outside (−π/2, π/2), a non-finite value, or a
+    /// non-positive time budget.
+    pub fn new(p: SimplestParams) -> Result<Self, WalkerError> {
+        let gamma = check_open(
+            "slope",
+            p.slope,
+            -FRAC_PI_2,
+            FRAC_PI_2,
+            "a finite angle in (-pi/2, pi/2) rad",
+        )?;
+        let max_stride_time = check_open(
+            "max_stride_time",
+            p.max_stride_time,
+            0.0,
+            f64::INFINITY,
+            "finite and > 0",
+        )?;
+        Ok(Self {
+            gamma,
+            max_stride_time,
+        })
+    }
+
+    /// Slope γ (rad).
+    pub fn slope(&self) -> f64 {
+        self.gamma
+    }
+
+    /// Mechanical energy per unit hip mass, `½ θ̇² + cos(θ − γ)` (units `M g l`); the swing
+    /// foot is massless and does not contribute.
+    pub fn energy(&self, x: &[f64]) -> f64 {
+        0.5 * x[1] * x[1] + (x[0] - self.gamma).cos()
+    }
+}
+
+impl HybridSystem for Simplest {
+    fn dim(&self) -> usize {
+        4
+    }
+
+    fn guards(&self, _mode: usize) -> &[GuardSpec] {
+        &GUARDS
+    }
+
+    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+        let (f, _) = rhs1(self.gamma, x);
+        dx[..4].copy_from_slice(&f);
+    }
+
+    fn flow_batch(&self, _mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
+        let lanes = x.nrows();
+        let cols: Option<Vec<&[f64]>> = (0..4)
+            .map(|j| x.col(j).try_as_col_major().map(|c| c.as_slice()))
+            .collect();
+        let Some(cols) = cols else {
+            // Non-contiguous columns: per-lane scalar path (same kernel, same bits).
+            let mut dx = dx;
+            let mut xi = [0.0; 4];
+            for l in 0..lanes {
+                for j in 0..4 {
+                    xi[j] = x[(l, j)];
+                }
+                let (f, _) = rhs1(self.gamma, &xi);
+                for j in 0..4 {
+                    dx[(l, j)] = f[j];
+                }
+            }
+            return;
+        };
+        let (d01, d23) = dx.split_at_col_mut(2);
+        let (d0, d1) = d01.split_at_col_mut(1);
+        let (d2, d3) = d23.split_at_col_mut(1);
+        let (Some(d0), Some(d1), Some(d2), Some(d3)) = (
+            d0.col_mut(0).try_as_col_major_mut(),
+            d1.col_mut(0).try_as_col_major_mut(),
+            d2.col_mut(0).try_as_col_major_mut(),
+            d3.col_mut(0).try_as_col_major_mut(),
+        ) else {
+            unreachable!("a column of a MatMut with unit row stride is contiguous")
+        };
+        let out = [
+            d0.as_slice_mut(),
+            d1.as_slice_mut(),
+            d2.as_slice_mut(),
+            d3.as_slice_mut(),
+        ];
+        let [o0, o1, o2, o3] = out;
+        let load = |c: &[f64], l: usize, n: usize| {
+            let mut a = [c[l + n - 1]; 4];
+            a[..n].copy_from_slice(&c[l..l + n]);
+            f64x4::from(a)
+        };
+        let mut l = 0;
+        while l < lanes {
+            let n = (lanes - l).min(4);
+            let (f, _) = rhs4(
+                self.gamma,
+                load(cols[0], l, n),
+                load(cols[1], l, n),
+                load(cols[2], l, n),
+                load(cols[3], l, n),
+            );
+            let f = f.map(|v| v.to_array());
+            o0[l..l + n].copy_from_slice(&f[0][..n]);
+            o1[l..l + n].copy_from_slice(&f[1][..n]);
+            o2[l..l + n].copy_from_slice(&f[2][..n]);
+            o3[l..l + n].copy_from_slice(&f[3][..n]);
+            l += n;
+        }
+    }
+
+    fn guard(&self, _mode: usize, k: usize, x: &[f64]) -> f64 {
+        match k {
+            0 => x[2] - 2.0 * x[0],
+            1 => x[1],
+            2 => x[0] - FRAC_PI_2,
+            _ => x[0] + FRAC_PI_2,
+        }
+    }
+
+    fn admissible(&self, _mode: usize, k: usize, x: &[f64]) -> bool {
+        // Heel strike only with the swing foot ahead of the stance foot (θ < 0); see module docs.
+        k != HEEL_STRIKE || x[0] < 0.0
+    }
+
+    fn reset(&self, _mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        let (th, thd) = (x[0], x[1]);
+        let c2 = (2.0 * th).cos();
+        out[0] = -th;
+        out[1] = c2 * thd;
+        out[2] = -2.0 * th;
+        out[3] = c2 * (1.0 - c2) * thd;
+        0
+    }
+
+    /// Closed form: rows `(0,1,0,0)`, `(c,0,0,0)`, `(0,0,0,1)`,
+    /// `(c + s sin φ, 2θ̇ sin φ, (θ̇² − c) cos φ, 0)` with `s, c = sin, cos(θ − γ)`.
+    fn flow_jacobian(&self, _mode: usize, x: &[f64], jac: &mut [f64]) {
+        let (f, [c, sp, cp]) = rhs1(self.gamma, x);
+        let s = f[1];
+        jac[..16].fill(0.0);
+        jac[1] = 1.0;
+        jac[4] = c;
+        jac[2 * 4 + 3] = 1.0;
+        jac[3 * 4] = c + s * sp;
+        jac[3 * 4 + 1] = 2.0 * x[1] * sp;
+        jac[3 * 4 + 2] = (x[1] * x[1] - c) * cp;
+    }
+
+    fn guard_gradient(&self, _mode: usize, k: usize, _x: &[f64], grad: &mut [f64]) {
+        grad[..4].fill(0.0);
+        match k {
+            0 => {
+                grad[0] = -2.0;
+                grad[2] = 1.0;
+            }
+            1 => grad[1] = 1.0,
+            _ => grad[0] = 1.0,
+        }
+    }
+
+    /// Closed form derivative of the jump map; only θ⁻ and θ̇⁻ enter (rank 2).
+    fn reset_jacobian(&self, _mode: usize, _k: usize, x: &[f64], jac: &mut [f64]) {
+        let (th, thd) = (x[0], x[1]);
+        let (s2, c2) = (2.0 * th).sin_cos();
+        jac[..16].fill(0.0);
+        jac[0] = -1.0;
+        jac[4] = -2.0 * s2 * thd;
+        jac[5] = c2;
+        jac[8] = -2.0;
+        // d/dθ [c2 (1 − c2)] = −2 s2 (1 − c2) + c2 · 2 s2 = 2 s2 (2 c2 − 1)
+        jac[12] = 2.0 * s2 * (2.0 * c2 - 1.0) * thd;
+        jac[13] = c2 * (1.0 - c2);
+    }
+}
+
+impl Section for Simplest {
+    fn section_dim(&self) -> usize {
+        2
+    }
+    fn section_names(&self) -> &[&'static str] {
+        &SECTION_NAMES
+    }
+    fn section_mode(&self) -> usize {
+        0
+    }
+    fn section_guard(&self) -> (usize, usize) {
+        (0, HEEL_STRIKE)
+    }
+    fn lift(&self, s: &[f64], x: &mut [f64]) {
+        let c2 = (2.0 * s[0]).cos();
+        x[0] = s[0];
+        x[1] = s[1];
+        x[2] = 2.0 * s[0];
+        x[3] = (1.0 - c2) * s[1];
+    }
+    fn project(&self, x: &[f64], s: &mut [f64]) {
+        s[0] = x[0];
+        s[1] = x[1];
+    }
+    fn max_stride_time(&self) -> f64 {
+        self.max_stride_time
+    }
+}
+
+impl Walker for Simplest {
+    fn name(&self) -> &'static str {
+        "simplest"
+    }
+    fn state_names(&self) -> &'static [&'static str] {
+        &STATE_NAMES
+    }
+    fn param_values(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("slope", self.gamma),
+            ("max_stride_time", self.max_stride_time),
+        ]
+    }
+    /// Distance between the feet at heel strike, `2 |sin θ⁻|` (leg length 1).
+    fn step_length(&self, x_pre: &[f64]) -> f64 {
+        2.0 * x_pre[0].sin().abs()
+    }
+    fn fall_name(&self, code: u8) -> &'static str {
+        match code {
+            FALL_BACKWARD => "fall_backward",
+            FALL_FORWARD => "fall_forward",
+            _ => "fall",
+        }
+    }
+    /// Garcia's small-slope asymptotics for both gaits (only meaningful for 0 < γ ≲ 0.015).
+    fn gait_guesses(&self) -> Vec<GaitGuess> {
+        let g = self.gamma.max(1e-12);
+        vec![
+            GaitGuess {
+                gait: "stable",
+                section: GarciaGait::LongPeriod.section_guess(g).to_vec(),
+                source: "Garcia et al. 1998 App. A.2, long-period gait asymptotics",
+            },
+            GaitGuess {
+                gait: "unstable",
+                section: GarciaGait::ShortPeriod.section_guess(g).to_vec(),
+                source: "Garcia et al. 1998 App. A.2, short-period gait asymptotics",
+            },
+        ]
+    }
+}
