@@ -1,0 +1,249 @@
+//! Parsers for the CLI's compact value syntaxes (shared/DESIGN.md "CLI contract").
+//!
+//! Every parser returns a message that names the bad value and says what is allowed; the binary
+//! prints it and exits with code 2.
+
+use std::fmt;
+
+/// A user-input error: the message is printed as is, exit code 2.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputError(pub String);
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for InputError {}
+
+fn err<T>(msg: String) -> Result<T, InputError> {
+    Err(InputError(msg))
+}
+
+/// A finite float, with a message naming `what` on failure.
+pub fn parse_f64(s: &str, what: &str) -> Result<f64, InputError> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => err(format!("{what}: '{s}' is not a finite number")),
+        Err(_) => err(format!("{what}: '{s}' is not a number")),
+    }
+}
+
+/// A slope in radians, or in degrees with a `deg` suffix (`3deg`); must lie in (−π/2, π/2).
+pub fn parse_slope(s: &str) -> Result<f64, InputError> {
+    let t = s.trim();
+    let v = if let Some(d) = t.strip_suffix("deg") {
+        parse_f64(d, "--slope")?.to_radians()
+    } else if let Some(r) = t.strip_suffix("rad") {
+        parse_f64(r, "--slope")?
+    } else {
+        parse_f64(t, "--slope")?
+    };
+    if v.abs() >= std::f64::consts::FRAC_PI_2 {
+        return err(format!(
+            "--slope: '{s}' is outside (-pi/2, pi/2) rad; give radians (0.009) or degrees (3deg)"
+        ));
+    }
+    Ok(v)
+}
+
+/// `NAME=VALUE` (for `--set`).
+pub fn parse_assignment(s: &str) -> Result<(String, f64), InputError> {
+    let Some((name, value)) = s.split_once('=') else {
+        return err(format!("--set: '{s}' is not of the form NAME=VALUE"));
+    };
+    let name = name.trim();
+    if name.is_empty() {
+        return err(format!("--set: '{s}' has an empty parameter name"));
+    }
+    let v = if name == "slope" {
+        parse_slope(value)?
+    } else {
+        parse_f64(value, &format!("--set {name}"))?
+    };
+    Ok((name.to_string(), v))
+}
+
+/// An inclusive coordinate range `NAME=A:B` with A < B (for `--x`, `--y`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisRange {
+    pub name: String,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+pub fn parse_axis(s: &str, flag: &str) -> Result<AxisRange, InputError> {
+    let Some((name, range)) = s.split_once('=') else {
+        return err(format!(
+            "{flag}: '{s}' is not of the form NAME=A:B (e.g. theta=0.15:0.25)"
+        ));
+    };
+    let Some((a, b)) = range.split_once(':') else {
+        return err(format!("{flag}: range '{range}' is not of the form A:B"));
+    };
+    let lo = parse_f64(a, flag)?;
+    let hi = parse_f64(b, flag)?;
+    if lo >= hi {
+        return err(format!(
+            "{flag}: range {lo}:{hi} is empty or inverted; the first bound must be below the second"
+        ));
+    }
+    Ok(AxisRange {
+        name: name.trim().to_string(),
+        lo,
+        hi,
+    })
+}
+
+/// A grid size `NXxNY`, each at least 1 and the product at most 10⁹.
+pub fn parse_grid(s: &str) -> Result<(usize, usize), InputError> {
+    let lower = s.trim().to_ascii_lowercase();
+    let Some((a, b)) = lower.split_once('x') else {
+        return err(format!(
+            "--grid: '{s}' is not of the form NXxNY (e.g. 401x401)"
+        ));
+    };
+    let parse = |t: &str| -> Result<usize, InputError> {
+        match t.parse::<usize>() {
+            Ok(n) if n >= 1 => Ok(n),
+            _ => err(format!("--grid: '{t}' in '{s}' is not a positive integer")),
+        }
+    };
+    let (nx, ny) = (parse(a)?, parse(b)?);
+    if nx.saturating_mul(ny) > 1_000_000_000 {
+        return err(format!("--grid: {nx}x{ny} has more than 10^9 cells"));
+    }
+    Ok((nx, ny))
+}
+
+/// A parameter sweep `NAME=A:B:N` (N ≥ 2 points, inclusive).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    pub name: String,
+    pub lo: f64,
+    pub hi: f64,
+    pub n: usize,
+}
+
+pub fn parse_sweep(s: &str) -> Result<Sweep, InputError> {
+    let Some((name, rest)) = s.split_once('=') else {
+        return err(format!(
+            "--sweep: '{s}' is not of the form NAME=A:B:N (e.g. slope=0.001:0.019:400)"
+        ));
+    };
+    let parts: Vec<&str> = rest.split(':').collect();
+    if parts.len() != 3 {
+        return err(format!("--sweep: '{rest}' is not of the form A:B:N"));
+    }
+    let name = name.trim().to_string();
+    let conv = |t: &str| {
+        if name == "slope" {
+            parse_slope(t)
+        } else {
+            parse_f64(t, "--sweep")
+        }
+    };
+    let lo = conv(parts[0])?;
+    let hi = conv(parts[1])?;
+    let n = match parts[2].trim().parse::<usize>() {
+        Ok(n) if n >= 2 => n,
+        _ => {
+            return err(format!(
+                "--sweep: point count '{}' must be an integer >= 2",
+                parts[2]
+            ))
+        }
+    };
+    if lo == hi {
+        return err(format!("--sweep: range {lo}:{hi} is empty"));
+    }
+    Ok(Sweep { name, lo, hi, n })
+}
+
+/// A shard `I/N` with 0 ≤ I < N.
+pub fn parse_shard(s: &str) -> Result<(usize, usize), InputError> {
+    let Some((a, b)) = s.split_once('/') else {
+        return err(format!("--shard: '{s}' is not of the form I/N (e.g. 0/4)"));
+    };
+    let (i, n) = match (a.trim().parse::<usize>(), b.trim().parse::<usize>()) {
+        (Ok(i), Ok(n)) => (i, n),
+        _ => {
+            return err(format!(
+                "--shard: '{s}' needs two non-negative integers I/N"
+            ))
+        }
+    };
+    if n == 0 || i >= n {
+        return err(format!("--shard: '{s}' needs 0 <= I < N"));
+    }
+    Ok((i, n))
+}
+
+/// A comma-separated initial guess `X1,X2,..`.
+pub fn parse_guess(s: &str) -> Result<Vec<f64>, InputError> {
+    s.split(',').map(|t| parse_f64(t, "--guess")).collect()
+}
+
+/// `linspace` with both ends included (n ≥ 1; n = 1 gives the midpoint).
+pub fn linspace(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    if n == 1 {
+        return vec![0.5 * (lo + hi)];
+    }
+    let step = (hi - lo) / (n - 1) as f64;
+    (0..n)
+        .map(|i| if i + 1 == n { hi } else { lo + step * i as f64 })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slope_accepts_radians_and_degrees() {
+        assert_eq!(parse_slope("0.009").unwrap(), 0.009);
+        let d = parse_slope("3deg").unwrap();
+        assert!((d - 3.0f64.to_radians()).abs() < 1e-15);
+        assert!(parse_slope("2").is_err());
+        assert!(parse_slope("nan").is_err());
+        assert!(parse_slope("abc").unwrap_err().0.contains("abc"));
+    }
+
+    #[test]
+    fn grid_axis_sweep_shard_reject_bad_input() {
+        assert_eq!(parse_grid("401x201").unwrap(), (401, 201));
+        assert!(parse_grid("0x5").is_err());
+        assert!(parse_grid("12").is_err());
+        assert_eq!(
+            parse_axis("theta=0.15:0.25", "--x").unwrap(),
+            AxisRange {
+                name: "theta".into(),
+                lo: 0.15,
+                hi: 0.25
+            }
+        );
+        assert!(parse_axis("theta=0.25:0.15", "--x")
+            .unwrap_err()
+            .0
+            .contains("inverted"));
+        assert!(parse_axis("theta", "--x").is_err());
+        let sw = parse_sweep("slope=0.001:0.019:400").unwrap();
+        assert_eq!((sw.lo, sw.hi, sw.n), (0.001, 0.019, 400));
+        assert!(parse_sweep("slope=0.001:0.019:1").is_err());
+        assert_eq!(parse_shard("2/4").unwrap(), (2, 4));
+        assert!(parse_shard("4/4").is_err());
+        assert_eq!(parse_assignment("mass=2.5").unwrap(), ("mass".into(), 2.5));
+        assert!(parse_assignment("=2").is_err());
+        assert_eq!(parse_guess("0.2,-0.2").unwrap(), vec![0.2, -0.2]);
+    }
+
+    #[test]
+    fn linspace_is_inclusive() {
+        let v = linspace(0.15, 0.25, 11);
+        assert_eq!(v.len(), 11);
+        assert_eq!(v[0], 0.15);
+        assert_eq!(v[10], 0.25);
+        assert!((v[5] - 0.2).abs() < 1e-15);
+    }
+}

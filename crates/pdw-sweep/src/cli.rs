@@ -1,0 +1,149 @@
+//! Command-line definitions (clap derive). The contract is shared/DESIGN.md "CLI contract".
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "pdw-sweep",
+    version,
+    about = "Find, measure and map the limit cycles of passive dynamic walkers",
+    long_about = "Find, measure and map the limit cycles of passive dynamic walkers: fixed points of \
+                  the stride map, Floquet multipliers, continuation in a parameter, and basins of \
+                  attraction written to HDF5. Every command runs on a default (the simplest \
+                  walker on slope 0.009 rad)."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// List the models, their parameters (units, defaults) and section coordinates.
+    Models(ModelsArgs),
+    /// Find period-one gaits (fixed points of the stride map) and their Floquet multipliers.
+    Fixedpoint(FixedpointArgs),
+    /// Compute a basin of attraction over a grid of section states and write HDF5 + PNG.
+    Basin(BasinArgs),
+    /// Join shard files of one basin run into one file.
+    Merge(MergeArgs),
+    /// Write an animated GIF of two strides of the gait found.
+    Animate(AnimateArgs),
+}
+
+/// Options shared by every command that builds a model.
+#[derive(Args, Debug, Clone)]
+pub struct ModelOpts {
+    /// Model name (see `pdw-sweep models`).
+    #[arg(long, default_value = "simplest")]
+    pub model: String,
+    /// Slope in radians, or degrees with a `deg` suffix (e.g. 3deg). Default: the model's preset.
+    #[arg(long)]
+    pub slope: Option<String>,
+    /// Override a model parameter, NAME=VALUE (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+}
+
+#[derive(Args, Debug)]
+pub struct ModelsArgs {
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct FixedpointArgs {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    /// Which gaits to report: stable, unstable or all.
+    #[arg(long, default_value = "all")]
+    pub gait: String,
+    /// Initial guess in section coordinates, comma separated.
+    #[arg(long)]
+    pub guess: Option<String>,
+    /// Tolerance on the fixed-point residual ‖P(x) − x‖.
+    #[arg(long, default_value_t = 1e-12)]
+    pub tol: f64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400).
+    #[arg(long)]
+    pub sweep: Option<String>,
+    /// HDF5 output of a sweep.
+    #[arg(long, default_value = "bif.h5")]
+    pub out: PathBuf,
+    /// PNG bifurcation diagram of a sweep.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Overwrite existing output files.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct BasinArgs {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    /// Grid size NXxNY.
+    #[arg(long, default_value = "401x401")]
+    pub grid: String,
+    /// Horizontal axis: NAME=A:B (inclusive). Default: the model's first section coordinate
+    /// around the fixed point.
+    #[arg(long)]
+    pub x: Option<String>,
+    /// Vertical axis: NAME=A:B (inclusive).
+    #[arg(long)]
+    pub y: Option<String>,
+    /// Stride budget per cell.
+    #[arg(long, default_value_t = 100)]
+    pub max_strides: u32,
+    /// HDF5 output file.
+    #[arg(long, default_value = "basin.h5")]
+    pub out: PathBuf,
+    /// PNG heatmap (default: the output path with .png).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Worker threads (rayon pool).
+    #[arg(long, default_value_t = 2)]
+    pub threads: usize,
+    /// Continue an interrupted run in --out.
+    #[arg(long)]
+    pub resume: bool,
+    /// Overwrite an existing --out.
+    #[arg(long)]
+    pub force: bool,
+    /// Compute only shard I of N (rows split deterministically).
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Shard files.
+    #[arg(required = true)]
+    pub shards: Vec<PathBuf>,
+    /// Merged output file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Overwrite an existing --out.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct AnimateArgs {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    /// Output GIF.
+    #[arg(long, default_value = "gait.gif")]
+    pub out: PathBuf,
+    /// Overwrite an existing --out.
+    #[arg(long)]
+    pub force: bool,
+}

@@ -1,0 +1,207 @@
+//! `pdw-sweep fixedpoint`: period-one gaits, their Floquet multipliers and gait metrics.
+
+use super::{build_model, BuiltModel};
+use crate::args::{self, InputError};
+use crate::cli::FixedpointArgs;
+use pdw_hybrid::Options;
+use pdw_limit::{find_fixed_point, FixedPoint, LimitError, NewtonOptions, StrideMap};
+use std::process::ExitCode;
+
+/// Integration tolerance of the stride map used for fixed points: two orders below the default
+/// residual tolerance 1e-12, so that the residual measures the Newton error, not the integrator's.
+pub const FIXEDPOINT_INTEGRATOR_TOL: f64 = 1e-14;
+
+/// One gait found, with the name of the guess it came from.
+pub struct Found {
+    pub label: String,
+    pub fp: FixedPoint,
+}
+
+/// Runs Newton from every guess (the user's, or the model's presets), de-duplicates the fixed
+/// points found, and returns them with the failures (guess label, error).
+pub fn search(
+    m: &BuiltModel,
+    guesses: &[(String, Vec<f64>)],
+    tol: f64,
+) -> Result<(Vec<Found>, Vec<(String, Vec<f64>, LimitError)>), LimitError> {
+    let walker = m.walker.as_ref();
+    let step = |x: &[f64]| walker.step_length(x);
+    let map = StrideMap::new(
+        walker,
+        Options::dop853(FIXEDPOINT_INTEGRATOR_TOL.max(tol * 1e-2)),
+    )?
+    .with_step_length(&step);
+    let opts = NewtonOptions {
+        tol,
+        ..NewtonOptions::default()
+    };
+    let mut found: Vec<Found> = Vec::new();
+    let mut failed = Vec::new();
+    for (label, g) in guesses {
+        match find_fixed_point(&map, g, &opts) {
+            Ok(fp) => {
+                let dup = found.iter().any(|f| {
+                    f.fp.section
+                        .iter()
+                        .zip(&fp.section)
+                        .all(|(a, b)| (a - b).abs() <= 1e-8 * (1.0 + a.abs()))
+                });
+                if !dup {
+                    found.push(Found {
+                        label: label.clone(),
+                        fp,
+                    });
+                }
+            }
+            Err(e) => failed.push((label.clone(), g.clone(), e)),
+        }
+    }
+    Ok((found, failed))
+}
+
+pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
+    if !(a.tol.is_finite() && a.tol > 0.0) {
+        return Err(InputError(format!("--tol: {} must be a positive number", a.tol)).into());
+    }
+    let which = a.gait.as_str();
+    if !matches!(which, "stable" | "unstable" | "all") {
+        return Err(InputError(format!(
+            "--gait: '{which}' is not one of stable, unstable, all"
+        ))
+        .into());
+    }
+    if a.sweep.is_some() {
+        return super::sweep::run(a);
+    }
+    let m = build_model(&a.model)?;
+    let ds = m.info.section_names.len();
+    let guesses: Vec<(String, Vec<f64>)> = match &a.guess {
+        Some(g) => {
+            let v = args::parse_guess(g)?;
+            if v.len() != ds {
+                return Err(InputError(format!(
+                    "--guess: {} values given, model '{}' has {} section coordinates ({})",
+                    v.len(),
+                    m.info.name,
+                    ds,
+                    m.info.section_names.join(", ")
+                ))
+                .into());
+            }
+            vec![("guess".to_string(), v)]
+        }
+        None => m
+            .walker
+            .gait_guesses()
+            .into_iter()
+            .map(|g| (g.gait.to_string(), g.section))
+            .collect(),
+    };
+    let (found, failed) = search(&m, &guesses, a.tol)?;
+    let selected: Vec<&Found> = found
+        .iter()
+        .filter(|f| match which {
+            "stable" => f.fp.stable,
+            "unstable" => !f.fp.stable,
+            _ => true,
+        })
+        .collect();
+
+    if a.json {
+        let fps: Vec<serde_json::Value> = selected
+            .iter()
+            .map(|f| {
+                let fp = &f.fp;
+                serde_json::json!({
+                    "gait": if fp.stable { "stable" } else { "unstable" },
+                    "guess": f.label,
+                    "section": fp.section,
+                    "state_names": m.info.state_names,
+                    "state": fp.state,
+                    "period": fp.metrics.period,
+                    "step_length": fp.metrics.step_length,
+                    "speed": fp.metrics.speed,
+                    "multipliers": fp.multipliers.iter().map(|l| serde_json::json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
+                    "stable": fp.stable,
+                    "residual": fp.residual,
+                    "iterations": fp.iterations,
+                })
+            })
+            .collect();
+        let out = serde_json::json!({
+            "model": m.info.name,
+            "slope": m.slope(),
+            "params": m.params_json(),
+            "section_names": m.info.section_names,
+            "fixed_points": fps,
+        });
+        crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        crate::outln!(
+            "model {}  slope {} rad ({:.4} deg)",
+            m.info.name,
+            m.slope(),
+            m.slope().to_degrees()
+        );
+        for f in &selected {
+            print_fixed_point(&m, f);
+        }
+    }
+    if selected.is_empty() {
+        eprintln!(
+            "no {} period-one gait found for model '{}' from {} guess(es)",
+            if which == "all" { "" } else { which },
+            m.info.name,
+            guesses.len()
+        );
+        for (label, g, e) in &failed {
+            report_failure(label, g, e);
+        }
+        eprintln!(
+            "try: another --guess (section coordinates {}), a smaller --slope, or continuation \
+             from a slope where a gait exists (--sweep slope=A:B:N)",
+            m.info.section_names.join(", ")
+        );
+        return Ok(ExitCode::from(2));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_fixed_point(m: &BuiltModel, f: &Found) {
+    let fp = &f.fp;
+    crate::outln!();
+    crate::outln!(
+        "{} gait (from guess '{}')",
+        if fp.stable { "stable" } else { "unstable" },
+        f.label
+    );
+    for (n, v) in m.info.section_names.iter().zip(&fp.section) {
+        crate::outln!("  {n:<12} {v:>22.15}");
+    }
+    crate::outln!("  period       {:>22.15}", fp.metrics.period);
+    if let Some(l) = fp.metrics.step_length {
+        crate::outln!("  step length  {l:>22.15}");
+    }
+    if let Some(v) = fp.metrics.speed {
+        crate::outln!("  speed        {v:>22.15}");
+    }
+    crate::outln!("  multipliers (|λ|):");
+    for l in &fp.multipliers {
+        crate::outln!(
+            "    {:>+20.15} {:>+20.15}i   ({:.6})",
+            l.re,
+            l.im,
+            l.modulus()
+        );
+    }
+    crate::outln!(
+        "  residual ‖P(x) − x‖∞ = {:.3e} after {} Newton iterations",
+        fp.residual,
+        fp.iterations
+    );
+}
+
+/// Prints why a Newton run failed (the error carries its residual history and last iterate).
+pub fn report_failure(label: &str, guess: &[f64], e: &LimitError) {
+    eprintln!("  guess '{label}' {guess:?}: {e}");
+}

@@ -1,0 +1,54 @@
+//! `pdw-sweep models`: every model, its parameters (units, defaults) and coordinates.
+
+use crate::cli::ModelsArgs;
+use pdw_walkers::MODELS;
+use std::process::ExitCode;
+
+pub fn run(a: &ModelsArgs) -> anyhow::Result<ExitCode> {
+    if a.json {
+        let list: Vec<serde_json::Value> = MODELS
+            .iter()
+            .map(|m| {
+                serde_json::json!({
+                    "name": m.name,
+                    "description": m.description,
+                    "state_names": m.state_names,
+                    "section_names": m.section_names,
+                    "params": m.params.iter().map(|p| serde_json::json!({
+                        "name": p.name, "unit": p.unit, "default": p.default,
+                        "description": p.description,
+                    })).collect::<Vec<_>>(),
+                })
+            })
+            .collect();
+        crate::outln!("{}", serde_json::to_string_pretty(&list)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    for m in MODELS {
+        crate::outln!("{} — {}", m.name, m.description);
+        crate::outln!("  state:   {}", m.state_names.join(", "));
+        crate::outln!("  section: {}", m.section_names.join(", "));
+        crate::outln!("  parameters:");
+        for p in m.params {
+            crate::outln!(
+                "    {:<14} {:>12} {:<6} {}",
+                p.name,
+                short(p.default),
+                p.unit,
+                p.description
+            );
+        }
+        crate::outln!();
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A default value in at most 12 characters (`0.0523598776`, not `0.05235987755982988`).
+fn short(v: f64) -> String {
+    let s = format!("{v}");
+    if s.len() <= 12 {
+        s
+    } else {
+        format!("{v:.10}").trim_end_matches('0').to_string()
+    }
+}

@@ -1,0 +1,43 @@
+//! `pdw-sweep`: the command-line front end. Thin by design: parse, call the libraries, report.
+//! Every user error prints a message naming the bad value and exits with code 2.
+
+mod args;
+mod cli;
+mod commands;
+
+/// Writes `text` to stdout; a closed pipe (`| head`) ends the output quietly instead of panicking.
+pub fn out(text: &str) {
+    use std::io::Write;
+    let mut o = std::io::stdout().lock();
+    if o.write_all(text.as_bytes())
+        .and_then(|_| o.flush())
+        .is_err()
+    {
+        std::process::exit(0);
+    }
+}
+
+/// `println!` through [`out`].
+#[macro_export]
+macro_rules! outln {
+    () => { $crate::out("\n") };
+    ($($t:tt)*) => { $crate::out(&format!("{}\n", format_args!($($t)*))) };
+}
+
+use clap::Parser;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = cli::Cli::parse();
+    match commands::run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            if let Some(input) = e.downcast_ref::<args::InputError>() {
+                eprintln!("error: {input}");
+            } else {
+                eprintln!("error: {e:#}");
+            }
+            ExitCode::from(2)
+        }
+    }
+}
