@@ -44,6 +44,7 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--target", default=os.environ.get("CARGO_TARGET_DIR", os.path.join(here, "..", "target")))
     ap.add_argument("--out", default=os.path.join(here, "results", "soa_scaling"))
+    ap.add_argument("--note", default="", help="free text appended to the table (machine, load)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
 
@@ -89,6 +90,8 @@ def main():
             t = e[0]
             batch_rows.append((g, n, lanes, t))
             lines.append(f"| {g} | {lanes} | {t / 1e3:.2f} | {t / lanes:.1f} | {t / (lanes * n):.2f} |")
+    if args.note:
+        lines += ["", args.note]
     table = "\n".join(lines) + "\n"
     with open(os.path.join(args.out, "soa_scaling.md"), "w") as f:
         f.write(table)

@@ -42,7 +42,11 @@ fn random_vec(rng: &mut ChaCha8Rng, n: usize, a: f64) -> Vec<f64> {
 
 fn scalar(c: &mut Criterion) {
     let sizes = [2usize, 3, 5, 8, 16, 32, 64, 128];
-    for (name, method) in [("soa_aba", 0), ("soa_crba_cholesky", 1), ("soa_naive_lu", 2)] {
+    for (name, method) in [
+        ("soa_aba", 0),
+        ("soa_crba_cholesky", 1),
+        ("soa_naive_lu", 2),
+    ] {
         let mut group = c.benchmark_group(name);
         for &n in &sizes {
             let mut rng = ChaCha8Rng::seed_from_u64(SEED + n as u64);
@@ -56,8 +60,16 @@ fn scalar(c: &mut Criterion) {
             match method {
                 0 => group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
                     b.iter(|| {
-                        aba(&chain, &mut ws, black_box(&q), black_box(&qd), &tau, None, &mut qdd)
-                            .unwrap();
+                        aba(
+                            &chain,
+                            &mut ws,
+                            black_box(&q),
+                            black_box(&qd),
+                            &tau,
+                            None,
+                            &mut qdd,
+                        )
+                        .unwrap();
                         black_box(&qdd);
                     })
                 }),
@@ -115,8 +127,16 @@ fn batched(c: &mut Criterion) {
             group.throughput(Throughput::Elements((lanes * n) as u64));
             group.bench_with_input(BenchmarkId::from_parameter(lanes), &lanes, |b, _| {
                 b.iter(|| {
-                    batch_aba(&chain, &mut bw, black_box(&q), black_box(&qd), &tau, None, &mut qdd)
-                        .unwrap();
+                    batch_aba(
+                        &chain,
+                        &mut bw,
+                        black_box(&q),
+                        black_box(&qd),
+                        &tau,
+                        None,
+                        &mut qdd,
+                    )
+                    .unwrap();
                     black_box(&qdd);
                 })
             });

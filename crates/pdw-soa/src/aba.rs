@@ -66,18 +66,52 @@ pub(crate) fn aba_passes(
         };
         let back = if is_locked {
             spatial::aba_back_locked(
-                &cp, &cz, chain.j_joint[k], link.mass, ws.cy[k], ws.cz[k], ws.by[k], ws.bz[k],
-                ws.ay[k], ws.az[k], ws.dy[k], ws.dz[k],
+                &cp,
+                &cz,
+                chain.j_joint[k],
+                link.mass,
+                ws.cy[k],
+                ws.cz[k],
+                ws.by[k],
+                ws.bz[k],
+                ws.ay[k],
+                ws.az[k],
+                ws.dy[k],
+                ws.dz[k],
             )
         } else if chain.prismatic[k] {
             spatial::aba_back_pri(
-                &cp, &cz, chain.j_joint[k], link.mass, ws.cy[k], ws.cz[k], ws.by[k], ws.bz[k],
-                ws.ay[k], ws.az[k], ws.hy[k], ws.hz[k], tau[k], ws.dy[k], ws.dz[k],
+                &cp,
+                &cz,
+                chain.j_joint[k],
+                link.mass,
+                ws.cy[k],
+                ws.cz[k],
+                ws.by[k],
+                ws.bz[k],
+                ws.ay[k],
+                ws.az[k],
+                ws.hy[k],
+                ws.hz[k],
+                tau[k],
+                ws.dy[k],
+                ws.dz[k],
             )
         } else {
             spatial::aba_back_rev(
-                &cp, &cz, chain.j_joint[k], link.mass, ws.cy[k], ws.cz[k], ws.by[k], ws.bz[k],
-                ws.ay[k], ws.az[k], tau[k], ws.dy[k], ws.dz[k],
+                &cp,
+                &cz,
+                chain.j_joint[k],
+                link.mass,
+                ws.cy[k],
+                ws.cz[k],
+                ws.by[k],
+                ws.bz[k],
+                ws.ay[k],
+                ws.az[k],
+                tau[k],
+                ws.dy[k],
+                ws.dz[k],
             )
         };
         ws.g[k] = back.g;
@@ -101,7 +135,9 @@ pub(crate) fn aba_passes(
                 &ap, &ws.g[k], ws.nu[k], ws.ay[k], ws.az[k], ws.hy[k], ws.hz[k], ws.dy[k], ws.dz[k],
             )
         } else {
-            spatial::aba_fwd_rev(&ap, ws.g[k][1], ws.g[k][2], ws.nu[k], ws.ay[k], ws.az[k], ws.dy[k], ws.dz[k])
+            spatial::aba_fwd_rev(
+                &ap, ws.g[k][1], ws.g[k][2], ws.nu[k], ws.ay[k], ws.az[k], ws.dy[k], ws.dz[k],
+            )
         };
         qdd[k] = qk;
         ws.acc[k] = a;

@@ -27,7 +27,10 @@ pub(crate) struct Cols {
 
 impl Cols {
     fn new(rows: usize, cols: usize) -> Self {
-        Cols { rows, data: vec![0.0; rows * cols] }
+        Cols {
+            rows,
+            data: vec![0.0; rows * cols],
+        }
     }
     #[inline(always)]
     pub(crate) fn col(&self, k: usize) -> &[f64] {
@@ -237,13 +240,13 @@ pub(crate) fn batch_kin_pass(
         if chain.prismatic[k] {
             let u = chain.axis[k];
             lanes_kin_pri(
-                m, lyp, lzp, u, comy, comz, sp, cp, wp, qk, qdk, dy, dz, hy, hz, cy, cz, w, ay, az, by,
-                bz,
+                m, lyp, lzp, u, comy, comz, sp, cp, wp, qk, qdk, dy, dz, hy, hz, cy, cz, w, ay, az,
+                by, bz,
             );
         } else {
             lanes_kin_rev(
-                m, lyp, lzp, comy, comz, sp, cp, s, c, wp, qdk, dy, dz, hy, hz, cy, cz, w, ay, az, by,
-                bz,
+                m, lyp, lzp, comy, comz, sp, cp, s, c, wp, qdk, dy, dz, hy, hz, cy, cz, w, ay, az,
+                by, bz,
             );
         }
     }
@@ -295,11 +298,24 @@ fn lanes_kin_rev(
 ) {
     let bl = qdk.len();
     let (sp, cp, s, c, wp) = (&sp[..bl], &cp[..bl], &s[..bl], &c[..bl], &wp[..bl]);
-    let (dy, dz, hy, hz, cy, cz) =
-        (&mut dy[..bl], &mut dz[..bl], &mut hy[..bl], &mut hz[..bl], &mut cy[..bl], &mut cz[..bl]);
-    let (w, ay, az, by, bz) = (&mut w[..bl], &mut ay[..bl], &mut az[..bl], &mut by[..bl], &mut bz[..bl]);
+    let (dy, dz, hy, hz, cy, cz) = (
+        &mut dy[..bl],
+        &mut dz[..bl],
+        &mut hy[..bl],
+        &mut hz[..bl],
+        &mut cy[..bl],
+        &mut cz[..bl],
+    );
+    let (w, ay, az, by, bz) = (
+        &mut w[..bl],
+        &mut ay[..bl],
+        &mut az[..bl],
+        &mut by[..bl],
+        &mut bz[..bl],
+    );
     for l in 0..bl {
-        let (dyl, dzl, cyl, czl) = spatial::geom_rev(sp[l], cp[l], lyp, lzp, s[l], c[l], comy, comz);
+        let (dyl, dzl, cyl, czl) =
+            spatial::geom_rev(sp[l], cp[l], lyp, lzp, s[l], c[l], comy, comz);
         let (wl, ayl, azl) = spatial::vel_rev(wp[l], qdk[l], dyl, dzl);
         let (byl, bzl) = spatial::force_bias(m, wl, cyl, czl);
         dy[l] = dyl;
@@ -344,9 +360,21 @@ fn lanes_kin_pri(
 ) {
     let bl = qdk.len();
     let (sp, cp, wp, qk) = (&sp[..bl], &cp[..bl], &wp[..bl], &qk[..bl]);
-    let (dy, dz, hy, hz, cy, cz) =
-        (&mut dy[..bl], &mut dz[..bl], &mut hy[..bl], &mut hz[..bl], &mut cy[..bl], &mut cz[..bl]);
-    let (w, ay, az, by, bz) = (&mut w[..bl], &mut ay[..bl], &mut az[..bl], &mut by[..bl], &mut bz[..bl]);
+    let (dy, dz, hy, hz, cy, cz) = (
+        &mut dy[..bl],
+        &mut dz[..bl],
+        &mut hy[..bl],
+        &mut hz[..bl],
+        &mut cy[..bl],
+        &mut cz[..bl],
+    );
+    let (w, ay, az, by, bz) = (
+        &mut w[..bl],
+        &mut ay[..bl],
+        &mut az[..bl],
+        &mut by[..bl],
+        &mut bz[..bl],
+    );
     for l in 0..bl {
         let (dyl, dzl, hyl, hzl, cyl, czl) =
             spatial::geom_pri(sp[l], cp[l], lyp, lzp, u[0], u[1], qk[l], comy, comz);

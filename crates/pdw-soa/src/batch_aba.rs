@@ -98,21 +98,27 @@ fn backward(
         let g2 = &mut bw.g2.col_mut(k)[..bl];
         let nu = &mut bw.nu.col_mut(k)[..bl];
         let [p0, p1, p2, p3, p4, p5] = bw.carry_p.all_mut::<6>();
-        let (p0, p1, p2, p3, p4, p5) =
-            (&mut p0[..bl], &mut p1[..bl], &mut p2[..bl], &mut p3[..bl], &mut p4[..bl], &mut p5[..bl]);
+        let (p0, p1, p2, p3, p4, p5) = (
+            &mut p0[..bl],
+            &mut p1[..bl],
+            &mut p2[..bl],
+            &mut p3[..bl],
+            &mut p4[..bl],
+            &mut p5[..bl],
+        );
         let [z0, z1, z2] = bw.carry_z.all_mut::<3>();
         let (z0, z1, z2) = (&mut z0[..bl], &mut z1[..bl], &mut z2[..bl]);
         if chain.prismatic[k] {
             let hy = &bw.hy.col(k)[..bl];
             let hz = &bw.hz.col(k)[..bl];
             lanes_back_pri(
-                j, m, tk, cy, cz, by, bz, ay, az, hy, hz, dy, dz, g0, g1, g2, nu, p0, p1, p2, p3, p4,
-                p5, z0, z1, z2,
+                j, m, tk, cy, cz, by, bz, ay, az, hy, hz, dy, dz, g0, g1, g2, nu, p0, p1, p2, p3,
+                p4, p5, z0, z1, z2,
             );
         } else {
             lanes_back_rev(
-                j, m, tk, cy, cz, by, bz, ay, az, dy, dz, g0, g1, g2, nu, p0, p1, p2, p3, p4, p5, z0,
-                z1, z2,
+                j, m, tk, cy, cz, by, bz, ay, az, dy, dz, g0, g1, g2, nu, p0, p1, p2, p3, p4, p5,
+                z0, z1, z2,
             );
         }
     }
@@ -150,11 +156,25 @@ fn lanes_back_rev(
     z2: &mut [f64],
 ) {
     let bl = tk.len();
-    let (cy, cz, by, bz, ay, az, dy, dz) =
-        (&cy[..bl], &cz[..bl], &by[..bl], &bz[..bl], &ay[..bl], &az[..bl], &dy[..bl], &dz[..bl]);
+    let (cy, cz, by, bz, ay, az, dy, dz) = (
+        &cy[..bl],
+        &cz[..bl],
+        &by[..bl],
+        &bz[..bl],
+        &ay[..bl],
+        &az[..bl],
+        &dy[..bl],
+        &dz[..bl],
+    );
     let (g0, g1, g2, nu) = (&mut g0[..bl], &mut g1[..bl], &mut g2[..bl], &mut nu[..bl]);
-    let (p0, p1, p2, p3, p4, p5) =
-        (&mut p0[..bl], &mut p1[..bl], &mut p2[..bl], &mut p3[..bl], &mut p4[..bl], &mut p5[..bl]);
+    let (p0, p1, p2, p3, p4, p5) = (
+        &mut p0[..bl],
+        &mut p1[..bl],
+        &mut p2[..bl],
+        &mut p3[..bl],
+        &mut p4[..bl],
+        &mut p5[..bl],
+    );
     let (z0, z1, z2) = (&mut z0[..bl], &mut z1[..bl], &mut z2[..bl]);
     for l in 0..bl {
         let cp = [p0[l], p1[l], p2[l], p3[l], p4[l], p5[l]];
@@ -209,12 +229,26 @@ fn lanes_back_pri(
     z2: &mut [f64],
 ) {
     let bl = tk.len();
-    let (cy, cz, by, bz, ay, az, dy, dz) =
-        (&cy[..bl], &cz[..bl], &by[..bl], &bz[..bl], &ay[..bl], &az[..bl], &dy[..bl], &dz[..bl]);
+    let (cy, cz, by, bz, ay, az, dy, dz) = (
+        &cy[..bl],
+        &cz[..bl],
+        &by[..bl],
+        &bz[..bl],
+        &ay[..bl],
+        &az[..bl],
+        &dy[..bl],
+        &dz[..bl],
+    );
     let (hy, hz) = (&hy[..bl], &hz[..bl]);
     let (g0, g1, g2, nu) = (&mut g0[..bl], &mut g1[..bl], &mut g2[..bl], &mut nu[..bl]);
-    let (p0, p1, p2, p3, p4, p5) =
-        (&mut p0[..bl], &mut p1[..bl], &mut p2[..bl], &mut p3[..bl], &mut p4[..bl], &mut p5[..bl]);
+    let (p0, p1, p2, p3, p4, p5) = (
+        &mut p0[..bl],
+        &mut p1[..bl],
+        &mut p2[..bl],
+        &mut p3[..bl],
+        &mut p4[..bl],
+        &mut p5[..bl],
+    );
     let (z0, z1, z2) = (&mut z0[..bl], &mut z1[..bl], &mut z2[..bl]);
     for l in 0..bl {
         let cp = [p0[l], p1[l], p2[l], p3[l], p4[l], p5[l]];
@@ -286,12 +320,27 @@ fn lanes_fwd_rev(
     a2: &mut [f64],
 ) {
     let bl = out.len();
-    let (g1, g2, nu, ay, az, dy, dz) =
-        (&g1[..bl], &g2[..bl], &nu[..bl], &ay[..bl], &az[..bl], &dy[..bl], &dz[..bl]);
+    let (g1, g2, nu, ay, az, dy, dz) = (
+        &g1[..bl],
+        &g2[..bl],
+        &nu[..bl],
+        &ay[..bl],
+        &az[..bl],
+        &dy[..bl],
+        &dz[..bl],
+    );
     let (a0, a1, a2) = (&mut a0[..bl], &mut a1[..bl], &mut a2[..bl]);
     for l in 0..bl {
-        let (qk, a) =
-            spatial::aba_fwd_rev(&[a0[l], a1[l], a2[l]], g1[l], g2[l], nu[l], ay[l], az[l], dy[l], dz[l]);
+        let (qk, a) = spatial::aba_fwd_rev(
+            &[a0[l], a1[l], a2[l]],
+            g1[l],
+            g2[l],
+            nu[l],
+            ay[l],
+            az[l],
+            dy[l],
+            dz[l],
+        );
         out[l] = qk;
         a0[l] = a[0];
         a1[l] = a[1];
@@ -318,7 +367,14 @@ fn lanes_fwd_pri(
     a2: &mut [f64],
 ) {
     let bl = out.len();
-    let (g0, g1, g2, nu, ay, az) = (&g0[..bl], &g1[..bl], &g2[..bl], &nu[..bl], &ay[..bl], &az[..bl]);
+    let (g0, g1, g2, nu, ay, az) = (
+        &g0[..bl],
+        &g1[..bl],
+        &g2[..bl],
+        &nu[..bl],
+        &ay[..bl],
+        &az[..bl],
+    );
     let (hy, hz, dy, dz) = (&hy[..bl], &hz[..bl], &dy[..bl], &dz[..bl]);
     let (a0, a1, a2) = (&mut a0[..bl], &mut a1[..bl], &mut a2[..bl]);
     for l in 0..bl {

@@ -46,7 +46,11 @@ pub fn batch_rnea(
             let hy = &bw.hy.col(k)[..bl];
             let hz = &bw.hz.col(k)[..bl];
             let prism = chain.prismatic[k];
-            for (col, base) in [(&mut bw.a0, ab[0]), (&mut bw.a1, ab[1]), (&mut bw.a2, ab[2])] {
+            for (col, base) in [
+                (&mut bw.a0, ab[0]),
+                (&mut bw.a1, ab[1]),
+                (&mut bw.a2, ab[2]),
+            ] {
                 // column k starts as Φ-independent copy of the previous acceleration
                 if k == 0 {
                     col.col_mut(0)[..bl].fill(base);
@@ -122,7 +126,11 @@ pub fn batch_rnea(
                     by[l],
                     bz[l],
                 );
-                out[l] = if prism { hy[l] * f[1] + hz[l] * f[2] } else { f[0] };
+                out[l] = if prism {
+                    hy[l] * f[1] + hz[l] * f[2]
+                } else {
+                    f[0]
+                };
                 let c = spatial::force_transport(&f, dy[l], dz[l]);
                 f0[l] = c[0];
                 f1[l] = c[1];

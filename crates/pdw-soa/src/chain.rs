@@ -179,7 +179,10 @@ impl Chain {
             finite(l, "mass", link.mass)?;
             finite(l, "inertia", link.inertia)?;
             if link.mass <= 0.0 {
-                return Err(SoaError::NonPositiveMass { link: k, mass: link.mass });
+                return Err(SoaError::NonPositiveMass {
+                    link: k,
+                    mass: link.mass,
+                });
             }
             if link.inertia < 0.0 {
                 return Err(SoaError::NegativeInertia {
@@ -187,7 +190,8 @@ impl Chain {
                     inertia: link.inertia,
                 });
             }
-            let jj = link.inertia + link.mass * (link.com[0] * link.com[0] + link.com[1] * link.com[1]);
+            let jj =
+                link.inertia + link.mass * (link.com[0] * link.com[0] + link.com[1] * link.com[1]);
             j_joint.push(jj);
             match *kind {
                 JointKind::Revolute => {
@@ -202,7 +206,11 @@ impl Chain {
                     finite(l, "axis[1]", a[1])?;
                     let norm = (a[0] * a[0] + a[1] * a[1]).sqrt();
                     if norm == 0.0 {
-                        return Err(SoaError::ZeroPrismaticAxis { link: k, ay: a[0], az: a[1] });
+                        return Err(SoaError::ZeroPrismaticAxis {
+                            link: k,
+                            ay: a[0],
+                            az: a[1],
+                        });
                     }
                     prismatic.push(true);
                     axis.push([a[0] / norm, a[1] / norm]);

@@ -74,10 +74,12 @@ pub fn closed_chain_dynamics(
     }
     let det = l00 * l11 - l01 * l10;
     let scale = (l00 * l11).abs().max((l01 * l10).abs());
-    if !(det.abs() > 1e-13 * scale) || !det.is_finite() {
+    if !det.is_finite() || det.abs() <= 1e-13 * scale {
         ws.tmp = ry;
         ws.tmp2 = rz;
-        return Err(SoaError::SingularConstraint { what: "J 𝓜⁻¹ Jᵀ (closed chain)" });
+        return Err(SoaError::SingularConstraint {
+            what: "J 𝓜⁻¹ Jᵀ (closed chain)",
+        });
     }
     // f_c = Λ a0 (tip acceleration a0 − Λ⁻¹ f_c = 0)
     let fy = (l11 * a0[1] - l01 * a0[2]) / det;
@@ -99,6 +101,7 @@ pub fn closed_chain_dynamics(
 
 /// `out = −𝓜⁻¹ Jᵀ F` for a tip force `F`, reusing the articulated inertias `P_k` and gains
 /// `G_k` of the last articulated-body pass (no torques, biases or gravity: linear response).
+#[allow(clippy::needless_range_loop)]
 pub(crate) fn force_response(chain: &Chain, ws: &Workspace, f: [f64; 3], out: &mut [f64]) {
     let n = chain.dof();
     let mut cz = spatial::force_transport(&f, ws.tip_d[0], ws.tip_d[1]);

@@ -48,7 +48,11 @@ pub(crate) fn crba_from_kin(chain: &Chain, ws: &mut Workspace) {
         let x = &ws.p[k];
         let (hy, hz) = (ws.hy[k], ws.hz[k]);
         let mut f = if chain.prismatic[k] {
-            [x[1] * hy + x[2] * hz, x[3] * hy + x[4] * hz, x[4] * hy + x[5] * hz]
+            [
+                x[1] * hy + x[2] * hz,
+                x[3] * hy + x[4] * hz,
+                x[4] * hy + x[5] * hz,
+            ]
         } else {
             [x[0], x[1], x[2]]
         };
@@ -74,12 +78,12 @@ fn h_dot(chain: &Chain, ws: &Workspace, k: usize, f: &[f64; 3]) -> f64 {
 /// Factor `ws.mass` into `ws.chol` (lower triangle).
 pub(crate) fn factor_mass(ws: &mut Workspace) -> Result<(), SoaError> {
     ws.chol.copy_from(&ws.mass);
-    let mut stack = MemStack::new(&mut ws.mem);
+    let stack = MemStack::new(&mut ws.mem);
     llt::factor::cholesky_in_place(
         ws.chol.as_mut(),
         Default::default(),
         Par::Seq,
-        &mut stack,
+        stack,
         Default::default(),
     )
     .map_err(|_| SoaError::MassMatrixNotPositiveDefinite)?;
@@ -89,13 +93,13 @@ pub(crate) fn factor_mass(ws: &mut Workspace) -> Result<(), SoaError> {
 /// Solve `𝓜 X = B` in place for the first `ncols` columns of `ws.rhs`, using `ws.chol`.
 pub(crate) fn solve_mass_in_place(ws: &mut Workspace, ncols: usize) {
     let n = ws.n;
-    let mut stack = MemStack::new(&mut ws.mem);
+    let stack = MemStack::new(&mut ws.mem);
     llt::solve::solve_in_place_with_conj(
         ws.chol.as_ref(),
         Conj::No,
         ws.rhs.as_mut().submatrix_mut(0, 0, n, ncols),
         Par::Seq,
-        &mut stack,
+        stack,
     );
 }
 

@@ -10,7 +10,13 @@ use crate::kinematics::positions_from_kin;
 use crate::workspace::{kin_pass, Workspace};
 
 /// Visit each link with `(k, ω_k, v_k at p_k)` after a kinematic pass with rates.
-fn for_each_link_velocity(chain: &Chain, ws: &Workspace, qd: &[f64], mut f: impl FnMut(usize, f64, [f64; 2])) {
+#[allow(clippy::needless_range_loop)]
+fn for_each_link_velocity(
+    chain: &Chain,
+    ws: &Workspace,
+    qd: &[f64],
+    mut f: impl FnMut(usize, f64, [f64; 2]),
+) {
     let (mut wp, mut v) = (0.0, [0.0, 0.0]);
     for k in 0..chain.dof() {
         // v_k = v_{k−1} + ω_{k−1} × d_k (+ h q̇ for a prismatic joint)
@@ -25,7 +31,12 @@ fn for_each_link_velocity(chain: &Chain, ws: &Workspace, qd: &[f64], mut f: impl
 }
 
 /// Kinetic energy `T = ½ q̇ᵀ 𝓜(q) q̇` (J), in O(n).
-pub fn kinetic_energy(chain: &Chain, ws: &mut Workspace, q: &[f64], qd: &[f64]) -> Result<f64, SoaError> {
+pub fn kinetic_energy(
+    chain: &Chain,
+    ws: &mut Workspace,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<f64, SoaError> {
     kin_pass(chain, ws, q, Some(qd))?;
     let mut t = 0.0;
     for_each_link_velocity(chain, ws, qd, |k, w, v| {
@@ -48,7 +59,12 @@ pub fn potential_energy(chain: &Chain, ws: &mut Workspace, q: &[f64]) -> Result<
 }
 
 /// Total mechanical energy `T + U` (J).
-pub fn total_energy(chain: &Chain, ws: &mut Workspace, q: &[f64], qd: &[f64]) -> Result<f64, SoaError> {
+pub fn total_energy(
+    chain: &Chain,
+    ws: &mut Workspace,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<f64, SoaError> {
     Ok(kinetic_energy(chain, ws, q, qd)? + potential_energy(chain, ws, q)?)
 }
 
@@ -76,7 +92,12 @@ pub fn angular_momentum_about(
 }
 
 /// Linear momentum `Σ m_k v_com,k` (kg m/s).
-pub fn linear_momentum(chain: &Chain, ws: &mut Workspace, q: &[f64], qd: &[f64]) -> Result<[f64; 2], SoaError> {
+pub fn linear_momentum(
+    chain: &Chain,
+    ws: &mut Workspace,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<[f64; 2], SoaError> {
     check_len("qd", chain.dof(), qd.len())?;
     kin_pass(chain, ws, q, Some(qd))?;
     let mut p = [0.0; 2];

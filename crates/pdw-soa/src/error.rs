@@ -42,13 +42,17 @@ pub enum SoaError {
     InvalidJointIndex { index: usize, n: usize },
     /// A constraint operator (J 𝓜⁻¹ Jᵀ, A 𝓜⁻¹ Aᵀ or J Jᵀ) is singular: the constraint rows are
     /// linearly dependent in this configuration.
-    #[error("singular constraint in `{what}`: the constraint rows are dependent in this configuration")]
+    #[error(
+        "singular constraint in `{what}`: the constraint rows are dependent in this configuration"
+    )]
     SingularConstraint { what: &'static str },
     /// The mass matrix Cholesky factorisation failed (not positive definite numerically).
     #[error("mass matrix is not numerically positive definite")]
     MassMatrixNotPositiveDefinite,
     /// Newton iteration for inverse kinematics did not converge.
-    #[error("inverse kinematics did not converge in {iterations} iterations (residual {residual:e})")]
+    #[error(
+        "inverse kinematics did not converge in {iterations} iterations (residual {residual:e})"
+    )]
     IkNotConverged { iterations: usize, residual: f64 },
 }
 

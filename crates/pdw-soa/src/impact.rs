@@ -26,6 +26,7 @@ use crate::pseudo_joint::set_mask;
 use crate::workspace::{kin_pass, Workspace};
 
 /// Core: constraint rows are the first `m` rows of `ws.arows`.
+#[allow(clippy::needless_range_loop)]
 fn impulse_from_rows(
     ws: &mut Workspace,
     m: usize,
@@ -57,15 +58,17 @@ fn impulse_from_rows(
         }
         ws.small_rhs[(i, 0)] = y;
     }
-    let mut stack = MemStack::new(&mut ws.mem);
+    let stack = MemStack::new(&mut ws.mem);
     llt::factor::cholesky_in_place(
         ws.small.as_mut().submatrix_mut(0, 0, m, m),
         Default::default(),
         Par::Seq,
-        &mut stack,
+        stack,
         Default::default(),
     )
-    .map_err(|_| SoaError::SingularConstraint { what: "A 𝓜⁻¹ Aᵀ (impact)" })?;
+    .map_err(|_| SoaError::SingularConstraint {
+        what: "A 𝓜⁻¹ Aᵀ (impact)",
+    })?;
     // reject numerically rank-deficient constraint sets: tiny pivot relative to the largest
     let (mut dmin, mut dmax) = (f64::INFINITY, 0.0f64);
     for i in 0..m {
@@ -73,15 +76,17 @@ fn impulse_from_rows(
         dmin = dmin.min(d);
         dmax = dmax.max(d);
     }
-    if !(dmin > 1e-7 * dmax) {
-        return Err(SoaError::SingularConstraint { what: "A 𝓜⁻¹ Aᵀ (impact)" });
+    if dmin.is_nan() || dmin <= 1e-7 * dmax {
+        return Err(SoaError::SingularConstraint {
+            what: "A 𝓜⁻¹ Aᵀ (impact)",
+        });
     }
     llt::solve::solve_in_place_with_conj(
         ws.small.as_ref().submatrix(0, 0, m, m),
         Conj::No,
         ws.small_rhs.as_mut().submatrix_mut(0, 0, m, 1),
         Par::Seq,
-        &mut stack,
+        stack,
     );
     for (i, l) in impulse.iter_mut().enumerate() {
         *l = ws.small_rhs[(i, 0)];

@@ -59,7 +59,11 @@ pub fn tip_position(chain: &Chain, ws: &mut Workspace, q: &[f64]) -> Result<[f64
 
 /// The 3 × n tip Jacobian `J` (rows ω, v_y, v_z; seed eq. 2.24) at `q`. Rows 1..3
 /// (`.subrows(1, 2)`) are the linear Jacobian of the tip point.
-pub fn tip_jacobian<'a>(chain: &Chain, ws: &'a mut Workspace, q: &[f64]) -> Result<MatRef<'a, f64>, SoaError> {
+pub fn tip_jacobian<'a>(
+    chain: &Chain,
+    ws: &'a mut Workspace,
+    q: &[f64],
+) -> Result<MatRef<'a, f64>, SoaError> {
     forward_kinematics(chain, ws, q)?;
     fill_jacobian(chain, ws);
     Ok(ws.jac.as_ref())
@@ -91,7 +95,12 @@ pub(crate) fn fill_jacobian(chain: &Chain, ws: &mut Workspace) {
 }
 
 /// Tip twist `V_t = J q̇ = [ω, v_y, v_z]` (seed eq. 2.25).
-pub fn tip_velocity(chain: &Chain, ws: &mut Workspace, q: &[f64], qd: &[f64]) -> Result<[f64; 3], SoaError> {
+pub fn tip_velocity(
+    chain: &Chain,
+    ws: &mut Workspace,
+    q: &[f64],
+    qd: &[f64],
+) -> Result<[f64; 3], SoaError> {
     check_len("qd", chain.dof(), qd.len())?;
     tip_jacobian(chain, ws, q)?;
     let mut v = [0.0; 3];
@@ -126,7 +135,9 @@ pub(crate) fn tip_acc_from_kin(chain: &Chain, ws: &Workspace, qdd: Option<&[f64]
     for k in 0..n {
         let qk = qdd.map_or(0.0, |a| a[k]);
         ap = if chain.prismatic[k] {
-            spatial::rnea_fwd_pri(&ap, qk, ws.ay[k], ws.az[k], ws.hy[k], ws.hz[k], ws.dy[k], ws.dz[k])
+            spatial::rnea_fwd_pri(
+                &ap, qk, ws.ay[k], ws.az[k], ws.hy[k], ws.hz[k], ws.dy[k], ws.dz[k],
+            )
         } else {
             spatial::rnea_fwd_rev(&ap, qk, ws.ay[k], ws.az[k], ws.dy[k], ws.dz[k])
         };
@@ -138,7 +149,12 @@ pub(crate) fn tip_acc_from_kin(chain: &Chain, ws: &Workspace, qdd: Option<&[f64]
 }
 
 /// `J# v = Jᵀ (J Jᵀ)⁻¹ v` for the 2 × n linear Jacobian currently in the workspace.
-fn pinv_linear_apply(ws: &Workspace, n: usize, v: [f64; 2], out: &mut [f64]) -> Result<(), SoaError> {
+fn pinv_linear_apply(
+    ws: &Workspace,
+    n: usize,
+    v: [f64; 2],
+    out: &mut [f64],
+) -> Result<(), SoaError> {
     let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
     for k in 0..n {
         let (j1, j2) = (ws.jac[(1, k)], ws.jac[(2, k)]);
@@ -147,8 +163,10 @@ fn pinv_linear_apply(ws: &Workspace, n: usize, v: [f64; 2], out: &mut [f64]) -> 
         c += j2 * j2;
     }
     let det = a * c - b * b;
-    if !(det > 1e-14 * (a * c).max(f64::MIN_POSITIVE)) {
-        return Err(SoaError::SingularConstraint { what: "J Jᵀ (pseudo-inverse)" });
+    if det.is_nan() || det <= 1e-14 * (a * c).max(f64::MIN_POSITIVE) {
+        return Err(SoaError::SingularConstraint {
+            what: "J Jᵀ (pseudo-inverse)",
+        });
     }
     let y0 = (c * v[0] - b * v[1]) / det;
     let y1 = (a * v[1] - b * v[0]) / det;
@@ -187,7 +205,10 @@ pub fn inverse_kinematics(
     check_len("q", n, q.len())?;
     let mut step = std::mem::take(&mut ws.tmp);
     let mut res = f64::INFINITY;
-    let mut out = Err(SoaError::IkNotConverged { iterations: max_iter, residual: res });
+    let mut out = Err(SoaError::IkNotConverged {
+        iterations: max_iter,
+        residual: res,
+    });
     for it in 0..=max_iter {
         if let Err(e) = tip_jacobian(chain, ws, q) {
             out = Err(e);
@@ -201,7 +222,10 @@ pub fn inverse_kinematics(
             break;
         }
         if it == max_iter {
-            out = Err(SoaError::IkNotConverged { iterations: max_iter, residual: res });
+            out = Err(SoaError::IkNotConverged {
+                iterations: max_iter,
+                residual: res,
+            });
             break;
         }
         if let Err(err) = pinv_linear_apply(ws, n, e, &mut step) {

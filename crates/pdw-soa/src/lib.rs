@@ -33,7 +33,9 @@ pub use batch_rnea::batch_rnea;
 pub use chain::{Chain, ChainBuilder, JointKind, Link};
 pub use closed_chain::{closed_chain_dynamics, ClosedChainForces};
 pub use crba::{crba, forward_dynamics_crba};
-pub use energy::{angular_momentum_about, kinetic_energy, linear_momentum, potential_energy, total_energy};
+pub use energy::{
+    angular_momentum_about, kinetic_energy, linear_momentum, potential_energy, total_energy,
+};
 pub use error::SoaError;
 pub use impact::{impulsive_constraint, joint_lock_impact, tip_impact};
 pub use kinematics::{

@@ -55,7 +55,11 @@ impl NaiveWorkspace {
         let n = chain.dof();
         let m3 = 3 * n;
         let req = lu_factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default())
-            .or(lu_solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq))
+            .or(lu_solve::solve_in_place_scratch::<usize, f64>(
+                n,
+                1,
+                Par::Seq,
+            ))
             .or(StackReq::EMPTY);
         NaiveWorkspace {
             n,
@@ -155,8 +159,22 @@ fn build(
     nws.phit[(1, r)] = -ws.tip_d[1];
     nws.phit[(2, r)] = ws.tip_d[0];
     let par = Par::Seq;
-    matmul(nws.phih.as_mut(), Accum::Replace, nws.phi.as_ref(), nws.h.as_ref(), 1.0, par);
-    matmul(nws.mphih.as_mut(), Accum::Replace, nws.m.as_ref(), nws.phih.as_ref(), 1.0, par);
+    matmul(
+        nws.phih.as_mut(),
+        Accum::Replace,
+        nws.phi.as_ref(),
+        nws.h.as_ref(),
+        1.0,
+        par,
+    );
+    matmul(
+        nws.mphih.as_mut(),
+        Accum::Replace,
+        nws.m.as_ref(),
+        nws.phih.as_ref(),
+        1.0,
+        par,
+    );
     matmul(
         nws.mass.as_mut(),
         Accum::Replace,
@@ -165,9 +183,23 @@ fn build(
         1.0,
         par,
     );
-    matmul(nws.phia.as_mut(), Accum::Replace, nws.phi.as_ref(), nws.a.as_ref(), 1.0, par);
+    matmul(
+        nws.phia.as_mut(),
+        Accum::Replace,
+        nws.phi.as_ref(),
+        nws.a.as_ref(),
+        1.0,
+        par,
+    );
     // v = M Φ a + b   (v holds b)
-    matmul(nws.v.as_mut(), Accum::Add, nws.m.as_ref(), nws.phia.as_ref(), 1.0, par);
+    matmul(
+        nws.v.as_mut(),
+        Accum::Add,
+        nws.m.as_ref(),
+        nws.phia.as_ref(),
+        1.0,
+        par,
+    );
     matmul(
         nws.rhs.as_mut(),
         Accum::Replace,
@@ -179,7 +211,14 @@ fn build(
     for (k, ck) in c.iter_mut().enumerate() {
         *ck = nws.rhs[(k, 0)];
     }
-    matmul(nws.jac.as_mut(), Accum::Replace, nws.phit.as_ref(), nws.phih.as_ref(), 1.0, par);
+    matmul(
+        nws.jac.as_mut(),
+        Accum::Replace,
+        nws.phit.as_ref(),
+        nws.phih.as_ref(),
+        1.0,
+        par,
+    );
     Ok(())
 }
 
@@ -225,13 +264,13 @@ pub fn naive_forward_dynamics(
     }
     ws.tmp = c;
     r?;
-    let mut stack = MemStack::new(&mut nws.mem);
+    let stack = MemStack::new(&mut nws.mem);
     let (_, perm) = lu_factor::lu_in_place(
         nws.mass.as_mut(),
         &mut nws.perm,
         &mut nws.perm_inv,
         Par::Seq,
-        &mut stack,
+        stack,
         Default::default(),
     );
     lu_solve::solve_in_place_with_conj(
@@ -241,7 +280,7 @@ pub fn naive_forward_dynamics(
         Conj::No,
         nws.rhs.as_mut(),
         Par::Seq,
-        &mut stack,
+        stack,
     );
     for (k, out) in qdd.iter_mut().enumerate() {
         *out = nws.rhs[(k, 0)];
@@ -251,6 +290,8 @@ pub fn naive_forward_dynamics(
 
 impl std::fmt::Debug for NaiveWorkspace {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("NaiveWorkspace").field("n", &self.n).finish_non_exhaustive()
+        f.debug_struct("NaiveWorkspace")
+            .field("n", &self.n)
+            .finish_non_exhaustive()
     }
 }

@@ -48,6 +48,7 @@ pub fn rnea(
 }
 
 /// The acceleration and force passes of RNEA over a workspace filled by `kin_pass`.
+#[allow(clippy::needless_range_loop)]
 pub(crate) fn rnea_passes(
     chain: &Chain,
     ws: &mut Workspace,
@@ -59,7 +60,9 @@ pub(crate) fn rnea_passes(
     let mut ap = chain.base_acc;
     for k in 0..n {
         let a = if chain.prismatic[k] {
-            spatial::rnea_fwd_pri(&ap, qdd[k], ws.ay[k], ws.az[k], ws.hy[k], ws.hz[k], ws.dy[k], ws.dz[k])
+            spatial::rnea_fwd_pri(
+                &ap, qdd[k], ws.ay[k], ws.az[k], ws.hy[k], ws.hz[k], ws.dy[k], ws.dz[k],
+            )
         } else {
             spatial::rnea_fwd_rev(&ap, qdd[k], ws.ay[k], ws.az[k], ws.dy[k], ws.dz[k])
         };

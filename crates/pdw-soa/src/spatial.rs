@@ -24,6 +24,10 @@
 //! lane loop performs the identical IEEE operations and both give the same bits. sin/cos come
 //! from one routine ([`sincos`], `wide::f64x4::sin_cos`) in both paths.
 
+// The per-link step functions take every input as a separate scalar so that the scalar
+// kernels and the batched lane loops call the very same arithmetic.
+#![allow(clippy::too_many_arguments)]
+
 use wide::f64x4;
 
 /// Symmetric 3×3 stored as `[x00, x01, x02, x11, x12, x22]`.
@@ -388,7 +392,10 @@ pub(crate) fn aba_fwd_pri(
 ) -> (f64, [f64; 3]) {
     let ab = motion_transport(ap, dy, dz);
     let qdd = nu - (g[0] * ab[0] + g[1] * ab[1] + g[2] * ab[2]);
-    (qdd, [ab[0], ab[1] + (hy * qdd + ay), ab[2] + (hz * qdd + az)])
+    (
+        qdd,
+        [ab[0], ab[1] + (hy * qdd + ay), ab[2] + (hz * qdd + az)],
+    )
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -397,7 +404,14 @@ pub(crate) fn aba_fwd_pri(
 
 /// Forward acceleration step of RNEA: `A = Φ A_p + H q̈ + a` (revolute).
 #[inline(always)]
-pub(crate) fn rnea_fwd_rev(ap: &[f64; 3], qdd: f64, ay: f64, az: f64, dy: f64, dz: f64) -> [f64; 3] {
+pub(crate) fn rnea_fwd_rev(
+    ap: &[f64; 3],
+    qdd: f64,
+    ay: f64,
+    az: f64,
+    dy: f64,
+    dz: f64,
+) -> [f64; 3] {
     let ab = motion_transport(ap, dy, dz);
     [ab[0] + qdd, ab[1] + ay, ab[2] + az]
 }

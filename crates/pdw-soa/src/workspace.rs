@@ -188,7 +188,8 @@ pub(crate) fn kin_pass(
         } else {
             let th = thp + qk;
             let (s, c) = spatial::sincos(th);
-            let (dy, dz, cy, cz) = spatial::geom_rev(sp, cp, lyp, lzp, s, c, link.com[0], link.com[1]);
+            let (dy, dz, cy, cz) =
+                spatial::geom_rev(sp, cp, lyp, lzp, s, c, link.com[0], link.com[1]);
             (w, ay, az) = spatial::vel_rev(wp, qdk, dy, dz);
             ws.theta[k] = th;
             ws.s[k] = s;
@@ -220,6 +221,8 @@ pub(crate) fn kin_pass(
 
 impl std::fmt::Debug for Workspace {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Workspace").field("n", &self.n).finish_non_exhaustive()
+        f.debug_struct("Workspace")
+            .field("n", &self.n)
+            .finish_non_exhaustive()
     }
 }

@@ -35,7 +35,11 @@ fn batched_aba_and_rnea_equal_scalar_bit_for_bit_per_lane() {
                     let ql: Vec<f64> = (0..n).map(|k| q[(l, k)]).collect();
                     let qdl: Vec<f64> = (0..n).map(|k| qd[(l, k)]).collect();
                     let tl: Vec<f64> = (0..n).map(|k| tau[(l, k)]).collect();
-                    let fl = if with_tip { Some([ft[(l, 0)], ft[(l, 1)], ft[(l, 2)]]) } else { None };
+                    let fl = if with_tip {
+                        Some([ft[(l, 0)], ft[(l, 1)], ft[(l, 2)]])
+                    } else {
+                        None
+                    };
                     aba(&chain, &mut ws, &ql, &qdl, &tl, fl, &mut qdd_s).unwrap();
                     let qddl: Vec<f64> = (0..n).map(|k| qdd[(l, k)]).collect();
                     rnea(&chain, &mut ws, &ql, &qdl, &qddl, fl, &mut tau_s).unwrap();
@@ -66,8 +70,23 @@ fn batched_kernels_reject_wrong_shapes() {
     let bad = Mat::<f64>::zeros(7, 3);
     let mut out = Mat::<f64>::zeros(8, 3);
     let e = batch_aba(&chain, &mut bw, &bad, &good, &good, None, &mut out).unwrap_err();
-    assert!(matches!(e, SoaError::DimensionMismatch { what: "q", .. }), "{e}");
+    assert!(
+        matches!(e, SoaError::DimensionMismatch { what: "q", .. }),
+        "{e}"
+    );
     let bad_tip = Mat::<f64>::zeros(8, 2);
-    let e = batch_rnea(&chain, &mut bw, &good, &good, &good, Some(&bad_tip), &mut out).unwrap_err();
-    assert!(matches!(e, SoaError::DimensionMismatch { what: "f_tip", .. }), "{e}");
+    let e = batch_rnea(
+        &chain,
+        &mut bw,
+        &good,
+        &good,
+        &good,
+        Some(&bad_tip),
+        &mut out,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, SoaError::DimensionMismatch { what: "f_tip", .. }),
+        "{e}"
+    );
 }

@@ -67,8 +67,14 @@ fn aba_agrees_with_crba_cholesky_and_naive_lu() {
         let tol = 64.0 * n as f64 * EPS * kappa * (norm(&qa) + 1.0);
         let e_c = diff_norm(&qa, &qc);
         let e_n = diff_norm(&qa, &qn);
-        assert!(e_c <= tol, "n={n}: |aba − crba| = {e_c:e} > {tol:e} (κ = {kappa:e})");
-        assert!(e_n <= tol, "n={n}: |aba − naive| = {e_n:e} > {tol:e} (κ = {kappa:e})");
+        assert!(
+            e_c <= tol,
+            "n={n}: |aba − crba| = {e_c:e} > {tol:e} (κ = {kappa:e})"
+        );
+        assert!(
+            e_n <= tol,
+            "n={n}: |aba − naive| = {e_n:e} > {tol:e} (κ = {kappa:e})"
+        );
     }
 }
 
@@ -108,7 +114,10 @@ fn double_pendulum_closed_form(
     let m12 = i2 + m2 * (lc2 * lc2 + l1 * lc2 * c2);
     let m22 = i2 + m2 * lc2 * lc2;
     let h = m2 * l1 * lc2 * s2;
-    let cor = [-h * (2.0 * qd[0] * qd[1] + qd[1] * qd[1]), h * qd[0] * qd[0]];
+    let cor = [
+        -h * (2.0 * qd[0] * qd[1] + qd[1] * qd[1]),
+        h * qd[0] * qd[0],
+    ];
     let a1 = q[0] - gam;
     let grav = [
         (m1 * lc1 + m2 * l1) * g * a1.sin() + m2 * lc2 * g * (a1 + q[1]).sin(),
@@ -138,11 +147,21 @@ fn double_pendulum_matches_closed_form_mass_coriolis_gravity() {
         let mut c = vec![0.0; 2];
         bias_forces(&no_grav, &mut ws, &q, &qd, &mut c).unwrap();
         for i in 0..2 {
-            assert!((c[i] - cor[i]).abs() < 1e-13, "C[{i}] {} vs {}", c[i], cor[i]);
+            assert!(
+                (c[i] - cor[i]).abs() < 1e-13,
+                "C[{i}] {} vs {}",
+                c[i],
+                cor[i]
+            );
         }
         bias_forces(&chain, &mut ws, &q, &[0.0, 0.0], &mut c).unwrap();
         for i in 0..2 {
-            assert!((c[i] - grav[i]).abs() < 1e-13, "G[{i}] {} vs {}", c[i], grav[i]);
+            assert!(
+                (c[i] - grav[i]).abs() < 1e-13,
+                "G[{i}] {} vs {}",
+                c[i],
+                grav[i]
+            );
         }
     }
 }

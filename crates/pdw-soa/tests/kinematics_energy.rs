@@ -50,7 +50,11 @@ fn jdot_qdot_equals_time_derivative_of_tip_velocity() {
         let vb = tip_velocity(&chain, &mut ws, &qb, &qd).unwrap();
         for i in 0..3 {
             let fd = (va[i] - vb[i]) / (2.0 * h);
-            assert!((a[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()), "n={n} row {i}: {} vs {fd}", a[i]);
+            assert!(
+                (a[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                "n={n} row {i}: {} vs {fd}",
+                a[i]
+            );
         }
     }
 }
@@ -64,7 +68,12 @@ fn seed_biped() -> Chain {
         .revolute(seg(3.0, 1.0)) // stance thigh, knee → hip
         .revolute(seg(3.0, -1.0)) // swing thigh, hip → knee
         .revolute(seg(2.0, -1.0)) // swing shank, knee → foot
-        .revolute(Link { to_next: [0.0, 0.0], com: [0.0, 0.0], mass: 1e-3, inertia: 1e-6 })
+        .revolute(Link {
+            to_next: [0.0, 0.0],
+            com: [0.0, 0.0],
+            mass: 1e-3,
+            inertia: 1e-6,
+        })
         .build()
         .unwrap()
 }
@@ -82,12 +91,18 @@ fn leg_lift_task_of_seed_section_5_1_tip_follows_commanded_path_to_1e_9() {
         // height and its rate: raise on [0,1] s, hold on [1,2] s, lower on [2,3] s
         use std::f64::consts::PI;
         if t < 1.0 {
-            (0.5 * lift * (1.0 - (PI * t).cos()), 0.5 * lift * PI * (PI * t).sin())
+            (
+                0.5 * lift * (1.0 - (PI * t).cos()),
+                0.5 * lift * PI * (PI * t).sin(),
+            )
         } else if t < 2.0 {
             (lift, 0.0)
         } else if t < 3.0 {
             let s = t - 2.0;
-            (0.5 * lift * (1.0 + (PI * s).cos()), -0.5 * lift * PI * (PI * s).sin())
+            (
+                0.5 * lift * (1.0 + (PI * s).cos()),
+                -0.5 * lift * PI * (PI * s).sin(),
+            )
         } else {
             (0.0, 0.0)
         }
@@ -102,14 +117,18 @@ fn leg_lift_task_of_seed_section_5_1_tip_follows_commanded_path_to_1e_9() {
         pseudo_inverse_rates(&chain, &mut ws, &q, [0.0, vz], &mut qd).unwrap();
         // J J# v = v
         let v = tip_velocity(&chain, &mut ws, &q, &qd).unwrap();
-        assert!(v[1].abs() < 1e-12 && (v[2] - vz).abs() < 1e-12, "J J# v = v");
+        assert!(
+            v[1].abs() < 1e-12 && (v[2] - vz).abs() < 1e-12,
+            "J J# v = v"
+        );
         for k in 0..5 {
             q[k] += dt * qd[k];
         }
         let (h1, _) = profile(t + dt);
         let target = [p0[0], p0[1] + h1];
         let p_pred = tip_position(&chain, &mut ws, &q).unwrap();
-        max_pred = max_pred.max(((p_pred[0] - target[0]).powi(2) + (p_pred[1] - target[1]).powi(2)).sqrt());
+        max_pred = max_pred
+            .max(((p_pred[0] - target[0]).powi(2) + (p_pred[1] - target[1]).powi(2)).sqrt());
         inverse_kinematics(&chain, &mut ws, &mut q, target, 1e-12, 20).unwrap();
         let p = tip_position(&chain, &mut ws, &q).unwrap();
         let err = ((p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)).sqrt();
@@ -158,7 +177,11 @@ fn gravity_torques_are_gradient_of_potential_energy() {
         let fd = (potential_energy(&chain, &mut ws, &qa).unwrap()
             - potential_energy(&chain, &mut ws, &qb).unwrap())
             / (2.0 * h);
-        assert!((g[k] - fd).abs() < 1e-6 * (1.0 + fd.abs()), "G_{k}: {} vs {fd}", g[k]);
+        assert!(
+            (g[k] - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+            "G_{k}: {} vs {fd}",
+            g[k]
+        );
     }
 }
 
@@ -214,8 +237,15 @@ fn free_n_link_pendulum_conserves_energy_with_fourth_order_drift() {
     let scale = chain.total_mass() * 9.81 * 4.0;
     let d1 = rk4_energy_drift(&chain, &q, &qd, 2e-3, 5.0);
     let d2 = rk4_energy_drift(&chain, &q, &qd, 1e-3, 5.0);
-    assert!(d2 < 1e-7 * scale, "energy drift {d2:e} J over 5 s (scale {scale} J)");
+    assert!(
+        d2 < 1e-7 * scale,
+        "energy drift {d2:e} J over 5 s (scale {scale} J)"
+    );
     // halving the step divides the error by ~16 (RK4): the drift is integration error,
     // not a modelling error in the dynamics.
-    assert!(d1 / d2 > 10.0, "drift ratio {} (d1 {d1:e}, d2 {d2:e})", d1 / d2);
+    assert!(
+        d1 / d2 > 10.0,
+        "drift ratio {} (d1 {d1:e}, d2 {d2:e})",
+        d1 / d2
+    );
 }

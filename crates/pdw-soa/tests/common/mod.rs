@@ -12,7 +12,9 @@ pub fn rng(seed: u64) -> ChaCha8Rng {
 /// A random planar chain of `n` joints; roughly one joint in five is prismatic when
 /// `prismatic` is true. Gravity 9.81 on a random slope.
 pub fn random_chain(rng: &mut ChaCha8Rng, n: usize, prismatic: bool) -> Chain {
-    let mut b = ChainBuilder::new().gravity(9.81).slope(rng.random_range(-0.2..0.2));
+    let mut b = ChainBuilder::new()
+        .gravity(9.81)
+        .slope(rng.random_range(-0.2..0.2));
     for _ in 0..n {
         let len = rng.random_range(0.3..1.2);
         let ang: f64 = rng.random_range(-0.5..0.5);
@@ -29,7 +31,9 @@ pub fn random_chain(rng: &mut ChaCha8Rng, n: usize, prismatic: bool) -> Chain {
         };
         let kind = if prismatic && rng.random_range(0.0..1.0) < 0.2 {
             let a: f64 = rng.random_range(-3.0..3.0);
-            JointKind::Prismatic { axis: [a.cos(), a.sin()] }
+            JointKind::Prismatic {
+                axis: [a.cos(), a.sin()],
+            }
         } else {
             JointKind::Revolute
         };
@@ -55,16 +59,42 @@ pub fn norm(v: &[f64]) -> f64 {
 }
 
 pub fn diff_norm(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
 }
 
+#[allow(clippy::too_many_arguments)]
 /// Planar double pendulum of two uniform-density links hanging along −z at q = 0.
-pub fn double_pendulum(m1: f64, m2: f64, l1: f64, l2: f64, lc1: f64, lc2: f64, i1: f64, i2: f64, g: f64, slope: f64) -> Chain {
+pub fn double_pendulum(
+    m1: f64,
+    m2: f64,
+    l1: f64,
+    l2: f64,
+    lc1: f64,
+    lc2: f64,
+    i1: f64,
+    i2: f64,
+    g: f64,
+    slope: f64,
+) -> Chain {
     ChainBuilder::new()
         .gravity(g)
         .slope(slope)
-        .revolute(Link { to_next: [0.0, -l1], com: [0.0, -lc1], mass: m1, inertia: i1 })
-        .revolute(Link { to_next: [0.0, -l2], com: [0.0, -lc2], mass: m2, inertia: i2 })
+        .revolute(Link {
+            to_next: [0.0, -l1],
+            com: [0.0, -lc1],
+            mass: m1,
+            inertia: i1,
+        })
+        .revolute(Link {
+            to_next: [0.0, -l2],
+            com: [0.0, -lc2],
+            mass: m2,
+            inertia: i2,
+        })
         .build()
         .unwrap()
 }
