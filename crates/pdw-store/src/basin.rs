@@ -644,7 +644,7 @@ impl BasinWriter {
         if resume && path.exists() {
             Self::resume(path, header)
         } else {
-            Self::create(path, header, resume || force)
+            Self::create(path, header, force)
         }
     }
 

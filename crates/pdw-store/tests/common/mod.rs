@@ -5,12 +5,36 @@ use std::path::{Path, PathBuf};
 
 use pdw_store::{Attractor, BasinHeader, BasinMetrics, BasinWriter, ShardSpec};
 
-/// A fresh empty directory under the system temp dir, unique per process and test.
-pub fn scratch(test: &str) -> PathBuf {
+/// A fresh empty directory under the system temp dir, unique per process and test; removed
+/// when the test passes, kept for inspection when it fails.
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+pub fn scratch(test: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("pdw-store-{}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    Scratch(d)
 }
 
 pub fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
