@@ -46,6 +46,22 @@ pub trait Walker: Section {
     fn fall_name(&self, code: u8) -> &'static str;
     /// Initial guesses for the gaits the model is known to have at its current parameters.
     fn gait_guesses(&self) -> Vec<GaitGuess>;
+    /// The walker's drawing at full state `x`, for animations; `None` if the model has none.
+    fn pose(&self, _x: &[f64]) -> Option<Pose> {
+        None
+    }
+}
+
+/// A drawing of the walker in the slope frame: `x` along the slope (downhill positive), `y`
+/// along the slope normal, stance foot at the origin (model length units).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Pose {
+    /// Rigid links as segments.
+    pub links: Vec<[[f64; 2]; 2]>,
+    /// Joint and point-mass positions.
+    pub joints: Vec<[f64; 2]>,
+    /// The swing foot (traced in animations).
+    pub swing_foot: Option<[f64; 2]>,
 }
 
 /// Constructor from parameter values in [`ModelInfo::params`] order.

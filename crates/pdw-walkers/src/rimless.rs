@@ -29,7 +29,7 @@
 //! way: the caller sees the wheel come to rest (rocking between two spokes, then standing).
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Walker};
+use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
 use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -299,6 +299,25 @@ impl Walker for Rimless {
     /// Distance between consecutive contact points, `2 l sin α`.
     fn step_length(&self, _x_pre: &[f64]) -> f64 {
         2.0 * self.l * self.alpha.sin()
+    }
+    /// Hub at `l (sin θ, cos θ)` above the contact point; spoke `k` points from the hub at angle
+    /// `θ + 2kα` from the downward normal (module docs).
+    fn pose(&self, x: &[f64]) -> Option<Pose> {
+        let th = x[0];
+        let hub = [self.l * th.sin(), self.l * th.cos()];
+        let n = (PI / self.alpha).round() as usize;
+        let links = (0..n)
+            .map(|k| {
+                let a = th + 2.0 * self.alpha * k as f64;
+                [hub, [hub[0] - self.l * a.sin(), hub[1] - self.l * a.cos()]]
+            })
+            .collect();
+        let next = th - 2.0 * self.alpha;
+        Some(Pose {
+            links,
+            joints: vec![hub],
+            swing_foot: Some([hub[0] - self.l * next.sin(), hub[1] - self.l * next.cos()]),
+        })
     }
     fn fall_name(&self, code: u8) -> &'static str {
         match code {

@@ -599,14 +599,22 @@ impl Walker for Seed5 {
         }
     }
     fn gait_guesses(&self) -> Vec<GaitGuess> {
-        // Scaled from the compass gait: the same inter-leg angle, rates scaled by √(g/L).
-        let w = (self.p.gravity / self.leg_length()).sqrt() / (9.81f64).sqrt();
-        vec![GaitGuess {
-            gait: "search",
-            section: vec![0.27, -1.09 * w, 0.715 * w],
-            source: "compass-gait fixed point at 3° (Goswami preset), rates rescaled by √(g/L); \
-                     the thesis gives no gait",
-        }]
+        // Both knees locked: the two period-one gaits found at slope 0.05 rad by a Newton search
+        // over a grid of starts (they continue to slopes 0.01..0.12). The thesis gives no gait.
+        vec![
+            GaitGuess {
+                gait: "stable",
+                section: vec![0.215124650, -0.570787311, 0.277583131],
+                source: "long-period gait of the locked-knee model at slope 0.05, found by this \
+                         engine (Newton from a grid of starts); the thesis gives no gait",
+            },
+            GaitGuess {
+                gait: "unstable",
+                section: vec![0.205618696, -0.646181471, 0.123497612],
+                source: "short-period gait of the locked-knee model at slope 0.05, found by this \
+                         engine (Newton from a grid of starts); the thesis gives no gait",
+            },
+        ]
     }
 }
 
@@ -722,7 +730,11 @@ impl Seed5Compliant {
 
     /// Joint accelerations, the knee torques applied and (mode 1) the ground reaction on the
     /// swing foot `[R_y, R_z]` and the stance-foot base reaction.
-    pub fn accelerations(&self, mode: usize, x: &[f64]) -> ([f64; 4], [f64; 4], [f64; 2], [f64; 3]) {
+    pub fn accelerations(
+        &self,
+        mode: usize,
+        x: &[f64],
+    ) -> ([f64; 4], [f64; 4], [f64; 2], [f64; 3]) {
         let m = &self.model;
         let g = &self.gains;
         let (_, lock, _) = m.accelerations(KNEES_LOCKED, x);
@@ -732,27 +744,37 @@ impl Seed5Compliant {
         }
         let mut qdd = [0.0; 4];
         let chain = &m.chain;
-        let r = with_workspace(chain, |ws| -> Result<([f64; 2], [f64; 3]), pdw_soa::SoaError> {
-            if mode == COMPLIANT_SINGLE {
-                pdw_soa::aba(chain, ws, &x[0..4], &x[4..8], &tau, None, &mut qdd)?;
-                let f0 = pdw_soa::base_reaction(chain, ws, &x[0..4], &x[4..8], &qdd, None)?;
-                Ok(([0.0; 2], f0))
-            } else {
-                let cc = pdw_soa::closed_chain_dynamics(chain, ws, &x[0..4], &x[4..8], &tau, &mut qdd)?;
-                let foot = m.swing_foot(x);
-                let v = pdw_soa::tip_velocity(chain, ws, &x[0..4], &x[4..8])?;
-                let e = [foot[0] - x[12], foot[1]];
-                let rpi = [
-                    -g.ground_kp * e[0] - g.ground_ki * x[10] - g.ground_kd * v[1],
-                    -g.ground_kp * e[1] - g.ground_ki * x[11] - g.ground_kd * v[2],
-                ];
-                // environment's reaction on the tip: −f_c + R_PI; tip force on it: f_c − R_PI
-                let ft = [0.0, cc.tip_force[0] - rpi[0], cc.tip_force[1] - rpi[1]];
-                pdw_soa::aba(chain, ws, &x[0..4], &x[4..8], &tau, Some(ft), &mut qdd)?;
-                let f0 = pdw_soa::base_reaction(chain, ws, &x[0..4], &x[4..8], &qdd, Some(ft))?;
-                Ok(([-ft[1], -ft[2]], f0))
-            }
-        });
+        let r = with_workspace(
+            chain,
+            |ws| -> Result<([f64; 2], [f64; 3]), pdw_soa::SoaError> {
+                if mode == COMPLIANT_SINGLE {
+                    pdw_soa::aba(chain, ws, &x[0..4], &x[4..8], &tau, None, &mut qdd)?;
+                    let f0 = pdw_soa::base_reaction(chain, ws, &x[0..4], &x[4..8], &qdd, None)?;
+                    Ok(([0.0; 2], f0))
+                } else {
+                    let cc = pdw_soa::closed_chain_dynamics(
+                        chain,
+                        ws,
+                        &x[0..4],
+                        &x[4..8],
+                        &tau,
+                        &mut qdd,
+                    )?;
+                    let foot = m.swing_foot(x);
+                    let v = pdw_soa::tip_velocity(chain, ws, &x[0..4], &x[4..8])?;
+                    let e = [foot[0] - x[12], foot[1]];
+                    let rpi = [
+                        -g.ground_kp * e[0] - g.ground_ki * x[10] - g.ground_kd * v[1],
+                        -g.ground_kp * e[1] - g.ground_ki * x[11] - g.ground_kd * v[2],
+                    ];
+                    // environment's reaction on the tip: −f_c + R_PI; tip force on it: f_c − R_PI
+                    let ft = [0.0, cc.tip_force[0] - rpi[0], cc.tip_force[1] - rpi[1]];
+                    pdw_soa::aba(chain, ws, &x[0..4], &x[4..8], &tau, Some(ft), &mut qdd)?;
+                    let f0 = pdw_soa::base_reaction(chain, ws, &x[0..4], &x[4..8], &qdd, Some(ft))?;
+                    Ok(([-ft[1], -ft[2]], f0))
+                }
+            },
+        );
         match r {
             Ok((rt, f0)) => (qdd, tau, rt, f0),
             Err(_) => ([f64::NAN; 4], [f64::NAN; 4], [f64::NAN; 2], [f64::NAN; 3]),

@@ -65,7 +65,7 @@
 //! scalar and batched right-hand sides are bit-identical.
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Walker};
+use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
 use std::f64::consts::FRAC_PI_2;
@@ -486,6 +486,19 @@ impl Walker for Simplest {
     /// Distance between the feet at heel strike, `2 |sin θ⁻|` (leg length 1).
     fn step_length(&self, x_pre: &[f64]) -> f64 {
         2.0 * x_pre[0].sin().abs()
+    }
+    /// Stance foot at the origin, hip `(−sin θ, cos θ)`, swing foot `hip + (sin ψ, −cos ψ)` with
+    /// `ψ = θ − φ` (module docs).
+    fn pose(&self, x: &[f64]) -> Option<Pose> {
+        let (th, ph) = (x[0], x[2]);
+        let psi = th - ph;
+        let hip = [-th.sin(), th.cos()];
+        let foot = [hip[0] + psi.sin(), hip[1] - psi.cos()];
+        Some(Pose {
+            links: vec![[[0.0, 0.0], hip], [hip, foot]],
+            joints: vec![hip],
+            swing_foot: Some(foot),
+        })
     }
     fn fall_name(&self, code: u8) -> &'static str {
         match code {
