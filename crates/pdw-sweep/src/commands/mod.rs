@@ -1,6 +1,9 @@
 //! One module per subcommand; shared model construction here.
 
+mod animate;
+mod basin;
 mod fixedpoint;
+mod merge;
 mod models;
 mod sweep;
 
@@ -13,9 +16,9 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Models(a) => models::run(&a),
         Command::Fixedpoint(a) => fixedpoint::run(&a),
-        Command::Basin(_) | Command::Merge(_) | Command::Animate(_) => {
-            Err(InputError("this command is not available in this build".into()).into())
-        }
+        Command::Animate(a) => animate::run(&a),
+        Command::Basin(a) => basin::run(&a),
+        Command::Merge(a) => merge::run(&a),
     }
 }
 

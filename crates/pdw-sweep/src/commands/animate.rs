@@ -1,0 +1,132 @@
+//! `pdw-sweep animate`: an animated GIF of two strides of the gait found.
+//!
+//! The gait is the first stable fixed point the model's guesses lead to (else an unstable one).
+//! Frames are the exact states at equally spaced times (the integrator stops at each frame time
+//! and at every event), drawn in world coordinates: the slope descends to the right at angle γ.
+
+use super::build_model;
+use super::fixedpoint::{report_failure, search};
+use crate::args::InputError;
+use crate::cli::AnimateArgs;
+use pdw_hybrid::{GuardKind, Integrator, Options, StopReason};
+use pdw_store::{animate_gif, Frame};
+use std::process::ExitCode;
+
+/// Frames per stride of the animation.
+const FRAMES_PER_STRIDE: usize = 40;
+/// Strides shown.
+const STRIDES: usize = 2;
+
+pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
+    if a.out.exists() && !a.force {
+        return Err(InputError(format!(
+            "{} exists; pass --force to overwrite it",
+            a.out.display()
+        ))
+        .into());
+    }
+    let m = build_model(&a.model)?;
+    let w = m.walker.as_ref();
+    if w.pose(&vec![0.0; w.dim()]).is_none() {
+        return Err(InputError(format!("model '{}' has no drawing", m.info.name)).into());
+    }
+    let guesses: Vec<(String, Vec<f64>)> = w
+        .gait_guesses()
+        .into_iter()
+        .map(|g| (g.gait.to_string(), g.section))
+        .collect();
+    let (found, failed) = search(&m, &guesses, 1e-10)?;
+    let Some(gait) = found.iter().find(|f| f.fp.stable).or_else(|| found.first()) else {
+        eprintln!("no period-one gait found for model '{}'", m.info.name);
+        for (label, g, e) in &failed {
+            report_failure(label, g, e);
+        }
+        return Ok(ExitCode::from(2));
+    };
+    let fp = &gait.fp;
+    let gamma = m.slope();
+    let period = fp.metrics.period;
+    let dt = period / FRAMES_PER_STRIDE as f64;
+    let mut integ = Integrator::new(w.dim(), Options::dop853(1e-10))?;
+    let mut x = fp.state.clone();
+    let mut buf = vec![0.0; x.len()];
+    let mut mode = w.section_mode();
+    let mut t = 0.0;
+    let mut offset = 0.0; // stance-foot position along the slope
+    let mut trace: Vec<(f64, f64)> = Vec::new();
+    let mut frames = Vec::new();
+    let section = w.section_guard();
+    let world = |p: [f64; 2], off: f64| -> (f64, f64) {
+        let (xs, ys) = (p[0] + off, p[1]);
+        (
+            xs * gamma.cos() + ys * gamma.sin(),
+            -xs * gamma.sin() + ys * gamma.cos(),
+        )
+    };
+    let total = STRIDES * FRAMES_PER_STRIDE;
+    let mut strides_done = 0;
+    for k in 0..=total {
+        let t_frame = k as f64 * dt;
+        // Advance to the frame time, handling every event on the way.
+        loop {
+            match integ.integrate(w, mode, &mut t, &mut x, t_frame) {
+                StopReason::EndTime => break,
+                StopReason::Guard { guard } => match w.guards(mode)[guard].kind {
+                    GuardKind::Reset => {
+                        if (mode, guard) == section {
+                            if let Some(foot) = w.pose(&x).and_then(|p| p.swing_foot) {
+                                offset += foot[0];
+                            }
+                            strides_done += 1;
+                        }
+                        mode = w.reset(mode, guard, &x, &mut buf);
+                        x.copy_from_slice(&buf);
+                    }
+                    GuardKind::Terminal(code) => {
+                        return Err(anyhow::anyhow!(
+                            "the gait fell ({}) at t = {t:.4} while animating",
+                            w.fall_name(code)
+                        ))
+                    }
+                },
+                other => {
+                    return Err(anyhow::anyhow!(
+                        "integration stopped at t = {t:.4}: {other:?}"
+                    ))
+                }
+            }
+        }
+        let pose = w.pose(&x).expect("model has a drawing (checked above)");
+        if let Some(f) = pose.swing_foot {
+            trace.push(world(f, offset));
+        }
+        let x0 = -1.5;
+        let x1 = offset + 3.0;
+        frames.push(Frame {
+            links: pose
+                .links
+                .iter()
+                .map(|[p, q]| (world(*p, offset), world(*q, offset)))
+                .collect(),
+            joints: pose.joints.iter().map(|p| world(*p, offset)).collect(),
+            slope: (world([x0, 0.0], 0.0), world([x1, 0.0], 0.0)),
+            trace: trace.clone(),
+            label: format!("t = {t:.3}   stride {}", strides_done + 1),
+        });
+    }
+    let title = format!(
+        "{} walker, slope {:.4} rad: {} gait, period {:.4}",
+        m.info.name,
+        gamma,
+        if fp.stable { "stable" } else { "unstable" },
+        period
+    );
+    animate_gif(&a.out, &frames, (640, 400), 60, &title)?;
+    eprintln!(
+        "wrote {} ({} frames, {} strides)",
+        a.out.display(),
+        frames.len(),
+        STRIDES
+    );
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,62 @@
+//! `pdw-sweep merge`: join the shard files of one basin run into one file (a copy; see
+//! `pdw_store::shard` for why not a virtual dataset), with whole-grid metrics and the PNG.
+
+use super::basin::store_metrics;
+use crate::cli::MergeArgs;
+use pdw_limit::basin::{basin_metrics, DEFAULT_ENTROPY_BOX};
+use pdw_store::{merge, plot_basin, read_basin, BasinMetrics};
+use std::process::ExitCode;
+
+pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let mut failure: Option<String> = None;
+    let header = merge(&a.shards, &a.out, a.force, &command, |h, outcome| {
+        let flat: Vec<u8> = outcome.iter().copied().collect();
+        match basin_metrics(&flat, h.nx(), h.ny(), DEFAULT_ENTROPY_BOX) {
+            Ok(m) => store_metrics(&m),
+            Err(e) => {
+                failure = Some(e.to_string());
+                BasinMetrics {
+                    fractions: Vec::new(),
+                    basin_entropy: f64::NAN,
+                    boundary_entropy: f64::NAN,
+                    entropy_box: DEFAULT_ENTROPY_BOX,
+                }
+            }
+        }
+    })?;
+    if let Some(f) = failure {
+        anyhow::bail!("metrics of the merged grid: {f}");
+    }
+    let data = read_basin(&a.out)?;
+    let png = a.out.with_extension("png");
+    let marker = data
+        .attractors
+        .first()
+        .and_then(|at| at.section.first())
+        .and_then(|s| {
+            let ix = header
+                .state_names
+                .iter()
+                .position(|n| *n == header.x_name)?;
+            let iy = header
+                .state_names
+                .iter()
+                .position(|n| *n == header.y_name)?;
+            Some((s[ix], s[iy]))
+        });
+    let title = format!(
+        "{} walker basin, slope {} rad (merged)",
+        header.model, header.slope
+    );
+    plot_basin(&png, &header, data.outcome.view(), marker, &title)?;
+    crate::outln!(
+        "merged {} shard(s) into {} ({}x{} cells) and {}",
+        a.shards.len(),
+        a.out.display(),
+        header.nx(),
+        header.ny(),
+        png.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
