@@ -12,8 +12,10 @@
 //!   `confirm − 1` extra strides.
 //! - **other** — a known other attractor (an orbit given in [`BasinProblem::others`]) was reached
 //!   in the same sense as a gait, or a recurrence was detected: `‖s_k − s_{k−p}‖∞ < tol_recur`
-//!   for some `p ∈ 1..=max_period` while not at `s*`; the period `p` (or the known orbit's
-//!   period) is recorded. `tol_recur` must be much smaller than `tol_gait·|1 − λ^p|` so that a
+//!   for some `p ∈ 1..=max_period` at `confirm` consecutive strides while not at `s*` (a single
+//!   coincidental near-return of a transient is not enough). The recorded period is the
+//!   smallest divisor q of the smallest such p with `‖s_k − s_{k−q}‖∞ < tol_gait` (or the known
+//!   orbit's length). `tol_recur` must be much smaller than `tol_gait·|1 − λ^p|` so that a
 //!   slow approach to `s*` (multiplier λ near ±1) is not mistaken for a recurrence; the defaults
 //!   (1e-6 and 1e-10) leave four decades.
 //! - **fall** with its kind — a terminal guard of the model fired (the kind comes from the
@@ -131,15 +133,19 @@ impl Outcome {
         )
     }
 
-    /// The fall outcome of a model's fall name (`Walker::fall_name`): `"fall_forward"`,
-    /// `"fall_backward"`, `"fall_hip_below_ground"` / `"hip_below_ground"`; anything else is
-    /// [`Outcome::Fall`].
+    /// The fall outcome of a model's fall name (`Walker::fall_name`): a name containing
+    /// "forward" is [`Outcome::FallForward`], "backward" [`Outcome::FallBackward`], "hip" and
+    /// "ground" [`Outcome::FallHipBelowGround`]; anything else [`Outcome::Fall`].
     pub fn from_fall_name(name: &str) -> Outcome {
-        match name {
-            "fall_forward" | "forward" => Outcome::FallForward,
-            "fall_backward" | "backward" => Outcome::FallBackward,
-            "fall_hip_below_ground" | "hip_below_ground" => Outcome::FallHipBelowGround,
-            _ => Outcome::Fall,
+        let n = name.to_ascii_lowercase();
+        if n.contains("forward") {
+            Outcome::FallForward
+        } else if n.contains("backward") {
+            Outcome::FallBackward
+        } else if n.contains("hip") && n.contains("ground") {
+            Outcome::FallHipBelowGround
+        } else {
+            Outcome::Fall
         }
     }
 }
@@ -171,7 +177,7 @@ pub struct BasinOptions {
 }
 
 impl Default for BasinOptions {
-    /// DOPRI5 at `rtol = atol = 1e-9` (chosen from label agreement against DOP853 at 1e-12,
+    /// DOP853 at `rtol = atol = 1e-9` (chosen from label agreement against DOP853 at 1e-12,
     /// see [`BasinOptions::default_integrator`]), 64 lanes, chunks of 1024 cells, 100 strides,
     /// `tol_gait = 1e-6`, `confirm = 2`, `tol_recur = 1e-10`, `max_period = 8`.
     fn default() -> Self {
@@ -189,14 +195,15 @@ impl Default for BasinOptions {
 }
 
 impl BasinOptions {
-    /// The default integrator for basins: DOPRI5 with `rtol = atol = 1e-9`.
+    /// The default integrator for basins: DOP853 with `rtol = atol = 1e-9`.
     ///
     /// Measured on the simplest walker at γ = 0.009 (200 × 200 cells over θ ∈ [0.15, 0.25],
-    /// θ̇ ∈ [−0.25, −0.15], 100 strides) against DOP853 at 1e-12: see the crate's basin tests and
-    /// the numbers reported with them; 1e-9 changes no label there while being the cheapest
-    /// setting that does not.
+    /// θ̇ ∈ [−0.25, −0.15], 100 strides, 2 threads), labels changed against DOP853 at 1e-12:
+    /// DOPRI5 1e-6: 5 cells (0.0125 %), 1e-7: 2, 1e-8: 1, 1e-9: 0 (1.7 s), 1e-10: 0 (3.0 s);
+    /// DOP853 1e-7: 1 (0.7 s), 1e-9: 0 (1.0 s); RK4 h = 0.05: 3, h = 0.02: 0 (5.3 s).
+    /// DOP853 at 1e-9 is the cheapest setting that changed no label.
     pub fn default_integrator() -> Options {
-        Options::dopri5(1e-9)
+        Options::dop853(1e-9)
     }
 
     /// Reject options the engine cannot honour.
@@ -224,8 +231,7 @@ impl BasinOptions {
         if self.confirm == 0 {
             return bad("confirm", 0.0, "must be >= 1");
         }
-        if !(self.tol_recur.is_finite() && self.tol_recur > 0.0 && self.tol_recur < self.tol_gait)
-        {
+        if !(self.tol_recur.is_finite() && self.tol_recur > 0.0 && self.tol_recur < self.tol_gait) {
             return bad(
                 "tol_recur",
                 self.tol_recur,
@@ -233,7 +239,11 @@ impl BasinOptions {
             );
         }
         if !(1..=16).contains(&self.max_period) {
-            return bad("max_period", f64::from(self.max_period), "must be in 1..=16");
+            return bad(
+                "max_period",
+                f64::from(self.max_period),
+                "must be in 1..=16",
+            );
         }
         Ok(())
     }
@@ -388,19 +398,40 @@ impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
                 lane.near_other[a.min(MAX_KNOWN - 1)] = 0;
             }
         }
-        let n_hist = HIST.min(usize::from(self.opts.max_period) + 1);
-        let count = lane.count;
-        for p in 1..=usize::from(self.opts.max_period) {
-            if p >= count || p >= n_hist {
-                break;
+        let max_p = usize::from(self.opts.max_period).min(HIST - 1);
+        let mut found = None;
+        for p in 1..=max_p {
+            if p >= lane.count {
+                lane.recur[p] = 0;
+                continue;
             }
-            let idx = (lane.head + HIST - p) % HIST;
-            let q = &lane.hist[idx * ds..(idx + 1) * ds];
+            let q = &lane.hist[Self::slot(lane.head, p) * ds..(Self::slot(lane.head, p) + 1) * ds];
             if Self::near(s, q, self.opts.tol_recur) {
-                return Some((Outcome::Other, p as u8, u8::MAX));
+                lane.recur[p] = lane.recur[p].saturating_add(1);
+                if found.is_none() && lane.recur[p] >= confirm {
+                    found = Some(p);
+                }
+            } else {
+                lane.recur[p] = 0;
             }
         }
-        None
+        let p = found?;
+        // Minimal period: the smallest divisor q of p whose shift also returns within tol_gait
+        // (a period-p recurrence of a period-q orbit, q | p).
+        let period = (1..p)
+            .filter(|q| p % q == 0 && *q < lane.count)
+            .find(|&q| {
+                let r =
+                    &lane.hist[Self::slot(lane.head, q) * ds..(Self::slot(lane.head, q) + 1) * ds];
+                Self::near(s, r, self.opts.tol_gait)
+            })
+            .unwrap_or(p);
+        Some((Outcome::Other, period as u8, u8::MAX))
+    }
+
+    /// Ring slot of the state `p` strides before the newest.
+    fn slot(head: usize, p: usize) -> usize {
+        (head + HIST - p) % HIST
     }
 
     /// Push `Π(x)` into the lane's history ring.
@@ -434,6 +465,8 @@ pub struct BasinLane {
     near_gait: u8,
     /// Same for the known other attractors.
     near_other: [u8; MAX_KNOWN],
+    /// Consecutive recurrences `‖s_k − s_{k−p}‖∞ < tol_recur`, per p.
+    recur: [u8; HIST],
     /// Intermediate events in the current stride.
     events: usize,
     strides: u16,
@@ -528,7 +561,14 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
         Control::Finish
     }
 
-    fn finish(&self, _sys: &S, _item: &Vec<f64>, lane: BasinLane, _t: f64, _x: &[f64]) -> CellResult {
+    fn finish(
+        &self,
+        _sys: &S,
+        _item: &Vec<f64>,
+        lane: BasinLane,
+        _t: f64,
+        _x: &[f64],
+    ) -> CellResult {
         let (outcome, period, attractor) = lane.decided.unwrap_or((Outcome::NonFinite, 0, u8::MAX));
         let ds = self.ds;
         let h = lane.head;

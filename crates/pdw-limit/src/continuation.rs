@@ -661,17 +661,21 @@ where
     y0.push(mu0);
     let mut e_mu = vec![0.0; n + 1];
     e_mu[n] = 1.0;
-    let first = ctx.correct(&y0, &e_mu, mu0).map_err(|reason| LimitError::NoConvergence {
-        reason,
-        iterations: opts.max_newton as u64,
-        last: s0.to_vec(),
-        history: Vec::new(),
-    })?;
+    let first = ctx
+        .correct(&y0, &e_mu, mu0)
+        .map_err(|reason| LimitError::NoConvergence {
+            reason,
+            iterations: opts.max_newton as u64,
+            last: s0.to_vec(),
+            history: Vec::new(),
+        })?;
     let mut t_dir = e_mu.clone();
     t_dir[n] = opts.direction;
-    let t0 = ctx.tangent(&first.jac, &t_dir).ok_or(LimitError::Singular {
-        at: first.y[..n].to_vec(),
-    })?;
+    let t0 = ctx
+        .tangent(&first.jac, &t_dir)
+        .ok_or(LimitError::Singular {
+            at: first.y[..n].to_vec(),
+        })?;
     run_branch(&ctx, first, t0, None)
 }
 
@@ -914,7 +918,12 @@ where
                     n,
                 };
                 let pk = half.iterate(&sol.y[..n], sol.y[n])?;
-                let gap = norm_inf(&pk.iter().zip(&sol.y[..n]).map(|(a, b)| a - b).collect::<Vec<_>>());
+                let gap = norm_inf(
+                    &pk.iter()
+                        .zip(&sol.y[..n])
+                        .map(|(a, b)| a - b)
+                        .collect::<Vec<_>>(),
+                );
                 if gap > 1e3 * opts.newton_tol.max(1e-12) && gap > 0.1 * eps {
                     let away: Vec<f64> = sol.y.iter().zip(&y_pd).map(|(a, b)| a - b).collect();
                     let t0 = ctx.tangent(&sol.jac, &away).ok_or(LimitError::Singular {
@@ -922,14 +931,20 @@ where
                     })?;
                     return run_branch(&ctx, sol, t0, None);
                 }
-                last_reason = format!("converged back onto the period-{} orbit (ε = {eps:e})", bif.period_strides);
+                last_reason = format!(
+                    "converged back onto the period-{} orbit (ε = {eps:e})",
+                    bif.period_strides
+                );
             }
             Err(r) => last_reason = r,
         }
         eps *= 0.5;
     }
     Err(LimitError::NoConvergence {
-        reason: format!("branch switching at the period doubling μ = {}: {last_reason}", bif.param),
+        reason: format!(
+            "branch switching at the period doubling μ = {}: {last_reason}",
+            bif.param
+        ),
         iterations: 12,
         last: bif.section.clone(),
         history: Vec::new(),

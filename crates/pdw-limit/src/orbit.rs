@@ -160,7 +160,12 @@ where
     Ok(all)
 }
 
-fn column<S, E, F>(family: &F, mu: f64, s0: &[f64], opts: &OrbitOptions) -> Result<OrbitColumn, LimitError>
+fn column<S, E, F>(
+    family: &F,
+    mu: f64,
+    s0: &[f64],
+    opts: &OrbitOptions,
+) -> Result<OrbitColumn, LimitError>
 where
     S: Section + ?Sized,
     E: Display,

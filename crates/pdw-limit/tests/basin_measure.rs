@@ -30,7 +30,10 @@ fn fall(c: u8) -> Outcome {
 }
 
 fn pool(n: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
 }
 
 fn grid(n: usize) -> Vec<Vec<f64>> {
@@ -58,18 +61,30 @@ fn summary(res: &[pdw_limit::CellResult], n: usize) -> String {
 #[test]
 #[ignore]
 fn measure_basin_throughput() {
-    let n: usize = std::env::var("PDW_N").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
-    let threads: usize = std::env::var("PDW_THREADS").ok().and_then(|v| v.parse().ok()).unwrap_or(2);
+    let n: usize = std::env::var("PDW_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200);
+    let threads: usize = std::env::var("PDW_THREADS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2);
     let (m, s) = simplest(0.009);
     let prob = BasinProblem::new(&m, s.clone(), &fall);
     let cells = grid(n);
     let p = pool(threads);
-    for (label, integ) in [
-        ("dopri5 1e-9", Options::dopri5(1e-9)),
-        ("dopri5 1e-7", Options::dopri5(1e-7)),
+    for (label, integ0, tg) in [
+        (
+            "dop853 1e-9 tol_gait 1e-6 (default)",
+            Options::dop853(1e-9),
+            1e-6,
+        ),
+        ("dop853 1e-9 tol_gait 1e-5", Options::dop853(1e-9), 1e-5),
+        ("dop853 1e-9 tol_gait 1e-4", Options::dop853(1e-9), 1e-4),
     ] {
         let opts = BasinOptions {
-            integrator: integ,
+            integrator: integ0,
+            tol_gait: tg,
             ..Default::default()
         };
         let t = Instant::now();
@@ -89,7 +104,10 @@ fn measure_basin_throughput() {
 #[test]
 #[ignore]
 fn measure_label_agreement_vs_tight_reference() {
-    let n: usize = std::env::var("PDW_N").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
+    let n: usize = std::env::var("PDW_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200);
     let (m, s) = simplest(0.009);
     let prob = BasinProblem::new(&m, s, &fall);
     let cells = grid(n);

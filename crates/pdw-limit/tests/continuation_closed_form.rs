@@ -19,9 +19,15 @@ fn logistic_period_doubling_located_at_mu_3_and_period_two_branch_doubles_at_one
     for p in &branch.points {
         let lambda = 2.0 - p.param;
         let dx = p.residual / (1.0 - lambda).abs() + 1e-15;
-        assert!((p.section[0] - (1.0 - 1.0 / p.param)).abs() <= 1.01 * dx, "{p:?}");
+        assert!(
+            (p.section[0] - (1.0 - 1.0 / p.param)).abs() <= 1.01 * dx,
+            "{p:?}"
+        );
         // (+1e-12: DL and DΠ inside the variational DP are Richardson differences, ~1e-13.)
-        assert!((p.multipliers[0].re - lambda).abs() <= 2.0 * p.param * dx + 1e-12, "{p:?}");
+        assert!(
+            (p.multipliers[0].re - lambda).abs() <= 2.0 * p.param * dx + 1e-12,
+            "{p:?}"
+        );
     }
     let pd: Vec<_> = branch
         .bifurcations
@@ -75,10 +81,18 @@ fn pseudo_arclength_passes_the_saddle_node_fold_and_natural_continuation_reports
         .filter(|b| b.kind == BifurcationKind::Fold)
         .collect();
     assert_eq!(folds.len(), 1, "{:?}", branch.bifurcations);
-    assert!(folds[0].param.abs() < 1e-7, "fold at μ = {}", folds[0].param);
+    assert!(
+        folds[0].param.abs() < 1e-7,
+        "fold at μ = {}",
+        folds[0].param
+    );
     // Past the fold: the other branch x = −√μ, unstable with multiplier 1 + 2√μ.
     let last = branch.points.last().unwrap();
-    assert!(matches!(branch.end, BranchEnd::ParamBound { .. }), "{:?}", branch.end);
+    assert!(
+        matches!(branch.end, BranchEnd::ParamBound { .. }),
+        "{:?}",
+        branch.end
+    );
     assert!(last.section[0] < 0.0 && last.param > 0.25);
     assert!((last.section[0] + last.param.sqrt()).abs() < 1e-10);
     assert!(!last.stable);
@@ -87,7 +101,9 @@ fn pseudo_arclength_passes_the_saddle_node_fold_and_natural_continuation_reports
     opts.ds_init = 1e-2;
     let nat = continue_branch(&saddle_node, &[0.5], 0.25, 1, &opts).unwrap();
     match nat.end {
-        BranchEnd::FoldSuspected { param, multiplier, .. } => {
+        BranchEnd::FoldSuspected {
+            param, multiplier, ..
+        } => {
             assert!(param > 0.0 && param < 1e-3, "{param}");
             assert!((multiplier - 1.0).abs() < 0.1);
         }
@@ -110,5 +126,8 @@ fn neimark_sacker_of_the_normal_form_map_located_at_mu_0() {
     let m = ns[0].multipliers[0];
     assert!((m.modulus() - 1.0).abs() < 1e-7);
     assert!((m.im.atan2(m.re).abs() - NS_OMEGA).abs() < 1e-9);
-    assert!(branch.bifurcations.iter().all(|b| b.kind == BifurcationKind::NeimarkSacker));
+    assert!(branch
+        .bifurcations
+        .iter()
+        .all(|b| b.kind == BifurcationKind::NeimarkSacker));
 }
