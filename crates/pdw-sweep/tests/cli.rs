@@ -1,0 +1,269 @@
+//! End-to-end tests of the `pdw-sweep` binary: published values through `fixedpoint --json`,
+//! bad input (exit code 2, a message naming the value, nothing lost), and the basin file's
+//! reproducibility across thread counts, shards and interrupted runs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn p(dir: &Path, name: &str) -> PathBuf {
+    dir.join(name)
+}
+
+fn s(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// Garcia et al. 1998 (REFERENCES §1), from Garcia's own code.
+const STABLE: [f64; 2] = [0.20031090049483, -0.19983247291764];
+const UNSTABLE: [f64; 2] = [0.19393736960624, -0.20386692731962];
+
+#[test]
+fn fixedpoint_json_reproduces_garcia_both_gaits() {
+    let o = run(&["fixedpoint", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["model"], "simplest");
+    assert_eq!(v["slope"], 0.009);
+    assert_eq!(v["section_names"], serde_json::json!(["theta", "thetadot"]));
+    let fps = v["fixed_points"].as_array().unwrap();
+    assert_eq!(fps.len(), 2, "both gaits expected: {v}");
+    for fp in fps {
+        for key in [
+            "gait", "section", "state_names", "state", "period", "step_length", "speed",
+            "multipliers", "stable", "residual", "iterations",
+        ] {
+            assert!(fp.get(key).is_some(), "missing key {key} in {fp}");
+        }
+        let sec: Vec<f64> = serde_json::from_value(fp["section"].clone()).unwrap();
+        let want = if fp["stable"].as_bool().unwrap() { STABLE } else { UNSTABLE };
+        for (a, b) in sec.iter().zip(want) {
+            assert!((a - b).abs() < 1e-9, "{sec:?} vs Garcia {want:?}");
+        }
+        assert!(fp["residual"].as_f64().unwrap() <= 1e-12);
+        // multipliers by decreasing modulus
+        let m: Vec<f64> = fp["multipliers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|z| z["re"].as_f64().unwrap().hypot(z["im"].as_f64().unwrap()))
+            .collect();
+        assert!(m.windows(2).all(|w| w[0] >= w[1] - 1e-15), "{m:?}");
+        let stable = fp["stable"].as_bool().unwrap();
+        assert_eq!(stable, m[0] < 1.0);
+        // period ≈ 3.88 (long) or ≈ 3.10 (short), Garcia 1998
+        let t = fp["period"].as_f64().unwrap();
+        let want_t = if stable { 3.88 } else { 3.10 };
+        assert!((t - want_t).abs() < 0.01, "period {t}");
+    }
+}
+
+#[test]
+fn fixedpoint_gait_filter_and_rimless_closed_form() {
+    let o = run(&["fixedpoint", "--json", "--gait", "unstable"]);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let fps = v["fixed_points"].as_array().unwrap();
+    assert_eq!(fps.len(), 1);
+    assert_eq!(fps[0]["stable"], false);
+    // Rimless wheel (REFERENCES §2): ω* = cot 2α √(4 (g/l) sin α sin γ), multiplier cos² 2α.
+    let o = run(&["fixedpoint", "--model", "rimless", "--slope", "0.1", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let fp = &v["fixed_points"][0];
+    let a = std::f64::consts::PI / 8.0;
+    let w = (4.0 * 9.81 * a.sin() * 0.1f64.sin()).sqrt() / (2.0 * a).tan();
+    assert!((fp["section"][0].as_f64().unwrap() - w).abs() < 1e-12);
+    let lam = fp["multipliers"][0]["re"].as_f64().unwrap();
+    assert!((lam - (2.0 * a).cos().powi(2)).abs() < 1e-10);
+}
+
+#[test]
+fn bad_input_exits_2_with_a_message_naming_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = p(dir.path(), "b.h5");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["fixedpoint", "--model", "bogus"], "bogus"),
+        (vec!["fixedpoint", "--set", "massx=2"], "massx"),
+        (vec!["fixedpoint", "--slope", "2"], "'2'"),
+        (vec!["fixedpoint", "--slope", "3degx"], "3degx"),
+        (vec!["fixedpoint", "--guess", "0.2"], "--guess"),
+        (vec!["fixedpoint", "--gait", "wobbly"], "wobbly"),
+        (vec!["basin", "--grid", "10by10", "--out", s(&out)], "10by10"),
+        (vec!["basin", "--x", "theta=0.3:0.1", "--out", s(&out)], "inverted"),
+        (vec!["basin", "--x", "psi=0.1:0.3", "--out", s(&out)], "psi"),
+        (vec!["basin", "--max-strides", "0", "--out", s(&out)], "--max-strides"),
+        (vec!["basin", "--shard", "3/3", "--out", s(&out)], "3/3"),
+        (vec!["basin", "--model", "rimless", "--out", s(&out)], "two"),
+        (vec!["basin", "--grid", "8x8", "--out", "/nonexistent-dir/b.h5"], "nonexistent-dir"),
+    ];
+    for (args, needle) in cases {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains(needle), "{args:?}: message {e:?} should name {needle:?}");
+        assert!(!e.contains("panicked"), "{args:?}: {e}");
+    }
+    assert!(!out.exists(), "no file may be left behind by rejected input");
+}
+
+fn basin(dir: &Path, name: &str, extra: &[&str]) -> (Output, PathBuf) {
+    basin_grid(dir, name, "48x40", extra)
+}
+
+fn basin_grid(dir: &Path, name: &str, grid: &str, extra: &[&str]) -> (Output, PathBuf) {
+    let out = p(dir, name);
+    let mut args = vec![
+        "basin", "--grid", grid, "--max-strides", "40", "--quiet", "--out", s(&out),
+    ];
+    args.extend_from_slice(extra);
+    let o = bin().args(&args).output().unwrap();
+    (o, out)
+}
+
+fn read(path: &Path) -> pdw_store::BasinData {
+    pdw_store::read_basin(path).expect("readable basin file")
+}
+
+fn same_cells(a: &pdw_store::BasinData, b: &pdw_store::BasinData) {
+    assert_eq!(a.outcome, b.outcome);
+    assert_eq!(a.strides, b.strides);
+    let (fa, fb) = (&a.final_state, &b.final_state);
+    assert_eq!(fa.shape(), fb.shape());
+    assert!(fa.iter().zip(fb.iter()).all(|(x, y)| x.to_bits() == y.to_bits()));
+}
+
+#[test]
+fn basin_is_identical_for_any_thread_count_and_refuses_overwrite() {
+    let dir = tempfile::tempdir().unwrap();
+    let (o1, f1) = basin(dir.path(), "t1.h5", &["--threads", "1"]);
+    assert!(o1.status.success(), "{}", stderr(&o1));
+    let (o2, f2) = basin(dir.path(), "t2.h5", &["--threads", "2"]);
+    assert!(o2.status.success(), "{}", stderr(&o2));
+    let (a, b) = (read(&f1), read(&f2));
+    assert!(a.complete && b.complete);
+    same_cells(&a, &b);
+    // the fixed point's neighbourhood is gait, and both falls occur (Schwab & Wisse 2001 band)
+    let gait = a.outcome.iter().filter(|&&c| c == 0).count();
+    assert!(gait > 0 && gait < a.outcome.len() / 4, "gait cells {gait}");
+    assert!(p(dir.path(), "t1.png").exists());
+    // no overwrite without --force: the bytes stay
+    let before = std::fs::read(&f1).unwrap();
+    let (o3, _) = basin(dir.path(), "t1.h5", &["--threads", "1"]);
+    assert_eq!(o3.status.code(), Some(2));
+    assert!(stderr(&o3).contains("--force"));
+    assert_eq!(std::fs::read(&f1).unwrap(), before);
+    // a complete file cannot be resumed, and is left alone
+    let (o4, _) = basin(dir.path(), "t1.h5", &["--resume"]);
+    assert_eq!(o4.status.code(), Some(2), "{}", stderr(&o4));
+    assert_eq!(std::fs::read(&f1).unwrap(), before);
+}
+
+#[test]
+fn shards_merged_equal_a_single_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let (o, single) = basin(dir.path(), "single.h5", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut shards = Vec::new();
+    for i in 0..3 {
+        let spec = format!("{i}/3");
+        let (o, f) = basin(dir.path(), &format!("s{i}.h5"), &["--shard", &spec]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        shards.push(f);
+    }
+    let merged = p(dir.path(), "merged.h5");
+    let mut args = vec!["merge".to_string()];
+    args.extend(shards.iter().map(|f| s(f).to_string()));
+    args.extend(["--out".to_string(), s(&merged).to_string()]);
+    let o = bin().args(&args).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (a, b) = (read(&single), read(&merged));
+    same_cells(&a, &b);
+    let (ma, mb) = (a.metrics.unwrap(), b.metrics.unwrap());
+    assert_eq!(ma.fractions, mb.fractions);
+    assert_eq!(ma.basin_entropy.to_bits(), mb.basin_entropy.to_bits());
+    // merging an incomplete set is refused
+    let o = bin()
+        .args(["merge", s(&shards[0]), s(&shards[1]), "--out", s(&p(dir.path(), "m2.h5"))])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+#[test]
+fn interrupted_basin_resumes_to_the_same_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let (o, reference) = basin_grid(dir.path(), "ref.h5", "64x96", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = p(dir.path(), "cut.h5");
+    let mut child = bin()
+        .args([
+            "basin", "--grid", "64x96", "--max-strides", "40", "--quiet", "--threads", "1",
+            "--out", s(&out),
+        ])
+        .spawn()
+        .unwrap();
+    // wait until the first rows are on disk (or the run ends), then SIGTERM
+    let t0 = std::time::Instant::now();
+    while !out.exists() && t0.elapsed().as_secs() < 30 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(60));
+    let _ = Command::new("kill").args(["-TERM", &child.id().to_string()]).status();
+    let status = child.wait().unwrap();
+    if !status.success() {
+        assert_eq!(status.code(), Some(130), "SIGTERM exits with 130");
+        let part = read(&out);
+        assert!(!part.complete);
+        let o = bin()
+            .args([
+                "basin", "--grid", "64x96", "--max-strides", "40", "--quiet", "--resume",
+                "--out", s(&out),
+            ])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let (a, b) = (read(&reference), read(&out));
+    assert!(b.complete);
+    same_cells(&a, &b);
+}
+
+#[test]
+fn corrupt_file_given_to_resume_is_an_error_and_left_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = p(dir.path(), "junk.h5");
+    std::fs::write(&f, b"not an hdf5 file at all").unwrap();
+    let (o, _) = basin(dir.path(), "junk.h5", &["--resume"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("junk.h5"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&f).unwrap(), b"not an hdf5 file at all");
+}
+
+#[test]
+fn models_and_animate() {
+    let o = run(&["models", "--json"]);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let names: Vec<&str> = v.as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    for want in ["rimless", "simplest", "compass", "kneed", "seed5"] {
+        assert!(names.contains(&want), "{names:?}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let gif = p(dir.path(), "g.gif");
+    let o = run(&["animate", "--out", s(&gif)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&gif).unwrap();
+    assert_eq!(&bytes[..6], b"GIF89a");
+}
