@@ -35,11 +35,11 @@ fn default_axis(name: &str, centre: f64) -> AxisRange {
     }
 }
 
+/// `--set` values: model parameters by name, and fixed section coordinates by index.
+type SplitSets = (Vec<(String, f64)>, Vec<(usize, f64)>);
+
 /// Splits `--set` into model parameters and fixed section coordinates.
-fn split_sets(
-    a: &BasinArgs,
-    section_names: &[&str],
-) -> Result<(Vec<(String, f64)>, Vec<(usize, f64)>), InputError> {
+fn split_sets(a: &BasinArgs, section_names: &[&str]) -> Result<SplitSets, InputError> {
     let mut fixed = Vec::new();
     let mut rest = Vec::new();
     for (n, v) in overrides(&a.model)? {

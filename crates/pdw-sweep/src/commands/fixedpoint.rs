@@ -17,13 +17,16 @@ pub struct Found {
     pub fp: FixedPoint,
 }
 
+/// A guess that did not lead to a fixed point: its label, value and the error.
+pub type Failed = (String, Vec<f64>, LimitError);
+
 /// Runs Newton from every guess (the user's, or the model's presets), de-duplicates the fixed
 /// points found, and returns them with the failures (guess label, error).
 pub fn search(
     m: &BuiltModel,
     guesses: &[(String, Vec<f64>)],
     tol: f64,
-) -> Result<(Vec<Found>, Vec<(String, Vec<f64>, LimitError)>), LimitError> {
+) -> Result<(Vec<Found>, Vec<Failed>), LimitError> {
     let walker = m.walker.as_ref();
     let step = |x: &[f64]| walker.step_length(x);
     let map = StrideMap::new(
