@@ -21,7 +21,7 @@
 use crate::event::{self, EventScratch};
 use crate::options::{Method, Options, Stats, StopReason};
 use crate::tableau::{self, Tableau};
-use crate::HybridSystem;
+use crate::{Crossing, HybridSystem};
 
 /// The tableau of a method.
 pub(crate) fn tableau_of(method: Method) -> &'static Tableau {
@@ -739,8 +739,54 @@ pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
     }
     ctl.t = t1;
     if ctl.last {
+        // An end point within `guard_tolerance` of a guard surface, on its pre-crossing side and
+        // moving into it (ġ = ∇g·f), is that guard's event: the next segment would count its
+        // start value as 0 (see `start_segment`) and miss the crossing. Reported as a `Guard`
+        // stop at t_end, whose state is as close to the surface as a located event.
+        if let Some(guard) = guard_at_end(sys, st, l, ctl.mode, sc) {
+            return After::Stop(StopReason::Guard { guard });
+        }
         After::Stop(StopReason::EndTime)
     } else {
         After::Accepted
     }
+}
+
+/// The earliest-index guard that the committed end point of lane `l` sits on (within
+/// `guard_tolerance`), strictly on its pre-crossing side, moving into the crossing and
+/// admissible there; `None` otherwise (the common case costs one comparison per guard).
+fn guard_at_end<S: HybridSystem + ?Sized>(
+    sys: &S,
+    st: &Store,
+    l: usize,
+    mode: usize,
+    sc: &mut LaneScratch,
+) -> Option<usize> {
+    let stride = st.stride;
+    let specs = sys.guards(mode);
+    for (k, spec) in specs.iter().enumerate() {
+        let g = st.g[k * stride + l];
+        let pre = match spec.crossing {
+            Crossing::Rising => g < 0.0,
+            Crossing::Falling => g > 0.0,
+            Crossing::Either => g != 0.0,
+        };
+        if !(pre && g.abs() <= sys.guard_tolerance(mode, k)) {
+            continue;
+        }
+        Store::gather(&st.x, stride, l, &mut sc.xg);
+        Store::gather(&st.k, stride, l, &mut sc.fg);
+        let mut grad = vec![0.0; st.dim];
+        sys.guard_gradient(mode, k, &sc.xg, &mut grad);
+        let gdot: f64 = grad.iter().zip(&sc.fg).map(|(a, b)| a * b).sum();
+        let into = match spec.crossing {
+            Crossing::Rising => gdot > 0.0,
+            Crossing::Falling => gdot < 0.0,
+            Crossing::Either => gdot * g < 0.0,
+        };
+        if into && sys.admissible(mode, k, &sc.xg) {
+            return Some(k);
+        }
+    }
+    None
 }

@@ -269,3 +269,24 @@ fn observer_sees_start_steps_and_stop_point() {
     assert!(seen.windows(2).all(|w| w[1].0 > w[0].0), "times increase");
     assert!(seen.iter().all(|&(tt, q)| (q - tt.cos()).abs() < 1e-6));
 }
+
+#[test]
+fn end_time_on_a_guard_surface_is_not_a_missed_event() {
+    // q = −cos t rises through 0 at t = π/2. Stopping at t_end = π/2 leaves the guard a few ulps
+    // below the surface (or exactly on it), moving into it. Taking frames at exact event times
+    // (animations at multiples of a gait period) must not lose the event: either this call or
+    // the next one reports it at π/2, never a period later.
+    let osc = Oscillator::new(&[(0.0, Crossing::Rising, None)]);
+    for opts in [Options::dop853(1e-12), Options::dopri5(1e-12)] {
+        let mut integ = Integrator::new(2, opts).unwrap();
+        let (mut t, mut x) = (0.0, [-1.0, 0.0]);
+        let r = integ.integrate(&osc, 0, &mut t, &mut x, PI / 2.0);
+        let r = if r == StopReason::EndTime {
+            integ.integrate(&osc, 0, &mut t, &mut x, 10.0)
+        } else {
+            r
+        };
+        assert_eq!(r, StopReason::Guard { guard: 0 }, "{:?}", opts.method);
+        assert!((t - PI / 2.0).abs() < 1e-10, "{:?}: t = {t}", opts.method);
+    }
+}
