@@ -64,7 +64,7 @@
 //! allocate after the first call on a thread.
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Walker};
+use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
 use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
 use pdw_soa::{Chain, ChainBuilder, Link, Workspace};
 use std::cell::RefCell;
@@ -460,6 +460,15 @@ impl Section for Compass {
 }
 
 impl Walker for Compass {
+    fn pose(&self, x: &[f64]) -> Option<Pose> {
+        Some(crate::registry::chain_pose(&x[0..2], &[self.l, -self.l]))
+    }
+    fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
+        Some(Self::constraint_forces(self, mode, x))
+    }
+    fn step_flags(&self, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        Some(self.check_state(mode, x))
+    }
     fn name(&self) -> &'static str {
         "compass"
     }

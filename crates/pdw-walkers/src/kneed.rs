@@ -65,7 +65,7 @@ use crate::compass::{
     soa_param_error, with_workspace, ConstraintForces, HeelStrike, StepFlags,
 };
 use crate::error::WalkerError;
-use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Walker};
+use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
 use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
 use pdw_soa::{Chain, ChainBuilder, Link};
 use std::f64::consts::FRAC_PI_2;
@@ -581,6 +581,19 @@ impl Section for Kneed {
 }
 
 impl Walker for Kneed {
+    fn pose(&self, x: &[f64]) -> Option<Pose> {
+        let l = self.ls + self.lt;
+        Some(crate::registry::chain_pose(
+            &x[0..3],
+            &[l, -self.lt, -self.ls],
+        ))
+    }
+    fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
+        Some(Self::constraint_forces(self, mode, x))
+    }
+    fn step_flags(&self, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        Some(self.check_state(mode, x))
+    }
     fn name(&self) -> &'static str {
         "kneed"
     }

@@ -16,4 +16,6 @@ pub mod seed5;
 pub mod simplest;
 
 pub use error::WalkerError;
-pub use registry::{build, model_info, GaitGuess, ModelInfo, ParamSpec, Pose, Walker, MODELS};
+pub use registry::{
+    build, chain_pose, model_info, GaitGuess, ModelInfo, ParamSpec, Pose, Walker, MODELS,
+};

@@ -4,6 +4,7 @@
 //! To add a model: implement [`Walker`] for it, give its module a `pub static INFO: ModelInfo`,
 //! and append `&crate::<module>::INFO` to [`MODELS`].
 
+use crate::compass::{ConstraintForces, StepFlags};
 use crate::error::WalkerError;
 use pdw_hybrid::Section;
 
@@ -49,6 +50,36 @@ pub trait Walker: Section {
     /// The walker's drawing at full state `x`, for animations; `None` if the model has none.
     fn pose(&self, _x: &[f64]) -> Option<Pose> {
         None
+    }
+    /// Stance-foot ground reaction and knee-lock torques at `(mode, x)`, if the model
+    /// computes them.
+    fn constraint_forces(&self, _mode: usize, _x: &[f64]) -> Option<ConstraintForces> {
+        None
+    }
+    /// Validity flags at `(mode, x)` (negative normal force, a knee that would unlock, a swing
+    /// foot below ground after mid-stance), if the model computes them.
+    fn step_flags(&self, _mode: usize, _x: &[f64]) -> Option<StepFlags> {
+        None
+    }
+}
+
+/// The pose of a planar serial chain rooted at the stance foot: link `k` has absolute angle
+/// `θ_k = q₀ + … + q_k` from the slope normal and signed length `len[k]`, and runs from `P_k` to
+/// `P_{k+1} = P_k + len[k] (−sin θ_k, cos θ_k)` (the convention of the chain walkers).
+pub fn chain_pose(q: &[f64], len: &[f64]) -> Pose {
+    let mut p = [0.0, 0.0];
+    let mut th = 0.0;
+    let mut pts = vec![p];
+    for (qk, lk) in q.iter().zip(len) {
+        th += qk;
+        let (s, c) = f64::sin_cos(th);
+        p = [p[0] - lk * s, p[1] + lk * c];
+        pts.push(p);
+    }
+    Pose {
+        links: pts.windows(2).map(|w| [w[0], w[1]]).collect(),
+        joints: pts[1..pts.len() - 1].to_vec(),
+        swing_foot: pts.last().copied(),
     }
 }
 

@@ -64,7 +64,7 @@ use crate::compass::{
 };
 use crate::error::WalkerError;
 use crate::kneed::point_mass_link;
-use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Walker};
+use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
 use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
 use pdw_soa::{Chain, ChainBuilder};
 use std::f64::consts::FRAC_PI_2;
@@ -564,6 +564,16 @@ impl Section for Seed5 {
 }
 
 impl Walker for Seed5 {
+    fn pose(&self, x: &[f64]) -> Option<Pose> {
+        let (ls, lt) = (self.p.shank_length, self.p.thigh_length);
+        Some(crate::registry::chain_pose(&x[0..4], &[ls, lt, -lt, -ls]))
+    }
+    fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
+        Some(Self::constraint_forces(self, mode, x))
+    }
+    fn step_flags(&self, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        Some(self.check_state(mode, x))
+    }
     fn name(&self) -> &'static str {
         "seed5"
     }

@@ -64,6 +64,7 @@
 //! at a time, and the scalar [`HybridSystem::flow`] calls the very same lane-wise kernel, so the
 //! scalar and batched right-hand sides are bit-identical.
 
+use crate::compass::{ConstraintForces, StepFlags};
 use crate::error::{check_open, WalkerError};
 use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
 use faer::{MatMut, MatRef};
@@ -486,6 +487,32 @@ impl Walker for Simplest {
     /// Distance between the feet at heel strike, `2 |sin θ⁻|` (leg length 1).
     fn step_length(&self, x_pre: &[f64]) -> f64 {
         2.0 * x_pre[0].sin().abs()
+    }
+    /// Ground reaction on the stance foot per unit hip weight `M g` (the massless legs carry the
+    /// hip's force to the foot): `R = a − g` with the hip acceleration
+    /// `a = θ̈ (−cos θ, −sin θ) + θ̇² (sin θ, −cos θ)`, `θ̈ = sin(θ − γ)` and gravity
+    /// `g = (sin γ, −cos γ)` in the slope frame (module docs). No knees.
+    fn constraint_forces(&self, _mode: usize, x: &[f64]) -> Option<ConstraintForces> {
+        let (th, thd) = (x[0], x[1]);
+        let thdd = (th - self.gamma).sin();
+        let (s, c) = th.sin_cos();
+        let a = [-thdd * c + thd * thd * s, -thdd * s - thd * thd * c];
+        let r = [a[0] - self.gamma.sin(), a[1] + self.gamma.cos()];
+        Some(ConstraintForces {
+            normal: r[1],
+            tangential: r[0],
+            friction_required: if r[1] > 0.0 {
+                (r[0] / r[1]).abs()
+            } else {
+                f64::INFINITY
+            },
+            knee_torque: [None, None],
+        })
+    }
+    fn step_flags(&self, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        let cf = Walker::constraint_forces(self, mode, x)?;
+        let foot = self.pose(x)?.swing_foot?;
+        Some(StepFlags::from_state(&cf, foot, 1.0))
     }
     /// Stance foot at the origin, hip `(−sin θ, cos θ)`, swing foot `hip + (sin ψ, −cos ψ)` with
     /// `ψ = θ − φ` (module docs).

@@ -271,3 +271,44 @@ fn registry_lists_models_and_rejects_unknown_names() {
     assert_eq!(w.param_values()[0], ("slope", 0.01));
     assert_eq!(w.section_names(), &["theta", "thetadot"]);
 }
+
+/// The stance-foot ground reaction per unit hip weight equals the hip's acceleration (measured
+/// by central differences of the hip velocity along the flow) minus gravity (Newton's second
+/// law for the point-mass hip on massless legs).
+#[test]
+fn ground_reaction_is_hip_mass_times_acceleration_minus_gravity() {
+    use pdw_hybrid::HybridSystem;
+    use pdw_walkers::Walker;
+    let gamma = 0.009;
+    let w = pdw_walkers::build("simplest", &[("slope", gamma)]).unwrap();
+    let hip_vel = |x: &[f64]| [-x[0].cos() * x[1], -x[0].sin() * x[1]];
+    let mut seed = 0x2545F4914F6CDD1Du64;
+    let mut rnd = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for _ in 0..200 {
+        let x = [0.6 * rnd(), rnd(), 0.8 * rnd(), rnd()];
+        let mut f = [0.0; 4];
+        w.flow(0, &x, &mut f);
+        let h = 1e-5;
+        let xp: Vec<f64> = x.iter().zip(&f).map(|(a, b)| a + h * b).collect();
+        let xm: Vec<f64> = x.iter().zip(&f).map(|(a, b)| a - h * b).collect();
+        let (vp, vm) = (hip_vel(&xp), hip_vel(&xm));
+        let a = [(vp[0] - vm[0]) / (2.0 * h), (vp[1] - vm[1]) / (2.0 * h)];
+        let cf = w.constraint_forces(0, &x).unwrap();
+        assert!(
+            (cf.tangential - (a[0] - gamma.sin())).abs() < 1e-8,
+            "{cf:?} {a:?}"
+        );
+        assert!(
+            (cf.normal - (a[1] + gamma.cos())).abs() < 1e-8,
+            "{cf:?} {a:?}"
+        );
+    }
+    // standing still, hip vertically above the foot: the reaction is the weight
+    let cf = w.constraint_forces(0, &[gamma, 0.0, 0.0, 0.0]).unwrap();
+    assert!((cf.normal - gamma.cos()).abs() < 1e-15 && (cf.tangential + gamma.sin()).abs() < 1e-15);
+}
