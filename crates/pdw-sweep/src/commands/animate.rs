@@ -84,7 +84,7 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
                     }
                     GuardKind::Terminal(code) => {
                         return Err(anyhow::anyhow!(
-                            "the gait fell ({}) at t = {t:.4} while animating",
+                            "the gait fell ({}) at t = {t:.4} while animating (state {x:?}, strides {strides_done})",
                             w.fall_name(code)
                         ))
                     }

@@ -62,6 +62,85 @@ pub fn search(
     Ok((found, failed))
 }
 
+/// Constraint forces and validity flags sampled along one stride of a gait (at every accepted
+/// integrator step and event): the gait is flagged, not silently accepted, if the stance foot
+/// would lift off, a locked knee would unlock, or the swing foot scuffs after mid-stance.
+#[derive(Clone, Debug, Default)]
+pub struct Validity {
+    pub min_normal_force: f64,
+    pub max_friction_required: f64,
+    /// Smallest knee-lock torque (negative: the knee would unlock); `None` without knees.
+    pub min_knee_torque: Option<f64>,
+    pub normal_force_negative: bool,
+    pub knee_unlocks: bool,
+    pub swing_foot_scuffs: bool,
+    pub samples: usize,
+}
+
+impl Validity {
+    pub fn valid(&self) -> bool {
+        !(self.normal_force_negative || self.knee_unlocks || self.swing_foot_scuffs)
+    }
+
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "valid": self.valid(),
+            "min_normal_force": self.min_normal_force,
+            "max_friction_required": self.max_friction_required,
+            "min_knee_torque": self.min_knee_torque,
+            "normal_force_negative": self.normal_force_negative,
+            "knee_unlocks": self.knee_unlocks,
+            "swing_foot_scuffs": self.swing_foot_scuffs,
+        })
+    }
+}
+
+/// Samples [`Validity`] along one stride from the fixed point's post-impact state.
+pub fn validity(m: &BuiltModel, fp: &FixedPoint) -> Option<Validity> {
+    use pdw_hybrid::{GuardKind, Integrator, StopReason};
+    let w = m.walker.as_ref();
+    let mut v = Validity {
+        min_normal_force: f64::INFINITY,
+        ..Validity::default()
+    };
+    let mut integ = Integrator::new(w.dim(), Options::dop853(1e-10)).ok()?;
+    let (mut t, mut x, mut mode) = (0.0, fp.state.clone(), w.section_mode());
+    let mut buf = vec![0.0; x.len()];
+    let t_end = 2.0 * fp.metrics.period;
+    let mut supported = true;
+    for _ in 0..64 {
+        let m0 = mode;
+        let stop = integ.integrate_observed(w, mode, &mut t, &mut x, t_end, &mut |_, xs| match (
+            w.constraint_forces(m0, xs),
+            w.step_flags(m0, xs),
+        ) {
+            (Some(cf), Some(fl)) => {
+                v.samples += 1;
+                v.min_normal_force = v.min_normal_force.min(cf.normal);
+                v.max_friction_required = v.max_friction_required.max(cf.friction_required);
+                for tq in cf.knee_torque.iter().flatten() {
+                    v.min_knee_torque = Some(v.min_knee_torque.map_or(*tq, |k| k.min(*tq)));
+                }
+                v.normal_force_negative |= fl.normal_force_negative;
+                v.knee_unlocks |= fl.knee_unlocks;
+                v.swing_foot_scuffs |= fl.swing_foot_scuffs;
+            }
+            _ => supported = false,
+        });
+        match stop {
+            StopReason::Guard { guard } if w.guards(mode)[guard].kind == GuardKind::Reset => {
+                if (mode, guard) == w.section_guard() {
+                    break;
+                }
+                mode = w.reset(mode, guard, &x, &mut buf);
+                x.copy_from_slice(&buf);
+            }
+            _ => return None,
+        }
+    }
+    (supported && v.samples > 0).then_some(v)
+}
+
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     if !(a.tol.is_finite() && a.tol > 0.0) {
         return Err(InputError(format!("--tol: {} must be a positive number", a.tol)).into());
@@ -128,6 +207,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
                     "stable": fp.stable,
                     "residual": fp.residual,
                     "iterations": fp.iterations,
+                    "validity": validity(&m, fp).map(|v| v.json()),
                 })
             })
             .collect();
@@ -196,6 +276,35 @@ fn print_fixed_point(m: &BuiltModel, f: &Found) {
             l.im,
             l.modulus()
         );
+    }
+    if let Some(v) = validity(m, fp) {
+        crate::outln!(
+            "  validity     {}: normal force ≥ {:.4}, friction needed ≤ {:.4}{}",
+            if v.valid() { "ok" } else { "FLAGGED" },
+            v.min_normal_force,
+            v.max_friction_required,
+            v.min_knee_torque
+                .map(|k| format!(", knee-lock torque ≥ {k:.4}"))
+                .unwrap_or_default()
+        );
+        for (flag, what) in [
+            (
+                v.normal_force_negative,
+                "the stance foot would lift off (normal force < 0)",
+            ),
+            (
+                v.knee_unlocks,
+                "a locked knee would unlock (lock torque < 0)",
+            ),
+            (
+                v.swing_foot_scuffs,
+                "the swing foot scuffs after mid-stance",
+            ),
+        ] {
+            if flag {
+                crate::outln!("    flag: {what}");
+            }
+        }
     }
     crate::outln!(
         "  residual ‖P(x) − x‖∞ = {:.3e} after {} Newton iterations",
