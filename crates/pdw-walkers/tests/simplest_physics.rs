@@ -277,8 +277,6 @@ fn registry_lists_models_and_rejects_unknown_names() {
 /// law for the point-mass hip on massless legs).
 #[test]
 fn ground_reaction_is_hip_mass_times_acceleration_minus_gravity() {
-    use pdw_hybrid::HybridSystem;
-    use pdw_walkers::Walker;
     let gamma = 0.009;
     let w = pdw_walkers::build("simplest", &[("slope", gamma)]).unwrap();
     let hip_vel = |x: &[f64]| [-x[0].cos() * x[1], -x[0].sin() * x[1]];
