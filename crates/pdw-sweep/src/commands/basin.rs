@@ -148,6 +148,18 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(2));
     };
     let fp = &gait.fp;
+    // Strides a perturbation of 1e-2 needs to shrink below the 1e-6 gait tolerance at the slowest
+    // multiplier: near a bifurcation (|λ| → 1) the default budget labels converging cells `timeout`.
+    if let Some(lmax) = fp.multipliers.first().map(|l| l.modulus()) {
+        let needed = ((1e-4f64).ln() / lmax.ln()).ceil();
+        if lmax < 1.0 && needed > f64::from(a.max_strides) {
+            eprintln!(
+                "warning: the gait's slowest multiplier has |λ| = {lmax:.4}; cells converge in about \
+                 {needed} strides, more than --max-strides {}: expect `timeout` where the gait is slow",
+                a.max_strides
+            );
+        }
+    }
     let (ix, xr) = xa.unwrap_or_else(|| (0, default_axis(names[0], fp.section[0])));
     let (iy, yr) = ya.unwrap_or_else(|| (1, default_axis(names[1], fp.section[1])));
     if ix == iy {
