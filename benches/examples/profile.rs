@@ -1,0 +1,161 @@
+//! A small, fixed workload for profilers (`valgrind --tool=callgrind`, `perf record`):
+//!
+//! - `profile basin N [THREADS]`: the simplest walker's basin at γ = 0.009 on an N × N grid over
+//!   θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100 strides, default engine options
+//!   (`profile basin-dyn N [THREADS]`: the same model behind `Box<dyn Walker>`, as the CLI);
+//! - `profile stride N [TOL] [dopri5|dop853]`: N scalar strides of the simplest walker from its
+//!   stable fixed point, one reused integrator (default DOP853 at 1e-10);
+//! - `profile batch N [TOL] [dopri5|dop853] [LANES]`: N strides from perturbed copies of the
+//!   fixed point through the serial lockstep engine (default 64 lanes);
+//! - `profile compass-stride N [TOL] [METHOD]`, `profile compass-batch N [TOL] [METHOD] [LANES]`:
+//!   the same for the compass gait (Goswami preset, 3°) from its fixed point.
+//!
+//! Prints the work done, so that an instruction count can be turned into a per-stride cost.
+
+use std::time::Instant;
+
+use pdw_hybrid::{Integrator, Options};
+use pdw_limit::{
+    classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem,
+    NewtonOptions, Outcome, StrideMap,
+};
+use pdw_walkers::compass::{Compass, CompassParams};
+use pdw_walkers::simplest::{GarciaGait, Simplest, SimplestParams};
+use pdw_walkers::Walker;
+
+const GAMMA: f64 = 0.009;
+
+fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> T {
+    args.get(i).and_then(|s| s.parse().ok()).unwrap_or(default)
+}
+
+fn method(args: &[String], i: usize, tol: f64) -> Options {
+    match args.get(i).map(String::as_str) {
+        Some("dopri5") => Options::dopri5(tol),
+        _ => Options::dop853(tol),
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let sys = Simplest::new(SimplestParams {
+        slope: GAMMA,
+        ..SimplestParams::default()
+    })
+    .expect("valid parameters");
+    let fp_map = StrideMap::new(&sys, Options::dop853(1e-14)).expect("valid options");
+    let fp = find_fixed_point(
+        &fp_map,
+        &GarciaGait::LongPeriod.section_guess(GAMMA),
+        &NewtonOptions::default(),
+    )
+    .expect("fixed point")
+    .section;
+    let what = args.first().map(String::as_str).unwrap_or("basin");
+    let t0 = Instant::now();
+    match what {
+        "stride" => {
+            let n: usize = arg(&args, 1, 2000);
+            let opts = method(&args, 3, arg(&args, 2, 1e-10));
+            let map = StrideMap::new(&sys, opts).expect("valid options");
+            let mut integ = Integrator::new(4, opts).expect("valid options");
+            let mut acc = 0.0;
+            for _ in 0..n {
+                acc += map.stride_with(&mut integ, &fp).expect("stride").period;
+            }
+            let s = integ.stats();
+            println!(
+                "{n} scalar strides ({:?}): {:.3} µs/stride, mean period {:.6}, {} accepted, {} rejected, {} rhs",
+                opts.method,
+                t0.elapsed().as_secs_f64() * 1e6 / n as f64,
+                acc / n as f64,
+                s.accepted,
+                s.rejected,
+                s.rhs_evals
+            );
+        }
+        "compass-stride" | "compass-batch" => {
+            let n: usize = arg(&args, 1, 2000);
+            let opts = method(&args, 3, arg(&args, 2, 1e-10));
+            let lanes: usize = arg(&args, 4, 64);
+            let sys = Compass::new(CompassParams::default()).expect("valid parameters");
+            let fp_map = StrideMap::new(&sys, Options::dop853(1e-14)).expect("valid options");
+            let guess = sys.gait_guesses()[0].section.clone();
+            let s0 = find_fixed_point(&fp_map, &guess, &NewtonOptions::default())
+                .expect("fixed point")
+                .section;
+            let map = StrideMap::new(&sys, opts).expect("valid options");
+            let t0 = Instant::now();
+            if what == "compass-stride" {
+                let mut integ = Integrator::new(4, opts).expect("valid options");
+                for _ in 0..n {
+                    map.stride_with(&mut integ, &s0).expect("stride");
+                }
+            } else {
+                let states = vec![s0.clone(); n];
+                map.strides(&states, lanes).expect("strides");
+            }
+            println!(
+                "{n} compass strides ({what}, {:?}): {:.3} µs/stride",
+                opts.method,
+                t0.elapsed().as_secs_f64() * 1e6 / n as f64
+            );
+        }
+        "batch" => {
+            let n: usize = arg(&args, 1, 8192);
+            let opts = method(&args, 3, arg(&args, 2, 1e-10));
+            let lanes: usize = arg(&args, 4, 64);
+            let map = StrideMap::new(&sys, opts).expect("valid options");
+            let states: Vec<Vec<f64>> = (0..n)
+                .map(|i| {
+                    let e = 1e-4 * ((i as f64 * 0.618_034).fract() - 0.5);
+                    vec![fp[0] * (1.0 + e), fp[1] * (1.0 - e)]
+                })
+                .collect();
+            let res = map.strides(&states, lanes).expect("strides");
+            println!(
+                "{n} batched strides ({:?}, {lanes} lanes): {:.3} µs/lane-stride, {} ok",
+                opts.method,
+                t0.elapsed().as_secs_f64() * 1e6 / n as f64,
+                res.iter().filter(|s| s.outcome.is_ok()).count()
+            );
+        }
+        _ => {
+            let n: usize = arg(&args, 1, 60);
+            let threads: usize = arg(&args, 2, 1);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool");
+            // `basin-dyn`: the model behind `Box<dyn Walker>` from the registry (as the CLI).
+            let boxed = pdw_walkers::build("simplest", &[("slope", GAMMA)]).expect("model");
+            let fall = |code: u8| Outcome::from_fall_name(sys.fall_name(code));
+            let problem = BasinProblem::new(&sys, fp.clone(), &fall);
+            let problem_dyn = BasinProblem::new(&*boxed, fp.clone(), &fall);
+            let cells = grid_cells(
+                &fp,
+                0,
+                &linspace(0.15, 0.25, n),
+                1,
+                &linspace(-0.25, -0.15, n),
+            );
+            let opts = BasinOptions::default();
+            let res = if what == "basin-dyn" {
+                classify_cells(&problem_dyn, &cells, &opts, &pool, &|_| {})
+            } else {
+                classify_cells(&problem, &cells, &opts, &pool, &|_| {})
+            }
+            .expect("basin");
+            let secs = t0.elapsed().as_secs_f64();
+            let strides: usize = res.iter().map(|c| usize::from(c.strides)).sum();
+            println!(
+                "{what} {n}x{n} on {threads} threads: {:.3} s, {:.0} cells/s, {strides} lane-strides, \
+                 {:.0} lane-strides/s, {} gait cells",
+                secs,
+                cells.len() as f64 / secs,
+                strides as f64 / secs,
+                res.iter().filter(|c| c.outcome() == Outcome::Gait).count()
+            );
+        }
+    }
+}
