@@ -185,17 +185,6 @@ pub fn parse_guess(s: &str) -> Result<Vec<f64>, InputError> {
     s.split(',').map(|t| parse_f64(t, "--guess")).collect()
 }
 
-/// `linspace` with both ends included (n ≥ 1; n = 1 gives the midpoint).
-pub fn linspace(lo: f64, hi: f64, n: usize) -> Vec<f64> {
-    if n == 1 {
-        return vec![0.5 * (lo + hi)];
-    }
-    let step = (hi - lo) / (n - 1) as f64;
-    (0..n)
-        .map(|i| if i + 1 == n { hi } else { lo + step * i as f64 })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -236,14 +225,5 @@ mod tests {
         assert_eq!(parse_assignment("mass=2.5").unwrap(), ("mass".into(), 2.5));
         assert!(parse_assignment("=2").is_err());
         assert_eq!(parse_guess("0.2,-0.2").unwrap(), vec![0.2, -0.2]);
-    }
-
-    #[test]
-    fn linspace_is_inclusive() {
-        let v = linspace(0.15, 0.25, 11);
-        assert_eq!(v.len(), 11);
-        assert_eq!(v[0], 0.15);
-        assert_eq!(v[10], 0.25);
-        assert!((v[5] - 0.2).abs() < 1e-15);
     }
 }

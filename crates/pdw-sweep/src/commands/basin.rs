@@ -180,8 +180,8 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         }
         base[*i] = *v;
     }
-    let xs = args::linspace(xr.lo, xr.hi, nx);
-    let ys = args::linspace(yr.lo, yr.hi, ny);
+    let xs = pdw_limit::basin::linspace(xr.lo, xr.hi, nx);
+    let ys = pdw_limit::basin::linspace(yr.lo, yr.hi, ny);
 
     let opts = BasinOptions {
         max_strides: a.max_strides as u16,

@@ -130,7 +130,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         }
     }
     // brute-force orbit diagram over the N values
-    let params = args::linspace(sw.lo, sw.hi, sw.n);
+    let params = pdw_limit::basin::linspace(sw.lo, sw.hi, sw.n);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     let oo = OrbitOptions {
         transient: 300,
