@@ -79,12 +79,9 @@ pub const FALL_FORWARD: u8 = 2;
 /// Mass (kg) of the fictitious prismatic base links of the floating chains used for impacts.
 pub const FLOATING_BASE_MASS: f64 = 1e-30;
 
-const GUARDS: [GuardSpec; 4] = [
-    GuardSpec {
-        name: "heel_strike",
-        crossing: Crossing::Falling,
-        kind: GuardKind::Reset,
-    },
+/// The fall guards shared by the chain walkers (compass, kneed, seed5), in this order: the
+/// stance leg reverses, the hip reaches the ground behind, the hip reaches the ground ahead.
+pub(crate) const FALL_GUARDS: [GuardSpec; 3] = [
     GuardSpec {
         name: "stance_reverses",
         crossing: Crossing::Rising,
@@ -100,6 +97,17 @@ const GUARDS: [GuardSpec; 4] = [
         crossing: Crossing::Falling,
         kind: GuardKind::Terminal(FALL_FORWARD),
     },
+];
+
+const GUARDS: [GuardSpec; 4] = [
+    GuardSpec {
+        name: "heel_strike",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Reset,
+    },
+    FALL_GUARDS[0],
+    FALL_GUARDS[1],
+    FALL_GUARDS[2],
 ];
 
 const STATE_NAMES: [&str; 4] = ["stance", "hip", "stance_rate", "hip_rate"];

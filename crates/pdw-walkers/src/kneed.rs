@@ -62,7 +62,7 @@
 
 use crate::compass::{
     chain_energy, check_closed_open, check_positive, check_slope, floating_chain, floating_impact,
-    soa_param_error, with_workspace, ConstraintForces, HeelStrike, StepFlags,
+    soa_param_error, with_workspace, ConstraintForces, HeelStrike, StepFlags, FALL_GUARDS,
 };
 use crate::error::WalkerError;
 use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
@@ -84,24 +84,6 @@ pub const FALL_BACKWARD: u8 = 1;
 pub const FALL_FORWARD: u8 = 2;
 /// Fall code: the swing foot hits the ground before the knee locked.
 pub const FALL_KNEE_BENT: u8 = 3;
-
-const FALL_GUARDS: [GuardSpec; 3] = [
-    GuardSpec {
-        name: "stance_reverses",
-        crossing: Crossing::Rising,
-        kind: GuardKind::Terminal(FALL_BACKWARD),
-    },
-    GuardSpec {
-        name: "hip_on_ground_behind",
-        crossing: Crossing::Rising,
-        kind: GuardKind::Terminal(FALL_BACKWARD),
-    },
-    GuardSpec {
-        name: "hip_on_ground_ahead",
-        crossing: Crossing::Falling,
-        kind: GuardKind::Terminal(FALL_FORWARD),
-    },
-];
 
 const GUARDS_UNLOCKED: [GuardSpec; 5] = [
     GuardSpec {

@@ -60,7 +60,7 @@
 
 use crate::compass::{
     chain_energy, check_closed_open, check_positive, check_slope, floating_chain, floating_impact,
-    soa_param_error, with_workspace, ConstraintForces, HeelStrike, StepFlags,
+    soa_param_error, with_workspace, ConstraintForces, HeelStrike, StepFlags, FALL_GUARDS,
 };
 use crate::error::WalkerError;
 use crate::kneed::point_mass_link;
@@ -84,24 +84,6 @@ pub const FALL_FORWARD: u8 = 2;
 /// Fall code: the swing foot struck the ground before the swing knee locked.
 pub const FALL_KNEE_BENT: u8 = 3;
 
-const FALLS: [GuardSpec; 3] = [
-    GuardSpec {
-        name: "stance_reverses",
-        crossing: Crossing::Rising,
-        kind: GuardKind::Terminal(FALL_BACKWARD),
-    },
-    GuardSpec {
-        name: "hip_on_ground_behind",
-        crossing: Crossing::Rising,
-        kind: GuardKind::Terminal(FALL_BACKWARD),
-    },
-    GuardSpec {
-        name: "hip_on_ground_ahead",
-        crossing: Crossing::Falling,
-        kind: GuardKind::Terminal(FALL_FORWARD),
-    },
-];
-
 const GUARDS_FREE: [GuardSpec; 5] = [
     GuardSpec {
         name: "knee_strike",
@@ -113,9 +95,9 @@ const GUARDS_FREE: [GuardSpec; 5] = [
         crossing: Crossing::Falling,
         kind: GuardKind::Terminal(FALL_KNEE_BENT),
     },
-    FALLS[0],
-    FALLS[1],
-    FALLS[2],
+    FALL_GUARDS[0],
+    FALL_GUARDS[1],
+    FALL_GUARDS[2],
 ];
 
 const GUARDS_LOCKED: [GuardSpec; 4] = [
@@ -124,9 +106,9 @@ const GUARDS_LOCKED: [GuardSpec; 4] = [
         crossing: Crossing::Falling,
         kind: GuardKind::Reset,
     },
-    FALLS[0],
-    FALLS[1],
-    FALLS[2],
+    FALL_GUARDS[0],
+    FALL_GUARDS[1],
+    FALL_GUARDS[2],
 ];
 
 const STATE_NAMES: [&str; 8] = [
