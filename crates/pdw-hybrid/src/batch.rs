@@ -33,7 +33,7 @@ use rayon::prelude::*;
 use crate::engine::{self, After, Ctl, LaneScratch, Store};
 use crate::options::{Options, Stats, StopReason};
 use crate::tableau::Tableau;
-use crate::{HybridError, HybridSystem, Integrator};
+use crate::{HybridError, HybridSystem, Integrator, Scratch};
 
 /// What a lane does after a stop.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,12 +58,13 @@ pub trait LaneDriver<S: HybridSystem + ?Sized>: Sync {
         lane: &mut Self::Lane,
         x: &mut [f64],
     ) -> (usize, f64);
-    /// Called when the lane stops. The driver may rewrite x (apply a reset) and return
+    /// Called when the lane stops (`ws`: the lane's model scratch, for resets). The driver may rewrite x (apply a reset) and return
     /// Control::Continue, or return Control::Finish after which `finish` is called.
     #[allow(clippy::too_many_arguments)]
     fn on_stop(
         &self,
         sys: &S,
+        ws: &mut Scratch,
         item: &Self::Item,
         lane: &mut Self::Lane,
         stop: StopReason,
@@ -149,7 +150,7 @@ where
     loop {
         check_mode(sys, mode)?;
         let stop = integ.integrate(sys, mode, &mut t, &mut x, t_end);
-        match driver.on_stop(sys, item, &mut lane, stop, mode, t, &mut x) {
+        match driver.on_stop(sys, integ.scratch(), item, &mut lane, stop, mode, t, &mut x) {
             Control::Continue { mode: m, t_end: te } => {
                 mode = m;
                 t_end = te;
@@ -361,7 +362,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                             d,
                             stride,
                         );
-                        self.sys.flow_batch(m, xv, kv);
+                        self.sys.flow_batch(&mut self.sc.ev.model, m, xv, kv);
                     }
                 }
             }
@@ -391,7 +392,13 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                         );
                         for k in 0..self.sys.guards(m).len() {
                             let col = (k * m_cols + i) * stride;
-                            self.sys.guard_batch(m, k, xv, &mut gs[col + a..col + b]);
+                            self.sys.guard_batch(
+                                &mut self.sc.ev.model,
+                                m,
+                                k,
+                                xv,
+                                &mut gs[col + a..col + b],
+                            );
                         }
                     }
                 }
@@ -480,6 +487,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             let item = &self.items[i];
             let ctrl = self.driver.on_stop(
                 self.sys,
+                &mut self.sc.ev.model,
                 item,
                 &mut self.lane[l],
                 reason,

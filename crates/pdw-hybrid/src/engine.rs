@@ -528,7 +528,7 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
     if !sc.xg.iter().all(|v| v.is_finite()) {
         return Some(StopReason::NonFinite);
     }
-    sys.flow(mode, &sc.xg, &mut sc.fg);
+    sys.flow(&mut sc.ev.model, mode, &sc.xg, &mut sc.fg);
     ctl.stats.rhs_evals += 1;
     Store::scatter(&mut st.k, stride, l, &sc.fg);
     if !sc.fg.iter().all(|v| v.is_finite()) {
@@ -544,7 +544,7 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
     ctl.h = h.min(opts.h_max);
     let ng = sys.guards(mode).len();
     for k in 0..ng {
-        let g = sys.guard(mode, k, &sc.xg);
+        let g = sys.guard(&mut sc.ev.model, mode, k, &sc.xg);
         st.g[k * stride + l] = if g.abs() <= sys.guard_tolerance(mode, k) {
             0.0
         } else {
@@ -583,7 +583,7 @@ fn initial_step<S: HybridSystem + ?Sized>(
         *y = x + h * f;
     }
     let mut f1 = std::mem::take(&mut sc.ev.f1);
-    sys.flow(mode, &sc.ytmp, &mut f1);
+    sys.flow(&mut sc.ev.model, mode, &sc.ytmp, &mut f1);
     ctl.stats.rhs_evals += 1;
     let mut der2 = 0.0;
     for ((&a, &b), &x) in f1.iter().zip(&sc.fg).zip(&sc.xg) {
@@ -777,7 +777,7 @@ fn guard_at_end<S: HybridSystem + ?Sized>(
         Store::gather(&st.x, stride, l, &mut sc.xg);
         Store::gather(&st.k, stride, l, &mut sc.fg);
         let mut grad = vec![0.0; st.dim];
-        sys.guard_gradient(mode, k, &sc.xg, &mut grad);
+        sys.guard_gradient(&mut sc.ev.model, mode, k, &sc.xg, &mut grad);
         let gdot: f64 = grad.iter().zip(&sc.fg).map(|(a, b)| a * b).sum();
         let into = match spec.crossing {
             Crossing::Rising => gdot > 0.0,

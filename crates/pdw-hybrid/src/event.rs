@@ -40,7 +40,7 @@
 
 use crate::engine::Store;
 use crate::options::{Method, Stats};
-use crate::system::Crossing;
+use crate::system::{Crossing, Scratch};
 use crate::tableau;
 use crate::HybridSystem;
 
@@ -87,6 +87,8 @@ pub(crate) struct EventScratch {
     /// `(3 × dim)` DOP853's extra dense-output stages.
     pub ext: Vec<f64>,
     pub ytmp: Vec<f64>,
+    /// The model's own scratch, passed to every model call made for this lane.
+    pub model: Scratch,
 }
 
 impl EventScratch {
@@ -103,6 +105,7 @@ impl EventScratch {
             cont: vec![0.0; 8 * d],
             ext: vec![0.0; 3 * d],
             ytmp: vec![0.0; d],
+            model: Scratch::new(),
         }
     }
 }
@@ -236,7 +239,7 @@ fn build_dense<S: HybridSystem + ?Sized>(
                     sc.ytmp[j] = sc.x0[j] + h * s;
                 }
                 let (_, rest) = sc.ext.split_at_mut(r * d);
-                sys.flow(mode, &sc.ytmp, &mut rest[..d]);
+                sys.flow(&mut sc.model, mode, &sc.ytmp, &mut rest[..d]);
                 stats.rhs_evals += 1;
             }
             hermite_coefficients(sc, h);
@@ -267,6 +270,7 @@ fn build_dense<S: HybridSystem + ?Sized>(
 #[allow(clippy::too_many_arguments)]
 fn refine<S: HybridSystem + ?Sized>(
     sys: &S,
+    ws: &mut Scratch,
     mode: usize,
     k: usize,
     dense: &Dense<'_>,
@@ -299,7 +303,7 @@ fn refine<S: HybridSystem + ?Sized>(
             }
         }
         dense.eval(c, xr);
-        let fc = sig * sys.guard(mode, k, xr);
+        let fc = sig * sys.guard(ws, mode, k, xr);
         if fc.is_nan() {
             break;
         }
@@ -396,6 +400,7 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
         xbest,
         gv,
         cont,
+        model,
         ..
     } = sc;
     let dense = Dense {
@@ -411,7 +416,7 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
         for i in 1..=N_SAMPLES {
             dense.eval(i as f64 * inv, xs);
             for k in 0..ng {
-                gv[k * M + i] = sys.guard(mode, k, xs);
+                gv[k * M + i] = sys.guard(model, mode, k, xs);
             }
         }
     }
@@ -436,6 +441,7 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
             };
             let root = refine(
                 sys,
+                model,
                 mode,
                 k,
                 &dense,

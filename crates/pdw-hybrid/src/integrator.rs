@@ -59,6 +59,12 @@ impl Integrator {
         self.ctl.stats
     }
 
+    /// The model scratch this integrator passes to every model call (for the caller's own
+    /// model calls between integrations, e.g. resets, so that they allocate nothing either).
+    pub fn scratch(&mut self) -> &mut crate::Scratch {
+        &mut self.sc.ev.model
+    }
+
     /// Zero the counters.
     pub fn reset_stats(&mut self) {
         self.ctl.stats = Stats::default();
@@ -195,7 +201,12 @@ impl Integrator {
             } else {
                 &self.st.y
             };
-            sys.flow(mode, &input[..d], &mut self.st.k[q * d..(q + 1) * d]);
+            sys.flow(
+                &mut self.sc.ev.model,
+                mode,
+                &input[..d],
+                &mut self.st.k[q * d..(q + 1) * d],
+            );
         }
         engine::error_norm(&mut self.st, self.opts.method, tab, &self.opts, 1);
         // Guard values at the Hermite samples and at x₁ (the batch does this column-wise).
@@ -210,7 +221,7 @@ impl Integrator {
                     &self.st.xn
                 };
                 for k in 0..ng {
-                    self.st.gs[k * m + i] = sys.guard(mode, k, &src[..d]);
+                    self.st.gs[k * m + i] = sys.guard(&mut self.sc.ev.model, mode, k, &src[..d]);
                 }
             }
         }

@@ -7,6 +7,51 @@
 //! guard (a fall), ends the trajectory.
 
 use faer::{MatMut, MatRef};
+use std::any::Any;
+
+/// A model's scratch space (Pinocchio's `Data`, MuJoCo's `mjData`): the buffers a model needs to
+/// evaluate its flow, guards, resets and Jacobians without allocating.
+///
+/// Callers own one per thread or per batch, created empty ([`Scratch::new`]), and pass it to
+/// every call of the [`HybridSystem`] methods; the model fills it with its own buffers on first
+/// use ([`Scratch::get_or_init`]) and reuses them afterwards. The model itself stays immutable
+/// and is shared by all threads. Models that need no buffers ignore it.
+#[derive(Default)]
+pub struct Scratch(Option<Box<dyn Any + Send>>);
+
+impl Scratch {
+    /// An empty scratch; the first model call that needs buffers fills it.
+    pub fn new() -> Self {
+        Self(None)
+    }
+
+    /// The buffers of type `T` held here, created by `init` when the scratch is empty, holds
+    /// another type, or holds a `T` for which `fits` is false (e.g. sized for another model).
+    pub fn get_or_init<T: Any + Send>(
+        &mut self,
+        init: impl FnOnce() -> T,
+        fits: impl FnOnce(&T) -> bool,
+    ) -> &mut T {
+        let ok = matches!(self.0.as_ref().and_then(|b| b.downcast_ref::<T>()), Some(t) if fits(t));
+        if !ok {
+            self.0 = Some(Box::new(init()));
+        }
+        match self.0.as_mut().and_then(|b| b.downcast_mut::<T>()) {
+            Some(t) => t,
+            None => unreachable!("scratch was just set to this type"),
+        }
+    }
+}
+
+impl std::fmt::Debug for Scratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() {
+            "Scratch(filled)"
+        } else {
+            "Scratch(empty)"
+        })
+    }
+}
 
 /// Direction in which a guard function must cross zero to count as an event.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,13 +100,19 @@ pub trait HybridSystem: Send + Sync {
     fn guards(&self, mode: usize) -> &[GuardSpec];
 
     /// Vector field: `dx = f_mode(x)`.
-    fn flow(&self, mode: usize, x: &[f64], dx: &mut [f64]);
+    fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]);
 
     /// Batched vector field over lanes that are all in `mode`: `x`, `dx` are `(lanes × dim)`.
     ///
     /// The default gathers each lane and calls [`flow`](HybridSystem::flow). Models override it
     /// with a vectorised loop; an override must give, per lane, exactly the same bits as `flow`.
-    fn flow_batch(&self, mode: usize, x: MatRef<'_, f64>, mut dx: MatMut<'_, f64>) {
+    fn flow_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        mut dx: MatMut<'_, f64>,
+    ) {
         let d = self.dim();
         let lanes = x.nrows();
         let (mut sx, mut sdx) = ([0.0; 16], [0.0; 16]);
@@ -77,7 +128,7 @@ pub trait HybridSystem: Send + Sync {
             for j in 0..d {
                 xi[j] = x[(l, j)];
             }
-            self.flow(mode, xi, dxi);
+            self.flow(ws, mode, xi, dxi);
             for j in 0..d {
                 dx[(l, j)] = dxi[j];
             }
@@ -85,14 +136,21 @@ pub trait HybridSystem: Send + Sync {
     }
 
     /// Value of guard `k` of `mode` at `x`.
-    fn guard(&self, mode: usize, k: usize, x: &[f64]) -> f64;
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64;
 
     /// Batched guard values over lanes that are all in `mode`: `x` is `(lanes × dim)`,
     /// `out[l] = g_k(x_l)` for every lane.
     ///
     /// The default gathers each lane and calls [`guard`](HybridSystem::guard). An override must
     /// give, per lane, exactly the same bits as `guard`.
-    fn guard_batch(&self, mode: usize, k: usize, x: MatRef<'_, f64>, out: &mut [f64]) {
+    fn guard_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: MatRef<'_, f64>,
+        out: &mut [f64],
+    ) {
         let d = self.dim();
         let mut sx = [0.0; 16];
         let mut hx = Vec::new();
@@ -106,7 +164,7 @@ pub trait HybridSystem: Send + Sync {
             for (j, v) in xi.iter_mut().enumerate() {
                 *v = x[(l, j)];
             }
-            *o = self.guard(mode, k, xi);
+            *o = self.guard(ws, mode, k, xi);
         }
     }
 
@@ -130,13 +188,13 @@ pub trait HybridSystem: Send + Sync {
 
     /// Reset map of guard `k` of `mode`: writes `x⁺` into `out`, returns the new mode.
     /// Only called for guards of kind [`GuardKind::Reset`].
-    fn reset(&self, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize;
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize;
 
     /// Jacobian of the flow, `jac[i*d + j] = ∂f_i/∂x_j` (row-major d×d).
     ///
     /// Default: central differences with a step of ε^(1/3)·max(1, |x_j|) (truncation and
     /// roundoff both ~1e-10 relative). Models with closed-form Jacobians override it.
-    fn flow_jacobian(&self, mode: usize, x: &[f64], jac: &mut [f64]) {
+    fn flow_jacobian(&self, ws: &mut Scratch, mode: usize, x: &[f64], jac: &mut [f64]) {
         let d = self.dim();
         let mut xp = x.to_vec();
         let mut fp = vec![0.0; d];
@@ -144,9 +202,9 @@ pub trait HybridSystem: Send + Sync {
         for j in 0..d {
             let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
             xp[j] = x[j] + h;
-            self.flow(mode, &xp, &mut fp);
+            self.flow(ws, mode, &xp, &mut fp);
             xp[j] = x[j] - h;
-            self.flow(mode, &xp, &mut fm);
+            self.flow(ws, mode, &xp, &mut fm);
             xp[j] = x[j];
             for i in 0..d {
                 jac[i * d + j] = (fp[i] - fm[i]) / (2.0 * h);
@@ -155,21 +213,21 @@ pub trait HybridSystem: Send + Sync {
     }
 
     /// Gradient of guard `k`: `grad[j] = ∂g/∂x_j`. Default: central differences.
-    fn guard_gradient(&self, mode: usize, k: usize, x: &[f64], grad: &mut [f64]) {
+    fn guard_gradient(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], grad: &mut [f64]) {
         let mut xp = x.to_vec();
         for j in 0..self.dim() {
             let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
             xp[j] = x[j] + h;
-            let gp = self.guard(mode, k, &xp);
+            let gp = self.guard(ws, mode, k, &xp);
             xp[j] = x[j] - h;
-            let gm = self.guard(mode, k, &xp);
+            let gm = self.guard(ws, mode, k, &xp);
             xp[j] = x[j];
             grad[j] = (gp - gm) / (2.0 * h);
         }
     }
 
     /// Jacobian of the reset map of guard `k`, row-major d×d. Default: central differences.
-    fn reset_jacobian(&self, mode: usize, k: usize, x: &[f64], jac: &mut [f64]) {
+    fn reset_jacobian(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], jac: &mut [f64]) {
         let d = self.dim();
         let mut xp = x.to_vec();
         let mut rp = vec![0.0; d];
@@ -177,9 +235,9 @@ pub trait HybridSystem: Send + Sync {
         for j in 0..d {
             let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
             xp[j] = x[j] + h;
-            self.reset(mode, k, &xp, &mut rp);
+            self.reset(ws, mode, k, &xp, &mut rp);
             xp[j] = x[j] - h;
-            self.reset(mode, k, &xp, &mut rm);
+            self.reset(ws, mode, k, &xp, &mut rm);
             xp[j] = x[j];
             for i in 0..d {
                 jac[i * d + j] = (rp[i] - rm[i]) / (2.0 * h);

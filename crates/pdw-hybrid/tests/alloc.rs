@@ -10,7 +10,7 @@ use std::cell::Cell;
 use common::*;
 use pdw_hybrid::{
     run_batch, BatchOptions, Control, Crossing, HybridSystem, Integrator, LaneDriver, Options,
-    StopReason,
+    Scratch, StopReason,
 };
 
 struct Counting;
@@ -79,6 +79,7 @@ impl<S: HybridSystem + ?Sized> LaneDriver<S> for Quiet {
     fn on_stop(
         &self,
         s: &S,
+        ws: &mut Scratch,
         _it: &(f64, f64),
         l: &mut u32,
         r: StopReason,
@@ -90,7 +91,7 @@ impl<S: HybridSystem + ?Sized> LaneDriver<S> for Quiet {
             StopReason::Guard { guard } => {
                 *l += 1;
                 let mut buf = [0.0; 2];
-                let m2 = s.reset(m, guard, x, &mut buf);
+                let m2 = s.reset(ws, m, guard, x, &mut buf);
                 x.copy_from_slice(&buf);
                 Control::Continue {
                     mode: m2,

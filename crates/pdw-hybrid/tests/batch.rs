@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use pdw_hybrid::{
     run_batch, run_batch_counted, run_batch_par, run_scalar, BatchOptions, Control, GuardKind,
-    HybridError, HybridSystem, Integrator, LaneDriver, Options, StopReason,
+    HybridError, HybridSystem, Integrator, LaneDriver, Options, Scratch, StopReason,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -52,6 +52,7 @@ impl<S: HybridSystem + ?Sized> LaneDriver<S> for Bouncer {
     fn on_stop(
         &self,
         sys: &S,
+        ws: &mut Scratch,
         item: &Item,
         lane: &mut LaneLog,
         stop: StopReason,
@@ -63,7 +64,7 @@ impl<S: HybridSystem + ?Sized> LaneDriver<S> for Bouncer {
         match stop {
             StopReason::Guard { guard } if sys.guards(mode)[guard].kind == GuardKind::Reset => {
                 let mut xp = vec![0.0; x.len()];
-                let m = sys.reset(mode, guard, x, &mut xp);
+                let m = sys.reset(ws, mode, guard, x, &mut xp);
                 x.copy_from_slice(&xp);
                 lane.events += 1;
                 lane.times.push(t.to_bits());
@@ -295,7 +296,7 @@ fn soft_ball_contact_conserves_energy_across_mode_switches() {
         let r = integ.integrate(&sys, mode, &mut t, &mut x, 50.0);
         assert_eq!(r, StopReason::Guard { guard: 0 });
         let mut xp = [0.0; 2];
-        mode = sys.reset(mode, 0, &x, &mut xp);
+        mode = sys.reset(&mut Scratch::new(), mode, 0, &x, &mut xp);
         x = xp;
         let e = energy(mode, &x);
         assert!(((e - e0) / e0).abs() < 1e-10, "energy {e} vs {e0}");

@@ -5,7 +5,7 @@ mod common;
 use std::f64::consts::PI;
 
 use common::*;
-use pdw_hybrid::{Crossing, HybridSystem, Integrator, Options, StopReason};
+use pdw_hybrid::{Crossing, HybridSystem, Integrator, Options, Scratch, StopReason};
 
 fn run(
     sys: &dyn HybridSystem,
@@ -96,7 +96,7 @@ fn bouncing_ball_impact_times_match_closed_form() {
         );
         assert!(x[0] <= 0.0 && x[0] > -1e-13);
         let mut xp = [0.0; 2];
-        ball.reset(0, 0, &x, &mut xp);
+        ball.reset(&mut Scratch::new(), 0, 0, &x, &mut xp);
         x = xp;
         v *= e;
         expected += 2.0 * v / g;

@@ -51,7 +51,7 @@ use crate::error::LimitError;
 use crate::stride::MAX_EVENTS_PER_STRIDE;
 use pdw_hybrid::{
     run_batch_par, run_scalar_with, BatchOptions, Control, GuardKind, Integrator, LaneDriver,
-    Options, Section, StopReason,
+    Options, Scratch, Section, StopReason,
 };
 
 /// Outcome of a cell. The `u8` codes are part of the file format and never change.
@@ -505,6 +505,7 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
     fn on_stop(
         &self,
         sys: &S,
+        ws: &mut Scratch,
         _item: &Vec<f64>,
         lane: &mut BasinLane,
         stop: StopReason,
@@ -518,7 +519,7 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
         let outcome = match stop {
             StopReason::Guard { guard } => match sys.guards(mode)[guard].kind {
                 GuardKind::Reset => {
-                    let new_mode = sys.reset(mode, guard, x, &mut lane.buf);
+                    let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
                     if (mode, guard) == self.section_guard {
                         lane.events = 0;
                         lane.strides = lane.strides.saturating_add(1);

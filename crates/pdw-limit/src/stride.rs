@@ -15,7 +15,7 @@
 use crate::error::LimitError;
 use pdw_hybrid::{
     run_batch, run_batch_par, run_scalar_with, BatchOptions, Control, GuardKind, HybridSystem,
-    Integrator, LaneDriver, Options, Section, StopReason,
+    Integrator, LaneDriver, Options, Scratch, Section, StopReason,
 };
 use std::fmt;
 
@@ -119,6 +119,7 @@ impl<H: HybridSystem + ?Sized> LaneDriver<H> for EventDriver {
     fn on_stop(
         &self,
         sys: &H,
+        ws: &mut Scratch,
         _item: &Vec<f64>,
         lane: &mut EventLane,
         stop: StopReason,
@@ -129,7 +130,7 @@ impl<H: HybridSystem + ?Sized> LaneDriver<H> for EventDriver {
         let outcome = match stop {
             StopReason::Guard { guard } => match sys.guards(mode)[guard].kind {
                 GuardKind::Reset => {
-                    let new_mode = sys.reset(mode, guard, x, &mut lane.buf);
+                    let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
                     if (mode, guard) == self.section_guard {
                         lane.pre = x.to_vec();
                         x.copy_from_slice(&lane.buf);

@@ -28,7 +28,7 @@
 //! reset uses `Ξ_P`, every other reset (e.g. a knee strike inside a stride) the full `Ξ`.
 //! Then `DP = DΠ(x⁺) · Ξ_P · Φ(T⁻) · DL(s)` in section coordinates (lift `L`, projection `Π`).
 
-use pdw_hybrid::{GuardSpec, HybridSystem};
+use pdw_hybrid::{GuardSpec, HybridSystem, Scratch};
 
 /// Variational extension of `sys` carrying `m` tangent columns.
 pub struct Variational<'a, S: ?Sized> {
@@ -68,8 +68,10 @@ impl<'a, S: HybridSystem + ?Sized> Variational<'a, S> {
 
     /// Event matrix (row-major `d × d`) of guard `k` of `mode` at the pre-event state `x`
     /// (length `d`): `Ξ` or, when `poincare`, `Ξ_P`. Returns the new mode and writes `x⁺`.
+    #[allow(clippy::too_many_arguments)]
     pub fn event_matrix(
         &self,
+        ws: &mut Scratch,
         mode: usize,
         k: usize,
         x: &[f64],
@@ -79,15 +81,15 @@ impl<'a, S: HybridSystem + ?Sized> Variational<'a, S> {
     ) -> usize {
         let d = self.d;
         let sys = self.sys;
-        let new_mode = sys.reset(mode, k, x, x_plus);
+        let new_mode = sys.reset(ws, mode, k, x, x_plus);
         let mut f_minus = vec![0.0; d];
         let mut f_plus = vec![0.0; d];
         let mut grad = vec![0.0; d];
         let mut dr = vec![0.0; d * d];
-        sys.flow(mode, x, &mut f_minus);
-        sys.flow(new_mode, x_plus, &mut f_plus);
-        sys.guard_gradient(mode, k, x, &mut grad);
-        sys.reset_jacobian(mode, k, x, &mut dr);
+        sys.flow(ws, mode, x, &mut f_minus);
+        sys.flow(ws, new_mode, x_plus, &mut f_plus);
+        sys.guard_gradient(ws, mode, k, x, &mut grad);
+        sys.reset_jacobian(ws, mode, k, x, &mut dr);
         let denom: f64 = grad.iter().zip(&f_minus).map(|(a, b)| a * b).sum();
         // v = (f⁺ or 0) − DR f⁻
         let mut v = vec![0.0; d];
@@ -117,11 +119,11 @@ impl<S: HybridSystem + ?Sized> HybridSystem for Variational<'_, S> {
         self.sys.guards(mode)
     }
 
-    fn flow(&self, mode: usize, z: &[f64], dz: &mut [f64]) {
+    fn flow(&self, ws: &mut Scratch, mode: usize, z: &[f64], dz: &mut [f64]) {
         let (d, m) = (self.d, self.m);
         let (x, phi) = z.split_at(d);
         let (dx, dphi) = dz.split_at_mut(d);
-        self.sys.flow(mode, x, dx);
+        self.sys.flow(ws, mode, x, dx);
         let mut stack = [0.0; 256];
         let mut heap = Vec::new();
         let jac: &mut [f64] = if d * d <= stack.len() {
@@ -130,7 +132,7 @@ impl<S: HybridSystem + ?Sized> HybridSystem for Variational<'_, S> {
             heap.resize(d * d, 0.0);
             &mut heap
         };
-        self.sys.flow_jacobian(mode, x, jac);
+        self.sys.flow_jacobian(ws, mode, x, jac);
         for i in 0..d {
             for j in 0..m {
                 let mut acc = 0.0;
@@ -142,20 +144,20 @@ impl<S: HybridSystem + ?Sized> HybridSystem for Variational<'_, S> {
         }
     }
 
-    fn guard(&self, mode: usize, k: usize, z: &[f64]) -> f64 {
-        self.sys.guard(mode, k, &z[..self.d])
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, z: &[f64]) -> f64 {
+        self.sys.guard(ws, mode, k, &z[..self.d])
     }
 
     fn admissible(&self, mode: usize, k: usize, z: &[f64]) -> bool {
         self.sys.admissible(mode, k, &z[..self.d])
     }
 
-    fn reset(&self, mode: usize, k: usize, z: &[f64], out: &mut [f64]) -> usize {
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, z: &[f64], out: &mut [f64]) -> usize {
         let (d, m) = (self.d, self.m);
         let poincare = self.poincare == Some((mode, k));
         let mut xi = vec![0.0; d * d];
         let (xo, phio) = out.split_at_mut(d);
-        let new_mode = self.event_matrix(mode, k, &z[..d], poincare, xo, &mut xi);
+        let new_mode = self.event_matrix(ws, mode, k, &z[..d], poincare, xo, &mut xi);
         let phi = &z[d..];
         for i in 0..d {
             for j in 0..m {

@@ -65,7 +65,7 @@
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_soa::{Chain, ChainBuilder, Link, Workspace};
 use std::cell::RefCell;
 use std::f64::consts::FRAC_PI_2;
@@ -402,7 +402,7 @@ impl HybridSystem for Compass {
         &GUARDS
     }
 
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         let qdd = self.accelerations(x);
         dx[0] = x[2];
         dx[1] = x[3];
@@ -410,7 +410,7 @@ impl HybridSystem for Compass {
         dx[3] = qdd[1];
     }
 
-    fn guard(&self, _mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
         match k {
             0 => self.swing_foot(x)[1],
             1 => x[2],
@@ -427,7 +427,14 @@ impl HybridSystem for Compass {
         }
     }
 
-    fn reset(&self, _mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         let mut v = [0.0; 4];
         self.heel_strike(x, &mut v);
         out[0] = x[0] + x[1];

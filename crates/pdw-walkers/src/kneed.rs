@@ -66,7 +66,7 @@ use crate::compass::{
 };
 use crate::error::WalkerError;
 use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_soa::{Chain, ChainBuilder, Link};
 use std::f64::consts::FRAC_PI_2;
 
@@ -477,12 +477,12 @@ impl HybridSystem for Kneed {
             &GUARDS_LOCKED
         }
     }
-    fn flow(&self, mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
         let (qdd, _) = self.accelerations(mode, x);
         dx[0..3].copy_from_slice(&x[3..6]);
         dx[3..6].copy_from_slice(&qdd);
     }
-    fn guard(&self, mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
         // index into the common tail (falls): mode 0 has two leading guards, mode 1 one
         let tail = if mode == UNLOCKED {
             k.checked_sub(2)
@@ -506,7 +506,14 @@ impl HybridSystem for Kneed {
             _ => true,
         }
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         if mode == UNLOCKED {
             let mut v = [0.0; 3];
             self.knee_strike(x, &mut v);

@@ -30,7 +30,7 @@
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Guard index of the spoke impact.
@@ -216,29 +216,43 @@ impl HybridSystem for Rimless {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &GUARDS
     }
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
         dx[1] = self.g / self.l * (x[0] + self.gamma).sin();
     }
-    fn guard(&self, _mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
         match k {
             0 => x[0] - self.alpha,
             1 => x[1],
             _ => x[0] + self.alpha,
         }
     }
-    fn reset(&self, _mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out[0] = x[0] - 2.0 * self.alpha;
         out[1] = (2.0 * self.alpha).cos() * x[1];
         0
     }
-    fn flow_jacobian(&self, _mode: usize, x: &[f64], jac: &mut [f64]) {
+    fn flow_jacobian(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], jac: &mut [f64]) {
         jac[0] = 0.0;
         jac[1] = 1.0;
         jac[2] = self.g / self.l * (x[0] + self.gamma).cos();
         jac[3] = 0.0;
     }
-    fn guard_gradient(&self, _mode: usize, k: usize, _x: &[f64], grad: &mut [f64]) {
+    fn guard_gradient(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        k: usize,
+        _x: &[f64],
+        grad: &mut [f64],
+    ) {
         if k == 1 {
             grad[0] = 0.0;
             grad[1] = 1.0;
@@ -247,7 +261,14 @@ impl HybridSystem for Rimless {
             grad[1] = 0.0;
         }
     }
-    fn reset_jacobian(&self, _mode: usize, _k: usize, _x: &[f64], jac: &mut [f64]) {
+    fn reset_jacobian(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        _x: &[f64],
+        jac: &mut [f64],
+    ) {
         jac[0] = 1.0;
         jac[1] = 0.0;
         jac[2] = 0.0;

@@ -65,7 +65,7 @@ use crate::compass::{
 use crate::error::WalkerError;
 use crate::kneed::point_mass_link;
 use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_soa::{Chain, ChainBuilder};
 use std::f64::consts::FRAC_PI_2;
 
@@ -467,12 +467,12 @@ impl HybridSystem for Seed5 {
             &GUARDS_LOCKED
         }
     }
-    fn flow(&self, mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
         let (qdd, _, _) = self.accelerations(mode, x);
         dx[0..4].copy_from_slice(&x[4..8]);
         dx[4..8].copy_from_slice(&qdd);
     }
-    fn guard(&self, mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
         let tail = if mode == SWING_KNEE_FREE {
             k.checked_sub(2)
         } else {
@@ -495,7 +495,14 @@ impl HybridSystem for Seed5 {
             _ => true,
         }
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         if mode == SWING_KNEE_FREE {
             let mut v = [0.0; 4];
             self.knee_strike(x, &mut v);
@@ -800,7 +807,7 @@ impl HybridSystem for Seed5Compliant {
             &COMPLIANT_GUARDS_DOUBLE
         }
     }
-    fn flow(&self, mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
         let (qdd, _, _, _) = self.accelerations(mode, x);
         dx[0..4].copy_from_slice(&x[4..8]);
         dx[4..8].copy_from_slice(&qdd);
@@ -816,7 +823,7 @@ impl HybridSystem for Seed5Compliant {
         }
         dx[12] = 0.0;
     }
-    fn guard(&self, mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
         match (mode, k) {
             (COMPLIANT_SINGLE, 0) => self.model.swing_foot(x)[1],
             (_, 0) => self.accelerations(mode, x).3[2],
@@ -831,7 +838,14 @@ impl HybridSystem for Seed5Compliant {
             true
         }
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out[..13].copy_from_slice(&x[..13]);
         if mode == COMPLIANT_SINGLE {
             out[10] = 0.0;

@@ -68,7 +68,7 @@ use crate::compass::{ConstraintForces, StepFlags};
 use crate::error::{check_open, WalkerError};
 use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
 use faer::{MatMut, MatRef};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::FRAC_PI_2;
 use wide::f64x4;
 
@@ -310,12 +310,12 @@ impl HybridSystem for Simplest {
         &GUARDS
     }
 
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         let (f, _) = rhs1(self.gamma, x);
         dx[..4].copy_from_slice(&f);
     }
 
-    fn flow_batch(&self, _mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
+    fn flow_batch(&self, _ws: &mut Scratch, _mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
         let lanes = x.nrows();
         let cols: Option<Vec<&[f64]>> = (0..4)
             .map(|j| x.col(j).try_as_col_major().map(|c| c.as_slice()))
@@ -377,7 +377,7 @@ impl HybridSystem for Simplest {
         }
     }
 
-    fn guard(&self, _mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
         match k {
             0 => x[2] - 2.0 * x[0],
             1 => x[1],
@@ -391,7 +391,14 @@ impl HybridSystem for Simplest {
         k != HEEL_STRIKE || x[0] < 0.0
     }
 
-    fn reset(&self, _mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         let (th, thd) = (x[0], x[1]);
         let c2 = (2.0 * th).cos();
         out[0] = -th;
@@ -403,7 +410,7 @@ impl HybridSystem for Simplest {
 
     /// Closed form: rows `(0,1,0,0)`, `(c,0,0,0)`, `(0,0,0,1)`,
     /// `(c + s sin φ, 2θ̇ sin φ, (θ̇² − c) cos φ, 0)` with `s, c = sin, cos(θ − γ)`.
-    fn flow_jacobian(&self, _mode: usize, x: &[f64], jac: &mut [f64]) {
+    fn flow_jacobian(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], jac: &mut [f64]) {
         let (f, [c, sp, cp]) = rhs1(self.gamma, x);
         let s = f[1];
         jac[..16].fill(0.0);
@@ -415,7 +422,14 @@ impl HybridSystem for Simplest {
         jac[3 * 4 + 2] = (x[1] * x[1] - c) * cp;
     }
 
-    fn guard_gradient(&self, _mode: usize, k: usize, _x: &[f64], grad: &mut [f64]) {
+    fn guard_gradient(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        k: usize,
+        _x: &[f64],
+        grad: &mut [f64],
+    ) {
         grad[..4].fill(0.0);
         match k {
             0 => {
@@ -428,7 +442,14 @@ impl HybridSystem for Simplest {
     }
 
     /// Closed form derivative of the jump map; only θ⁻ and θ̇⁻ enter (rank 2).
-    fn reset_jacobian(&self, _mode: usize, _k: usize, x: &[f64], jac: &mut [f64]) {
+    fn reset_jacobian(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        x: &[f64],
+        jac: &mut [f64],
+    ) {
         let (th, thd) = (x[0], x[1]);
         let (s2, c2) = (2.0 * th).sin_cos();
         jac[..16].fill(0.0);

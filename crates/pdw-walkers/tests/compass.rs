@@ -3,7 +3,7 @@
 //! kernel), conservation laws computed from point-mass positions and velocities, Garcia's
 //! simplest walker as the small-leg-mass limit.
 
-use pdw_hybrid::{HybridSystem, Integrator, Options, Section, StopReason};
+use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};
 use pdw_walkers::compass::{Compass, CompassParams, HEEL_STRIKE};
 use pdw_walkers::WalkerError;
 use rand::{Rng, SeedableRng};
@@ -140,7 +140,7 @@ fn vector_field_equals_goswami_closed_form() {
         for _ in 0..200 {
             let x = random_state(&mut rng);
             let mut dx = [0.0; 4];
-            w.flow(0, &x, &mut dx);
+            w.flow(&mut Scratch::new(), 0, &x, &mut dx);
             // θ_s = q₁ − γ, θ_ns = q₁ + q₂ − γ
             let g = params.slope;
             let th = [x[0] + x[1] - g, x[0] - g];
@@ -181,7 +181,10 @@ fn heel_strike_equals_goswami_impact_map() {
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     for x in heel_strike_states(&mut rng, 100) {
         let mut out = [0.0; 4];
-        assert_eq!(w.reset(0, HEEL_STRIKE, &x, &mut out), 0);
+        assert_eq!(
+            w.reset(&mut Scratch::new(), 0, HEEL_STRIKE, &x, &mut out),
+            0
+        );
         let alpha = 0.5 * x[1];
         let post = goswami_impact(&p, alpha, [x[2] + x[3], x[2]]);
         // after relabelling: new stance rate = θ̇_s⁺, new swing absolute rate = θ̇_ns⁺
@@ -234,7 +237,7 @@ fn impact_conserves_angular_momentum_about_contact_and_trailing_leg_about_hip() 
         );
         // the new contact point is at rest after the impact
         let mut post_state = [0.0; 4];
-        w.reset(0, HEEL_STRIKE, &x, &mut post_state);
+        w.reset(&mut Scratch::new(), 0, HEEL_STRIKE, &x, &mut post_state);
         // energy: T⁻ − T⁺ equals the impulse's work −½ Λ·v_c⁻ (plastic, v_c⁺ = 0)
         let vc = {
             let (q1, psi) = (x[0], x[0] + x[1]);
@@ -326,7 +329,7 @@ fn ground_reaction_equals_total_momentum_rate_minus_weight() {
     for _ in 0..50 {
         let x = random_state(&mut rng);
         let mut dx = [0.0; 4];
-        w.flow(0, &x, &mut dx);
+        w.flow(&mut Scratch::new(), 0, &x, &mut dx);
         // Σ m a by central differences in time of the point-mass velocities along the flow is
         // replaced by the exact second derivative: v(x + h ẋ) − v(x − h ẋ), h small.
         let h = 1e-6;
@@ -378,7 +381,7 @@ fn compass_tends_to_simplest_walker_as_leg_mass_vanishes() {
             let phdd = thdd + thd * thd * ph.sin() - (th - gamma).cos() * ph.sin();
             let _ = phd;
             let mut dx = [0.0; 4];
-            w.flow(0, x, &mut dx);
+            w.flow(&mut Scratch::new(), 0, x, &mut dx);
             let e = ((dx[2] / (tscale * tscale)) - thdd)
                 .abs()
                 .max((-dx[3] / (tscale * tscale) - phdd).abs());
@@ -413,7 +416,7 @@ fn heel_strike_tends_to_garcia_jump_map_as_leg_mass_vanishes() {
         let mut worst: f64 = 0.0;
         for x in &states {
             let mut out = [0.0; 4];
-            w.reset(0, HEEL_STRIKE, x, &mut out);
+            w.reset(&mut Scratch::new(), 0, HEEL_STRIKE, x, &mut out);
             // Garcia: θ̇⁺ = cos 2θ θ̇⁻, φ̇⁺ = cos 2θ (1 − cos 2θ) θ̇⁻ (θ = q₁, φ̇ = −q̇₂)
             let c2 = (2.0 * x[0]).cos();
             let thd = c2 * x[2];

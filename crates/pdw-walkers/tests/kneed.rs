@@ -2,7 +2,7 @@
 //! a merged-link model for the locked knee, conservation laws computed from the point masses,
 //! and Hsu Chen's published fixed point.
 
-use pdw_hybrid::{HybridSystem, Integrator, Options, Section, StopReason};
+use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};
 use pdw_soa::{ChainBuilder, Link, Workspace};
 use pdw_walkers::kneed::{
     hsu_chen_section, Kneed, KneedParams, HEEL_STRIKE, KNEE_STRIKE, LOCKED, UNLOCKED,
@@ -107,7 +107,7 @@ fn locked_mode_equals_merged_link_model() {
             0.0,
         ];
         let mut dx = [0.0; 6];
-        w.flow(LOCKED, &x, &mut dx);
+        w.flow(&mut Scratch::new(), LOCKED, &x, &mut dx);
         let mut qdd = [0.0; 2];
         pdw_soa::aba(
             &merged,
@@ -153,7 +153,10 @@ fn knee_strike_conserves_angular_momenta_and_loses_the_predicted_energy() {
             rng.random_range(0.1..8.0),
         ];
         let mut y = [0.0; 6];
-        assert_eq!(w.reset(UNLOCKED, KNEE_STRIKE, &x, &mut y), LOCKED);
+        assert_eq!(
+            w.reset(&mut Scratch::new(), UNLOCKED, KNEE_STRIKE, &x, &mut y),
+            LOCKED
+        );
         assert_eq!(y[5], 0.0);
         let (pre, post) = (masses(&p, &x), masses(&p, &y));
         let scale: f64 = pre.iter().map(|(m, _, v)| m * l * v[0].hypot(v[1])).sum();
@@ -270,7 +273,7 @@ fn stride(w: &Kneed, s: &[f64], tol: f64) -> (f64, Vec<StopReason>, [f64; 3]) {
             break;
         };
         let mut y = [0.0; 6];
-        mode = w.reset(mode, guard, &x, &mut y);
+        mode = w.reset(&mut Scratch::new(), mode, guard, &x, &mut y);
         x = y;
     }
     let mut s2 = [0.0; 3];
@@ -323,6 +326,6 @@ fn knee_flexes_at_the_start_of_the_swing() {
     let mut x = [0.0; 6];
     w.lift(&hsu_chen_section(w.params().slope), &mut x);
     let mut dx = [0.0; 6];
-    w.flow(UNLOCKED, &x, &mut dx);
+    w.flow(&mut Scratch::new(), UNLOCKED, &x, &mut dx);
     assert!(dx[5] < 0.0, "q̈₃ = {}", dx[5]);
 }

@@ -1,6 +1,6 @@
 //! Physics claims about the rimless wheel, against geometry and energy bookkeeping.
 
-use pdw_hybrid::{HybridSystem, Section};
+use pdw_hybrid::{HybridSystem, Scratch, Section};
 use pdw_walkers::rimless::{Rimless, RimlessParams, SPOKE_IMPACT};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -28,7 +28,7 @@ fn spoke_impact_loses_exactly_the_predicted_kinetic_energy() {
             let omega: f64 = rng.random_range(0.1..3.0);
             let xm = [a, omega];
             let mut xp = [0.0; 2];
-            w.reset(0, SPOKE_IMPACT, &xm, &mut xp);
+            w.reset(&mut Scratch::new(), 0, SPOKE_IMPACT, &xm, &mut xp);
             assert!((xp[0] + a).abs() < 1e-15);
             // Old contact at origin: hub = l (sin θ, cos θ); velocity = l θ̇ (cos θ, −sin θ).
             let hub = [a.sin(), a.cos()];
@@ -60,7 +60,7 @@ fn energy_gain_over_a_spoke_equals_the_drop_in_hub_height() {
     for _ in 0..100 {
         let x = [rng.random_range(-a..a), rng.random_range(0.0..2.0)];
         let mut f = [0.0; 2];
-        w.flow(0, &x, &mut f);
+        w.flow(&mut Scratch::new(), 0, &x, &mut f);
         let de = 1.0 * x[1] * f[1] - 9.81 * (x[0] + 0.08).sin() * f[0];
         assert!(de.abs() < 1e-13);
     }
@@ -75,6 +75,7 @@ fn lift_is_the_post_impact_state() {
     w.lift(&[1.3], &mut x);
     let mut xp = [0.0; 2];
     w.reset(
+        &mut Scratch::new(),
         0,
         SPOKE_IMPACT,
         &[w.alpha(), 1.3 / (2.0 * w.alpha()).cos()],

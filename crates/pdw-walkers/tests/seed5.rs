@@ -2,7 +2,7 @@
 //! merged-link model for the locked knees, the thesis' switch matrix T (eq. 3.29) on the five
 //! joints, and conservation laws computed from the point masses.
 
-use pdw_hybrid::{HybridSystem, Integrator, Options, Section, StopReason};
+use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};
 use pdw_soa::{ChainBuilder, Link, Workspace};
 use pdw_walkers::seed5::{
     Seed5, Seed5Params, Seed5Variant, HEEL_STRIKE, KNEES_LOCKED, KNEE_STRIKE, SWING_KNEE_FREE,
@@ -105,7 +105,7 @@ fn locked_knees_equal_merged_two_link_model() {
             0.0,
         ];
         let mut dx = [0.0; 8];
-        w.flow(KNEES_LOCKED, &x, &mut dx);
+        w.flow(&mut Scratch::new(), KNEES_LOCKED, &x, &mut dx);
         let mut qdd = [0.0; 2];
         pdw_soa::aba(
             &merged,
@@ -231,7 +231,13 @@ fn knee_strike_conserves_angular_momenta_and_keeps_the_stance_knee_locked() {
         ];
         let mut y = [0.0; 8];
         assert_eq!(
-            w.reset(SWING_KNEE_FREE, KNEE_STRIKE, &x, &mut y),
+            w.reset(
+                &mut Scratch::new(),
+                SWING_KNEE_FREE,
+                KNEE_STRIKE,
+                &x,
+                &mut y
+            ),
             KNEES_LOCKED
         );
         let (pre, post) = (masses(&p, &x, [0.0; 2]), masses(&p, &y, [0.0; 2]));

@@ -2,7 +2,7 @@
 //! opt-in comparison model: claims about how it differs from the exact (pseudo-joint,
 //! impulsive) model, each measured against that model.
 
-use pdw_hybrid::{GuardKind, HybridSystem, Integrator, Options, Section, StopReason};
+use pdw_hybrid::{GuardKind, HybridSystem, Integrator, Options, Scratch, Section, StopReason};
 use pdw_walkers::seed5::{
     PiGains, Seed5, Seed5Compliant, Seed5Params, COMPLIANT_DOUBLE, COMPLIANT_SINGLE, KNEES_LOCKED,
 };
@@ -48,7 +48,7 @@ fn exact_model_repeats_the_gait() {
     let stop = integ.integrate(&w, KNEES_LOCKED, &mut t, &mut x, 5.0);
     assert_eq!(stop, StopReason::Guard { guard: 0 });
     let mut y = [0.0; 8];
-    w.reset(KNEES_LOCKED, 0, &x, &mut y);
+    w.reset(&mut Scratch::new(), KNEES_LOCKED, 0, &x, &mut y);
     let mut s = [0.0; 3];
     w.project(&y, &mut s);
     for i in 0..3 {
@@ -99,7 +99,7 @@ fn acceleration_level_switch_does_not_repeat_the_exact_gait() {
             match stop {
                 StopReason::Guard { guard } if w.guards(mode)[guard].kind == GuardKind::Reset => {
                     let mut y = [0.0; 13];
-                    let next = w.reset(mode, guard, &x, &mut y);
+                    let next = w.reset(&mut Scratch::new(), mode, guard, &x, &mut y);
                     if mode == COMPLIANT_DOUBLE {
                         let dev = (y[0] - GAIT[0]).abs()
                             + (y[4] - GAIT[1]).abs()

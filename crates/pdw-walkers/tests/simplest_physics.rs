@@ -2,7 +2,7 @@
 //! (Newtonian mechanics in a slope frame) rather than against the model's own formulas.
 
 use faer::Mat;
-use pdw_hybrid::{HybridSystem, Section};
+use pdw_hybrid::{HybridSystem, Scratch, Section};
 use pdw_walkers::simplest::{Simplest, SimplestParams, HEEL_STRIKE};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -59,7 +59,7 @@ fn vector_field_matches_newtonian_derivation_at_random_states() {
             rng.random_range(-2.0..2.0),
         ];
         let mut f = [0.0; 4];
-        m.flow(0, &x, &mut f);
+        m.flow(&mut Scratch::new(), 0, &x, &mut f);
         let (thdd, phdd) = newton_accelerations(gamma, x[0], x[1], x[2], x[3]);
         assert_eq!(f[0], x[1]);
         assert_eq!(f[2], x[3]);
@@ -76,7 +76,7 @@ fn energy_rate_vanishes_along_the_flow() {
     for _ in 0..200 {
         let x: Vec<f64> = (0..4).map(|_| rng.random_range(-1.0..1.0)).collect();
         let mut f = [0.0; 4];
-        m.flow(0, &x, &mut f);
+        m.flow(&mut Scratch::new(), 0, &x, &mut f);
         let de = -(x[0] - 0.009).sin() * f[0] + x[1] * f[1];
         assert!(de.abs() < 1e-15);
     }
@@ -91,7 +91,7 @@ fn heel_strike_conserves_hip_angular_momentum_about_new_contact_and_foot_about_h
         let thd: f64 = rng.random_range(-1.5..-0.01);
         let xm = [th, thd, 2.0 * th, rng.random_range(-1.0..1.0)];
         let mut xp = [0.0; 4];
-        m.reset(0, HEEL_STRIKE, &xm, &mut xp);
+        m.reset(&mut Scratch::new(), 0, HEEL_STRIKE, &xm, &mut xp);
 
         // Geometry before impact (old stance foot at the origin).
         let hip = [-th.sin(), th.cos()];
@@ -144,7 +144,7 @@ fn lift_reproduces_every_post_heel_strike_state() {
             rng.random_range(-1.0..1.0),
         ];
         let mut xp = [0.0; 4];
-        m.reset(0, HEEL_STRIKE, &xm, &mut xp);
+        m.reset(&mut Scratch::new(), 0, HEEL_STRIKE, &xm, &mut xp);
         let mut s = [0.0; 2];
         m.project(&xp, &mut s);
         let mut xl = [0.0; 4];
@@ -156,7 +156,7 @@ fn lift_reproduces_every_post_heel_strike_state() {
             );
         }
         // and the lifted state is on the heel-strike surface g = 0
-        assert!(m.guard(0, HEEL_STRIKE, &xl).abs() < 1e-15);
+        assert!(m.guard(&mut Scratch::new(), 0, HEEL_STRIKE, &xl).abs() < 1e-15);
     }
 }
 
@@ -179,8 +179,8 @@ fn closed_form_jacobians_match_central_differences() {
         let x: Vec<f64> = (0..4).map(|_| rng.random_range(-1.0..1.0)).collect();
         let mut jac = [0.0; 16];
         let mut rjac = [0.0; 16];
-        m.flow_jacobian(0, &x, &mut jac);
-        m.reset_jacobian(0, 0, &x, &mut rjac);
+        m.flow_jacobian(&mut Scratch::new(), 0, &x, &mut jac);
+        m.reset_jacobian(&mut Scratch::new(), 0, 0, &x, &mut rjac);
         let h = 1e-6;
         for j in 0..4 {
             let mut xp = x.clone();
@@ -188,17 +188,17 @@ fn closed_form_jacobians_match_central_differences() {
             xp[j] += h;
             xm[j] -= h;
             let (mut fp, mut fm, mut rp, mut rm) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
-            m.flow(0, &xp, &mut fp);
-            m.flow(0, &xm, &mut fm);
-            m.reset(0, 0, &xp, &mut rp);
-            m.reset(0, 0, &xm, &mut rm);
+            m.flow(&mut Scratch::new(), 0, &xp, &mut fp);
+            m.flow(&mut Scratch::new(), 0, &xm, &mut fm);
+            m.reset(&mut Scratch::new(), 0, 0, &xp, &mut rp);
+            m.reset(&mut Scratch::new(), 0, 0, &xm, &mut rm);
             for i in 0..4 {
                 assert!((jac[i * 4 + j] - (fp[i] - fm[i]) / (2.0 * h)).abs() < 1e-8);
                 assert!((rjac[i * 4 + j] - (rp[i] - rm[i]) / (2.0 * h)).abs() < 1e-8);
             }
         }
         let mut grad = [0.0; 4];
-        m.guard_gradient(0, HEEL_STRIKE, &x, &mut grad);
+        m.guard_gradient(&mut Scratch::new(), 0, HEEL_STRIKE, &x, &mut grad);
         assert_eq!(grad, [-2.0, 0.0, 1.0, 0.0]);
     }
 }
@@ -210,11 +210,11 @@ fn batched_flow_is_bit_identical_to_scalar_flow() {
     for lanes in [1usize, 3, 4, 5, 13] {
         let x = Mat::<f64>::from_fn(lanes, 4, |_, _| rng.random_range(-2.0..2.0));
         let mut dx = Mat::<f64>::zeros(lanes, 4);
-        m.flow_batch(0, x.as_ref(), dx.as_mut());
+        m.flow_batch(&mut Scratch::new(), 0, x.as_ref(), dx.as_mut());
         for l in 0..lanes {
             let xi: Vec<f64> = (0..4).map(|j| x[(l, j)]).collect();
             let mut f = [0.0; 4];
-            m.flow(0, &xi, &mut f);
+            m.flow(&mut Scratch::new(), 0, &xi, &mut f);
             for j in 0..4 {
                 assert_eq!(
                     f[j].to_bits(),
@@ -234,7 +234,7 @@ fn simd_trigonometry_agrees_with_libm() {
     for _ in 0..1000 {
         let x = [rng.random_range(-3.0..3.0), 0.0, 0.0, 0.0];
         let mut f = [0.0; 4];
-        m.flow(0, &x, &mut f);
+        m.flow(&mut Scratch::new(), 0, &x, &mut f);
         assert!((f[1] - x[0].sin()).abs() <= 4.0 * f64::EPSILON);
     }
 }
@@ -290,7 +290,7 @@ fn ground_reaction_is_hip_mass_times_acceleration_minus_gravity() {
     for _ in 0..200 {
         let x = [0.6 * rnd(), rnd(), 0.8 * rnd(), rnd()];
         let mut f = [0.0; 4];
-        w.flow(0, &x, &mut f);
+        w.flow(&mut Scratch::new(), 0, &x, &mut f);
         let h = 1e-5;
         let xp: Vec<f64> = x.iter().zip(&f).map(|(a, b)| a + h * b).collect();
         let xm: Vec<f64> = x.iter().zip(&f).map(|(a, b)| a - h * b).collect();

@@ -1,7 +1,7 @@
 //! Trajectory-level claims of the simplest walker, integrated with DOP853.
 
 use pdw_hybrid::Section;
-use pdw_hybrid::{HybridSystem, Integrator, Options, StopReason};
+use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, StopReason};
 use pdw_walkers::simplest::{Simplest, SimplestParams, HEEL_STRIKE};
 
 // Garcia's stable gait at γ = 0.009 (REFERENCES §1).
@@ -28,7 +28,7 @@ fn energy_conserved_between_impacts() {
     // the impact then removes kinetic energy ½θ̇⁻²(1 − cos²2θ⁻) (the potential is measured
     // from the stance foot, which changes at the impact, so only kinetic energy is compared)
     let mut xp = [0.0; 4];
-    m.reset(0, HEEL_STRIKE, &x, &mut xp);
+    m.reset(&mut Scratch::new(), 0, HEEL_STRIKE, &x, &mut xp);
     let lost = 0.5 * (x[1] * x[1] - xp[1] * xp[1]);
     let c2 = (2.0 * x[0]).cos();
     assert!((lost - 0.5 * x[1] * x[1] * (1.0 - c2 * c2)).abs() < 1e-15);
@@ -46,7 +46,7 @@ fn scuffing_crossing_is_never_taken_as_heel_strike() {
     let mut t = 0.0;
     let mut samples: Vec<(f64, f64, f64)> = Vec::new();
     let stop = integ.integrate_observed(&m, 0, &mut t, &mut x, 12.0, &mut |t, xs| {
-        samples.push((t, m.guard(0, HEEL_STRIKE, xs), xs[0]));
+        samples.push((t, m.guard(&mut Scratch::new(), 0, HEEL_STRIKE, xs), xs[0]));
     });
     assert_eq!(stop, StopReason::Guard { guard: HEEL_STRIKE });
     let mid_crossings: Vec<_> = samples
@@ -76,7 +76,7 @@ fn a_start_on_the_heel_strike_surface_does_not_retrigger() {
     let m = model();
     let mut x = [0.0; 4];
     m.lift(&S_STABLE, &mut x);
-    assert_eq!(m.guard(0, HEEL_STRIKE, &x), 0.0);
+    assert_eq!(m.guard(&mut Scratch::new(), 0, HEEL_STRIKE, &x), 0.0);
     let mut integ = Integrator::new(4, Options::dop853(1e-10)).unwrap();
     let mut t = 0.0;
     integ.integrate(&m, 0, &mut t, &mut x, 12.0);

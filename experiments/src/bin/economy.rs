@@ -19,7 +19,9 @@ use anyhow::Context;
 use pdw_experiments::{
     command, fmt_multipliers, results_dir, sci, time_mean, time_once, write_text, Table,
 };
-use pdw_hybrid::{GuardKind, HybridSystem, Integrator, Options, Section, Stats, StopReason};
+use pdw_hybrid::{
+    GuardKind, HybridSystem, Integrator, Options, Scratch, Section, Stats, StopReason,
+};
 use pdw_limit::{find_fixed_point, Multiplier, NewtonOptions, StrideMap};
 use pdw_walkers::seed5::{
     PiGains, Seed5, Seed5Compliant, Seed5Params, COMPLIANT_DOUBLE, COMPLIANT_SINGLE, KNEES_LOCKED,
@@ -279,7 +281,7 @@ fn compliant_step(
     r.t_touchdown = t;
     r.foot_touchdown = w.model().swing_foot(&x);
     let mut y = [0.0; 13];
-    let mode = w.reset(COMPLIANT_SINGLE, 0, &x, &mut y);
+    let mode = w.reset(&mut Scratch::new(), COMPLIANT_SINGLE, 0, &x, &mut y);
     debug_assert_eq!(mode, COMPLIANT_DOUBLE);
     let t0 = t;
     let (mut mk2, mut pen): (f64, f64) = (0.0, 0.0);
@@ -306,7 +308,7 @@ fn compliant_step(
             r.ok = finite;
             r.why = "switch".into();
             let mut z = [0.0; 13];
-            w.reset(COMPLIANT_DOUBLE, guard, &y, &mut z);
+            w.reset(&mut Scratch::new(), COMPLIANT_DOUBLE, guard, &y, &mut z);
             r.post = [z[0], z[4], z[6]];
         }
         StopReason::EndTime => {

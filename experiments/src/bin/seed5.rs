@@ -7,7 +7,7 @@
 //! of the stable gait.
 
 use pdw_experiments::{command, fmt_multipliers, results_dir, sci, time_once, write_text, Table};
-use pdw_hybrid::{GuardKind, Integrator, Options, StopReason};
+use pdw_hybrid::{GuardKind, Integrator, Options, Scratch, StopReason};
 use pdw_limit::{
     basin_metrics, classify_cells, continue_branch, find_fixed_point, grid_cells, legend, linspace,
     BasinOptions, BasinProblem, Branch, ContinuationOptions, NewtonOptions, Outcome, StrideMap,
@@ -104,7 +104,7 @@ fn validity(w: &dyn Walker, s: &[f64], h_max: f64) -> Option<Validity> {
                 if (mode, guard) == w.section_guard() {
                     return Some(v);
                 }
-                mode = w.reset(mode, guard, &x, &mut buf);
+                mode = w.reset(&mut Scratch::new(), mode, guard, &x, &mut buf);
                 x.copy_from_slice(&buf);
             }
             _ => return None,

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use faer::{MatMut, MatRef};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch};
 
 /// Harmonic oscillator `q̇ = p, ṗ = −q` (exact: `q = q₀ cos t + p₀ sin t`) with configurable
 /// guards `g_k = q − level_k`, optionally admissible only when `p` has a given sign.
@@ -40,17 +40,24 @@ impl HybridSystem for Oscillator {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &self.guards
     }
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
         dx[1] = -x[0];
     }
-    fn guard(&self, _mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
         x[0] - self.levels[k]
     }
     fn admissible(&self, _mode: usize, k: usize, x: &[f64]) -> bool {
         self.admit_sign[k].is_none_or(|s| s * x[1] > 0.0)
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out.copy_from_slice(x);
         mode
     }
@@ -73,15 +80,22 @@ impl HybridSystem for OscGrowth {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &[]
     }
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
         dx[1] = -x[0];
         dx[2] = -x[2] * x[2];
     }
-    fn guard(&self, _mode: usize, _k: usize, _x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, _x: &[f64]) -> f64 {
         0.0
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out.copy_from_slice(x);
         mode
     }
@@ -122,14 +136,21 @@ impl HybridSystem for Pendulum {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &PENDULUM_GUARDS
     }
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
         dx[1] = -x[0].sin();
     }
-    fn guard(&self, _mode: usize, _k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, x: &[f64]) -> f64 {
         x[0]
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out.copy_from_slice(x);
         mode
     }
@@ -157,14 +178,21 @@ impl HybridSystem for Ball {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &BALL_GUARDS
     }
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
         dx[1] = -self.g;
     }
-    fn guard(&self, _mode: usize, _k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, x: &[f64]) -> f64 {
         x[0]
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out[0] = x[0];
         out[1] = -self.e * x[1];
         mode
@@ -223,11 +251,17 @@ impl HybridSystem for SoftBall {
             &SOFT_GUARDS_CONTACT
         }
     }
-    fn flow(&self, mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
         dx[1] = self.acc(mode, x[0]);
     }
-    fn flow_batch(&self, mode: usize, x: MatRef<'_, f64>, mut dx: MatMut<'_, f64>) {
+    fn flow_batch(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        mut dx: MatMut<'_, f64>,
+    ) {
         let n = x.nrows();
         let y = x.col(0).try_as_col_major().unwrap().as_slice();
         let v = x.col(1).try_as_col_major().unwrap().as_slice();
@@ -245,14 +279,21 @@ impl HybridSystem for SoftBall {
             dv[l] = self.acc(mode, y[l]);
         }
     }
-    fn guard(&self, mode: usize, k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
         if mode == 0 || k == 0 {
             x[0]
         } else {
             x[0] + 0.5
         }
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out.copy_from_slice(x);
         1 - mode
     }
@@ -268,13 +309,20 @@ impl HybridSystem for BlowUp {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &[]
     }
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[0] * x[0];
     }
-    fn guard(&self, _mode: usize, _k: usize, _x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, _x: &[f64]) -> f64 {
         0.0
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out.copy_from_slice(x);
         mode
     }
@@ -290,13 +338,20 @@ impl HybridSystem for Cliff {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &[]
     }
-    fn flow(&self, _mode: usize, x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = if x[0] <= 1.5 { 1.0 } else { f64::NAN };
     }
-    fn guard(&self, _mode: usize, _k: usize, _x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, _x: &[f64]) -> f64 {
         0.0
     }
-    fn reset(&self, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         out.copy_from_slice(x);
         mode
     }

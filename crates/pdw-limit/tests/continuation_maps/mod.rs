@@ -6,7 +6,7 @@
 #![allow(dead_code)]
 
 use faer::{MatMut, MatRef};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Section};
+use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 
 /// `F(s; μ)` into `out`.
 pub type MapFn = fn(&[f64], f64, &mut [f64]);
@@ -34,11 +34,17 @@ impl HybridSystem for MapSystem {
     fn guards(&self, _mode: usize) -> &[GuardSpec] {
         &GUARDS
     }
-    fn flow(&self, _mode: usize, _x: &[f64], dx: &mut [f64]) {
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, _x: &[f64], dx: &mut [f64]) {
         dx.fill(0.0);
         dx[self.n] = 1.0;
     }
-    fn flow_batch(&self, _mode: usize, _x: MatRef<'_, f64>, mut dx: MatMut<'_, f64>) {
+    fn flow_batch(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _x: MatRef<'_, f64>,
+        mut dx: MatMut<'_, f64>,
+    ) {
         for l in 0..dx.nrows() {
             for j in 0..self.n {
                 dx[(l, j)] = 0.0;
@@ -46,22 +52,43 @@ impl HybridSystem for MapSystem {
             dx[(l, self.n)] = 1.0;
         }
     }
-    fn guard(&self, _mode: usize, _k: usize, x: &[f64]) -> f64 {
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, x: &[f64]) -> f64 {
         x[self.n] - 1.0
     }
-    fn reset(&self, _mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
         (self.f)(&x[..self.n], self.mu, &mut out[..self.n]);
         out[self.n] = 0.0;
         0
     }
-    fn flow_jacobian(&self, _mode: usize, _x: &[f64], jac: &mut [f64]) {
+    fn flow_jacobian(&self, _ws: &mut Scratch, _mode: usize, _x: &[f64], jac: &mut [f64]) {
         jac.fill(0.0);
     }
-    fn guard_gradient(&self, _mode: usize, _k: usize, _x: &[f64], grad: &mut [f64]) {
+    fn guard_gradient(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        _x: &[f64],
+        grad: &mut [f64],
+    ) {
         grad.fill(0.0);
         grad[self.n] = 1.0;
     }
-    fn reset_jacobian(&self, _mode: usize, _k: usize, x: &[f64], jac: &mut [f64]) {
+    fn reset_jacobian(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        _k: usize,
+        x: &[f64],
+        jac: &mut [f64],
+    ) {
         let (n, d) = (self.n, self.n + 1);
         let mut df = vec![0.0; n * n];
         (self.jac)(&x[..n], self.mu, &mut df);

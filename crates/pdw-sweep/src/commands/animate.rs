@@ -79,7 +79,7 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
                             }
                             strides_done += 1;
                         }
-                        mode = w.reset(mode, guard, &x, &mut buf);
+                        mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
                         x.copy_from_slice(&buf);
                     }
                     GuardKind::Terminal(code) => {

@@ -132,7 +132,7 @@ pub fn validity(m: &BuiltModel, fp: &FixedPoint) -> Option<Validity> {
                 if (mode, guard) == w.section_guard() {
                     break;
                 }
-                mode = w.reset(mode, guard, &x, &mut buf);
+                mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
                 x.copy_from_slice(&buf);
             }
             _ => return None,
