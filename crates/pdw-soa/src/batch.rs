@@ -8,7 +8,7 @@
 //! [`crate::spatial`], the same sin/cos routine), so every lane equals the scalar result bit for
 //! bit. No allocation happens per call.
 
-use faer::Mat;
+use faer::{Mat, MatRef};
 
 use crate::chain::Chain;
 use crate::error::{check_shape, SoaError};
@@ -159,20 +159,48 @@ pub(crate) fn check_batch(
     check_shape(what, (lanes, ncols), (m.nrows(), m.ncols()))
 }
 
+/// Checks that a batch view has `ncols` columns and contiguous columns (unit row stride), so
+/// that [`col`] can hand out each column as a slice.
+pub(crate) fn check_view(
+    what: &'static str,
+    m: MatRef<'_, f64>,
+    lanes: usize,
+    ncols: usize,
+) -> Result<(), SoaError> {
+    check_shape(what, (lanes, ncols), (m.nrows(), m.ncols()))?;
+    if lanes > 0 && m.row_stride() != 1 {
+        return Err(SoaError::DimensionMismatch {
+            what,
+            expected: "contiguous columns (row stride 1)".into(),
+            got: format!("row stride {}", m.row_stride()),
+        });
+    }
+    Ok(())
+}
+
+/// Column `k` of a view checked by [`check_view`], as a slice of its lanes.
+#[inline(always)]
+pub(crate) fn col(m: MatRef<'_, f64>, k: usize) -> &[f64] {
+    match m.col(k).try_as_col_major() {
+        Some(c) => c.as_slice(),
+        None => &[],
+    }
+}
+
 /// Batched pass 1 for lanes `l0 .. l0 + bl`: identical arithmetic to the scalar `kin_pass`.
 pub(crate) fn batch_kin_pass(
     chain: &Chain,
     bw: &mut BatchWorkspace,
-    q: &Mat<f64>,
-    qd: &Mat<f64>,
+    q: MatRef<'_, f64>,
+    qd: MatRef<'_, f64>,
     l0: usize,
     bl: usize,
 ) {
     let n = chain.dof();
     for k in 0..n {
         let link = &chain.links[k];
-        let qk = &q.col_as_slice(k)[l0..l0 + bl];
-        let qdk = &qd.col_as_slice(k)[l0..l0 + bl];
+        let qk = &col(q, k)[l0..l0 + bl];
+        let qdk = &col(qd, k)[l0..l0 + bl];
         let (lyp, lzp) = if k == 0 {
             (0.0, 0.0)
         } else {

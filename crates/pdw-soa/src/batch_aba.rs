@@ -1,9 +1,10 @@
 //! Batched O(n) forward dynamics: the articulated-body recursion of [`crate::aba`] over
 //! `(lanes × n)` matrices, bit-for-bit equal per lane to the scalar [`crate::aba::aba`].
 
-use faer::Mat;
+use faer::reborrow::ReborrowMut;
+use faer::{Mat, MatMut, MatRef};
 
-use crate::batch::{batch_kin_pass, check_batch, BatchWorkspace};
+use crate::batch::{batch_kin_pass, check_batch, check_view, col, BatchWorkspace};
 use crate::chain::Chain;
 use crate::error::{check_len, SoaError};
 use crate::spatial;
@@ -32,12 +33,62 @@ pub fn batch_aba(
     if let Some(ft) = f_tip {
         check_batch("f_tip", ft, lanes, 3)?;
     }
+    batch_aba_view(
+        chain,
+        bw,
+        q.as_ref(),
+        qd.as_ref(),
+        Some(tau.as_ref()),
+        f_tip.map(|f| f.as_ref()),
+        None,
+        qdd.as_mut(),
+    )
+}
+
+/// Batched forward dynamics on matrix views, with optional locked joints: the pseudo joints of
+/// seed §3.4, welded in the articulated-body recursion (`P⁺ = P`, `z⁺ = z + P a`, `q̈ = 0`), as
+/// the scalar [`crate::pseudo_joint_dynamics`] does.
+///
+/// - `q`, `qd`: `(lanes × n)` views with contiguous columns (e.g. column ranges of a state
+///   matrix `(lanes × 2n)`); any lane count (processed in blocks of the workspace's block size);
+/// - `tau`: `(lanes × n)` applied torques or `None` for zero (a passive walker);
+/// - `f_tip`: optional `(lanes × 3)` tip force on the environment;
+/// - `locked`: mask of length `n` (the same joints locked in every lane) or `None`;
+/// - `qdd`: output `(lanes × n)`, exactly `0.0` at locked joints.
+///
+/// Each lane equals the one-lane call bit for bit, whatever the lane count or block.
+#[allow(clippy::too_many_arguments)]
+pub fn batch_aba_view(
+    chain: &Chain,
+    bw: &mut BatchWorkspace,
+    q: MatRef<'_, f64>,
+    qd: MatRef<'_, f64>,
+    tau: Option<MatRef<'_, f64>>,
+    f_tip: Option<MatRef<'_, f64>>,
+    locked: Option<&[bool]>,
+    mut qdd: MatMut<'_, f64>,
+) -> Result<(), SoaError> {
+    let n = chain.dof();
+    let lanes = q.nrows();
+    check_len("batch workspace dof", n, bw.n)?;
+    check_view("q", q, lanes, n)?;
+    check_view("qd", qd, lanes, n)?;
+    if let Some(t) = tau {
+        check_view("tau", t, lanes, n)?;
+    }
+    if let Some(ft) = f_tip {
+        check_view("f_tip", ft, lanes, 3)?;
+    }
+    check_view("qdd", qdd.as_ref(), lanes, n)?;
+    if let Some(m) = locked {
+        check_len("locked", n, m.len())?;
+    }
     let mut l0 = 0;
     while l0 < lanes {
         let bl = bw.block.min(lanes - l0);
         batch_kin_pass(chain, bw, q, qd, l0, bl);
-        backward(chain, bw, tau, f_tip, l0, bl);
-        forward(chain, bw, qdd, l0, bl);
+        backward(chain, bw, tau, f_tip, locked, l0, bl);
+        forward(chain, bw, locked, qdd.rb_mut(), l0, bl);
         l0 += bl;
     }
     Ok(())
@@ -46,8 +97,9 @@ pub fn batch_aba(
 fn backward(
     chain: &Chain,
     bw: &mut BatchWorkspace,
-    tau: &Mat<f64>,
-    f_tip: Option<&Mat<f64>>,
+    tau: Option<MatRef<'_, f64>>,
+    f_tip: Option<MatRef<'_, f64>>,
+    locked: Option<&[bool]>,
     l0: usize,
     bl: usize,
 ) {
@@ -61,9 +113,9 @@ fn backward(
         match f_tip {
             Some(ft) => {
                 let (f0, f1, f2) = (
-                    &ft.col_as_slice(0)[l0..l0 + bl],
-                    &ft.col_as_slice(1)[l0..l0 + bl],
-                    &ft.col_as_slice(2)[l0..l0 + bl],
+                    &col(ft, 0)[l0..l0 + bl],
+                    &col(ft, 1)[l0..l0 + bl],
+                    &col(ft, 2)[l0..l0 + bl],
                 );
                 let ty = &bw.tip.col(0)[..bl];
                 let tz = &bw.tip.col(1)[..bl];
@@ -84,7 +136,11 @@ fn backward(
     for k in (0..n).rev() {
         let link = &chain.links[k];
         let (j, m) = (chain.j_joint[k], link.mass);
-        let tk = &tau.col_as_slice(k)[l0..l0 + bl];
+        let tk = match tau {
+            Some(t) => &col(t, k)[l0..l0 + bl],
+            None => &bw.zeros[..bl],
+        };
+        let is_locked = locked.is_some_and(|m| m[k]);
         let cy = &bw.cy.col(k)[..bl];
         let cz = &bw.cz.col(k)[..bl];
         let by = &bw.by.col(k)[..bl];
@@ -108,7 +164,11 @@ fn backward(
         );
         let [z0, z1, z2] = bw.carry_z.all_mut::<3>();
         let (z0, z1, z2) = (&mut z0[..bl], &mut z1[..bl], &mut z2[..bl]);
-        if chain.prismatic[k] {
+        if is_locked {
+            lanes_back_locked(
+                j, m, cy, cz, by, bz, ay, az, dy, dz, p0, p1, p2, p3, p4, p5, z0, z1, z2,
+            );
+        } else if chain.prismatic[k] {
             let hy = &bw.hy.col(k)[..bl];
             let hz = &bw.hz.col(k)[..bl];
             lanes_back_pri(
@@ -273,7 +333,14 @@ fn lanes_back_pri(
     }
 }
 
-fn forward(chain: &Chain, bw: &mut BatchWorkspace, qdd: &mut Mat<f64>, l0: usize, bl: usize) {
+fn forward(
+    chain: &Chain,
+    bw: &mut BatchWorkspace,
+    locked: Option<&[bool]>,
+    mut qdd: MatMut<'_, f64>,
+    l0: usize,
+    bl: usize,
+) {
     let n = chain.dof();
     let ab = chain.base_acc;
     {
@@ -283,7 +350,10 @@ fn forward(chain: &Chain, bw: &mut BatchWorkspace, qdd: &mut Mat<f64>, l0: usize
         a2[..bl].fill(ab[2]);
     }
     for k in 0..n {
-        let out = &mut qdd.col_as_slice_mut(k)[l0..l0 + bl];
+        let out = match qdd.rb_mut().col_mut(k).try_as_col_major_mut() {
+            Some(c) => &mut c.as_slice_mut()[l0..l0 + bl],
+            None => return,
+        };
         let g0 = &bw.g0.col(k)[..bl];
         let g1 = &bw.g1.col(k)[..bl];
         let g2 = &bw.g2.col(k)[..bl];
@@ -294,7 +364,9 @@ fn forward(chain: &Chain, bw: &mut BatchWorkspace, qdd: &mut Mat<f64>, l0: usize
         let dz = &bw.dz.col(k)[..bl];
         let [a0, a1, a2] = bw.carry_a.all_mut::<3>();
         let (a0, a1, a2) = (&mut a0[..bl], &mut a1[..bl], &mut a2[..bl]);
-        if chain.prismatic[k] {
+        if locked.is_some_and(|m| m[k]) {
+            lanes_fwd_locked(ay, az, dy, dz, out, a0, a1, a2);
+        } else if chain.prismatic[k] {
             let hy = &bw.hy.col(k)[..bl];
             let hz = &bw.hz.col(k)[..bl];
             lanes_fwd_pri(g0, g1, g2, nu, ay, az, hy, hz, dy, dz, out, a0, a1, a2);
@@ -393,5 +465,91 @@ fn lanes_fwd_pri(
         a0[l] = a[0];
         a1[l] = a[1];
         a2[l] = a[2];
+    }
+}
+
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn lanes_back_locked(
+    j: f64,
+    m: f64,
+    cy: &[f64],
+    cz: &[f64],
+    by: &[f64],
+    bz: &[f64],
+    ay: &[f64],
+    az: &[f64],
+    dy: &[f64],
+    dz: &[f64],
+    p0: &mut [f64],
+    p1: &mut [f64],
+    p2: &mut [f64],
+    p3: &mut [f64],
+    p4: &mut [f64],
+    p5: &mut [f64],
+    z0: &mut [f64],
+    z1: &mut [f64],
+    z2: &mut [f64],
+) {
+    let bl = cy.len();
+    let (cz, by, bz, ay, az, dy, dz) = (
+        &cz[..bl],
+        &by[..bl],
+        &bz[..bl],
+        &ay[..bl],
+        &az[..bl],
+        &dy[..bl],
+        &dz[..bl],
+    );
+    let (p0, p1, p2, p3, p4, p5) = (
+        &mut p0[..bl],
+        &mut p1[..bl],
+        &mut p2[..bl],
+        &mut p3[..bl],
+        &mut p4[..bl],
+        &mut p5[..bl],
+    );
+    let (z0, z1, z2) = (&mut z0[..bl], &mut z1[..bl], &mut z2[..bl]);
+    for l in 0..bl {
+        let cp = [p0[l], p1[l], p2[l], p3[l], p4[l], p5[l]];
+        let czc = [z0[l], z1[l], z2[l]];
+        let r = spatial::aba_back_locked(
+            &cp, &czc, j, m, cy[l], cz[l], by[l], bz[l], ay[l], az[l], dy[l], dz[l],
+        );
+        p0[l] = r.cp[0];
+        p1[l] = r.cp[1];
+        p2[l] = r.cp[2];
+        p3[l] = r.cp[3];
+        p4[l] = r.cp[4];
+        p5[l] = r.cp[5];
+        z0[l] = r.cz[0];
+        z1[l] = r.cz[1];
+        z2[l] = r.cz[2];
+    }
+}
+
+/// Forward step across a locked joint: `A = Φ A_p + a`, `q̈ = 0` (as the scalar pseudo-joint
+/// pass).
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn lanes_fwd_locked(
+    ay: &[f64],
+    az: &[f64],
+    dy: &[f64],
+    dz: &[f64],
+    out: &mut [f64],
+    a0: &mut [f64],
+    a1: &mut [f64],
+    a2: &mut [f64],
+) {
+    let bl = out.len();
+    let (ay, az, dy, dz) = (&ay[..bl], &az[..bl], &dy[..bl], &dz[..bl]);
+    let (a0, a1, a2) = (&mut a0[..bl], &mut a1[..bl], &mut a2[..bl]);
+    for l in 0..bl {
+        let ab = spatial::motion_transport(&[a0[l], a1[l], a2[l]], dy[l], dz[l]);
+        out[l] = 0.0;
+        a0[l] = ab[0];
+        a1[l] = ab[1] + ay[l];
+        a2[l] = ab[2] + az[l];
     }
 }

@@ -34,7 +34,7 @@ pub fn batch_rnea(
     let mut l0 = 0;
     while l0 < lanes {
         let bl = bw.block.min(lanes - l0);
-        batch_kin_pass(chain, bw, q, qd, l0, bl);
+        batch_kin_pass(chain, bw, q.as_ref(), qd.as_ref(), l0, bl);
         // forward accelerations
         let ab = chain.base_acc;
         for k in 0..n {

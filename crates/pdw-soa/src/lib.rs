@@ -28,7 +28,7 @@ pub mod workspace;
 
 pub use aba::aba;
 pub use batch::BatchWorkspace;
-pub use batch_aba::batch_aba;
+pub use batch_aba::{batch_aba, batch_aba_view};
 pub use batch_rnea::batch_rnea;
 pub use chain::{Chain, ChainBuilder, JointKind, Link};
 pub use closed_chain::{closed_chain_dynamics, ClosedChainForces};

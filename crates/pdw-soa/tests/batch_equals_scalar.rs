@@ -90,3 +90,60 @@ fn batched_kernels_reject_wrong_shapes() {
         "{e}"
     );
 }
+
+/// The batched pseudo-joint path (locked joints welded in the articulated-body recursion) on
+/// column views of a state matrix equals the scalar `pseudo_joint_dynamics` bit for bit per lane,
+/// for any lane count, with zero torques (`tau = None`) as the passive walkers use it.
+#[test]
+fn batched_locked_joints_on_views_equal_scalar_pseudo_joints_bit_for_bit() {
+    let mut r = rng(11);
+    for (ci, n) in [2usize, 3, 4, 6].into_iter().enumerate() {
+        let chain = random_chain(&mut r, n, ci % 2 == 1);
+        let mut ws = Workspace::new(&chain);
+        let lock_sets: Vec<Vec<usize>> = vec![vec![], vec![1], vec![0, n - 1], vec![n - 1]];
+        for lanes in [1usize, 5, 300] {
+            let mut bw = BatchWorkspace::new(&chain, lanes.min(64));
+            // state matrix (lanes × 2n): q then q̇, as a hybrid system's flow receives it
+            let x = fill(&mut r, lanes, 2 * n, -2.0, 2.0);
+            for locked in &lock_sets {
+                let mask: Vec<bool> = (0..n).map(|k| locked.contains(&k)).collect();
+                let mut dx = Mat::<f64>::zeros(lanes, 2 * n);
+                batch_aba_view(
+                    &chain,
+                    &mut bw,
+                    x.as_ref().subcols(0, n),
+                    x.as_ref().subcols(n, n),
+                    None,
+                    None,
+                    Some(&mask),
+                    dx.as_mut().subcols_mut(n, n),
+                )
+                .unwrap();
+                let zero = vec![0.0; n];
+                let (mut qdd, mut lock) = (vec![0.0; n], vec![0.0; n]);
+                for l in 0..lanes {
+                    let xl: Vec<f64> = (0..2 * n).map(|k| x[(l, k)]).collect();
+                    pseudo_joint_dynamics(
+                        &chain,
+                        &mut ws,
+                        &xl[..n],
+                        &xl[n..],
+                        &zero,
+                        locked,
+                        None,
+                        &mut qdd,
+                        &mut lock,
+                    )
+                    .unwrap();
+                    for k in 0..n {
+                        assert_eq!(
+                            dx[(l, n + k)].to_bits(),
+                            qdd[k].to_bits(),
+                            "n={n} lanes={lanes} locked={locked:?} lane {l} joint {k}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
