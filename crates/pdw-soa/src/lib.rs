@@ -16,6 +16,8 @@ pub mod batch_rnea;
 pub mod chain;
 pub mod closed_chain;
 pub mod crba;
+pub mod derivatives;
+pub mod dual;
 pub mod energy;
 pub mod error;
 pub mod impact;
@@ -33,6 +35,11 @@ pub use batch_rnea::batch_rnea;
 pub use chain::{Chain, ChainBuilder, JointKind, Link};
 pub use closed_chain::{closed_chain_dynamics, ClosedChainForces};
 pub use crba::{crba, forward_dynamics_crba};
+pub use derivatives::{
+    aba_derivatives, joint_lock_impact_derivatives, tip_impact_derivatives,
+    tip_position_derivatives,
+};
+pub use dual::{Dual, Scalar};
 pub use energy::{
     angular_momentum_about, kinetic_energy, linear_momentum, potential_energy, total_energy,
 };

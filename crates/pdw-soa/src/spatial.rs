@@ -23,12 +23,21 @@
 //! loop. Rust never contracts `a*b + c` into a fused multiply-add on its own, so the vectorised
 //! lane loop performs the identical IEEE operations and both give the same bits. sin/cos come
 //! from one routine ([`sincos`], `wide::f64x4::sin_cos`) in both paths.
+//!
+//! # Generic scalars
+//! The kinematics and RNEA steps are generic over [`Scalar`]: `f64` for the kernels, and the
+//! forward-mode [`crate::dual::Dual`] for exact derivatives ([`crate::derivatives`]) through the
+//! same arithmetic. Constants are written `T::cst(c)` in the place the literal had, so the `f64`
+//! instantiation performs the same IEEE operations in the same order as before (the kernels'
+//! results are unchanged bit for bit).
 
 // The per-link step functions take every input as a separate scalar so that the scalar
 // kernels and the batched lane loops call the very same arithmetic.
 #![allow(clippy::too_many_arguments)]
 
 use wide::f64x4;
+
+use crate::dual::Scalar;
 
 /// Symmetric 3×3 stored as `[x00, x01, x02, x11, x12, x22]`.
 pub(crate) type Sym3 = [f64; 6];
@@ -89,16 +98,16 @@ pub fn spatial_inertia(m: f64, ic: f64, c: [f64; 2]) -> [[f64; 3]; 3] {
 /// Inputs: previous link rotation `(sp, cp)`, previous `to_next` `(lyp, lzp)` (local), own
 /// rotation `(s, c)`, local COM `(comy, comz)`. Returns `(dy, dz, cy, cz)`.
 #[inline(always)]
-pub(crate) fn geom_rev(
-    sp: f64,
-    cp: f64,
-    lyp: f64,
-    lzp: f64,
-    s: f64,
-    c: f64,
-    comy: f64,
-    comz: f64,
-) -> (f64, f64, f64, f64) {
+pub(crate) fn geom_rev<T: Scalar>(
+    sp: T,
+    cp: T,
+    lyp: T,
+    lzp: T,
+    s: T,
+    c: T,
+    comy: T,
+    comz: T,
+) -> (T, T, T, T) {
     let dy = cp * lyp - sp * lzp;
     let dz = sp * lyp + cp * lzp;
     let cy = c * comy - s * comz;
@@ -110,17 +119,17 @@ pub(crate) fn geom_rev(
 /// lever `d = R (l_{k−1} + q u)`, world axis `h = R u`, world COM offset.
 /// Returns `(dy, dz, hy, hz, cy, cz)`.
 #[inline(always)]
-pub(crate) fn geom_pri(
-    sp: f64,
-    cp: f64,
-    lyp: f64,
-    lzp: f64,
-    uy: f64,
-    uz: f64,
-    q: f64,
-    comy: f64,
-    comz: f64,
-) -> (f64, f64, f64, f64, f64, f64) {
+pub(crate) fn geom_pri<T: Scalar>(
+    sp: T,
+    cp: T,
+    lyp: T,
+    lzp: T,
+    uy: T,
+    uz: T,
+    q: T,
+    comy: T,
+    comz: T,
+) -> (T, T, T, T, T, T) {
     let ly = lyp + q * uy;
     let lz = lzp + q * uz;
     let dy = cp * ly - sp * lz;
@@ -135,7 +144,7 @@ pub(crate) fn geom_pri(
 /// Angular rate and acceleration bias across a revolute joint (seed eq. 3.13):
 /// `ω = ω_p + q̇`, `a = [0, −ω_p² d]`. Returns `(ω, a_y, a_z)`.
 #[inline(always)]
-pub(crate) fn vel_rev(wp: f64, qd: f64, dy: f64, dz: f64) -> (f64, f64, f64) {
+pub(crate) fn vel_rev<T: Scalar>(wp: T, qd: T, dy: T, dz: T) -> (T, T, T) {
     let w = wp + qd;
     let w2 = wp * wp;
     (w, -(w2 * dy), -(w2 * dz))
@@ -144,15 +153,15 @@ pub(crate) fn vel_rev(wp: f64, qd: f64, dy: f64, dz: f64) -> (f64, f64, f64) {
 /// Angular rate and acceleration bias across a prismatic joint: `ω = ω_p`,
 /// `a = [0, −ω_p² d + 2 ω_p × (h q̇)]`. Returns `(ω, a_y, a_z)`.
 #[inline(always)]
-pub(crate) fn vel_pri(wp: f64, qd: f64, dy: f64, dz: f64, hy: f64, hz: f64) -> (f64, f64, f64) {
+pub(crate) fn vel_pri<T: Scalar>(wp: T, qd: T, dy: T, dz: T, hy: T, hz: T) -> (T, T, T) {
     let w2 = wp * wp;
-    let t = 2.0 * wp * qd;
+    let t = T::cst(2.0) * wp * qd;
     (wp, -(w2 * dy) - t * hz, -(w2 * dz) + t * hy)
 }
 
 /// Force bias of a link (seed eq. 3.14): `b = [0, −m ω² c]`. Returns `(b_y, b_z)`.
 #[inline(always)]
-pub(crate) fn force_bias(m: f64, w: f64, cy: f64, cz: f64) -> (f64, f64) {
+pub(crate) fn force_bias<T: Scalar>(m: T, w: T, cy: T, cz: T) -> (T, T) {
     let mw2 = m * (w * w);
     (-(mw2 * cy), -(mw2 * cz))
 }
@@ -207,7 +216,7 @@ fn add_link(
 
 /// `Φᵀ X Φ` for symmetric `X` and the lever `d` (`r = (−d_z, d_y)`).
 #[inline(always)]
-pub(crate) fn congruence(x: &Sym3, dy: f64, dz: f64) -> Sym3 {
+pub(crate) fn congruence<T: Scalar>(x: &[T; 6], dy: T, dz: T) -> [T; 6] {
     let r0 = -dz;
     let r1 = dy;
     let y0 = x[0] + r0 * x[1] + r1 * x[2];
@@ -218,13 +227,13 @@ pub(crate) fn congruence(x: &Sym3, dy: f64, dz: f64) -> Sym3 {
 
 /// `Φᵀ f` for the lever `d`: moment transport `τ + d × f`.
 #[inline(always)]
-pub(crate) fn force_transport(f: &[f64; 3], dy: f64, dz: f64) -> [f64; 3] {
+pub(crate) fn force_transport<T: Scalar>(f: &[T; 3], dy: T, dz: T) -> [T; 3] {
     [f[0] + (-dz) * f[1] + dy * f[2], f[1], f[2]]
 }
 
 /// `Φ A` for the lever `d`.
 #[inline(always)]
-pub(crate) fn motion_transport(a: &[f64; 3], dy: f64, dz: f64) -> [f64; 3] {
+pub(crate) fn motion_transport<T: Scalar>(a: &[T; 3], dy: T, dz: T) -> [T; 3] {
     [a[0], a[1] + (-dz) * a[0], a[2] + dy * a[0]]
 }
 
@@ -404,30 +413,23 @@ pub(crate) fn aba_fwd_pri(
 
 /// Forward acceleration step of RNEA: `A = Φ A_p + H q̈ + a` (revolute).
 #[inline(always)]
-pub(crate) fn rnea_fwd_rev(
-    ap: &[f64; 3],
-    qdd: f64,
-    ay: f64,
-    az: f64,
-    dy: f64,
-    dz: f64,
-) -> [f64; 3] {
+pub(crate) fn rnea_fwd_rev<T: Scalar>(ap: &[T; 3], qdd: T, ay: T, az: T, dy: T, dz: T) -> [T; 3] {
     let ab = motion_transport(ap, dy, dz);
     [ab[0] + qdd, ab[1] + ay, ab[2] + az]
 }
 
 /// Forward acceleration step of RNEA (prismatic).
 #[inline(always)]
-pub(crate) fn rnea_fwd_pri(
-    ap: &[f64; 3],
-    qdd: f64,
-    ay: f64,
-    az: f64,
-    hy: f64,
-    hz: f64,
-    dy: f64,
-    dz: f64,
-) -> [f64; 3] {
+pub(crate) fn rnea_fwd_pri<T: Scalar>(
+    ap: &[T; 3],
+    qdd: T,
+    ay: T,
+    az: T,
+    hy: T,
+    hz: T,
+    dy: T,
+    dz: T,
+) -> [T; 3] {
     let ab = motion_transport(ap, dy, dz);
     [ab[0], ab[1] + (hy * qdd + ay), ab[2] + (hz * qdd + az)]
 }
@@ -435,16 +437,16 @@ pub(crate) fn rnea_fwd_pri(
 /// Backward force step of RNEA (seed eq. 2.57): `F = Φᵀ_{k+1,k} F_{k+1} + M A + b`, where
 /// `cf = Φᵀ F_{k+1}` is carried from the child. Returns `F`.
 #[inline(always)]
-pub(crate) fn rnea_back(
-    cf: &[f64; 3],
-    a: &[f64; 3],
-    j: f64,
-    m: f64,
-    cy: f64,
-    cz: f64,
-    by: f64,
-    bz: f64,
-) -> [f64; 3] {
+pub(crate) fn rnea_back<T: Scalar>(
+    cf: &[T; 3],
+    a: &[T; 3],
+    j: T,
+    m: T,
+    cy: T,
+    cz: T,
+    by: T,
+    bz: T,
+) -> [T; 3] {
     let mcy = m * cy;
     let mcz = m * cz;
     let ma0 = j * a[0] + (mcy * a[2] - mcz * a[1]);
