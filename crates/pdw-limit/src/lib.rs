@@ -13,11 +13,13 @@ pub mod basin;
 pub mod continuation;
 pub mod error;
 pub mod floquet;
+pub mod gaits;
 pub mod jacobian;
 pub mod metrics;
 pub mod newton;
 pub mod orbit;
 pub mod stride;
+pub mod trajectory;
 pub mod variational;
 
 pub use basin::{
@@ -38,4 +40,8 @@ pub use newton::{
 };
 pub use orbit::{orbit_diagram, OrbitColumn, OrbitOptions, OrbitStart};
 pub use stride::{EventDriver, Stride, StrideEnd, StrideMap, StrideOutcome, MAX_EVENTS_PER_STRIDE};
+pub use trajectory::{
+    initial_state, model_energy, simulate, Trajectory, TrajectoryError, TrajectoryEvent,
+    TrajectoryOptions, Validity,
+};
 pub use variational::Variational;

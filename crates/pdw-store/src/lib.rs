@@ -6,6 +6,7 @@
 //! * [`sweep`]: the parameter-continuation file (`pdw-sweep fixedpoint --sweep`): branches of
 //!   fixed points, their Floquet multipliers and stability, detected bifurcations and an optional
 //!   brute-force orbit diagram.
+//! * [`trajectory`]: time series of a simulated walk (`pdw-sweep simulate`), HDF5 or CSV.
 //! * [`plot`]: PNG heatmaps of basins, two-panel bifurcation diagrams, line charts (log axes for
 //!   work-precision charts) and animated GIFs of a gait, drawn with `plotters`' pure-Rust bitmap
 //!   backend and an embedded DejaVu font (no system libraries).
@@ -66,6 +67,7 @@ pub mod plot;
 pub mod shard;
 pub mod sweep;
 mod time;
+pub mod trajectory;
 
 pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
@@ -75,6 +77,10 @@ pub use error::StoreError;
 pub use plot::{animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, Frame};
 pub use shard::{merge, shard_rows, ShardSpec};
 pub use sweep::{read_sweep, write_sweep, Bifurcation, Branch, OrbitDiagram, SweepData};
+pub use trajectory::{
+    read_trajectory_h5, write_trajectory_csv, write_trajectory_h5, TrajColumn, TrajEvents,
+    TrajectoryData, TRAJECTORY_FORMAT,
+};
 
 /// Result type of this crate.
 pub type Result<T> = std::result::Result<T, StoreError>;

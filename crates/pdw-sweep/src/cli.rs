@@ -30,6 +30,8 @@ pub enum Command {
     Merge(MergeArgs),
     /// Write an animated GIF of two strides of the gait found.
     Animate(AnimateArgs),
+    /// Simulate N steps and write the time series (states, events, forces, energy) to HDF5 or CSV.
+    Simulate(SimulateArgs),
 }
 
 /// Options shared by every command that builds a model.
@@ -142,6 +144,32 @@ pub struct AnimateArgs {
     pub model: ModelOpts,
     /// Output GIF.
     #[arg(long, default_value = "gait.gif")]
+    pub out: PathBuf,
+    /// Overwrite an existing --out.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    /// Initial state just after a heel strike: section coordinates or the full state, comma
+    /// separated (see `pdw-sweep models`). Default: the stable gait.
+    #[arg(long, value_name = "X1,X2,..")]
+    pub state: Option<String>,
+    /// Start on the model's stable or unstable gait (found as `fixedpoint` finds it).
+    #[arg(long)]
+    pub gait: Option<String>,
+    /// Steps to simulate (heel strike to heel strike).
+    #[arg(long, default_value_t = 10)]
+    pub steps: usize,
+    /// Output time step (model time units). Default: every accepted integrator step and both
+    /// sides of every event.
+    #[arg(long)]
+    pub dt_out: Option<f64>,
+    /// Output file: .h5/.hdf5 (HDF5) or .csv.
+    #[arg(long, default_value = "traj.h5")]
     pub out: PathBuf,
     /// Overwrite an existing --out.
     #[arg(long)]

@@ -3,142 +3,38 @@
 use super::{build_model, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
-use pdw_hybrid::Options;
-use pdw_limit::{find_fixed_point, FixedPoint, LimitError, NewtonOptions, StrideMap};
+use pdw_limit::{FixedPoint, LimitError};
 use std::process::ExitCode;
 
-/// Integration tolerance of the stride map used for fixed points: two orders below the default
-/// residual tolerance 1e-12, so that the residual measures the Newton error, not the integrator's.
-pub const FIXEDPOINT_INTEGRATOR_TOL: f64 = 1e-14;
+pub use pdw_limit::gaits::{Failed, Found};
+use pdw_limit::Validity;
 
-/// One gait found, with the name of the guess it came from.
-pub struct Found {
-    pub label: String,
-    pub fp: FixedPoint,
-}
-
-/// A guess that did not lead to a fixed point: its label, value and the error.
-pub type Failed = (String, Vec<f64>, LimitError);
-
-/// Runs Newton from every guess (the user's, or the model's presets), de-duplicates the fixed
-/// points found, and returns them with the failures (guess label, error).
+/// Newton from every guess (the user's, or the model's presets); see [`pdw_limit::gaits::search`].
 pub fn search(
     m: &BuiltModel,
     guesses: &[(String, Vec<f64>)],
     tol: f64,
 ) -> Result<(Vec<Found>, Vec<Failed>), LimitError> {
-    let walker = m.walker.as_ref();
-    let step = |x: &[f64]| walker.step_length(x);
-    let map = StrideMap::new(
-        walker,
-        Options::dop853(FIXEDPOINT_INTEGRATOR_TOL.max(tol * 1e-2)),
-    )?
-    .with_step_length(&step);
-    let opts = NewtonOptions {
-        tol,
-        ..NewtonOptions::default()
-    };
-    let mut found: Vec<Found> = Vec::new();
-    let mut failed = Vec::new();
-    for (label, g) in guesses {
-        match find_fixed_point(&map, g, &opts) {
-            Ok(fp) => {
-                let dup = found.iter().any(|f| {
-                    f.fp.section
-                        .iter()
-                        .zip(&fp.section)
-                        .all(|(a, b)| (a - b).abs() <= 1e-8 * (1.0 + a.abs()))
-                });
-                if !dup {
-                    found.push(Found {
-                        label: label.clone(),
-                        fp,
-                    });
-                }
-            }
-            Err(e) => failed.push((label.clone(), g.clone(), e)),
-        }
-    }
-    Ok((found, failed))
+    pdw_limit::gaits::search(m.walker.as_ref(), guesses, tol)
 }
 
-/// Constraint forces and validity flags sampled along one stride of a gait (at every accepted
-/// integrator step and event): the gait is flagged, not silently accepted, if the stance foot
-/// would lift off, a locked knee would unlock, or the swing foot scuffs after mid-stance.
-#[derive(Clone, Debug, Default)]
-pub struct Validity {
-    pub min_normal_force: f64,
-    pub max_friction_required: f64,
-    /// Smallest knee-lock torque (negative: the knee would unlock); `None` without knees.
-    pub min_knee_torque: Option<f64>,
-    pub normal_force_negative: bool,
-    pub knee_unlocks: bool,
-    pub swing_foot_scuffs: bool,
-    pub samples: usize,
-}
-
-impl Validity {
-    pub fn valid(&self) -> bool {
-        !(self.normal_force_negative || self.knee_unlocks || self.swing_foot_scuffs)
-    }
-
-    pub fn json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "valid": self.valid(),
-            "min_normal_force": self.min_normal_force,
-            "max_friction_required": self.max_friction_required,
-            "min_knee_torque": self.min_knee_torque,
-            "normal_force_negative": self.normal_force_negative,
-            "knee_unlocks": self.knee_unlocks,
-            "swing_foot_scuffs": self.swing_foot_scuffs,
-        })
-    }
-}
-
-/// Samples [`Validity`] along one stride from the fixed point's post-impact state.
+/// Constraint forces and validity flags sampled along one step of a gait (every accepted
+/// integrator step and both sides of every event; [`Validity::along_step`]).
 pub fn validity(m: &BuiltModel, fp: &FixedPoint) -> Option<Validity> {
-    use pdw_hybrid::{GuardKind, Integrator, StopReason};
-    let w = m.walker.as_ref();
-    let mut v = Validity {
-        min_normal_force: f64::INFINITY,
-        ..Validity::default()
-    };
-    let mut integ = Integrator::new(w.dim(), Options::dop853(1e-10)).ok()?;
-    let (mut t, mut x, mut mode) = (0.0, fp.state.clone(), w.section_mode());
-    let mut buf = vec![0.0; x.len()];
-    let t_end = 2.0 * fp.metrics.period;
-    let mut supported = true;
-    for _ in 0..64 {
-        let m0 = mode;
-        let stop = integ.integrate_observed(w, mode, &mut t, &mut x, t_end, &mut |_, xs| match (
-            w.constraint_forces(m0, xs),
-            w.step_flags(m0, xs),
-        ) {
-            (Some(cf), Some(fl)) => {
-                v.samples += 1;
-                v.min_normal_force = v.min_normal_force.min(cf.normal);
-                v.max_friction_required = v.max_friction_required.max(cf.friction_required);
-                for tq in cf.knee_torque.iter().flatten() {
-                    v.min_knee_torque = Some(v.min_knee_torque.map_or(*tq, |k| k.min(*tq)));
-                }
-                v.normal_force_negative |= fl.normal_force_negative;
-                v.knee_unlocks |= fl.knee_unlocks;
-                v.swing_foot_scuffs |= fl.swing_foot_scuffs;
-            }
-            _ => supported = false,
-        });
-        match stop {
-            StopReason::Guard { guard } if w.guards(mode)[guard].kind == GuardKind::Reset => {
-                if (mode, guard) == w.section_guard() {
-                    break;
-                }
-                mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
-                x.copy_from_slice(&buf);
-            }
-            _ => return None,
-        }
-    }
-    (supported && v.samples > 0).then_some(v)
+    Validity::along_step(m.walker.as_ref(), &fp.state)
+}
+
+/// The `validity` object of `fixedpoint --json`.
+pub fn validity_json(v: &Validity) -> serde_json::Value {
+    serde_json::json!({
+        "valid": v.valid(),
+        "min_normal_force": v.min_normal_force,
+        "max_friction_required": v.max_friction_required,
+        "min_knee_torque": v.min_knee_torque,
+        "normal_force_negative": v.normal_force_negative,
+        "knee_unlocks": v.knee_unlocks,
+        "swing_foot_scuffs": v.swing_foot_scuffs,
+    })
 }
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
@@ -172,12 +68,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             }
             vec![("guess".to_string(), v)]
         }
-        None => m
-            .walker
-            .gait_guesses()
-            .into_iter()
-            .map(|g| (g.gait.to_string(), g.section))
-            .collect(),
+        None => pdw_limit::gaits::model_guesses(m.walker.as_ref()),
     };
     let (found, failed) = search(&m, &guesses, a.tol)?;
     let selected: Vec<&Found> = found
@@ -207,7 +98,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
                     "stable": fp.stable,
                     "residual": fp.residual,
                     "iterations": fp.iterations,
-                    "validity": validity(&m, fp).map(|v| v.json()),
+                    "validity": validity(&m, fp).map(|v| validity_json(&v)),
                 })
             })
             .collect();

@@ -5,6 +5,7 @@ mod basin;
 mod fixedpoint;
 mod merge;
 mod models;
+mod simulate;
 mod sweep;
 
 use crate::args::{self, InputError};
@@ -19,6 +20,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Animate(a) => animate::run(&a),
         Command::Basin(a) => basin::run(&a),
         Command::Merge(a) => merge::run(&a),
+        Command::Simulate(a) => simulate::run(&a),
     }
 }
 

@@ -1,0 +1,594 @@
+//! Trajectories: the time series of a walk of `N` steps from one initial state.
+//!
+//! A step runs from the post-impact state on the Poincaré section to the next firing of the
+//! section reset ([`Section::section_guard`]), through every intermediate reset (a knee strike),
+//! exactly as one application of the stride map ([`crate::StrideMap`]) does. Along the way
+//! [`simulate`] records, per sample,
+//!
+//! * the time `t` and the full state `x = (q, q̇)` in the model's state order, and its mode;
+//! * the stance-foot ground reaction (normal, tangential, friction coefficient needed) and the
+//!   knee-lock torques, where the model computes them ([`Walker::constraint_forces`]);
+//! * the validity flags ([`Walker::step_flags`]) as a bit mask ([`FLAG_NORMAL_NEGATIVE`], …);
+//! * the total mechanical energy, where the model defines one ([`model_energy`]); it is conserved
+//!   by the flow between impacts and drops at each plastic impact.
+//!
+//! # Sampling
+//! Without an output step (`dt_out = None`) a sample is taken at the start, after every accepted
+//! integrator step, and on both sides of every event: the pre-impact state (old mode) and the
+//! post-impact state (new mode) share the event time. The integrator restarts at every event
+//! from the state alone.
+//! With `dt_out = Some(h)` the samples are exactly at `t = k h` (the integrator is stopped at
+//! each of these times); events are then only in [`Trajectory::events`], with their pre- and
+//! post-impact states.
+//!
+//! A walk that falls, times out or fails numerically ends early; [`Trajectory::outcome`] says
+//! how (a [`StrideOutcome`], [`StrideOutcome::Ok`] when all `N` steps were completed).
+
+use crate::error::LimitError;
+use crate::stride::{StrideOutcome, MAX_EVENTS_PER_STRIDE};
+use pdw_hybrid::{GuardKind, Integrator, Options, StopReason};
+use pdw_walkers::Walker;
+
+/// Why a trajectory could not be started.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TrajectoryError {
+    /// Invalid options or integrator settings.
+    #[error(transparent)]
+    Limit(#[from] LimitError),
+    /// The initial state does not fit the model.
+    #[error("initial state: {0}")]
+    State(String),
+}
+
+/// Flag bit: the normal ground reaction on the stance foot is negative (the foot would lift off).
+pub const FLAG_NORMAL_NEGATIVE: u8 = 1;
+/// Flag bit: a locked knee needs a locking torque of the wrong sign (it would unlock).
+pub const FLAG_KNEE_UNLOCKS: u8 = 2;
+/// Flag bit: the swing foot is below ground after mid-stance (it scuffs).
+pub const FLAG_SWING_FOOT_SCUFFS: u8 = 4;
+
+/// Integration tolerance of trajectories (DOP853, `rtol = atol`), the one the CLI's validity
+/// check has always used.
+pub const TRAJECTORY_TOL: f64 = 1e-10;
+
+/// What to simulate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrajectoryOptions {
+    /// Steps (heel strike to heel strike), at least 1.
+    pub steps: usize,
+    /// Output step (model time units); `None`: every accepted integrator step and every event.
+    pub dt_out: Option<f64>,
+    /// Integrator.
+    pub integrator: Options,
+}
+
+impl TrajectoryOptions {
+    /// `steps` steps sampled at every accepted step of DOP853 at [`TRAJECTORY_TOL`].
+    pub fn new(steps: usize) -> Self {
+        Self {
+            steps,
+            dt_out: None,
+            integrator: Options::dop853(TRAJECTORY_TOL),
+        }
+    }
+
+    fn validate(&self) -> Result<(), TrajectoryError> {
+        if self.steps == 0 {
+            return Err(LimitError::InvalidOption {
+                name: "steps",
+                value: 0.0,
+                allowed: "an integer >= 1",
+            }
+            .into());
+        }
+        if let Some(h) = self.dt_out {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(LimitError::InvalidOption {
+                    name: "dt_out",
+                    value: h,
+                    allowed: "a positive finite time step",
+                }
+                .into());
+            }
+        }
+        self.integrator.validate().map_err(LimitError::from)?;
+        Ok(())
+    }
+}
+
+/// One event along a trajectory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrajectoryEvent {
+    /// Event time.
+    pub t: f64,
+    /// Step during which it happened (0-based).
+    pub step: usize,
+    /// The guard's name (e.g. `"heel_strike"`, `"knee_strike"`), or for a fall the fall's name
+    /// ([`Walker::fall_name`]).
+    pub kind: String,
+    /// True for the reset that ends a step (the section event).
+    pub ends_step: bool,
+    /// True for a terminal guard (a fall).
+    pub fall: bool,
+    /// Mode before the event.
+    pub mode_before: usize,
+    /// Mode after the event (`mode_before` for a fall).
+    pub mode_after: usize,
+    /// State just before the event.
+    pub pre: Vec<f64>,
+    /// State just after the event (equal to `pre` for a fall).
+    pub post: Vec<f64>,
+}
+
+/// Stance-foot ground reaction and knee-lock torques per sample.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ForceSeries {
+    /// Normal ground reaction `(n)`; positive: the ground pushes up.
+    pub normal: Vec<f64>,
+    /// Tangential ground reaction along the slope, downhill positive `(n)`.
+    pub tangential: Vec<f64>,
+    /// Friction coefficient the ground must supply, `|f_t / f_n|` `(n)`.
+    pub friction_required: Vec<f64>,
+    /// Knee-lock torques `[stance knee, swing knee]` per sample, `(n × 2)` row-major; NaN where
+    /// the knee is free or absent. Negative: the knee would unlock.
+    pub knee_torque: Vec<f64>,
+}
+
+/// Units of every column of a [`Trajectory`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrajectoryUnits {
+    pub time: String,
+    /// One per state component.
+    pub state: Vec<String>,
+    pub force: String,
+    pub torque: String,
+    pub energy: String,
+}
+
+/// A simulated walk. Sample arrays have one entry per sample (`n`), states `n × d` row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// State component names (`d`).
+    pub state_names: Vec<String>,
+    /// Sample times `(n)`.
+    pub t: Vec<f64>,
+    /// States `(n × d)`, row-major.
+    pub x: Vec<f64>,
+    /// Mode per sample `(n)`.
+    pub mode: Vec<u32>,
+    /// Step index per sample `(n)`.
+    pub step: Vec<u32>,
+    /// Ground reaction and knee torques, if the model computes them.
+    pub forces: Option<ForceSeries>,
+    /// Validity flag bits per sample `(n)`, if the model computes them.
+    pub flags: Option<Vec<u8>>,
+    /// Total mechanical energy per sample `(n)`, if the model defines it.
+    pub energy: Option<Vec<f64>>,
+    /// Every event, in time order.
+    pub events: Vec<TrajectoryEvent>,
+    /// How the walk ended: `Ok` when all requested steps were completed.
+    pub outcome: StrideOutcome,
+    /// Completed steps.
+    pub steps_done: usize,
+    /// Section state after each completed step (`steps_done × d_s`, row-major).
+    pub section: Vec<f64>,
+    pub units: TrajectoryUnits,
+}
+
+impl Trajectory {
+    /// State dimension `d`.
+    pub fn dim(&self) -> usize {
+        self.state_names.len()
+    }
+
+    /// Number of samples `n`.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// True without samples (never the case for a trajectory returned by [`simulate`]).
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// State of sample `i`.
+    pub fn state(&self, i: usize) -> &[f64] {
+        let d = self.dim();
+        &self.x[i * d..(i + 1) * d]
+    }
+}
+
+/// A model's total mechanical energy as a function of the full state.
+pub type EnergyFn = Box<dyn Fn(&[f64]) -> f64 + Send + Sync>;
+
+/// The total mechanical energy of `w` (potential zero at the stance foot) and its unit, for the
+/// registered models: simplest `½θ̇² + cos(θ − γ)` per unit hip mass (`M g l`), rimless per unit
+/// mass (J/kg), the chain walkers in J. `None` for a model without one.
+pub fn model_energy(w: &dyn Walker) -> Option<(EnergyFn, &'static str)> {
+    use pdw_walkers::{compass, kneed, rimless, seed5, simplest};
+    let v: Vec<f64> = w.param_values().iter().map(|p| p.1).collect();
+    // Rebuilt from the registry's parameter order (see each model's `INFO.build_from`).
+    let f: (EnergyFn, &'static str) = match w.name() {
+        "simplest" => {
+            let m = simplest::Simplest::new(simplest::SimplestParams {
+                slope: v[0],
+                max_stride_time: v[1],
+            })
+            .ok()?;
+            (Box::new(move |x| m.energy(x)), "M g l")
+        }
+        "rimless" => {
+            let m = rimless::Rimless::new(rimless::RimlessParams {
+                slope: v[0],
+                n_spokes: v[1],
+                g: v[2],
+                l: v[3],
+                max_stride_time: v[4],
+            })
+            .ok()?;
+            (Box::new(move |x| m.energy(x)), "J/kg")
+        }
+        "compass" => {
+            let m = compass::Compass::new(compass::CompassParams {
+                slope: v[0],
+                leg_mass: v[1],
+                hip_mass: v[2],
+                a: v[3],
+                b: v[4],
+                gravity: v[5],
+                max_stride_time: v[6],
+            })
+            .ok()?;
+            (Box::new(move |x| m.energy(x)), "J")
+        }
+        "kneed" => {
+            let m = kneed::Kneed::new(kneed::KneedParams {
+                slope: v[0],
+                a1: v[1],
+                b1: v[2],
+                a2: v[3],
+                b2: v[4],
+                hip_mass: v[5],
+                thigh_mass: v[6],
+                shank_mass: v[7],
+                gravity: v[8],
+                max_stride_time: v[9],
+            })
+            .ok()?;
+            (Box::new(move |x| m.energy(x)), "J")
+        }
+        "seed5" => {
+            let m = seed5::Seed5::new(seed5::Seed5Params {
+                slope: v[0],
+                shank_mass: v[1],
+                thigh_mass: v[2],
+                shank_length: v[3],
+                thigh_length: v[4],
+                hip_mass: v[5],
+                gravity: v[6],
+                variant: if v[7] == 1.0 {
+                    seed5::Seed5Variant::FreeSwingKnee
+                } else {
+                    seed5::Seed5Variant::LockedKnees
+                },
+                max_stride_time: v[8],
+            })
+            .ok()?;
+            (Box::new(move |x| m.energy(x)), "J")
+        }
+        _ => return None,
+    };
+    Some(f)
+}
+
+/// Units of the columns of a trajectory of `w`: time in the unit of the model's
+/// `max_stride_time` parameter, angles in rad, rates in rad per time unit; forces per unit hip
+/// weight `M g` for the simplest walker (its model is dimensionless), N and N m otherwise.
+pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
+    let time = pdw_walkers::model_info(w.name())
+        .ok()
+        .and_then(|i| i.params.iter().find(|p| p.name == "max_stride_time"))
+        .map(|p| p.unit)
+        .unwrap_or("s")
+        .to_string();
+    let state = w
+        .state_names()
+        .iter()
+        .map(|n| {
+            if n.ends_with("_rate") || n.ends_with("dot") {
+                format!("rad/{time}")
+            } else {
+                "rad".to_string()
+            }
+        })
+        .collect();
+    let dimensionless = w.name() == "simplest";
+    TrajectoryUnits {
+        time,
+        state,
+        force: if dimensionless { "M g" } else { "N" }.into(),
+        torque: if dimensionless { "M g l" } else { "N m" }.into(),
+        energy: energy_unit.into(),
+    }
+}
+
+/// The full initial state from `values`: section coordinates (length `d_s`, lifted with
+/// [`pdw_hybrid::Section::lift`]) or a full state (length `d`, taken as the state just after a
+/// heel strike, in the section mode).
+pub fn initial_state(w: &dyn Walker, values: &[f64]) -> Result<Vec<f64>, TrajectoryError> {
+    let (ds, d) = (w.section_dim(), w.dim());
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(TrajectoryError::State(format!(
+            "{values:?} has a non-finite value"
+        )));
+    }
+    if values.len() == ds {
+        let mut x = vec![0.0; d];
+        w.lift(values, &mut x);
+        Ok(x)
+    } else if values.len() == d {
+        Ok(values.to_vec())
+    } else {
+        Err(TrajectoryError::State(format!(
+            "{} values given; model '{}' takes {ds} section coordinates ({}) or a full state of \
+             {d} ({})",
+            values.len(),
+            w.name(),
+            w.section_names().join(", "),
+            w.state_names().join(", ")
+        )))
+    }
+}
+
+/// Per-sample recorder.
+struct Recorder<'a> {
+    w: &'a dyn Walker,
+    energy: Option<&'a EnergyFn>,
+    tr: Trajectory,
+    forces_ok: bool,
+    flags_ok: bool,
+}
+
+impl Recorder<'_> {
+    fn push(&mut self, t: f64, x: &[f64], mode: usize, step: usize) {
+        let tr = &mut self.tr;
+        tr.t.push(t);
+        tr.x.extend_from_slice(x);
+        tr.mode.push(mode as u32);
+        tr.step.push(step as u32);
+        if let Some(e) = self.energy {
+            tr.energy.get_or_insert_with(Vec::new).push(e(x));
+        }
+        match (self.forces_ok, self.w.constraint_forces(mode, x)) {
+            (true, Some(cf)) => {
+                let f = tr.forces.get_or_insert_with(ForceSeries::default);
+                f.normal.push(cf.normal);
+                f.tangential.push(cf.tangential);
+                f.friction_required.push(cf.friction_required);
+                f.knee_torque
+                    .extend(cf.knee_torque.iter().map(|k| k.unwrap_or(f64::NAN)));
+            }
+            _ => {
+                self.forces_ok = false;
+                tr.forces = None;
+            }
+        }
+        match (self.flags_ok, self.w.step_flags(mode, x)) {
+            (true, Some(fl)) => {
+                let bit = |on: bool, b: u8| if on { b } else { 0 };
+                let bits = bit(fl.normal_force_negative, FLAG_NORMAL_NEGATIVE)
+                    | bit(fl.knee_unlocks, FLAG_KNEE_UNLOCKS)
+                    | bit(fl.swing_foot_scuffs, FLAG_SWING_FOOT_SCUFFS);
+                tr.flags.get_or_insert_with(Vec::new).push(bits);
+            }
+            _ => {
+                self.flags_ok = false;
+                tr.flags = None;
+            }
+        }
+    }
+}
+
+/// Simulates `opts.steps` steps of `w` from the full state `x0` (just after a heel strike, in the
+/// section mode; see [`initial_state`]) at `t = 0`. A fall or a numerical failure ends the walk
+/// early and is reported in [`Trajectory::outcome`], not as an error.
+pub fn simulate(
+    w: &dyn Walker,
+    x0: &[f64],
+    opts: &TrajectoryOptions,
+) -> Result<Trajectory, TrajectoryError> {
+    opts.validate()?;
+    let d = w.dim();
+    if x0.len() != d {
+        return Err(TrajectoryError::State(format!(
+            "{} values given; model '{}' has a state of {d}",
+            x0.len(),
+            w.name()
+        )));
+    }
+    let energy = model_energy(w);
+    let units = units(w, energy.as_ref().map_or("", |e| e.1));
+    let mut rec = Recorder {
+        w,
+        energy: energy.as_ref().map(|e| &e.0),
+        tr: Trajectory {
+            state_names: w.state_names().iter().map(|s| s.to_string()).collect(),
+            t: Vec::new(),
+            x: Vec::new(),
+            mode: Vec::new(),
+            step: Vec::new(),
+            forces: None,
+            flags: None,
+            energy: None,
+            events: Vec::new(),
+            outcome: StrideOutcome::Ok,
+            steps_done: 0,
+            section: Vec::new(),
+            units,
+        },
+        forces_ok: true,
+        flags_ok: true,
+    };
+    let mut integ = Integrator::new(d, opts.integrator).map_err(LimitError::from)?;
+    let (mut t, mut x, mut mode) = (0.0, x0.to_vec(), w.section_mode());
+    let mut buf = vec![0.0; d];
+    let mut s = vec![0.0; w.section_dim()];
+    // Next output time (index k of t = k h) when sampling on a grid.
+    let mut k_out: u64 = 0;
+    match opts.dt_out {
+        None => rec.push(t, &x, mode, 0),
+        Some(_) => {
+            rec.push(t, &x, mode, 0);
+            k_out = 1;
+        }
+    }
+    'steps: for step in 0..opts.steps {
+        let t_budget = t + w.max_stride_time();
+        let mut events = 0;
+        loop {
+            let stop = match opts.dt_out {
+                None => {
+                    let mut first = true;
+                    let m0 = mode;
+                    integ.integrate_observed(w, mode, &mut t, &mut x, t_budget, &mut |ts, xs| {
+                        if !std::mem::take(&mut first) {
+                            rec.push(ts, xs, m0, step);
+                        }
+                    })
+                }
+                Some(h) => loop {
+                    let t_next = k_out as f64 * h;
+                    let t_end = t_next.min(t_budget);
+                    let stop = integ.integrate(w, mode, &mut t, &mut x, t_end);
+                    if stop != StopReason::EndTime || t_end == t_budget {
+                        break stop;
+                    }
+                    rec.push(t, &x, mode, step);
+                    k_out += 1;
+                },
+            };
+            let outcome = match stop {
+                StopReason::Guard { guard } => {
+                    let spec = w.guards(mode)[guard];
+                    match spec.kind {
+                        GuardKind::Reset => {
+                            let new_mode = w.reset(mode, guard, &x, &mut buf);
+                            let ends_step = (mode, guard) == w.section_guard();
+                            rec.tr.events.push(TrajectoryEvent {
+                                t,
+                                step,
+                                kind: spec.name.to_string(),
+                                ends_step,
+                                fall: false,
+                                mode_before: mode,
+                                mode_after: new_mode,
+                                pre: x.clone(),
+                                post: buf.clone(),
+                            });
+                            x.copy_from_slice(&buf);
+                            mode = new_mode;
+                            if ends_step {
+                                rec.tr.steps_done = step + 1;
+                                w.project(&x, &mut s);
+                                rec.tr.section.extend_from_slice(&s);
+                                if opts.dt_out.is_none() {
+                                    rec.push(t, &x, mode, step + 1);
+                                }
+                                continue 'steps;
+                            }
+                            if opts.dt_out.is_none() {
+                                rec.push(t, &x, mode, step);
+                            }
+                            events += 1;
+                            if events > MAX_EVENTS_PER_STRIDE {
+                                StrideOutcome::TooManyEvents
+                            } else {
+                                continue;
+                            }
+                        }
+                        GuardKind::Terminal(code) => {
+                            rec.tr.events.push(TrajectoryEvent {
+                                t,
+                                step,
+                                kind: w.fall_name(code).to_string(),
+                                ends_step: false,
+                                fall: true,
+                                mode_before: mode,
+                                mode_after: mode,
+                                pre: x.clone(),
+                                post: x.clone(),
+                            });
+                            StrideOutcome::Fall { code, guard }
+                        }
+                    }
+                }
+                StopReason::EndTime => StrideOutcome::Timeout,
+                StopReason::NonFinite => StrideOutcome::NonFinite,
+                StopReason::StepTooSmall => StrideOutcome::StepTooSmall,
+                StopReason::MaxSteps => StrideOutcome::MaxSteps,
+            };
+            if opts.dt_out.is_some() && rec.tr.t.last() != Some(&t) {
+                // The stop point closes the series.
+                rec.push(t, &x, mode, step);
+            }
+            rec.tr.outcome = outcome;
+            break 'steps;
+        }
+    }
+    Ok(rec.tr)
+}
+
+/// Constraint forces and validity flags along a trajectory: the gait is flagged, not silently
+/// accepted, if the stance foot would lift off, a locked knee would unlock, or the swing foot
+/// scuffs after mid-stance.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Validity {
+    pub min_normal_force: f64,
+    pub max_friction_required: f64,
+    /// Smallest knee-lock torque (negative: the knee would unlock); `None` without locked knees.
+    pub min_knee_torque: Option<f64>,
+    pub normal_force_negative: bool,
+    pub knee_unlocks: bool,
+    pub swing_foot_scuffs: bool,
+    /// Samples checked.
+    pub samples: usize,
+}
+
+impl Validity {
+    /// No flag raised.
+    pub fn valid(&self) -> bool {
+        !(self.normal_force_negative || self.knee_unlocks || self.swing_foot_scuffs)
+    }
+
+    /// Summary of a trajectory's forces and flags; `None` if the model computes neither or the
+    /// walk did not complete its steps.
+    pub fn of(tr: &Trajectory) -> Option<Self> {
+        let (f, flags) = (tr.forces.as_ref()?, tr.flags.as_ref()?);
+        if !tr.outcome.is_ok() || flags.is_empty() {
+            return None;
+        }
+        let or = |bit| flags.iter().any(|b| b & bit != 0);
+        let min_knee = f
+            .knee_torque
+            .iter()
+            .filter(|k| !k.is_nan())
+            .fold(None, |m: Option<f64>, &k| Some(m.map_or(k, |m| m.min(k))));
+        Some(Self {
+            min_normal_force: f.normal.iter().copied().fold(f64::INFINITY, f64::min),
+            max_friction_required: f.friction_required.iter().copied().fold(0.0, f64::max),
+            min_knee_torque: min_knee,
+            normal_force_negative: or(FLAG_NORMAL_NEGATIVE),
+            knee_unlocks: or(FLAG_KNEE_UNLOCKS),
+            swing_foot_scuffs: or(FLAG_SWING_FOOT_SCUFFS),
+            samples: flags.len(),
+        })
+    }
+
+    /// Validity along one step of the gait from the post-impact state `x0` (every accepted
+    /// DOP853 step at [`TRAJECTORY_TOL`] and both sides of every event).
+    pub fn along_step(w: &dyn Walker, x0: &[f64]) -> Option<Self> {
+        simulate(w, x0, &TrajectoryOptions::new(1))
+            .ok()
+            .and_then(|tr| Self::of(&tr))
+    }
+}

@@ -1,0 +1,262 @@
+//! `pdw-sweep simulate`: the time series of a walk of N steps (states, mode, events, ground
+//! reaction, knee-lock torque, energy, with units) to HDF5 or CSV.
+//!
+//! The walk starts from `--state` (section coordinates, or a full state just after a heel
+//! strike) or from a gait of the model (`--gait stable|unstable`, found as `fixedpoint` finds
+//! it). The trajectory itself is [`pdw_limit::trajectory::simulate`]; this file only parses,
+//! converts to the store's plain columns and writes.
+
+use super::fixedpoint::{report_failure, search};
+use super::{build_model, BuiltModel};
+use crate::args::{self, InputError};
+use crate::cli::SimulateArgs;
+use pdw_limit::trajectory::{self, Trajectory, TrajectoryOptions};
+use pdw_store::{TrajColumn, TrajEvents, TrajectoryData};
+use std::process::ExitCode;
+
+/// Residual tolerance of the gait a walk starts from (`--gait`).
+const GAIT_TOL: f64 = 1e-12;
+
+/// Output formats by file extension.
+enum Format {
+    Hdf5,
+    Csv,
+}
+
+fn format_of(path: &std::path::Path) -> Result<Format, InputError> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+    {
+        Some(e) if e == "h5" || e == "hdf5" => Ok(Format::Hdf5),
+        Some(e) if e == "csv" => Ok(Format::Csv),
+        _ => Err(InputError(format!(
+            "--out: '{}' must end in .h5, .hdf5 or .csv",
+            path.display()
+        ))),
+    }
+}
+
+pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
+    let format = format_of(&a.out)?;
+    if a.out.exists() && !a.force {
+        return Err(InputError(format!(
+            "--out: {} exists; pass --force to overwrite it",
+            a.out.display()
+        ))
+        .into());
+    }
+    if a.steps == 0 {
+        return Err(InputError("--steps: 0 must be an integer >= 1".into()).into());
+    }
+    if let Some(h) = a.dt_out {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(InputError(format!("--dt-out: {h} must be a positive time step")).into());
+        }
+    }
+    if a.state.is_some() && a.gait.is_some() {
+        return Err(InputError("--state and --gait: give one or the other".into()).into());
+    }
+    let m = build_model(&a.model)?;
+    let w = m.walker.as_ref();
+    let (x0, start) = match &a.state {
+        Some(s) => {
+            let v = s
+                .split(',')
+                .map(|t| args::parse_f64(t, "--state"))
+                .collect::<Result<Vec<f64>, _>>()?;
+            let x0 = trajectory::initial_state(w, &v)
+                .map_err(|e| InputError(format!("--state: {e}")))?;
+            (x0, format!("state {v:?}"))
+        }
+        None => {
+            let which = a.gait.as_deref().unwrap_or("stable");
+            if !matches!(which, "stable" | "unstable") {
+                return Err(InputError(format!(
+                    "--gait: '{which}' is not one of stable, unstable"
+                ))
+                .into());
+            }
+            let guesses = pdw_limit::gaits::model_guesses(w);
+            let (found, failed) = search(&m, &guesses, GAIT_TOL)?;
+            let Some(g) = found.iter().find(|f| f.fp.stable == (which == "stable")) else {
+                eprintln!(
+                    "error: no {which} period-one gait found for model '{}' at slope {} from {} \
+                     guess(es); give a starting point with --state",
+                    m.info.name,
+                    m.slope(),
+                    guesses.len()
+                );
+                for (label, g, e) in &failed {
+                    report_failure(label, g, e);
+                }
+                return Ok(ExitCode::from(2));
+            };
+            (
+                g.fp.state.clone(),
+                format!("{which} gait {:?}", g.fp.section),
+            )
+        }
+    };
+    let opts = TrajectoryOptions {
+        dt_out: a.dt_out,
+        ..TrajectoryOptions::new(a.steps)
+    };
+    let tr = trajectory::simulate(w, &x0, &opts).map_err(|e| InputError(e.to_string()))?;
+    let data = to_store(&m, &tr, &opts, &start);
+    match format {
+        Format::Hdf5 => pdw_store::write_trajectory_h5(&a.out, a.force, &data)?,
+        Format::Csv => pdw_store::write_trajectory_csv(&a.out, a.force, &data)?,
+    }
+    crate::outln!(
+        "model {}  slope {} rad  from {}",
+        m.info.name,
+        m.slope(),
+        start
+    );
+    crate::outln!(
+        "{} of {} steps, {} samples, {} events; ended: {}",
+        tr.steps_done,
+        a.steps,
+        tr.len(),
+        tr.events.len(),
+        if tr.outcome.is_ok() {
+            "all steps done".to_string()
+        } else {
+            outcome_name(w, &tr)
+        }
+    );
+    crate::outln!("wrote {}", a.out.display());
+    // A fall is an outcome of the walk (in the file's `outcome`), not an error.
+    Ok(ExitCode::SUCCESS)
+}
+
+/// How a walk that stopped early ended, with the fall named.
+fn outcome_name(w: &dyn pdw_walkers::Walker, tr: &Trajectory) -> String {
+    match tr.outcome {
+        pdw_limit::StrideOutcome::Fall { code, .. } => format!("fell ({})", w.fall_name(code)),
+        o => o.to_string(),
+    }
+}
+
+/// The store's plain columns from a trajectory, with the run's attributes.
+pub fn to_store(
+    m: &BuiltModel,
+    tr: &Trajectory,
+    opts: &TrajectoryOptions,
+    start: &str,
+) -> TrajectoryData {
+    let u = &tr.units;
+    let n = tr.len();
+    let d = tr.dim();
+    let mut columns = vec![TrajColumn::scalar("t", &u.time, tr.t.clone())];
+    let int_col = |name: &str, v: Vec<f64>| TrajColumn {
+        integer: true,
+        ..TrajColumn::scalar(name, "1", v)
+    };
+    // One column per state component, so that units can differ (angles, rates).
+    for (j, name) in tr.state_names.iter().enumerate() {
+        let v = (0..n).map(|i| tr.x[i * d + j]).collect();
+        columns.push(TrajColumn::scalar(name, &u.state[j], v));
+    }
+    columns.push(int_col(
+        "mode",
+        tr.mode.iter().map(|&v| f64::from(v)).collect(),
+    ));
+    columns.push(int_col(
+        "step",
+        tr.step.iter().map(|&v| f64::from(v)).collect(),
+    ));
+    if let Some(f) = &tr.forces {
+        columns.push(TrajColumn::scalar(
+            "normal_force",
+            &u.force,
+            f.normal.clone(),
+        ));
+        columns.push(TrajColumn::scalar(
+            "tangential_force",
+            &u.force,
+            f.tangential.clone(),
+        ));
+        columns.push(TrajColumn::scalar(
+            "friction_required",
+            "1",
+            f.friction_required.clone(),
+        ));
+        columns.push(TrajColumn {
+            width: 2,
+            components: vec!["stance_knee_torque".into(), "swing_knee_torque".into()],
+            ..TrajColumn::scalar("knee_torque", &u.torque, f.knee_torque.clone())
+        });
+    }
+    if let Some(fl) = &tr.flags {
+        columns.push(int_col("flags", fl.iter().map(|&b| f64::from(b)).collect()));
+    }
+    if let Some(e) = &tr.energy {
+        columns.push(TrajColumn::scalar("energy", &u.energy, e.clone()));
+    }
+    let ev = &tr.events;
+    let events = TrajEvents {
+        t: ev.iter().map(|e| e.t).collect(),
+        step: ev.iter().map(|e| e.step as u32).collect(),
+        kind: ev.iter().map(|e| e.kind.clone()).collect(),
+        mode_before: ev.iter().map(|e| e.mode_before as u32).collect(),
+        mode_after: ev.iter().map(|e| e.mode_after as u32).collect(),
+        pre: ev.iter().flat_map(|e| e.pre.iter().copied()).collect(),
+        post: ev.iter().flat_map(|e| e.post.iter().copied()).collect(),
+    };
+    let attrs = vec![
+        (
+            "command".into(),
+            std::env::args().collect::<Vec<_>>().join(" "),
+        ),
+        ("model".into(), m.info.name.to_string()),
+        ("slope".into(), format!("{:?}", m.slope())),
+        ("params".into(), m.params_json().to_string()),
+        ("start".into(), start.to_string()),
+        (
+            "state_names".into(),
+            serde_json::json!(tr.state_names).to_string(),
+        ),
+        ("steps".into(), opts.steps.to_string()),
+        ("steps_done".into(), tr.steps_done.to_string()),
+        (
+            "outcome".into(),
+            if tr.outcome.is_ok() {
+                "ok".to_string()
+            } else {
+                tr.outcome.to_string()
+            },
+        ),
+        (
+            "integrator".into(),
+            format!(
+                "{:?} rtol={:e} atol={:e}",
+                opts.integrator.method, opts.integrator.rtol, opts.integrator.atol
+            ),
+        ),
+        (
+            "dt_out".into(),
+            opts.dt_out
+                .map_or("every accepted step and event".to_string(), |h| {
+                    format!("{h:?}")
+                }),
+        ),
+        (
+            "flags_legend".into(),
+            serde_json::json!({
+                trajectory::FLAG_NORMAL_NEGATIVE.to_string(): "normal force negative",
+                trajectory::FLAG_KNEE_UNLOCKS.to_string(): "knee unlocks",
+                trajectory::FLAG_SWING_FOOT_SCUFFS.to_string(): "swing foot scuffs",
+            })
+            .to_string(),
+        ),
+    ];
+    TrajectoryData {
+        attrs,
+        columns,
+        events,
+        dim: d,
+    }
+}

@@ -1,0 +1,100 @@
+//! `pdw-sweep simulate`: the files hold exactly what the library computes.
+
+use pdw_limit::gaits;
+use pdw_limit::trajectory::{self, TrajectoryOptions};
+use std::process::Command;
+
+fn simulate(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+        .arg("simulate")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The library's trajectory of the compass walker's stable gait, 3 steps.
+fn library_compass() -> pdw_limit::Trajectory {
+    let w = pdw_walkers::build("compass", &[]).unwrap();
+    let (found, _) = gaits::search(w.as_ref(), &gaits::model_guesses(w.as_ref()), 1e-12).unwrap();
+    let fp = &found.iter().find(|f| f.fp.stable).unwrap().fp;
+    trajectory::simulate(w.as_ref(), &fp.state, &TrajectoryOptions::new(3)).unwrap()
+}
+
+#[test]
+fn hdf5_and_csv_hold_the_library_trajectory() {
+    let dir = tempfile::tempdir().unwrap();
+    let tr = library_compass();
+    let h5 = dir.path().join("c.h5");
+    let csv = dir.path().join("c.csv");
+    for p in [&h5, &csv] {
+        let o = simulate(&[
+            "--model",
+            "compass",
+            "--steps",
+            "3",
+            "--out",
+            p.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    assert_eq!(d.column("t").unwrap().values, tr.t);
+    assert_eq!(d.column("t").unwrap().units, "s");
+    for (j, name) in tr.state_names.iter().enumerate() {
+        let want: Vec<f64> = (0..tr.len()).map(|i| tr.state(i)[j]).collect();
+        assert_eq!(d.column(name).unwrap().values, want, "{name}");
+    }
+    assert_eq!(
+        d.column("energy").unwrap().values,
+        *tr.energy.as_ref().unwrap()
+    );
+    assert_eq!(
+        d.column("normal_force").unwrap().values,
+        tr.forces.as_ref().unwrap().normal
+    );
+    assert_eq!(
+        d.events.t,
+        tr.events.iter().map(|e| e.t).collect::<Vec<_>>()
+    );
+    assert!(d.events.kind.iter().all(|k| k == "heel_strike"));
+    // CSV: shortest round-trip floats, the same numbers.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), tr.len());
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[col("t")], tr.t[i]);
+        assert_eq!(r[col("stance_rate")], tr.state(i)[2]);
+        assert_eq!(r[col("energy")], tr.energy.as_ref().unwrap()[i]);
+    }
+    assert_eq!(text.matches("# event: ").count(), 3);
+    // An existing file is refused and left as it was.
+    let before = std::fs::read(&csv).unwrap();
+    let o = simulate(&["--model", "compass", "--out", csv.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(std::fs::read(&csv).unwrap(), before);
+}
+
+#[test]
+fn bad_input_names_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.csv");
+    let out = out.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--state", "1,2,3", "--out", out], "3 values given"),
+        (vec!["--steps", "0", "--out", out], "--steps"),
+        (vec!["--dt-out=-1", "--out", out], "--dt-out"),
+        (vec!["--gait", "sideways", "--out", out], "sideways"),
+        (vec!["--out", "t.txt"], "t.txt"),
+    ] {
+        let o = simulate(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(needle), "{args:?}: {e}");
+        assert!(!e.contains("panicked"));
+    }
+}

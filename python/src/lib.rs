@@ -1,0 +1,793 @@
+//! `pdw_sweep`: the Python face of pdw-sweep (numpy in and out).
+//!
+//! Every function builds the model from the registry ([`pdw_walkers::model_info`]) with the
+//! same parameter names as the CLI's `--set`, calls the library crates (pdw-limit), and converts
+//! the result to Python objects. Computation runs with the interpreter released
+//! ([`Python::detach`]); batched work runs on a rayon pool of [`THREADS`] threads. Invalid input
+//! raises `ValueError` with the library's message (the one the CLI prints).
+
+use numpy::ndarray::Array2;
+use numpy::{AllowTypeChange, Complex64, IntoPyArray, PyArrayLike2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use pdw_limit::basin::{self as lbasin, BasinOptions, BasinProblem, Outcome};
+use pdw_limit::gaits::{self, Found};
+use pdw_limit::trajectory::{self, TrajectoryOptions, Validity};
+use pdw_limit::{
+    continue_branch, switch_period_doubling, BifurcationKind, Branch, ContinuationOptions,
+    StrideMap, StrideOutcome,
+};
+use pdw_walkers::{ModelInfo, Walker};
+
+/// Threads of the pool that runs batched strides and basins.
+const THREADS: usize = 2;
+/// Integration tolerance (DOP853) of `stride_map`, the basin engine's default.
+const STRIDE_TOL: f64 = 1e-10;
+
+fn err(msg: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(msg.to_string())
+}
+
+/// A model built from Python arguments.
+struct Model {
+    info: &'static ModelInfo,
+    walker: Box<dyn Walker>,
+    /// `(name, value)` in the model's parameter order.
+    params: Vec<(&'static str, f64)>,
+}
+
+impl Model {
+    fn slope(&self) -> f64 {
+        self.params
+            .iter()
+            .find(|(n, _)| *n == "slope")
+            .map_or(f64::NAN, |p| p.1)
+    }
+}
+
+/// Parameter overrides from `slope` and the keyword arguments.
+fn overrides(
+    slope: Option<f64>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Vec<(String, f64)>> {
+    let mut ov = Vec::new();
+    if let Some(p) = params {
+        for (k, v) in p.iter() {
+            let name: String = k.extract()?;
+            let value: f64 = v.extract().map_err(|_| {
+                err(format!(
+                    "{name}: {} is not a number",
+                    v.repr().map_or_else(|_| "?".into(), |r| r.to_string())
+                ))
+            })?;
+            if !value.is_finite() {
+                return Err(err(format!("{name}: {value} is not a finite number")));
+            }
+            ov.push((name, value));
+        }
+    }
+    if let Some(s) = slope {
+        if !(s.is_finite() && s.abs() < std::f64::consts::FRAC_PI_2) {
+            return Err(err(format!("slope: {s} is outside (-pi/2, pi/2) rad")));
+        }
+        ov.push(("slope".to_string(), s));
+    }
+    Ok(ov)
+}
+
+fn build(model: &str, ov: &[(String, f64)]) -> PyResult<Model> {
+    let info = pdw_walkers::model_info(model).map_err(err)?;
+    let refs: Vec<(&str, f64)> = ov.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    let values = info.resolve(&refs).map_err(err)?;
+    let walker = (info.build_from)(&values).map_err(err)?;
+    let params = info.params.iter().map(|p| p.name).zip(values).collect();
+    Ok(Model {
+        info,
+        walker,
+        params,
+    })
+}
+
+fn build_kw(
+    model: &str,
+    slope: Option<f64>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Model> {
+    build(model, &overrides(slope, params)?)
+}
+
+fn rows_to_array<'py>(py: Python<'py>, v: Vec<f64>, cols: usize) -> PyResult<Bound<'py, PyAny>> {
+    let rows = v.len().checked_div(cols).unwrap_or(0);
+    let a = Array2::from_shape_vec((rows, cols), v).map_err(err)?;
+    Ok(a.into_pyarray(py).into_any())
+}
+
+fn complex_array<'py>(py: Python<'py>, m: &[pdw_limit::Multiplier]) -> Bound<'py, PyAny> {
+    m.iter()
+        .map(|l| Complex64::new(l.re, l.im))
+        .collect::<Vec<_>>()
+        .into_pyarray(py)
+        .into_any()
+}
+
+/// `models()`: every registered model with its parameters (units, defaults) and coordinates.
+#[pyfunction]
+fn models(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let out = PyList::empty(py);
+    for m in pdw_walkers::MODELS {
+        let d = PyDict::new(py);
+        d.set_item("name", m.name)?;
+        d.set_item("description", m.description)?;
+        let ps = PyList::empty(py);
+        for p in m.params {
+            let pd = PyDict::new(py);
+            pd.set_item("name", p.name)?;
+            pd.set_item("unit", p.unit)?;
+            pd.set_item("default", p.default)?;
+            pd.set_item("description", p.description)?;
+            ps.append(pd)?;
+        }
+        d.set_item("parameters", ps)?;
+        d.set_item("state_names", m.state_names.to_vec())?;
+        d.set_item("section_names", m.section_names.to_vec())?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
+fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("valid", v.valid())?;
+    d.set_item("min_normal_force", v.min_normal_force)?;
+    d.set_item("max_friction_required", v.max_friction_required)?;
+    d.set_item("min_knee_torque", v.min_knee_torque)?;
+    d.set_item("normal_force_negative", v.normal_force_negative)?;
+    d.set_item("knee_unlocks", v.knee_unlocks)?;
+    d.set_item("swing_foot_scuffs", v.swing_foot_scuffs)?;
+    Ok(d)
+}
+
+/// Gaits found from `guess` (section coordinates) or the model's own guesses.
+fn find_gaits(
+    m: &Model,
+    guess: Option<Vec<f64>>,
+    tol: f64,
+) -> PyResult<(Vec<Found>, Vec<gaits::Failed>, usize)> {
+    let w = m.walker.as_ref();
+    let guesses = match guess {
+        Some(g) => {
+            let ds = w.section_dim();
+            if g.len() != ds {
+                return Err(err(format!(
+                    "guess: {} values given, model '{}' has {} section coordinates ({})",
+                    g.len(),
+                    m.info.name,
+                    ds,
+                    m.info.section_names.join(", ")
+                )));
+            }
+            vec![("guess".to_string(), g)]
+        }
+        None => gaits::model_guesses(w),
+    };
+    let n = guesses.len();
+    let (found, failed) = gaits::search(w, &guesses, tol).map_err(err)?;
+    Ok((found, failed, n))
+}
+
+fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> PyErr {
+    let mut msg = format!(
+        "no {}period-one gait found for model '{}' at slope {} from {} guess(es)",
+        if which == "all" {
+            String::new()
+        } else {
+            format!("{which} ")
+        },
+        m.info.name,
+        m.slope(),
+        n
+    );
+    for (label, g, e) in failed {
+        msg.push_str(&format!("\n  guess '{label}' {g:?}: {e}"));
+    }
+    err(msg)
+}
+
+/// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None, **params)`.
+#[pyfunction]
+#[pyo3(signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, **params))]
+#[allow(clippy::too_many_arguments)]
+fn fixed_point<'py>(
+    py: Python<'py>,
+    model: &str,
+    slope: Option<f64>,
+    period: usize,
+    gait: &str,
+    tol: f64,
+    guess: Option<Vec<f64>>,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyList>> {
+    if period != 1 {
+        return Err(err("period-k orbits not supported yet"));
+    }
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(err(format!("tol: {tol} must be a positive number")));
+    }
+    if !matches!(gait, "stable" | "unstable" | "all") {
+        return Err(err(format!(
+            "gait: '{gait}' is not one of stable, unstable, all"
+        )));
+    }
+    let m = build_kw(model, slope, params)?;
+    let (found, failed, n, validity) = py.detach(|| -> PyResult<_> {
+        let (found, failed, n) = find_gaits(&m, guess, tol)?;
+        let validity: Vec<Option<Validity>> = found
+            .iter()
+            .map(|f| Validity::along_step(m.walker.as_ref(), &f.fp.state))
+            .collect();
+        Ok((found, failed, n, validity))
+    })?;
+    let out = PyList::empty(py);
+    for (f, v) in found.iter().zip(&validity) {
+        let fp = &f.fp;
+        let keep = match gait {
+            "stable" => fp.stable,
+            "unstable" => !fp.stable,
+            _ => true,
+        };
+        if !keep {
+            continue;
+        }
+        let d = PyDict::new(py);
+        d.set_item("gait", if fp.stable { "stable" } else { "unstable" })?;
+        d.set_item("guess", &f.label)?;
+        d.set_item("section", fp.section.clone().into_pyarray(py))?;
+        d.set_item("state_names", m.info.state_names.to_vec())?;
+        d.set_item("state", fp.state.clone().into_pyarray(py))?;
+        d.set_item("period", fp.metrics.period)?;
+        d.set_item("step_length", fp.metrics.step_length)?;
+        d.set_item("speed", fp.metrics.speed)?;
+        d.set_item("multipliers", complex_array(py, &fp.multipliers))?;
+        d.set_item("stable", fp.stable)?;
+        d.set_item("residual", fp.residual)?;
+        d.set_item("iterations", fp.iterations)?;
+        d.set_item(
+            "validity",
+            v.as_ref().map(|v| validity_dict(py, v)).transpose()?,
+        )?;
+        out.append(d)?;
+    }
+    if out.is_empty() {
+        return Err(no_gait_error(&m, gait, n, &failed));
+    }
+    Ok(out)
+}
+
+/// Outcome code of one stride (see `stride_outcomes`).
+fn stride_code(o: StrideOutcome) -> u8 {
+    match o {
+        StrideOutcome::Ok => 0,
+        StrideOutcome::Timeout => 1,
+        StrideOutcome::NonFinite => 2,
+        StrideOutcome::StepTooSmall => 3,
+        StrideOutcome::MaxSteps => 4,
+        StrideOutcome::TooManyEvents => 5,
+        StrideOutcome::Fall { code, .. } => 16u8.saturating_add(code),
+    }
+}
+
+/// `stride_outcomes(model="simplest", **params)`: legend of `stride_map`'s outcome codes.
+#[pyfunction]
+#[pyo3(signature = (model="simplest", **params))]
+fn stride_outcomes<'py>(
+    py: Python<'py>,
+    model: &str,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = build_kw(model, None, params)?;
+    let d = PyDict::new(py);
+    for (c, n) in [
+        (0u8, "ok"),
+        (1, "timeout"),
+        (2, "nonfinite"),
+        (3, "step_too_small"),
+        (4, "max_steps"),
+        (5, "too_many_events"),
+    ] {
+        d.set_item(c, n)?;
+    }
+    let mut seen = Vec::new();
+    for mode in 0..m.walker.n_modes() {
+        for g in m.walker.guards(mode) {
+            if let pdw_hybrid::GuardKind::Terminal(code) = g.kind {
+                if !seen.contains(&code) {
+                    seen.push(code);
+                    d.set_item(16u8.saturating_add(code), m.walker.fall_name(code))?;
+                }
+            }
+        }
+    }
+    Ok(d)
+}
+
+/// `stride_map(model, states, slope=None, **params)` → `(next, outcome, time)`.
+#[pyfunction]
+#[pyo3(signature = (model, states, slope=None, **params))]
+fn stride_map<'py>(
+    py: Python<'py>,
+    model: &str,
+    states: PyArrayLike2<'py, f64, AllowTypeChange>,
+    slope: Option<f64>,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let m = build_kw(model, slope, params)?;
+    let ds = m.walker.section_dim();
+    let view = states.as_array();
+    if view.ncols() != ds {
+        return Err(err(format!(
+            "states: {} columns given, model '{}' has {} section coordinates ({})",
+            view.ncols(),
+            m.info.name,
+            ds,
+            m.info.section_names.join(", ")
+        )));
+    }
+    let rows: Vec<Vec<f64>> = view.rows().into_iter().map(|r| r.to_vec()).collect();
+    if let Some(r) = rows.iter().position(|r| r.iter().any(|v| !v.is_finite())) {
+        return Err(err(format!(
+            "states: row {r} {:?} has a non-finite value",
+            rows[r]
+        )));
+    }
+    let strides = py.detach(|| -> PyResult<_> {
+        let w = m.walker.as_ref();
+        let map = StrideMap::new(w, pdw_hybrid::Options::dop853(STRIDE_TOL)).map_err(err)?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(THREADS)
+            .build()
+            .map_err(err)?;
+        let opts = BasinOptions::default();
+        map.strides_par(&rows, opts.lanes, &pool, opts.chunk, &|_| {})
+            .map_err(err)
+    })?;
+    let n = strides.len();
+    let next: Vec<f64> = strides
+        .iter()
+        .flat_map(|s| s.next.iter().copied())
+        .collect();
+    let codes: Vec<u8> = strides.iter().map(|s| stride_code(s.outcome)).collect();
+    let times: Vec<f64> = strides.iter().map(|s| s.period).collect();
+    debug_assert_eq!(next.len(), n * ds);
+    Ok((
+        rows_to_array(py, next, ds)?,
+        codes.into_pyarray(py).into_any(),
+        times.into_pyarray(py).into_any(),
+    ))
+}
+
+/// An axis `(name, lo, hi)` of a basin grid: the index of the section coordinate and its range.
+fn axis(
+    m: &Model,
+    a: Option<(String, f64, f64)>,
+    which: &str,
+    default: usize,
+    centre: &[f64],
+) -> PyResult<(usize, f64, f64)> {
+    let names = m.info.section_names;
+    match a {
+        Some((name, lo, hi)) => {
+            let i = names.iter().position(|n| *n == name).ok_or_else(|| {
+                err(format!(
+                    "{which}: model '{}' has no section coordinate '{name}'; its coordinates are {}",
+                    m.info.name,
+                    names.join(", ")
+                ))
+            })?;
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return Err(err(format!(
+                    "{which}: range {lo}:{hi} is empty or inverted; the first bound must be below the second"
+                )));
+            }
+            Ok((i, lo, hi))
+        }
+        None => {
+            // The CLI's default: 25 % of the coordinate around the gait, at least 0.05.
+            let c = centre[default];
+            let half = (0.25 * c.abs()).max(0.05);
+            Ok((default, c - half, c + half))
+        }
+    }
+}
+
+/// `basin(model="simplest", slope=None, grid=(nx, ny), x=None, y=None, max_strides=100, **params)`.
+#[pyfunction]
+#[pyo3(signature = (model="simplest", slope=None, grid=(101, 101), x=None, y=None, max_strides=100, **params))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn basin<'py>(
+    py: Python<'py>,
+    model: &str,
+    slope: Option<f64>,
+    grid: (usize, usize),
+    x: Option<(String, f64, f64)>,
+    y: Option<(String, f64, f64)>,
+    max_strides: u32,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
+    let (nx, ny) = grid;
+    if nx == 0 || ny == 0 || nx.saturating_mul(ny) > 1_000_000_000 {
+        return Err(err(format!(
+            "grid: ({nx}, {ny}) must have positive sizes and at most 10^9 cells"
+        )));
+    }
+    if max_strides == 0 || max_strides > u32::from(u16::MAX) {
+        return Err(err(format!(
+            "max_strides: {max_strides} must be between 1 and {}",
+            u16::MAX
+        )));
+    }
+    let m = build_kw(model, slope, params)?;
+    if m.info.section_names.len() < 2 {
+        return Err(err(format!(
+            "model '{}' has one section coordinate ({}); a basin grid needs two",
+            m.info.name,
+            m.info.section_names.join(", ")
+        )));
+    }
+    let (found, failed, n) = py.detach(|| find_gaits(&m, None, 1e-12))?;
+    let Some(g) = found.iter().find(|f| f.fp.stable) else {
+        return Err(no_gait_error(&m, "stable", n, &failed));
+    };
+    let fp = &g.fp;
+    let (ix, xlo, xhi) = axis(&m, x, "x", 0, &fp.section)?;
+    let (iy, ylo, yhi) = axis(&m, y, "y", 1, &fp.section)?;
+    if ix == iy {
+        return Err(err(format!(
+            "x and y both name '{}'; choose two different coordinates",
+            m.info.section_names[ix]
+        )));
+    }
+    let xs = lbasin::linspace(xlo, xhi, nx);
+    let ys = lbasin::linspace(ylo, yhi, ny);
+    let opts = BasinOptions {
+        max_strides: max_strides as u16,
+        ..BasinOptions::default()
+    };
+    let (outcome, metrics) = py.detach(|| -> PyResult<_> {
+        let w = m.walker.as_ref();
+        let fall = |c: u8| Outcome::from_fall_name(w.fall_name(c));
+        let problem = BasinProblem::new(w, fp.section.clone(), &fall);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(THREADS)
+            .build()
+            .map_err(err)?;
+        let cells = lbasin::grid_cells(&fp.section, ix, &xs, iy, &ys);
+        let res = lbasin::classify_cells(&problem, &cells, &opts, &pool, &|_| {}).map_err(err)?;
+        let outcome: Vec<u8> = res.iter().map(|c| c.outcome).collect();
+        let metrics =
+            lbasin::basin_metrics(&outcome, nx, ny, lbasin::DEFAULT_ENTROPY_BOX).map_err(err)?;
+        Ok((outcome, metrics))
+    })?;
+    let arr = Array2::from_shape_vec((ny, nx), outcome).map_err(err)?;
+    let legend = PyDict::new(py);
+    for (c, name) in lbasin::legend() {
+        legend.set_item(c, name)?;
+    }
+    let md = PyDict::new(py);
+    let fr = PyDict::new(py);
+    for (_, name, f) in &metrics.fractions {
+        fr.set_item(*name, *f)?;
+    }
+    md.set_item("fractions", fr)?;
+    md.set_item("basin_entropy", metrics.basin_entropy)?;
+    md.set_item("boundary_entropy", metrics.boundary_entropy)?;
+    md.set_item("box_size", metrics.box_size)?;
+    md.set_item("x_name", m.info.section_names[ix])?;
+    md.set_item("y_name", m.info.section_names[iy])?;
+    md.set_item("x", xs.into_pyarray(py))?;
+    md.set_item("y", ys.into_pyarray(py))?;
+    md.set_item("gait", fp.section.clone().into_pyarray(py))?;
+    md.set_item("gait_multipliers", complex_array(py, &fp.multipliers))?;
+    Ok((arr.into_pyarray(py).into_any(), legend, md))
+}
+
+fn kind_name(k: BifurcationKind) -> &'static str {
+    match k {
+        BifurcationKind::PeriodDoubling => "period_doubling",
+        BifurcationKind::Fold => "fold",
+        BifurcationKind::BranchPoint => "branch_point",
+        BifurcationKind::NeimarkSacker => "neimark_sacker",
+    }
+}
+
+fn branch_dict<'py>(
+    py: Python<'py>,
+    name: &str,
+    b: &Branch,
+    ds: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("name", name)?;
+    d.set_item("period_k", b.period_strides)?;
+    let p = &b.points;
+    d.set_item(
+        "parameter",
+        p.iter()
+            .map(|q| q.param)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "section",
+        rows_to_array(
+            py,
+            p.iter().flat_map(|q| q.section.iter().copied()).collect(),
+            ds,
+        )?,
+    )?;
+    let nm = p.first().map_or(0, |q| q.multipliers.len());
+    let mult: Vec<Complex64> = p
+        .iter()
+        .flat_map(|q| q.multipliers.iter().map(|l| Complex64::new(l.re, l.im)))
+        .collect();
+    let rows = mult.len().checked_div(nm).unwrap_or(0);
+    d.set_item(
+        "multipliers",
+        Array2::from_shape_vec((rows, nm), mult)
+            .map_err(err)?
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "stable",
+        p.iter()
+            .map(|q| q.stable)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "period",
+        p.iter()
+            .map(|q| q.period)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    let bifs = PyList::empty(py);
+    for bf in &b.bifurcations {
+        let bd = PyDict::new(py);
+        bd.set_item("kind", kind_name(bf.kind))?;
+        bd.set_item("parameter", bf.param)?;
+        bd.set_item("section", bf.section.clone().into_pyarray(py))?;
+        bd.set_item("multipliers", complex_array(py, &bf.multipliers))?;
+        bifs.append(bd)?;
+    }
+    d.set_item("bifurcations", bifs)?;
+    Ok(d)
+}
+
+/// `continuation(model, parameter="slope", start, stop, points=100, gait="stable", **params)`.
+#[pyfunction]
+#[pyo3(signature = (model="simplest", parameter="slope", start=0.001, stop=0.019, points=100, gait="stable", **params))]
+#[allow(clippy::too_many_arguments)]
+fn continuation<'py>(
+    py: Python<'py>,
+    model: &str,
+    parameter: &str,
+    start: f64,
+    stop: f64,
+    points: usize,
+    gait: &str,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyList>> {
+    if points < 2 {
+        return Err(err(format!("points: {points} must be an integer >= 2")));
+    }
+    if !(start.is_finite() && stop.is_finite()) || start == stop {
+        return Err(err(format!("start, stop: range {start}:{stop} is empty")));
+    }
+    if !matches!(gait, "stable" | "unstable") {
+        return Err(err(format!(
+            "gait: '{gait}' is not one of stable, unstable"
+        )));
+    }
+    let mut base = overrides(None, params)?;
+    base.retain(|(n, _)| n != parameter);
+    let at = |mu: f64| -> PyResult<Model> {
+        let mut ov = base.clone();
+        ov.push((parameter.to_string(), mu));
+        build(model, &ov)
+    };
+    let m0 = at(start)?;
+    at(stop)?;
+    let ds = m0.walker.section_dim();
+    let branches = py.detach(|| -> PyResult<Vec<(String, Branch)>> {
+        let (found, failed, n) = find_gaits(&m0, None, 1e-12)?;
+        let Some(s) = found.iter().find(|f| f.fp.stable == (gait == "stable")) else {
+            return Err(no_gait_error(&m0, gait, n, &failed));
+        };
+        let family = |mu: f64| at(mu).map(|m| m.walker);
+        // The CLI's `--sweep` settings: steps of one grid spacing, up to 20 points per value.
+        let span = stop - start;
+        let step = span.abs() / (points - 1) as f64;
+        let mut opts = ContinuationOptions::new(start.min(stop), start.max(stop));
+        opts.direction = span.signum();
+        opts.ds_max = step;
+        opts.ds_init = step;
+        opts.ds_min = (step * 1e-6).min(opts.ds_min.max(1e-12));
+        opts.max_points = 20 * points;
+        let main = continue_branch(&family, &s.fp.section, start, 1, &opts).map_err(err)?;
+        let pd = main
+            .bifurcations
+            .iter()
+            .find(|b| b.kind == BifurcationKind::PeriodDoubling)
+            .cloned();
+        let mut out = vec![("period-1".to_string(), main)];
+        if let Some(pd) = pd {
+            if let Ok(b2) = switch_period_doubling(&family, &pd, &opts) {
+                out.push(("period-2".to_string(), b2));
+            }
+        }
+        Ok(out)
+    })?;
+    let list = PyList::empty(py);
+    for (name, b) in &branches {
+        list.append(branch_dict(py, name, b, ds)?)?;
+    }
+    Ok(list)
+}
+
+/// `simulate(model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params)`.
+#[pyfunction]
+#[pyo3(signature = (model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params))]
+#[allow(clippy::too_many_arguments)]
+fn simulate<'py>(
+    py: Python<'py>,
+    model: &str,
+    slope: Option<f64>,
+    state: Option<Vec<f64>>,
+    gait: &str,
+    steps: usize,
+    dt_out: Option<f64>,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !matches!(gait, "stable" | "unstable") {
+        return Err(err(format!(
+            "gait: '{gait}' is not one of stable, unstable"
+        )));
+    }
+    let m = build_kw(model, slope, params)?;
+    let tr = py.detach(|| -> PyResult<_> {
+        let w = m.walker.as_ref();
+        let x0 = match state {
+            Some(v) => trajectory::initial_state(w, &v).map_err(err)?,
+            None => {
+                let (found, failed, n) = find_gaits(&m, None, 1e-12)?;
+                match found.iter().find(|f| f.fp.stable == (gait == "stable")) {
+                    Some(f) => f.fp.state.clone(),
+                    None => return Err(no_gait_error(&m, gait, n, &failed)),
+                }
+            }
+        };
+        let opts = TrajectoryOptions {
+            dt_out,
+            ..TrajectoryOptions::new(steps)
+        };
+        trajectory::simulate(w, &x0, &opts).map_err(err)
+    })?;
+    let d = PyDict::new(py);
+    let dim = tr.dim();
+    let n = tr.len();
+    d.set_item("state_names", tr.state_names.clone())?;
+    d.set_item("t", tr.t.clone().into_pyarray(py))?;
+    d.set_item("x", rows_to_array(py, tr.x.clone(), dim)?)?;
+    d.set_item("mode", tr.mode.clone().into_pyarray(py))?;
+    d.set_item("step", tr.step.clone().into_pyarray(py))?;
+    if let Some(f) = &tr.forces {
+        d.set_item("normal_force", f.normal.clone().into_pyarray(py))?;
+        d.set_item("tangential_force", f.tangential.clone().into_pyarray(py))?;
+        d.set_item(
+            "friction_required",
+            f.friction_required.clone().into_pyarray(py),
+        )?;
+        d.set_item("knee_torque", rows_to_array(py, f.knee_torque.clone(), 2)?)?;
+    }
+    if let Some(fl) = &tr.flags {
+        d.set_item("flags", fl.clone().into_pyarray(py))?;
+    }
+    if let Some(e) = &tr.energy {
+        d.set_item("energy", e.clone().into_pyarray(py))?;
+    }
+    let ev = PyDict::new(py);
+    let e = &tr.events;
+    ev.set_item(
+        "t",
+        e.iter().map(|e| e.t).collect::<Vec<_>>().into_pyarray(py),
+    )?;
+    ev.set_item("kind", e.iter().map(|e| e.kind.clone()).collect::<Vec<_>>())?;
+    ev.set_item(
+        "step",
+        e.iter()
+            .map(|e| e.step as u32)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    ev.set_item(
+        "ends_step",
+        e.iter()
+            .map(|e| e.ends_step)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    ev.set_item(
+        "mode_before",
+        e.iter()
+            .map(|e| e.mode_before as u32)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    ev.set_item(
+        "mode_after",
+        e.iter()
+            .map(|e| e.mode_after as u32)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    ev.set_item(
+        "pre",
+        rows_to_array(
+            py,
+            e.iter().flat_map(|e| e.pre.iter().copied()).collect(),
+            dim,
+        )?,
+    )?;
+    ev.set_item(
+        "post",
+        rows_to_array(
+            py,
+            e.iter().flat_map(|e| e.post.iter().copied()).collect(),
+            dim,
+        )?,
+    )?;
+    d.set_item("events", ev)?;
+    d.set_item(
+        "section",
+        rows_to_array(py, tr.section.clone(), m.walker.section_dim())?,
+    )?;
+    d.set_item("steps_done", tr.steps_done)?;
+    d.set_item(
+        "outcome",
+        match tr.outcome {
+            StrideOutcome::Ok => "ok".to_string(),
+            StrideOutcome::Fall { code, .. } => m.walker.fall_name(code).to_string(),
+            o => o.to_string(),
+        },
+    )?;
+    let u = &tr.units;
+    let ud = PyDict::new(py);
+    ud.set_item("t", &u.time)?;
+    for (name, unit) in tr.state_names.iter().zip(&u.state) {
+        ud.set_item(name, unit)?;
+    }
+    ud.set_item("normal_force", &u.force)?;
+    ud.set_item("tangential_force", &u.force)?;
+    ud.set_item("friction_required", "1")?;
+    ud.set_item("knee_torque", &u.torque)?;
+    ud.set_item("energy", &u.energy)?;
+    d.set_item("units", ud)?;
+    debug_assert_eq!(tr.mode.len(), n);
+    Ok(d)
+}
+
+/// Fixed points, stride maps, basins, continuation and trajectories of passive dynamic walkers.
+#[pymodule]
+fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(models, m)?)?;
+    m.add_function(wrap_pyfunction!(fixed_point, m)?)?;
+    m.add_function(wrap_pyfunction!(stride_map, m)?)?;
+    m.add_function(wrap_pyfunction!(stride_outcomes, m)?)?;
+    m.add_function(wrap_pyfunction!(basin, m)?)?;
+    m.add_function(wrap_pyfunction!(continuation, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    Ok(())
+}
