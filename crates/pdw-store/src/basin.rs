@@ -23,7 +23,10 @@ use std::time::Instant;
 use hdf5::{Dataset, File, Group};
 use ndarray::{s, Array2, Array3, ArrayView2, ArrayView3};
 
-use crate::h5util::{create_file, get_attr, get_str, has_attr, open_file, set_attr, set_str, At};
+use crate::h5util::{
+    create_file, ensure_space, get_attr, get_str, has_attr, lock_existing, open_file, open_locked,
+    set_attr, set_str, At, OutputLock,
+};
 use crate::shard::{shard_rows, ShardSpec};
 use crate::{time, Result, StoreError};
 
@@ -446,12 +449,16 @@ fn read_rows_done(path: &Path, f: &File) -> Result<Vec<bool>> {
 /// `complete = false`.
 pub struct BasinWriter {
     path: PathBuf,
-    file: File,
+    /// `None` once closed (or handed to [`Drop`]).
+    h: Option<Handles>,
+    /// Held until the writer is dropped: no other process writes this file meanwhile.
+    _lock: OutputLock,
+    /// Set by a failed HDF5 call: the handles are then leaked, not closed (HDF5's close after a
+    /// failed write can crash; the file stays as of its last successful flush).
+    poisoned: bool,
+    /// Blocks found damaged (checksum or content) by [`resume`](Self::resume), to recompute.
+    damaged: Vec<usize>,
     header: BasinHeader,
-    outcome: Dataset,
-    strides: Dataset,
-    final_state: Dataset,
-    rows_done_ds: Dataset,
     /// (ny) rows on disk.
     rows_done: Vec<bool>,
     /// (ny) rows this file may hold (its shard's, or all).
@@ -460,6 +467,42 @@ pub struct BasinWriter {
     pending: BTreeMap<usize, PendingBlock>,
     elapsed_before: f64,
     started: Instant,
+}
+
+/// The open HDF5 objects of a writer.
+struct Handles {
+    file: File,
+    outcome: Dataset,
+    strides: Dataset,
+    final_state: Dataset,
+    rows_done_ds: Dataset,
+}
+
+impl Handles {
+    /// Closes the datasets, then the file.
+    fn close(self, path: &Path) -> Result<()> {
+        let Handles {
+            file,
+            outcome,
+            strides,
+            final_state,
+            rows_done_ds,
+        } = self;
+        drop((outcome, strides, final_state, rows_done_ds));
+        file.close().at(path, "closing")
+    }
+}
+
+impl Drop for BasinWriter {
+    fn drop(&mut self) {
+        if let Some(h) = self.h.take() {
+            if self.poisoned {
+                std::mem::forget(h);
+            } else {
+                let _ = h.close(&self.path);
+            }
+        }
+    }
 }
 
 impl std::fmt::Debug for BasinWriter {
@@ -479,18 +522,43 @@ impl BasinWriter {
     pub fn create(path: impl AsRef<Path>, header: &BasinHeader, force: bool) -> Result<Self> {
         let path = path.as_ref();
         header.validate()?;
-        let file = create_file(path, force)?;
-        match Self::init(path, file, header) {
-            Ok(w) => Ok(w),
+        let reserve = 64 * 1024 + 8 * (header.nx() + header.ny()) as u64 + header.ny() as u64;
+        let (file, lock) = create_file(path, force, true, reserve)?;
+        let mut made = Vec::new();
+        match Self::init(path, &file, header, &mut made) {
+            Ok(h) => Ok(BasinWriter {
+                path: path.to_path_buf(),
+                h: Some(h),
+                _lock: lock,
+                poisoned: false,
+                damaged: Vec::new(),
+                header: header.clone(),
+                rows_done: vec![false; header.ny()],
+                own: own_mask(header),
+                pending: BTreeMap::new(),
+                elapsed_before: 0.0,
+                started: Instant::now(),
+            }),
             Err(e) => {
-                // A half-initialised file is useless: do not leave it behind.
+                // A half-initialised file is useless: do not leave it behind. Its HDF5 objects
+                // are leaked, not closed (closing after a failed write can crash HDF5).
+                std::mem::forget(made);
+                std::mem::forget(file);
                 let _ = std::fs::remove_file(path);
                 Err(e)
             }
         }
     }
 
-    fn init(path: &Path, file: File, h: &BasinHeader) -> Result<Self> {
+    /// Writes the header and creates the datasets; every object created is pushed onto `made`
+    /// so that the caller decides whether to close or leak them.
+    fn init(
+        path: &Path,
+        file: &File,
+        h: &BasinHeader,
+        made: &mut Vec<hdf5::Location>,
+    ) -> Result<Handles> {
+        let file = file.clone();
         let (nx, ny, d) = (h.nx(), h.ny(), h.d());
         for (k, v) in [
             ("format", BASIN_FORMAT),
@@ -513,25 +581,30 @@ impl BasinWriter {
             set_attr(path, &file, "shard_count", &(s.count as u64))?;
         }
         let grid = file.create_group("grid").at(path, "creating /grid")?;
+        made.push((*grid).clone());
         for (name, coord, v) in [("x", &h.x_name, &h.x), ("y", &h.y_name, &h.y)] {
             let ds = grid
                 .new_dataset::<f64>()
                 .shape([v.len()])
                 .create(name)
                 .at(path, "creating the grid")?;
+            made.push((**ds).clone());
             ds.write_raw(v.as_slice()).at(path, "writing the grid")?;
             set_str(path, &ds, "name", coord)?;
         }
         let basin = file.create_group("basin").at(path, "creating /basin")?;
+        made.push((*basin).clone());
         let rb = BLOCK_ROWS.min(ny);
         let outcome = basin
             .new_dataset::<u8>()
             .shape([ny, nx])
             .chunk([rb, nx])
             .deflate(DEFLATE_LEVEL)
+            .fletcher32()
             .fill_value(NOT_COMPUTED)
             .create("outcome")
             .at(path, "creating /basin/outcome")?;
+        made.push((**outcome).clone());
         set_str(path, &outcome, "legend", &legend_json(&h.legend))?;
         let strides = basin
             .new_dataset::<u16>()
@@ -539,17 +612,21 @@ impl BasinWriter {
             .chunk([rb, nx])
             .shuffle()
             .deflate(DEFLATE_LEVEL)
+            .fletcher32()
             .create("strides")
             .at(path, "creating /basin/strides")?;
+        made.push((**strides).clone());
         let final_state = basin
             .new_dataset::<f64>()
             .shape([ny, nx, d])
             .chunk([rb, nx, d])
             .shuffle()
             .deflate(DEFLATE_LEVEL)
+            .fletcher32()
             .fill_value(f64::NAN)
             .create("final")
             .at(path, "creating /basin/final")?;
+        made.push((**final_state).clone());
         let names = serde_json::to_string(&h.state_names).unwrap_or_default();
         set_str(path, &final_state, "names", &names)?;
         let rows_done_ds = basin
@@ -557,70 +634,90 @@ impl BasinWriter {
             .shape([ny])
             .create("rows_done")
             .at(path, "creating /basin/rows_done")?;
+        made.push((**rows_done_ds).clone());
         rows_done_ds
             .write_raw(&vec![0u8; ny])
             .at(path, "writing /basin/rows_done")?;
         file.flush().at(path, "flushing")?;
-        let own = own_mask(h);
-        Ok(BasinWriter {
-            path: path.to_path_buf(),
+        Ok(Handles {
             file,
-            header: h.clone(),
             outcome,
             strides,
             final_state,
             rows_done_ds,
-            rows_done: vec![false; ny],
-            own,
-            pending: BTreeMap::new(),
-            elapsed_before: 0.0,
-            started: Instant::now(),
         })
     }
 
-    /// Reopens an incomplete file made for the same run as `expected` (same model, slope,
-    /// params, integrator, tolerances, stride budget, grid, coordinates, legend, shard).
+    /// Reopens a file made for the same run as `expected` (same model, slope, params,
+    /// integrator, tolerances, stride budget, grid, coordinates, legend, shard) to continue it.
     ///
-    /// A file that does not match gives [`StoreError::Mismatch`], a complete one
-    /// [`StoreError::AlreadyComplete`], a corrupt one [`StoreError::Format`] or
-    /// [`StoreError::Hdf5`]; in every error case the file is only opened read-only, never
-    /// modified. Rows still to do: [`rows_todo`](Self::rows_todo).
+    /// Every block marked done is read back and checked before it is trusted: its chunks'
+    /// Fletcher-32 checksums (files written by this version) and its outcome codes (all in the
+    /// legend). A block that fails either check is recomputed ([`damaged_rows`](Self::damaged_rows)
+    /// lists it) and the file is marked incomplete until it is. A complete file whose every
+    /// block, metric and attractor reads back intact gives [`StoreError::AlreadyComplete`].
+    ///
+    /// A file that does not match gives [`StoreError::Mismatch`], a corrupt header
+    /// [`StoreError::Format`] or [`StoreError::Hdf5`], a file another process is writing
+    /// [`StoreError::Busy`]; in these cases the file is not modified. Rows still to do:
+    /// [`rows_todo`](Self::rows_todo).
     pub fn resume(path: impl AsRef<Path>, expected: &BasinHeader) -> Result<Self> {
         let path = path.as_ref();
         expected.validate()?;
-        {
-            let f = open_file(path, false)?;
+        let lock = lock_existing(path)?;
+        let (mut rows_done, damaged, complete) = {
+            let f = open_locked(path, false)?;
             let found = read_header(path, &f)?;
             expected.check_matches(&found, path)?;
-            if get_attr::<bool>(path, KIND, &f, "complete")? {
+            let complete = get_attr::<bool>(path, KIND, &f, "complete")?;
+            let mut rows_done = read_rows_done(path, &f)?;
+            // Only whole blocks are ever written; a partly marked block (not made by this
+            // writer) is redone whole.
+            for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
+                let r = block_range(b, found.ny());
+                if !rows_done[r.clone()].iter().all(|d| *d) {
+                    rows_done[r].iter_mut().for_each(|d| *d = false);
+                }
+            }
+            let damaged = damaged_blocks(&f, &found, &rows_done);
+            let extras_ok = !complete
+                || (read_metrics(path, &f, &found.legend).is_ok_and(|m| m.is_some())
+                    && read_attractors(path, &f).is_ok());
+            if complete && damaged.is_empty() && extras_ok {
                 return Err(StoreError::AlreadyComplete {
                     path: path.to_path_buf(),
                 });
             }
-            read_rows_done(path, &f)?;
+            (rows_done, damaged, complete)
+        };
+        for &b in &damaged {
+            let r = block_range(b, expected.ny());
+            rows_done[r].iter_mut().for_each(|d| *d = false);
         }
-        let file = open_file(path, true)?;
+        let file = open_locked(path, true)?;
         let header = read_header(path, &file)?;
-        let mut rows_done = read_rows_done(path, &file)?;
-        // Only whole blocks are ever written; a partly marked block (not made by this writer)
-        // is redone whole.
-        for b in 0..header.ny().div_ceil(BLOCK_ROWS) {
-            let r = block_range(b, header.ny());
-            if !rows_done[r.clone()].iter().all(|d| *d) {
-                rows_done[r].iter_mut().for_each(|d| *d = false);
-            }
+        if complete {
+            // Not complete until the damaged blocks (or metrics) are rewritten.
+            set_attr(path, &file, "complete", &false)?;
+            file.flush().at(path, "flushing")?;
         }
         let elapsed_before = get_attr::<f64>(path, KIND, &file, "elapsed_s")?;
         let basin = file.group("basin").at(path, "opening /basin")?;
         let open = |n: &str| basin.dataset(n).at(path, "opening the basin datasets");
-        let own = own_mask(&header);
-        Ok(BasinWriter {
-            path: path.to_path_buf(),
+        let h = Handles {
             outcome: open("outcome")?,
             strides: open("strides")?,
             final_state: open("final")?,
             rows_done_ds: open("rows_done")?,
             file,
+        };
+        let own = own_mask(&header);
+        Ok(BasinWriter {
+            path: path.to_path_buf(),
+            h: Some(h),
+            _lock: lock,
+            poisoned: false,
+            damaged,
             header,
             rows_done,
             own,
@@ -628,6 +725,16 @@ impl BasinWriter {
             elapsed_before,
             started: Instant::now(),
         })
+    }
+
+    /// Rows of blocks that [`resume`](Self::resume) found marked done but damaged (failed
+    /// checksum, unreadable, or outcome codes outside the legend); they are among
+    /// [`rows_todo`](Self::rows_todo).
+    pub fn damaged_rows(&self) -> Vec<usize> {
+        self.damaged
+            .iter()
+            .flat_map(|&b| block_range(b, self.header.ny()))
+            .collect()
     }
 
     /// What the CLI's `--resume` / `--force` mean: with `resume`, continue `path` if it exists
@@ -651,20 +758,32 @@ impl BasinWriter {
     /// Flushes and closes the file without finishing it (`complete` stays false; rows of
     /// incomplete blocks are dropped). Dropping the writer does the same but cannot report
     /// errors.
-    pub fn close(self) -> Result<()> {
+    pub fn close(mut self) -> Result<()> {
         let p = self.path.clone();
-        set_attr(&p, &self.file, "elapsed_s", &self.elapsed())?;
-        self.file.flush().at(&p, "flushing")?;
-        let BasinWriter {
-            file,
-            outcome,
-            strides,
-            final_state,
-            rows_done_ds,
-            ..
-        } = self;
-        drop((outcome, strides, final_state, rows_done_ds));
-        file.close().at(&p, "closing")
+        let r = (|| {
+            set_attr(&p, &self.h().file, "elapsed_s", &self.elapsed())?;
+            self.h().file.flush().at(&p, "flushing")
+        })();
+        self.close_after(r)
+    }
+
+    /// Closes the handles after `r` succeeded; after a failure marks the writer poisoned so
+    /// that [`Drop`] leaks them instead.
+    fn close_after(&mut self, r: Result<()>) -> Result<()> {
+        match r {
+            Ok(()) => {
+                let h = self.h.take().expect("writer is open");
+                h.close(&self.path)
+            }
+            Err(e) => {
+                self.poisoned = true;
+                Err(e)
+            }
+        }
+    }
+
+    fn h(&self) -> &Handles {
+        self.h.as_ref().expect("writer is open")
     }
 
     /// The file's header.
@@ -783,7 +902,15 @@ impl BasinWriter {
         let mut written = 0;
         for b in complete {
             let pb = self.pending.remove(&b).expect("block is pending");
-            written += self.write_block(b, &pb)?;
+            // Uncompressed size: compression only shrinks it.
+            ensure_space(&self.path, (pb.outcome.len() * (3 + 8 * d)) as u64)?;
+            match self.write_block(b, &pb) {
+                Ok(k) => written += k,
+                Err(e) => {
+                    self.poisoned = true;
+                    return Err(e);
+                }
+            }
         }
         Ok(written)
     }
@@ -794,25 +921,26 @@ impl BasinWriter {
         let range = block_range(b, self.header.ny());
         let (r0, r1, k) = (range.start, range.end, range.len());
         let p = &self.path;
+        let h = self.h.as_ref().expect("writer is open");
         let o = ArrayView2::from_shape((k, nx), &pb.outcome).expect("block shape");
         let st = ArrayView2::from_shape((k, nx), &pb.strides).expect("block shape");
         let fs = ArrayView3::from_shape((k, nx, d), &pb.final_state).expect("block shape");
-        self.outcome
+        h.outcome
             .write_slice(o, s![r0..r1, ..])
             .at(p, "writing /basin/outcome")?;
-        self.strides
+        h.strides
             .write_slice(st, s![r0..r1, ..])
             .at(p, "writing /basin/strides")?;
-        self.final_state
+        h.final_state
             .write_slice(fs, s![r0..r1, .., ..])
             .at(p, "writing /basin/final")?;
-        set_attr(p, &self.file, "elapsed_s", &self.elapsed())?;
-        self.file.flush().at(p, "flushing")?;
+        set_attr(p, &h.file, "elapsed_s", &self.elapsed())?;
+        h.file.flush().at(p, "flushing")?;
         let ones = vec![1u8; k];
-        self.rows_done_ds
+        h.rows_done_ds
             .write_slice(&ones, s![r0..r1])
             .at(p, "writing /basin/rows_done")?;
-        self.file.flush().at(p, "flushing")?;
+        h.file.flush().at(p, "flushing")?;
         self.rows_done[r0..r1].iter_mut().for_each(|b| *b = true);
         Ok(k)
     }
@@ -820,7 +948,8 @@ impl BasinWriter {
     /// Reads back the (ny × nx) outcome codes written so far ([`NOT_COMPUTED`] elsewhere), e.g.
     /// to compute metrics before [`finish`](Self::finish).
     pub fn read_outcome(&self) -> Result<Array2<u8>> {
-        self.outcome
+        self.h()
+            .outcome
             .read_2d::<u8>()
             .at(&self.path, "reading /basin/outcome")
     }
@@ -836,7 +965,7 @@ impl BasinWriter {
     /// Writes `/metrics` and `/attractors`, sets `complete = true` and closes the file.
     ///
     /// Every row of the file (or shard) must be on disk ([`StoreError::Incomplete`] otherwise).
-    pub fn finish(self, metrics: &BasinMetrics, attractors: &[Attractor]) -> Result<()> {
+    pub fn finish(mut self, metrics: &BasinMetrics, attractors: &[Attractor]) -> Result<()> {
         let todo = self.rows_todo().len();
         if todo > 0 {
             let expected = self.own.iter().filter(|b| **b).count();
@@ -847,21 +976,18 @@ impl BasinWriter {
             });
         }
         let p = self.path.clone();
-        write_metrics(&p, &self.file, metrics)?;
-        write_attractors(&p, &self.file, attractors, self.header.d())?;
-        set_attr(&p, &self.file, "elapsed_s", &self.elapsed())?;
-        set_attr(&p, &self.file, "complete", &true)?;
-        self.file.flush().at(&p, "flushing")?;
-        let BasinWriter {
-            file,
-            outcome,
-            strides,
-            final_state,
-            rows_done_ds,
-            ..
-        } = self;
-        drop((outcome, strides, final_state, rows_done_ds));
-        file.close().at(&p, "closing")
+        ensure_space(&p, 0)?;
+        let r = (|| {
+            let f = &self.h().file;
+            write_metrics(&p, f, metrics)?;
+            write_attractors(&p, f, attractors, self.header.d())?;
+            set_attr(&p, f, "elapsed_s", &self.elapsed())?;
+            f.flush().at(&p, "flushing")?;
+            // `complete` only once everything else is on disk.
+            set_attr(&p, f, "complete", &true)?;
+            f.flush().at(&p, "flushing")
+        })();
+        self.close_after(r)
     }
 }
 
@@ -875,6 +1001,41 @@ struct PendingBlock {
     final_state: Vec<f64>,
     /// (k) rows received.
     have: Vec<bool>,
+}
+
+/// Blocks whose rows are all marked done in `rows_done` but that do not read back intact: a
+/// chunk fails its checksum or cannot be read, or an outcome code is outside the legend (e.g.
+/// the fill value of a chunk never written).
+fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
+    let Ok(basin) = f.group("basin") else {
+        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+    };
+    let (o, st, fs) = (
+        basin.dataset("outcome"),
+        basin.dataset("strides"),
+        basin.dataset("final"),
+    );
+    let (Ok(o), Ok(st), Ok(fs)) = (o, st, fs) else {
+        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+    };
+    let mut bad = Vec::new();
+    for b in 0..h.ny().div_ceil(BLOCK_ROWS) {
+        let r = block_range(b, h.ny());
+        if !rows_done[r.clone()].iter().all(|d| *d) {
+            continue;
+        }
+        let ok = o
+            .read_slice_2d::<u8, _>(s![r.clone(), ..])
+            .is_ok_and(|v| v.iter().all(|c| h.legend.iter().any(|(l, _)| l == c)))
+            && st.read_slice_2d::<u16, _>(s![r.clone(), ..]).is_ok()
+            && fs
+                .read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..])
+                .is_ok();
+        if !ok {
+            bad.push(b);
+        }
+    }
+    bad
 }
 
 /// Rows `start .. end` of chunk block `b` of a grid of `ny` rows.

@@ -7,8 +7,16 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
     /// The output exists and overwriting was not allowed.
-    #[error("{}: file exists; refusing to overwrite it (use --force to replace it, or --resume to continue it)", path.display())]
-    Exists { path: PathBuf },
+    #[error("{}: file exists; refusing to overwrite it (use --force to replace it{})", path.display(), if *resumable { ", or --resume to continue it" } else { "" })]
+    Exists {
+        path: PathBuf,
+        /// Whether the command can continue the file (`basin --resume`).
+        resumable: bool,
+    },
+
+    /// Another process holds the output file's lock (it is being written).
+    #[error("{}: another process is writing this file (it is locked); wait for it to finish, or choose another output path", path.display())]
+    Busy { path: PathBuf },
 
     /// Creating, opening, renaming or removing a file failed at the operating-system level.
     #[error("{}: cannot {action}: {source}", path.display())]

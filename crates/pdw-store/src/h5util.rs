@@ -15,10 +15,20 @@ pub(crate) trait At<T> {
 
 impl<T> At<T> for hdf5::Result<T> {
     fn at(self, path: &Path, action: &str) -> Result<T> {
-        self.map_err(|source| StoreError::Hdf5 {
-            path: path.to_path_buf(),
-            action: action.to_string(),
-            source,
+        self.map_err(|source| {
+            if is_no_space(&source) {
+                StoreError::Io {
+                    path: path.to_path_buf(),
+                    action: "write",
+                    source: std::io::Error::from_raw_os_error(28),
+                }
+            } else {
+                StoreError::Hdf5 {
+                    path: path.to_path_buf(),
+                    action: action.to_string(),
+                    source,
+                }
+            }
         })
     }
 }
@@ -83,66 +93,199 @@ pub(crate) fn has_attr(loc: &Location, name: &str) -> bool {
         .unwrap_or(false)
 }
 
-/// Creates `path` for writing. Without `force`, an existing file is an error and is left
-/// untouched (the check and the creation are one atomic `create_new`); with `force` an existing
-/// regular file is replaced. Unwritable locations give the operating system's message.
-pub(crate) fn create_file(path: &Path, force: bool) -> Result<hdf5::File> {
-    if path.is_dir() {
-        return Err(StoreError::Io {
+/// An exclusive advisory lock (`flock`) on an output file, held for as long as the file is
+/// being written. Two pdw-sweep processes given the same output path exclude each other: the
+/// second is refused *before* anything is truncated or modified (HDF5's own lock is taken only
+/// after its create call has truncated the file, so it cannot protect a running job from a
+/// second `--force` run). HDF5's own locking is turned off for the files this lock guards.
+#[derive(Debug)]
+pub(crate) struct OutputLock {
+    _file: std::fs::File,
+}
+
+fn lock(path: &Path, file: std::fs::File) -> Result<OutputLock> {
+    match file.try_lock() {
+        Ok(()) => Ok(OutputLock { _file: file }),
+        Err(std::fs::TryLockError::WouldBlock) => Err(StoreError::Busy {
+            path: path.to_path_buf(),
+        }),
+        Err(std::fs::TryLockError::Error(source)) => Err(StoreError::Io {
+            path: path.to_path_buf(),
+            action: "lock the file",
+            source,
+        }),
+    }
+}
+
+/// Refuses a path that exists and is not a regular file (a directory, FIFO, device or socket):
+/// writing there would hang (FIFO) or replace something that is not ours (device node).
+pub(crate) fn check_regular(path: &Path) -> Result<()> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => Err(StoreError::Io {
             path: path.to_path_buf(),
             action: "create a file",
             source: std::io::Error::new(std::io::ErrorKind::IsADirectory, "it is a directory"),
-        });
+        }),
+        Ok(m) if !m.is_file() => Err(StoreError::Io {
+            path: path.to_path_buf(),
+            action: "create a file",
+            source: std::io::Error::other(
+                "it exists and is not a regular file (a FIFO, device or socket); only regular \
+                 files are written or replaced",
+            ),
+        }),
+        _ => Ok(()),
     }
-    let created_here = if force {
-        // Probe writability with the OS's message before HDF5 truncates anything.
-        std::fs::OpenOptions::new()
+}
+
+/// Free bytes for an unprivileged writer on the file system holding `path` (its directory if
+/// the file does not exist yet); `None` if it cannot be queried.
+pub(crate) fn free_bytes(path: &Path) -> Option<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let dir = if path.exists() {
+        path.to_path_buf()
+    } else {
+        match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        }
+    };
+    let c = std::ffi::CString::new(dir.as_os_str().as_bytes()).ok()?;
+    let mut st: libc::statvfs = unsafe { std::mem::zeroed() };
+    // SAFETY: `c` is a valid NUL-terminated path and `st` a properly sized out-parameter.
+    let rc = unsafe { libc::statvfs(c.as_ptr(), &mut st) };
+    (rc == 0).then(|| (st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
+}
+
+/// Head room kept free beyond the data of each write: HDF5 metadata (object headers, chunk
+/// index, attributes) written by the flush that follows.
+pub(crate) const SPACE_MARGIN: u64 = 256 << 10;
+
+/// Fails with the operating system's "No space left on device" before a write of about
+/// `bytes` (+ [`SPACE_MARGIN`]) that the file system cannot hold.
+///
+/// HDF5 (1.14) does not survive a full disk: after a failed write its next flush or close
+/// dereferences a dataset it has already freed (SIGSEGV). Checking before each write turns that
+/// into an error with the file left as of its last flush (resumable). A file system filled by
+/// someone else between this check and the write can still reach HDF5's failure path; the
+/// writer then leaves the HDF5 handles unclosed (see [`crate::basin::BasinWriter`]).
+pub(crate) fn ensure_space(path: &Path, bytes: u64) -> Result<()> {
+    match free_bytes(path) {
+        Some(free) if free < bytes.saturating_add(SPACE_MARGIN) => Err(StoreError::Io {
+            path: path.to_path_buf(),
+            action: "write",
+            source: std::io::Error::other(format!(
+                "No space left on device ({} free, about {} needed)",
+                human_bytes(free),
+                human_bytes(bytes.saturating_add(SPACE_MARGIN))
+            )),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// `1.5 MiB` style.
+pub(crate) fn human_bytes(b: u64) -> String {
+    let units = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} B")
+    } else {
+        format!("{v:.1} {}", units[u])
+    }
+}
+
+/// Whether an HDF5 error is the operating system's "No space left on device".
+pub(crate) fn is_no_space(e: &hdf5::Error) -> bool {
+    let t = e.to_string();
+    t.contains("errno = 28") || t.contains("No space left on device")
+}
+
+/// Keeps HDF5 from flushing and closing files at process exit. After a failed write HDF5's own
+/// close path can crash (see [`ensure_space`]); the writers close their files explicitly and
+/// leave them unclosed after a failure, and this keeps the library's exit handler from closing
+/// them either. Must run before the library is first used; later calls are no-ops.
+pub(crate) fn no_close_at_exit() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // SAFETY: H5dont_atexit takes no arguments and only sets a flag read by H5open.
+        unsafe {
+            let _ = hdf5_sys::h5::H5dont_atexit();
+        }
+    });
+}
+
+/// Creates `path` for writing and locks it ([`OutputLock`]). Without `force`, an existing file
+/// is an error and is left untouched (the check and the creation are one atomic `create_new`);
+/// with `force` an existing regular file is replaced, but only once the lock is held (a file
+/// another process is writing is refused, not truncated). Non-regular files are refused;
+/// unwritable locations give the operating system's message; a file system without room for
+/// `reserve` bytes (+ a margin) gives "No space left on device" before anything is created.
+pub(crate) fn create_file(
+    path: &Path,
+    force: bool,
+    resume_hint: bool,
+    reserve: u64,
+) -> Result<(hdf5::File, OutputLock)> {
+    no_close_at_exit();
+    check_regular(path)?;
+    let io = |source| StoreError::Io {
+        path: path.to_path_buf(),
+        action: "create a file",
+        source,
+    };
+    let (std_file, created_here) = if force {
+        let f = std::fs::OpenOptions::new()
             .create(true)
-            .append(true)
+            .truncate(false)
+            .write(true)
             .open(path)
-            .map_err(|source| StoreError::Io {
-                path: path.to_path_buf(),
-                action: "create a file",
-                source,
-            })?;
-        false
+            .map_err(io)?;
+        (f, false)
     } else {
         match std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(path)
         {
-            Ok(_) => true,
+            Ok(f) => (f, true),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                 return Err(StoreError::Exists {
                     path: path.to_path_buf(),
+                    resumable: resume_hint,
                 })
             }
-            Err(source) => {
-                return Err(StoreError::Io {
-                    path: path.to_path_buf(),
-                    action: "create a file",
-                    source,
-                })
-            }
+            Err(source) => return Err(io(source)),
         }
     };
+    let cleanup = |e: StoreError| {
+        if created_here {
+            let _ = std::fs::remove_file(path);
+        }
+        e
+    };
+    let guard = lock(path, std_file).map_err(cleanup)?;
+    ensure_space(path, reserve).map_err(cleanup)?;
     // No free-space reuse: every allocation goes to the end of the file, so nothing the last
     // flushed state references is overwritten before the next flush (a kill between flushes
     // leaves that state intact). Needs HDF5 >= 1.10 to read.
     let file = hdf5::File::with_options()
-        .with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0))
+        .with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0).file_locking(false))
         .with_fcpl(|p| p.file_space_strategy(hdf5::file::FileSpaceStrategy::None))
         .create(path)
-        .at(path, "creating the file");
-    if file.is_err() && created_here {
-        let _ = std::fs::remove_file(path);
-    }
-    file
+        .at(path, "creating the file")
+        .map_err(cleanup)?;
+    Ok((file, guard))
 }
 
 /// Opens an existing file read-only or read-write with a 32 MiB chunk cache.
 pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
+    no_close_at_exit();
     if !path.exists() {
         return Err(StoreError::Io {
             path: path.to_path_buf(),
@@ -152,6 +295,32 @@ pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
     }
     let mut b = hdf5::File::with_options();
     b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0));
+    if rw { b.open_rw(path) } else { b.open(path) }.at(path, "opening the file")
+}
+
+/// Locks an existing file for writing ([`OutputLock`]); a file another process is writing is
+/// refused.
+pub(crate) fn lock_existing(path: &Path) -> Result<OutputLock> {
+    no_close_at_exit();
+    check_regular(path)?;
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+        .map_err(|source| StoreError::Io {
+            path: path.to_path_buf(),
+            action: "open the file for writing",
+            source,
+        })?;
+    lock(path, f)
+}
+
+/// Opens a file guarded by an [`OutputLock`] of this process (HDF5's own locking off, since
+/// the advisory lock already excludes other writers and would conflict with it).
+pub(crate) fn open_locked(path: &Path, rw: bool) -> Result<hdf5::File> {
+    no_close_at_exit();
+    let mut b = hdf5::File::with_options();
+    b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0).file_locking(false));
     if rw { b.open_rw(path) } else { b.open(path) }.at(path, "opening the file")
 }
 
@@ -179,16 +348,11 @@ pub(crate) fn rename_into_place(tmp: &Path, path: &Path) -> Result<()> {
 /// Refuses an existing `path` unless `force`, and checks its directory is writable, before a
 /// write-then-rename.
 pub(crate) fn check_target(path: &Path, force: bool) -> Result<()> {
-    if path.is_dir() {
-        return Err(StoreError::Io {
-            path: path.to_path_buf(),
-            action: "create a file",
-            source: std::io::Error::new(std::io::ErrorKind::IsADirectory, "it is a directory"),
-        });
-    }
+    check_regular(path)?;
     if path.exists() && !force {
         return Err(StoreError::Exists {
             path: path.to_path_buf(),
+            resumable: false,
         });
     }
     Ok(())

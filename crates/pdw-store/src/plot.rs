@@ -35,10 +35,66 @@ fn register_fonts() {
     });
 }
 
+/// A drawing error, told in words: plotters' backend errors embed the image encoder's Debug
+/// text (`ImageError(IoError(Custom { .. }))`); an operating-system error inside is reported
+/// by its own message instead.
 fn pe<E: std::fmt::Display>(path: &Path, e: E) -> StoreError {
+    let text = e.to_string();
+    let os = text.find("(os error ").and_then(|i| {
+        let digits: String = text[i + 10..]
+            .chars()
+            .take_while(|c| c.is_ascii_digit())
+            .collect();
+        digits.parse::<i32>().ok()
+    });
+    let detail = match os {
+        Some(code) => std::io::Error::from_raw_os_error(code).to_string(),
+        None if text.contains("ImageError") || text.contains("Custom {") => {
+            "the image encoder failed to write the file".to_string()
+        }
+        None => text,
+    };
     StoreError::Plot {
         path: path.to_path_buf(),
-        detail: e.to_string(),
+        detail,
+    }
+}
+
+/// A picture is drawn into a temporary sibling and renamed onto its path only once complete:
+/// a failed drawing (full disk, …) leaves no truncated picture and does not touch an existing
+/// one. Dropped without [`commit`](Self::commit), it removes the temporary file.
+struct TempPicture {
+    tmp: std::path::PathBuf,
+    done: bool,
+}
+
+impl TempPicture {
+    fn new(path: &Path) -> Result<Self> {
+        crate::h5util::check_regular(path)?;
+        // The encoder is chosen by the extension, so the temporary name keeps it.
+        let tmp = crate::h5util::temp_sibling(path);
+        let tmp = match path.extension() {
+            Some(ext) => {
+                let mut name = tmp.file_name().unwrap_or_default().to_os_string();
+                name.push(".");
+                name.push(ext);
+                tmp.with_file_name(name)
+            }
+            None => tmp,
+        };
+        Ok(TempPicture { tmp, done: false })
+    }
+    fn commit(mut self, path: &Path) -> Result<()> {
+        self.done = true;
+        crate::h5util::rename_into_place(&self.tmp, path)
+    }
+}
+
+impl Drop for TempPicture {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
     }
 }
 
@@ -186,7 +242,9 @@ pub fn plot_basin(
         ));
     }
     register_fonts();
-    let root = BitMapBackend::new(path, BASIN_PNG_SIZE).into_drawing_area();
+    let pic = TempPicture::new(path)?;
+    let tmp = pic.tmp.clone();
+    let root = BitMapBackend::new(&tmp, BASIN_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let (left, right) = root.split_horizontally(BASIN_PNG_SIZE.0 - 220);
     let (x0, x1) = cell_extent(&header.x);
@@ -307,7 +365,7 @@ pub fn plot_basin(
             .map_err(|x| pe(path, x))?;
     }
     root.present().map_err(|x| pe(path, x))?;
-    Ok(())
+    pic.commit(path)
 }
 
 const BRANCH_COLOURS: [RGBColor; 6] = [
@@ -373,7 +431,9 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         ));
     }
     register_fonts();
-    let root = BitMapBackend::new(path, BIFURCATION_PNG_SIZE).into_drawing_area();
+    let pic = TempPicture::new(path)?;
+    let tmp = pic.tmp.clone();
+    let root = BitMapBackend::new(&tmp, BIFURCATION_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let panels = root.split_evenly((2, 1));
 
@@ -551,7 +611,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         .draw()
         .map_err(|x| pe(path, x))?;
     root.present().map_err(|x| pe(path, x))?;
-    Ok(())
+    pic.commit(path)
 }
 
 /// Title and axis labels of a chart.
@@ -656,7 +716,9 @@ pub fn plot_lines(
     };
     let (xr, yr) = (widen(xr, log_x), widen(yr, log_y));
     register_fonts();
-    let root = BitMapBackend::new(path, LINES_PNG_SIZE).into_drawing_area();
+    let pic = TempPicture::new(path)?;
+    let tmp = pic.tmp.clone();
+    let root = BitMapBackend::new(&tmp, LINES_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let labels = Labels {
         title,
@@ -695,7 +757,7 @@ pub fn plot_lines(
         ),
     }?;
     root.present().map_err(|x| pe(path, x))?;
-    Ok(())
+    pic.commit(path)
 }
 
 /// One picture of a walker, in world coordinates (metres or leg lengths; x along the ground's
@@ -801,7 +863,9 @@ pub fn animate_gif(
     let (x0, x1) = (cx - s * w / 2.0, cx + s * w / 2.0);
     let (y0, y1) = (cy - s * h / 2.0, cy + s * h / 2.0);
     register_fonts();
-    let root = BitMapBackend::gif(path, size, delay_ms)
+    let pic = TempPicture::new(path)?;
+    let tmp = pic.tmp.clone();
+    let root = BitMapBackend::gif(&tmp, size, delay_ms)
         .map_err(|x| pe(path, x))?
         .into_drawing_area();
     for f in frames {
@@ -843,7 +907,9 @@ pub fn animate_gif(
             .map_err(|x| pe(path, x))?;
         root.present().map_err(|x| pe(path, x))?;
     }
-    Ok(())
+    // The GIF encoder writes its trailer when the backend is dropped.
+    drop(root);
+    pic.commit(path)
 }
 
 #[cfg(test)]

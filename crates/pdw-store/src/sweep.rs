@@ -173,9 +173,16 @@ pub fn write_sweep(path: impl AsRef<Path>, force: bool, data: &SweepData) -> Res
     check_target(path, force)?;
     let tmp = temp_sibling(path);
     let res = (|| -> Result<()> {
-        let f = create_file(&tmp, true)?;
-        fill(&tmp, &f, data)?;
-        f.close().at(&tmp, "closing")
+        let (f, _lock) = create_file(&tmp, true, false, 0)?;
+        match fill(&tmp, &f, data).and_then(|()| f.flush().at(&tmp, "flushing")) {
+            Ok(()) => f.close().at(&tmp, "closing"),
+            Err(e) => {
+                // Closing after a failed write can crash HDF5: leave the handle unclosed (the
+                // temporary file is removed below).
+                std::mem::forget(f);
+                Err(e)
+            }
+        }
     })();
     match res {
         Ok(()) => rename_into_place(&tmp, path),

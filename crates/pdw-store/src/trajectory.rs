@@ -157,7 +157,7 @@ pub fn write_trajectory_h5(
     check_target(path, force)?;
     let tmp = temp_sibling(path);
     let res = (|| -> Result<()> {
-        let f = create_file(&tmp, true)?;
+        let (f, _lock) = create_file(&tmp, true, false, 0)?;
         fill(&tmp, &f, data)?;
         f.close().at(&tmp, "closing")
     })();

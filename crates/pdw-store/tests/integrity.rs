@@ -1,0 +1,147 @@
+//! Nothing damaged is trusted, nothing running is clobbered: checksummed blocks verified on
+//! resume, and the output lock that keeps a second writer off a file being written.
+
+mod common;
+
+use common::*;
+use pdw_store::{read_basin, BasinWriter, StoreError};
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::Path;
+
+/// Writes every row of `h` into a new file at `p` and finishes it.
+fn complete_file(p: &Path, h: &pdw_store::BasinHeader) {
+    let mut w = BasinWriter::create(p, h, false).unwrap();
+    write_block(&mut w, 0, h.ny());
+    let (o, _, _) = block(h, 0, h.ny());
+    w.finish(&fractions(h, &o), &attractors()).unwrap();
+}
+
+/// File offset and size of chunk `index` of dataset `name`.
+fn chunk_at(p: &Path, name: &str, index: usize) -> (u64, u64) {
+    let f = hdf5::File::open(p).unwrap();
+    let ds = f.dataset(name).unwrap();
+    let c = ds.chunk_info(index).expect("chunk is allocated");
+    (c.addr, c.size)
+}
+
+/// Overwrites `n` bytes in the middle of `[at, at + len)` with their complement.
+fn damage(p: &Path, at: u64, len: u64, n: u64) {
+    let mut f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(p)
+        .unwrap();
+    let start = at + len / 2 - n.min(len) / 2;
+    let mut buf = vec![0u8; n.min(len) as usize];
+    f.seek(SeekFrom::Start(start)).unwrap();
+    f.read_exact(&mut buf).unwrap();
+    for b in &mut buf {
+        *b = !*b;
+    }
+    f.seek(SeekFrom::Start(start)).unwrap();
+    f.write_all(&buf).unwrap();
+}
+
+#[test]
+fn damaged_chunk_of_a_complete_file_is_detected_and_recomputed_on_resume() {
+    let dir = scratch("damaged-complete");
+    let p = dir.join("basin.h5");
+    let h = header(23, 50); // blocks of rows 0..16, 16..32, 32..48, 48..50
+    complete_file(&p, &h);
+    let intact = read_basin(&p).unwrap();
+    // Damage the second chunk of /basin/final (rows 16..32): the data can no longer be read.
+    let (at, len) = chunk_at(&p, "basin/final", 1);
+    damage(&p, at, len, 32);
+    assert!(
+        read_basin(&p).is_err(),
+        "the checksum must catch the damage"
+    );
+
+    // Resume does not call it complete: it finds the block and schedules it again.
+    let w = BasinWriter::resume(&p, &h).unwrap();
+    assert_eq!(w.damaged_rows(), (16..32).collect::<Vec<_>>());
+    assert_eq!(w.rows_todo(), (16..32).collect::<Vec<_>>());
+    drop(w);
+    // Interrupted before recomputing: still not complete, still found.
+    let d = hdf5::File::open(&p).unwrap();
+    assert!(!d.attr("complete").unwrap().read_scalar::<bool>().unwrap());
+    drop(d);
+    let mut w = BasinWriter::resume(&p, &h).unwrap();
+    assert_eq!(w.rows_todo(), (16..32).collect::<Vec<_>>());
+    write_block(&mut w, 16, 16);
+    let (o, _, _) = block(&h, 0, h.ny());
+    w.finish(&fractions(&h, &o), &attractors()).unwrap();
+
+    let repaired = read_basin(&p).unwrap();
+    assert!(repaired.complete);
+    assert_eq!(repaired.outcome, intact.outcome);
+    assert_eq!(repaired.strides, intact.strides);
+    let bits = |a: &ndarray::Array3<f64>| a.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&repaired.final_state), bits(&intact.final_state));
+    // Now intact: resuming it again is "already complete".
+    assert!(matches!(
+        BasinWriter::resume(&p, &h),
+        Err(StoreError::AlreadyComplete { .. })
+    ));
+}
+
+#[test]
+fn damaged_outcome_chunk_of_a_partial_file_is_recomputed_not_trusted() {
+    let dir = scratch("damaged-partial");
+    let p = dir.join("basin.h5");
+    let h = header(31, 40);
+    let mut w = BasinWriter::create(&p, &h, false).unwrap();
+    write_block(&mut w, 0, 32); // blocks 0 and 1 on disk, block 2 (rows 32..40) missing
+    w.close().unwrap();
+    let (at, len) = chunk_at(&p, "basin/outcome", 0);
+    damage(&p, at, len, 8);
+    let w = BasinWriter::resume(&p, &h).unwrap();
+    assert_eq!(w.damaged_rows(), (0..16).collect::<Vec<_>>());
+    let mut todo: Vec<usize> = (0..16).collect();
+    todo.extend(32..40);
+    assert_eq!(w.rows_todo(), todo);
+}
+
+#[test]
+fn a_file_being_written_is_not_truncated_by_a_second_writer() {
+    let dir = scratch("locked");
+    let p = dir.join("basin.h5");
+    let h = header(20, 32);
+    let mut first = BasinWriter::create(&p, &h, false).unwrap();
+    write_block(&mut first, 0, 16);
+    let size_before = std::fs::metadata(&p).unwrap().len();
+    // A second run with --force, and a second --resume, are refused while the first writes.
+    let err = BasinWriter::create(&p, &h, true).unwrap_err();
+    assert!(matches!(err, StoreError::Busy { .. }), "{err}");
+    assert!(err.to_string().contains("another process"), "{err}");
+    let err = BasinWriter::resume(&p, &h).unwrap_err();
+    assert!(matches!(err, StoreError::Busy { .. }), "{err}");
+    assert!(std::fs::metadata(&p).unwrap().len() >= size_before);
+    // The first run is unharmed and finishes a readable file.
+    write_block(&mut first, 16, 16);
+    let (o, _, _) = block(&h, 0, 32);
+    first.finish(&fractions(&h, &o), &attractors()).unwrap();
+    let d = read_basin(&p).unwrap();
+    assert!(d.complete);
+    assert_eq!(d.outcome.as_slice().unwrap(), &o[..]);
+    // Once it is done, --force may replace it.
+    let w = BasinWriter::create(&p, &h, true).unwrap();
+    drop(w);
+}
+
+#[test]
+fn non_regular_outputs_are_refused() {
+    let dir = scratch("fifo");
+    let fifo = dir.join("fifo.h5");
+    // mkfifo(3) directly: spawning a process here would fork this multi-threaded test binary
+    // and let the child briefly hold other tests' file locks.
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+    let h = header(8, 8);
+    let err = BasinWriter::create(&fifo, &h, true).unwrap_err();
+    assert!(err.to_string().contains("not a regular file"), "{err}");
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+}
