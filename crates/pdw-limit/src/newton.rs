@@ -13,10 +13,21 @@
 //! `‖F(s + λδ)‖₂ ≤ (1 − 10⁻⁴ λ) ‖F(s)‖₂`. A trial stride that falls counts as a failed trial.
 //!
 //! # Acceptance
-//! The solver reports convergence when `‖F‖∞ ≤ tol`. [`find_fixed_point`] never trusts that: it
+//! Convergence is relative to the gait's scale: `‖F(s)‖∞ ≤ tol · σ(s)` with
+//! `σ(s) = min(1, ‖s‖∞)`. For order-one states this is the absolute test `‖F‖∞ ≤ tol`; for small
+//! states it tightens with them, so that a residual of 10⁻¹² on a state of 10⁻⁵ (a walker barely
+//! moving, whose stride map is the identity to within 10⁻⁷) is not mistaken for a solution.
+//! The solver reports convergence on that test; [`find_fixed_point`] never trusts it: it
 //! re-runs the stride from the returned point with a fresh integrator and accepts only if
-//! `‖P(s) − s‖∞ ≤ tol`; otherwise it returns [`LimitError::NoConvergence`] with the residual
-//! history and the last iterate.
+//! `‖P(s) − s‖∞ ≤ tol · σ(s)`; otherwise it returns [`LimitError::NoConvergence`] with the
+//! residual history and the last iterate.
+//!
+//! # Degenerate gaits
+//! On a level floor (slope 0) the passive walkers lose energy at every heel strike and have no
+//! gait, but their stride map has a continuum of near-fixed points shrinking to standing still:
+//! `P(s) = s − O(‖s‖³)`, so Newton creeps towards `s = 0` with ever smaller residuals. A fixed
+//! point whose step length is below [`NewtonOptions::min_step_length`] is rejected as degenerate
+//! (the walker does not travel), with a message saying so.
 
 use crate::error::LimitError;
 use crate::floquet::{is_stable, multipliers, Multiplier};
@@ -53,6 +64,17 @@ pub struct NewtonOptions {
     pub dp: DpMethod,
     /// Jacobian reported with the fixed point (for the multipliers).
     pub dp_report: DpMethod,
+    /// Smallest step length (model length units, legs are O(1)) of an accepted gait; shorter
+    /// ones are degenerate (standing still). Applies only to maps that report a step length.
+    pub min_step_length: f64,
+}
+
+/// Default [`NewtonOptions::min_step_length`]: a millionth of a leg.
+pub const MIN_STEP_LENGTH: f64 = 1e-6;
+
+/// The scale `σ(s) = min(1, ‖s‖∞)` of the relative convergence test (see the module docs).
+pub fn residual_scale(s: &[f64]) -> f64 {
+    norm_inf(s).min(1.0)
 }
 
 impl Default for NewtonOptions {
@@ -63,6 +85,7 @@ impl Default for NewtonOptions {
             max_backtracks: 30,
             dp: DpMethod::Variational,
             dp_report: DpMethod::Variational,
+            min_step_length: MIN_STEP_LENGTH,
         }
     }
 }
@@ -219,7 +242,8 @@ where
         if let Some(msg) = &self.exit {
             return TerminationStatus::Terminated(TerminationReason::SolverExit(msg.clone()));
         }
-        if state.get_cost() <= self.tol {
+        let scale = state.get_param().map_or(1.0, |x| residual_scale(x));
+        if state.get_cost() <= self.tol * scale {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
         }
         TerminationStatus::NotTerminated
@@ -271,6 +295,24 @@ pub fn find_fixed_point<S: Section + ?Sized>(
         Err(e) => {
             // The guess itself did not give a complete stride (init failed).
             return Err(match e.downcast::<LimitError>() {
+                // A stride from an iterate far smaller than the guess: the iterates collapsed
+                // towards standing still (see "Degenerate gaits").
+                Ok(LimitError::StrideFailed { from, outcome })
+                    if norm_inf(&from) < 0.25 * norm_inf(guess) =>
+                {
+                    LimitError::NoConvergence {
+                        reason: format!(
+                            "degenerate: the iterates shrink towards standing still (‖s‖∞ from \
+                             {:.3e} at the guess to {:.3e}, where the stride fails: {outcome}), \
+                             so there is no gait to converge to",
+                            norm_inf(guess),
+                            norm_inf(&from)
+                        ),
+                        iterations: 0,
+                        last: from,
+                        history: Vec::new(),
+                    }
+                }
                 Ok(le) => le,
                 Err(e) => LimitError::NoConvergence {
                     reason: e.to_string(),
@@ -293,8 +335,25 @@ pub fn find_fixed_point<S: Section + ?Sized>(
         .or(state.get_param())
         .cloned()
         .unwrap_or_else(|| guess.to_vec());
+    // The iterates collapsed towards the standing state s = 0 (a level floor has no gait).
+    let shrunk = norm_inf(&last) < 0.25 * norm_inf(guess);
+    let collapsed = |why: String| LimitError::NoConvergence {
+        reason: format!(
+            "degenerate: the iterates shrink towards standing still (‖s‖∞ from {:.3e} at the \
+             guess to {:.3e}), so there is no gait to converge to ({why})",
+            norm_inf(guess),
+            norm_inf(&last)
+        ),
+        iterations,
+        last: last.clone(),
+        history: history.clone(),
+    };
     // Independent check with a fresh integrator.
-    let check = map.stride(&last)?;
+    let check = match map.stride(&last) {
+        Ok(c) => c,
+        Err(e) if shrunk => return Err(collapsed(e.to_string())),
+        Err(e) => return Err(e),
+    };
     let residual = if check.outcome.is_ok() {
         norm_inf(
             &check
@@ -307,10 +366,44 @@ pub fn find_fixed_point<S: Section + ?Sized>(
     } else {
         f64::INFINITY
     };
-    let accepted = residual.is_finite() && residual <= opts.tol;
-    if !accepted {
+    let accepted = residual.is_finite() && residual <= opts.tol * residual_scale(&last);
+    let step = check
+        .outcome
+        .is_ok()
+        .then_some(check.step_length)
+        .flatten()
+        .map(f64::abs);
+    if let Some(l) = step.filter(|l| l.is_nan() || *l < opts.min_step_length) {
         return Err(LimitError::NoConvergence {
-            reason: termination,
+            reason: format!(
+                "degenerate gait: the iterate's step length is {l:.3e}, below {:e} (the walker \
+                 barely moves; on a level or near-level floor a passive walker has no gait)",
+                opts.min_step_length
+            ),
+            iterations,
+            last,
+            history,
+        });
+    }
+    if !accepted {
+        // Say so when the iterates were shrinking towards standing still (no gait exists).
+        let at_guess = map
+            .stride(guess)
+            .ok()
+            .filter(|g| g.outcome.is_ok())
+            .and_then(|g| g.step_length)
+            .map(f64::abs);
+        let reason = match (at_guess, step) {
+            (Some(g), Some(l)) if l < 0.25 * g => format!(
+                "degenerate: the iterates shrink towards standing still (step length {g:.3e} at \
+                 the guess, {l:.3e} at the last iterate), so there is no gait to converge to \
+                 ({termination})"
+            ),
+            _ if shrunk => return Err(collapsed(termination)),
+            _ => termination,
+        };
+        return Err(LimitError::NoConvergence {
+            reason,
             iterations,
             last,
             history,
@@ -335,4 +428,54 @@ pub fn find_fixed_point<S: Section + ?Sized>(
         termination,
         residual_history: history,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pdw_hybrid::Options;
+    use pdw_walkers::simplest::{Simplest, SimplestParams};
+    use pdw_walkers::Walker;
+
+    fn solve(slope: f64, guess: &[f64]) -> Result<FixedPoint, LimitError> {
+        let m = Simplest::new(SimplestParams {
+            slope,
+            ..Default::default()
+        })
+        .unwrap();
+        let sl = |x: &[f64]| m.step_length(x);
+        let map = StrideMap::new(&m, Options::dop853(1e-14))
+            .unwrap()
+            .with_step_length(&sl);
+        find_fixed_point(&map, guess, &NewtonOptions::default())
+    }
+
+    /// On a level floor the simplest walker loses energy at every heel strike: there is no
+    /// gait. The absolute test accepted a residual of 1e-12 on states of 6e-5 as a "stable
+    /// gait"; the relative test and the step-length check reject it, and say why.
+    #[test]
+    fn level_floor_has_no_gait_and_the_failure_says_degenerate() {
+        for slope in [0.0, -0.0, 1e-320] {
+            for guess in [[0.2, -0.2], [9.7e-5, -1.01e-4]] {
+                let e = solve(slope, &guess).unwrap_err();
+                let LimitError::NoConvergence { reason, last, .. } = &e else {
+                    panic!("slope {slope}, guess {guess:?}: {e}");
+                };
+                assert!(
+                    reason.contains("degenerate") || reason.contains("standing still"),
+                    "slope {slope}, guess {guess:?}: {reason} (last {last:?})"
+                );
+            }
+        }
+    }
+
+    /// The relative test does not loosen order-one gaits: Garcia's stable gait at 0.009 is
+    /// found to the same 1e-12 absolute residual.
+    #[test]
+    fn order_one_gait_keeps_the_absolute_tolerance() {
+        let fp = solve(0.009, &[0.2, -0.2]).unwrap();
+        assert!(fp.residual <= 1e-12 * residual_scale(&fp.section));
+        assert!((fp.section[0] - 0.200_310_900_494_83).abs() < 1e-9);
+        assert!(fp.metrics.step_length.unwrap() > 0.3);
+    }
 }
