@@ -55,7 +55,9 @@ pub struct ModelsArgs {
     pub json: bool,
 }
 
+// Negative numbers are values, not flags: `--slope -0.009`, `--guess -0.2,0.2`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct FixedpointArgs {
     #[command(flatten)]
     pub model: ModelOpts,
@@ -63,9 +65,10 @@ pub struct FixedpointArgs {
     #[arg(long, default_value = "all")]
     pub gait: String,
     /// Initial guess in section coordinates, comma separated.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub guess: Option<String>,
-    /// Tolerance on the fixed-point residual ‖P(x) − x‖.
+    /// Tolerance on the fixed-point residual ‖P(x) − x‖, relative to the gait's scale
+    /// (max |x|, at most 1); between 1e-15 and 1e-3.
     #[arg(long, default_value_t = 1e-12)]
     pub tol: f64,
     /// Print one JSON object instead of a table.
@@ -86,6 +89,7 @@ pub struct FixedpointArgs {
 }
 
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct BasinArgs {
     #[command(flatten)]
     pub model: ModelOpts,
@@ -111,7 +115,8 @@ pub struct BasinArgs {
     /// Worker threads (rayon pool).
     #[arg(long, default_value_t = 2)]
     pub threads: usize,
-    /// Continue an interrupted run in --out.
+    /// Continue an interrupted run in --out (blocks damaged on disk are recomputed; a
+    /// complete file is left as it is, exit 0).
     #[arg(long)]
     pub resume: bool,
     /// Overwrite an existing --out.
@@ -133,12 +138,16 @@ pub struct MergeArgs {
     /// Merged output file.
     #[arg(long)]
     pub out: PathBuf,
-    /// Overwrite an existing --out.
+    /// PNG heatmap (default: the output path with .png).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Overwrite an existing --out and --png.
     #[arg(long)]
     pub force: bool,
 }
 
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct AnimateArgs {
     #[command(flatten)]
     pub model: ModelOpts,
