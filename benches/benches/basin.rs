@@ -24,7 +24,6 @@ use pdw_limit::{
     NewtonOptions, Outcome, StrideMap,
 };
 use pdw_walkers::simplest::{GarciaGait, Simplest, SimplestParams};
-use pdw_walkers::Walker;
 
 const GAMMA: f64 = 0.009;
 
@@ -54,11 +53,11 @@ fn basin(c: &mut Criterion) {
         &NewtonOptions::default(),
     )
     .expect("fixed point");
-    let fall = |code: u8| Outcome::from_fall_name(sys.fall_name(code));
+    let fall = Outcome::of_fall;
     let problem = BasinProblem::new(&sys, fp.section.clone(), &fall);
     // The same model behind `dyn Walker`, as the CLI builds it from the registry.
     let boxed = pdw_walkers::build("simplest", &[("slope", GAMMA)]).expect("registry model");
-    let fall_dyn = |code: u8| Outcome::from_fall_name(boxed.fall_name(code));
+    let fall_dyn = Outcome::of_fall;
     let problem_dyn = BasinProblem::new(&*boxed, fp.section.clone(), &fall_dyn);
     let default_opts = BasinOptions::default();
     assert_eq!(default_opts.max_strides, 100);

@@ -16,7 +16,6 @@ use std::time::Duration;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use pdw_hybrid::{Integrator, Options, Section};
 use pdw_limit::{find_fixed_point, NewtonOptions, StrideMap};
-use pdw_walkers::compass::{Compass, CompassParams};
 use pdw_walkers::simplest::{Simplest, SimplestParams};
 use pdw_walkers::Walker;
 use rand::{Rng, SeedableRng};
@@ -148,7 +147,7 @@ fn simplest(c: &mut Criterion) {
 }
 
 fn compass(c: &mut Criterion) {
-    let sys = Compass::new(CompassParams::default()).expect("valid parameters");
+    let sys = pdw_walkers::presets::compass(&[]).expect("valid parameters");
     assert_eq!(sys.section_dim(), 3);
     bench_model(c, "compass", &sys);
 }

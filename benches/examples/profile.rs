@@ -19,7 +19,6 @@ use pdw_limit::{
     classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem,
     NewtonOptions, Outcome, StrideMap,
 };
-use pdw_walkers::compass::{Compass, CompassParams};
 use pdw_walkers::simplest::{GarciaGait, Simplest, SimplestParams};
 use pdw_walkers::Walker;
 
@@ -78,7 +77,7 @@ fn main() {
             let n: usize = arg(&args, 1, 2000);
             let opts = method(&args, 3, arg(&args, 2, 1e-10));
             let lanes: usize = arg(&args, 4, 64);
-            let sys = Compass::new(CompassParams::default()).expect("valid parameters");
+            let sys = pdw_walkers::presets::compass(&[]).expect("valid parameters");
             let fp_map = StrideMap::new(&sys, Options::dop853(1e-14)).expect("valid options");
             let guess = sys.gait_guesses()[0].section.clone();
             let s0 = find_fixed_point(&fp_map, &guess, &NewtonOptions::default())
@@ -129,7 +128,7 @@ fn main() {
                 .expect("thread pool");
             // `basin-dyn`: the model behind `Box<dyn Walker>` from the registry (as the CLI).
             let boxed = pdw_walkers::build("simplest", &[("slope", GAMMA)]).expect("model");
-            let fall = |code: u8| Outcome::from_fall_name(sys.fall_name(code));
+            let fall = Outcome::of_fall;
             let problem = BasinProblem::new(&sys, fp.clone(), &fall);
             let problem_dyn = BasinProblem::new(&*boxed, fp.clone(), &fall);
             let cells = grid_cells(

@@ -32,10 +32,10 @@ fn err(msg: impl std::fmt::Display) -> PyErr {
 
 /// A model built from Python arguments.
 struct Model {
-    info: &'static ModelInfo,
+    info: ModelInfo,
     walker: Box<dyn Walker>,
     /// `(name, value)` in the model's parameter order.
-    params: Vec<(&'static str, f64)>,
+    params: Vec<(String, f64)>,
 }
 
 impl Model {
@@ -81,8 +81,13 @@ fn build(model: &str, ov: &[(String, f64)]) -> PyResult<Model> {
     let info = pdw_walkers::model_info(model).map_err(err)?;
     let refs: Vec<(&str, f64)> = ov.iter().map(|(n, v)| (n.as_str(), *v)).collect();
     let values = info.resolve(&refs).map_err(err)?;
-    let walker = (info.build_from)(&values).map_err(err)?;
-    let params = info.params.iter().map(|p| p.name).zip(values).collect();
+    let walker = info.build_from(&values).map_err(err)?;
+    let params = info
+        .params
+        .iter()
+        .map(|p| p.name.clone())
+        .zip(values)
+        .collect();
     Ok(Model {
         info,
         walker,
@@ -116,17 +121,17 @@ fn complex_array<'py>(py: Python<'py>, m: &[pdw_limit::Multiplier]) -> Bound<'py
 #[pyfunction]
 fn models(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     let out = PyList::empty(py);
-    for m in pdw_walkers::MODELS {
+    for m in pdw_walkers::models() {
         let d = PyDict::new(py);
-        d.set_item("name", m.name)?;
-        d.set_item("description", m.description)?;
+        d.set_item("name", &m.name)?;
+        d.set_item("description", &m.description)?;
         let ps = PyList::empty(py);
-        for p in m.params {
+        for p in &m.params {
             let pd = PyDict::new(py);
-            pd.set_item("name", p.name)?;
-            pd.set_item("unit", p.unit)?;
+            pd.set_item("name", &p.name)?;
+            pd.set_item("unit", &p.unit)?;
             pd.set_item("default", p.default)?;
-            pd.set_item("description", p.description)?;
+            pd.set_item("description", &p.description)?;
             ps.append(pd)?;
         }
         d.set_item("parameters", ps)?;
@@ -274,7 +279,7 @@ fn stride_code(o: StrideOutcome) -> u8 {
         StrideOutcome::StepTooSmall => 3,
         StrideOutcome::MaxSteps => 4,
         StrideOutcome::TooManyEvents => 5,
-        StrideOutcome::Fall { code, .. } => 16u8.saturating_add(code),
+        StrideOutcome::Fall { kind, .. } => 16u8.saturating_add(kind.code()),
     }
 }
 
@@ -301,10 +306,10 @@ fn stride_outcomes<'py>(
     let mut seen = Vec::new();
     for mode in 0..m.walker.n_modes() {
         for g in m.walker.guards(mode) {
-            if let pdw_hybrid::GuardKind::Terminal(code) = g.kind {
-                if !seen.contains(&code) {
-                    seen.push(code);
-                    d.set_item(16u8.saturating_add(code), m.walker.fall_name(code))?;
+            if let pdw_hybrid::GuardKind::Terminal(kind) = g.kind {
+                if !seen.contains(&kind) {
+                    seen.push(kind);
+                    d.set_item(16u8.saturating_add(kind.code()), kind.name())?;
                 }
             }
         }
@@ -375,7 +380,7 @@ fn axis(
     default: usize,
     centre: &[f64],
 ) -> PyResult<(usize, f64, f64)> {
-    let names = m.info.section_names;
+    let names = &m.info.section_names;
     match a {
         Some((name, lo, hi)) => {
             let i = names.iter().position(|n| *n == name).ok_or_else(|| {
@@ -456,8 +461,7 @@ fn basin<'py>(
     };
     let (outcome, metrics) = py.detach(|| -> PyResult<_> {
         let w = m.walker.as_ref();
-        let fall = |c: u8| Outcome::from_fall_name(w.fall_name(c));
-        let problem = BasinProblem::new(w, fp.section.clone(), &fall);
+        let problem = BasinProblem::new(w, fp.section.clone(), &Outcome::of_fall);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(THREADS)
             .build()
@@ -483,8 +487,8 @@ fn basin<'py>(
     md.set_item("basin_entropy", metrics.basin_entropy)?;
     md.set_item("boundary_entropy", metrics.boundary_entropy)?;
     md.set_item("box_size", metrics.box_size)?;
-    md.set_item("x_name", m.info.section_names[ix])?;
-    md.set_item("y_name", m.info.section_names[iy])?;
+    md.set_item("x_name", &m.info.section_names[ix])?;
+    md.set_item("y_name", &m.info.section_names[iy])?;
     md.set_item("x", xs.into_pyarray(py))?;
     md.set_item("y", ys.into_pyarray(py))?;
     md.set_item("gait", fp.section.clone().into_pyarray(py))?;
@@ -758,7 +762,7 @@ fn simulate<'py>(
         "outcome",
         match tr.outcome {
             StrideOutcome::Ok => "ok".to_string(),
-            StrideOutcome::Fall { code, .. } => m.walker.fall_name(code).to_string(),
+            StrideOutcome::Fall { kind, .. } => kind.name().to_string(),
             o => o.to_string(),
         },
     )?;

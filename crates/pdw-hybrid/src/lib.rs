@@ -57,4 +57,4 @@ pub use batch::{
 pub use error::HybridError;
 pub use integrator::Integrator;
 pub use options::{Method, Options, Stats, StopReason};
-pub use system::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+pub use system::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};

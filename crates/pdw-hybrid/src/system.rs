@@ -64,13 +64,54 @@ pub enum Crossing {
     Either,
 }
 
+/// How a walker falls: the kind a terminal guard carries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FallKind {
+    /// Falls back, uphill (the stance leg reverses before mid-stance, or the hip reaches the
+    /// ground behind the stance foot).
+    Backward,
+    /// Falls forward (the hip reaches the ground ahead).
+    Forward,
+    /// The swing foot strikes the ground before the swing knee locked.
+    KneeBent,
+    /// A rimless wheel rolls back (does not reach the next spoke).
+    RollsBack,
+    /// Any other terminal event (test systems).
+    Other,
+}
+
+impl FallKind {
+    /// A small stable number for the kind (1 backward, 2 forward, 3 knee bent, 4 rolls back,
+    /// 0 other), for array outputs.
+    pub fn code(self) -> u8 {
+        match self {
+            FallKind::Other => 0,
+            FallKind::Backward => 1,
+            FallKind::Forward => 2,
+            FallKind::KneeBent => 3,
+            FallKind::RollsBack => 4,
+        }
+    }
+
+    /// Human name, for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            FallKind::Backward => "fell backward",
+            FallKind::Forward => "fell forward",
+            FallKind::KneeBent => "swing foot struck the ground before the knee locked",
+            FallKind::RollsBack => "rolls back",
+            FallKind::Other => "fall",
+        }
+    }
+}
+
 /// What a guard means.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GuardKind {
     /// An impact or switch: the caller applies [`HybridSystem::reset`] and continues.
     Reset,
-    /// The trajectory ends here (a fall); the code is a model-defined fall kind.
-    Terminal(u8),
+    /// The trajectory ends here (a fall of the given kind).
+    Terminal(FallKind),
 }
 
 /// Static description of one guard of one mode.

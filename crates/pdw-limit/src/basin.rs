@@ -50,8 +50,8 @@
 use crate::error::LimitError;
 use crate::stride::MAX_EVENTS_PER_STRIDE;
 use pdw_hybrid::{
-    run_batch_par, run_scalar_with, BatchOptions, Control, GuardKind, Integrator, LaneDriver,
-    Options, Scratch, Section, StopReason,
+    run_batch_par, run_scalar_with, BatchOptions, Control, FallKind, GuardKind, Integrator,
+    LaneDriver, Options, Scratch, Section, StopReason,
 };
 
 /// Outcome of a cell. The `u8` codes are part of the file format and never change.
@@ -133,19 +133,12 @@ impl Outcome {
         )
     }
 
-    /// The fall outcome of a model's fall name (`Walker::fall_name`): a name containing
-    /// "forward" is [`Outcome::FallForward`], "backward" [`Outcome::FallBackward`], "hip" and
-    /// "ground" [`Outcome::FallHipBelowGround`]; anything else [`Outcome::Fall`].
-    pub fn from_fall_name(name: &str) -> Outcome {
-        let n = name.to_ascii_lowercase();
-        if n.contains("forward") {
-            Outcome::FallForward
-        } else if n.contains("backward") {
-            Outcome::FallBackward
-        } else if n.contains("hip") && n.contains("ground") {
-            Outcome::FallHipBelowGround
-        } else {
-            Outcome::Fall
+    /// The outcome of a fall of `kind` (the kind a terminal guard carries).
+    pub fn of_fall(kind: FallKind) -> Outcome {
+        match kind {
+            FallKind::Forward => Outcome::FallForward,
+            FallKind::Backward => Outcome::FallBackward,
+            FallKind::KneeBent | FallKind::RollsBack | FallKind::Other => Outcome::Fall,
         }
     }
 }
@@ -257,9 +250,8 @@ pub struct BasinProblem<'a, S: Section + ?Sized> {
     pub gait: Vec<f64>,
     /// Other known attractors, each an orbit of section states (its period = its length).
     pub others: Vec<Vec<Vec<f64>>>,
-    /// Outcome of a terminal guard's fall code, e.g.
-    /// `&|c| Outcome::from_fall_name(walker.fall_name(c))`.
-    pub fall_outcome: &'a (dyn Fn(u8) -> Outcome + Sync),
+    /// Outcome of a terminal guard's fall kind, usually `&Outcome::of_fall`.
+    pub fall_outcome: &'a (dyn Fn(FallKind) -> Outcome + Sync),
 }
 
 impl<'a, S: Section + ?Sized> BasinProblem<'a, S> {
@@ -267,7 +259,7 @@ impl<'a, S: Section + ?Sized> BasinProblem<'a, S> {
     pub fn new(
         sys: &'a S,
         gait: Vec<f64>,
-        fall_outcome: &'a (dyn Fn(u8) -> Outcome + Sync),
+        fall_outcome: &'a (dyn Fn(FallKind) -> Outcome + Sync),
     ) -> Self {
         Self {
             sys,

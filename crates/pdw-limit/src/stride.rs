@@ -14,8 +14,8 @@
 
 use crate::error::LimitError;
 use pdw_hybrid::{
-    run_batch, run_batch_par, run_scalar_with, BatchOptions, Control, GuardKind, HybridSystem,
-    Integrator, LaneDriver, Options, Scratch, Section, StopReason,
+    run_batch, run_batch_par, run_scalar_with, BatchOptions, Control, FallKind, GuardKind,
+    HybridSystem, Integrator, LaneDriver, Options, Scratch, Section, StopReason,
 };
 use std::fmt;
 
@@ -29,7 +29,7 @@ pub enum StrideOutcome {
     /// Reached the section: a complete stride.
     Ok,
     /// A terminal guard fired: a fall of model-defined kind `code` (guard index `guard`).
-    Fall { code: u8, guard: usize },
+    Fall { kind: FallKind, guard: usize },
     /// No section event within the stride time budget.
     Timeout,
     /// The state became non-finite.
@@ -53,7 +53,9 @@ impl fmt::Display for StrideOutcome {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             StrideOutcome::Ok => write!(f, "ok"),
-            StrideOutcome::Fall { code, guard } => write!(f, "fall (kind {code}, guard {guard})"),
+            StrideOutcome::Fall { kind, guard } => {
+                write!(f, "{} (guard {guard})", kind.name())
+            }
             StrideOutcome::Timeout => write!(f, "no heel strike within the stride time budget"),
             StrideOutcome::NonFinite => write!(f, "non-finite state"),
             StrideOutcome::StepTooSmall => write!(f, "integrator step size too small"),
@@ -146,7 +148,7 @@ impl<H: HybridSystem + ?Sized> LaneDriver<H> for EventDriver {
                         };
                     }
                 }
-                GuardKind::Terminal(code) => StrideOutcome::Fall { code, guard },
+                GuardKind::Terminal(kind) => StrideOutcome::Fall { kind, guard },
             },
             StopReason::EndTime => StrideOutcome::Timeout,
             StopReason::NonFinite => StrideOutcome::NonFinite,

@@ -198,87 +198,11 @@ impl Trajectory {
     }
 }
 
-/// A model's total mechanical energy as a function of the full state.
-pub type EnergyFn = Box<dyn Fn(&[f64]) -> f64 + Send + Sync>;
-
-/// The total mechanical energy of `w` (potential zero at the stance foot) and its unit, for the
-/// registered models: simplest `½θ̇² + cos(θ − γ)` per unit hip mass (`M g l`), rimless per unit
-/// mass (J/kg), the chain walkers in J. `None` for a model without one.
-pub fn model_energy(w: &dyn Walker) -> Option<(EnergyFn, &'static str)> {
-    use pdw_walkers::{compass, kneed, rimless, seed5, simplest};
-    let v: Vec<f64> = w.param_values().iter().map(|p| p.1).collect();
-    // Rebuilt from the registry's parameter order (see each model's `INFO.build_from`).
-    let f: (EnergyFn, &'static str) = match w.name() {
-        "simplest" => {
-            let m = simplest::Simplest::new(simplest::SimplestParams {
-                slope: v[0],
-                max_stride_time: v[1],
-            })
-            .ok()?;
-            (Box::new(move |x| m.energy(x)), "M g l")
-        }
-        "rimless" => {
-            let m = rimless::Rimless::new(rimless::RimlessParams {
-                slope: v[0],
-                n_spokes: v[1],
-                g: v[2],
-                l: v[3],
-                max_stride_time: v[4],
-            })
-            .ok()?;
-            (Box::new(move |x| m.energy(x)), "J/kg")
-        }
-        "compass" => {
-            let m = compass::Compass::new(compass::CompassParams {
-                slope: v[0],
-                leg_mass: v[1],
-                hip_mass: v[2],
-                a: v[3],
-                b: v[4],
-                gravity: v[5],
-                max_stride_time: v[6],
-            })
-            .ok()?;
-            (Box::new(move |x| m.energy(x)), "J")
-        }
-        "kneed" => {
-            let m = kneed::Kneed::new(kneed::KneedParams {
-                slope: v[0],
-                a1: v[1],
-                b1: v[2],
-                a2: v[3],
-                b2: v[4],
-                hip_mass: v[5],
-                thigh_mass: v[6],
-                shank_mass: v[7],
-                gravity: v[8],
-                max_stride_time: v[9],
-            })
-            .ok()?;
-            (Box::new(move |x| m.energy(x)), "J")
-        }
-        "seed5" => {
-            let m = seed5::Seed5::new(seed5::Seed5Params {
-                slope: v[0],
-                shank_mass: v[1],
-                thigh_mass: v[2],
-                shank_length: v[3],
-                thigh_length: v[4],
-                hip_mass: v[5],
-                gravity: v[6],
-                variant: if v[7] == 1.0 {
-                    seed5::Seed5Variant::FreeSwingKnee
-                } else {
-                    seed5::Seed5Variant::LockedKnees
-                },
-                max_stride_time: v[8],
-            })
-            .ok()?;
-            (Box::new(move |x| m.energy(x)), "J")
-        }
-        _ => return None,
-    };
-    Some(f)
+/// The unit of `w`'s total mechanical energy ([`Walker::energy`]), `None` for a model without
+/// one.
+pub fn model_energy(w: &dyn Walker) -> Option<String> {
+    let x = vec![0.0; w.dim()];
+    w.energy(&x).map(|_| w.energy_unit().to_string())
 }
 
 /// Units of the columns of a trajectory of `w`: time in the unit of the model's
@@ -287,10 +211,13 @@ pub fn model_energy(w: &dyn Walker) -> Option<(EnergyFn, &'static str)> {
 pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
     let time = pdw_walkers::model_info(w.name())
         .ok()
-        .and_then(|i| i.params.iter().find(|p| p.name == "max_stride_time"))
-        .map(|p| p.unit)
-        .unwrap_or("s")
-        .to_string();
+        .and_then(|i| {
+            i.params
+                .iter()
+                .find(|p| p.name == "max_stride_time")
+                .map(|p| p.unit.clone())
+        })
+        .unwrap_or_else(|| "s".to_string());
     let state = w
         .state_names()
         .iter()
@@ -343,7 +270,7 @@ pub fn initial_state(w: &dyn Walker, values: &[f64]) -> Result<Vec<f64>, Traject
 /// Per-sample recorder.
 struct Recorder<'a> {
     w: &'a dyn Walker,
-    energy: Option<&'a EnergyFn>,
+    energy: bool,
     tr: Trajectory,
     forces_ok: bool,
     flags_ok: bool,
@@ -356,8 +283,8 @@ impl Recorder<'_> {
         tr.x.extend_from_slice(x);
         tr.mode.push(mode as u32);
         tr.step.push(step as u32);
-        if let Some(e) = self.energy {
-            tr.energy.get_or_insert_with(Vec::new).push(e(x));
+        if let Some(e) = self.energy.then(|| self.w.energy(x)).flatten() {
+            tr.energy.get_or_insert_with(Vec::new).push(e);
         }
         match (self.forces_ok, self.w.constraint_forces(mode, x)) {
             (true, Some(cf)) => {
@@ -407,10 +334,10 @@ pub fn simulate(
         )));
     }
     let energy = model_energy(w);
-    let units = units(w, energy.as_ref().map_or("", |e| e.1));
+    let units = units(w, energy.as_deref().unwrap_or(""));
     let mut rec = Recorder {
         w,
-        energy: energy.as_ref().map(|e| &e.0),
+        energy: energy.is_some(),
         tr: Trajectory {
             state_names: w.state_names().iter().map(|s| s.to_string()).collect(),
             t: Vec::new(),
@@ -472,7 +399,7 @@ pub fn simulate(
                     let spec = w.guards(mode)[guard];
                     match spec.kind {
                         GuardKind::Reset => {
-                            let new_mode = w.reset(mode, guard, &x, &mut buf);
+                            let new_mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
                             let ends_step = (mode, guard) == w.section_guard();
                             rec.tr.events.push(TrajectoryEvent {
                                 t,
@@ -506,11 +433,11 @@ pub fn simulate(
                                 continue;
                             }
                         }
-                        GuardKind::Terminal(code) => {
+                        GuardKind::Terminal(fall) => {
                             rec.tr.events.push(TrajectoryEvent {
                                 t,
                                 step,
-                                kind: w.fall_name(code).to_string(),
+                                kind: fall.name().to_string(),
                                 ends_step: false,
                                 fall: true,
                                 mode_before: mode,
@@ -518,7 +445,7 @@ pub fn simulate(
                                 pre: x.clone(),
                                 post: x.clone(),
                             });
-                            StrideOutcome::Fall { code, guard }
+                            StrideOutcome::Fall { kind: fall, guard }
                         }
                     }
                 }

@@ -21,14 +21,6 @@ fn simplest(gamma: f64) -> (Simplest, Vec<f64>) {
     (m, s)
 }
 
-fn fall(c: u8) -> Outcome {
-    match c {
-        1 => Outcome::FallBackward,
-        2 => Outcome::FallForward,
-        _ => Outcome::Fall,
-    }
-}
-
 fn pool(n: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
@@ -70,7 +62,7 @@ fn measure_basin_throughput() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(2);
     let (m, s) = simplest(0.009);
-    let prob = BasinProblem::new(&m, s.clone(), &fall);
+    let prob = BasinProblem::new(&m, s.clone(), &Outcome::of_fall);
     let cells = grid(n);
     let p = pool(threads);
     for (label, integ0, tg) in [
@@ -109,7 +101,7 @@ fn measure_label_agreement_vs_tight_reference() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(200);
     let (m, s) = simplest(0.009);
-    let prob = BasinProblem::new(&m, s, &fall);
+    let prob = BasinProblem::new(&m, s, &Outcome::of_fall);
     let cells = grid(n);
     let p = pool(2);
     let reference = classify_cells(

@@ -40,10 +40,6 @@ fn pool(n: usize) -> rayon::ThreadPool {
         .unwrap()
 }
 
-fn fall_of(m: &Simplest) -> impl Fn(u8) -> Outcome + Sync + '_ {
-    move |c| Outcome::from_fall_name(m.fall_name(c))
-}
-
 /// The window around the stable gait at γ = 0.009, `n × n` cells.
 fn window(n: usize) -> Vec<Vec<f64>> {
     grid_cells(
@@ -76,7 +72,7 @@ fn basin_at_0009_is_a_thin_band_containing_the_fixed_point() {
     let m = simplest(0.009);
     let (s, stable) = fixed_point(&m, &[0.2003, -0.1998]);
     assert!(stable);
-    let fall = fall_of(&m);
+    let fall = Outcome::of_fall;
     let prob = BasinProblem::new(&m, s.clone(), &fall);
     let opts = BasinOptions::default();
     let n = 61;
@@ -129,7 +125,7 @@ fn basin_at_0009_is_a_thin_band_containing_the_fixed_point() {
 fn labels_are_identical_for_any_thread_count_lane_count_chunk_and_shard_split() {
     let m = simplest(0.009);
     let (s, _) = fixed_point(&m, &[0.2003, -0.1998]);
-    let fall = fall_of(&m);
+    let fall = Outcome::of_fall;
     let prob = BasinProblem::new(&m, s, &fall);
     let cells = window(41);
     let base = BasinOptions::default();
@@ -170,7 +166,7 @@ fn labels_are_identical_for_any_thread_count_lane_count_chunk_and_shard_split() 
 fn batched_equals_scalar_cell_for_cell_on_101x101_simplest() {
     let m = simplest(0.009);
     let (s, _) = fixed_point(&m, &[0.2003, -0.1998]);
-    let fall = fall_of(&m);
+    let fall = Outcome::of_fall;
     let prob = BasinProblem::new(&m, s, &fall);
     let cells = window(101);
     let opts = BasinOptions::default();
@@ -184,13 +180,12 @@ fn batched_equals_scalar_cell_for_cell_on_101x101_simplest() {
 
 #[test]
 fn batched_equals_scalar_cell_for_cell_on_101x101_compass() {
-    use pdw_walkers::compass::{Compass, CompassParams};
-    let m = Compass::new(CompassParams::default()).unwrap();
+    let m = pdw_walkers::presets::compass(&[]).unwrap();
     let guess = m.gait_guesses()[0].section.clone();
     let map = StrideMap::new(&m, Options::dop853(1e-12)).unwrap();
     let fp = find_fixed_point(&map, &guess, &NewtonOptions::default()).unwrap();
     let s = fp.section.clone();
-    let fall = |c| Outcome::from_fall_name(m.fall_name(c));
+    let fall = Outcome::of_fall;
     let prob = BasinProblem::new(&m, s.clone(), &fall);
     let cells = grid_cells(
         &s,
@@ -219,7 +214,7 @@ fn batched_equals_scalar_cell_for_cell_on_101x101_compass() {
 fn nonfinite_cells_are_an_outcome_not_a_panic() {
     let m = simplest(0.009);
     let (s, _) = fixed_point(&m, &[0.2003, -0.1998]);
-    let fall = fall_of(&m);
+    let fall = Outcome::of_fall;
     let prob = BasinProblem::new(&m, s.clone(), &fall);
     let cells = vec![
         vec![f64::NAN, -0.2],
@@ -261,7 +256,7 @@ fn past_the_first_period_doubling_cells_reach_the_period_two_gait_not_the_unstab
     let m = simplest(gamma);
     let (s1, stable) = fixed_point(&m, &[0.245, -0.238]);
     assert!(!stable);
-    let fall = fall_of(&m);
+    let fall = Outcome::of_fall;
     let mut prob = BasinProblem::new(&m, s1.clone(), &fall);
     // An even grid, so that s* itself is not a cell (see the chaotic-regime test).
     let d = 2e-3;
@@ -338,7 +333,7 @@ fn in_the_chaotic_regime_no_cell_is_labelled_gait() {
     let m = simplest(gamma);
     let (s1, stable) = fixed_point(&m, &[0.26, -0.25]);
     assert!(!stable);
-    let fall = fall_of(&m);
+    let fall = Outcome::of_fall;
     let prob = BasinProblem::new(&m, s1.clone(), &fall);
     // An even grid: s* itself is not a cell (a trajectory started exactly on the unstable gait
     // stays within tol_gait of it for many strides — that cell *is* the gait).

@@ -1,8 +1,8 @@
 //! The rimless wheel against its closed form (REFERENCES §2).
 
-use pdw_hybrid::Options;
+use pdw_hybrid::{FallKind, Options};
 use pdw_limit::*;
-use pdw_walkers::rimless::{Rimless, RimlessParams, ROLLS_BACK};
+use pdw_walkers::rimless::{Rimless, RimlessParams};
 use pdw_walkers::Walker;
 
 fn wheel(slope: f64) -> Rimless {
@@ -74,7 +74,7 @@ fn rimless_on_a_shallow_slope_rolls_back() {
         matches!(
             st.outcome,
             StrideOutcome::Fall {
-                code: ROLLS_BACK,
+                kind: FallKind::RollsBack,
                 ..
             }
         ),
@@ -86,7 +86,7 @@ fn rimless_on_a_shallow_slope_rolls_back() {
         matches!(
             st.outcome,
             StrideOutcome::Fall {
-                code: ROLLS_BACK,
+                kind: FallKind::RollsBack,
                 ..
             }
         ),

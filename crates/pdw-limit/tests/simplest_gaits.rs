@@ -180,7 +180,7 @@ fn a_walker_without_energy_falls_backward_and_newton_reports_it() {
     assert_eq!(
         st.outcome,
         StrideOutcome::Fall {
-            code: pdw_walkers::simplest::FALL_BACKWARD,
+            kind: pdw_hybrid::FallKind::Backward,
             guard: 1
         }
     );

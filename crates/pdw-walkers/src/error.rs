@@ -13,13 +13,31 @@ pub enum WalkerError {
     /// A parameter name the model does not have.
     #[error("model `{model}` has no parameter `{name}`; valid parameters: {valid}")]
     UnknownParam {
-        model: &'static str,
+        model: String,
         name: String,
         valid: String,
     },
-    /// A model name that is not registered.
-    #[error("unknown model `{name}`; valid models: {valid}")]
+    /// A model name that is not registered (and not a spec file).
+    #[error("unknown model `{name}`; valid models: {valid}, or a walker spec file (.toml)")]
     UnknownModel { name: String, valid: String },
+    /// A walker spec field with a value that breaks a rule, e.g. a negative mass.
+    #[error("{source_name}: `{field}` = {value} is invalid: {rule}")]
+    InvalidSpec {
+        /// The spec's file (or preset) name.
+        source_name: String,
+        /// Path of the field, e.g. `segments[1].mass`.
+        field: String,
+        /// The offending value as written or evaluated.
+        value: String,
+        /// The rule it breaks.
+        rule: String,
+    },
+    /// A walker spec that cannot be read or parsed (syntax, unknown keys, wrong types).
+    #[error("{source_name}: {message}")]
+    SpecSyntax {
+        source_name: String,
+        message: String,
+    },
 }
 
 /// Checks that `value` is finite and inside the open interval `(lo, hi)`.

@@ -1,21 +1,28 @@
 //! Passive dynamic walker models as hybrid systems ([`pdw_hybrid::HybridSystem`]) with a
 //! Poincaré section just after heel strike ([`pdw_hybrid::Section`]).
 //!
-//! Every model documents its coordinates, sign conventions, guards, reset maps and section in
-//! its module docs, validates its parameters at construction ([`WalkerError`]) and implements
-//! [`Walker`], the model-level extras (names, step length, fall kinds, initial gait guesses)
-//! the stride map and the CLI need. [`registry::MODELS`] lists every model with its parameters
-//! (units, defaults) so that a front end can list, describe and build them by name.
+//! Closed-form models: [`rimless`] (rimless wheel) and [`simplest`] (Garcia et al. 1998). Every
+//! planar legged chain — the compass gait, kneed walkers, the seed thesis' walker, a user's own
+//! — is one [`chain_walker::ChainWalker`] built from a [`spec::WalkerSpec`] (TOML; the presets
+//! are the files in `models/`). Every model documents its coordinates, sign conventions,
+//! guards, reset maps and section in its module docs, validates its parameters at
+//! construction ([`WalkerError`]) and implements [`Walker`], the model-level extras the stride
+//! map and the CLI need. [`registry::model_info`] finds a model by name or spec file.
 
-pub mod compass;
+pub mod chain_walker;
 pub mod error;
-pub mod kneed;
 pub mod registry;
 pub mod rimless;
 pub mod seed5;
 pub mod simplest;
+pub mod spec;
+pub mod validity;
 
+pub use chain_walker::ChainWalker;
 pub use error::WalkerError;
 pub use registry::{
-    build, chain_pose, model_info, GaitGuess, ModelInfo, ParamSpec, Pose, Walker, MODELS,
+    build, chain_pose, model_info, models, preset_text, presets, ClosedInfo, GaitGuess, ModelInfo,
+    ParamSpec, Pose, StaticParam, Walker, PRESETS,
 };
+pub use spec::WalkerSpec;
+pub use validity::{ConstraintForces, StepFlags};

@@ -1,23 +1,36 @@
 //! The model registry: names, parameters (units, defaults, meaning), coordinates, and a
-//! constructor from parameter values, so that a front end can list and build models by name.
+//! constructor from parameter values, so that a front end can list and build models by name —
+//! or from a walker spec file (`.toml`, see [`crate::spec`]).
 //!
-//! To add a model: implement [`Walker`] for it, give its module a `pub static INFO: ModelInfo`,
-//! and append `&crate::<module>::INFO` to [`MODELS`].
+//! Closed-form models (rimless, simplest) are Rust modules with a `pub static INFO:
+//! ClosedInfo`; every chain walker is a spec: the presets `compass`, `kneed`, `seed5` are the
+//! spec files in the repository's `models/` folder, compiled in.
 
-use crate::compass::{ConstraintForces, StepFlags};
+use crate::chain_walker::ChainWalker;
 use crate::error::WalkerError;
+use crate::spec::WalkerSpec;
+use crate::validity::{ConstraintForces, StepFlags};
 use pdw_hybrid::Section;
 
 /// One user-settable model parameter.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ParamSpec {
     /// Name used on the command line (`--set NAME=VALUE`); every model calls its slope `slope`.
-    pub name: &'static str,
+    pub name: String,
     /// Unit, e.g. `"rad"`, `"m"`, `"kg"`, `"1"` (dimensionless).
-    pub unit: &'static str,
+    pub unit: String,
     /// Default value (the model's reference preset).
     pub default: f64,
     /// One-line meaning, with the preset's source.
+    pub description: String,
+}
+
+/// A parameter of a closed-form model (static form of [`ParamSpec`]).
+#[derive(Clone, Copy, Debug)]
+pub struct StaticParam {
+    pub name: &'static str,
+    pub unit: &'static str,
+    pub default: f64,
     pub description: &'static str,
 }
 
@@ -25,26 +38,24 @@ pub struct ParamSpec {
 #[derive(Clone, Debug, PartialEq)]
 pub struct GaitGuess {
     /// Which gait this is meant to find, e.g. `"stable"`, `"unstable"`.
-    pub gait: &'static str,
+    pub gait: String,
     /// Reduced section coordinates (in [`Section::section_names`] order).
     pub section: Vec<f64>,
     /// Where the guess comes from (e.g. "Garcia 1998 App. A.2 small-slope asymptotics").
-    pub source: &'static str,
+    pub source: String,
 }
 
 /// Model-level extras on top of the hybrid system and its section.
 pub trait Walker: Section {
-    /// Registry name, e.g. `"simplest"`.
-    fn name(&self) -> &'static str;
+    /// Registry name, e.g. `"simplest"`, or the spec's name.
+    fn name(&self) -> &str;
     /// Names of the full state components, in state order.
-    fn state_names(&self) -> &'static [&'static str];
+    fn state_names(&self) -> Vec<String>;
     /// Current parameter values, in [`ModelInfo::params`] order.
-    fn param_values(&self) -> Vec<(&'static str, f64)>;
+    fn param_values(&self) -> Vec<(String, f64)>;
     /// Step length (distance between the feet along the slope, model length units) at the
     /// stride-ending event, from the *pre-reset* state `x_pre` on the section guard.
     fn step_length(&self, x_pre: &[f64]) -> f64;
-    /// Human name of a terminal guard's fall code (`GuardKind::Terminal(code)`).
-    fn fall_name(&self, code: u8) -> &'static str;
     /// Initial guesses for the gaits the model is known to have at its current parameters.
     fn gait_guesses(&self) -> Vec<GaitGuess>;
     /// The walker's drawing at full state `x`, for animations; `None` if the model has none.
@@ -60,6 +71,15 @@ pub trait Walker: Section {
     /// foot below ground after mid-stance), if the model computes them.
     fn step_flags(&self, _mode: usize, _x: &[f64]) -> Option<StepFlags> {
         None
+    }
+    /// Total mechanical energy at the full state `x` (potential zero at the stance foot), if
+    /// the model defines it; conserved between impacts.
+    fn energy(&self, _x: &[f64]) -> Option<f64> {
+        None
+    }
+    /// Unit of [`Walker::energy`], e.g. `"J"`, `"M g l"`.
+    fn energy_unit(&self) -> &str {
+        ""
     }
 }
 
@@ -95,21 +115,118 @@ pub struct Pose {
     pub swing_foot: Option<[f64; 2]>,
 }
 
-/// Constructor from parameter values in [`ModelInfo::params`] order.
+/// Constructor of a closed-form model from parameter values in [`ClosedInfo::params`] order.
 pub type BuildFn = fn(&[f64]) -> Result<Box<dyn Walker>, WalkerError>;
 
-/// Static description of a model and its constructor.
-pub struct ModelInfo {
+/// Static description of a closed-form model and its constructor.
+pub struct ClosedInfo {
     pub name: &'static str,
     pub description: &'static str,
-    pub params: &'static [ParamSpec],
+    pub params: &'static [StaticParam],
     pub state_names: &'static [&'static str],
     pub section_names: &'static [&'static str],
-    /// Builds the model from values in `params` order (already resolved by [`ModelInfo::resolve`]).
+    /// Builds the model from values in `params` order.
     pub build_from: BuildFn,
 }
 
+/// How a registered model is built.
+#[derive(Clone)]
+enum Builder {
+    Closed(BuildFn),
+    Spec(Box<WalkerSpec>),
+}
+
+/// A model: name, parameters (units, defaults), coordinates, and how to build it.
+#[derive(Clone)]
+pub struct ModelInfo {
+    pub name: String,
+    pub description: String,
+    pub params: Vec<ParamSpec>,
+    pub state_names: Vec<String>,
+    pub section_names: Vec<String>,
+    builder: Builder,
+}
+
+impl std::fmt::Debug for ModelInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ModelInfo")
+            .field("name", &self.name)
+            .finish_non_exhaustive()
+    }
+}
+
+impl From<&ClosedInfo> for ModelInfo {
+    fn from(c: &ClosedInfo) -> Self {
+        Self {
+            name: c.name.into(),
+            description: c.description.into(),
+            params: c
+                .params
+                .iter()
+                .map(|p| ParamSpec {
+                    name: p.name.into(),
+                    unit: p.unit.into(),
+                    default: p.default,
+                    description: p.description.into(),
+                })
+                .collect(),
+            state_names: c.state_names.iter().map(|s| s.to_string()).collect(),
+            section_names: c.section_names.iter().map(|s| s.to_string()).collect(),
+            builder: Builder::Closed(c.build_from),
+        }
+    }
+}
+
+/// Names of the full state of a chain walker with `m` segments per leg.
+pub fn chain_state_names(m: usize) -> Vec<String> {
+    let knee = |side: &str, i: usize| {
+        if m == 2 {
+            format!("{side}_knee")
+        } else {
+            format!("{side}_knee{}", i + 1)
+        }
+    };
+    let mut names = vec!["stance".to_string()];
+    names.extend((0..m.saturating_sub(1)).map(|i| knee("stance", i)));
+    names.push("hip".into());
+    names.extend((0..m.saturating_sub(1)).rev().map(|i| knee("swing", i)));
+    let rates: Vec<String> = names.iter().map(|s| format!("{s}_rate")).collect();
+    names.extend(rates);
+    names
+}
+
 impl ModelInfo {
+    /// The model of a walker spec.
+    pub fn from_spec(spec: WalkerSpec) -> Self {
+        let t = spec.param_table();
+        Self {
+            name: spec.name.clone(),
+            description: spec.description.clone(),
+            params: (0..t.names.len())
+                .map(|i| ParamSpec {
+                    name: t.names[i].clone(),
+                    unit: t.units[i].clone(),
+                    default: t.values[i],
+                    description: t.descriptions[i].clone(),
+                })
+                .collect(),
+            state_names: chain_state_names(spec.segments.len()),
+            section_names: ["stance", "stance_rate", "hip_rate"]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            builder: Builder::Spec(Box::new(spec)),
+        }
+    }
+
+    /// The walker spec, for chain walkers.
+    pub fn spec(&self) -> Option<&WalkerSpec> {
+        match &self.builder {
+            Builder::Spec(s) => Some(s),
+            Builder::Closed(_) => None,
+        }
+    }
+
     /// Default values with `overrides` applied; an unknown name is an error listing the valid ones.
     pub fn resolve(&self, overrides: &[(&str, f64)]) -> Result<Vec<f64>, WalkerError> {
         let mut v: Vec<f64> = self.params.iter().map(|p| p.default).collect();
@@ -118,12 +235,12 @@ impl ModelInfo {
                 Some(i) => v[i] = *value,
                 None => {
                     return Err(WalkerError::UnknownParam {
-                        model: self.name,
+                        model: self.name.clone(),
                         name: (*name).to_string(),
                         valid: self
                             .params
                             .iter()
-                            .map(|p| p.name)
+                            .map(|p| p.name.as_str())
                             .collect::<Vec<_>>()
                             .join(", "),
                     })
@@ -133,34 +250,104 @@ impl ModelInfo {
         Ok(v)
     }
 
+    /// Builds the model from values in `params` order (as [`ModelInfo::resolve`] gives them).
+    pub fn build_from(&self, values: &[f64]) -> Result<Box<dyn Walker>, WalkerError> {
+        match &self.builder {
+            Builder::Closed(f) => f(values),
+            Builder::Spec(s) => Ok(Box::new(ChainWalker::new((**s).clone(), values)?)),
+        }
+    }
+
     /// Builds the model with `overrides` applied to the defaults.
     pub fn build(&self, overrides: &[(&str, f64)]) -> Result<Box<dyn Walker>, WalkerError> {
-        (self.build_from)(&self.resolve(overrides)?)
+        self.build_from(&self.resolve(overrides)?)
     }
 }
 
-/// Every registered model, in listing order.
-pub static MODELS: &[&ModelInfo] = &[
-    &crate::rimless::INFO,
-    &crate::simplest::INFO,
-    &crate::compass::INFO,
-    &crate::kneed::INFO,
-    &crate::seed5::INFO,
+/// The chain-walker presets: name and spec text (the files in `models/`).
+pub const PRESETS: [(&str, &str); 3] = [
+    ("compass", include_str!("../../../models/compass.toml")),
+    ("kneed", include_str!("../../../models/kneed.toml")),
+    ("seed5", include_str!("../../../models/seed5.toml")),
 ];
 
-/// Looks a model up by name; an unknown name is an error listing the valid ones.
-pub fn model_info(name: &str) -> Result<&'static ModelInfo, WalkerError> {
-    MODELS
-        .iter()
-        .copied()
-        .find(|m| m.name == name)
-        .ok_or_else(|| WalkerError::UnknownModel {
-            name: name.to_string(),
-            valid: MODELS.iter().map(|m| m.name).collect::<Vec<_>>().join(", "),
-        })
+/// The spec text of a preset (`models/NAME.toml`), if `name` is one.
+pub fn preset_text(name: &str) -> Option<&'static str> {
+    PRESETS.iter().find(|p| p.0 == name).map(|p| p.1)
 }
 
-/// Builds model `name` with parameter `overrides` (e.g. `[("slope", 0.01)]`).
+/// Every built-in model, in listing order: the closed-form models, then the chain presets.
+pub fn models() -> Vec<ModelInfo> {
+    let mut v: Vec<ModelInfo> = vec![
+        (&crate::rimless::INFO).into(),
+        (&crate::simplest::INFO).into(),
+    ];
+    for (name, text) in PRESETS {
+        match WalkerSpec::from_toml(text, name) {
+            Ok(spec) => v.push(ModelInfo::from_spec(spec)),
+            Err(e) => unreachable!("preset {name} does not parse (tested): {e}"),
+        }
+    }
+    v
+}
+
+fn builtin_names() -> String {
+    let mut names = vec!["rimless", "simplest"];
+    names.extend(PRESETS.iter().map(|p| p.0));
+    names.join(", ")
+}
+
+/// Looks a model up by name, or reads a walker spec file when `name` is a path (ends in
+/// `.toml` or names an existing file); an unknown name is an error listing the valid ones.
+pub fn model_info(name: &str) -> Result<ModelInfo, WalkerError> {
+    match name {
+        "rimless" => return Ok((&crate::rimless::INFO).into()),
+        "simplest" => return Ok((&crate::simplest::INFO).into()),
+        _ => {}
+    }
+    if let Some(text) = preset_text(name) {
+        return Ok(ModelInfo::from_spec(WalkerSpec::from_toml(text, name)?));
+    }
+    let path = std::path::Path::new(name);
+    if name.ends_with(".toml") || path.is_file() {
+        return Ok(ModelInfo::from_spec(WalkerSpec::from_file(path)?));
+    }
+    Err(WalkerError::UnknownModel {
+        name: name.to_string(),
+        valid: builtin_names(),
+    })
+}
+
+/// Builds model `name` (or spec file) with parameter `overrides` (e.g. `[("slope", 0.01)]`).
 pub fn build(name: &str, overrides: &[(&str, f64)]) -> Result<Box<dyn Walker>, WalkerError> {
     model_info(name)?.build(overrides)
+}
+
+/// The chain-walker presets as concrete types (for code that needs the chain walker's own API).
+pub mod presets {
+    use super::*;
+
+    fn preset(name: &str, overrides: &[(&str, f64)]) -> Result<ChainWalker, WalkerError> {
+        let info = model_info(name)?;
+        let values = info.resolve(overrides)?;
+        match info.spec() {
+            Some(spec) => ChainWalker::new(spec.clone(), &values),
+            None => unreachable!("{name} is a chain preset"),
+        }
+    }
+
+    /// Goswami et al.'s compass gait (`models/compass.toml`) with `overrides`.
+    pub fn compass(overrides: &[(&str, f64)]) -> Result<ChainWalker, WalkerError> {
+        preset("compass", overrides)
+    }
+
+    /// Hsu Chen's kneed walker (`models/kneed.toml`) with `overrides`.
+    pub fn kneed(overrides: &[(&str, f64)]) -> Result<ChainWalker, WalkerError> {
+        preset("kneed", overrides)
+    }
+
+    /// The seed thesis' walker (`models/seed5.toml`) with `overrides`.
+    pub fn seed5(overrides: &[(&str, f64)]) -> Result<ChainWalker, WalkerError> {
+        preset("seed5", overrides)
+    }
 }

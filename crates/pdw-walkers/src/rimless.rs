@@ -29,8 +29,8 @@
 //! way: the caller sees the wheel come to rest (rocking between two spokes, then standing).
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
+use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Guard index of the spoke impact.
@@ -47,44 +47,44 @@ const GUARDS: [GuardSpec; 3] = [
     GuardSpec {
         name: "rolls_back",
         crossing: Crossing::Falling,
-        kind: GuardKind::Terminal(ROLLS_BACK),
+        kind: GuardKind::Terminal(FallKind::RollsBack),
     },
     GuardSpec {
         name: "back_past_previous_spoke",
         crossing: Crossing::Falling,
-        kind: GuardKind::Terminal(ROLLS_BACK),
+        kind: GuardKind::Terminal(FallKind::RollsBack),
     },
 ];
 
 const STATE_NAMES: [&str; 2] = ["theta", "thetadot"];
 const SECTION_NAMES: [&str; 1] = ["thetadot"];
 
-static PARAMS: [ParamSpec; 5] = [
-    ParamSpec {
+static PARAMS: [StaticParam; 5] = [
+    StaticParam {
         name: "slope",
         unit: "rad",
         default: 0.08,
         description: "slope angle γ",
     },
-    ParamSpec {
+    StaticParam {
         name: "n_spokes",
         unit: "1",
         default: 8.0,
         description: "number of spokes N (integer ≥ 3); α = π/N (Tedrake's example uses 8)",
     },
-    ParamSpec {
+    StaticParam {
         name: "g",
         unit: "m/s^2",
         default: 9.81,
         description: "gravitational acceleration",
     },
-    ParamSpec {
+    StaticParam {
         name: "l",
         unit: "m",
         default: 1.0,
         description: "spoke length",
     },
-    ParamSpec {
+    StaticParam {
         name: "max_stride_time",
         unit: "s",
         default: 10.0,
@@ -93,7 +93,7 @@ static PARAMS: [ParamSpec; 5] = [
 ];
 
 /// Registry entry.
-pub static INFO: ModelInfo = ModelInfo {
+pub static INFO: ClosedInfo = ClosedInfo {
     name: "rimless",
     description: "rimless wheel: point mass on N massless spokes (closed-form fixed point)",
     params: &PARAMS,
@@ -302,20 +302,29 @@ impl Section for Rimless {
 }
 
 impl Walker for Rimless {
-    fn name(&self) -> &'static str {
+    fn energy(&self, x: &[f64]) -> Option<f64> {
+        Some(Self::energy(self, x))
+    }
+    fn energy_unit(&self) -> &str {
+        "J/kg"
+    }
+    fn name(&self) -> &str {
         "rimless"
     }
-    fn state_names(&self) -> &'static [&'static str] {
-        &STATE_NAMES
+    fn state_names(&self) -> Vec<String> {
+        STATE_NAMES.iter().map(|s| s.to_string()).collect()
     }
-    fn param_values(&self) -> Vec<(&'static str, f64)> {
-        vec![
+    fn param_values(&self) -> Vec<(String, f64)> {
+        [
             ("slope", self.gamma),
             ("n_spokes", self.n),
             ("g", self.g),
             ("l", self.l),
             ("max_stride_time", self.max_stride_time),
         ]
+        .into_iter()
+        .map(|(n, v)| (n.to_string(), v))
+        .collect()
     }
     /// Distance between consecutive contact points, `2 l sin α`.
     fn step_length(&self, _x_pre: &[f64]) -> f64 {
@@ -340,19 +349,13 @@ impl Walker for Rimless {
             swing_foot: Some([hub[0] - self.l * next.sin(), hub[1] - self.l * next.cos()]),
         })
     }
-    fn fall_name(&self, code: u8) -> &'static str {
-        match code {
-            ROLLS_BACK => "rolls_back",
-            _ => "fall",
-        }
-    }
     /// The closed-form rolling fixed point, when it exists.
     fn gait_guesses(&self) -> Vec<GaitGuess> {
         self.rolling_fixed_point()
             .map(|w| GaitGuess {
-                gait: "stable",
+                gait: "stable".into(),
                 section: vec![w],
-                source: "closed form (Coleman; Tedrake), REFERENCES §2",
+                source: "closed form (Coleman; Tedrake), REFERENCES §2".into(),
             })
             .into_iter()
             .collect()

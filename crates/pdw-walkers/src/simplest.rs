@@ -64,11 +64,11 @@
 //! at a time, and the scalar [`HybridSystem::flow`] calls the very same lane-wise kernel, so the
 //! scalar and batched right-hand sides are bit-identical.
 
-use crate::compass::{ConstraintForces, StepFlags};
 use crate::error::{check_open, WalkerError};
-use crate::registry::{GaitGuess, ModelInfo, ParamSpec, Pose, Walker};
+use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
+use crate::validity::{ConstraintForces, StepFlags};
 use faer::{MatMut, MatRef};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::FRAC_PI_2;
 use wide::f64x4;
 
@@ -88,31 +88,31 @@ const GUARDS: [GuardSpec; 4] = [
     GuardSpec {
         name: "stance_reverses",
         crossing: Crossing::Rising,
-        kind: GuardKind::Terminal(FALL_BACKWARD),
+        kind: GuardKind::Terminal(FallKind::Backward),
     },
     GuardSpec {
         name: "hip_on_ground_behind",
         crossing: Crossing::Rising,
-        kind: GuardKind::Terminal(FALL_BACKWARD),
+        kind: GuardKind::Terminal(FallKind::Backward),
     },
     GuardSpec {
         name: "hip_on_ground_ahead",
         crossing: Crossing::Falling,
-        kind: GuardKind::Terminal(FALL_FORWARD),
+        kind: GuardKind::Terminal(FallKind::Forward),
     },
 ];
 
 const STATE_NAMES: [&str; 4] = ["theta", "thetadot", "phi", "phidot"];
 const SECTION_NAMES: [&str; 2] = ["theta", "thetadot"];
 
-static PARAMS: [ParamSpec; 2] = [
-    ParamSpec {
+static PARAMS: [StaticParam; 2] = [
+    StaticParam {
         name: "slope",
         unit: "rad",
         default: 0.009,
         description: "slope angle γ (Garcia et al. 1998 use 0.009)",
     },
-    ParamSpec {
+    StaticParam {
         name: "max_stride_time",
         unit: "sqrt(l/g)",
         default: 12.0,
@@ -121,7 +121,7 @@ static PARAMS: [ParamSpec; 2] = [
 ];
 
 /// Registry entry.
-pub static INFO: ModelInfo = ModelInfo {
+pub static INFO: ClosedInfo = ClosedInfo {
     name: "simplest",
     description: "Garcia et al. 1998 simplest walker: point-mass hip, massless legs, \
                   infinitesimal feet; time in sqrt(l/g)",
@@ -493,17 +493,26 @@ impl Section for Simplest {
 }
 
 impl Walker for Simplest {
-    fn name(&self) -> &'static str {
+    fn energy(&self, x: &[f64]) -> Option<f64> {
+        Some(Self::energy(self, x))
+    }
+    fn energy_unit(&self) -> &str {
+        "M g l"
+    }
+    fn name(&self) -> &str {
         "simplest"
     }
-    fn state_names(&self) -> &'static [&'static str] {
-        &STATE_NAMES
+    fn state_names(&self) -> Vec<String> {
+        STATE_NAMES.iter().map(|s| s.to_string()).collect()
     }
-    fn param_values(&self) -> Vec<(&'static str, f64)> {
-        vec![
+    fn param_values(&self) -> Vec<(String, f64)> {
+        [
             ("slope", self.gamma),
             ("max_stride_time", self.max_stride_time),
         ]
+        .into_iter()
+        .map(|(n, v)| (n.to_string(), v))
+        .collect()
     }
     /// Distance between the feet at heel strike, `2 |sin θ⁻|` (leg length 1).
     fn step_length(&self, x_pre: &[f64]) -> f64 {
@@ -548,26 +557,19 @@ impl Walker for Simplest {
             swing_foot: Some(foot),
         })
     }
-    fn fall_name(&self, code: u8) -> &'static str {
-        match code {
-            FALL_BACKWARD => "fall_backward",
-            FALL_FORWARD => "fall_forward",
-            _ => "fall",
-        }
-    }
     /// Garcia's small-slope asymptotics for both gaits (only meaningful for 0 < γ ≲ 0.015).
     fn gait_guesses(&self) -> Vec<GaitGuess> {
         let g = self.gamma.max(1e-12);
         vec![
             GaitGuess {
-                gait: "stable",
+                gait: "stable".into(),
                 section: GarciaGait::LongPeriod.section_guess(g).to_vec(),
-                source: "Garcia et al. 1998 App. A.2, long-period gait asymptotics",
+                source: "Garcia et al. 1998 App. A.2, long-period gait asymptotics".into(),
             },
             GaitGuess {
-                gait: "unstable",
+                gait: "unstable".into(),
                 section: GarciaGait::ShortPeriod.section_guess(g).to_vec(),
-                source: "Garcia et al. 1998 App. A.2, short-period gait asymptotics",
+                source: "Garcia et al. 1998 App. A.2, short-period gait asymptotics".into(),
             },
         ]
     }

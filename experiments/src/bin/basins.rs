@@ -100,7 +100,7 @@ fn run(
     let s = &fp.section;
     let xs = window(s[0], n);
     let ys = window(s[1], n);
-    let fall = |c: u8| Outcome::from_fall_name(w.fall_name(c));
+    let fall = Outcome::of_fall;
     let problem = BasinProblem::new(w.as_ref(), s.clone(), &fall);
     let cells = grid_cells(s, 0, &xs, 1, &ys);
     let bo = BasinOptions {

@@ -23,9 +23,7 @@ use pdw_hybrid::{
     GuardKind, HybridSystem, Integrator, Options, Scratch, Section, Stats, StopReason,
 };
 use pdw_limit::{find_fixed_point, Multiplier, NewtonOptions, StrideMap};
-use pdw_walkers::seed5::{
-    PiGains, Seed5, Seed5Compliant, Seed5Params, COMPLIANT_DOUBLE, COMPLIANT_SINGLE, KNEES_LOCKED,
-};
+use pdw_walkers::seed5::{PiGains, Seed5Compliant, COMPLIANT_DOUBLE, COMPLIANT_SINGLE};
 use pdw_walkers::simplest::GarciaGait;
 use std::fmt::Write as _;
 
@@ -359,8 +357,7 @@ fn largest_step(ok: impl Fn(f64) -> bool) -> Option<f64> {
 }
 
 fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
-    let p = Seed5Params::default();
-    let exact = Seed5::new(p)?;
+    let exact = pdw_walkers::presets::seed5(&[])?;
     let emap = StrideMap::new(&exact, Options::dop853(1e-13))?;
     let fp = find_fixed_point(
         &emap,
@@ -375,7 +372,7 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
         let mut x = [0.0; 8];
         exact.lift(s, &mut x);
         let mut t = 0.0;
-        let stop = integ.integrate(&exact, KNEES_LOCKED, &mut t, &mut x, 5.0);
+        let stop = integ.integrate(&exact, exact.locked_mode(), &mut t, &mut x, 5.0);
         (stop, t, exact.swing_foot(&x), integ.stats())
     };
     let (_, t_ref, foot_ref, _) = exact_ss(Options::dop853(1e-13));
@@ -458,7 +455,7 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
             ground_ki: kp / 10.0,
             ground_kd: 0.0,
         };
-        let w = Seed5Compliant::new(p, gains)?;
+        let w = Seed5Compliant::new(exact.clone(), gains)?;
         w.lift(&s10, &mut x0);
         let ((r, wall), _) =
             time_once(|| time_once(|| compliant_step(&w, Options::dop853(tol), &x0, 0.5)));

@@ -541,7 +541,7 @@ fn main() -> anyhow::Result<()> {
         let n = 60;
         let xs = linspace(s[0] - 0.08, s[0] + 0.08, n);
         let ys = linspace(s[1] - 0.3, s[1] + 0.3, n);
-        let fall = |c: u8| Outcome::from_fall_name(locked.fall_name(c));
+        let fall = Outcome::of_fall;
         let problem = BasinProblem::new(locked.as_ref(), s.clone(), &fall);
         let cells = grid_cells(s, 0, &xs, 1, &ys);
         let bo = BasinOptions {

@@ -253,7 +253,7 @@ fn basin_study(w: &dyn Walker, settings: &[Setting]) -> anyhow::Result<(Vec<Basi
     let xs = linspace(0.15, 0.25, nx);
     let ys = linspace(-0.25, -0.15, ny);
     let guess = w.gait_guesses()[0].section.clone();
-    let fall = |c: u8| Outcome::from_fall_name(w.fall_name(c));
+    let fall = Outcome::of_fall;
     let run = |opts: Options, gait: &[f64]| -> anyhow::Result<(Vec<u8>, f64)> {
         let problem = BasinProblem::new(w, gait.to_vec(), &fall);
         let cells = grid_cells(gait, 0, &xs, 1, &ys);

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use faer::{MatMut, MatRef};
-use pdw_hybrid::{Crossing, GuardKind, GuardSpec, HybridSystem, Scratch};
+use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch};
 
 /// Harmonic oscillator `q̇ = p, ṗ = −q` (exact: `q = q₀ cos t + p₀ sin t`) with configurable
 /// guards `g_k = q − level_k`, optionally admissible only when `p` has a given sign.
@@ -223,7 +223,7 @@ pub const SOFT_GUARDS_CONTACT: [GuardSpec; 2] = [
     GuardSpec {
         name: "too_deep",
         crossing: Crossing::Falling,
-        kind: GuardKind::Terminal(1),
+        kind: GuardKind::Terminal(FallKind::Other),
     },
 ];
 

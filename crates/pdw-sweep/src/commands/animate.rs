@@ -82,10 +82,10 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
                         mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
                         x.copy_from_slice(&buf);
                     }
-                    GuardKind::Terminal(code) => {
+                    GuardKind::Terminal(kind) => {
                         return Err(anyhow::anyhow!(
                             "the gait fell ({}) at t = {t:.4} while animating (state {x:?}, strides {strides_done})",
-                            w.fall_name(code)
+                            kind.name()
                         ))
                     }
                 },

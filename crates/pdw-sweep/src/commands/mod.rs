@@ -26,10 +26,10 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
 
 /// A model built from the command line, with the resolved parameter values.
 pub struct BuiltModel {
-    pub info: &'static ModelInfo,
+    pub info: ModelInfo,
     pub walker: Box<dyn Walker>,
     /// `(name, value)` in the model's parameter order.
-    pub params: Vec<(&'static str, f64)>,
+    pub params: Vec<(String, f64)>,
 }
 
 impl BuiltModel {
@@ -76,8 +76,15 @@ pub fn build_with(opts: &ModelOpts, extra: &[(String, f64)]) -> Result<BuiltMode
     ov.extend_from_slice(extra);
     let refs: Vec<(&str, f64)> = ov.iter().map(|(n, v)| (n.as_str(), *v)).collect();
     let values = info.resolve(&refs).map_err(|e| InputError(e.to_string()))?;
-    let walker = (info.build_from)(&values).map_err(|e| InputError(e.to_string()))?;
-    let params = info.params.iter().map(|p| p.name).zip(values).collect();
+    let walker = info
+        .build_from(&values)
+        .map_err(|e| InputError(e.to_string()))?;
+    let params = info
+        .params
+        .iter()
+        .map(|p| p.name.clone())
+        .zip(values)
+        .collect();
     Ok(BuiltModel {
         info,
         walker,

@@ -1,12 +1,30 @@
 //! `pdw-sweep models`: every model, its parameters (units, defaults) and coordinates.
 
 use crate::cli::ModelsArgs;
-use pdw_walkers::MODELS;
+use pdw_walkers::models;
 use std::process::ExitCode;
 
 pub fn run(a: &ModelsArgs) -> anyhow::Result<ExitCode> {
+    if let Some(name) = &a.spec {
+        return match pdw_walkers::preset_text(name) {
+            Some(text) => {
+                crate::outln!("{}", text.trim_end());
+                Ok(ExitCode::SUCCESS)
+            }
+            None => Err(crate::args::InputError(format!(
+                "`{name}` is not a chain-walker preset; presets with a spec file: {}",
+                pdw_walkers::PRESETS
+                    .iter()
+                    .map(|p| p.0)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+            .into()),
+        };
+    }
+    let all = models();
     if a.json {
-        let list: Vec<serde_json::Value> = MODELS
+        let list: Vec<serde_json::Value> = all
             .iter()
             .map(|m| {
                 serde_json::json!({
@@ -24,12 +42,12 @@ pub fn run(a: &ModelsArgs) -> anyhow::Result<ExitCode> {
         crate::outln!("{}", serde_json::to_string_pretty(&list)?);
         return Ok(ExitCode::SUCCESS);
     }
-    for m in MODELS {
+    for m in &all {
         crate::outln!("{} — {}", m.name, m.description);
         crate::outln!("  state:   {}", m.state_names.join(", "));
         crate::outln!("  section: {}", m.section_names.join(", "));
         crate::outln!("  parameters:");
-        for p in m.params {
+        for p in &m.params {
             crate::outln!(
                 "    {:<14} {:>12} {:<6} {}",
                 p.name,

@@ -133,9 +133,9 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
 }
 
 /// How a walk that stopped early ended, with the fall named.
-fn outcome_name(w: &dyn pdw_walkers::Walker, tr: &Trajectory) -> String {
+fn outcome_name(_w: &dyn pdw_walkers::Walker, tr: &Trajectory) -> String {
     match tr.outcome {
-        pdw_limit::StrideOutcome::Fall { code, .. } => format!("fell ({})", w.fall_name(code)),
+        pdw_limit::StrideOutcome::Fall { kind, .. } => format!("fell ({})", kind.name()),
         o => o.to_string(),
     }
 }

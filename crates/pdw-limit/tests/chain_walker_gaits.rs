@@ -1,0 +1,149 @@
+//! The chain-walker presets (compass, kneed, seed5 as spec files on the batched kernel):
+//! their gaits equal those of the hand-written models they replace, and their exact
+//! (dual-number) multipliers agree with Richardson-extrapolated finite differences of the stride
+//! map.
+
+use pdw_hybrid::Options;
+use pdw_limit::{
+    dp_variational, find_fixed_point, multipliers, FixedPoint, NewtonOptions, StrideMap,
+};
+use pdw_walkers::Walker;
+
+/// Fixed points `(model, overrides, gait, section, period)` of the hand-written compass, kneed
+/// and seed5 models that the chain walker replaced (DOP853 at 1e-14, Newton to 1e-12), printed
+/// to 17 digits before the rewrite.
+#[allow(clippy::type_complexity)]
+const BEFORE: [(&str, &[(&str, f64)], &str, [f64; 3], f64); 6] = [
+    (
+        "compass",
+        &[],
+        "stable",
+        [0.2710286804988225, -1.0923835898836058, 0.715009640976422],
+        0.7343463911587212,
+    ),
+    (
+        "compass",
+        &[("slope", 0.0525)],
+        "stable",
+        [0.27127461798032326, -1.0928668105801012, 0.716732217049337],
+        0.7344606213364417,
+    ),
+    (
+        "compass",
+        &[("hip_mass", 10.0), ("slope", 0.04)],
+        "stable",
+        [0.24739851859806916, -1.0406442918670915, 0.5596112441531499],
+        0.7240476232535575,
+    ),
+    (
+        "kneed",
+        &[],
+        "stable",
+        [0.23858546025339888, -1.1090216480752053, 1.0519026766396014],
+        0.5646160150365004,
+    ),
+    (
+        "seed5",
+        &[],
+        "stable",
+        [0.21512464990665398, -0.5707873106365762, 0.2775831306796213],
+        1.3949431429016155,
+    ),
+    (
+        "seed5",
+        &[],
+        "unstable",
+        [
+            0.20561869640616331,
+            -0.6461814709238121,
+            0.12349761193964497,
+        ],
+        1.1499561821926563,
+    ),
+];
+
+fn fixed_point(w: &dyn Walker, guess: &[f64]) -> FixedPoint {
+    let map = StrideMap::new(w, Options::dop853(1e-14)).unwrap();
+    let opts = NewtonOptions {
+        tol: 1e-12,
+        ..NewtonOptions::default()
+    };
+    find_fixed_point(&map, guess, &opts).unwrap()
+}
+
+#[test]
+fn presets_reproduce_the_hand_written_models_gaits_to_1e_11() {
+    for (name, ov, gait, section, period) in BEFORE {
+        let w = pdw_walkers::build(name, ov).unwrap();
+        let g = w
+            .gait_guesses()
+            .into_iter()
+            .find(|g| g.gait == gait)
+            .unwrap();
+        let fp = fixed_point(w.as_ref(), &g.section);
+        for i in 0..3 {
+            let e = (fp.section[i] - section[i]).abs();
+            assert!(e <= 1e-11, "{name} {ov:?} {gait} s[{i}] off by {e:.2e}");
+        }
+        let e = (fp.metrics.period - period).abs();
+        assert!(e <= 1e-11, "{name} {ov:?} {gait} period off by {e:.2e}");
+    }
+}
+
+/// `DP(s)` by central differences of the stride map with steps `h`, `h/2`, `h/4`
+/// (`h = 1e-3·max(1, |s_j|)`), extrapolated twice (Richardson: error `O(h⁶)`).
+fn dp_richardson3(map: &StrideMap<'_, dyn Walker>, s: &[f64]) -> Vec<f64> {
+    let n = s.len();
+    let mut dp = vec![0.0; n * n];
+    for j in 0..n {
+        let h = 1e-3 * s[j].abs().max(1.0);
+        let central = |h: f64| -> Vec<f64> {
+            let (mut sp, mut sm) = (s.to_vec(), s.to_vec());
+            sp[j] += h;
+            sm[j] -= h;
+            let (p, m) = (map.apply(&sp).unwrap(), map.apply(&sm).unwrap());
+            p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+        };
+        let (d1, d2, d4) = (central(h), central(h / 2.0), central(h / 4.0));
+        for i in 0..n {
+            let r1 = (4.0 * d2[i] - d1[i]) / 3.0;
+            let r2 = (4.0 * d4[i] - d2[i]) / 3.0;
+            dp[i * n + j] = (16.0 * r2 - r1) / 15.0;
+        }
+    }
+    dp
+}
+
+/// Variational multipliers (exact flow, guard and impact Jacobians) against Richardson
+/// extrapolation of central differences of the stride map (integrator at 1e-14): at least 9
+/// significant digits.
+#[test]
+fn exact_multipliers_agree_with_richardson_differences_to_nine_digits() {
+    for (name, ov, gait, section, _) in BEFORE {
+        let w = pdw_walkers::build(name, ov).unwrap();
+        let fp = fixed_point(w.as_ref(), &section);
+        let map: StrideMap<'_, dyn Walker> =
+            StrideMap::new(w.as_ref(), Options::dop853(1e-14)).unwrap();
+        let (_, dp_var) = dp_variational(&map, &fp.section).unwrap();
+        let dp_fd = dp_richardson3(&map, &fp.section);
+        let (mv, mf) = (
+            multipliers(&dp_var, 3).unwrap(),
+            multipliers(&dp_fd, 3).unwrap(),
+        );
+        for (a, b) in mv.iter().zip(&mf) {
+            let e = ((a.re - b.re).powi(2) + (a.im - b.im).powi(2)).sqrt()
+                / (a.re.hypot(a.im)).max(1.0);
+            assert!(
+                e <= 1e-9,
+                "{name} {ov:?} {gait}: variational {a:?} vs Richardson {b:?} ({e:.2e})"
+            );
+        }
+        // and the fixed point's own DP is the variational one
+        for (a, b) in fp.dp.iter().zip(&dp_var) {
+            assert!(
+                (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
+                "{name}: {a} vs {b}"
+            );
+        }
+    }
+}

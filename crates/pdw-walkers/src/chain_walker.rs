@@ -1,0 +1,854 @@
+//! The chain walker: every planar legged chain (compass gait, kneed walkers, the seed's
+//! walker, users' own) from a [`WalkerSpec`], on the batched planar SOA kernel ([`pdw_soa`]).
+//!
+//! # Chain, frame, coordinates and signs
+//! Both legs have the spec's `m` segments. The kernel chain is rooted at the stance foot and has
+//! `n = 2m` revolute joints: the stance foot (joint 0), the stance knees (joints `1..m`, foot
+//! side first), the hip (joint `m`), the swing knees (joints `m+1..2m`, hip side first). Link
+//! `k < m` is stance segment `k` (lower end at its joint, `to_next = (0, L_k)`, COM
+//! `(c⊥_k, c_k)`); the top stance segment also carries the hip mass at its upper end. Link
+//! `m + j` is swing segment `m−1−j` hanging from its joint (`to_next = (0, −L)`, COM
+//! `(c⊥, −(L − c))`). Slope frame of the kernel: `y` along the slope **downhill**, `z` normal to
+//! the slope, up; angles positive from `+y` to `+z`; gravity as the base acceleration
+//! `[0, −g sin γ, g cos γ]` (seed eq. 3.12). State `x = (q, q̇)`, `q₀` the stance leg's angle from
+//! the slope normal (positive: stance foot ahead of the hip — Garcia's θ), `q_m` the hip angle
+//! (swing leg relative to the stance leg; `q_m = 0`: legs together). Knee flexion: a stance knee
+//! flexes with `q > 0`, a swing knee with `q < 0`; a knee is straight at `q = 0`.
+//!
+//! # Modes
+//! With a free-swing knee: mode 0 ([`FREE`]) — the swing knee is free, every other knee is a
+//! pseudo joint (seed §3.4, `q̈ = 0`); mode 1 ([`LOCKED`]) — every knee locked. Without one:
+//! a single mode 0 with every knee locked. The flow is the batched articulated-body recursion
+//! with the locked joints welded ([`pdw_soa::batch_aba_view`]) over all lanes of a mode; the
+//! scalar [`HybridSystem::flow`] is its one-lane case, so a lane of a batch equals the scalar
+//! run bit for bit.
+//!
+//! # Guards
+//! Free mode: 0 `knee_strike` (the free knee's angle rising through 0, reset → locked mode);
+//! 1 `foot_strike_knee_bent` (terminal [`FallKind::KneeBent`]: swing-foot height falling through
+//! 0 ahead of the stance foot). Locked mode: 0 `heel_strike` (swing-foot height falling through
+//! 0, admissible with the swing foot ahead and on the heel-strike factor `|2θ_s + q_m| < |q_m|`,
+//! `θ_s` the stance leg's absolute angle — with straight legs the swing-foot height is
+//! `2L sin(θ_s + q_m/2) sin(q_m/2)`). Both modes then: `stance_reverses` (`q̇₀` rising through 0
+//! while `q₀ > γ`, [`FallKind::Backward`]), `hip_on_ground_behind` (`q₀ − π/2` rising,
+//! backward), `hip_on_ground_ahead` (`q₀ + π/2` falling, [`FallKind::Forward`]).
+//!
+//! # Resets
+//! - Knee strike: plastic lock of the free knee with the stance foot pinned and the other knees
+//!   held (kernel [`pdw_soa::joint_lock_impact`]: `q̇⁺ = q̇⁻ − 𝓜⁻¹Eᵀ(E𝓜⁻¹Eᵀ)⁻¹E q̇⁻`); the
+//!   knee angle and locked rates are set to exactly 0.
+//! - Heel strike: plastic impact at the swing foot with every knee held and the old stance foot
+//!   free (kernel [`pdw_soa::tip_impact`] on the floating chain `(P_y, P_z, q…)`), then the leg
+//!   swap (the seed's switch rule, eq. 3.29–3.32): `q₀' = Σq`, new stance knees `= −`old swing
+//!   knees, `q_m' = −q_m`, new swing knees `= −`old stance knees (same for the rates). The kernel
+//!   requires positive link masses, so the two prismatic base links carry
+//!   [`FLOATING_BASE_MASS`] = 1e-30 kg, which changes no sum of masses by even one ulp.
+//!
+//! # Section
+//! Just after heel strike, every knee straight: `q = (s₀, 0…, −2s₀, 0…)`,
+//! `q̇ = (s₁, 0…, s₂, 0…)`; reduced coordinates `(q₀, q̇₀, q̇_m)` (`"stance"`, `"stance_rate"`,
+//! `"hip_rate"`).
+
+use crate::error::WalkerError;
+use crate::registry::{GaitGuess, Pose, Walker};
+use crate::spec::{ParamTable, Resolved, WalkerSpec};
+use crate::validity::{ConstraintForces, StepFlags};
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::{MatMut, MatRef};
+use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+use pdw_soa::{BatchWorkspace, Chain, ChainBuilder, Link, Workspace};
+use std::f64::consts::FRAC_PI_2;
+
+/// Mode with the swing knee free (only with a free-swing knee).
+pub const FREE: usize = 0;
+/// Mode with every knee locked (mode 0 when there is no free-swing knee).
+pub const LOCKED: usize = 1;
+/// Mass (kg) of the fictitious prismatic base links of the floating chain used for heel strikes.
+pub const FLOATING_BASE_MASS: f64 = 1e-30;
+/// Largest number of segments per leg.
+pub const MAX_SEGMENTS: usize = 3;
+
+const SECTION_NAMES: [&str; 3] = ["stance", "stance_rate", "hip_rate"];
+
+const FALLS: [GuardSpec; 3] = [
+    GuardSpec {
+        name: "stance_reverses",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Terminal(FallKind::Backward),
+    },
+    GuardSpec {
+        name: "hip_on_ground_behind",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Terminal(FallKind::Backward),
+    },
+    GuardSpec {
+        name: "hip_on_ground_ahead",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Terminal(FallKind::Forward),
+    },
+];
+
+const GUARDS_FREE: [GuardSpec; 5] = [
+    GuardSpec {
+        name: "knee_strike",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Reset,
+    },
+    GuardSpec {
+        name: "foot_strike_knee_bent",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Terminal(FallKind::KneeBent),
+    },
+    FALLS[0],
+    FALLS[1],
+    FALLS[2],
+];
+
+const GUARDS_LOCKED: [GuardSpec; 4] = [
+    GuardSpec {
+        name: "heel_strike",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Reset,
+    },
+    FALLS[0],
+    FALLS[1],
+    FALLS[2],
+];
+
+/// The chain walker (immutable model, shared by threads). See the module docs.
+#[derive(Clone, Debug)]
+pub struct ChainWalker {
+    spec: WalkerSpec,
+    table: ParamTable,
+    r: Resolved,
+    /// segments per leg
+    m: usize,
+    /// joints, `2m`
+    n: usize,
+    chain: Chain,
+    floating: Chain,
+    /// signed link lengths along each link's z axis (stance `+L`, swing `−L`)
+    len: Vec<f64>,
+    leg_length: f64,
+    /// joint index of the free swing knee
+    free_knee: Option<usize>,
+    /// locked-joint mask per mode (index by mode)
+    masks: Vec<Vec<bool>>,
+    /// locked joints per mode
+    locked: Vec<Vec<usize>>,
+    /// knee joints of the floating chain (offset by the two base joints)
+    floating_knees: Vec<usize>,
+    state_names: Vec<String>,
+}
+
+/// The chain walker's scratch (held in a [`Scratch`]): kernel workspaces sized by the number
+/// of joints, so that chain walkers of equal size share one.
+pub struct ChainScratch {
+    n: usize,
+    bw: BatchWorkspace,
+    ws: Workspace,
+    fws: Workspace,
+    zeros: Vec<f64>,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    v: Vec<f64>,
+    imp: Vec<f64>,
+}
+
+impl ChainScratch {
+    fn new(w: &ChainWalker) -> Self {
+        let n = w.n;
+        Self {
+            n,
+            bw: BatchWorkspace::new(&w.chain, pdw_soa::batch::BLOCK),
+            ws: Workspace::new(&w.chain),
+            fws: Workspace::new(&w.floating),
+            zeros: vec![0.0; n + 2],
+            q: vec![0.0; n + 2],
+            qd: vec![0.0; n + 2],
+            v: vec![0.0; n + 2],
+            imp: vec![0.0; n + 2],
+        }
+    }
+}
+
+impl ChainWalker {
+    /// Builds the walker from a spec at its default parameter values.
+    pub fn from_spec(spec: WalkerSpec) -> Result<Self, WalkerError> {
+        let values = spec.param_table().values;
+        Self::new(spec, &values)
+    }
+
+    /// Builds the walker from a spec at parameter values `values` (in
+    /// [`WalkerSpec::param_table`] order).
+    pub fn new(spec: WalkerSpec, values: &[f64]) -> Result<Self, WalkerError> {
+        let r = spec.resolve(values)?;
+        let m = r.segments.len();
+        if m > MAX_SEGMENTS {
+            return Err(WalkerError::InvalidSpec {
+                source_name: spec.name.clone(),
+                field: "segments".into(),
+                value: format!("{m} segments"),
+                rule: format!("at most {MAX_SEGMENTS} segments per leg"),
+            });
+        }
+        let n = 2 * m;
+        let mut table = spec.param_table();
+        table.values = values.to_vec();
+        let mut links = Vec::with_capacity(n);
+        for (k, s) in r.segments.iter().enumerate() {
+            let [l, mass, c, cn, inertia] = *s;
+            let mut link = Link {
+                to_next: [0.0, l],
+                com: [cn, c],
+                mass,
+                inertia,
+            };
+            if k + 1 == m && r.hip_mass > 0.0 {
+                link = add_point_mass(link, r.hip_mass, [0.0, l]);
+            }
+            links.push(link);
+        }
+        for s in r.segments.iter().rev() {
+            let [l, mass, c, cn, inertia] = *s;
+            links.push(Link {
+                to_next: [0.0, -l],
+                com: [cn, -(l - c)],
+                mass,
+                inertia,
+            });
+        }
+        let kernel_error = |e: pdw_soa::SoaError| WalkerError::InvalidSpec {
+            source_name: spec.name.clone(),
+            field: "segments".into(),
+            value: "the chain".into(),
+            rule: format!("the kernel rejects the chain: {e}"),
+        };
+        let mut b = ChainBuilder::new().gravity(r.gravity).slope(r.slope);
+        for l in &links {
+            b = b.revolute(*l);
+        }
+        let chain = b.build().map_err(kernel_error)?;
+        let base = Link {
+            to_next: [0.0, 0.0],
+            com: [0.0, 0.0],
+            mass: FLOATING_BASE_MASS,
+            inertia: 0.0,
+        };
+        let mut fb = ChainBuilder::new()
+            .gravity(r.gravity)
+            .slope(r.slope)
+            .prismatic([1.0, 0.0], base)
+            .prismatic([0.0, 1.0], base);
+        for l in &links {
+            fb = fb.revolute(*l);
+        }
+        let floating = fb.build().map_err(kernel_error)?;
+        let len: Vec<f64> = links.iter().map(|l| l.to_next[1]).collect();
+        let leg_length = r.segments.iter().map(|s| s[0]).sum();
+        let knees: Vec<usize> = (1..m).chain(m + 1..n).collect();
+        let free_knee = r.free_swing.iter().position(|f| *f).map(|i| 2 * m - 1 - i);
+        let locked_mode = |free: Option<usize>| -> Vec<usize> {
+            knees.iter().copied().filter(|k| Some(*k) != free).collect()
+        };
+        let locked: Vec<Vec<usize>> = match free_knee {
+            Some(f) => vec![locked_mode(Some(f)), locked_mode(None)],
+            None => vec![locked_mode(None)],
+        };
+        let masks = locked
+            .iter()
+            .map(|l| (0..n).map(|k| l.contains(&k)).collect())
+            .collect();
+        let floating_knees = knees.iter().map(|k| k + 2).collect();
+        let mut names = vec!["stance".to_string()];
+        let knee_name = |side: &str, i: usize| {
+            if m == 2 {
+                format!("{side}_knee")
+            } else {
+                format!("{side}_knee{}", i + 1)
+            }
+        };
+        names.extend((0..m - 1).map(|i| knee_name("stance", i)));
+        names.push("hip".into());
+        names.extend((0..m - 1).rev().map(|i| knee_name("swing", i)));
+        let rates: Vec<String> = names.iter().map(|s| format!("{s}_rate")).collect();
+        names.extend(rates);
+        Ok(Self {
+            spec,
+            table,
+            r,
+            m,
+            n,
+            chain,
+            floating,
+            len,
+            leg_length,
+            free_knee,
+            masks,
+            locked,
+            floating_knees,
+            state_names: names,
+        })
+    }
+
+    /// The spec the walker was built from.
+    pub fn spec(&self) -> &WalkerSpec {
+        &self.spec
+    }
+
+    /// The evaluated geometry.
+    pub fn resolved(&self) -> &Resolved {
+        &self.r
+    }
+
+    /// The kernel chain rooted at the stance foot (tip: the swing foot).
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    /// Segments per leg.
+    pub fn segments(&self) -> usize {
+        self.m
+    }
+
+    /// Leg length (sum of the segment lengths).
+    pub fn leg_length(&self) -> f64 {
+        self.leg_length
+    }
+
+    /// Joint index of the free swing knee, if the spec has one.
+    pub fn free_knee(&self) -> Option<usize> {
+        self.free_knee
+    }
+
+    /// Mode in which every knee is locked (the mode of the heel strike).
+    pub fn locked_mode(&self) -> usize {
+        if self.free_knee.is_some() {
+            LOCKED
+        } else {
+            0
+        }
+    }
+
+    /// Joints held locked (pseudo joints) in `mode`.
+    pub fn locked_joints(&self, mode: usize) -> &[usize] {
+        &self.locked[mode]
+    }
+
+    /// Swing-foot position `[y, z]` relative to the stance foot.
+    pub fn swing_foot(&self, x: &[f64]) -> [f64; 2] {
+        let mut th = 0.0;
+        let mut p = [0.0, 0.0];
+        for k in 0..self.n {
+            th += x[k];
+            let (s, c) = th.sin_cos();
+            p[0] -= self.len[k] * s;
+            p[1] += self.len[k] * c;
+        }
+        p
+    }
+
+    /// Absolute angle of the stance leg's top segment (the stance leg's angle when its knees
+    /// are straight).
+    fn stance_angle(&self, x: &[f64]) -> f64 {
+        x[..self.m].iter().sum()
+    }
+
+    /// The leg swap (seed switch rule, eq. 3.29–3.32) on joint angles `q` and rates `qd`
+    /// (length `n` each) into `out` (length `2n`).
+    pub fn swap(&self, q: &[f64], qd: &[f64], out: &mut [f64]) {
+        let (m, n) = (self.m, self.n);
+        for (src, off) in [(q, 0), (qd, n)] {
+            out[off] = src.iter().sum();
+            for i in 0..m - 1 {
+                // stance knee i (joint i+1) ← −(swing knee i, joint 2m−1−i), and vice versa
+                out[off + i + 1] = -src[2 * m - 1 - i];
+                out[off + 2 * m - 1 - i] = -src[i + 1];
+            }
+            out[off + m] = -src[m];
+        }
+    }
+
+    fn scratch<'a>(&self, ws: &'a mut Scratch) -> &'a mut ChainScratch {
+        ws.get_or_init(|| ChainScratch::new(self), |s: &ChainScratch| s.n == self.n)
+    }
+
+    /// Joint accelerations in `mode`, the locking torques (kernel sign, per joint, 0 where
+    /// free) and the ground's force on the stance foot `[τ, f_y, f_z]`, by the kernel's
+    /// [`pdw_soa::pseudo_joint_dynamics`].
+    pub fn dynamics(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        qdd: &mut [f64],
+        lock: &mut [f64],
+    ) -> [f64; 3] {
+        let n = self.n;
+        let s = self.scratch(ws);
+        let r = pdw_soa::pseudo_joint_dynamics(
+            &self.chain,
+            &mut s.ws,
+            &x[..n],
+            &x[n..2 * n],
+            &s.zeros[..n],
+            &self.locked[mode],
+            None,
+            qdd,
+            lock,
+        )
+        .map(|_| s.ws.joint_forces()[0]);
+        match r {
+            Ok(f) => f,
+            Err(_) => {
+                qdd.iter_mut().for_each(|v| *v = f64::NAN);
+                lock.iter_mut().for_each(|v| *v = f64::NAN);
+                [f64::NAN; 3]
+            }
+        }
+    }
+
+    /// Ground reaction at the stance foot and the knee-lock torques, positive towards flexion
+    /// (a stance knee's kernel torque as is, a swing knee's negated); of several knees per leg
+    /// the smallest (the one nearest to unlocking) is reported.
+    pub fn constraint_forces_ws(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+    ) -> ConstraintForces {
+        let n = self.n;
+        let mut qdd = [0.0; 2 * MAX_SEGMENTS];
+        let mut lock = [0.0; 2 * MAX_SEGMENTS];
+        let f = self.dynamics(ws, mode, x, &mut qdd[..n], &mut lock[..n]);
+        let m = self.m;
+        let stance = (1..m).map(|k| lock[k]).reduce(f64::min);
+        let swing = (m + 1..n)
+            .filter(|k| self.masks[mode][*k])
+            .map(|k| -lock[k])
+            .reduce(f64::min);
+        ConstraintForces::from_ground(f, [stance, swing])
+    }
+
+    /// Validity flags at one state; a hyper-extended free knee (`q > 0` in the free mode) also
+    /// raises `knee_unlocks`.
+    pub fn check_state_ws(&self, ws: &mut Scratch, mode: usize, x: &[f64]) -> StepFlags {
+        let cf = self.constraint_forces_ws(ws, mode, x);
+        let mut f = StepFlags::from_state(&cf, self.swing_foot(x), self.leg_length);
+        if let (Some(k), FREE) = (self.free_knee, mode) {
+            if x[k] > 1e-9 {
+                f.knee_unlocks = true;
+            }
+        }
+        f
+    }
+
+    /// The heel-strike impact at the pre-impact state `x` (every knee held): floating-chain rates
+    /// `(ẏ, ż, q̇…)` after the impact into `qd_post` (length `n + 2`), before the leg swap; the
+    /// ground's impulse on the new stance foot `[Λ_y, Λ_z]` is returned.
+    pub fn heel_strike(&self, ws: &mut Scratch, x: &[f64], qd_post: &mut [f64]) -> [f64; 2] {
+        let n = self.n;
+        let s = self.scratch(ws);
+        s.q[..2].fill(0.0);
+        s.qd[..2].fill(0.0);
+        s.q[2..n + 2].copy_from_slice(&x[..n]);
+        s.qd[2..n + 2].copy_from_slice(&x[n..2 * n]);
+        let nl = 2 + self.floating_knees.len();
+        let ok = pdw_soa::tip_impact(
+            &self.floating,
+            &mut s.fws,
+            &s.q[..n + 2],
+            &s.qd[..n + 2],
+            &self.floating_knees,
+            qd_post,
+            &mut s.imp[..nl],
+        )
+        .is_ok();
+        if ok {
+            [-s.imp[0], -s.imp[1]]
+        } else {
+            qd_post.iter_mut().for_each(|v| *v = f64::NAN);
+            [f64::NAN; 2]
+        }
+    }
+
+    fn flow_views(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        mut dx: MatMut<'_, f64>,
+    ) {
+        let n = self.n;
+        for j in 0..n {
+            dx.rb_mut().col_mut(j).copy_from(x.col(n + j));
+        }
+        let s = self.scratch(ws);
+        let r = pdw_soa::batch_aba_view(
+            &self.chain,
+            &mut s.bw,
+            x.subcols(0, n),
+            x.subcols(n, n),
+            None,
+            None,
+            Some(&self.masks[mode]),
+            dx.rb_mut().subcols_mut(n, n),
+        );
+        if r.is_err() {
+            dx.fill(f64::NAN);
+        }
+    }
+}
+
+/// Largest state dimension `2n` of a chain walker.
+const DMAX: usize = 4 * MAX_SEGMENTS;
+/// Largest joint count of the floating chain.
+const FMAX: usize = 2 * MAX_SEGMENTS + 2;
+
+impl ChainWalker {
+    /// The leg swap as a matrix `S` (row-major `n × n`): `q' = S q`, `q̇' = S q̇`.
+    fn swap_matrix(&self, out: &mut [f64]) {
+        let n = self.n;
+        let mut e = [0.0; 2 * MAX_SEGMENTS];
+        let mut col = [0.0; 4 * MAX_SEGMENTS];
+        for j in 0..n {
+            e[..n].fill(0.0);
+            e[j] = 1.0;
+            self.swap(&e[..n], &e[..n], &mut col[..2 * n]);
+            for i in 0..n {
+                out[i * n + j] = col[i];
+            }
+        }
+    }
+}
+
+/// A link with a point mass `mp` added at `p` (link frame): composite mass, COM and inertia
+/// about the new COM (parallel-axis theorem).
+fn add_point_mass(l: Link, mp: f64, p: [f64; 2]) -> Link {
+    let mass = l.mass + mp;
+    let com = [
+        (l.mass * l.com[0] + mp * p[0]) / mass,
+        (l.mass * l.com[1] + mp * p[1]) / mass,
+    ];
+    let d2 = |a: [f64; 2]| (a[0] - com[0]).powi(2) + (a[1] - com[1]).powi(2);
+    Link {
+        to_next: l.to_next,
+        com,
+        mass,
+        inertia: l.inertia + l.mass * d2(l.com) + mp * d2(p),
+    }
+}
+
+impl HybridSystem for ChainWalker {
+    fn dim(&self) -> usize {
+        2 * self.n
+    }
+
+    fn n_modes(&self) -> usize {
+        self.masks.len()
+    }
+
+    fn guards(&self, mode: usize) -> &[GuardSpec] {
+        if self.free_knee.is_some() && mode == FREE {
+            &GUARDS_FREE
+        } else {
+            &GUARDS_LOCKED
+        }
+    }
+
+    /// One lane of [`HybridSystem::flow_batch`] (the same kernel call, the same bits).
+    fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+        let d = 2 * self.n;
+        let xv = MatRef::from_column_major_slice(&x[..d], 1, d);
+        let dxv = MatMut::from_column_major_slice_mut(&mut dx[..d], 1, d);
+        self.flow_views(ws, mode, xv, dxv);
+    }
+
+    fn flow_batch(&self, ws: &mut Scratch, mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
+        self.flow_views(ws, mode, x.rb(), dx);
+    }
+
+    fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        let n = self.n;
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        match (free, k) {
+            (true, 0) => x[self.free_knee.unwrap_or(0)],
+            (_, k) if k < lead => self.swing_foot(x)[1],
+            (_, k) => match k - lead {
+                0 => x[n],
+                1 => x[0] - FRAC_PI_2,
+                _ => x[0] + FRAC_PI_2,
+            },
+        }
+    }
+
+    fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        match (free, k) {
+            (true, 0) => true,
+            (true, 1) => self.swing_foot(x)[0] > 0.0,
+            (false, 0) => {
+                let qh = x[self.m];
+                self.swing_foot(x)[0] > 0.0 && (2.0 * self.stance_angle(x) + qh).abs() < qh.abs()
+            }
+            (_, k) if k == lead => x[0] > self.r.slope,
+            _ => true,
+        }
+    }
+
+    fn reset(&self, ws: &mut Scratch, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        let n = self.n;
+        if let (Some(knee), FREE) = (self.free_knee, mode) {
+            let s = self.scratch(ws);
+            let locked = &self.locked[LOCKED];
+            let ok = pdw_soa::joint_lock_impact(
+                &self.chain,
+                &mut s.ws,
+                &x[..n],
+                &x[n..2 * n],
+                locked,
+                &mut s.v[..n],
+                &mut s.imp[..locked.len()],
+            )
+            .is_ok();
+            out[..n].copy_from_slice(&x[..n]);
+            out[knee] = 0.0;
+            if ok {
+                out[n..2 * n].copy_from_slice(&s.v[..n]);
+                for &j in locked {
+                    out[n + j] = 0.0;
+                }
+            } else {
+                out[n..2 * n].fill(f64::NAN);
+            }
+            return LOCKED;
+        }
+        let mut v = [0.0; 2 * MAX_SEGMENTS + 2];
+        self.heel_strike(ws, x, &mut v[..n + 2]);
+        self.swap(&x[..n], &v[2..n + 2], out);
+        self.section_mode()
+    }
+
+    /// Exact flow Jacobian: `∂q̇/∂x = [0 | I]`, and `∂q̈/∂(q, q̇)` by forward-mode dual numbers
+    /// through the kernel's per-link steps with the mode's knees locked
+    /// ([`pdw_soa::aba_derivatives`]: `∂q̈_f = −𝓜_ff⁻¹ ∂ID_f`, Carpentier & Mansard 2018).
+    fn flow_jacobian(&self, ws: &mut Scratch, mode: usize, x: &[f64], jac: &mut [f64]) {
+        let (n, d) = (self.n, 2 * self.n);
+        let s = self.scratch(ws);
+        let mut dq = [0.0; 4 * MAX_SEGMENTS * MAX_SEGMENTS];
+        let mut dqd = [0.0; 4 * MAX_SEGMENTS * MAX_SEGMENTS];
+        let ok = pdw_soa::aba_derivatives(
+            &self.chain,
+            &x[..n],
+            &x[n..d],
+            &s.zeros[..n],
+            &self.masks[mode],
+            &mut s.v[..n],
+            &mut dq[..n * n],
+            &mut dqd[..n * n],
+        )
+        .is_ok();
+        jac[..d * d].fill(0.0);
+        for i in 0..n {
+            jac[i * d + n + i] = 1.0;
+            for j in 0..n {
+                jac[(n + i) * d + j] = if ok { dq[i * n + j] } else { f64::NAN };
+                jac[(n + i) * d + n + j] = if ok { dqd[i * n + j] } else { f64::NAN };
+            }
+        }
+    }
+
+    /// Exact gradients: the knee angle, the swing-foot height (kernel tip-position derivatives),
+    /// the stance rate, the stance angle.
+    fn guard_gradient(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        grad: &mut [f64],
+    ) {
+        let (n, d) = (self.n, 2 * self.n);
+        grad[..d].fill(0.0);
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        match (free, k) {
+            (true, 0) => grad[self.free_knee.unwrap_or(0)] = 1.0,
+            (_, k) if k < lead => {
+                let mut pos = [0.0; 2];
+                let mut j = [0.0; 2 * 2 * MAX_SEGMENTS];
+                match pdw_soa::tip_position_derivatives(
+                    &self.chain,
+                    &x[..n],
+                    &mut pos,
+                    &mut j[..2 * n],
+                ) {
+                    Ok(()) => grad[..n].copy_from_slice(&j[n..2 * n]),
+                    Err(_) => grad[..d].fill(f64::NAN),
+                }
+            }
+            (_, k) if k == lead => grad[n] = 1.0,
+            _ => grad[0] = 1.0,
+        }
+    }
+
+    /// Exact reset Jacobians: the impact maps' derivatives by dual numbers through the kernel
+    /// ([`pdw_soa::joint_lock_impact_derivatives`], [`pdw_soa::tip_impact_derivatives`]), the
+    /// leg swap as its matrix.
+    fn reset_jacobian(&self, ws: &mut Scratch, mode: usize, _k: usize, x: &[f64], jac: &mut [f64]) {
+        let (n, d) = (self.n, 2 * self.n);
+        jac[..d * d].fill(0.0);
+        if let (Some(knee), FREE) = (self.free_knee, mode) {
+            let s = self.scratch(ws);
+            let locked = &self.locked[LOCKED];
+            let mut jl = [0.0; DMAX * DMAX / 2];
+            let ok = pdw_soa::joint_lock_impact_derivatives(
+                &self.chain,
+                &x[..n],
+                &x[n..d],
+                locked,
+                &mut s.v[..n],
+                &mut jl[..n * d],
+            )
+            .is_ok();
+            for i in 0..n {
+                if i != knee {
+                    jac[i * d + i] = 1.0;
+                }
+                if locked.contains(&i) {
+                    continue;
+                }
+                for j in 0..d {
+                    jac[(n + i) * d + j] = if ok { jl[i * d + j] } else { f64::NAN };
+                }
+            }
+            return;
+        }
+        let s = self.scratch(ws);
+        let f = n + 2;
+        s.q[..2].fill(0.0);
+        s.qd[..2].fill(0.0);
+        s.q[2..f].copy_from_slice(&x[..n]);
+        s.qd[2..f].copy_from_slice(&x[n..d]);
+        let mut jf = [0.0; FMAX * 2 * FMAX];
+        let ok = pdw_soa::tip_impact_derivatives(
+            &self.floating,
+            &s.q[..f],
+            &s.qd[..f],
+            &self.floating_knees,
+            &mut s.v[..f],
+            &mut jf[..f * 2 * f],
+        )
+        .is_ok();
+        let mut sm = [0.0; 4 * MAX_SEGMENTS * MAX_SEGMENTS];
+        self.swap_matrix(&mut sm[..n * n]);
+        for i in 0..n {
+            for j in 0..n {
+                // q' = S q
+                jac[i * d + j] = sm[i * n + j];
+                // q̇' = S v(q, q̇), v = floating rates 2.. of the impact
+                let (mut a, mut b) = (0.0, 0.0);
+                for l in 0..n {
+                    a += sm[i * n + l] * jf[(2 + l) * 2 * f + 2 + j];
+                    b += sm[i * n + l] * jf[(2 + l) * 2 * f + f + 2 + j];
+                }
+                jac[(n + i) * d + j] = if ok { a } else { f64::NAN };
+                jac[(n + i) * d + n + j] = if ok { b } else { f64::NAN };
+            }
+        }
+    }
+}
+
+impl Section for ChainWalker {
+    fn section_dim(&self) -> usize {
+        3
+    }
+    fn section_names(&self) -> &[&'static str] {
+        &SECTION_NAMES
+    }
+    fn section_mode(&self) -> usize {
+        0
+    }
+    fn section_guard(&self) -> (usize, usize) {
+        (self.locked_mode(), 0)
+    }
+    fn lift(&self, s: &[f64], x: &mut [f64]) {
+        let (m, n) = (self.m, self.n);
+        x[..2 * n].fill(0.0);
+        x[0] = s[0];
+        x[m] = -2.0 * s[0];
+        x[n] = s[1];
+        x[n + m] = s[2];
+    }
+    fn project(&self, x: &[f64], s: &mut [f64]) {
+        s[0] = x[0];
+        s[1] = x[self.n];
+        s[2] = x[self.n + self.m];
+    }
+    fn max_stride_time(&self) -> f64 {
+        self.r.max_stride_time
+    }
+}
+
+impl Walker for ChainWalker {
+    fn name(&self) -> &str {
+        &self.spec.name
+    }
+    fn state_names(&self) -> Vec<String> {
+        self.state_names.clone()
+    }
+    fn param_values(&self) -> Vec<(String, f64)> {
+        self.table
+            .names
+            .iter()
+            .cloned()
+            .zip(self.table.values.iter().copied())
+            .collect()
+    }
+    fn step_length(&self, x_pre: &[f64]) -> f64 {
+        self.swing_foot(x_pre)[0]
+    }
+    fn gait_guesses(&self) -> Vec<GaitGuess> {
+        if self.r.gaits.is_empty() {
+            // Goswami's compass gait at 3° scaled by √(g/L): a start that reaches the
+            // period-one gait of most straight-legged walkers on small slopes.
+            let w = (self.r.gravity / self.leg_length).sqrt();
+            return vec![GaitGuess {
+                gait: "stable".into(),
+                section: vec![0.27, -0.35 * w, 0.23 * w],
+                source: "generic start (the compass gait's at 3°, rates scaled by √(g/L)); the \
+                         spec gives no gait"
+                    .into(),
+            }];
+        }
+        self.r
+            .gaits
+            .iter()
+            .map(|(name, section, source)| GaitGuess {
+                gait: name.clone(),
+                section: section.clone(),
+                source: source.clone(),
+            })
+            .collect()
+    }
+    fn pose(&self, x: &[f64]) -> Option<Pose> {
+        Some(crate::registry::chain_pose(&x[..self.n], &self.len))
+    }
+    fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
+        Some(self.constraint_forces_ws(&mut Scratch::new(), mode, x))
+    }
+    fn step_flags(&self, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        Some(self.check_state_ws(&mut Scratch::new(), mode, x))
+    }
+    /// `T + V` by the kernel's `total_energy` (potential zero at the stance foot).
+    fn energy(&self, x: &[f64]) -> Option<f64> {
+        let mut ws = Workspace::new(&self.chain);
+        pdw_soa::total_energy(&self.chain, &mut ws, &x[..self.n], &x[self.n..2 * self.n]).ok()
+    }
+    /// The spec's energy unit: J for SI specs (mass × length² / time² in the spec's units).
+    fn energy_unit(&self) -> &str {
+        "J"
+    }
+}

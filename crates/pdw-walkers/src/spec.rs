@@ -1,0 +1,611 @@
+//! Walker specs: a planar legged chain described as data (TOML), validated, with named
+//! parameters that `--set NAME=V` changes.
+//!
+//! A spec describes **one leg** (both legs are identical, so that the stride map from one heel
+//! strike to the next is the same map every step) as a list of segments from the foot up to the
+//! hip, the knees between consecutive segments, a hip point mass, gravity, slope and the gait
+//! guesses of the Poincaré section. Every numeric field is either a number or an expression over
+//! the spec's parameters (`"a + b"`, `"0.5 * thigh_length"`, `+ − * /`, parentheses), so that a
+//! preset keeps the parameter names of its source (Goswami's `a`, `b`, `leg_mass`, …).
+//!
+//! ```toml
+//! name = "compass"
+//! description = "Goswami et al. 1998 compass gait"
+//! source = "Goswami, Thuilot & Espiau, IJRR 17(12), 1998"
+//! hip_mass = "hip_mass"
+//!
+//! [parameters]
+//! slope = { value = 0.05235987755982988, unit = "rad", description = "slope angle (3°)" }
+//! a = { value = 0.5, unit = "m", description = "foot to leg mass" }
+//!
+//! [[segments]]                # from the foot up
+//! length = "a + b"            # m
+//! mass = "leg_mass"           # kg
+//! com = "a"                   # COM along the segment from its lower end (m)
+//! com_normal = 0.0            # COM normal to the segment, + forward (m)
+//! inertia = 0.0               # about the COM (kg m²)
+//!
+//! [[knees]]                   # one per joint between consecutive segments (foot side first)
+//! mode = "free-swing"         # "locked" | "free-swing" | an expression: 0 locked, 1 free-swing
+//!
+//! [[gaits]]                   # optional starting points of the fixed-point search
+//! name = "stable"
+//! section = [0.271, -1.092, 0.715]   # stance, stance_rate, hip_rate
+//! source = "…"
+//! ```
+//!
+//! The parameters `slope` (rad), `gravity` and `max_stride_time` always exist (defaults: slope
+//! required, 9.81, 5.0); a spec sets their defaults, units and descriptions in `[parameters]`
+//! like any other parameter. Unknown keys, a leg without segments, a knee on a one-segment leg,
+//! non-positive masses and lengths, NaN, unknown names in expressions are errors that name the
+//! field, its value and the rule.
+
+use crate::error::WalkerError;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A number or an expression over the spec's parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Num {
+    Value(f64),
+    Expr(String),
+}
+
+impl Default for Num {
+    fn default() -> Self {
+        Num::Value(0.0)
+    }
+}
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Num::Value(v) => write!(f, "{v}"),
+            Num::Expr(e) => write!(f, "\"{e}\""),
+        }
+    }
+}
+
+/// A named parameter: default value, unit, meaning (with its source).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParamDef {
+    pub value: f64,
+    #[serde(default = "default_unit")]
+    pub unit: String,
+    #[serde(default)]
+    pub description: String,
+}
+
+fn default_unit() -> String {
+    "1".into()
+}
+
+/// One rigid segment of a leg, described in the **stance** orientation (lower end at the foot
+/// side, upper end at the knee or hip above it).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentSpec {
+    /// Optional name, e.g. `"shank"`.
+    #[serde(default)]
+    pub name: String,
+    /// Length between its two joints (the lowest segment: from the point foot), > 0.
+    pub length: Num,
+    /// Mass, > 0.
+    pub mass: Num,
+    /// COM position along the segment, from its lower end.
+    pub com: Num,
+    /// COM offset normal to the segment, positive forward (the walking direction when the leg is
+    /// upright). McGeer's offset thigh COM, which keeps a stance knee locked.
+    #[serde(default)]
+    pub com_normal: Num,
+    /// Rotational inertia about the COM, ≥ 0.
+    #[serde(default)]
+    pub inertia: Num,
+}
+
+/// A knee between two consecutive segments.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KneeSpec {
+    /// `"locked"` (a pseudo joint all step, seed §3.4), `"free-swing"` (the swing knee is free
+    /// until it straightens — the knee strike — and locked after; the stance knee is locked), or
+    /// an expression over the parameters that evaluates to 0 (locked) or 1 (free-swing).
+    pub mode: String,
+}
+
+/// A starting point for the fixed-point search on the section.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaitSpec {
+    pub name: String,
+    /// Section coordinates `(stance, stance_rate, hip_rate)` (numbers or expressions).
+    pub section: Vec<Num>,
+    #[serde(default)]
+    pub source: String,
+}
+
+/// A planar chain walker as data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WalkerSpec {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// Where the preset's values come from.
+    #[serde(default)]
+    pub source: String,
+    /// Named parameters (`--set NAME=V`); `slope`, `gravity`, `max_stride_time` always exist.
+    #[serde(default)]
+    pub parameters: BTreeMap<String, ParamDef>,
+    /// Hip point mass (≥ 0), carried by the stance leg's top segment at its upper end.
+    #[serde(default)]
+    pub hip_mass: Num,
+    /// One leg's segments from the foot up (both legs are identical).
+    #[serde(default)]
+    pub segments: Vec<SegmentSpec>,
+    /// The knees between consecutive segments, foot side first (`segments.len() − 1` of them).
+    #[serde(default)]
+    pub knees: Vec<KneeSpec>,
+    /// Gait guesses; without any, one generic guess scaled by `√(g/L)` is used.
+    #[serde(default)]
+    pub gaits: Vec<GaitSpec>,
+}
+
+/// Parameters every chain walker has, with their defaults when a spec does not set them.
+pub(crate) const BUILTIN_PARAMS: [(&str, f64, &str, &str); 3] = [
+    ("slope", f64::NAN, "rad", "slope angle γ"),
+    ("gravity", 9.81, "m/s^2", "gravitational acceleration g"),
+    (
+        "max_stride_time",
+        5.0,
+        "s",
+        "stride time budget; a longer stride counts as a fall",
+    ),
+];
+
+/// A spec's parameters with values (in a fixed order: the spec's own names sorted, builtins
+/// added where missing).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamTable {
+    pub names: Vec<String>,
+    pub values: Vec<f64>,
+    pub units: Vec<String>,
+    pub descriptions: Vec<String>,
+}
+
+impl ParamTable {
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| self.values[i])
+    }
+}
+
+/// The evaluated, validated geometry of a spec at given parameter values (SI or the spec's units).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Resolved {
+    pub slope: f64,
+    pub gravity: f64,
+    pub max_stride_time: f64,
+    pub hip_mass: f64,
+    /// Per segment (foot up): length, mass, com along, com normal, inertia about the COM.
+    pub segments: Vec<[f64; 5]>,
+    /// Per knee (foot side first): free-swing?
+    pub free_swing: Vec<bool>,
+    /// Gait guesses `(name, section, source)` with their sections evaluated.
+    pub gaits: Vec<(String, Vec<f64>, String)>,
+}
+
+impl WalkerSpec {
+    /// Parses a spec from TOML text; `source_name` names it in errors (a file path or preset).
+    pub fn from_toml(text: &str, source_name: &str) -> Result<Self, WalkerError> {
+        toml::from_str(text).map_err(|e| WalkerError::SpecSyntax {
+            source_name: source_name.to_string(),
+            message: e.message().to_string()
+                + &e.span()
+                    .map(|s| {
+                        let line = text[..s.start.min(text.len())].lines().count().max(1);
+                        format!(" (line {line})")
+                    })
+                    .unwrap_or_default(),
+        })
+    }
+
+    /// Reads and parses a spec file.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, WalkerError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| WalkerError::SpecSyntax {
+            source_name: name.clone(),
+            message: format!("cannot read the spec file: {e}"),
+        })?;
+        Self::from_toml(&text, &name)
+    }
+
+    /// The spec as TOML text (parses back to an equal spec).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_default()
+    }
+
+    /// The parameter table with the spec's defaults (builtins added where missing).
+    pub fn param_table(&self) -> ParamTable {
+        let mut t = ParamTable {
+            names: vec![],
+            values: vec![],
+            units: vec![],
+            descriptions: vec![],
+        };
+        // builtins first, in a fixed order, then the spec's own names sorted
+        for (name, default, unit, desc) in BUILTIN_PARAMS {
+            let (v, u, d) = match self.parameters.get(name) {
+                Some(p) => (p.value, p.unit.clone(), p.description.clone()),
+                None => (default, unit.to_string(), desc.to_string()),
+            };
+            t.names.push(name.to_string());
+            t.values.push(v);
+            t.units.push(u);
+            t.descriptions.push(d);
+        }
+        for (name, p) in &self.parameters {
+            if BUILTIN_PARAMS.iter().any(|b| b.0 == name) {
+                continue;
+            }
+            t.names.push(name.clone());
+            t.values.push(p.value);
+            t.units.push(p.unit.clone());
+            t.descriptions.push(p.description.clone());
+        }
+        t
+    }
+
+    fn err(
+        &self,
+        field: impl Into<String>,
+        value: impl Into<String>,
+        rule: impl Into<String>,
+    ) -> WalkerError {
+        WalkerError::InvalidSpec {
+            source_name: self.name.clone(),
+            field: field.into(),
+            value: value.into(),
+            rule: rule.into(),
+        }
+    }
+
+    /// Evaluates and validates the geometry at parameter values `values` (in
+    /// [`WalkerSpec::param_table`] order).
+    pub fn resolve(&self, values: &[f64]) -> Result<Resolved, WalkerError> {
+        let table = self.param_table();
+        for (name, _) in &self.parameters {
+            if !is_identifier(name) {
+                return Err(self.err(
+                    format!("parameters.{name}"),
+                    name.clone(),
+                    "a parameter name is a letter or _ followed by letters, digits or _",
+                ));
+            }
+        }
+        let env: Vec<(&str, f64)> = table
+            .names
+            .iter()
+            .map(|s| s.as_str())
+            .zip(values.iter().copied())
+            .collect();
+        for (name, v) in &env {
+            if !v.is_finite() {
+                let rule = if *name == "slope" {
+                    "the spec must give the slope a default in [parameters] (or pass --slope)"
+                } else {
+                    "parameter values must be finite"
+                };
+                return Err(self.err(format!("parameters.{name}"), v.to_string(), rule));
+            }
+        }
+        let eval = |field: &str, n: &Num| -> Result<f64, WalkerError> {
+            let v = match n {
+                Num::Value(v) => *v,
+                Num::Expr(e) => {
+                    eval_expr(e, &env).map_err(|msg| self.err(field, format!("\"{e}\""), msg))?
+                }
+            };
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(self.err(field, format!("{n} = {v}"), "must be finite"))
+            }
+        };
+        let positive = |field: &str, n: &Num| -> Result<f64, WalkerError> {
+            let v = eval(field, n)?;
+            if v > 0.0 {
+                Ok(v)
+            } else {
+                Err(self.err(field, format!("{n} = {v}"), "must be > 0"))
+            }
+        };
+        let nonneg = |field: &str, n: &Num| -> Result<f64, WalkerError> {
+            let v = eval(field, n)?;
+            if v >= 0.0 {
+                Ok(v)
+            } else {
+                Err(self.err(field, format!("{n} = {v}"), "must be >= 0"))
+            }
+        };
+        let get = |name: &str| {
+            env.iter()
+                .find(|(n, _)| *n == name)
+                .map(|p| p.1)
+                .unwrap_or(f64::NAN)
+        };
+        let slope = get("slope");
+        if !(slope.abs() < std::f64::consts::FRAC_PI_2) {
+            return Err(self.err(
+                "parameters.slope",
+                slope.to_string(),
+                "a slope in (-pi/2, pi/2) rad",
+            ));
+        }
+        let gravity = get("gravity");
+        if !(gravity > 0.0) {
+            return Err(self.err("parameters.gravity", gravity.to_string(), "must be > 0"));
+        }
+        let max_stride_time = get("max_stride_time");
+        if !(max_stride_time > 0.0) {
+            return Err(self.err(
+                "parameters.max_stride_time",
+                max_stride_time.to_string(),
+                "must be > 0",
+            ));
+        }
+        if self.segments.is_empty() {
+            return Err(self.err(
+                "segments",
+                "[]",
+                "a leg needs at least one segment ([[segments]] with length, mass, com)",
+            ));
+        }
+        if self.knees.len() + 1 != self.segments.len() {
+            let rule = if self.segments.len() == 1 {
+                "a one-segment leg has no knee: remove [[knees]]".to_string()
+            } else {
+                format!(
+                    "a leg of {} segments has {} knees (one between consecutive segments)",
+                    self.segments.len(),
+                    self.segments.len() - 1
+                )
+            };
+            return Err(self.err("knees", format!("{} knees", self.knees.len()), rule));
+        }
+        let hip_mass = nonneg("hip_mass", &self.hip_mass)?;
+        let mut segments = Vec::with_capacity(self.segments.len());
+        for (i, s) in self.segments.iter().enumerate() {
+            let f = |k: &str| format!("segments[{i}].{k}");
+            let length = positive(&f("length"), &s.length)?;
+            let mass = positive(&f("mass"), &s.mass)?;
+            let com = eval(&f("com"), &s.com)?;
+            let com_normal = eval(&f("com_normal"), &s.com_normal)?;
+            let inertia = nonneg(&f("inertia"), &s.inertia)?;
+            let upper = length - com;
+            if inertia + mass * (com * com + com_normal * com_normal) <= 0.0
+                || inertia + mass * (upper * upper + com_normal * com_normal) <= 0.0
+            {
+                return Err(self.err(
+                    f("com"),
+                    com.to_string(),
+                    "a segment with zero inertia about one of its joints (a point mass at a joint: \
+                     COM at 0 or at the segment's length, on the segment line, inertia 0) makes \
+                     the dynamics singular: move the COM or give an inertia",
+                ));
+            }
+            segments.push([length, mass, com, com_normal, inertia]);
+        }
+        let mut free_swing = Vec::with_capacity(self.knees.len());
+        for (i, k) in self.knees.iter().enumerate() {
+            let free = match k.mode.trim() {
+                "locked" => false,
+                "free-swing" | "free_swing" => true,
+                e => match eval_expr(e, &env) {
+                    Ok(v) if v == 0.0 => false,
+                    Ok(v) if v == 1.0 => true,
+                    Ok(v) => {
+                        return Err(self.err(
+                            format!("knees[{i}].mode"),
+                            format!("\"{e}\" = {v}"),
+                            "an expression for a knee mode must be 0 (locked) or 1 (free-swing)",
+                        ))
+                    }
+                    Err(msg) => {
+                        return Err(self.err(
+                            format!("knees[{i}].mode"),
+                            format!("\"{e}\""),
+                            format!("\"locked\", \"free-swing\" or an expression (0 or 1): {msg}"),
+                        ))
+                    }
+                },
+            };
+            free_swing.push(free);
+        }
+        if free_swing.iter().filter(|f| **f).count() > 1 {
+            return Err(self.err(
+                "knees",
+                format!(
+                    "{} free-swing knees",
+                    free_swing.iter().filter(|f| **f).count()
+                ),
+                "at most one knee may be free-swing (one knee strike per step)",
+            ));
+        }
+        let mut gaits = Vec::with_capacity(self.gaits.len());
+        for (i, g) in self.gaits.iter().enumerate() {
+            if g.section.len() != 3 {
+                return Err(self.err(
+                    format!("gaits[{i}].section"),
+                    format!("{} values", g.section.len()),
+                    "three values: stance, stance_rate, hip_rate",
+                ));
+            }
+            let mut sec = Vec::with_capacity(3);
+            for (j, v) in g.section.iter().enumerate() {
+                sec.push(eval(&format!("gaits[{i}].section[{j}]"), v)?);
+            }
+            gaits.push((g.name.clone(), sec, g.source.clone()));
+        }
+        Ok(Resolved {
+            slope,
+            gravity,
+            max_stride_time,
+            hip_mass,
+            segments,
+            free_swing,
+            gaits,
+        })
+    }
+}
+
+fn is_identifier(s: &str) -> bool {
+    let mut c = s.chars();
+    matches!(c.next(), Some(ch) if ch.is_ascii_alphabetic() || ch == '_')
+        && c.all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+}
+
+/// Evaluates an arithmetic expression (`+ − * /`, unary minus, parentheses, numbers, parameter
+/// names) over `env`. Errors name what is wrong.
+pub fn eval_expr(text: &str, env: &[(&str, f64)]) -> Result<f64, String> {
+    let toks = tokenize(text)?;
+    let mut p = Parser {
+        toks: &toks,
+        i: 0,
+        env,
+    };
+    let v = p.sum()?;
+    if p.i != toks.len() {
+        return Err(format!("unexpected `{}` in the expression", toks[p.i]));
+    }
+    Ok(v)
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Tok {
+    Num(f64),
+    Name(String),
+    Op(char),
+}
+
+impl std::fmt::Display for Tok {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Tok::Num(v) => write!(f, "{v}"),
+            Tok::Name(n) => write!(f, "{n}"),
+            Tok::Op(c) => write!(f, "{c}"),
+        }
+    }
+}
+
+fn tokenize(s: &str) -> Result<Vec<Tok>, String> {
+    let b: Vec<char> = s.chars().collect();
+    let mut out = vec![];
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        if c.is_whitespace() {
+            i += 1;
+        } else if "+-*/()".contains(c) {
+            out.push(Tok::Op(c));
+            i += 1;
+        } else if c.is_ascii_digit() || c == '.' {
+            let st = i;
+            while i < b.len()
+                && (b[i].is_ascii_digit()
+                    || b[i] == '.'
+                    || b[i] == 'e'
+                    || b[i] == 'E'
+                    || ((b[i] == '-' || b[i] == '+')
+                        && i > st
+                        && (b[i - 1] == 'e' || b[i - 1] == 'E')))
+            {
+                i += 1;
+            }
+            let t: String = b[st..i].iter().collect();
+            out.push(Tok::Num(
+                t.parse().map_err(|_| format!("`{t}` is not a number"))?,
+            ));
+        } else if c.is_ascii_alphabetic() || c == '_' {
+            let st = i;
+            while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == '_') {
+                i += 1;
+            }
+            out.push(Tok::Name(b[st..i].iter().collect()));
+        } else {
+            return Err(format!("unexpected character `{c}` in the expression"));
+        }
+    }
+    if out.is_empty() {
+        return Err("empty expression".into());
+    }
+    Ok(out)
+}
+
+struct Parser<'a> {
+    toks: &'a [Tok],
+    i: usize,
+    env: &'a [(&'a str, f64)],
+}
+
+impl Parser<'_> {
+    fn sum(&mut self) -> Result<f64, String> {
+        let mut v = self.product()?;
+        while let Some(Tok::Op(c @ ('+' | '-'))) = self.toks.get(self.i) {
+            self.i += 1;
+            let r = self.product()?;
+            v = if *c == '+' { v + r } else { v - r };
+        }
+        Ok(v)
+    }
+    fn product(&mut self) -> Result<f64, String> {
+        let mut v = self.unary()?;
+        while let Some(Tok::Op(c @ ('*' | '/'))) = self.toks.get(self.i) {
+            self.i += 1;
+            let r = self.unary()?;
+            v = if *c == '*' { v * r } else { v / r };
+        }
+        Ok(v)
+    }
+    fn unary(&mut self) -> Result<f64, String> {
+        if let Some(Tok::Op('-')) = self.toks.get(self.i) {
+            self.i += 1;
+            return Ok(-self.unary()?);
+        }
+        self.atom()
+    }
+    fn atom(&mut self) -> Result<f64, String> {
+        let t = self.toks.get(self.i).cloned();
+        self.i += 1;
+        match t {
+            Some(Tok::Num(v)) => Ok(v),
+            Some(Tok::Name(n)) => self
+                .env
+                .iter()
+                .find(|(k, _)| *k == n)
+                .map(|p| p.1)
+                .ok_or_else(|| {
+                    format!(
+                        "unknown parameter `{n}` (parameters: {})",
+                        self.env.iter().map(|p| p.0).collect::<Vec<_>>().join(", ")
+                    )
+                }),
+            Some(Tok::Op('(')) => {
+                let v = self.sum()?;
+                match self.toks.get(self.i) {
+                    Some(Tok::Op(')')) => {
+                        self.i += 1;
+                        Ok(v)
+                    }
+                    _ => Err("missing `)`".into()),
+                }
+            }
+            Some(t) => Err(format!("unexpected `{t}` in the expression")),
+            None => Err("the expression ends too early".into()),
+        }
+    }
+}

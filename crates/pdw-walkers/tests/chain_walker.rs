@@ -1,0 +1,350 @@
+//! The chain walker built from specs: round trip of spec files, clear errors for bad specs,
+//! batched flows equal to the scalar flow bit for bit, exact Jacobians against Richardson
+//! differences (allocation: `chain_walker_alloc.rs`).
+
+use faer::Mat;
+use pdw_hybrid::{HybridSystem, Scratch, Section};
+use pdw_walkers::{presets, ChainWalker, Walker, WalkerError, WalkerSpec};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn all_presets() -> Vec<(&'static str, ChainWalker)> {
+    vec![
+        ("compass", presets::compass(&[]).unwrap()),
+        ("kneed", presets::kneed(&[]).unwrap()),
+        ("seed5", presets::seed5(&[]).unwrap()),
+        (
+            "seed5 free knee",
+            presets::seed5(&[("free_swing_knee", 1.0)]).unwrap(),
+        ),
+    ]
+}
+
+/// A state near the gait: section state lifted, perturbed, with a bent free knee in mode 0.
+fn random_state(w: &ChainWalker, r: &mut ChaCha8Rng, mode: usize) -> Vec<f64> {
+    let mut x = vec![0.0; w.dim()];
+    w.lift(&[0.2, -1.0, 0.5], &mut x);
+    for v in x.iter_mut() {
+        *v += r.random_range(-0.3..0.3);
+    }
+    let n = w.dim() / 2;
+    for (k, v) in x.iter_mut().enumerate().take(n) {
+        if w.locked_joints(mode).contains(&k) {
+            *v = 0.0;
+            // locked joints carry no rate either
+        }
+    }
+    for &k in w.locked_joints(mode) {
+        x[n + k] = 0.0;
+    }
+    if let (Some(k), 0) = (w.free_knee(), mode) {
+        x[k] = -r.random_range(0.05..0.6);
+    }
+    x
+}
+
+#[test]
+fn spec_round_trip_gives_identical_dynamics() {
+    let mut r = ChaCha8Rng::seed_from_u64(1);
+    for (name, text) in pdw_walkers::PRESETS {
+        let spec = WalkerSpec::from_toml(text, name).unwrap();
+        let printed = spec.to_toml();
+        let back = WalkerSpec::from_toml(&printed, "printed").unwrap();
+        assert_eq!(spec, back, "{name}: spec changed in the round trip");
+        let (a, b) = (
+            ChainWalker::from_spec(spec).unwrap(),
+            ChainWalker::from_spec(back).unwrap(),
+        );
+        let mut ws = Scratch::new();
+        for mode in 0..a.n_modes() {
+            for _ in 0..20 {
+                let x = random_state(&a, &mut r, mode);
+                let (mut fa, mut fb) = (vec![0.0; a.dim()], vec![0.0; b.dim()]);
+                a.flow(&mut ws, mode, &x, &mut fa);
+                b.flow(&mut ws, mode, &x, &mut fb);
+                for (u, v) in fa.iter().zip(&fb) {
+                    assert_eq!(u.to_bits(), v.to_bits(), "{name} mode {mode}");
+                }
+            }
+        }
+        assert_eq!(a.gait_guesses(), b.gait_guesses());
+    }
+}
+
+/// A spec file with one changed parameter default equals `--set` of that parameter on the preset.
+#[test]
+fn file_model_with_a_changed_parameter_equals_set_on_the_preset() {
+    let text = pdw_walkers::preset_text("compass")
+        .unwrap()
+        .replace("hip_mass = { value = 10.0,", "hip_mass = { value = 7.5,");
+    let dir = std::env::temp_dir().join(format!("pdw-spec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("my_compass.toml");
+    std::fs::write(&path, text).unwrap();
+    let file = pdw_walkers::build(path.to_str().unwrap(), &[]).unwrap();
+    let set = pdw_walkers::build("compass", &[("hip_mass", 7.5)]).unwrap();
+    let base = pdw_walkers::build("compass", &[]).unwrap();
+    let mut ws = Scratch::new();
+    let x = [0.25, -0.5, -1.0, 0.6];
+    let (mut f1, mut f2, mut f3) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+    file.flow(&mut ws, 0, &x, &mut f1);
+    set.flow(&mut ws, 0, &x, &mut f2);
+    base.flow(&mut ws, 0, &x, &mut f3);
+    assert_eq!(f1.map(f64::to_bits), f2.map(f64::to_bits));
+    assert_ne!(
+        f1[2], f3[2],
+        "the changed hip mass must change the dynamics"
+    );
+    assert_eq!(file.param_values(), set.param_values());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn spec_error(text: &str) -> String {
+    let spec = match WalkerSpec::from_toml(text, "bad.toml") {
+        Ok(s) => s,
+        Err(e) => return e.to_string(),
+    };
+    match ChainWalker::from_spec(spec) {
+        Ok(_) => panic!("spec accepted:\n{text}"),
+        Err(e) => {
+            assert!(
+                matches!(
+                    e,
+                    WalkerError::InvalidSpec { .. } | WalkerError::SpecSyntax { .. }
+                ),
+                "{e:?}"
+            );
+            e.to_string()
+        }
+    }
+}
+
+const OK_SEGMENT: &str = "[[segments]]\nlength = 1.0\nmass = 1.0\ncom = 0.5\n";
+
+#[test]
+fn every_bad_spec_is_refused_naming_the_field_the_value_and_the_rule() {
+    let head = "name = \"w\"\n[parameters]\nslope = { value = 0.05, unit = \"rad\" }\n";
+    let cases: Vec<(String, &[&str])> = vec![
+        (
+            format!("{head}[[segments]]\nlength = 1.0\nmass = -2.0\ncom = 0.5\n"),
+            &["segments[0].mass", "-2", "> 0"],
+        ),
+        (
+            format!("{head}[[segments]]\nlength = 0.0\nmass = 1.0\ncom = 0.5\n"),
+            &["segments[0].length", "0", "> 0"],
+        ),
+        (
+            format!("{head}[[segments]]\nlength = nan\nmass = 1.0\ncom = 0.5\n"),
+            &["segments[0].length", "NaN", "finite"],
+        ),
+        (head.to_string(), &["segments", "at least one segment"]),
+        (
+            format!("{head}{OK_SEGMENT}[[knees]]\nmode = \"locked\"\n"),
+            &["knees", "one-segment leg has no knee"],
+        ),
+        (
+            format!("{head}{OK_SEGMENT}colour = \"red\"\n"),
+            &["unknown field", "colour"],
+        ),
+        (
+            format!("{head}[[segments]]\nlength = \"a + 1\"\nmass = 1.0\ncom = 0.5\n"),
+            &["segments[0].length", "unknown parameter `a`"],
+        ),
+        (
+            format!(
+                "{head}{OK_SEGMENT}{OK_SEGMENT}{OK_SEGMENT}[[knees]]\nmode = \"free-swing\"\n\
+                 [[knees]]\nmode = \"free-swing\"\n"
+            ),
+            &["knees", "at most one knee may be free-swing"],
+        ),
+        (
+            format!("{head}{OK_SEGMENT}{OK_SEGMENT}[[knees]]\nmode = \"loose\"\n"),
+            &["knees[0].mode", "loose"],
+        ),
+        (
+            format!("{head}[[segments]]\nlength = 1.0\nmass = 1.0\ncom = 0.0\n"),
+            &["segments[0].com", "singular"],
+        ),
+        (
+            "name = \"w\"\n[[segments]]\nlength = 1.0\nmass = 1.0\ncom = 0.5\n".to_string(),
+            &["parameters.slope", "default"],
+        ),
+        (
+            format!("name = \"w\"\nhip_mass = -1.0\n{}{OK_SEGMENT}", &head[11..]),
+            &["hip_mass", "-1", ">= 0"],
+        ),
+    ];
+    for (text, needles) in cases {
+        let msg = spec_error(&text);
+        for n in needles {
+            assert!(
+                msg.contains(n),
+                "message `{msg}` lacks `{n}` for spec:\n{text}"
+            );
+        }
+        assert!(
+            !msg.contains("Some(") && !msg.contains("{ "),
+            "Debug output in `{msg}`"
+        );
+    }
+    // a preset with a bad override names the parameter's field too
+    let e = presets::compass(&[("leg_mass", -1.0)])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("segments[0].mass") && e.contains("-1"), "{e}");
+    let e = presets::compass(&[("b", -0.5)]).unwrap_err().to_string();
+    assert!(e.contains("segments[0].length"), "{e}");
+}
+
+#[test]
+fn batched_flow_equals_scalar_flow_bit_for_bit_for_every_lane_count() {
+    let mut r = ChaCha8Rng::seed_from_u64(2);
+    for (name, w) in all_presets() {
+        let d = w.dim();
+        for mode in 0..w.n_modes() {
+            for lanes in [1usize, 7, 300] {
+                let states: Vec<Vec<f64>> =
+                    (0..lanes).map(|_| random_state(&w, &mut r, mode)).collect();
+                let x = Mat::from_fn(lanes, d, |l, j| states[l][j]);
+                let mut dx = Mat::<f64>::zeros(lanes, d);
+                let mut ws = Scratch::new();
+                w.flow_batch(&mut ws, mode, x.as_ref(), dx.as_mut());
+                let mut f = vec![0.0; d];
+                let mut ws1 = Scratch::new();
+                for (l, s) in states.iter().enumerate() {
+                    w.flow(&mut ws1, mode, s, &mut f);
+                    for j in 0..d {
+                        assert_eq!(
+                            dx[(l, j)].to_bits(),
+                            f[j].to_bits(),
+                            "{name} mode {mode} lanes {lanes} lane {l} comp {j}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Central differences of `f` at `x`, extrapolated (Richardson, steps h and h/2).
+fn richardson(f: &mut dyn FnMut(&[f64], &mut [f64]), x: &[f64], n_out: usize) -> Vec<f64> {
+    let n = x.len();
+    let mut jac = vec![0.0; n_out * n];
+    let (mut fp, mut fm) = (vec![0.0; n_out], vec![0.0; n_out]);
+    let mut xp = x.to_vec();
+    for j in 0..n {
+        let mut d = [vec![0.0; n_out], vec![0.0; n_out]];
+        for (k, h) in [1e-4, 5e-5].into_iter().enumerate() {
+            xp[j] = x[j] + h;
+            f(&xp, &mut fp);
+            xp[j] = x[j] - h;
+            f(&xp, &mut fm);
+            xp[j] = x[j];
+            for i in 0..n_out {
+                d[k][i] = (fp[i] - fm[i]) / (2.0 * h);
+            }
+        }
+        for i in 0..n_out {
+            jac[i * n + j] = (4.0 * d[1][i] - d[0][i]) / 3.0;
+        }
+    }
+    jac
+}
+
+fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
+    let scale = b.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    for (i, (u, v)) in a.iter().zip(b).enumerate() {
+        assert!(
+            (u - v).abs() <= tol * scale,
+            "{what}: entry {i}: exact {u} vs differences {v}"
+        );
+    }
+}
+
+#[test]
+fn exact_flow_guard_and_reset_jacobians_match_richardson_differences() {
+    let mut r = ChaCha8Rng::seed_from_u64(3);
+    for (name, w) in all_presets() {
+        let d = w.dim();
+        let mut ws = Scratch::new();
+        for mode in 0..w.n_modes() {
+            for _ in 0..5 {
+                let x = random_state(&w, &mut r, mode);
+                let mut jac = vec![0.0; d * d];
+                w.flow_jacobian(&mut ws, mode, &x, &mut jac);
+                let mut ws2 = Scratch::new();
+                let fd = richardson(&mut |x, f| w.flow(&mut ws2, mode, x, f), &x, d);
+                assert_close(
+                    &jac,
+                    &fd,
+                    1e-8,
+                    &format!("{name} flow jacobian mode {mode}"),
+                );
+                for k in 0..w.guards(mode).len() {
+                    let mut g = vec![0.0; d];
+                    w.guard_gradient(&mut ws, mode, k, &x, &mut g);
+                    let fd =
+                        richardson(&mut |x, out| out[0] = w.guard(&mut ws2, mode, k, x), &x, 1);
+                    assert_close(&g, &fd, 1e-8, &format!("{name} guard {k} mode {mode}"));
+                }
+                // reset (knee strike in the free mode, heel strike in the locked mode)
+                let mut jr = vec![0.0; d * d];
+                w.reset_jacobian(&mut ws, mode, 0, &x, &mut jr);
+                let fd = richardson(
+                    &mut |x, out| {
+                        w.reset(&mut ws2, mode, 0, x, out);
+                    },
+                    &x,
+                    d,
+                );
+                // columns of locked coordinates are not free to vary in the model; compare all
+                // columns anyway: the impact maps are smooth in every coordinate
+                assert_close(
+                    &jr,
+                    &fd,
+                    1e-8,
+                    &format!("{name} reset jacobian mode {mode}"),
+                );
+            }
+        }
+    }
+}
+
+/// The leg swap is an involution on a symmetric walker's joint angles (swapping twice returns
+/// the same chain) and the heel strike keeps the post-impact state on the section.
+#[test]
+fn heel_strike_lands_on_the_section_and_the_swap_is_an_involution() {
+    let mut r = ChaCha8Rng::seed_from_u64(5);
+    for (name, w) in all_presets() {
+        let n = w.dim() / 2;
+        let q: Vec<f64> = (0..n).map(|_| r.random_range(-1.0..1.0)).collect();
+        let mut once = vec![0.0; 2 * n];
+        let mut twice = vec![0.0; 2 * n];
+        w.swap(&q, &q, &mut once);
+        let (q1, _) = once.split_at(n);
+        w.swap(q1, q1, &mut twice);
+        for k in 1..n {
+            assert!((twice[k] - q[k]).abs() < 1e-15, "{name}: joint {k}");
+        }
+        // heel strike from a lifted section state at the symmetric configuration
+        let mut x = vec![0.0; 2 * n];
+        w.lift(&[0.2, -1.0, 0.4], &mut x);
+        // mirror to the pre-impact configuration: stance −0.2, hip +0.4
+        x[0] = -0.2;
+        x[n / 2] = 0.4;
+        let mut post = vec![0.0; 2 * n];
+        let mut ws = Scratch::new();
+        let mode = w.locked_mode();
+        w.reset(&mut ws, mode, 0, &x, &mut post);
+        let mut s = [0.0; 3];
+        w.project(&post, &mut s);
+        let mut lifted = vec![0.0; 2 * n];
+        w.lift(&s, &mut lifted);
+        for k in 0..2 * n {
+            assert!(
+                (lifted[k] - post[k]).abs() <= 1e-12,
+                "{name}: post-impact state leaves the section at {k}: {post:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,120 @@
+//! The chain walker allocates nothing per right-hand side (scalar or batched), flow Jacobian,
+//! guard, guard gradient, reset or reset Jacobian once its scratch is filled. (One test in this
+//! binary: the allocation counter is global.)
+
+use faer::Mat;
+use pdw_hybrid::{HybridSystem, Scratch, Section};
+use pdw_walkers::{presets, ChainWalker};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+}
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn all_presets() -> Vec<(&'static str, ChainWalker)> {
+    vec![
+        ("compass", presets::compass(&[]).unwrap()),
+        ("kneed", presets::kneed(&[]).unwrap()),
+        ("seed5", presets::seed5(&[]).unwrap()),
+        (
+            "seed5 free knee",
+            presets::seed5(&[("free_swing_knee", 1.0)]).unwrap(),
+        ),
+    ]
+}
+
+/// A state near the gait: section state lifted, perturbed, with a bent free knee in mode 0.
+fn random_state(w: &ChainWalker, r: &mut ChaCha8Rng, mode: usize) -> Vec<f64> {
+    let mut x = vec![0.0; w.dim()];
+    w.lift(&[0.2, -1.0, 0.5], &mut x);
+    for v in x.iter_mut() {
+        *v += r.random_range(-0.3..0.3);
+    }
+    let n = w.dim() / 2;
+    for (k, v) in x.iter_mut().enumerate().take(n) {
+        if w.locked_joints(mode).contains(&k) {
+            *v = 0.0;
+            // locked joints carry no rate either
+        }
+    }
+    for &k in w.locked_joints(mode) {
+        x[n + k] = 0.0;
+    }
+    if let (Some(k), 0) = (w.free_knee(), mode) {
+        x[k] = -r.random_range(0.05..0.6);
+    }
+    x
+}
+
+#[test]
+fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
+    let mut r = ChaCha8Rng::seed_from_u64(4);
+    for (name, w) in all_presets() {
+        let d = w.dim();
+        let lanes = 64;
+        let mut ws = Scratch::new();
+        let modes: Vec<usize> = (0..w.n_modes()).collect();
+        let states: Vec<Vec<Vec<f64>>> = modes
+            .iter()
+            .map(|&m| (0..lanes).map(|_| random_state(&w, &mut r, m)).collect())
+            .collect();
+        let xs: Vec<Mat<f64>> = states
+            .iter()
+            .map(|s| Mat::from_fn(lanes, d, |l, j| s[l][j]))
+            .collect();
+        let mut dx = Mat::<f64>::zeros(lanes, d);
+        let (mut f, mut jac, mut out) = (vec![0.0; d], vec![0.0; d * d], vec![0.0; d]);
+        let mut counts = [0usize; 7];
+        let mut run = |ws: &mut Scratch, counts: &mut [usize; 7]| {
+            let tick = |i: usize, c: &mut [usize; 7], before: usize| {
+                c[i] += ALLOCS.load(Ordering::SeqCst) - before;
+            };
+            for &m in &modes {
+                let b = ALLOCS.load(Ordering::SeqCst);
+                w.flow_batch(ws, m, xs[m].as_ref(), dx.as_mut());
+                tick(0, counts, b);
+                for s in &states[m][..4] {
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    w.flow(ws, m, s, &mut f);
+                    tick(1, counts, b);
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    w.flow_jacobian(ws, m, s, &mut jac);
+                    tick(2, counts, b);
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    w.guard(ws, m, 0, s);
+                    tick(3, counts, b);
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    w.reset(ws, m, 0, s, &mut out);
+                    tick(4, counts, b);
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    w.reset_jacobian(ws, m, 0, s, &mut jac);
+                    tick(5, counts, b);
+                    let mut g = [0.0; 16];
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    w.guard_gradient(ws, m, 0, s, &mut g[..d]);
+                    tick(6, counts, b);
+                }
+            }
+        };
+        run(&mut ws, &mut [0; 7]); // fills the scratch
+        run(&mut ws, &mut counts);
+        assert_eq!(
+            counts, [0; 7],
+            "{name}: allocations in [flow_batch, flow, flow_jacobian, guard, reset, \
+             reset_jacobian, guard_gradient]"
+        );
+    }
+}
