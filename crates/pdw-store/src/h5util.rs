@@ -240,13 +240,14 @@ pub(crate) fn create_file(
         source,
     };
     let (std_file, created_here) = if force {
+        let existed = path.exists();
         let f = std::fs::OpenOptions::new()
             .create(true)
             .truncate(false)
             .write(true)
             .open(path)
             .map_err(io)?;
-        (f, false)
+        (f, !existed)
     } else {
         match std::fs::OpenOptions::new()
             .write(true)

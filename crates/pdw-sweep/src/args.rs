@@ -32,17 +32,22 @@ pub fn parse_f64(s: &str, what: &str) -> Result<f64, InputError> {
 
 /// A slope in radians, or in degrees with a `deg` suffix (`3deg`); must lie in (−π/2, π/2).
 pub fn parse_slope(s: &str) -> Result<f64, InputError> {
+    parse_slope_for(s, "--slope")
+}
+
+/// [`parse_slope`] with the messages naming `flag` (e.g. `--set slope`, `--sweep slope`).
+pub fn parse_slope_for(s: &str, flag: &str) -> Result<f64, InputError> {
     let t = s.trim();
     let v = if let Some(d) = t.strip_suffix("deg") {
-        parse_f64(d, "--slope")?.to_radians()
+        parse_f64(d, flag)?.to_radians()
     } else if let Some(r) = t.strip_suffix("rad") {
-        parse_f64(r, "--slope")?
+        parse_f64(r, flag)?
     } else {
-        parse_f64(t, "--slope")?
+        parse_f64(t, flag)?
     };
     if v.abs() >= std::f64::consts::FRAC_PI_2 {
         return err(format!(
-            "--slope: '{s}' is outside (-pi/2, pi/2) rad; give radians (0.009) or degrees (3deg)"
+            "{flag}: '{s}' is outside (-pi/2, pi/2) rad; give radians (0.009) or degrees (3deg)"
         ));
     }
     Ok(v)
@@ -58,7 +63,7 @@ pub fn parse_assignment(s: &str) -> Result<(String, f64), InputError> {
         return err(format!("--set: '{s}' has an empty parameter name"));
     }
     let v = if name == "slope" {
-        parse_slope(value)?
+        parse_slope_for(value, "--set slope")?
     } else {
         parse_f64(value, &format!("--set {name}"))?
     };
@@ -89,6 +94,12 @@ pub fn parse_axis(s: &str, flag: &str) -> Result<AxisRange, InputError> {
             "{flag}: range {lo}:{hi} is empty or inverted; the first bound must be below the second"
         ));
     }
+    if !(hi - lo).is_finite() {
+        return err(format!(
+            "{flag}: range '{range}' is too wide to divide into grid points (its width \
+             overflows a double); keep |B - A| below about 1e308"
+        ));
+    }
     Ok(AxisRange {
         name: name.trim().to_string(),
         lo,
@@ -117,7 +128,11 @@ pub fn parse_grid(s: &str) -> Result<(usize, usize), InputError> {
     Ok((nx, ny))
 }
 
-/// A parameter sweep `NAME=A:B:N` (N ≥ 2 points, inclusive).
+/// Most points of a `--sweep` (each is a continuation step and an orbit-diagram column of
+/// 364 strides; 10⁵ points take about an hour).
+pub const MAX_SWEEP_POINTS: usize = 100_000;
+
+/// A parameter sweep `NAME=A:B:N` (2 ≤ N ≤ [`MAX_SWEEP_POINTS`] points, inclusive).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sweep {
     pub name: String,
@@ -137,26 +152,32 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, InputError> {
         return err(format!("--sweep: '{rest}' is not of the form A:B:N"));
     }
     let name = name.trim().to_string();
+    let flag = format!("--sweep {name}");
     let conv = |t: &str| {
         if name == "slope" {
-            parse_slope(t)
+            parse_slope_for(t, &flag)
         } else {
-            parse_f64(t, "--sweep")
+            parse_f64(t, &flag)
         }
     };
     let lo = conv(parts[0])?;
     let hi = conv(parts[1])?;
     let n = match parts[2].trim().parse::<usize>() {
-        Ok(n) if n >= 2 => n,
+        Ok(n) if (2..=MAX_SWEEP_POINTS).contains(&n) => n,
         _ => {
             return err(format!(
-                "--sweep: point count '{}' must be an integer >= 2",
+                "--sweep: point count '{}' must be an integer from 2 to {MAX_SWEEP_POINTS}",
                 parts[2]
             ))
         }
     };
     if lo == hi {
         return err(format!("--sweep: range {lo}:{hi} is empty"));
+    }
+    if !(hi - lo).is_finite() {
+        return err(format!(
+            "--sweep: range '{rest}' is too wide (its width overflows a double)"
+        ));
     }
     Ok(Sweep { name, lo, hi, n })
 }
@@ -183,6 +204,94 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), InputError> {
 /// A comma-separated initial guess `X1,X2,..`.
 pub fn parse_guess(s: &str) -> Result<Vec<f64>, InputError> {
     s.split(',').map(|t| parse_f64(t, "--guess")).collect()
+}
+
+/// One output file of a command: the flag that names it and its path.
+pub struct Output<'a> {
+    pub flag: &'static str,
+    pub path: &'a std::path::Path,
+    /// An existing file is expected here (`--resume`), not refused without `--force`.
+    pub may_exist: bool,
+}
+
+/// `path` with its directory resolved (symbolic links, `..`), for comparing paths that may
+/// not exist yet; `None` if the directory does not exist.
+fn resolved(path: &std::path::Path) -> Option<std::path::PathBuf> {
+    let name = path.file_name()?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => std::path::Path::new("."),
+    };
+    let dir = std::fs::canonicalize(dir).ok()?;
+    let full = dir.join(name);
+    // An existing file (possibly a link) resolves fully.
+    Some(std::fs::canonicalize(&full).unwrap_or(full))
+}
+
+/// Checks every output path of a command before anything is computed: its directory exists;
+/// it is not a directory, FIFO, device or socket; it exists only with `force` (or `may_exist`);
+/// no two outputs are the same file; no output is one of the `inputs`.
+pub fn check_outputs(
+    outputs: &[Output<'_>],
+    inputs: &[&std::path::Path],
+    force: bool,
+) -> Result<(), InputError> {
+    let mut seen: Vec<(&str, &std::path::Path, std::path::PathBuf)> = Vec::new();
+    for o in outputs {
+        let shown = o.path.display();
+        let Some(r) = resolved(o.path) else {
+            let dir = o
+                .path
+                .parent()
+                .map(|d| d.display().to_string())
+                .unwrap_or_default();
+            return err(if o.path.file_name().is_none() {
+                format!("{}: '{shown}' does not name a file", o.flag)
+            } else {
+                format!(
+                    "{}: the directory '{dir}' of '{shown}' does not exist",
+                    o.flag
+                )
+            });
+        };
+        if let Ok(m) = std::fs::metadata(o.path) {
+            if m.is_dir() {
+                return err(format!("{}: '{shown}' is a directory", o.flag));
+            }
+            if !m.is_file() {
+                return err(format!(
+                    "{}: '{shown}' is not a regular file (a FIFO, device or socket); only \
+                     regular files are written or replaced",
+                    o.flag
+                ));
+            }
+            if !force && !o.may_exist {
+                return err(format!(
+                    "{}: '{shown}' exists; pass --force to overwrite it",
+                    o.flag
+                ));
+            }
+        }
+        if let Some((flag, p, _)) = seen.iter().find(|(_, _, q)| *q == r) {
+            return err(format!(
+                "{} '{shown}' and {flag} '{}' are the same file: one would replace the other; \
+                 give each output its own path (the HDF5 data ends in .h5, the picture in .png)",
+                o.flag,
+                p.display()
+            ));
+        }
+        for i in inputs {
+            if resolved(i).is_some_and(|q| q == r) {
+                return err(format!(
+                    "{}: '{shown}' is also an input ('{}'); writing it would destroy the input",
+                    o.flag,
+                    i.display()
+                ));
+            }
+        }
+        seen.push((o.flag, o.path, r));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -37,8 +37,7 @@ pub enum Command {
 /// Options shared by every command that builds a model.
 #[derive(Args, Debug, Clone)]
 pub struct ModelOpts {
-    /// Model name (see `pdw-sweep models`) or a walker spec file (`.toml`, e.g. one written by
-    /// `pdw-sweep models --spec compass > my.toml`).
+    /// Model name (see `pdw-sweep models`).
     #[arg(long, default_value = "simplest")]
     pub model: String,
     /// Slope in radians, or degrees with a `deg` suffix (e.g. 3deg). Default: the model's preset.
@@ -54,13 +53,11 @@ pub struct ModelsArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Print a chain-walker preset's spec file (compass, kneed, seed5), to edit and pass back
-    /// with `--model FILE.toml`.
-    #[arg(long, value_name = "NAME")]
-    pub spec: Option<String>,
 }
 
+// Negative numbers are values, not flags: `--slope -0.009`, `--guess -0.2,0.2`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct FixedpointArgs {
     #[command(flatten)]
     pub model: ModelOpts,
@@ -68,9 +65,10 @@ pub struct FixedpointArgs {
     #[arg(long, default_value = "all")]
     pub gait: String,
     /// Initial guess in section coordinates, comma separated.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub guess: Option<String>,
-    /// Tolerance on the fixed-point residual ‖P(x) − x‖.
+    /// Tolerance on the fixed-point residual ‖P(x) − x‖, relative to the gait's scale
+    /// (max |x|, at most 1); between 1e-15 and 1e-3.
     #[arg(long, default_value_t = 1e-12)]
     pub tol: f64,
     /// Print one JSON object instead of a table.
@@ -91,6 +89,7 @@ pub struct FixedpointArgs {
 }
 
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct BasinArgs {
     #[command(flatten)]
     pub model: ModelOpts,
@@ -116,7 +115,8 @@ pub struct BasinArgs {
     /// Worker threads (rayon pool).
     #[arg(long, default_value_t = 2)]
     pub threads: usize,
-    /// Continue an interrupted run in --out.
+    /// Continue an interrupted run in --out (blocks damaged on disk are recomputed; a
+    /// complete file is left as it is, exit 0).
     #[arg(long)]
     pub resume: bool,
     /// Overwrite an existing --out.
@@ -138,12 +138,16 @@ pub struct MergeArgs {
     /// Merged output file.
     #[arg(long)]
     pub out: PathBuf,
-    /// Overwrite an existing --out.
+    /// PNG heatmap (default: the output path with .png).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Overwrite an existing --out and --png.
     #[arg(long)]
     pub force: bool,
 }
 
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct AnimateArgs {
     #[command(flatten)]
     pub model: ModelOpts,

@@ -24,6 +24,21 @@ macro_rules! outln {
     ($($t:tt)*) => { $crate::out(&format!("{}\n", format_args!($($t)*))) };
 }
 
+/// The error and its causes, each told once: a cause whose text the message already holds
+/// (HDF5's and the operating system's errors are embedded by the store's messages) is not
+/// repeated.
+fn message(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !msg.contains(&c) {
+            msg.push_str(": ");
+            msg.push_str(&c);
+        }
+    }
+    msg
+}
+
 use clap::Parser;
 use std::process::ExitCode;
 
@@ -35,7 +50,7 @@ fn main() -> ExitCode {
             if let Some(input) = e.downcast_ref::<args::InputError>() {
                 eprintln!("error: {input}");
             } else {
-                eprintln!("error: {e:#}");
+                eprintln!("error: {}", message(&e));
             }
             ExitCode::from(2)
         }

@@ -212,9 +212,22 @@ fn basin_is_identical_for_any_thread_count_and_refuses_overwrite() {
     assert_eq!(o3.status.code(), Some(2));
     assert!(stderr(&o3).contains("--force"));
     assert_eq!(std::fs::read(&f1).unwrap(), before);
-    // a complete file cannot be resumed, and is left alone
+    // resuming a complete file of the same run is an idempotent success (a requeued cluster
+    // task that had finished): exit 0, says so, file and picture left alone
+    let png_before = std::fs::read(p(dir.path(), "t1.png")).unwrap();
     let (o4, _) = basin(dir.path(), "t1.h5", &["--resume"]);
-    assert_eq!(o4.status.code(), Some(2), "{}", stderr(&o4));
+    assert_eq!(o4.status.code(), Some(0), "{}", stderr(&o4));
+    assert!(
+        String::from_utf8_lossy(&o4.stdout).contains("already complete"),
+        "{}",
+        String::from_utf8_lossy(&o4.stdout)
+    );
+    assert_eq!(std::fs::read(&f1).unwrap(), before);
+    assert_eq!(std::fs::read(p(dir.path(), "t1.png")).unwrap(), png_before);
+    // ... but not a complete file of another run: that is refused, file untouched
+    let (o5, _) = basin_grid(dir.path(), "t1.h5", "48x41", &["--resume"]);
+    assert_eq!(o5.status.code(), Some(2), "{}", stderr(&o5));
+    assert!(stderr(&o5).contains("y grid"), "{}", stderr(&o5));
     assert_eq!(std::fs::read(&f1).unwrap(), before);
 }
 

@@ -12,7 +12,7 @@ use pdw_limit::basin::{
 };
 use pdw_store::{
     plot_basin, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter, ShardSpec,
-    BLOCK_ROWS,
+    StoreError, BLOCK_ROWS,
 };
 use std::io::IsTerminal;
 use std::process::ExitCode;
@@ -20,9 +20,94 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Rows handed to the engine per call: several chunk blocks, so that both threads stay busy,
-/// written (and flushed) as soon as they finish.
-const ROWS_PER_CALL: usize = 4 * BLOCK_ROWS;
+/// Most rows handed to the engine per call (written and flushed as soon as their block is
+/// complete).
+const MAX_ROWS_PER_CALL: usize = 4 * BLOCK_ROWS;
+/// Most cells per engine call (bounds the memory in flight on wide grids).
+const MAX_CELLS_PER_CALL: usize = 1 << 16;
+/// Target duration of one engine call: an interrupt is honoured between calls, so this bounds
+/// the wait after Ctrl-C. Rows per call adapt to the measured time per row (results do not
+/// depend on how the grid is batched).
+const CALL_TARGET_S: f64 = 0.4;
+
+/// Rows for the next engine call, from the measured seconds per row so far.
+fn rows_for_next_call(secs_per_row: Option<f64>, nx: usize) -> usize {
+    let by_cells = (MAX_CELLS_PER_CALL / nx).max(1);
+    let by_time = match secs_per_row {
+        None => 1,
+        Some(t) if t > 0.0 => (CALL_TARGET_S / t).floor().max(1.0) as usize,
+        Some(_) => MAX_ROWS_PER_CALL,
+    };
+    by_time.min(by_cells).min(MAX_ROWS_PER_CALL)
+}
+
+/// HDF5's largest chunk (4 GiB − 1 byte).
+const MAX_CHUNK_BYTES: u64 = (1 << 32) - 1;
+
+/// Estimated peak memory (bytes) of a basin run on an `nx × ny` grid with `d` section
+/// coordinates and `dim` state components: per-row bookkeeping (axes, done/owned flags, the
+/// row list), the cells in flight in one engine call (start states, integrator lanes, results),
+/// two pending chunk blocks, the outcome read back for metrics and plot (three copies of
+/// nx·ny bytes), HDF5's 32 MiB chunk cache and a fixed allowance.
+fn memory_estimate(nx: usize, ny: usize, d: usize, dim: usize) -> u64 {
+    let (nx, ny, d, dim) = (nx as u64, ny as u64, d as u64, dim as u64);
+    let per_row = 56;
+    let per_col = 32;
+    let per_cell_in_flight = 96 + 24 * d + 8 * dim * 20;
+    let cells_in_flight = (MAX_CELLS_PER_CALL as u64).max(nx).min(nx * ny);
+    let block = BLOCK_ROWS as u64 * nx * (3 + 8 * d);
+    per_row * ny
+        + per_col * nx
+        + per_cell_in_flight * cells_in_flight
+        + 2 * block
+        + 3 * nx * ny
+        + (96 << 20)
+}
+
+/// Memory this process may use: `MemAvailable` of /proc/meminfo (8 GiB if unknown).
+fn memory_available() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("MemAvailable:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<u64>().ok())
+        })
+        .map(|kb| kb * 1024)
+        .unwrap_or(8 << 30)
+}
+
+fn gib(b: u64) -> String {
+    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+}
+
+/// Refuses grids whose row of cells exceeds HDF5's chunk limit or whose estimated memory
+/// exceeds what is available, before anything is computed.
+fn check_memory(nx: usize, ny: usize, d: usize, dim: usize) -> Result<(), InputError> {
+    let chunk = BLOCK_ROWS.min(ny) as u64 * nx as u64 * d as u64 * 8;
+    if chunk > MAX_CHUNK_BYTES {
+        return Err(InputError(format!(
+            "--grid {nx}x{ny}: rows of {nx} cells are too wide for the file's chunks ({} per \
+             {}-row block, HDF5 allows 4 GiB); at most {} columns",
+            gib(chunk),
+            BLOCK_ROWS.min(ny),
+            MAX_CHUNK_BYTES / (BLOCK_ROWS.min(ny) as u64 * d as u64 * 8)
+        )));
+    }
+    let need = memory_estimate(nx, ny, d, dim);
+    let have = memory_available();
+    if need > have * 4 / 5 {
+        return Err(InputError(format!(
+            "--grid {nx}x{ny}: needs about {} of memory, more than the {} available (80 % of \
+             {}); use a smaller grid, or split it with --shard I/N across machines",
+            gib(need),
+            gib(have * 4 / 5),
+            gib(have)
+        )));
+    }
+    Ok(())
+}
 
 /// Default half-width of an axis around the fixed point: 25 % of the coordinate, at least 0.05.
 /// For the simplest walker at γ = 0.009 this gives θ ∈ [0.150, 0.250], θ̇ ∈ [−0.250, −0.150].
@@ -53,6 +138,13 @@ fn split_sets(a: &BasinArgs, section_names: &[&str]) -> Result<SplitSets, InputE
 
 pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let t0 = Instant::now();
+    // ---- signals first: Ctrl-C or SIGTERM at any moment exits 130, leaving a resumable file
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // A second handler cannot be installed in tests that call run() twice; ignore that.
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+    }
     // ---- validate everything before touching any file
     let (nx, ny) = args::parse_grid(&a.grid)?;
     if a.max_strides == 0 || a.max_strides > u32::from(u16::MAX) {
@@ -78,9 +170,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let info = pdw_walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
-    let names_owned = info.section_names.clone();
-    let names: Vec<&str> = names_owned.iter().map(|s| s.as_str()).collect();
-    let names = &names[..];
+    let names = info.section_names;
     if names.len() < 2 {
         return Err(InputError(format!(
             "model '{}' has one section coordinate ({}); a basin grid needs two",
@@ -89,6 +179,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    check_memory(nx, ny, names.len(), info.state_names.len())?;
     let (param_sets, fixed) = split_sets(a, names)?;
     let m: BuiltModel = build_with(
         &crate::cli::ModelOpts {
@@ -115,17 +206,27 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let xa = axis(&a.x, "--x")?;
     let ya = axis(&a.y, "--y")?;
     let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
-    if !a.resume && !a.force {
-        for p in [&a.out, &png] {
-            if p.exists() {
-                return Err(InputError(format!(
-                    "{} exists; pass --force to overwrite it or --resume to continue it",
-                    p.display()
-                ))
-                .into());
-            }
-        }
+    // A shard writes no picture. With --resume an existing --out is expected, and an existing
+    // picture is refused below unless the file turns out complete (then nothing is written).
+    let mut outputs = vec![args::Output {
+        flag: "--out",
+        path: &a.out,
+        may_exist: a.resume,
+    }];
+    if shard.is_none() {
+        outputs.push(args::Output {
+            flag: "--png",
+            path: &png,
+            may_exist: a.resume,
+        });
     }
+    args::check_outputs(&outputs, &[], a.force).map_err(|e| {
+        if e.0.contains("exists; pass --force") && e.0.starts_with("--out") {
+            InputError(format!("{}, or --resume to continue it", e.0))
+        } else {
+            e
+        }
+    })?;
 
     // ---- the attractor: the model's stable gait
     let guesses: Vec<(String, Vec<f64>)> = m
@@ -135,6 +236,10 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         .map(|g| (g.gait.to_string(), g.section))
         .collect();
     let (found, failed) = search(&m, &guesses, 1e-12)?;
+    if stop.load(Ordering::SeqCst) {
+        eprintln!("interrupted before the grid was started; nothing written");
+        return Ok(ExitCode::from(130));
+    }
     let Some(gait) = found.iter().find(|f| f.fp.stable) else {
         eprintln!(
             "error: no stable period-one gait found for model '{}' at slope {}; a basin needs one",
@@ -212,22 +317,43 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         legend: legend().into_iter().map(|(c, n)| (c, n.to_string())).collect(),
         shard,
     };
-    let mut writer = BasinWriter::start(&a.out, &header, a.resume, a.force)?;
-    let todo = writer.rows_todo();
-
-    // ---- signals: stop between row blocks, leave a resumable file
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second handler cannot be installed in tests that call run() twice; ignore that.
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+    let mut writer = match BasinWriter::start(&a.out, &header, a.resume, a.force) {
+        Ok(w) => w,
+        Err(StoreError::AlreadyComplete { .. }) => {
+            // A requeued cluster task that had finished: success, nothing to do.
+            crate::outln!(
+                "{} is already complete for this command (checked: same run, every block's \
+                 checksum); nothing to do",
+                a.out.display()
+            );
+            return Ok(ExitCode::SUCCESS);
+        }
+        Err(e) => return Err(e.into()),
+    };
+    if shard.is_none() && a.resume && !a.force && png.exists() {
+        writer.close()?;
+        return Err(InputError(format!(
+            "--png: '{}' exists; pass --force to overwrite it (with --resume, only a complete \
+             file leaves the picture untouched)",
+            png.display()
+        ))
+        .into());
     }
+    let damaged = writer.damaged_rows();
+    if !damaged.is_empty() {
+        eprintln!(
+            "warning: {} row(s) of {} were damaged on disk (checksum or content); recomputing them",
+            damaged.len(),
+            a.out.display()
+        );
+    }
+    let todo = writer.rows_todo();
 
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads)
         .build()?;
     let walker = m.walker.as_ref();
-    let fall = Outcome::of_fall;
+    let fall = |c: u8| Outcome::from_fall_name(walker.fall_name(c));
     let problem = BasinProblem::new(walker, fp.section.clone(), &fall);
 
     let total_cells = (todo.len() * nx) as u64;
@@ -244,16 +370,19 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     );
     let mut k = 0;
     let mut interrupted = false;
+    let mut secs_per_row: Option<f64> = None;
     while k < todo.len() {
         if stop.load(Ordering::SeqCst) {
             interrupted = true;
             break;
         }
-        // Consecutive rows only, at most ROWS_PER_CALL.
+        // Consecutive rows only, as many as fit the call's time and memory budget.
+        let max_rows = rows_for_next_call(secs_per_row, nx);
         let mut end = k + 1;
-        while end < todo.len() && end - k < ROWS_PER_CALL && todo[end] == todo[end - 1] + 1 {
+        while end < todo.len() && end - k < max_rows && todo[end] == todo[end - 1] + 1 {
             end += 1;
         }
+        let call_start = Instant::now();
         let rows = &todo[k..end];
         let row_ys: Vec<f64> = rows.iter().map(|&r| ys[r]).collect();
         let cells = grid_cells(&base, ix, &xs, iy, &row_ys);
@@ -268,6 +397,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             .flat_map(|c| c.final_state.iter().copied())
             .collect();
         writer.write_rows(rows[0], &outcome, &strides, &fin)?;
+        let t_row = call_start.elapsed().as_secs_f64() / rows.len() as f64;
+        // Slowest recent row cost, decaying: a costly band keeps calls short.
+        secs_per_row = Some(secs_per_row.map_or(t_row, |t| t_row.max(0.7 * t)));
         k = end;
     }
     pb.finish_and_clear();
@@ -291,12 +423,11 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let out_metrics = if shard.is_none() {
         let outcome = writer.read_outcome()?;
         let flat: Vec<u8> = outcome.iter().copied().collect();
-        Some(store_metrics(&basin_metrics(
-            &flat,
+        Some(store_metrics(
+            &basin_metrics(&flat, nx, ny, DEFAULT_ENTROPY_BOX)?,
             nx,
             ny,
-            DEFAULT_ENTROPY_BOX,
-        )?))
+        ))
     } else {
         None
     };
@@ -332,16 +463,19 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The engine's metrics in the file's plain form.
-pub fn store_metrics(m: &pdw_limit::basin::BasinMetrics) -> BasinMetrics {
+/// The engine's metrics in the file's plain form. The entropies are NaN ("not defined") when
+/// no box of the entropy's size fits the `nx × ny` grid.
+pub fn store_metrics(m: &pdw_limit::basin::BasinMetrics, nx: usize, ny: usize) -> BasinMetrics {
+    let defined = nx >= m.box_size && ny >= m.box_size;
+    let or_nan = |v: f64| if defined { v } else { f64::NAN };
     BasinMetrics {
         fractions: m
             .fractions
             .iter()
             .map(|(_, n, f)| (n.to_string(), *f))
             .collect(),
-        basin_entropy: m.basin_entropy,
-        boundary_entropy: m.boundary_entropy,
+        basin_entropy: or_nan(m.basin_entropy),
+        boundary_entropy: or_nan(m.boundary_entropy),
         entropy_box: m.box_size,
     }
 }
@@ -369,13 +503,21 @@ fn print_summary(
     for (name, f) in mt.fractions.iter().filter(|(_, f)| *f > 0.0) {
         crate::outln!("  {name:<24} {:>8.4} %", 100.0 * f);
     }
-    crate::outln!(
-        "  basin entropy S_b = {:.4}, boundary basin entropy S_bb = {:.4} (boxes of {}x{} cells)",
-        mt.basin_entropy,
-        mt.boundary_entropy,
-        mt.entropy_box,
-        mt.entropy_box
-    );
+    if mt.basin_entropy.is_finite() {
+        crate::outln!(
+            "  basin entropy S_b = {:.4}, boundary basin entropy S_bb = {:.4} (boxes of {}x{} cells)",
+            mt.basin_entropy,
+            mt.boundary_entropy,
+            mt.entropy_box,
+            mt.entropy_box
+        );
+    } else {
+        crate::outln!(
+            "  basin entropy: not defined (no {}x{}-cell box fits a {nx}x{ny} grid)",
+            mt.entropy_box,
+            mt.entropy_box
+        );
+    }
     crate::outln!(
         "  {:.2} s, {:.0} cells/s; wrote {}{}",
         elapsed,

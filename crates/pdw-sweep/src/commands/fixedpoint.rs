@@ -9,6 +9,12 @@ use std::process::ExitCode;
 pub use pdw_limit::gaits::{Failed, Found};
 use pdw_limit::Validity;
 
+/// Smallest `--tol`: below it the residual is integrator round-off.
+pub const MIN_TOL: f64 = 1e-15;
+/// Largest `--tol`: a looser relative tolerance accepts a preset guess as the gait after zero
+/// iterations (the presets are within ~1e-2 of the gaits).
+pub const MAX_TOL: f64 = 1e-3;
+
 /// Newton from every guess (the user's, or the model's presets); see [`pdw_limit::gaits::search`].
 pub fn search(
     m: &BuiltModel,
@@ -38,8 +44,13 @@ pub fn validity_json(v: &Validity) -> serde_json::Value {
 }
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
-    if !(a.tol.is_finite() && a.tol > 0.0) {
-        return Err(InputError(format!("--tol: {} must be a positive number", a.tol)).into());
+    if !(MIN_TOL..=MAX_TOL).contains(&a.tol) {
+        return Err(InputError(format!(
+            "--tol: {} is outside [{MIN_TOL:e}, {MAX_TOL:e}]; the residual tolerance is relative \
+             to the gait's scale, and a looser one would accept the initial guess as a gait",
+            a.tol
+        ))
+        .into());
     }
     let which = a.gait.as_str();
     if !matches!(which, "stable" | "unstable" | "all") {

@@ -8,12 +8,30 @@ use pdw_store::{merge, plot_basin, read_basin, BasinMetrics};
 use std::process::ExitCode;
 
 pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
+    let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
+    let inputs: Vec<&std::path::Path> = a.shards.iter().map(|p| p.as_path()).collect();
+    crate::args::check_outputs(
+        &[
+            crate::args::Output {
+                flag: "--out",
+                path: &a.out,
+                may_exist: false,
+            },
+            crate::args::Output {
+                flag: "--png",
+                path: &png,
+                may_exist: false,
+            },
+        ],
+        &inputs,
+        a.force,
+    )?;
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let mut failure: Option<String> = None;
     let header = merge(&a.shards, &a.out, a.force, &command, |h, outcome| {
         let flat: Vec<u8> = outcome.iter().copied().collect();
         match basin_metrics(&flat, h.nx(), h.ny(), DEFAULT_ENTROPY_BOX) {
-            Ok(m) => store_metrics(&m),
+            Ok(m) => store_metrics(&m, h.nx(), h.ny()),
             Err(e) => {
                 failure = Some(e.to_string());
                 BasinMetrics {
@@ -29,7 +47,6 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
         anyhow::bail!("metrics of the merged grid: {f}");
     }
     let data = read_basin(&a.out)?;
-    let png = a.out.with_extension("png");
     let marker = data
         .attractors
         .first()

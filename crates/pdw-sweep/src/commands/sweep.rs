@@ -41,17 +41,22 @@ fn store_branch(name: &str, b: &Branch) -> pdw_store::Branch {
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let sw = args::parse_sweep(a.sweep.as_deref().unwrap_or_default())?;
     let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
-    if !a.force {
-        for p in [&a.out, &png] {
-            if p.exists() {
-                return Err(InputError(format!(
-                    "{} exists; pass --force to overwrite it",
-                    p.display()
-                ))
-                .into());
-            }
-        }
-    }
+    args::check_outputs(
+        &[
+            args::Output {
+                flag: "--out",
+                path: &a.out,
+                may_exist: false,
+            },
+            args::Output {
+                flag: "--png",
+                path: &png,
+                may_exist: false,
+            },
+        ],
+        &[],
+        a.force,
+    )?;
     let at = |mu: f64| -> Result<BuiltModel, InputError> {
         build_with(&a.model, &[(sw.name.clone(), mu)])
     };

@@ -1,0 +1,372 @@
+//! The binary used as a hostile user would: nothing lost (outputs that would replace data or
+//! inputs, concurrent runs on one file, a full disk), no crash, no false gait (level floor),
+//! damaged files never reported complete, early and clear errors (exit 2, the bad value named,
+//! no Rust Debug text).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("the binary runs")
+}
+
+fn err(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn out(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A small basin run (48×40 cells, 40 strides) with `extra` arguments.
+fn basin(out: &Path, extra: &[&str]) -> Output {
+    basin_grid(out, "48x40", extra)
+}
+
+fn basin_grid(out: &Path, grid: &str, extra: &[&str]) -> Output {
+    let mut a = vec![
+        "basin",
+        "--grid",
+        grid,
+        "--max-strides",
+        "40",
+        "--quiet",
+        "--out",
+        s(out),
+    ];
+    a.extend_from_slice(extra);
+    run(&a)
+}
+
+/// Exit 2 with a message, and none of Rust's Debug renderings in it.
+fn refused(o: &Output) -> String {
+    let e = err(o);
+    assert_eq!(o.status.code(), Some(2), "stderr: {e}\nstdout: {}", out(o));
+    for debug in [
+        "Custom {",
+        "kind: ",
+        "ImageError",
+        "Os {",
+        "Some(",
+        "panicked",
+    ] {
+        assert!(!e.contains(debug), "Debug text {debug:?} in: {e}");
+    }
+    e
+}
+
+fn same_cells(a: &Path, b: &Path) {
+    let (a, b) = (
+        pdw_store::read_basin(a).unwrap(),
+        pdw_store::read_basin(b).unwrap(),
+    );
+    assert_eq!(a.outcome, b.outcome);
+    assert_eq!(a.strides, b.strides);
+    let bits = |d: &pdw_store::BasinData| {
+        d.final_state
+            .iter()
+            .map(|v| v.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&a), bits(&b));
+}
+
+#[test]
+fn an_output_never_replaces_another_output_or_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // --out x.png: the picture would replace the data
+    let o = basin(&d.join("x.png"), &[]);
+    assert!(refused(&o).contains("same file"), "{}", err(&o));
+    assert!(!d.join("x.png").exists(), "nothing written");
+    // --out equal to --png
+    let o = basin(&d.join("a.h5"), &["--png", s(&d.join("a.h5"))]);
+    assert!(refused(&o).contains("same file"));
+    assert!(!d.join("a.h5").exists());
+    // fixedpoint --sweep with --out equal to --png
+    let o = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.001:0.002:3",
+        "--out",
+        s(&d.join("b.png")),
+    ]);
+    assert!(refused(&o).contains("same file"));
+
+    // merge: an output path that is one of the inputs (the picture beside --out)
+    let mut shards: Vec<PathBuf> = Vec::new();
+    for (i, name) in ["s0.h5", "s1.png"].iter().enumerate() {
+        let p = d.join(name);
+        let sh = format!("{i}/2");
+        let o = basin(&p, &["--shard", &sh]);
+        assert!(o.status.success(), "{}", err(&o));
+        shards.push(p);
+    }
+    let before = std::fs::read(&shards[1]).unwrap();
+    let o = run(&[
+        "merge",
+        s(&shards[0]),
+        s(&shards[1]),
+        "--out",
+        s(&d.join("s1.h5x")),
+        "--force",
+    ]);
+    assert!(refused(&o).contains("also an input"), "{}", err(&o));
+    assert_eq!(std::fs::read(&shards[1]).unwrap(), before);
+    assert!(!d.join("s1.h5x").exists());
+    // merge refuses an existing picture without --force, and its message does not offer
+    // --resume (merge has none)
+    std::fs::write(d.join("m.png"), b"keep").unwrap();
+    let o = run(&[
+        "merge",
+        s(&shards[0]),
+        s(&shards[1]),
+        "--out",
+        s(&d.join("m.h5")),
+    ]);
+    let e = refused(&o);
+    assert!(e.contains("--force") && !e.contains("--resume"), "{e}");
+    assert_eq!(std::fs::read(d.join("m.png")).unwrap(), b"keep");
+
+    // basin --resume of an unfinished file does not overwrite an existing picture
+    let full = d.join("full.h5");
+    assert!(basin(&full, &[]).status.success());
+    let h = pdw_store::read_basin_header(&full).unwrap();
+    let part = d.join("part.h5");
+    pdw_store::BasinWriter::create(&part, &h, false)
+        .unwrap()
+        .close()
+        .unwrap();
+    std::fs::write(d.join("old.png"), b"keep").unwrap();
+    let o = basin(&part, &["--resume", "--png", s(&d.join("old.png"))]);
+    assert!(refused(&o).contains("--force"));
+    assert_eq!(std::fs::read(d.join("old.png")).unwrap(), b"keep");
+    // ... and resumes to the full result when the picture may be replaced
+    let o = basin(
+        &part,
+        &["--resume", "--png", s(&d.join("old.png")), "--force"],
+    );
+    assert!(o.status.success(), "{}", err(&o));
+    same_cells(&part, &full);
+}
+
+/// Flips `n` bytes at a pseudo-random offset (xorshift from `seed`) in the second half of the
+/// file, where the data chunks are.
+fn damage(p: &Path, seed: u64, n: usize) {
+    let mut bytes = std::fs::read(p).unwrap();
+    let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    x ^= x << 13;
+    x ^= x >> 7;
+    x ^= x << 17;
+    let half = bytes.len() / 2;
+    let at = half + (x as usize) % (bytes.len() - half - n);
+    for b in &mut bytes[at..at + n] {
+        *b ^= 0xA5;
+    }
+    std::fs::write(p, bytes).unwrap();
+}
+
+#[test]
+fn resume_never_reports_a_damaged_file_complete() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.h5");
+    assert!(basin(&full, &[]).status.success());
+    let mut repaired = 0;
+    for seed in 1..=12u64 {
+        let p = dir.path().join(format!("d{seed}.h5"));
+        std::fs::copy(&full, &p).unwrap();
+        damage(&p, seed, 32);
+        let o = basin(&p, &["--resume", "--force"]);
+        match o.status.code() {
+            // success only with a file that reads back whole and equals the undamaged run
+            Some(0) => {
+                same_cells(&p, &full);
+                assert!(pdw_store::read_basin(&p).unwrap().complete);
+                if err(&o).contains("recomputing") {
+                    repaired += 1;
+                }
+            }
+            // or a refusal that says what is wrong
+            Some(2) => {
+                let e = refused(&o);
+                assert!(e.contains(s(&p)), "seed {seed}: {e}");
+            }
+            other => panic!("seed {seed}: exit {other:?}: {}", err(&o)),
+        }
+    }
+    assert!(repaired > 0, "no trial hit a data chunk");
+}
+
+#[test]
+fn no_gait_on_a_level_floor() {
+    for model in ["simplest", "compass"] {
+        for slope in ["0", "-0", "1e-320"] {
+            let o = run(&["fixedpoint", "--model", model, "--slope", slope]);
+            let e = refused(&o);
+            assert!(
+                e.contains("degenerate") && !out(&o).contains("stable gait"),
+                "{model} at {slope}: {e}"
+            );
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let o = basin(&dir.path().join("b.h5"), &["--slope", "0"]);
+    assert!(refused(&o).contains("no stable period-one gait"));
+}
+
+#[test]
+fn huge_grids_are_refused_before_any_allocation_with_the_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = basin_grid(&dir.path().join("b.h5"), "1x1000000000", &[]);
+    let e = err(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("GiB of memory"), "{e}");
+    let o = basin_grid(&dir.path().join("b.h5"), "1000000000x1", &[]);
+    let e = err(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("columns") || e.contains("memory"), "{e}");
+    assert!(!dir.path().join("b.h5").exists());
+}
+
+#[test]
+fn small_grid_entropy_is_not_defined_and_loose_tolerances_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = basin_grid(&dir.path().join("b.h5"), "4x4", &[]);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(out(&o).contains("not defined"), "{}", out(&o));
+    let m = pdw_store::read_basin(dir.path().join("b.h5"))
+        .unwrap()
+        .metrics
+        .unwrap();
+    assert!(m.basin_entropy.is_nan() && m.boundary_entropy.is_nan());
+    for tol in ["1", "0.01", "0"] {
+        let o = run(&["fixedpoint", "--tol", tol]);
+        assert!(refused(&o).contains("--tol"));
+    }
+}
+
+#[test]
+fn errors_name_the_flag_and_come_before_any_computation() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // negative numbers are values
+    let o = run(&["fixedpoint", "--slope", "-0.009"]);
+    assert!(!err(&o).contains("unexpected argument"), "{}", err(&o));
+    let o = run(&["fixedpoint", "--guess", "-0.2,0.2", "--json"]);
+    assert!(!err(&o).contains("unexpected argument"), "{}", err(&o));
+    // the flag actually given is the one blamed
+    let o = run(&["fixedpoint", "--set", "slope=2"]);
+    assert!(refused(&o).contains("--set slope"), "{}", err(&o));
+    let o = run(&["fixedpoint", "--sweep", "slope=0.001:2:10"]);
+    assert!(refused(&o).contains("--sweep slope"), "{}", err(&o));
+    let o = run(&["fixedpoint", "--sweep", "slope=0.001:0.002:100000000"]);
+    assert!(refused(&o).contains("point count"), "{}", err(&o));
+    let o = basin(&d.join("b.h5"), &["--x", "theta=-1e308:1e308"]);
+    assert!(refused(&o).contains("-1e308:1e308"), "{}", err(&o));
+    // a missing directory for the picture is found before the grid is computed
+    let o = basin(&d.join("b.h5"), &["--png", s(&d.join("no/such/dir.png"))]);
+    assert!(refused(&o).contains("does not exist"), "{}", err(&o));
+    assert!(!d.join("b.h5").exists());
+    // FIFOs and devices are not written or replaced, even with --force (no hang)
+    let fifo = d.join("fifo.h5");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let o = basin(&fifo, &["--force"]);
+        assert!(refused(&o).contains("not a regular file"));
+        let o = run(&["merge", s(&d.join("x.h5")), "--out", s(&fifo), "--force"]);
+        assert!(refused(&o).contains("not a regular file"));
+        use std::os::unix::fs::FileTypeExt;
+        assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    } else {
+        eprintln!("FIFO cases skipped: mkfifo is not available");
+    }
+    // an HDF5 error is told once
+    std::fs::write(d.join("junk.h5"), b"not an HDF5 file").unwrap();
+    let o = basin(&d.join("junk.h5"), &["--resume"]);
+    let e = refused(&o);
+    let first = e.split(": ").nth(2).unwrap_or_default().to_string();
+    assert!(
+        first.len() < 12 || e.matches(&first).count() == 1,
+        "repeated: {e}"
+    );
+}
+
+/// A file system too small for the file: exit 2 with the operating system's message, never a
+/// crash, and no unreadable file left that would block a rerun or --resume. Needs root to mount
+/// a tiny tmpfs.
+#[test]
+fn full_disk_is_an_error_not_a_crash() {
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| o.stdout == b"0\n");
+    if !root {
+        eprintln!("skipped: needs root to mount a tiny tmpfs (a full file system)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mnt = dir.path().join("mnt");
+    std::fs::create_dir(&mnt).unwrap();
+    let reference = dir.path().join("ref.h5");
+    assert!(basin(&reference, &[]).status.success());
+    let png = dir.path().join("pic.png");
+    for size in ["4k", "8k", "16k", "32k", "48k"] {
+        let ok = Command::new("mount")
+            .args([
+                "-t",
+                "tmpfs",
+                "-o",
+                &format!("size={size}"),
+                "tmpfs",
+                s(&mnt),
+            ])
+            .status()
+            .is_ok_and(|s| s.success());
+        if !ok {
+            eprintln!("skipped: mount -t tmpfs failed (no permission in this container)");
+            return;
+        }
+        let f = mnt.join("b.h5");
+        let o = basin(&f, &["--png", s(&png), "--force"]);
+        let e = refused(&o);
+        assert!(e.contains("No space left on device"), "{size}: {e}");
+        // the sweep writer too, leaving no temporary file
+        let o = run(&[
+            "fixedpoint",
+            "--sweep",
+            "slope=0.001:0.002:3",
+            "--out",
+            s(&mnt.join("bif.h5")),
+            "--png",
+            s(&png),
+            "--force",
+        ]);
+        let e = refused(&o);
+        assert!(e.contains("No space left on device"), "{size}: {e}");
+        // what is left is resumable (or absent): grow the file system and resume
+        let ok = Command::new("mount")
+            .args(["-o", "remount,size=16m", s(&mnt)])
+            .status()
+            .is_ok_and(|s| s.success());
+        assert!(ok, "remount");
+        let o = basin(&f, &["--png", s(&png), "--force", "--resume"]);
+        assert!(o.status.success(), "{size}: {}", err(&o));
+        same_cells(&f, &reference);
+        let leftovers: Vec<_> = std::fs::read_dir(&mnt)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("partial"))
+            .collect();
+        assert!(leftovers.is_empty(), "{leftovers:?}");
+        let _ = Command::new("umount").args(["-l", s(&mnt)]).status();
+    }
+}
