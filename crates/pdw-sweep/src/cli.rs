@@ -37,7 +37,8 @@ pub enum Command {
 /// Options shared by every command that builds a model.
 #[derive(Args, Debug, Clone)]
 pub struct ModelOpts {
-    /// Model name (see `pdw-sweep models`).
+    /// Model name (see `pdw-sweep models`) or a walker spec file (`.toml`, e.g. one written by
+    /// `pdw-sweep models --spec compass > my.toml`).
     #[arg(long, default_value = "simplest")]
     pub model: String,
     /// Slope in radians, or degrees with a `deg` suffix (e.g. 3deg). Default: the model's preset.
@@ -53,6 +54,10 @@ pub struct ModelsArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Print a chain-walker preset's spec file (compass, kneed, seed5), to edit and pass back
+    /// with `--model FILE.toml`.
+    #[arg(long, value_name = "NAME")]
+    pub spec: Option<String>,
 }
 
 // Negative numbers are values, not flags: `--slope -0.009`, `--guess -0.2,0.2`.

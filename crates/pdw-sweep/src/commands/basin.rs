@@ -170,7 +170,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let info = pdw_walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
-    let names = info.section_names;
+    let names_owned = info.section_names.clone();
+    let names: Vec<&str> = names_owned.iter().map(|s| s.as_str()).collect();
+    let names = &names[..];
     if names.len() < 2 {
         return Err(InputError(format!(
             "model '{}' has one section coordinate ({}); a basin grid needs two",
@@ -353,7 +355,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         .num_threads(a.threads)
         .build()?;
     let walker = m.walker.as_ref();
-    let fall = |c: u8| Outcome::from_fall_name(walker.fall_name(c));
+    let fall = Outcome::of_fall;
     let problem = BasinProblem::new(walker, fp.section.clone(), &fall);
 
     let total_cells = (todo.len() * nx) as u64;
