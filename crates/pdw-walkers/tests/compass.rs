@@ -1,21 +1,80 @@
-//! Physics claims about the compass gait, each against an independent reference: Goswami's
-//! closed-form M, C, G and heel-strike matrices Q⁻, Q⁺ (written here from the paper, not from the
-//! kernel), conservation laws computed from point-mass positions and velocities, Garcia's
-//! simplest walker as the small-leg-mass limit.
+//! Physics claims about the compass gait (the `compass` preset of the chain walker,
+//! `models/compass.toml`), each against an independent reference: Goswami's closed-form M, C, G
+//! and heel-strike matrices Q⁻, Q⁺ (written here from the paper, not from the kernel),
+//! conservation laws computed from point-mass positions and velocities, Garcia's simplest walker
+//! as the small-leg-mass limit.
 
 use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};
-use pdw_walkers::compass::{Compass, CompassParams, HEEL_STRIKE};
-use pdw_walkers::WalkerError;
+use pdw_walkers::{presets, ChainWalker, StepFlags, Walker, WalkerError};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-fn goswami() -> Compass {
-    Compass::new(CompassParams::default()).unwrap()
+/// Guard index of the heel strike (the compass has one mode, 0).
+const HEEL_STRIKE: usize = 0;
+
+/// Goswami et al.'s parameters, held by the test (the reference computations use these, never
+/// the walker's own geometry).
+#[derive(Clone, Copy, Debug)]
+struct Gp {
+    leg_mass: f64,
+    hip_mass: f64,
+    a: f64,
+    b: f64,
+    slope: f64,
+    gravity: f64,
+}
+
+/// Goswami et al. 1998's preset: m = 5, m_H = 10, a = b = 0.5, 3°, g = 9.81.
+const GOSWAMI: Gp = Gp {
+    leg_mass: 5.0,
+    hip_mass: 10.0,
+    a: 0.5,
+    b: 0.5,
+    slope: 0.05235987755982988,
+    gravity: 9.81,
+};
+
+fn walker(p: &Gp) -> ChainWalker {
+    presets::compass(&[
+        ("leg_mass", p.leg_mass),
+        ("hip_mass", p.hip_mass),
+        ("a", p.a),
+        ("b", p.b),
+        ("slope", p.slope),
+        ("gravity", p.gravity),
+    ])
+    .unwrap()
+}
+
+fn goswami() -> ChainWalker {
+    // the preset's defaults are Goswami's: building with no overrides must equal GOSWAMI
+    let w = presets::compass(&[]).unwrap();
+    let v = w.param_values();
+    let get = |n: &str| v.iter().find(|p| p.0 == n).map(|p| p.1).unwrap();
+    assert_eq!(
+        [
+            get("leg_mass"),
+            get("hip_mass"),
+            get("a"),
+            get("b"),
+            get("slope"),
+            get("gravity")
+        ],
+        [
+            GOSWAMI.leg_mass,
+            GOSWAMI.hip_mass,
+            GOSWAMI.a,
+            GOSWAMI.b,
+            GOSWAMI.slope,
+            GOSWAMI.gravity
+        ]
+    );
+    w
 }
 
 /// Goswami et al. (1998) equations of motion `M(θ)θ̈ + C(θ,θ̇)θ̇ + G(θ) = 0` with
 /// `θ = (θ_ns, θ_s)` measured from the vertical; returns θ̈.
-fn goswami_accel(p: &CompassParams, th: [f64; 2], thd: [f64; 2]) -> [f64; 2] {
+fn goswami_accel(p: &Gp, th: [f64; 2], thd: [f64; 2]) -> [f64; 2] {
     let (m, mh, a, b, g) = (p.leg_mass, p.hip_mass, p.a, p.b, p.gravity);
     let l = a + b;
     let (ns, s) = (th[0], th[1]);
@@ -48,7 +107,7 @@ fn solve2(a: [[f64; 2]; 2], b: [f64; 2]) -> [f64; 2] {
 
 /// Goswami et al. (1998) heel-strike map `Q⁺(α) θ̇⁺ = Q⁻(α) θ̇⁻`, `θ̇ = (θ̇_ns, θ̇_s)`, with the
 /// legs relabelled (the new stance leg is the old swing leg); `α` the half inter-leg angle.
-fn goswami_impact(p: &CompassParams, alpha: f64, thd: [f64; 2]) -> [f64; 2] {
+fn goswami_impact(p: &Gp, alpha: f64, thd: [f64; 2]) -> [f64; 2] {
     let (m, mh, a, b) = (p.leg_mass, p.hip_mass, p.a, p.b);
     let l = a + b;
     let c2 = (2.0 * alpha).cos();
@@ -70,8 +129,11 @@ fn goswami_impact(p: &CompassParams, alpha: f64, thd: [f64; 2]) -> [f64; 2] {
     solve2(qp, r)
 }
 
-/// Point masses of the compass (mass, position, velocity) at state `x`, stance foot at origin.
-fn point_masses(p: &CompassParams, x: &[f64]) -> Vec<(f64, [f64; 2], [f64; 2])> {
+type Pm = Vec<(f64, [f64; 2], [f64; 2])>;
+
+/// Point masses of the compass (mass, position, velocity) at state `x`, stance foot at origin
+/// (slope frame: `y` downhill, `z` along the slope normal).
+fn point_masses(p: &Gp, x: &[f64]) -> Pm {
     let l = p.a + p.b;
     let (q1, psi) = (x[0], x[0] + x[1]);
     let (w1, wp) = (x[2], x[2] + x[3]);
@@ -112,6 +174,14 @@ fn kinetic(pm: &[(f64, [f64; 2], [f64; 2])]) -> f64 {
         .sum()
 }
 
+/// Potential energy in the slope frame (gravity `g (sin γ, −cos γ)`), zero at the stance foot.
+fn potential(p: &Gp, pm: &[(f64, [f64; 2], [f64; 2])]) -> f64 {
+    let gvec = [p.gravity * p.slope.sin(), -p.gravity * p.slope.cos()];
+    pm.iter()
+        .map(|(m, r, _)| -m * (gvec[0] * r[0] + gvec[1] * r[1]))
+        .sum()
+}
+
 fn random_state(rng: &mut ChaCha8Rng) -> [f64; 4] {
     [
         rng.random_range(-0.6..0.6),
@@ -124,23 +194,24 @@ fn random_state(rng: &mut ChaCha8Rng) -> [f64; 4] {
 #[test]
 fn vector_field_equals_goswami_closed_form() {
     let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let mut ws = Scratch::new();
     for params in [
-        CompassParams::default(),
-        CompassParams {
+        GOSWAMI,
+        Gp {
             leg_mass: 2.0,
             hip_mass: 7.0,
             a: 0.3,
             b: 0.6,
             slope: 0.1,
-            ..CompassParams::default()
+            ..GOSWAMI
         },
     ] {
-        let w = Compass::new(params).unwrap();
+        let w = walker(&params);
         let mut worst: f64 = 0.0;
         for _ in 0..200 {
             let x = random_state(&mut rng);
             let mut dx = [0.0; 4];
-            w.flow(&mut Scratch::new(), 0, &x, &mut dx);
+            w.flow(&mut ws, 0, &x, &mut dx);
             // θ_s = q₁ − γ, θ_ns = q₁ + q₂ − γ
             let g = params.slope;
             let th = [x[0] + x[1] - g, x[0] - g];
@@ -154,7 +225,7 @@ fn vector_field_equals_goswami_closed_form() {
         }
         assert!(
             worst < 1e-12,
-            "SOA vector field vs Goswami: worst relative error {worst:e}"
+            "chain walker vector field vs Goswami: worst relative error {worst:e}"
         );
     }
 }
@@ -177,14 +248,13 @@ fn heel_strike_states(rng: &mut ChaCha8Rng, n: usize) -> Vec<[f64; 4]> {
 #[test]
 fn heel_strike_equals_goswami_impact_map() {
     let w = goswami();
-    let p = *w.params();
+    let p = GOSWAMI;
+    assert_eq!(w.section_guard(), (0, HEEL_STRIKE));
+    let mut ws = Scratch::new();
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     for x in heel_strike_states(&mut rng, 100) {
         let mut out = [0.0; 4];
-        assert_eq!(
-            w.reset(&mut Scratch::new(), 0, HEEL_STRIKE, &x, &mut out),
-            0
-        );
+        assert_eq!(w.reset(&mut ws, 0, HEEL_STRIKE, &x, &mut out), 0);
         let alpha = 0.5 * x[1];
         let post = goswami_impact(&p, alpha, [x[2] + x[3], x[2]]);
         // after relabelling: new stance rate = θ̇_s⁺, new swing absolute rate = θ̇_ns⁺
@@ -192,7 +262,7 @@ fn heel_strike_equals_goswami_impact_map() {
         for i in 0..4 {
             assert!(
                 (out[i] - expect[i]).abs() < 1e-12 * (1.0 + expect[i].abs()),
-                "component {i}: SOA impact {} vs Goswami {}",
+                "component {i}: chain walker impact {} vs Goswami {}",
                 out[i],
                 expect[i]
             );
@@ -203,12 +273,13 @@ fn heel_strike_equals_goswami_impact_map() {
 #[test]
 fn impact_conserves_angular_momentum_about_contact_and_trailing_leg_about_hip() {
     let w = goswami();
-    let p = *w.params();
-    let l = w.leg_length();
+    let p = GOSWAMI;
+    let l = p.a + p.b;
+    let mut ws = Scratch::new();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     for x in heel_strike_states(&mut rng, 100) {
         let mut v = [0.0; 4];
-        let hs = w.heel_strike(&x, &mut v);
+        let impulse = w.heel_strike(&mut ws, &x, &mut v);
         let pre = point_masses(&p, &x);
         // post-impact motion in the old coordinates: base (old stance foot) moves with (v0, v1)
         let post_rel = point_masses(&p, &[x[0], x[1], v[2], v[3]]);
@@ -216,7 +287,11 @@ fn impact_conserves_angular_momentum_about_contact_and_trailing_leg_about_hip() 
             .iter()
             .map(|(m, r, u)| (*m, *r, [u[0] + v[0], u[1] + v[1]]))
             .collect();
-        let contact = w.swing_foot(&x);
+        // the contact point from the test's own kinematics (and the walker's agrees)
+        let (q1, psi) = (x[0], x[0] + x[1]);
+        let contact = [l * (psi.sin() - q1.sin()), l * (q1.cos() - psi.cos())];
+        let sf = w.swing_foot(&x);
+        assert!((sf[0] - contact[0]).abs() < 1e-15 && (sf[1] - contact[1]).abs() < 1e-15);
         let hip = [-l * x[0].sin(), l * x[0].cos()];
         let h0 = ang_mom(&pre, contact);
         let h1 = ang_mom(&post, contact);
@@ -235,50 +310,57 @@ fn impact_conserves_angular_momentum_about_contact_and_trailing_leg_about_hip() 
             (t0 - t1).abs() < 1e-12 * scale,
             "trailing leg about hip: {t0} vs {t1}"
         );
-        // the new contact point is at rest after the impact
-        let mut post_state = [0.0; 4];
-        w.reset(&mut Scratch::new(), 0, HEEL_STRIKE, &x, &mut post_state);
         // energy: T⁻ − T⁺ equals the impulse's work −½ Λ·v_c⁻ (plastic, v_c⁺ = 0)
-        let vc = {
-            let (q1, psi) = (x[0], x[0] + x[1]);
-            [
-                l * (-q1.cos() * x[2] + psi.cos() * (x[2] + x[3])),
-                l * (-q1.sin() * x[2] + psi.sin() * (x[2] + x[3])),
-            ]
-        };
+        let vc = [
+            l * (-q1.cos() * x[2] + psi.cos() * (x[2] + x[3])),
+            l * (-q1.sin() * x[2] + psi.sin() * (x[2] + x[3])),
+        ];
         let (k0, k1) = (kinetic(&pre), kinetic(&post));
-        let work = 0.5 * (hs.impulse[0] * vc[0] + hs.impulse[1] * vc[1]);
+        let work = 0.5 * (impulse[0] * vc[0] + impulse[1] * vc[1]);
         assert!(
             ((k1 - k0) - work).abs() < 1e-12 * k0,
             "ΔT = {} vs impulse work {}",
             k1 - k0,
             work
         );
-        assert!((hs.kinetic_energy[0] - k0).abs() < 1e-12 * k0);
-        assert!((hs.kinetic_energy[1] - k1).abs() < 1e-12 * k0);
         // the post-swap state's kinetic energy (new chain, base at rest) is the same
+        let mut post_state = [0.0; 4];
+        w.reset(&mut ws, 0, HEEL_STRIKE, &x, &mut post_state);
         let pm_new = point_masses(&p, &post_state);
         assert!((kinetic(&pm_new) - k1).abs() < 1e-12 * k0);
     }
 }
 
-/// Runs one step with DOP853 from the section state `s` and returns the pre-impact state.
-fn one_step(w: &Compass, s: &[f64], tol: f64) -> (StopReason, f64, [f64; 4], f64) {
+/// Runs one step with DOP853 from the section state `s`: stop reason, time, pre-impact state,
+/// relative energy drift.
+fn one_step(w: &ChainWalker, s: &[f64], tol: f64) -> (StopReason, f64, [f64; 4], f64) {
     let mut x = [0.0; 4];
     w.lift(s, &mut x);
-    let e0 = w.energy(&x);
+    let e0 = w.energy(&x).unwrap();
     let mut integ = Integrator::new(4, Options::dop853(tol)).unwrap();
     let mut t = 0.0;
     let mut drift: f64 = 0.0;
     let stop = integ.integrate_observed(w, 0, &mut t, &mut x, 5.0, &mut |_, y| {
-        drift = drift.max((w.energy(y) - e0).abs());
+        drift = drift.max((w.energy(y).unwrap() - e0).abs());
     });
     (stop, t, x, drift / e0.abs().max(1.0))
 }
 
 #[test]
-fn energy_conserved_between_impacts() {
+fn energy_is_point_mass_energy_and_conserved_between_impacts() {
     let w = goswami();
+    // the walker's energy is T + V of the point masses (potential zero at the stance foot)
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for _ in 0..50 {
+        let x = random_state(&mut rng);
+        let pm = point_masses(&GOSWAMI, &x);
+        let e = kinetic(&pm) + potential(&GOSWAMI, &pm);
+        let we = w.energy(&x).unwrap();
+        assert!(
+            (we - e).abs() < 1e-12 * (1.0 + e.abs()),
+            "energy {we} vs point masses {e}"
+        );
+    }
     // a post-impact state near the 3° gait
     let s = [0.271, -1.09, 0.715];
     let (stop, t, x, drift) = one_step(&w, &s, 1e-13);
@@ -323,13 +405,14 @@ fn scuffing_crossing_is_never_heel_strike() {
 #[test]
 fn ground_reaction_equals_total_momentum_rate_minus_weight() {
     let w = goswami();
-    let p = *w.params();
+    let p = GOSWAMI;
+    let mut ws = Scratch::new();
     let mut rng = ChaCha8Rng::seed_from_u64(4);
     let gvec = [p.gravity * p.slope.sin(), -p.gravity * p.slope.cos()];
     for _ in 0..50 {
         let x = random_state(&mut rng);
         let mut dx = [0.0; 4];
-        w.flow(&mut Scratch::new(), 0, &x, &mut dx);
+        w.flow(&mut ws, 0, &x, &mut dx);
         // Σ m a by central differences in time of the point-mass velocities along the flow is
         // replaced by the exact second derivative: v(x + h ẋ) − v(x − h ẋ), h small.
         let h = 1e-6;
@@ -342,7 +425,7 @@ fn ground_reaction_equals_total_momentum_rate_minus_weight() {
                 f[c] += pp[k].0 * ((pp[k].2[c] - pm[k].2[c]) / (2.0 * h) - gvec[c]);
             }
         }
-        let cf = w.constraint_forces(0, &x);
+        let cf = w.constraint_forces_ws(&mut ws, 0, &x);
         let scale = (p.leg_mass * 2.0 + p.hip_mass) * (p.gravity + 10.0);
         assert!(
             (cf.normal - f[1]).abs() < 1e-6 * scale,
@@ -351,37 +434,56 @@ fn ground_reaction_equals_total_momentum_rate_minus_weight() {
             f[1]
         );
         assert!((cf.tangential - f[0]).abs() < 1e-6 * scale);
+        assert_eq!(cf.knee_torque, [None, None]);
+    }
+}
+
+/// The compass with leg mass `β` (hip mass 1) near the feet: the spec rejects a point mass at
+/// a joint (`a = 0`, Garcia's foot masses), so the leg masses sit at `a = βl` from the foot; the
+/// offset is O(β), as the leg masses' own effect.
+fn near_simplest(beta: f64, l: f64, gamma: f64, g: f64) -> ChainWalker {
+    walker(&Gp {
+        leg_mass: beta,
+        hip_mass: 1.0,
+        a: beta * l,
+        b: l - beta * l,
+        slope: gamma,
+        gravity: g,
+    })
+}
+
+#[test]
+fn foot_point_masses_are_rejected_by_the_spec() {
+    // Garcia's simplest walker has its leg masses at the feet (a = 0); as a chain walker that is
+    // a point mass on the stance-foot joint, which the spec rejects with the rule.
+    match presets::compass(&[("a", 0.0), ("b", 1.0)]) {
+        Err(WalkerError::InvalidSpec { field, rule, .. }) => {
+            assert_eq!(field, "segments[0].com");
+            assert!(rule.contains("zero inertia"), "{rule}");
+        }
+        other => panic!("expected InvalidSpec, got {other:?}"),
     }
 }
 
 #[test]
 fn compass_tends_to_simplest_walker_as_leg_mass_vanishes() {
-    // a = 0: leg masses at the feet, as Garcia's; time in √(l/g), φ = −q₂.
+    // time in √(l/g), φ = −q₂.
     let (l, g, gamma): (f64, f64, f64) = (1.3, 9.81, 0.009);
     let tscale = (g / l).sqrt();
+    let mut ws = Scratch::new();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let states: Vec<[f64; 4]> = (0..50).map(|_| random_state(&mut rng)).collect();
     let mut errs = vec![];
     for beta in [1e-2, 1e-3, 1e-4] {
-        let w = Compass::new(CompassParams {
-            slope: gamma,
-            leg_mass: beta,
-            hip_mass: 1.0,
-            a: 0.0,
-            b: l,
-            gravity: g,
-            max_stride_time: 5.0,
-        })
-        .unwrap();
+        let w = near_simplest(beta, l, gamma, g);
         let mut worst: f64 = 0.0;
         for x in &states {
             let (th, ph) = (x[0], -x[1]);
-            let (thd, phd) = (x[2] / tscale, -x[3] / tscale);
+            let thd = x[2] / tscale;
             let thdd = (th - gamma).sin();
             let phdd = thdd + thd * thd * ph.sin() - (th - gamma).cos() * ph.sin();
-            let _ = phd;
             let mut dx = [0.0; 4];
-            w.flow(&mut Scratch::new(), 0, x, &mut dx);
+            w.flow(&mut ws, 0, x, &mut dx);
             let e = ((dx[2] / (tscale * tscale)) - thdd)
                 .abs()
                 .max((-dx[3] / (tscale * tscale) - phdd).abs());
@@ -399,24 +501,16 @@ fn compass_tends_to_simplest_walker_as_leg_mass_vanishes() {
 
 #[test]
 fn heel_strike_tends_to_garcia_jump_map_as_leg_mass_vanishes() {
+    let mut ws = Scratch::new();
     let mut rng = ChaCha8Rng::seed_from_u64(6);
     let states = heel_strike_states(&mut rng, 20);
     let mut errs = vec![];
     for beta in [1e-2, 1e-3, 1e-4] {
-        let w = Compass::new(CompassParams {
-            slope: 0.009,
-            leg_mass: beta,
-            hip_mass: 1.0,
-            a: 0.0,
-            b: 1.0,
-            gravity: 1.0,
-            max_stride_time: 5.0,
-        })
-        .unwrap();
+        let w = near_simplest(beta, 1.0, 0.009, 1.0);
         let mut worst: f64 = 0.0;
         for x in &states {
             let mut out = [0.0; 4];
-            w.reset(&mut Scratch::new(), 0, HEEL_STRIKE, x, &mut out);
+            w.reset(&mut ws, 0, HEEL_STRIKE, x, &mut out);
             // Garcia: θ̇⁺ = cos 2θ θ̇⁻, φ̇⁺ = cos 2θ (1 − cos 2θ) θ̇⁻ (θ = q₁, φ̇ = −q̇₂)
             let c2 = (2.0 * x[0]).cos();
             let thd = c2 * x[2];
@@ -432,50 +526,47 @@ fn heel_strike_tends_to_garcia_jump_map_as_leg_mass_vanishes() {
 }
 
 #[test]
-fn bad_parameters_are_rejected_with_their_name() {
-    let cases: [(&str, CompassParams); 5] = [
-        (
-            "leg_mass",
-            CompassParams {
-                leg_mass: -1.0,
-                ..Default::default()
-            },
-        ),
-        (
-            "hip_mass",
-            CompassParams {
-                hip_mass: f64::NAN,
-                ..Default::default()
-            },
-        ),
-        (
-            "b",
-            CompassParams {
-                b: 0.0,
-                ..Default::default()
-            },
-        ),
-        (
-            "slope",
-            CompassParams {
-                slope: 2.0,
-                ..Default::default()
-            },
-        ),
-        (
-            "gravity",
-            CompassParams {
-                gravity: 0.0,
-                ..Default::default()
-            },
-        ),
+fn bad_parameters_are_rejected_as_spec_errors_naming_field_value_and_rule() {
+    // (override, field, a piece of the value, a piece of the rule)
+    let cases: [(&str, f64, &str, &str, &str); 6] = [
+        ("leg_mass", -1.0, "segments[0].mass", "-1", "must be > 0"),
+        ("hip_mass", f64::NAN, "parameters.hip_mass", "NaN", "finite"),
+        ("hip_mass", -2.0, "hip_mass", "-2", "must be >= 0"),
+        ("b", 0.0, "segments[0].com", "0.5", "zero inertia"),
+        ("slope", 2.0, "parameters.slope", "2", "(-pi/2, pi/2)"),
+        ("gravity", 0.0, "parameters.gravity", "0", "must be > 0"),
     ];
-    for (name, p) in cases {
-        match Compass::new(p) {
-            Err(WalkerError::InvalidParam { name: n, .. }) => assert_eq!(n, name),
-            other => panic!("{name}: expected InvalidParam, got {other:?}"),
+    for (name, v, field, value, rule) in cases {
+        match presets::compass(&[(name, v)]) {
+            Err(e @ WalkerError::InvalidSpec { .. }) => {
+                let msg = e.to_string();
+                let WalkerError::InvalidSpec {
+                    source_name,
+                    field: f,
+                    value: val,
+                    rule: r,
+                } = e
+                else {
+                    unreachable!()
+                };
+                assert_eq!(source_name, "compass", "{name}");
+                assert_eq!(f, field, "{name}: {msg}");
+                assert!(val.contains(value), "{name}: value {val:?} in {msg}");
+                assert!(r.contains(rule), "{name}: rule {r:?} in {msg}");
+                // the message shows all three
+                assert!(
+                    msg.contains(field) && msg.contains(&val) && msg.contains(&r),
+                    "{msg}"
+                );
+            }
+            other => panic!("{name} = {v}: expected InvalidSpec, got {other:?}"),
         }
     }
+    // a name the model does not have
+    assert!(matches!(
+        presets::compass(&[("mass", 1.0)]),
+        Err(WalkerError::UnknownParam { .. })
+    ));
 }
 
 #[test]
@@ -484,12 +575,13 @@ fn falling_scuff_crossing_is_skipped_and_flagged() {
     // vertical: the swing-foot height falls through zero on the scuffing factor q₂ = 0 (the foot
     // enters the ground as it passes). That crossing must not end the step.
     let w = goswami();
+    let mut ws = Scratch::new();
     let mut x = [-0.1, -0.05, -1.0, 1.0];
     let mut integ = Integrator::new(4, Options::dop853(1e-11)).unwrap();
     let mut t = 0.0;
     let mut saw_falling_scuff = false;
     let mut prev: Option<[f64; 4]> = None;
-    let mut flags = pdw_walkers::compass::StepFlags::default();
+    let mut flags = StepFlags::default();
     let stop = integ.integrate_observed(&w, 0, &mut t, &mut x, 3.0, &mut |_, y| {
         if let Some(p) = prev {
             if w.swing_foot(&p)[1] > 0.0 && w.swing_foot(y)[1] <= 0.0 && p[1] < 0.0 && y[1] > -0.01
@@ -498,7 +590,7 @@ fn falling_scuff_crossing_is_skipped_and_flagged() {
             }
         }
         prev = Some([y[0], y[1], y[2], y[3]]);
-        flags = flags.merge(w.check_state(0, y));
+        flags = flags.merge(w.check_state_ws(&mut ws, 0, y));
     });
     assert!(
         saw_falling_scuff,

@@ -1,185 +1,217 @@
-//! Physics claims about the kneed walker (Hsu Chen 2007), each against an independent reference:
-//! a merged-link model for the locked knee, conservation laws computed from the point masses,
-//! and Hsu Chen's published fixed point.
+//! Physics claims about the kneed walker (Hsu Chen 2007; the `kneed` preset of the chain walker,
+//! `models/kneed.toml`), each against an independent reference: the point-mass equations of
+//! motion written in the test (d'Alembert, `common::PointChain`) for both modes, conservation
+//! laws computed from the point masses, and Hsu Chen's published fixed point.
+//!
+//! State `(q₀, q₁, q₂, q₃, q̇₀ … q̇₃)`: stance leg, stance knee (locked, 0), hip, swing knee
+//! (flexion `q₃ < 0`). Modes: 0 swing knee free, 1 every knee locked.
 
+mod common;
+
+use common::{ang_mom, kinetic, param, PointChain};
 use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};
-use pdw_soa::{ChainBuilder, Link, Workspace};
-use pdw_walkers::kneed::{
-    hsu_chen_section, Kneed, KneedParams, HEEL_STRIKE, KNEE_STRIKE, LOCKED, UNLOCKED,
-};
+use pdw_walkers::chain_walker::{FREE, LOCKED};
+use pdw_walkers::{presets, ChainWalker, Walker};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// A point `Σ len_j · (−sin θ_j, cos θ_j)` and its velocity, for terms `(len_j, θ_j, θ̇_j)`.
-fn point(terms: &[(f64, f64, f64)]) -> ([f64; 2], [f64; 2]) {
-    let mut r = [0.0; 2];
-    let mut v = [0.0; 2];
-    for &(l, th, w) in terms {
-        r[0] -= l * th.sin();
-        r[1] += l * th.cos();
-        v[0] -= l * w * th.cos();
-        v[1] -= l * w * th.sin();
-    }
-    (r, v)
+/// Guard (free mode) of the knee strike.
+const KNEE_STRIKE: usize = 0;
+/// Guard (locked mode) of the heel strike.
+const HEEL_STRIKE: usize = 0;
+
+/// Hsu Chen 2007's parameters (shared REFERENCES §4), held by the test.
+struct Kp {
+    a1: f64,
+    b1: f64,
+    a2: f64,
+    b2: f64,
+    hip_mass: f64,
+    thigh_mass: f64,
+    shank_mass: f64,
+    slope: f64,
+    gravity: f64,
 }
 
-/// Point masses `(m, r, v)` of the kneed walker at state `x` (stance foot at the origin, at
-/// rest), in the order stance shank, stance thigh, hip, swing thigh, swing shank.
-fn masses(p: &KneedParams, x: &[f64]) -> Vec<(f64, [f64; 2], [f64; 2])> {
+const HSU_CHEN: Kp = Kp {
+    a1: 0.375,
+    b1: 0.125,
+    a2: 0.175,
+    b2: 0.325,
+    hip_mass: 0.5,
+    thigh_mass: 0.5,
+    shank_mass: 0.05,
+    slope: 0.0504,
+    gravity: 9.8,
+};
+
+/// Hsu Chen's published post-heel-strike state (absolute angles from the vertical) in section
+/// coordinates (angles from the slope normal): `q₁ = 0.1877 + γ`, `q̇₁ = −1.1014`, hip rate
+/// `q̇₂ − q̇₁ = −0.0399 + 1.1014`.
+fn hsu_chen_section(gamma: f64) -> [f64; 3] {
+    [0.1877 + gamma, -1.1014, -0.0399 + 1.1014]
+}
+
+/// The preset, checked to be at Hsu Chen's parameters.
+fn kneed() -> ChainWalker {
+    let w = presets::kneed(&[]).unwrap();
+    let v = w.param_values();
+    let p = HSU_CHEN;
+    for (name, value) in [
+        ("a1", p.a1),
+        ("b1", p.b1),
+        ("a2", p.a2),
+        ("b2", p.b2),
+        ("hip_mass", p.hip_mass),
+        ("thigh_mass", p.thigh_mass),
+        ("shank_mass", p.shank_mass),
+        ("slope", p.slope),
+        ("gravity", p.gravity),
+    ] {
+        assert_eq!(param(&v, name), value, "{name}");
+    }
+    assert_eq!(w.free_knee(), Some(3));
+    assert_eq!(w.locked_joints(FREE), &[1]);
+    assert_eq!(w.locked_joints(LOCKED), &[1, 3]);
+    w
+}
+
+/// Point masses, in the order stance shank, stance thigh, hip, swing thigh, swing shank.
+fn point_chain(p: &Kp) -> PointChain {
     let (ls, lt) = (p.a1 + p.b1, p.a2 + p.b2);
-    let l = ls + lt;
-    let (t1, tt, ts) = (x[0], x[0] + x[1], x[0] + x[1] + x[2]);
-    let (w1, wt, ws) = (x[3], x[3] + x[4], x[3] + x[4] + x[5]);
-    let mk = |m: f64, terms: &[(f64, f64, f64)]| {
-        let (r, v) = point(terms);
-        (m, r, v)
-    };
-    vec![
-        mk(p.shank_mass, &[(p.a1, t1, w1)]),
-        mk(p.thigh_mass, &[(ls + p.a2, t1, w1)]),
-        mk(p.hip_mass, &[(l, t1, w1)]),
-        mk(p.thigh_mass, &[(l, t1, w1), (-p.b2, tt, wt)]),
-        mk(p.shank_mass, &[(l, t1, w1), (-lt, tt, wt), (-p.b1, ts, ws)]),
+    PointChain {
+        n: 4,
+        masses: vec![
+            (p.shank_mass, vec![(p.a1, 0)]),
+            (p.thigh_mass, vec![(ls, 0), (p.a2, 1)]),
+            (p.hip_mass, vec![(ls, 0), (lt, 1)]),
+            (p.thigh_mass, vec![(ls, 0), (lt, 1), (-p.b2, 2)]),
+            (p.shank_mass, vec![(ls, 0), (lt, 1), (-lt, 2), (-p.b1, 3)]),
+        ],
+        gravity: p.gravity,
+        slope: p.slope,
+    }
+}
+
+/// Hip, swing knee and swing foot (terms of [`PointChain::point`]).
+fn hip_knee_foot(p: &Kp) -> [Vec<(f64, usize)>; 3] {
+    let (ls, lt) = (p.a1 + p.b1, p.a2 + p.b2);
+    [
+        vec![(ls, 0), (lt, 1)],
+        vec![(ls, 0), (lt, 1), (-lt, 2)],
+        vec![(ls, 0), (lt, 1), (-lt, 2), (-ls, 3)],
     ]
 }
 
-fn ang_mom(pm: &[(f64, [f64; 2], [f64; 2])], c: [f64; 2]) -> f64 {
-    pm.iter()
-        .map(|(m, r, v)| m * ((r[0] - c[0]) * v[1] - (r[1] - c[1]) * v[0]))
-        .sum()
-}
-
-fn kinetic(pm: &[(f64, [f64; 2], [f64; 2])]) -> f64 {
-    pm.iter()
-        .map(|(m, _, v)| 0.5 * m * (v[0] * v[0] + v[1] * v[1]))
-        .sum()
-}
-
-fn shifted(pm: &[(f64, [f64; 2], [f64; 2])], vb: [f64; 2]) -> Vec<(f64, [f64; 2], [f64; 2])> {
-    pm.iter()
-        .map(|(m, r, v)| (*m, *r, [v[0] + vb[0], v[1] + vb[1]]))
-        .collect()
+fn check_flow_against_point_masses(w: &ChainWalker, mode: usize, free: &[usize], seed: u64) {
+    let pc = point_chain(&HSU_CHEN);
+    let mut ws = Scratch::new();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for i in 0..200 {
+        // the stance knee is locked; half of the states hold it bent (a rigid bent leg)
+        let stance_knee = if i % 2 == 0 {
+            0.0
+        } else {
+            rng.random_range(0.0..0.4)
+        };
+        let swing_knee_free = free.contains(&3);
+        let x = [
+            rng.random_range(-0.6..0.6),
+            stance_knee,
+            rng.random_range(-1.2..1.2),
+            if swing_knee_free {
+                rng.random_range(-1.0..0.0)
+            } else {
+                0.0
+            },
+            rng.random_range(-3.0..3.0),
+            0.0,
+            rng.random_range(-5.0..5.0),
+            if swing_knee_free {
+                rng.random_range(-5.0..5.0)
+            } else {
+                0.0
+            },
+        ];
+        let mut dx = [0.0; 8];
+        w.flow(&mut ws, mode, &x, &mut dx);
+        let qdd = pc.accel(&x, free);
+        let scale = 1.0 + qdd.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        for j in 0..4 {
+            assert_eq!(dx[j], x[4 + j]);
+            if free.contains(&j) {
+                assert!(
+                    (dx[4 + j] - qdd[j]).abs() < 1e-12 * scale,
+                    "mode {mode}, q̈{j}: {} vs point masses {}",
+                    dx[4 + j],
+                    qdd[j]
+                );
+            } else {
+                assert_eq!(dx[4 + j], 0.0, "held joint {j} in mode {mode}");
+            }
+        }
+    }
 }
 
 #[test]
-fn locked_mode_equals_merged_link_model() {
-    let p = KneedParams::default();
-    let w = Kneed::new(p).unwrap();
-    // second model: thigh and shank merged into one rigid swing leg (two point masses)
-    let (ls, lt) = (p.a1 + p.b1, p.a2 + p.b2);
-    let l = ls + lt;
-    let link = |len: f64, pm: &[(f64, f64)]| {
-        let m: f64 = pm.iter().map(|q| q.0).sum();
-        let c = pm.iter().map(|q| q.0 * q.1).sum::<f64>() / m;
-        Link {
-            to_next: [0.0, len],
-            com: [0.0, c],
-            mass: m,
-            inertia: pm.iter().map(|q| q.0 * (q.1 - c).powi(2)).sum(),
-        }
-    };
-    let merged = ChainBuilder::new()
-        .gravity(p.gravity)
-        .slope(p.slope)
-        .revolute(link(
-            l,
-            &[
-                (p.shank_mass, p.a1),
-                (p.thigh_mass, ls + p.a2),
-                (p.hip_mass, l),
-            ],
-        ))
-        .revolute(link(
-            -l,
-            &[(p.thigh_mass, -p.b2), (p.shank_mass, -(lt + p.b1))],
-        ))
-        .build()
-        .unwrap();
-    let mut ws = Workspace::new(&merged);
-    let mut rng = ChaCha8Rng::seed_from_u64(11);
-    for _ in 0..200 {
-        let x = [
-            rng.random_range(-0.6..0.6),
-            rng.random_range(-1.2..1.2),
-            0.0,
-            rng.random_range(-3.0..3.0),
-            rng.random_range(-5.0..5.0),
-            0.0,
-        ];
-        let mut dx = [0.0; 6];
-        w.flow(&mut Scratch::new(), LOCKED, &x, &mut dx);
-        let mut qdd = [0.0; 2];
-        pdw_soa::aba(
-            &merged,
-            &mut ws,
-            &x[0..2],
-            &[x[3], x[4]],
-            &[0.0; 2],
-            None,
-            &mut qdd,
-        )
-        .unwrap();
-        let scale = 1.0 + qdd[0].abs().max(qdd[1].abs());
-        assert!(
-            (dx[3] - qdd[0]).abs() < 1e-12 * scale,
-            "{} vs {}",
-            dx[3],
-            qdd[0]
-        );
-        assert!(
-            (dx[4] - qdd[1]).abs() < 1e-12 * scale,
-            "{} vs {}",
-            dx[4],
-            qdd[1]
-        );
-        assert_eq!(dx[5], 0.0);
-        assert_eq!(dx[2], 0.0);
-    }
+fn locked_mode_equals_point_mass_rigid_legs() {
+    // every knee locked: two rigid legs of point masses (the merged-link model)
+    check_flow_against_point_masses(&kneed(), LOCKED, &[0, 2], 11);
+}
+
+#[test]
+fn free_mode_equals_point_mass_three_link_swing() {
+    check_flow_against_point_masses(&kneed(), FREE, &[0, 2, 3], 14);
 }
 
 #[test]
 fn knee_strike_conserves_angular_momenta_and_loses_the_predicted_energy() {
-    let p = KneedParams::default();
-    let w = Kneed::new(p).unwrap();
+    let p = HSU_CHEN;
+    let w = kneed();
+    let pc = point_chain(&p);
+    let [hip_t, knee_t, _] = hip_knee_foot(&p);
     let l = w.leg_length();
+    let mut ws = Scratch::new();
     let mut rng = ChaCha8Rng::seed_from_u64(12);
     for _ in 0..100 {
         let x = [
             rng.random_range(-0.3..0.3),
+            0.0,
             rng.random_range(-0.2..0.6),
             0.0,
             rng.random_range(-2.0..-0.2),
+            0.0,
             rng.random_range(-1.0..3.0),
             rng.random_range(0.1..8.0),
         ];
-        let mut y = [0.0; 6];
-        assert_eq!(
-            w.reset(&mut Scratch::new(), UNLOCKED, KNEE_STRIKE, &x, &mut y),
-            LOCKED
-        );
-        assert_eq!(y[5], 0.0);
-        let (pre, post) = (masses(&p, &x), masses(&p, &y));
+        let mut y = [0.0; 8];
+        assert_eq!(w.reset(&mut ws, FREE, KNEE_STRIKE, &x, &mut y), LOCKED);
+        assert_eq!((y[3], y[7]), (0.0, 0.0));
+        assert_eq!((y[1], y[5]), (0.0, 0.0));
+        assert_eq!((y[0], y[2]), (x[0], x[2]));
+        let (pre, post) = (pc.masses(&x, [0.0; 2]), pc.masses(&y, [0.0; 2]));
         let scale: f64 = pre.iter().map(|(m, _, v)| m * l * v[0].hypot(v[1])).sum();
         let (h0, h1) = (ang_mom(&pre, [0.0, 0.0]), ang_mom(&post, [0.0, 0.0]));
         assert!(
             (h0 - h1).abs() < 1e-12 * scale,
             "about the stance foot: {h0} vs {h1}"
         );
-        let hip = pre[2].1;
+        let hip = pc.point(&hip_t, &x, [0.0; 2]).0;
         let (s0, s1) = (ang_mom(&pre[3..], hip), ang_mom(&post[3..], hip));
         assert!(
             (s0 - s1).abs() < 1e-12 * scale,
             "swing leg about the hip: {s0} vs {s1}"
         );
-        // ΔT = −½ q̇₃⁻ Λ (work of the locking impulse, kernel sign)
-        let mut v = [0.0; 3];
-        let lam = w.knee_strike(&x, &mut v);
+        // the locking impulse (a torque impulse on the shank) is the shank's change of angular
+        // momentum about the knee; its work is ½ Λ (q̇₃⁻ + q̇₃⁺) = ½ Λ q̇₃⁻
+        let knee = pc.point(&knee_t, &x, [0.0; 2]).0;
+        let lam = ang_mom(&post[4..], knee) - ang_mom(&pre[4..], knee);
         let (k0, k1) = (kinetic(&pre), kinetic(&post));
         assert!(
-            ((k1 - k0) + 0.5 * x[5] * lam).abs() < 1e-12 * k0,
+            ((k1 - k0) - 0.5 * x[7] * lam).abs() < 1e-12 * k0,
             "ΔT {} vs {}",
             k1 - k0,
-            -0.5 * x[5] * lam
+            0.5 * x[7] * lam
         );
         assert!(k1 <= k0);
     }
@@ -187,93 +219,97 @@ fn knee_strike_conserves_angular_momenta_and_loses_the_predicted_energy() {
 
 #[test]
 fn heel_strike_conserves_angular_momenta_and_loses_the_predicted_energy() {
-    let p = KneedParams::default();
-    let w = Kneed::new(p).unwrap();
+    let p = HSU_CHEN;
+    let w = kneed();
+    let pc = point_chain(&p);
+    let [hip_t, _, foot_t] = hip_knee_foot(&p);
     let l = w.leg_length();
+    assert_eq!(w.section_guard(), (LOCKED, HEEL_STRIKE));
+    let mut ws = Scratch::new();
     let mut rng = ChaCha8Rng::seed_from_u64(13);
     for _ in 0..100 {
         let a: f64 = rng.random_range(0.05..0.5);
         let x = [
             -a,
+            0.0,
             2.0 * a,
             0.0,
             rng.random_range(-2.5..-0.2),
+            0.0,
             rng.random_range(-3.0..3.0),
             0.0,
         ];
-        let mut v = [0.0; 5];
-        let hs = w.heel_strike(&x, &mut v);
-        let pre = masses(&p, &x);
-        let post = shifted(
-            &masses(&p, &[x[0], x[1], x[2], v[2], v[3], v[4]]),
-            [v[0], v[1]],
-        );
-        let contact = w.swing_foot(&x);
+        // floating-chain rates (ẏ, ż, q̇₀ … q̇₃) of the old chain after the impact
+        let mut v = [0.0; 6];
+        let impulse = w.heel_strike(&mut ws, &x, &mut v);
+        let vb = [v[0], v[1]];
+        let xpost = [x[0], x[1], x[2], x[3], v[2], v[3], v[4], v[5]];
+        let pre = pc.masses(&x, [0.0; 2]);
+        let post = pc.masses(&xpost, vb);
+        let contact = pc.point(&foot_t, &x, [0.0; 2]).0;
+        let sf = w.swing_foot(&x);
+        assert!((sf[0] - contact[0]).abs() < 1e-15 && (sf[1] - contact[1]).abs() < 1e-15);
         let scale: f64 = pre.iter().map(|(m, _, u)| m * l * u[0].hypot(u[1])).sum();
         let (h0, h1) = (ang_mom(&pre, contact), ang_mom(&post, contact));
         assert!(
             (h0 - h1).abs() < 1e-12 * scale,
             "about the contact: {h0} vs {h1}"
         );
-        let hip = pre[2].1;
+        let hip = pc.point(&hip_t, &x, [0.0; 2]).0;
         let (t0, t1) = (ang_mom(&pre[0..2], hip), ang_mom(&post[0..2], hip));
         assert!(
             (t0 - t1).abs() < 1e-12 * scale,
             "trailing leg about the hip: {t0} vs {t1}"
         );
-        // the knee stays locked and the new contact point is at rest
-        assert!(v[4].abs() < 1e-12 * scale);
-        let foot_v = post[4].2;
-        // swing-foot velocity = shank-mass velocity + b1·ω_shank·(cos, sin) of the shank axis
-        let ts = x[0] + x[1] + x[2];
-        let ws = v[2] + v[3] + v[4];
-        let fv = [
-            foot_v[0] + p.a1 * ws * ts.cos(),
-            foot_v[1] + p.a1 * ws * ts.sin(),
-        ];
+        // the knees stay locked and the new contact point is at rest
+        assert!(
+            v[3].abs() < 1e-12 * scale && v[5].abs() < 1e-12 * scale,
+            "{v:?}"
+        );
+        let fv = pc.point(&foot_t, &xpost, vb).1;
         assert!(
             fv[0].hypot(fv[1]) < 1e-12 * scale,
             "contact velocity after impact {fv:?}"
         );
         // ΔT equals the impulse's work ½ Λ·v_c⁻
-        let ts_pre_w = x[3] + x[4] + x[5];
-        let fpre = pre[4].2;
-        let vc = [
-            fpre[0] + p.a1 * ts_pre_w * ts.cos(),
-            fpre[1] + p.a1 * ts_pre_w * ts.sin(),
-        ];
+        let vc = pc.point(&foot_t, &x, [0.0; 2]).1;
         let (k0, k1) = (kinetic(&pre), kinetic(&post));
-        let work = 0.5 * (hs.impulse[0] * vc[0] + hs.impulse[1] * vc[1]);
+        let work = 0.5 * (impulse[0] * vc[0] + impulse[1] * vc[1]);
         assert!(
             ((k1 - k0) - work).abs() < 1e-12 * k0,
             "ΔT {} vs work {}",
             k1 - k0,
             work
         );
+        // after the leg swap: the same kinetic energy (new chain, new stance foot at rest)
+        let mut y = [0.0; 8];
+        assert_eq!(w.reset(&mut ws, LOCKED, HEEL_STRIKE, &x, &mut y), FREE);
+        assert!((kinetic(&pc.masses(&y, [0.0; 2])) - k1).abs() < 1e-12 * k0);
     }
 }
 
 /// Runs one stride from the section with DOP853 at `tol`, returning the worst relative energy
 /// drift within a mode, the stop reasons and the next section state.
-fn stride(w: &Kneed, s: &[f64], tol: f64) -> (f64, Vec<StopReason>, [f64; 3]) {
-    let mut x = [0.0; 6];
+fn stride(w: &ChainWalker, s: &[f64], tol: f64) -> (f64, Vec<StopReason>, [f64; 3]) {
+    let mut x = [0.0; 8];
     w.lift(s, &mut x);
     let mut mode = w.section_mode();
-    let mut integ = Integrator::new(6, Options::dop853(tol)).unwrap();
+    let mut integ = Integrator::new(8, Options::dop853(tol)).unwrap();
+    let mut ws = Scratch::new();
     let mut t = 0.0;
     let mut drift: f64 = 0.0;
     let mut stops = vec![];
     for _ in 0..2 {
-        let e0 = w.energy(&x);
+        let e0 = w.energy(&x).unwrap();
         let stop = integ.integrate_observed(w, mode, &mut t, &mut x, 5.0, &mut |_, y| {
-            drift = drift.max(((w.energy(y) - e0) / e0).abs());
+            drift = drift.max(((w.energy(y).unwrap() - e0) / e0).abs());
         });
         stops.push(stop);
         let StopReason::Guard { guard } = stop else {
             break;
         };
-        let mut y = [0.0; 6];
-        mode = w.reset(&mut Scratch::new(), mode, guard, &x, &mut y);
+        let mut y = [0.0; 8];
+        mode = w.reset(&mut ws, mode, guard, &x, &mut y);
         x = y;
     }
     let mut s2 = [0.0; 3];
@@ -282,9 +318,23 @@ fn stride(w: &Kneed, s: &[f64], tol: f64) -> (f64, Vec<StopReason>, [f64; 3]) {
 }
 
 #[test]
-fn energy_conserved_between_impacts_in_both_modes() {
-    let w = Kneed::new(KneedParams::default()).unwrap();
-    let (drift, stops, _) = stride(&w, &hsu_chen_section(w.params().slope), 1e-13);
+fn energy_is_point_mass_energy_and_conserved_between_impacts_in_both_modes() {
+    let w = kneed();
+    let pc = point_chain(&HSU_CHEN);
+    let mut rng = ChaCha8Rng::seed_from_u64(15);
+    for _ in 0..50 {
+        let x: [f64; 8] = std::array::from_fn(|i| {
+            if i < 4 {
+                rng.random_range(-0.6..0.6)
+            } else {
+                rng.random_range(-3.0..3.0)
+            }
+        });
+        let e = kinetic(&pc.masses(&x, [0.0; 2])) + pc.potential(&x);
+        let we = w.energy(&x).unwrap();
+        assert!((we - e).abs() < 1e-12 * (1.0 + e.abs()), "{we} vs {e}");
+    }
+    let (drift, stops, _) = stride(&w, &hsu_chen_section(HSU_CHEN.slope), 1e-13);
     assert_eq!(
         stops,
         vec![
@@ -298,8 +348,13 @@ fn energy_conserved_between_impacts_in_both_modes() {
 #[test]
 fn stable_gait_near_hsu_chen_published_fixed_point() {
     // The gait is stable: iterating the stride map from the published state converges.
-    let w = Kneed::new(KneedParams::default()).unwrap();
-    let published = hsu_chen_section(w.params().slope);
+    let w = kneed();
+    let published = hsu_chen_section(HSU_CHEN.slope);
+    // the preset's gait guess is the published state
+    let guess = &w.gait_guesses()[0].section;
+    for i in 0..3 {
+        assert!((guess[i] - published[i]).abs() < 1e-15, "{guess:?}");
+    }
     let mut s = published;
     let mut step = f64::INFINITY;
     for _ in 0..60 {
@@ -322,10 +377,10 @@ fn stable_gait_near_hsu_chen_published_fixed_point() {
 #[test]
 fn knee_flexes_at_the_start_of_the_swing() {
     // just after heel strike the free knee must bend (q̈₃ < 0, flexion), not hyper-extend
-    let w = Kneed::new(KneedParams::default()).unwrap();
-    let mut x = [0.0; 6];
-    w.lift(&hsu_chen_section(w.params().slope), &mut x);
-    let mut dx = [0.0; 6];
-    w.flow(&mut Scratch::new(), UNLOCKED, &x, &mut dx);
-    assert!(dx[5] < 0.0, "q̈₃ = {}", dx[5]);
+    let w = kneed();
+    let mut x = [0.0; 8];
+    w.lift(&hsu_chen_section(HSU_CHEN.slope), &mut x);
+    let mut dx = [0.0; 8];
+    w.flow(&mut Scratch::new(), FREE, &x, &mut dx);
+    assert!(dx[7] < 0.0, "q̈₃ = {}", dx[7]);
 }

@@ -3,17 +3,20 @@
 //! impulsive) model, each measured against that model.
 
 use pdw_hybrid::{GuardKind, HybridSystem, Integrator, Options, Scratch, Section, StopReason};
-use pdw_walkers::seed5::{
-    PiGains, Seed5, Seed5Compliant, Seed5Params, COMPLIANT_DOUBLE, COMPLIANT_SINGLE, KNEES_LOCKED,
-};
+use pdw_walkers::presets;
+use pdw_walkers::seed5::{PiGains, Seed5Compliant, COMPLIANT_DOUBLE, COMPLIANT_SINGLE};
+use pdw_walkers::Walker;
+
+/// The exact model's single mode (every knee locked: the `seed5` preset without a free knee).
+const KNEES_LOCKED: usize = 0;
 
 /// The locked-knee period-one gait at slope 0.05 (found by a Newton search on the exact model;
-/// its residual is re-checked in `exact_model_repeats_the_gait`).
+/// its residual is re-checked in `exact_model_repeats_the_gait`; the preset's `stable` guess).
 const GAIT: [f64; 3] = [0.215124650, -0.570787311, 0.277583131];
 
 fn compliant_section(kd: f64) -> (Seed5Compliant, [f64; 13]) {
     let w = Seed5Compliant::new(
-        Seed5Params::default(),
+        presets::seed5(&[]).unwrap(),
         PiGains {
             knee_kd: kd,
             ground_kd: 10.0 * kd,
@@ -40,7 +43,13 @@ fn compliant_section(kd: f64) -> (Seed5Compliant, [f64; 13]) {
 
 #[test]
 fn exact_model_repeats_the_gait() {
-    let w = Seed5::new(Seed5Params::default()).unwrap();
+    let w = presets::seed5(&[]).unwrap();
+    assert_eq!(w.locked_mode(), KNEES_LOCKED);
+    let guess = w.gait_guesses();
+    assert_eq!(
+        (guess[0].gait.as_str(), &guess[0].section[..]),
+        ("stable", &GAIT[..])
+    );
     let mut x = [0.0; 8];
     w.lift(&GAIT, &mut x);
     let mut integ = Integrator::new(8, Options::dop853(1e-12)).unwrap();
@@ -60,7 +69,7 @@ fn exact_model_repeats_the_gait() {
 fn pi_knee_latch_makes_the_flow_stiff() {
     // Same first single-support phase, same tolerance: the PI latch needs many more steps
     // than the exact pseudo-joint lock, and still lets the knees move.
-    let exact = Seed5::new(Seed5Params::default()).unwrap();
+    let exact = presets::seed5(&[]).unwrap();
     let mut x = [0.0; 8];
     exact.lift(&GAIT, &mut x);
     let mut ie = Integrator::new(8, Options::dop853(1e-9)).unwrap();
