@@ -81,8 +81,8 @@ fn presets_reproduce_the_hand_written_models_gaits_to_1e_11() {
             .find(|g| g.gait == gait)
             .unwrap();
         let fp = fixed_point(w.as_ref(), &g.section);
-        for i in 0..3 {
-            let e = (fp.section[i] - section[i]).abs();
+        for (i, (a, b)) in fp.section.iter().zip(&section).enumerate() {
+            let e = (a - b).abs();
             assert!(e <= 1e-11, "{name} {ov:?} {gait} s[{i}] off by {e:.2e}");
         }
         let e = (fp.metrics.period - period).abs();

@@ -339,11 +339,11 @@ impl ChainWalker {
     pub fn swing_foot(&self, x: &[f64]) -> [f64; 2] {
         let mut th = 0.0;
         let mut p = [0.0, 0.0];
-        for k in 0..self.n {
-            th += x[k];
+        for (qk, len) in x[..self.n].iter().zip(&self.len) {
+            th += qk;
             let (s, c) = th.sin_cos();
-            p[0] -= self.len[k] * s;
-            p[1] += self.len[k] * c;
+            p[0] -= len * s;
+            p[1] += len * c;
         }
         p
     }

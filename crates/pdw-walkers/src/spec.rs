@@ -278,7 +278,7 @@ impl WalkerSpec {
     /// [`WalkerSpec::param_table`] order).
     pub fn resolve(&self, values: &[f64]) -> Result<Resolved, WalkerError> {
         let table = self.param_table();
-        for (name, _) in &self.parameters {
+        for name in self.parameters.keys() {
             if !is_identifier(name) {
                 return Err(self.err(
                     format!("parameters.{name}"),
@@ -339,7 +339,7 @@ impl WalkerSpec {
                 .unwrap_or(f64::NAN)
         };
         let slope = get("slope");
-        if !(slope.abs() < std::f64::consts::FRAC_PI_2) {
+        if slope.is_nan() || slope.abs() >= std::f64::consts::FRAC_PI_2 {
             return Err(self.err(
                 "parameters.slope",
                 slope.to_string(),
@@ -347,11 +347,11 @@ impl WalkerSpec {
             ));
         }
         let gravity = get("gravity");
-        if !(gravity > 0.0) {
+        if gravity.is_nan() || gravity <= 0.0 {
             return Err(self.err("parameters.gravity", gravity.to_string(), "must be > 0"));
         }
         let max_stride_time = get("max_stride_time");
-        if !(max_stride_time > 0.0) {
+        if max_stride_time.is_nan() || max_stride_time <= 0.0 {
             return Err(self.err(
                 "parameters.max_stride_time",
                 max_stride_time.to_string(),
@@ -387,7 +387,10 @@ impl WalkerSpec {
             let com_normal = eval(&f("com_normal"), &s.com_normal)?;
             let inertia = nonneg(&f("inertia"), &s.inertia)?;
             let upper = length - com;
-            if inertia + mass * (com * com + com_normal * com_normal) <= 0.0
+            // the hip mass sits at the top segment's upper end: it gives that segment inertia
+            // about its lower joint in the stance leg
+            let hip_here = i + 1 == self.segments.len() && hip_mass > 0.0;
+            if (!hip_here && inertia + mass * (com * com + com_normal * com_normal) <= 0.0)
                 || inertia + mass * (upper * upper + com_normal * com_normal) <= 0.0
             {
                 return Err(self.err(
@@ -406,8 +409,8 @@ impl WalkerSpec {
                 "locked" => false,
                 "free-swing" | "free_swing" => true,
                 e => match eval_expr(e, &env) {
-                    Ok(v) if v == 0.0 => false,
-                    Ok(v) if v == 1.0 => true,
+                    Ok(0.0) => false,
+                    Ok(1.0) => true,
                     Ok(v) => {
                         return Err(self.err(
                             format!("knees[{i}].mode"),

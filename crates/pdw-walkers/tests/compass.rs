@@ -453,10 +453,22 @@ fn near_simplest(beta: f64, l: f64, gamma: f64, g: f64) -> ChainWalker {
 }
 
 #[test]
-fn foot_point_masses_are_rejected_by_the_spec() {
-    // Garcia's simplest walker has its leg masses at the feet (a = 0); as a chain walker that is
-    // a point mass on the stance-foot joint, which the spec rejects with the rule.
-    match presets::compass(&[("a", 0.0), ("b", 1.0)]) {
+fn foot_point_masses_need_a_hip_mass_to_keep_the_chain_regular() {
+    // Leg masses at the feet (a = 0, Garcia's simplest walker): the stance leg's only inertia
+    // about the stance foot is the hip mass's. With it the chain is regular and the dynamics
+    // equal Goswami's closed form; without it the spec is refused with the rule.
+    let w = presets::compass(&[("a", 0.0), ("b", 1.0)]).unwrap();
+    let p = Gp {
+        a: 0.0,
+        b: 1.0,
+        ..GOSWAMI
+    };
+    let x = [0.2, -0.4, -1.1, 0.3];
+    let mut f = [0.0; 4];
+    w.flow(&mut Scratch::new(), 0, &x, &mut f);
+    let th = goswami_accel(&p, [x[0] + x[1] - p.slope, x[0] - p.slope], [x[2] + x[3], x[2]]);
+    assert!((f[2] - th[1]).abs() <= 1e-12 * th[1].abs().max(1.0), "{f:?} vs {th:?}");
+    match presets::compass(&[("a", 0.0), ("b", 1.0), ("hip_mass", 0.0)]) {
         Err(WalkerError::InvalidSpec { field, rule, .. }) => {
             assert_eq!(field, "segments[0].com");
             assert!(rule.contains("zero inertia"), "{rule}");
