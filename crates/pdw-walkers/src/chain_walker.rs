@@ -58,6 +58,7 @@ use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_soa::{BatchWorkspace, Chain, ChainBuilder, Link, Workspace};
 use std::f64::consts::FRAC_PI_2;
+use wide::f64x4;
 
 /// Mode with the swing knee free (only with a free-swing knee).
 pub const FREE: usize = 0;
@@ -335,17 +336,56 @@ impl ChainWalker {
         &self.locked[mode]
     }
 
-    /// Swing-foot position `[y, z]` relative to the stance foot.
+    /// Swing-foot position `[y, z]` relative to the stance foot (sin/cos by the kernel's
+    /// routine, so that the batched guard gives the same bits).
     pub fn swing_foot(&self, x: &[f64]) -> [f64; 2] {
         let mut th = 0.0;
         let mut p = [0.0, 0.0];
         for (qk, len) in x[..self.n].iter().zip(&self.len) {
             th += qk;
-            let (s, c) = th.sin_cos();
+            let (s, c) = pdw_soa::spatial::sincos(th);
             p[0] -= len * s;
             p[1] += len * c;
         }
         p
+    }
+
+    /// Swing-foot height for every lane of `x` (`lanes × 2n`), four lanes at a time with the
+    /// arithmetic of [`ChainWalker::swing_foot`].
+    fn foot_height_lanes(&self, x: MatRef<'_, f64>, out: &mut [f64]) {
+        let lanes = x.nrows();
+        let mut cols: [&[f64]; 2 * MAX_SEGMENTS] = [&[]; 2 * MAX_SEGMENTS];
+        for (k, c) in cols.iter_mut().enumerate().take(self.n) {
+            *c = match x.col(k).try_as_col_major() {
+                Some(v) => v.as_slice(),
+                None => {
+                    // non-contiguous view: lane by lane
+                    let mut xi = [0.0; 4 * MAX_SEGMENTS];
+                    for (l, o) in out.iter_mut().enumerate().take(lanes) {
+                        for j in 0..self.n {
+                            xi[j] = x[(l, j)];
+                        }
+                        *o = self.swing_foot(&xi)[1];
+                    }
+                    return;
+                }
+            };
+        }
+        let mut l0 = 0;
+        while l0 < lanes {
+            let w = (lanes - l0).min(4);
+            let mut th = f64x4::splat(0.0);
+            let mut z = f64x4::splat(0.0);
+            for k in 0..self.n {
+                let mut q = [0.0; 4];
+                q[..w].copy_from_slice(&cols[k][l0..l0 + w]);
+                th += f64x4::from(q);
+                let (_, c) = th.sin_cos();
+                z += f64x4::splat(self.len[k]) * c;
+            }
+            out[l0..l0 + w].copy_from_slice(&z.to_array()[..w]);
+            l0 += w;
+        }
     }
 
     /// Absolute angle of the stance leg's top segment (the stance leg's angle when its knees
@@ -566,6 +606,36 @@ impl HybridSystem for ChainWalker {
 
     fn flow_batch(&self, ws: &mut Scratch, mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
         self.flow_views(ws, mode, x.rb(), dx);
+    }
+
+    /// The guards over all lanes: columns of `x` directly, the swing-foot height four lanes at a
+    /// time (same bits as [`HybridSystem::guard`]).
+    fn guard_batch(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: MatRef<'_, f64>,
+        out: &mut [f64],
+    ) {
+        let n = self.n;
+        let lanes = x.nrows();
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        let column = |j: usize, out: &mut [f64], shift: f64| {
+            for (l, o) in out.iter_mut().enumerate().take(lanes) {
+                *o = x[(l, j)] + shift;
+            }
+        };
+        match (free, k) {
+            (true, 0) => column(self.free_knee.unwrap_or(0), out, 0.0),
+            (_, k) if k < lead => self.foot_height_lanes(x, out),
+            (_, k) => match k - lead {
+                0 => column(n, out, 0.0),
+                1 => column(0, out, -FRAC_PI_2),
+                _ => column(0, out, FRAC_PI_2),
+            },
+        }
     }
 
     fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {

@@ -348,3 +348,30 @@ fn heel_strike_lands_on_the_section_and_the_swap_is_an_involution() {
         }
     }
 }
+
+#[test]
+fn batched_guards_equal_scalar_guards_bit_for_bit() {
+    let mut r = ChaCha8Rng::seed_from_u64(6);
+    for (name, w) in all_presets() {
+        let d = w.dim();
+        for mode in 0..w.n_modes() {
+            let lanes = 37;
+            let states: Vec<Vec<f64>> =
+                (0..lanes).map(|_| random_state(&w, &mut r, mode)).collect();
+            let x = Mat::from_fn(lanes, d, |l, j| states[l][j]);
+            let mut ws = Scratch::new();
+            for k in 0..w.guards(mode).len() {
+                let mut out = vec![0.0; lanes];
+                w.guard_batch(&mut ws, mode, k, x.as_ref(), &mut out);
+                for (l, s) in states.iter().enumerate() {
+                    let g = w.guard(&mut ws, mode, k, s);
+                    assert_eq!(
+                        out[l].to_bits(),
+                        g.to_bits(),
+                        "{name} mode {mode} guard {k} lane {l}"
+                    );
+                }
+            }
+        }
+    }
+}

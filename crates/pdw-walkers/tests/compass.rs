@@ -466,8 +466,15 @@ fn foot_point_masses_need_a_hip_mass_to_keep_the_chain_regular() {
     let x = [0.2, -0.4, -1.1, 0.3];
     let mut f = [0.0; 4];
     w.flow(&mut Scratch::new(), 0, &x, &mut f);
-    let th = goswami_accel(&p, [x[0] + x[1] - p.slope, x[0] - p.slope], [x[2] + x[3], x[2]]);
-    assert!((f[2] - th[1]).abs() <= 1e-12 * th[1].abs().max(1.0), "{f:?} vs {th:?}");
+    let th = goswami_accel(
+        &p,
+        [x[0] + x[1] - p.slope, x[0] - p.slope],
+        [x[2] + x[3], x[2]],
+    );
+    assert!(
+        (f[2] - th[1]).abs() <= 1e-12 * th[1].abs().max(1.0),
+        "{f:?} vs {th:?}"
+    );
     match presets::compass(&[("a", 0.0), ("b", 1.0), ("hip_mass", 0.0)]) {
         Err(WalkerError::InvalidSpec { field, rule, .. }) => {
             assert_eq!(field, "segments[0].com");
