@@ -376,12 +376,12 @@ impl ChainWalker {
             let w = (lanes - l0).min(4);
             let mut th = f64x4::splat(0.0);
             let mut z = f64x4::splat(0.0);
-            for k in 0..self.n {
+            for (col, len) in cols[..self.n].iter().zip(&self.len) {
                 let mut q = [0.0; 4];
-                q[..w].copy_from_slice(&cols[k][l0..l0 + w]);
+                q[..w].copy_from_slice(&col[l0..l0 + w]);
                 th += f64x4::from(q);
                 let (_, c) = th.sin_cos();
-                z += f64x4::splat(self.len[k]) * c;
+                z += f64x4::splat(*len) * c;
             }
             out[l0..l0 + w].copy_from_slice(&z.to_array()[..w]);
             l0 += w;
