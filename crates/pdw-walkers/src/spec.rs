@@ -58,6 +58,16 @@ impl Default for Num {
     }
 }
 
+impl Num {
+    /// The value as written, with its evaluation when it is an expression (for messages).
+    fn shown(&self, v: f64) -> String {
+        match self {
+            Num::Value(_) => format!("{v}"),
+            Num::Expr(e) => format!("\"{e}\" = {v}"),
+        }
+    }
+}
+
 impl std::fmt::Display for Num {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
@@ -313,7 +323,7 @@ impl WalkerSpec {
             if v.is_finite() {
                 Ok(v)
             } else {
-                Err(self.err(field, format!("{n} = {v}"), "must be finite"))
+                Err(self.err(field, n.shown(v), "must be finite"))
             }
         };
         let positive = |field: &str, n: &Num| -> Result<f64, WalkerError> {
@@ -321,7 +331,7 @@ impl WalkerSpec {
             if v > 0.0 {
                 Ok(v)
             } else {
-                Err(self.err(field, format!("{n} = {v}"), "must be > 0"))
+                Err(self.err(field, n.shown(v), "must be > 0"))
             }
         };
         let nonneg = |field: &str, n: &Num| -> Result<f64, WalkerError> {
@@ -329,7 +339,7 @@ impl WalkerSpec {
             if v >= 0.0 {
                 Ok(v)
             } else {
-                Err(self.err(field, format!("{n} = {v}"), "must be >= 0"))
+                Err(self.err(field, n.shown(v), "must be >= 0"))
             }
         };
         let get = |name: &str| {
