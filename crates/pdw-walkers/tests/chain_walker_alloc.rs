@@ -3,9 +3,11 @@
 //! binary: the allocation counter is global.)
 
 use faer::Mat;
-use pdw_hybrid::{HybridSystem, Scratch, Section};
-use pdw_walkers::{presets, ChainWalker};
-use rand::{Rng, SeedableRng};
+use pdw_hybrid::{HybridSystem, Scratch};
+mod chain_common;
+
+use chain_common::{all_presets, random_state};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -23,41 +25,6 @@ unsafe impl GlobalAlloc for Counting {
 }
 #[global_allocator]
 static GLOBAL: Counting = Counting;
-
-fn all_presets() -> Vec<(&'static str, ChainWalker)> {
-    vec![
-        ("compass", presets::compass(&[]).unwrap()),
-        ("kneed", presets::kneed(&[]).unwrap()),
-        ("seed5", presets::seed5(&[]).unwrap()),
-        (
-            "seed5 free knee",
-            presets::seed5(&[("free_swing_knee", 1.0)]).unwrap(),
-        ),
-    ]
-}
-
-/// A state near the gait: section state lifted, perturbed, with a bent free knee in mode 0.
-fn random_state(w: &ChainWalker, r: &mut ChaCha8Rng, mode: usize) -> Vec<f64> {
-    let mut x = vec![0.0; w.dim()];
-    w.lift(&[0.2, -1.0, 0.5], &mut x);
-    for v in x.iter_mut() {
-        *v += r.random_range(-0.3..0.3);
-    }
-    let n = w.dim() / 2;
-    for (k, v) in x.iter_mut().enumerate().take(n) {
-        if w.locked_joints(mode).contains(&k) {
-            *v = 0.0;
-            // locked joints carry no rate either
-        }
-    }
-    for &k in w.locked_joints(mode) {
-        x[n + k] = 0.0;
-    }
-    if let (Some(k), 0) = (w.free_knee(), mode) {
-        x[k] = -r.random_range(0.05..0.6);
-    }
-    x
-}
 
 #[test]
 fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
