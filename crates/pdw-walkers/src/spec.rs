@@ -405,7 +405,7 @@ impl WalkerSpec {
             {
                 return Err(self.err(
                     f("com"),
-                    com.to_string(),
+                    s.com.shown(com),
                     "a segment with zero inertia about one of its joints (a point mass at a joint: \
                      COM at 0 or at the segment's length, on the segment line, inertia 0) makes \
                      the dynamics singular: move the COM or give an inertia",
