@@ -171,12 +171,12 @@ pub struct BasinOptions {
 
 impl Default for BasinOptions {
     /// DOP853 at `rtol = atol = 1e-9` (chosen from label agreement against DOP853 at 1e-12,
-    /// see [`BasinOptions::default_integrator`]), 64 lanes, chunks of 1024 cells, 100 strides,
+    /// see [`BasinOptions::default_integrator`]), 256 lanes, chunks of 1024 cells, 100 strides,
     /// `tol_gait = 1e-6`, `confirm = 2`, `tol_recur = 1e-10`, `max_period = 8`.
     fn default() -> Self {
         Self {
             integrator: Self::default_integrator(),
-            lanes: 64,
+            lanes: 256,
             chunk: 1024,
             max_strides: 100,
             tol_gait: 1e-6,
