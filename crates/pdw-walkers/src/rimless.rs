@@ -23,7 +23,7 @@
 //! (REFERENCES §2): `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)`.
 //!
 //! # Stopping (terminal guards)
-//! [`ROLLS_BACK`]: the wheel does not reach the next spoke — `θ̇` falls through zero (guard 1), or
+//! [`FallKind::RollsBack`]: the wheel does not reach the next spoke — `θ̇` falls through zero (guard 1), or
 //! the hub moves back past the previous spoke, `θ = −α` falling (guard 2, for a start with
 //! `θ̇ ≤ 0`). On a slope too shallow for the rolling gait (`ω* ≤ ω₁`), every stride ends this
 //! way: the caller sees the wheel come to rest (rocking between two spokes, then standing).
@@ -35,8 +35,6 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Guard index of the spoke impact.
 pub const SPOKE_IMPACT: usize = 0;
-/// Fall code: the wheel rolls back (fails to reach the next spoke).
-pub const ROLLS_BACK: u8 = 1;
 
 const GUARDS: [GuardSpec; 3] = [
     GuardSpec {

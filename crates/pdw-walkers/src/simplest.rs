@@ -51,12 +51,12 @@
 //! `cos 2θ`.)
 //!
 //! # Falls (terminal guards)
-//! - guard 1, [`FALL_BACKWARD`]: `θ̇` rises through 0 before heel strike. The stance motion
+//! - guard 1, [`FallKind::Backward`]: `θ̇` rises through 0 before heel strike. The stance motion
 //!   `θ̈ = sin(θ − γ)` does not depend on the swing leg, and θ̇ can only rise through 0 where
 //!   `θ > γ`, after which the walker falls back over its stance foot.
-//! - guard 2, [`FALL_BACKWARD`]: the hip reaches the ground behind, `θ = π/2` (rising) — catches
+//! - guard 2, [`FallKind::Backward`]: the hip reaches the ground behind, `θ = π/2` (rising) — catches
 //!   states that start with `θ̇ ≥ 0`.
-//! - guard 3, [`FALL_FORWARD`]: the hip reaches the ground ahead, `θ = −π/2` (falling).
+//! - guard 3, [`FallKind::Forward`]: the hip reaches the ground ahead, `θ = −π/2` (falling).
 //! - a stride longer than `max_stride_time` ([`Section::max_stride_time`]).
 //!
 //! # Vectorised right-hand side
@@ -74,10 +74,6 @@ use wide::f64x4;
 
 /// Guard index of the heel strike.
 pub const HEEL_STRIKE: usize = 0;
-/// Fall code: the walker falls backward (stance leg reverses before heel strike).
-pub const FALL_BACKWARD: u8 = 1;
-/// Fall code: the walker falls forward (hip reaches the ground ahead).
-pub const FALL_FORWARD: u8 = 2;
 
 const GUARDS: [GuardSpec; 4] = [
     GuardSpec {

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{ang_mom, kinetic, param, PointChain};
+use common::{ang_mom, check_flow_against_point_masses, kinetic, param, PointChain};
 use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};
 use pdw_walkers::chain_walker::{FREE, LOCKED};
 use pdw_walkers::{presets, ChainWalker, Walker};
@@ -103,65 +103,29 @@ fn hip_knee_foot(p: &Kp) -> [Vec<(f64, usize)>; 3] {
     ]
 }
 
-fn check_flow_against_point_masses(w: &ChainWalker, mode: usize, free: &[usize], seed: u64) {
-    let pc = point_chain(&HSU_CHEN);
-    let mut ws = Scratch::new();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    for i in 0..200 {
-        // the stance knee is locked; half of the states hold it bent (a rigid bent leg)
-        let stance_knee = if i % 2 == 0 {
-            0.0
-        } else {
-            rng.random_range(0.0..0.4)
-        };
-        let swing_knee_free = free.contains(&3);
-        let x = [
-            rng.random_range(-0.6..0.6),
-            stance_knee,
-            rng.random_range(-1.2..1.2),
-            if swing_knee_free {
-                rng.random_range(-1.0..0.0)
-            } else {
-                0.0
-            },
-            rng.random_range(-3.0..3.0),
-            0.0,
-            rng.random_range(-5.0..5.0),
-            if swing_knee_free {
-                rng.random_range(-5.0..5.0)
-            } else {
-                0.0
-            },
-        ];
-        let mut dx = [0.0; 8];
-        w.flow(&mut ws, mode, &x, &mut dx);
-        let qdd = pc.accel(&x, free);
-        let scale = 1.0 + qdd.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-        for j in 0..4 {
-            assert_eq!(dx[j], x[4 + j]);
-            if free.contains(&j) {
-                assert!(
-                    (dx[4 + j] - qdd[j]).abs() < 1e-12 * scale,
-                    "mode {mode}, q̈{j}: {} vs point masses {}",
-                    dx[4 + j],
-                    qdd[j]
-                );
-            } else {
-                assert_eq!(dx[4 + j], 0.0, "held joint {j} in mode {mode}");
-            }
-        }
-    }
-}
-
 #[test]
 fn locked_mode_equals_point_mass_rigid_legs() {
     // every knee locked: two rigid legs of point masses (the merged-link model)
-    check_flow_against_point_masses(&kneed(), LOCKED, &[0, 2], 11);
+    check_flow_against_point_masses(
+        &kneed(),
+        &point_chain(&HSU_CHEN),
+        LOCKED,
+        &[0, 2],
+        11,
+        [3.0, 5.0, 5.0],
+    );
 }
 
 #[test]
 fn free_mode_equals_point_mass_three_link_swing() {
-    check_flow_against_point_masses(&kneed(), FREE, &[0, 2, 3], 14);
+    check_flow_against_point_masses(
+        &kneed(),
+        &point_chain(&HSU_CHEN),
+        FREE,
+        &[0, 2, 3],
+        14,
+        [3.0, 5.0, 5.0],
+    );
 }
 
 #[test]

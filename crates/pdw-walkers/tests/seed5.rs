@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{ang_mom, kinetic, param, PointChain};
+use common::{ang_mom, check_flow_against_point_masses, kinetic, param, PointChain};
 use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};
 use pdw_walkers::chain_walker::{FREE, LOCKED};
 use pdw_walkers::{presets, ChainWalker, Walker};
@@ -98,65 +98,36 @@ fn hip_knee_foot(p: &Sp) -> [Vec<(f64, usize)>; 3] {
     ]
 }
 
-fn check_flow_against_point_masses(w: &ChainWalker, mode: usize, free: &[usize], seed: u64) {
-    let pc = point_chain(&TABLE_3_1);
-    let mut ws = Scratch::new();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let swing_free = free.contains(&3);
-    for i in 0..200 {
-        // locked knees straight, or (every other state) the stance knee held bent
-        let stance_knee = if i % 2 == 0 {
-            0.0
-        } else {
-            rng.random_range(0.0..0.4)
-        };
-        let x = [
-            rng.random_range(-0.6..0.6),
-            stance_knee,
-            rng.random_range(-1.2..1.2),
-            if swing_free {
-                rng.random_range(-1.0..0.0)
-            } else {
-                0.0
-            },
-            rng.random_range(-2.0..2.0),
-            0.0,
-            rng.random_range(-3.0..3.0),
-            if swing_free {
-                rng.random_range(-4.0..4.0)
-            } else {
-                0.0
-            },
-        ];
-        let mut dx = [0.0; 8];
-        w.flow(&mut ws, mode, &x, &mut dx);
-        let qdd = pc.accel(&x, free);
-        let scale = 1.0 + qdd.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-        for j in 0..4 {
-            assert_eq!(dx[j], x[4 + j]);
-            if free.contains(&j) {
-                assert!(
-                    (dx[4 + j] - qdd[j]).abs() < 1e-12 * scale,
-                    "mode {mode}, q̈{j}: {} vs point masses {}",
-                    dx[4 + j],
-                    qdd[j]
-                );
-            } else {
-                assert_eq!(dx[4 + j], 0.0, "held joint {j} in mode {mode}");
-            }
-        }
-    }
-}
-
 #[test]
 fn locked_knees_equal_point_mass_rigid_legs() {
-    check_flow_against_point_masses(&seed5(false), 0, &[0, 2], 21);
-    check_flow_against_point_masses(&seed5(true), LOCKED, &[0, 2], 25);
+    check_flow_against_point_masses(
+        &seed5(false),
+        &point_chain(&TABLE_3_1),
+        0,
+        &[0, 2],
+        21,
+        [2.0, 3.0, 4.0],
+    );
+    check_flow_against_point_masses(
+        &seed5(true),
+        &point_chain(&TABLE_3_1),
+        LOCKED,
+        &[0, 2],
+        25,
+        [2.0, 3.0, 4.0],
+    );
 }
 
 #[test]
 fn free_swing_knee_equals_point_mass_three_link_swing() {
-    check_flow_against_point_masses(&seed5(true), FREE, &[0, 2, 3], 26);
+    check_flow_against_point_masses(
+        &seed5(true),
+        &point_chain(&TABLE_3_1),
+        FREE,
+        &[0, 2, 3],
+        26,
+        [2.0, 3.0, 4.0],
+    );
 }
 
 #[test]

@@ -166,3 +166,65 @@ pub fn param(values: &[(String, f64)], name: &str) -> f64 {
         .map(|p| p.1)
         .unwrap_or_else(|| panic!("no parameter {name}"))
 }
+
+/// The chain walker's flow against this point-mass reference at 200 seeded states of a
+/// two-segment walker in `mode` (`free`: its moving joints): knee angles straight or (every other
+/// state) the stance knee held bent, a bent free swing knee; the stance, hip and free-knee rates
+/// drawn up to `rates`. Free accelerations agree to 1e-12, held joints get exactly 0.
+pub fn check_flow_against_point_masses(
+    w: &pdw_walkers::ChainWalker,
+    pc: &PointChain,
+    mode: usize,
+    free: &[usize],
+    seed: u64,
+    rates: [f64; 3],
+) {
+    let [stance_rate, hip_rate, knee_rate] = rates;
+    use pdw_hybrid::HybridSystem;
+    use rand::{Rng, SeedableRng};
+    let mut ws = pdw_hybrid::Scratch::new();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let swing_free = free.contains(&3);
+    for i in 0..200 {
+        let stance_knee = if i % 2 == 0 {
+            0.0
+        } else {
+            rng.random_range(0.0..0.4)
+        };
+        let x = [
+            rng.random_range(-0.6..0.6),
+            stance_knee,
+            rng.random_range(-1.2..1.2),
+            if swing_free {
+                rng.random_range(-1.0..0.0)
+            } else {
+                0.0
+            },
+            rng.random_range(-stance_rate..stance_rate),
+            0.0,
+            rng.random_range(-hip_rate..hip_rate),
+            if swing_free {
+                rng.random_range(-knee_rate..knee_rate)
+            } else {
+                0.0
+            },
+        ];
+        let mut dx = [0.0; 8];
+        w.flow(&mut ws, mode, &x, &mut dx);
+        let qdd = pc.accel(&x, free);
+        let scale = 1.0 + qdd.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        for j in 0..4 {
+            assert_eq!(dx[j], x[4 + j]);
+            if free.contains(&j) {
+                assert!(
+                    (dx[4 + j] - qdd[j]).abs() < 1e-12 * scale,
+                    "mode {mode}, q̈{j}: {} vs point masses {}",
+                    dx[4 + j],
+                    qdd[j]
+                );
+            } else {
+                assert_eq!(dx[4 + j], 0.0, "held joint {j} in mode {mode}");
+            }
+        }
+    }
+}
