@@ -304,7 +304,17 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
         }
     }
 
+    /// The lockstep loop, compiled per instruction set (pdw-simd): the column kernels are
+    /// inlined into each copy; every copy gives the same bits.
     fn run(&mut self) -> Result<(), HybridError> {
+        pdw_simd::dispatch(
+            #[inline(always)]
+            || self.run_lockstep(),
+        )
+    }
+
+    #[inline(always)]
+    fn run_lockstep(&mut self) -> Result<(), HybridError> {
         let nl = self.st.lanes;
         for l in 0..nl {
             if let Some(r) = self.assign(l)? {

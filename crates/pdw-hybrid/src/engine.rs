@@ -136,7 +136,7 @@ fn poison(v: f64) -> f64 {
 
 /// `acc = 0 + Σ_q w_q k_q` over the nonzero weights, in increasing q, for column `off` of every
 /// stage block, lanes `0..n`.
-#[inline]
+#[inline(always)]
 fn weighted_sum(n: usize, k: &[f64], blk: usize, off: usize, w: &[f64], acc: &mut [f64]) {
     let acc = &mut acc[..n];
     acc.fill(0.0);
@@ -190,6 +190,7 @@ fn one_lane_row(st: &mut Store, last: bool, w: &[f64]) {
 }
 
 /// [`stage_input`] for one lane, dispatched to constant rows.
+#[inline(always)]
 fn stage_input_one(st: &mut Store, method: Method, q: usize) {
     use tableau::*;
     match (method, q) {
@@ -220,6 +221,7 @@ fn stage_input_one(st: &mut Store, method: Method, q: usize) {
 
 /// Input of stage `q ≥ 1`: `x₀ + h ⊙ Σ_p a_{qp} k_p`, written to `y`, or to `xn` for the last
 /// stage (whose row is b, so that the input is x₁).
+#[inline(always)]
 pub(crate) fn stage_input(st: &mut Store, tab: &Tableau, n: usize, q: usize) {
     let blk = st.blk();
     let stride = st.stride;
@@ -252,6 +254,7 @@ pub(crate) fn stage_input(st: &mut Store, tab: &Tableau, n: usize, q: usize) {
 /// - RK4: 0.
 ///
 /// In every method a non-finite x₁ or f(x₁) makes the norm NaN (`v − v` is 0 for finite v).
+#[inline(always)]
 pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &Options, n: usize) {
     let blk = st.blk();
     let stride = st.stride;
@@ -338,6 +341,7 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
 }
 
 /// [`error_norm`] for a single lane (lane 0): the same operations in the same order.
+#[inline(always)]
 fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
     let blk = st.blk();
     let stride = st.stride;
@@ -399,6 +403,7 @@ fn engine_last(method: Method) -> usize {
 
 /// `err^α` of every lane into `st.s2` (the controller's `fac11`; HNW I eq. II.4.13), as a column
 /// kernel so that it vectorises; α = 1/8 (DOP853) as three square roots.
+#[inline(always)]
 pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
     let (err, out) = (&st.err[..n], &mut st.s2[..n]);
     if tab.alpha == 0.125 {
@@ -415,6 +420,7 @@ pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
 /// Cubic Hermite sample `i` (θ = i/(N_SAMPLES + 1)) of the attempt into `st.y`, lanes `0..n`:
 /// `x(θ) = c₀₀ x₀ + c₀₁ x₁ + h (c₁₀ f₀ + c₁₁ f₁)` with the Hermite basis
 /// `c₀₀ = (1+2θ)(1−θ)²`, `c₀₁ = θ²(3−2θ)`, `c₁₀ = θ(1−θ)²`, `c₁₁ = −θ²(1−θ)` (HNW I, II.6).
+#[inline(always)]
 pub(crate) fn hermite_sample(st: &mut Store, tab: &Tableau, n: usize, i: usize) {
     let theta = i as f64 / (event::N_SAMPLES + 1) as f64;
     let c = event::hermite_basis(theta);

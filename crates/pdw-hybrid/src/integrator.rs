@@ -123,7 +123,25 @@ impl Integrator {
         self.run(sys, mode, t, x, t_end, Some(obs))
     }
 
+    /// Compiled per instruction set (pdw-simd) with the step kernels inlined; same bits on
+    /// every path.
     fn run<S: HybridSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        obs: Option<Observer<'_>>,
+    ) -> StopReason {
+        pdw_simd::dispatch(
+            #[inline(always)]
+            || self.run_inner(sys, mode, t, x, t_end, obs),
+        )
+    }
+
+    #[inline(always)]
+    fn run_inner<S: HybridSystem + ?Sized>(
         &mut self,
         sys: &S,
         mode: usize,
@@ -191,6 +209,7 @@ impl Integrator {
     }
 
     /// Stages and error norm of one attempt (one lane, stride 1: blocks are contiguous vectors).
+    #[inline(always)]
     fn attempt<S: HybridSystem + ?Sized>(&mut self, sys: &S, mode: usize) {
         let tab = self.tab;
         let d = self.st.dim;

@@ -124,6 +124,9 @@ fn batch_allocations_do_not_grow_with_the_number_of_steps() {
         let n = allocs() - before;
         (n, out.len())
     };
+    // Warm-up: the process-wide one-time initialisations (the SIMD path choice reads
+    // `PDW_SIMD` once) are not per-run allocations.
+    count(0.5);
     let (short, _) = count(0.5);
     let (long, _) = count(20.0);
     eprintln!("allocations per run_batch: short run {short}, 40× longer run {long}");

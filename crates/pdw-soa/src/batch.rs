@@ -188,6 +188,7 @@ pub(crate) fn col(m: MatRef<'_, f64>, k: usize) -> &[f64] {
 }
 
 /// Batched pass 1 for lanes `l0 .. l0 + bl`: identical arithmetic to the scalar `kin_pass`.
+#[inline(always)]
 pub(crate) fn batch_kin_pass(
     chain: &Chain,
     bw: &mut BatchWorkspace,
@@ -291,14 +292,14 @@ pub(crate) fn batch_kin_pass(
     }
 }
 
-#[inline]
+#[inline(always)]
 fn sincos_into(th: &[f64], s: &mut [f64], c: &mut [f64]) {
     spatial::sincos_slice(th, s, c);
 }
 
 // Lane loops as functions with distinct `noalias` slice parameters (see batch_aba.rs).
 
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_kin_rev(
     m: f64,
@@ -360,7 +361,7 @@ fn lanes_kin_rev(
     }
 }
 
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_kin_pri(
     m: f64,

@@ -83,17 +83,25 @@ pub fn batch_aba_view(
     if let Some(m) = locked {
         check_len("locked", n, m.len())?;
     }
-    let mut l0 = 0;
-    while l0 < lanes {
-        let bl = bw.block.min(lanes - l0);
-        batch_kin_pass(chain, bw, q, qd, l0, bl);
-        backward(chain, bw, tau, f_tip, locked, l0, bl);
-        forward(chain, bw, locked, qdd.rb_mut(), l0, bl);
-        l0 += bl;
-    }
+    // One dispatch per call: the passes and their lane loops are inlined into the copy compiled
+    // for the selected instruction set (pdw-simd; every copy gives the same bits).
+    pdw_simd::dispatch(
+        #[inline(always)]
+        || {
+            let mut l0 = 0;
+            while l0 < lanes {
+                let bl = bw.block.min(lanes - l0);
+                batch_kin_pass(chain, bw, q, qd, l0, bl);
+                backward(chain, bw, tau, f_tip, locked, l0, bl);
+                forward(chain, bw, locked, qdd.rb_mut(), l0, bl);
+                l0 += bl;
+            }
+        },
+    );
     Ok(())
 }
 
+#[inline(always)]
 fn backward(
     chain: &Chain,
     bw: &mut BatchWorkspace,
@@ -185,9 +193,11 @@ fn backward(
 }
 
 // The lane loops live in their own functions so that every slice is a distinct `noalias`
-// parameter: the loop vectoriser then needs no runtime overlap checks between the ~25 streams.
+// parameter (kept as alias scopes when inlined): the loop vectoriser then needs no runtime
+// overlap checks between the ~25 streams. They are inlined into the per-instruction-set copies
+// made by `pdw_simd::dispatch`.
 
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_back_rev(
     j: f64,
@@ -258,7 +268,7 @@ fn lanes_back_rev(
     }
 }
 
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_back_pri(
     j: f64,
@@ -333,6 +343,7 @@ fn lanes_back_pri(
     }
 }
 
+#[inline(always)]
 fn forward(
     chain: &Chain,
     bw: &mut BatchWorkspace,
@@ -376,7 +387,7 @@ fn forward(
     }
 }
 
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_fwd_rev(
     g1: &[f64],
@@ -420,7 +431,7 @@ fn lanes_fwd_rev(
     }
 }
 
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_fwd_pri(
     g0: &[f64],
@@ -468,7 +479,7 @@ fn lanes_fwd_pri(
     }
 }
 
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_back_locked(
     j: f64,
@@ -530,7 +541,7 @@ fn lanes_back_locked(
 
 /// Forward step across a locked joint: `A = Φ A_p + a`, `q̈ = 0` (as the scalar pseudo-joint
 /// pass).
-#[inline(never)]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn lanes_fwd_locked(
     ay: &[f64],

@@ -52,7 +52,7 @@ pub fn sincos(x: f64) -> (f64, f64) {
 
 /// `sin`/`cos` of every element of `x` into `s` and `c` (same length), four at a time with the
 /// routine of [`sincos`].
-#[inline]
+#[inline(always)]
 pub(crate) fn sincos_slice(x: &[f64], s: &mut [f64], c: &mut [f64]) {
     let n = x.len().min(s.len()).min(c.len());
     let mut i = 0;

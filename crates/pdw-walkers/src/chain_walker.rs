@@ -352,6 +352,7 @@ impl ChainWalker {
 
     /// Swing-foot height for every lane of `x` (`lanes × 2n`), four lanes at a time with the
     /// arithmetic of [`ChainWalker::swing_foot`].
+    #[inline(always)]
     fn foot_height_lanes(&self, x: MatRef<'_, f64>, out: &mut [f64]) {
         let lanes = x.nrows();
         let mut cols: [&[f64]; 2 * MAX_SEGMENTS] = [&[]; 2 * MAX_SEGMENTS];
@@ -629,7 +630,10 @@ impl HybridSystem for ChainWalker {
         };
         match (free, k) {
             (true, 0) => column(self.free_knee.unwrap_or(0), out, 0.0),
-            (_, k) if k < lead => self.foot_height_lanes(x, out),
+            (_, k) if k < lead => pdw_simd::dispatch(
+                #[inline(always)]
+                || self.foot_height_lanes(x, out),
+            ),
             (_, k) => match k - lead {
                 0 => column(n, out, 0.0),
                 1 => column(0, out, -FRAC_PI_2),

@@ -157,42 +157,28 @@ pub struct Simplest {
     max_stride_time: f64,
 }
 
-/// Lane-wise right-hand side on four lanes: returns `(θ̇, θ̈, φ̇, φ̈)` and the trigonometric
-/// values the Jacobian needs. Every operation is lane-wise, so a lane's result depends only on its own inputs.
+/// Lane-wise right-hand side on four lanes: returns `(θ̇, θ̈, φ̇, φ̈)`. Every operation is
+/// lane-wise, so a lane's result depends only on its own inputs.
 #[inline(always)]
-fn rhs4(gamma: f64, th: f64x4, thd: f64x4, ph: f64x4, phd: f64x4) -> ([f64x4; 4], Trig4) {
+fn rhs4(gamma: f64, th: f64x4, thd: f64x4, ph: f64x4, phd: f64x4) -> [f64x4; 4] {
     let (s, c) = (th - f64x4::splat(gamma)).sin_cos();
-    let (sp, cp) = ph.sin_cos();
+    let (sp, _) = ph.sin_cos();
     let phdd = s + (thd * thd - c) * sp;
-    ([thd, s, phd, phdd], Trig4 { c, sp, cp })
+    [thd, s, phd, phdd]
 }
 
-/// `cos(θ − γ)`, `sin φ`, `cos φ` on four lanes (for the Jacobian).
-struct Trig4 {
-    c: f64x4,
-    sp: f64x4,
-    cp: f64x4,
-}
-
-/// Scalar evaluation through the same lane-wise kernel: one state in all four lanes.
-#[inline]
+/// Scalar evaluation with the operations of [`rhs4`] on one state: `θ − γ` and `φ` share one
+/// vector, so one `sin_cos` serves both angles (the routine is lane-wise, so every value has the
+/// bits `rhs4` gives that state's lane).
+#[inline(always)]
 fn rhs1(gamma: f64, x: &[f64]) -> ([f64; 4], [f64; 3]) {
-    let (f, t) = rhs4(
-        gamma,
-        f64x4::splat(x[0]),
-        f64x4::splat(x[1]),
-        f64x4::splat(x[2]),
-        f64x4::splat(x[3]),
-    );
-    (
-        [
-            f[0].to_array()[0],
-            f[1].to_array()[0],
-            f[2].to_array()[0],
-            f[3].to_array()[0],
-        ],
-        [t.c.to_array()[0], t.sp.to_array()[0], t.cp.to_array()[0]],
-    )
+    let (th, thd, ph, phd) = (x[0], x[1], x[2], x[3]);
+    let a = th - gamma;
+    let (sv, cv) = f64x4::from([a, ph, a, ph]).sin_cos();
+    let (sv, cv) = (sv.to_array(), cv.to_array());
+    let (s, c, sp, cp) = (sv[0], cv[0], sv[1], cv[1]);
+    let phdd = s + (thd * thd - c) * sp;
+    ([thd, s, phd, phdd], [c, sp, cp])
 }
 
 /// Which of Garcia's two period-one gaits.
@@ -313,11 +299,9 @@ impl HybridSystem for Simplest {
 
     fn flow_batch(&self, _ws: &mut Scratch, _mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
         let lanes = x.nrows();
-        let cols: Option<Vec<&[f64]>> = (0..4)
-            .map(|j| x.col(j).try_as_col_major().map(|c| c.as_slice()))
-            .collect();
-        let Some(cols) = cols else {
-            // Non-contiguous columns: per-lane scalar path (same kernel, same bits).
+        let col = |j: usize| x.col(j).try_as_col_major().map(|c| c.as_slice());
+        let (Some(c0), Some(c1), Some(c2), Some(c3)) = (col(0), col(1), col(2), col(3)) else {
+            // Non-contiguous columns: per-lane scalar path (same operations, same bits).
             let mut dx = dx;
             let mut xi = [0.0; 4];
             for l in 0..lanes {
@@ -331,6 +315,7 @@ impl HybridSystem for Simplest {
             }
             return;
         };
+        let cols = [c0, c1, c2, c3];
         let (d01, d23) = dx.split_at_col_mut(2);
         let (d0, d1) = d01.split_at_col_mut(1);
         let (d2, d3) = d23.split_at_col_mut(1);
@@ -354,23 +339,29 @@ impl HybridSystem for Simplest {
             a[..n].copy_from_slice(&c[l..l + n]);
             f64x4::from(a)
         };
-        let mut l = 0;
-        while l < lanes {
-            let n = (lanes - l).min(4);
-            let (f, _) = rhs4(
-                self.gamma,
-                load(cols[0], l, n),
-                load(cols[1], l, n),
-                load(cols[2], l, n),
-                load(cols[3], l, n),
-            );
-            let f = f.map(|v| v.to_array());
-            o0[l..l + n].copy_from_slice(&f[0][..n]);
-            o1[l..l + n].copy_from_slice(&f[1][..n]);
-            o2[l..l + n].copy_from_slice(&f[2][..n]);
-            o3[l..l + n].copy_from_slice(&f[3][..n]);
-            l += n;
-        }
+        // Compiled per instruction set (pdw-simd); same bits on every path.
+        pdw_simd::dispatch(
+            #[inline(always)]
+            || {
+                let mut l = 0;
+                while l < lanes {
+                    let n = (lanes - l).min(4);
+                    let f = rhs4(
+                        self.gamma,
+                        load(cols[0], l, n),
+                        load(cols[1], l, n),
+                        load(cols[2], l, n),
+                        load(cols[3], l, n),
+                    );
+                    let f = f.map(|v| v.to_array());
+                    o0[l..l + n].copy_from_slice(&f[0][..n]);
+                    o1[l..l + n].copy_from_slice(&f[1][..n]);
+                    o2[l..l + n].copy_from_slice(&f[2][..n]);
+                    o3[l..l + n].copy_from_slice(&f[3][..n]);
+                    l += n;
+                }
+            },
+        );
     }
 
     fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
