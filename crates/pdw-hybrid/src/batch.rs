@@ -413,6 +413,12 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     }
                 }
             }
+            for m in 0..self.n_modes {
+                let (a, b) = (self.range[m], self.range[m + 1]);
+                if b > a {
+                    engine::mark_candidates(&mut self.st, self.sys.guards(m), a, b);
+                }
+            }
             // Per-lane accept/reject, events, commit; stopped lanes go to the driver.
             for l in 0..n_active {
                 let r = engine::after_attempt(

@@ -55,6 +55,10 @@ pub(crate) struct Store {
     /// column `k·(N_SAMPLES + 2) + i` for i = 1..=N_SAMPLES (Hermite samples) and
     /// i = N_SAMPLES + 1 (x₁); column i = 0 is unused (the left values are in `g`).
     pub gs: Vec<f64>,
+    /// `(lanes)` 1 when some guard of the lane's attempt shows a directional crossing between
+    /// consecutive values of `g` and `gs` (set by [`mark_candidates`]); lanes with 0 skip the
+    /// event locator.
+    pub cand: Vec<u8>,
     /// `(lanes)` step of the current attempt.
     pub h: Vec<f64>,
     /// `(lanes)` error norm of the current attempt (0 or NaN for RK4: a finiteness check).
@@ -80,6 +84,7 @@ impl Store {
             k: vec![0.0; blk * tab.n_stages],
             g: vec![0.0; ng * stride],
             gs: vec![0.0; ng * event::N_COLS * stride],
+            cand: vec![0; lanes],
             h: vec![0.0; lanes],
             err: vec![0.0; lanes],
             s1: vec![0.0; lanes],
@@ -437,6 +442,44 @@ pub(crate) fn hermite_sample(st: &mut Store, tab: &Tableau, n: usize, i: usize) 
         let y = &mut st.y[off..off + n];
         for l in 0..n {
             y[l] = event::hermite_point(c, x0[l], x1[l], f0[l], f1[l], h[l]);
+        }
+    }
+}
+
+/// Candidate flags of rows `a..b` for the guards `specs` of their mode: `cand[l] = 1` when a
+/// directional crossing ([`event::crosses`]) shows between θ = 0 (`g`) and the samples and x₁
+/// (`gs`) of any guard. A column kernel over lanes; the per-lane locator runs only where it is 1.
+#[inline(always)]
+pub(crate) fn mark_candidates(st: &mut Store, specs: &[crate::GuardSpec], a: usize, b: usize) {
+    let stride = st.stride;
+    let m = event::N_COLS;
+    let cand = &mut st.cand[a..b];
+    cand.fill(0);
+    for (k, spec) in specs.iter().enumerate() {
+        let mut prev = &st.g[k * stride + a..k * stride + b];
+        for i in 1..m {
+            let col = (k * m + i) * stride;
+            let cur = &st.gs[col + a..col + b];
+            match spec.crossing {
+                Crossing::Rising => {
+                    for l in 0..cand.len() {
+                        cand[l] |= (prev[l] < 0.0 && cur[l] >= 0.0) as u8;
+                    }
+                }
+                Crossing::Falling => {
+                    for l in 0..cand.len() {
+                        cand[l] |= (prev[l] > 0.0 && cur[l] <= 0.0) as u8;
+                    }
+                }
+                Crossing::Either => {
+                    for l in 0..cand.len() {
+                        cand[l] |= ((prev[l] < 0.0 && cur[l] >= 0.0)
+                            || (prev[l] > 0.0 && cur[l] <= 0.0))
+                            as u8;
+                    }
+                }
+            }
+            prev = cur;
         }
     }
 }

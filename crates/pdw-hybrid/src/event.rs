@@ -362,6 +362,14 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
         return None;
     }
     let (stride, blk) = (st.stride, st.blk());
+    if st.cand[l] == 0 {
+        // No sub-interval of any guard shows a crossing (the column kernel `mark_candidates`
+        // made the same test): keep the guard values at x₁ for the next step.
+        for k in 0..ng {
+            st.g[k * stride + l] = st.gs[(k * M + M - 1) * stride + l];
+        }
+        return None;
+    }
     // Guard values at θ = 0 (kept from the previous step), at the Hermite samples and at x₁
     // (computed column-wise for all lanes before this per-lane pass).
     for k in 0..ng {

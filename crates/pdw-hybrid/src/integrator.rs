@@ -243,6 +243,7 @@ impl Integrator {
                     self.st.gs[k * m + i] = sys.guard(&mut self.sc.ev.model, mode, k, &src[..d]);
                 }
             }
+            engine::mark_candidates(&mut self.st, sys.guards(mode), 0, 1);
         }
     }
 }

@@ -21,6 +21,9 @@
 
 use std::sync::atomic::{AtomicU8, Ordering};
 
+pub mod trig;
+pub use trig::{sincos, sincos_lanes, sincos_slice};
+
 /// The numeric contract every path keeps (recorded in output files; `merge` compares it).
 pub const NUMERICS: &str = "ieee754-binary64, no fma contraction, sequential lane order";
 

@@ -22,7 +22,7 @@
 //! them once per link; the batched kernels call them once per link and lane, inside the lane
 //! loop. Rust never contracts `a*b + c` into a fused multiply-add on its own, so the vectorised
 //! lane loop performs the identical IEEE operations and both give the same bits. sin/cos come
-//! from one routine ([`sincos`], `wide::f64x4::sin_cos`) in both paths.
+//! from one routine ([`sincos`], `pdw_simd::trig`) in both paths.
 //!
 //! # Generic scalars
 //! The kinematics and RNEA steps are generic over [`Scalar`]: `f64` for the kernels, and the
@@ -35,42 +35,23 @@
 // kernels and the batched lane loops call the very same arithmetic.
 #![allow(clippy::too_many_arguments)]
 
-use wide::f64x4;
-
 use crate::dual::Scalar;
 
 /// Symmetric 3×3 stored as `[x00, x01, x02, x11, x12, x22]`.
 pub(crate) type Sym3 = [f64; 6];
 
-/// `(sin x, cos x)` by `wide`'s vector routine (1–2 ulp of libm), evaluated on one lane.
-/// The batched kernels evaluate the same routine four lanes at a time.
+/// `(sin x, cos x)` by the vectorisable routine of [`pdw_simd::trig`] (≤ 2 ulp of libm), which
+/// the batched kernels evaluate on many lanes at a time with the same bits per lane.
 #[inline(always)]
 pub fn sincos(x: f64) -> (f64, f64) {
-    let (s, c) = f64x4::splat(x).sin_cos();
-    (s.to_array()[0], c.to_array()[0])
+    pdw_simd::sincos(x)
 }
 
-/// `sin`/`cos` of every element of `x` into `s` and `c` (same length), four at a time with the
-/// routine of [`sincos`].
+/// `sin`/`cos` of every element of `x` into `s` and `c` (same length), with the routine of
+/// [`sincos`].
 #[inline(always)]
 pub(crate) fn sincos_slice(x: &[f64], s: &mut [f64], c: &mut [f64]) {
-    let n = x.len().min(s.len()).min(c.len());
-    let mut i = 0;
-    while i + 4 <= n {
-        let v = f64x4::from([x[i], x[i + 1], x[i + 2], x[i + 3]]);
-        let (vs, vc) = v.sin_cos();
-        s[i..i + 4].copy_from_slice(&vs.to_array());
-        c[i..i + 4].copy_from_slice(&vc.to_array());
-        i += 4;
-    }
-    if i < n {
-        let mut buf = [0.0; 4];
-        buf[..n - i].copy_from_slice(&x[i..n]);
-        let (vs, vc) = f64x4::from(buf).sin_cos();
-        let (vs, vc) = (vs.to_array(), vc.to_array());
-        s[i..n].copy_from_slice(&vs[..n - i]);
-        c[i..n].copy_from_slice(&vc[..n - i]);
-    }
+    pdw_simd::sincos_slice(x, s, c);
 }
 
 /// `Φ_{b,a}` for the lever `l = p_b − p_a` (seed eq. 3.10) as a dense 3×3.

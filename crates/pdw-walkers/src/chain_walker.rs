@@ -58,7 +58,6 @@ use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_soa::{BatchWorkspace, Chain, ChainBuilder, Link, Workspace};
 use std::f64::consts::FRAC_PI_2;
-use wide::f64x4;
 
 /// Mode with the swing knee free (only with a free-swing knee).
 pub const FREE: usize = 0;
@@ -343,7 +342,7 @@ impl ChainWalker {
         let mut p = [0.0, 0.0];
         for (qk, len) in x[..self.n].iter().zip(&self.len) {
             th += qk;
-            let (s, c) = pdw_soa::spatial::sincos(th);
+            let (s, c) = pdw_simd::sincos(th);
             p[0] -= len * s;
             p[1] += len * c;
         }
@@ -375,16 +374,18 @@ impl ChainWalker {
         let mut l0 = 0;
         while l0 < lanes {
             let w = (lanes - l0).min(4);
-            let mut th = f64x4::splat(0.0);
-            let mut z = f64x4::splat(0.0);
+            let mut th = [0.0; 4];
+            let mut z = [0.0; 4];
             for (col, len) in cols[..self.n].iter().zip(&self.len) {
-                let mut q = [0.0; 4];
-                q[..w].copy_from_slice(&col[l0..l0 + w]);
-                th += f64x4::from(q);
-                let (_, c) = th.sin_cos();
-                z += f64x4::splat(*len) * c;
+                for i in 0..w {
+                    th[i] += col[l0 + i];
+                }
+                let (_, c) = pdw_simd::sincos_lanes(th);
+                for i in 0..4 {
+                    z[i] += *len * c[i];
+                }
             }
-            out[l0..l0 + w].copy_from_slice(&z.to_array()[..w]);
+            out[l0..l0 + w].copy_from_slice(&z[..w]);
             l0 += w;
         }
     }

@@ -161,21 +161,24 @@ pub struct Simplest {
 /// lane-wise, so a lane's result depends only on its own inputs.
 #[inline(always)]
 fn rhs4(gamma: f64, th: f64x4, thd: f64x4, ph: f64x4, phd: f64x4) -> [f64x4; 4] {
-    let (s, c) = (th - f64x4::splat(gamma)).sin_cos();
-    let (sp, _) = ph.sin_cos();
+    let a = (th - f64x4::splat(gamma)).to_array();
+    let p = ph.to_array();
+    let (sv, cv) = pdw_simd::sincos_lanes([a[0], a[1], a[2], a[3], p[0], p[1], p[2], p[3]]);
+    let s = f64x4::from([sv[0], sv[1], sv[2], sv[3]]);
+    let c = f64x4::from([cv[0], cv[1], cv[2], cv[3]]);
+    let sp = f64x4::from([sv[4], sv[5], sv[6], sv[7]]);
     let phdd = s + (thd * thd - c) * sp;
     [thd, s, phd, phdd]
 }
 
-/// Scalar evaluation with the operations of [`rhs4`] on one state: `θ − γ` and `φ` share one
-/// vector, so one `sin_cos` serves both angles (the routine is lane-wise, so every value has the
-/// bits `rhs4` gives that state's lane).
+/// Scalar evaluation with the operations of [`rhs4`] on one state: `θ − γ` and `φ` in one
+/// two-element `sincos_lanes` (element-wise, so every value has the bits `rhs4` gives that
+/// state's lane).
 #[inline(always)]
 fn rhs1(gamma: f64, x: &[f64]) -> ([f64; 4], [f64; 3]) {
     let (th, thd, ph, phd) = (x[0], x[1], x[2], x[3]);
     let a = th - gamma;
-    let (sv, cv) = f64x4::from([a, ph, a, ph]).sin_cos();
-    let (sv, cv) = (sv.to_array(), cv.to_array());
+    let (sv, cv) = pdw_simd::sincos_lanes([a, ph]);
     let (s, c, sp, cp) = (sv[0], cv[0], sv[1], cv[1]);
     let phdd = s + (thd * thd - c) * sp;
     ([thd, s, phd, phdd], [c, sp, cp])
@@ -339,13 +342,33 @@ impl HybridSystem for Simplest {
             a[..n].copy_from_slice(&c[l..l + n]);
             f64x4::from(a)
         };
-        // Compiled per instruction set (pdw-simd); same bits on every path.
+        let load4 = |c: &[f64], l: usize| {
+            let a: [f64; 4] = c[l..l + 4].try_into().expect("four lanes");
+            f64x4::from(a)
+        };
+        // Compiled per instruction set (pdw-simd); same bits on every path. Full groups of four
+        // lanes move as fixed-size arrays; the last group (fewer lanes) repeats its last lane.
         pdw_simd::dispatch(
             #[inline(always)]
             || {
                 let mut l = 0;
-                while l < lanes {
-                    let n = (lanes - l).min(4);
+                while l + 4 <= lanes {
+                    let f = rhs4(
+                        self.gamma,
+                        load4(cols[0], l),
+                        load4(cols[1], l),
+                        load4(cols[2], l),
+                        load4(cols[3], l),
+                    );
+                    let f = f.map(|v| v.to_array());
+                    o0[l..l + 4].copy_from_slice(&f[0]);
+                    o1[l..l + 4].copy_from_slice(&f[1]);
+                    o2[l..l + 4].copy_from_slice(&f[2]);
+                    o3[l..l + 4].copy_from_slice(&f[3]);
+                    l += 4;
+                }
+                if l < lanes {
+                    let n = lanes - l;
                     let f = rhs4(
                         self.gamma,
                         load(cols[0], l, n),
@@ -354,11 +377,10 @@ impl HybridSystem for Simplest {
                         load(cols[3], l, n),
                     );
                     let f = f.map(|v| v.to_array());
-                    o0[l..l + n].copy_from_slice(&f[0][..n]);
-                    o1[l..l + n].copy_from_slice(&f[1][..n]);
-                    o2[l..l + n].copy_from_slice(&f[2][..n]);
-                    o3[l..l + n].copy_from_slice(&f[3][..n]);
-                    l += n;
+                    o0[l..].copy_from_slice(&f[0][..n]);
+                    o1[l..].copy_from_slice(&f[1][..n]);
+                    o2[l..].copy_from_slice(&f[2][..n]);
+                    o3[l..].copy_from_slice(&f[3][..n]);
                 }
             },
         );
