@@ -1,0 +1,342 @@
+//! The integration engine against a plain C++ DOPRI5 (../shared/peers/sw_map.cpp), side by side
+//! in the same minute: time per stride of the simplest walker (Garcia 1998, γ = 0.009) against
+//! the accuracy it buys, for every method, with right-hand-side evaluation counts.
+//!
+//! - Accuracy is the error of the fixed point found with that setting, `‖s − s_ref‖∞`, against
+//!   the reference `s_ref` (DOP853 at rtol = atol = 1e-14, Newton to 1e-13): the one number
+//!   both engines print. The peer prints its fixed point with 10 decimals, so its errors below
+//!   ~5e-11 are print-limited (marked in the table). Our per-stride error
+//!   `‖P(s_ref) − P_ref(s_ref)‖∞` is listed too.
+//! - Error norms: both engines use HNW's RMS norm `√(1/d Σ (errᵢ/(atol + rtol·max(|x₀ᵢ|, |x₁ᵢ|)))²)`
+//!   with rtol = atol = tol (DOP853: the code's stretched 5th/3rd-order estimate). The peer
+//!   uses an elementary controller (no PI term, h ∈ [0.2, 5]·h) and starts every stride at
+//!   h = 0.05; pdw-sweep starts each stride with HNW's starting-step heuristic.
+//! - Scalar: one stride at a time from the fixed point (one reused integrator). Batched: 1024
+//!   perturbed copies (relative 1e-4, seeded) through the lockstep engine, 64 lanes, chunks of
+//!   256, on a 2-thread pool; time per lane-stride.
+//! - The default basin: 1000 × 1000 cells over θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100
+//!   strides, `BasinOptions::default()` (DOP853 1e-9), 2 threads, without file output.
+//!
+//! Run with nothing else on the machine; the load average is printed with the figures.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::process::Command;
+
+use anyhow::Context;
+use pdw_experiments::{command, results_dir, sci, time_mean, time_once, write_text, Table};
+use pdw_hybrid::{Integrator, Options};
+use pdw_limit::{
+    classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem,
+    NewtonOptions, Outcome, StrideMap,
+};
+use pdw_walkers::simplest::{GarciaGait, Simplest, SimplestParams};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const GAMMA: f64 = 0.009;
+const TOLS: [f64; 4] = [1e-6, 1e-8, 1e-10, 1e-12];
+
+struct Row {
+    engine: &'static str,
+    method: String,
+    tol: String,
+    scalar_us: f64,
+    batch_us: f64,
+    evals: f64,
+    err_fp: f64,
+    err_stride: f64,
+    print_limited: bool,
+}
+
+fn loadavg() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unavailable".into())
+}
+
+/// Compile and run the C++ peer; `None` (with the reason) when g++ or the source is missing.
+fn run_peer() -> Result<Vec<(f64, f64, f64, f64, f64)>, String> {
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/peers/sw_map.cpp");
+    if !src.exists() {
+        return Err(format!("{} not found", src.display()));
+    }
+    let dir = std::env::temp_dir().join(format!("pdw-engine-peer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let exe = dir.join("sw_map");
+    let st = Command::new("g++")
+        .args(["-O3", "-march=native"])
+        .arg(&src)
+        .arg("-o")
+        .arg(&exe)
+        .status()
+        .map_err(|e| format!("g++: {e}"))?;
+    if !st.success() {
+        return Err("g++ failed".into());
+    }
+    let out = Command::new(&exe).output().map_err(|e| e.to_string())?;
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let _ = std::fs::remove_dir_all(&dir);
+    // tol=1e-10 newton_iters=3 newton_ms=0.133 nf_newton=4210 | map_us=77.55 nf_per_map=421 |
+    // theta*=0.2003109006 thetadot*=-0.1998324731 | eig = ...
+    let field = |line: &str, key: &str| -> Option<f64> {
+        let i = line.find(key)? + key.len();
+        line[i..].split_whitespace().next()?.parse().ok()
+    };
+    let rows: Vec<_> = text
+        .lines()
+        .filter_map(|l| {
+            Some((
+                field(l, "tol=")?,
+                field(l, "map_us=")?,
+                field(l, "nf_per_map=")?,
+                field(l, "theta*=")?,
+                field(l, "thetadot*=")?,
+            ))
+        })
+        .collect();
+    if rows.is_empty() {
+        return Err(format!("could not parse the peer's output:\n{text}"));
+    }
+    Ok(rows)
+}
+
+fn main() -> anyhow::Result<()> {
+    let dir = results_dir("engine")?;
+    let load_start = loadavg();
+    let sys = Simplest::new(SimplestParams {
+        slope: GAMMA,
+        ..Default::default()
+    })?;
+    let guess = GarciaGait::LongPeriod.section_guess(GAMMA);
+    let refmap = StrideMap::new(&sys, Options::dop853(1e-14))?;
+    let newton_ref = NewtonOptions {
+        tol: 1e-13,
+        ..NewtonOptions::default()
+    };
+    let s_ref = find_fixed_point(&refmap, &guess, &newton_ref)
+        .context("reference fixed point")?
+        .section;
+    let p_ref = refmap.stride(&s_ref)?.next;
+    let mut rng = ChaCha8Rng::seed_from_u64(20_261_122);
+    let states: Vec<Vec<f64>> = (0..1024)
+        .map(|_| {
+            s_ref
+                .iter()
+                .map(|v| v * (1.0 + rng.random_range(-1e-4..1e-4)))
+                .collect()
+        })
+        .collect();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+
+    let mut settings: Vec<(&'static str, String, Options)> = Vec::new();
+    for tol in TOLS {
+        settings.push(("DOPRI5", sci(tol), Options::dopri5(tol)));
+        settings.push(("DOP853", sci(tol), Options::dop853(tol)));
+    }
+    for n in [40.0, 160.0, 640.0] {
+        // RK4 with a fixed step: n steps over the stride period (≈ 3.85).
+        settings.push(("RK4", format!("{n} steps"), Options::rk4(3.85 / n)));
+    }
+    let mut rows = Vec::new();
+    for (method, tol, opts) in &settings {
+        let map = StrideMap::new(&sys, *opts)?;
+        let mut integ = Integrator::new(4, *opts)?;
+        let (st, t) = time_mean(0.4, || map.stride_with(&mut integ, &s_ref));
+        let st = st?;
+        integ.reset_stats();
+        map.stride_with(&mut integ, &s_ref)?;
+        let evals = integ.stats().rhs_evals as f64;
+        let err_stride = pdw_experiments::max_abs_diff(&st.next, &p_ref);
+        let (_, tb) = time_mean(0.6, || {
+            map.strides_par(&states, 64, &pool, 256, &|_| {})
+                .map(|v| v.len())
+        });
+        let newton = NewtonOptions {
+            tol: (opts.rtol * 100.0).clamp(1e-12, 1e-4),
+            ..NewtonOptions::default()
+        };
+        let err_fp = match find_fixed_point(&map, &guess, &newton) {
+            Ok(fp) => pdw_experiments::max_abs_diff(&fp.section, &s_ref),
+            Err(_) => f64::NAN,
+        };
+        rows.push(Row {
+            engine: "pdw-sweep",
+            method: method.to_string(),
+            tol: tol.clone(),
+            scalar_us: t * 1e6,
+            batch_us: tb / states.len() as f64 * 1e6,
+            evals,
+            err_fp,
+            err_stride,
+            print_limited: false,
+        });
+        eprintln!("{method} {tol}: {:.2} µs/stride", t * 1e6);
+    }
+    let peer = run_peer();
+    let mut peer_1e10 = None;
+    match &peer {
+        Ok(p) => {
+            for &(tol, us, nf, th, thd) in p {
+                let err = (th - s_ref[0]).abs().max((thd - s_ref[1]).abs());
+                if tol == 1e-10 {
+                    peer_1e10 = Some(us);
+                }
+                rows.push(Row {
+                    engine: "C++ peer",
+                    method: "DOPRI5".into(),
+                    tol: sci(tol),
+                    scalar_us: us,
+                    batch_us: f64::NAN,
+                    evals: nf,
+                    err_fp: err,
+                    err_stride: f64::NAN,
+                    print_limited: err < 5e-11,
+                });
+            }
+        }
+        Err(e) => eprintln!("peer not run: {e}"),
+    }
+
+    // The default basin on 2 threads (no file output), and the fixed point to 1e-12 (CLI).
+    let fall = Outcome::of_fall;
+    let prob = BasinProblem::new(&sys, s_ref.clone(), &fall);
+    let cells = grid_cells(
+        &s_ref,
+        0,
+        &linspace(0.15, 0.25, 1000),
+        1,
+        &linspace(-0.25, -0.15, 1000),
+    );
+    let (basin, t_basin) =
+        time_once(|| classify_cells(&prob, &cells, &BasinOptions::default(), &pool, &|_| {}));
+    let gait_cells = basin?
+        .iter()
+        .filter(|c| c.outcome() == Outcome::Gait)
+        .count();
+    let (_, t_fp) = time_mean(1.0, || {
+        find_fixed_point(&refmap, &guess, &NewtonOptions::default()).map(|f| f.residual)
+    });
+    let load_end = loadavg();
+
+    let mut tab = Table::new(&[
+        "engine",
+        "method",
+        "tol",
+        "µs / stride (scalar)",
+        "µs / lane-stride (batch, 2 threads)",
+        "RHS evals / stride",
+        "ns / eval (scalar)",
+        "fixed-point error",
+        "stride error",
+    ]);
+    for r in &rows {
+        let fmt = |v: f64| {
+            if v.is_nan() {
+                "–".to_string()
+            } else {
+                format!("{v:.2}")
+            }
+        };
+        tab.row(vec![
+            r.engine.into(),
+            r.method.clone(),
+            r.tol.clone(),
+            fmt(r.scalar_us),
+            fmt(r.batch_us),
+            format!("{:.0}", r.evals),
+            format!("{:.0}", r.scalar_us * 1e3 / r.evals),
+            if r.print_limited {
+                format!("≤ {} (print-limited)", sci(r.err_fp.max(5e-11)))
+            } else {
+                sci(r.err_fp)
+            },
+            if r.err_stride.is_nan() {
+                "–".into()
+            } else {
+                sci(r.err_stride)
+            },
+        ]);
+    }
+    let pick = |m: &str, t: &str| {
+        rows.iter()
+            .find(|r| r.engine == "pdw-sweep" && r.method == m && r.tol == t)
+            .map(|r| (r.scalar_us, r.batch_us))
+    };
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# The engine against a plain C++ DOPRI5, side by side\n"
+    );
+    let _ = writeln!(
+        md,
+        "Reproduce: `{}` (≈ 1 min; needs g++ for the peer).\n",
+        command("engine")
+    );
+    let _ = writeln!(
+        md,
+        "Load average at start: {load_start}; at end: {load_end}. SIMD path: {}.\n",
+        pdw_simd::path()
+    );
+    let _ = writeln!(md, "![time vs accuracy](engine.png)\n");
+    let _ = writeln!(md, "{}", tab.markdown());
+    let _ = writeln!(md, "## Against the targets\n");
+    if let Some(p) = peer_1e10 {
+        if let (Some((d5, b5)), Some((d8, b8))) =
+            (pick("DOPRI5", &sci(1e-10)), pick("DOP853", &sci(1e-10)))
+        {
+            let _ = writeln!(md, "| quantity | measured | target |\n|---|---|---|");
+            let _ = writeln!(md, "| scalar DOPRI5 1e-10 / peer DOPRI5 1e-10 | {d5:.2} / {p:.2} µs = {:.2}× | ≤ 1.0× |", d5 / p);
+            let _ = writeln!(md, "| scalar DOP853 1e-10 / peer DOPRI5 1e-10 | {d8:.2} / {p:.2} µs = {:.2}× | ≤ 0.6× |", d8 / p);
+            let _ = writeln!(md, "| batched DOP853 1e-10, 2 threads | {b8:.3} µs / lane-stride (DOPRI5: {b5:.3}) | ≤ 0.6 µs |");
+            let _ = writeln!(md, "| 1000×1000 basin, 2 threads (no file) | {t_basin:.2} s = {:.3} s per µs of the peer's stride | ≤ 0.2 s/µs |", t_basin / p);
+            let _ = writeln!(md, "| simplest fixed point to 1e-12 (DOP853 1e-14, CLI settings) | {:.3} ms | ≤ 0.15 ms |", t_fp * 1e3);
+        }
+    } else {
+        let _ = writeln!(
+            md,
+            "The peer did not run ({}); basin 1000×1000: {t_basin:.2} s; fixed point: {:.3} ms.",
+            peer.as_ref().err().cloned().unwrap_or_default(),
+            t_fp * 1e3
+        );
+    }
+    let _ = writeln!(md, "\nBasin: {gait_cells} of 10⁶ cells reach the gait.");
+    write_text(&dir, "table.md", &md)?;
+
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for (engine, method) in [
+        ("pdw-sweep", "DOPRI5"),
+        ("pdw-sweep", "DOP853"),
+        ("pdw-sweep", "RK4"),
+        ("C++ peer", "DOPRI5"),
+    ] {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.engine == engine && r.method == method)
+            .map(|r| (r.scalar_us, r.err_fp.max(1e-16)))
+            .collect();
+        series.push((format!("{engine} {method} (scalar)"), pts));
+    }
+    for method in ["DOPRI5", "DOP853"] {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.engine == "pdw-sweep" && r.method == method)
+            .map(|r| (r.batch_us, r.err_fp.max(1e-16)))
+            .collect();
+        series.push((
+            format!("pdw-sweep {method} (batched, per lane, 2 threads)"),
+            pts,
+        ));
+    }
+    pdw_store::plot_lines(
+        dir.join("engine.png"),
+        "simplest walker γ = 0.009: time per stride vs fixed-point accuracy",
+        "time per stride (µs)",
+        "fixed-point error vs DOP853 1e-14 (∞-norm)",
+        &series,
+        true,
+        true,
+    )?;
+    print!("{md}");
+    Ok(())
+}
