@@ -55,8 +55,11 @@ fn loadavg() -> String {
         .unwrap_or_else(|_| "unavailable".into())
 }
 
-/// Compile and run the C++ peer; `None` (with the reason) when g++ or the source is missing.
-fn run_peer() -> Result<Vec<(f64, f64, f64, f64, f64)>, String> {
+/// One line of the peer's output: tolerance, µs per stride, evaluations per stride, θ*, θ̇*.
+type PeerRow = (f64, f64, f64, f64, f64);
+
+/// Compile and run the C++ peer; `Err` (with the reason) when g++ or the source is missing.
+fn run_peer() -> Result<Vec<PeerRow>, String> {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/peers/sw_map.cpp");
     if !src.exists() {
         return Err(format!("{} not found", src.display()));
