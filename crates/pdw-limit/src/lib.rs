@@ -18,6 +18,7 @@ pub mod jacobian;
 pub mod metrics;
 pub mod newton;
 pub mod orbit;
+pub mod periodic;
 pub mod stride;
 pub mod trajectory;
 pub mod variational;
@@ -39,6 +40,7 @@ pub use newton::{
     find_fixed_point, DpMethod, FixedPoint, FixedPointProblem, Newton, NewtonOptions, NewtonState,
 };
 pub use orbit::{orbit_diagram, OrbitColumn, OrbitOptions, OrbitStart};
+pub use periodic::{find_periodic_orbit, PeriodKProblem, PeriodicOrbit};
 pub use stride::{EventDriver, Stride, StrideEnd, StrideMap, StrideOutcome, MAX_EVENTS_PER_STRIDE};
 pub use trajectory::{
     initial_state, model_energy, simulate, Trajectory, TrajectoryError, TrajectoryEvent,
