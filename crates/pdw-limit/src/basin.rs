@@ -143,6 +143,11 @@ impl Outcome {
     }
 }
 
+/// First outcome code of the attractors found besides the selected gait (see
+/// [`crate::attractors`]): attractor `i` of them has code `ATTRACTOR_CODE_BASE + i`. Codes below
+/// are the fixed [`Outcome`] codes.
+pub const ATTRACTOR_CODE_BASE: u8 = 10;
+
 /// `(code, name)` of every outcome, by code: the legend of a basin file.
 pub fn legend() -> Vec<(u8, &'static str)> {
     Outcome::ALL.iter().map(|o| (o.code(), o.name())).collect()
@@ -246,7 +251,8 @@ impl BasinOptions {
 pub struct BasinProblem<'a, S: Section + ?Sized> {
     /// The model.
     pub sys: &'a S,
-    /// The selected fixed point `s*` (section coordinates).
+    /// The selected fixed point `s*` (section coordinates); empty when there is none (no cell
+    /// is then labelled `gait`, e.g. past the first period doubling).
     pub gait: Vec<f64>,
     /// Other known attractors, each an orbit of section states (its period = its length).
     pub others: Vec<Vec<Vec<f64>>>,
@@ -287,7 +293,9 @@ impl<'a, S: Section + ?Sized> BasinProblem<'a, S> {
                 })
             }
         };
-        check(&self.gait)?;
+        if !self.gait.is_empty() {
+            check(&self.gait)?;
+        }
         for orbit in &self.others {
             if orbit.is_empty() {
                 return Err(LimitError::InvalidOption {
@@ -323,9 +331,15 @@ pub struct CellResult {
 }
 
 impl CellResult {
-    /// The outcome.
+    /// The outcome; an attractor code (≥ [`ATTRACTOR_CODE_BASE`], given by
+    /// [`crate::attractors::AttractorSet::relabel`]) is an attractor other than the selected
+    /// gait, [`Outcome::Other`].
     pub fn outcome(&self) -> Outcome {
-        Outcome::from_code(self.outcome).unwrap_or(Outcome::IntegratorFailure)
+        match Outcome::from_code(self.outcome) {
+            Some(o) => o,
+            None if self.outcome >= ATTRACTOR_CODE_BASE => Outcome::Other,
+            None => Outcome::IntegratorFailure,
+        }
     }
 }
 
@@ -369,7 +383,7 @@ impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
             return Some((Outcome::NonFinite, 0, u8::MAX));
         }
         let confirm = self.opts.confirm;
-        if Self::near(s, &self.problem.gait, self.opts.tol_gait) {
+        if !self.problem.gait.is_empty() && Self::near(s, &self.problem.gait, self.opts.tol_gait) {
             lane.near_gait = lane.near_gait.saturating_add(1);
             if lane.near_gait >= confirm {
                 return Some((Outcome::Gait, 0, u8::MAX));

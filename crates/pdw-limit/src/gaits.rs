@@ -137,7 +137,8 @@ pub fn search_periodic(
                     for sign in [1.0, -1.0] {
                         let g: Vec<f64> =
                             s1.iter().zip(&v).map(|(a, b)| a + sign * eps * b).collect();
-                        starts.push((format!("{} gait ± ε·v(λ = {:.4})", f.label, l.re), g));
+                        let pm = if sign > 0.0 { '+' } else { '−' };
+                        starts.push((format!("{} gait {pm} ε·v(λ = {:.4})", f.label, l.re), g));
                     }
                 }
             }

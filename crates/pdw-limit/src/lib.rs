@@ -9,6 +9,7 @@
 //!   find_fixed_point(&map, &guess, &NewtonOptions)    s*, multipliers, period, step, speed
 //! ```
 
+pub mod attractors;
 pub mod basin;
 pub mod continuation;
 pub mod error;
@@ -23,6 +24,9 @@ pub mod stride;
 pub mod trajectory;
 pub mod variational;
 
+pub use attractors::{
+    discover, seed_set, Attractor, AttractorKind, AttractorSet, DiscoveryOptions,
+};
 pub use basin::{
     basin_metrics, classify_cells, classify_cells_scalar, grid_cells, legend, linspace,
     BasinDriver, BasinMetrics, BasinOptions, BasinProblem, CellResult, Outcome,

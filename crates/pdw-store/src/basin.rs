@@ -285,7 +285,10 @@ pub struct BasinMetrics {
     pub entropy_box: usize,
 }
 
-/// An attractor used to classify cells (the selected gait, a period-2 orbit…).
+/// An attractor used to classify cells (the selected gait, a period-2 orbit, a chaotic
+/// attractor…). Its legend entry is the one of the same name. A chaotic attractor has
+/// `period_strides` 0, `period_time` NaN, no multipliers, and a sample of consecutive points on
+/// it as `section`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attractor {
     /// Name, e.g. `"gait"`; unique in a file, no `/`.
@@ -294,7 +297,8 @@ pub struct Attractor {
     pub period_strides: u32,
     /// Duration of one period (model time units).
     pub period_time: f64,
-    /// The `period_strides` points of the orbit on the section, each of length d.
+    /// The `period_strides` points of the orbit on the section (a sample of points for a chaotic
+    /// attractor), each of length d.
     pub section: Vec<Vec<f64>>,
     /// Floquet multipliers `(re, im)`, by decreasing modulus.
     pub multipliers: Vec<(f64, f64)>,
@@ -1114,6 +1118,8 @@ pub(crate) fn write_attractors(
     for a in list {
         let ga = g.create_group(&a.name).at(path, "creating an attractor")?;
         set_attr(path, &ga, "period_strides", &a.period_strides)?;
+        // The same number under the name of `fixedpoint --period K` (0: chaotic).
+        set_attr(path, &ga, "period_k", &a.period_strides)?;
         set_attr(path, &ga, "period_time", &a.period_time)?;
         let k = a.section.len();
         let flat: Vec<f64> = a.section.iter().flatten().copied().collect();
