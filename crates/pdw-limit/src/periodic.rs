@@ -274,7 +274,7 @@ pub fn find_periodic_orbit<S: Section + ?Sized>(
     }
     // Minimal period: the smallest q | k with s_q = s_0.
     let same = same_point_tol(opts.tol, &last);
-    if let Some(q) = (1..k).find(|&q| k % q == 0 && dist_inf(&pts[q], &pts[0]) <= same) {
+    if let Some(q) = (1..k).find(|&q| k.is_multiple_of(q) && dist_inf(&pts[q], &pts[0]) <= same) {
         return Err(fail(
             format!(
                 "converged to an orbit of period {q} (‖P^{q}(s) − s‖∞ = {:.3e}), a divisor of \

@@ -266,22 +266,6 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             return Ok(ExitCode::from(2));
         }
     };
-    if let Some(fp) = gait {
-        // Strides a perturbation of 1e-2 needs to shrink below the 1e-6 gait tolerance at the
-        // slowest multiplier: near a bifurcation (|λ| → 1) the default budget labels converging
-        // cells `timeout`.
-        if let Some(lmax) = fp.multipliers.first().map(|l| l.modulus()) {
-            let needed = ((1e-4f64).ln() / lmax.ln()).ceil();
-            if lmax < 1.0 && needed > f64::from(a.max_strides) {
-                eprintln!(
-                    "warning: the gait's slowest multiplier has |λ| = {lmax:.4}; cells converge in \
-                     about {needed} strides, more than --max-strides {}: expect `timeout` where \
-                     the gait is slow",
-                    a.max_strides
-                );
-            }
-        }
-    }
     let (ix, xr) = xa.unwrap_or_else(|| (0, default_axis(names[0], centre[0])));
     let (iy, yr) = ya.unwrap_or_else(|| (1, default_axis(names[1], centre[1])));
     if ix == iy {
@@ -427,6 +411,26 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     let todo = writer.rows_todo();
 
+    // Strides a perturbation of 1e-2 needs to shrink below the 1e-6 tolerance at an attractor's
+    // slowest multiplier (per K strides): near a bifurcation (|λ| → 1) the default budget
+    // labels converging cells `timeout`.
+    for at in set
+        .attractors
+        .iter()
+        .filter(|at| at.kind == pdw_limit::AttractorKind::Periodic)
+    {
+        if let Some(lmax) = at.multipliers.first().map(|l| l.modulus()) {
+            let needed = (at.period_k as f64 * (1e-4f64).ln() / lmax.ln()).ceil();
+            if lmax < 1.0 && needed > f64::from(a.max_strides) {
+                eprintln!(
+                    "warning: attractor `{}`: its slowest multiplier has |λ| = {lmax:.4} per {} \
+                     stride(s); cells converge in about {needed} strides, more than --max-strides \
+                     {}: expect `timeout` where `{}` is slow",
+                    at.name, at.period_k, a.max_strides, at.name
+                );
+            }
+        }
+    }
     let problem = set.problem(walker, &fall);
 
     let total_cells = (todo.len() * nx) as u64;
