@@ -304,6 +304,41 @@ pub struct Attractor {
     pub multipliers: Vec<(f64, f64)>,
 }
 
+impl Attractor {
+    /// Equal name and period, and every number equal bit for bit (so that a chaotic
+    /// attractor's NaN `period_time` equals itself): what [`crate::merge`] requires of shards.
+    pub fn same_as(&self, other: &Attractor) -> bool {
+        let bits = |v: &[f64], w: &[f64]| {
+            v.len() == w.len() && v.iter().zip(w).all(|(a, b)| a.to_bits() == b.to_bits())
+        };
+        self.name == other.name
+            && self.period_strides == other.period_strides
+            && self.period_time.to_bits() == other.period_time.to_bits()
+            && self.section.len() == other.section.len()
+            && self
+                .section
+                .iter()
+                .zip(&other.section)
+                .all(|(a, b)| bits(a, b))
+            && self.multipliers.len() == other.multipliers.len()
+            && self
+                .multipliers
+                .iter()
+                .zip(&other.multipliers)
+                .all(|(a, b)| bits(&[a.0, a.1], &[b.0, b.1]))
+    }
+
+    /// `name (period k, n points)`, for messages.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} (period {}, {} points)",
+            self.name,
+            self.period_strides,
+            self.section.len()
+        )
+    }
+}
+
 /// A basin file read back whole.
 #[derive(Clone, Debug)]
 pub struct BasinData {

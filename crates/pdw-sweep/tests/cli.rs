@@ -429,6 +429,26 @@ fn basins_past_the_period_doubling_label_every_attractor_for_any_shard_split() {
     let at = c.attractors.iter().find(|x| x.name == "chaotic").unwrap();
     assert_eq!(at.period_strides, 0);
     assert!(at.multipliers.is_empty() && at.section.len() > 100);
+    assert!(at.period_time.is_nan());
+    // Its shards merge (the NaN period of a chaotic attractor equals itself bit for bit).
+    let mut shards = Vec::new();
+    for i in 0..2 {
+        let spec = format!("{i}/2");
+        let (o, f) = basin(
+            dir.path(),
+            &format!("c{i}.h5"),
+            &["--slope", "0.0189", "--shard", &spec],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        shards.push(f);
+    }
+    let merged = p(dir.path(), "cm.h5");
+    let o = bin()
+        .args(["merge", s(&shards[0]), s(&shards[1]), "--out", s(&merged)])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    same_cells(&c, &read(&merged));
     // Before the period doubling nothing changes: the stable gait keeps code 0 and is the only
     // attractor.
     let (o, g) = basin(dir.path(), "g.h5", &[]);
