@@ -80,6 +80,11 @@ pub fn search(
 /// contracting map (a perturbation of 1e-1 shrinks below 1e-6 at |λ| ≤ 0.97 per stride).
 pub const PERIOD_K_ITERATES: usize = 400;
 
+/// Offsets ε of the period-doubling predictors `s₁ ± ε v`: the period-2 orbit's distance from
+/// the period-one gait grows like √(μ − μ_PD), so one offset near the bifurcation and larger
+/// ones further past it.
+pub const PD_OFFSETS: [f64; 3] = [1e-3, 1e-2, 5e-2];
+
 /// One period-K orbit found, with the name of the guess it came from.
 pub struct FoundOrbit {
     pub label: String,
@@ -90,10 +95,10 @@ pub struct FoundOrbit {
 /// - every guess itself,
 /// - the point the map reaches after [`PERIOD_K_ITERATES`] strides from every guess (where a
 ///   stable period-k orbit attracts it),
-/// - for every period-one gait found from the guesses, the predictor of the period-doubled
-///   branch `s₁ ± ε v` (v the eigenvector of the multiplier nearest −1, ε = 10⁻³; the period-2k
-///   orbit leaves the period-k one along v, see [`crate::continuation`]), and that gait perturbed
-///   by ε and iterated [`PERIOD_K_ITERATES`] strides;
+/// - for every period-one gait found from the guesses, the predictors of the period-doubled
+///   branch `s₁ ± ε v` (v the eigenvector of the multiplier nearest −1, ε in [`PD_OFFSETS`]; the
+///   period-2 orbit leaves the period-one one along v, see [`crate::continuation`]), and that
+///   gait perturbed by 10⁻³ and iterated [`PERIOD_K_ITERATES`] strides;
 ///
 /// de-duplicated as cycles ([`same_orbit`]) and rotated to start at their smallest point
 /// ([`canonical_start`]), failures kept with their guess. `k = 1` is [`search`].
@@ -134,11 +139,16 @@ pub fn search_periodic(
                     .min_by(|a, b| (a.re + 1.0).abs().total_cmp(&(b.re + 1.0).abs()))
             {
                 if let Some(v) = real_eigenvector(&f.fp.dp, n, l.re) {
-                    for sign in [1.0, -1.0] {
-                        let g: Vec<f64> =
-                            s1.iter().zip(&v).map(|(a, b)| a + sign * eps * b).collect();
-                        let pm = if sign > 0.0 { '+' } else { '−' };
-                        starts.push((format!("{} gait {pm} ε·v(λ = {:.4})", f.label, l.re), g));
+                    for e in PD_OFFSETS {
+                        for sign in [1.0, -1.0] {
+                            let g: Vec<f64> =
+                                s1.iter().zip(&v).map(|(a, b)| a + sign * e * b).collect();
+                            let pm = if sign > 0.0 { '+' } else { '−' };
+                            starts.push((
+                                format!("{} gait {pm} {e:e}·v(λ = {:.4})", f.label, l.re),
+                                g,
+                            ));
+                        }
                     }
                 }
             }

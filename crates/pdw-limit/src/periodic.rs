@@ -159,11 +159,12 @@ impl PeriodicOrbit {
 }
 
 /// Separation below which two points of a candidate period-K orbit count as the same point:
-/// `‖s_q − s_0‖∞ ≤ max(10⁴·tol, 10⁻¹⁰) · σ(s_0)` means the orbit has period q. With the
-/// default tol = 1e-12 this is 1e-8, far below the splitting of a period-doubled orbit a
-/// measurable distance past its bifurcation (it grows like √|μ − μ_PD|).
+/// `‖s_q − s_0‖∞ ≤ max(10·tol, min(10⁴·tol, 10⁻³), 10⁻¹⁰) · σ(s_0)` means the orbit has period
+/// q. With the default tol = 1e-12 this is 1e-8, far below the splitting of a period-doubled
+/// orbit a measurable distance past its bifurcation (it grows like √|μ − μ_PD|); it never
+/// exceeds 10⁻³ unless the residual tolerance itself is that loose.
 fn same_point_tol(tol: f64, s: &[f64]) -> f64 {
-    (1e4 * tol).max(1e-10) * residual_scale(s)
+    (1e4 * tol).min(1e-3).max(10.0 * tol).max(1e-10) * residual_scale(s)
 }
 
 /// The orbit of `s` under K strides with a fresh integrator: the K + 1 section states and the
