@@ -5,7 +5,8 @@
 //! Starting from the section state `s₀` (the cell), the stride map is applied,
 //! `s_{k+1} = P(s_k) = Π(R(x⁻_k))` followed by the lift `L` (so the iteration is exactly that of
 //! [`StrideMap`](crate::StrideMap)), until one of:
-//! - **gait** — `‖s_k − s*‖∞ < tol_gait` at `confirm` consecutive section states
+//! - **gait** — (only when a gait `s*` is given; [`BasinProblem::gait`] may be empty)
+//!   `‖s_k − s*‖∞ < tol_gait` at `confirm` consecutive section states
 //!   (`s₀` included). Requiring several consecutive states, not one, makes the label robust when
 //!   the selected fixed point is a saddle: a trajectory that merely passes near an unstable `s*`
 //!   does not stay. For a stable `s*` with largest multiplier modulus ρ the price is
@@ -27,6 +28,9 @@
 //!   more than [`MAX_EVENTS_PER_STRIDE`] intermediate events.
 //!
 //! `strides` is the number of completed strides (heel strikes) when the label was decided.
+//! [`crate::attractors`] finds every attractor before a basin is computed, passes the periodic
+//! ones as known orbits, and turns `other` (known orbit) and `timeout` (on a chaotic attractor)
+//! into per-attractor codes from [`ATTRACTOR_CODE_BASE`] on.
 //!
 //! # Engine
 //! [`BasinDriver`] is a [`LaneDriver`]: each cell is one work item; a lane integrates its cell's
