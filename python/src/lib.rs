@@ -268,7 +268,10 @@ fn fixed_point<'py>(
             v.as_ref().map(|v| validity_dict(py, v)).transpose()?,
         )?;
         d.set_item("period_k", 1)?;
-        d.set_item("orbit", rows_to_array(py, fp.section.clone(), fp.section.len())?)?;
+        d.set_item(
+            "orbit",
+            rows_to_array(py, fp.section.clone(), fp.section.len())?,
+        )?;
         out.append(d)?;
     }
     if out.is_empty() {
@@ -338,7 +341,11 @@ fn fixed_point_period_k<'py>(
         d.set_item("period", o.period)?;
         d.set_item(
             "stride_periods",
-            o.strides.iter().map(|s| s.period).collect::<Vec<_>>().into_pyarray(py),
+            o.strides
+                .iter()
+                .map(|s| s.period)
+                .collect::<Vec<_>>()
+                .into_pyarray(py),
         )?;
         d.set_item("step_length", o.total_step_length().map(|l| l / k as f64))?;
         d.set_item(
