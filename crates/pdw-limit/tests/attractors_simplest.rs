@@ -189,3 +189,24 @@ fn gamma_0_0189_is_chaotic_and_its_walking_cells_are_labelled_chaotic() {
     }
     assert!(r.iter().all(|c| c.outcome() != Outcome::Gait));
 }
+
+#[test]
+fn at_gamma_0_0177_the_attractor_is_the_period_four_gait_of_the_period_k_search() {
+    let m = simplest(0.0177);
+    let s = setup(&m, 2, 20);
+    assert_eq!(s.set.attractors.len(), 1, "{:?}", s.set.attractors);
+    let a = &s.set.attractors[0];
+    assert_eq!((a.name.as_str(), a.period_k), ("period-4", 4));
+    let (p4, _) = search_periodic(&m, &model_guesses(&m), 4, 1e-12).unwrap();
+    let o = &p4.iter().find(|f| f.orbit.stable).unwrap().orbit;
+    // Same cycle, stored from the same (smallest) point.
+    for (p, q) in a.points.iter().zip(&o.orbit) {
+        assert!(dist(p, q) < 1e-9, "{p:?} vs {q:?}");
+    }
+    for (x, y) in a.multipliers.iter().zip(&o.multipliers) {
+        assert!(
+            (x.re - y.re).abs() + (x.im - y.im).abs() < 1e-8,
+            "{x:?} vs {y:?}"
+        );
+    }
+}
