@@ -32,14 +32,17 @@ def fixed_point(
     guess: Optional[Sequence[float]] = None,
     **params: float,
 ) -> list[dict[str, Any]]:
-    """Period-one gaits (fixed points of the stride map), with the keys of
-    `pdw-sweep fixedpoint --json`'s `fixed_points`: gait, guess, section (ndarray), state_names,
-    state (ndarray), period, step_length, speed, multipliers (complex ndarray, by decreasing
-    modulus), stable, residual, iterations, validity (dict or None).
+    """Period-one gaits (fixed points of the stride map), or with `period=K` the period-K
+    orbits (fixed points of P^K), with the keys of `pdw-sweep fixedpoint --period K --json`'s
+    `fixed_points`: gait, guess, period_k, section (ndarray, the first point), orbit (K × d_s
+    ndarray, the K points in stride order), state_names, state (ndarray), period (the K strides
+    together), step_length, speed, multipliers (complex ndarray of the K-step map, by decreasing
+    modulus), stable, residual, iterations, validity (dict or None); for K > 1 also
+    stride_periods, step_lengths and validity_per_stride.
 
     `slope` in rad; `params` are the model's parameters by name (see `models()`). `gait` is
-    "stable", "unstable" or "all". Raises ValueError for invalid input, `period != 1`, or when
-    no gait is found (the message lists every guess and why it failed)."""
+    "stable", "unstable" or "all". Raises ValueError for invalid input (`period` outside
+    1..=64), or when no orbit is found (the message lists every guess and why it failed)."""
 
 def stride_map(
     model: str,

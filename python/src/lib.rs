@@ -214,8 +214,10 @@ fn fixed_point<'py>(
     guess: Option<Vec<f64>>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    if period != 1 {
-        return Err(err("period-k orbits not supported yet"));
+    if !(1..=64).contains(&period) {
+        return Err(err(format!(
+            "period: {period} must be between 1 and 64 strides"
+        )));
     }
     if !(tol.is_finite() && tol > 0.0) {
         return Err(err(format!("tol: {tol} must be a positive number")));
@@ -226,6 +228,9 @@ fn fixed_point<'py>(
         )));
     }
     let m = build_kw(model, slope, params)?;
+    if period > 1 {
+        return fixed_point_period_k(py, &m, period, gait, tol, guess);
+    }
     let (found, failed, n, validity) = py.detach(|| -> PyResult<_> {
         let (found, failed, n) = find_gaits(&m, guess, tol)?;
         let validity: Vec<Option<Validity>> = found
@@ -262,10 +267,124 @@ fn fixed_point<'py>(
             "validity",
             v.as_ref().map(|v| validity_dict(py, v)).transpose()?,
         )?;
+        d.set_item("period_k", 1)?;
+        d.set_item(
+            "orbit",
+            rows_to_array(py, fp.section.clone(), fp.section.len())?,
+        )?;
         out.append(d)?;
     }
     if out.is_empty() {
         return Err(no_gait_error(&m, gait, n, &failed));
+    }
+    Ok(out)
+}
+
+/// `fixed_point(period=K)`, K > 1: the period-K orbits of `fixedpoint --period K --json`, with
+/// `orbit` a (K, d_s) array and the K-step map's `multipliers`.
+fn fixed_point_period_k<'py>(
+    py: Python<'py>,
+    m: &Model,
+    k: usize,
+    gait: &str,
+    tol: f64,
+    guess: Option<Vec<f64>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let w = m.walker.as_ref();
+    let guesses = match guess {
+        Some(g) if g.len() != w.section_dim() => {
+            return Err(err(format!(
+                "guess: {} values given, model '{}' has {} section coordinates ({})",
+                g.len(),
+                m.info.name,
+                w.section_dim(),
+                m.info.section_names.join(", ")
+            )))
+        }
+        Some(g) => vec![("guess".to_string(), g)],
+        None => gaits::model_guesses(w),
+    };
+    let (found, failed, validity) = py.detach(|| -> PyResult<_> {
+        let (found, failed) = gaits::search_periodic(w, &guesses, k, tol).map_err(err)?;
+        let validity: Vec<Vec<Option<Validity>>> = found
+            .iter()
+            .map(|f| {
+                f.orbit
+                    .states
+                    .iter()
+                    .map(|x| Validity::along_step(w, x))
+                    .collect()
+            })
+            .collect();
+        Ok((found, failed, validity))
+    })?;
+    let out = PyList::empty(py);
+    for (f, v) in found.iter().zip(&validity) {
+        let o = &f.orbit;
+        let keep = match gait {
+            "stable" => o.stable,
+            "unstable" => !o.stable,
+            _ => true,
+        };
+        if !keep {
+            continue;
+        }
+        let ds = o.orbit[0].len();
+        let d = PyDict::new(py);
+        d.set_item("gait", if o.stable { "stable" } else { "unstable" })?;
+        d.set_item("guess", &f.label)?;
+        d.set_item("period_k", k)?;
+        d.set_item("section", o.orbit[0].clone().into_pyarray(py))?;
+        d.set_item("orbit", rows_to_array(py, o.orbit.concat(), ds)?)?;
+        d.set_item("state_names", m.info.state_names.to_vec())?;
+        d.set_item("state", o.states[0].clone().into_pyarray(py))?;
+        d.set_item("period", o.period)?;
+        d.set_item(
+            "stride_periods",
+            o.strides
+                .iter()
+                .map(|s| s.period)
+                .collect::<Vec<_>>()
+                .into_pyarray(py),
+        )?;
+        d.set_item("step_length", o.total_step_length().map(|l| l / k as f64))?;
+        d.set_item(
+            "step_lengths",
+            o.strides.iter().map(|s| s.step_length).collect::<Vec<_>>(),
+        )?;
+        d.set_item("speed", o.speed())?;
+        d.set_item("multipliers", complex_array(py, &o.multipliers))?;
+        d.set_item("stable", o.stable)?;
+        d.set_item("residual", o.residual)?;
+        d.set_item("iterations", o.iterations)?;
+        d.set_item(
+            "validity",
+            v[0].as_ref().map(|v| validity_dict(py, v)).transpose()?,
+        )?;
+        let per = PyList::empty(py);
+        for x in v {
+            per.append(x.as_ref().map(|v| validity_dict(py, v)).transpose()?)?;
+        }
+        d.set_item("validity_per_stride", per)?;
+        out.append(d)?;
+    }
+    if out.is_empty() {
+        let mut msg = format!(
+            "no {}period-{k} orbit found for model '{}' at slope {} from {} guess(es), their \
+             iterates and the period-doubling predictors",
+            if gait == "all" {
+                String::new()
+            } else {
+                format!("{gait} ")
+            },
+            m.info.name,
+            m.slope(),
+            guesses.len()
+        );
+        for (label, g, e) in failed {
+            msg.push_str(&format!("\n  guess '{label}' {g:?}: {e}"));
+        }
+        return Err(err(msg));
     }
     Ok(out)
 }

@@ -67,8 +67,10 @@ def test_errors_raise_value_error_with_the_cli_message():
         pdw.fixed_point("walker9")
     with pytest.raises(ValueError, match="hip_mass"):
         pdw.fixed_point("compass", hip_mass=-1.0)
-    with pytest.raises(ValueError, match="period-k orbits not supported yet"):
-        pdw.fixed_point(period=2)
+    with pytest.raises(ValueError, match="period: 0 must be between 1 and 64"):
+        pdw.fixed_point(period=0)
+    with pytest.raises(ValueError, match="no period-2 orbit found"):
+        pdw.fixed_point(period=2, slope=0.009)
     with pytest.raises(ValueError, match="3 columns given"):
         pdw.stride_map("simplest", np.zeros((2, 3)))
     with pytest.raises(ValueError, match="no section coordinate 'psi'"):
@@ -143,3 +145,25 @@ def test_simulate_a_fall_is_an_outcome():
     assert tr["steps_done"] == 0 and tr["outcome"] == "fell backward"
     with pytest.raises(ValueError, match="3 values given"):
         pdw.simulate("simplest", state=[0.1, 0.2, 0.3])
+
+
+def test_period_two_orbit_matches_the_cli():
+    # Garcia et al. 1998: past the first period doubling (0.0151) the walker settles on a
+    # period-2 gait; both of its points, and the 2-step multipliers, as `fixedpoint --period 2`.
+    exe = cli()
+    if exe is None:
+        pytest.skip("pdw-sweep binary not built")
+    ref = json.loads(
+        subprocess.run(
+            [exe, "fixedpoint", "--slope", "0.016", "--period", "2", "--gait", "stable", "--json"],
+            check=True,
+            capture_output=True,
+        ).stdout
+    )["fixed_points"]
+    got = pdw.fixed_point(slope=0.016, period=2, gait="stable")
+    assert len(got) == len(ref) == 1
+    g, r = got[0], ref[0]
+    assert set(g) == set(r)
+    assert g["period_k"] == 2 and g["orbit"].shape == (2, 2)
+    np.testing.assert_array_equal(g["orbit"], np.array(r["orbit"]))
+    assert np.all(np.abs(g["multipliers"]) < 1.0)

@@ -5,7 +5,8 @@
 //! Starting from the section state `s₀` (the cell), the stride map is applied,
 //! `s_{k+1} = P(s_k) = Π(R(x⁻_k))` followed by the lift `L` (so the iteration is exactly that of
 //! [`StrideMap`](crate::StrideMap)), until one of:
-//! - **gait** — `‖s_k − s*‖∞ < tol_gait` at `confirm` consecutive section states
+//! - **gait** — (only when a gait `s*` is given; [`BasinProblem::gait`] may be empty)
+//!   `‖s_k − s*‖∞ < tol_gait` at `confirm` consecutive section states
 //!   (`s₀` included). Requiring several consecutive states, not one, makes the label robust when
 //!   the selected fixed point is a saddle: a trajectory that merely passes near an unstable `s*`
 //!   does not stay. For a stable `s*` with largest multiplier modulus ρ the price is
@@ -27,6 +28,9 @@
 //!   more than [`MAX_EVENTS_PER_STRIDE`] intermediate events.
 //!
 //! `strides` is the number of completed strides (heel strikes) when the label was decided.
+//! [`crate::attractors`] finds every attractor before a basin is computed, passes the periodic
+//! ones as known orbits, and turns `other` (known orbit) and `timeout` (on a chaotic attractor)
+//! into per-attractor codes from [`ATTRACTOR_CODE_BASE`] on.
 //!
 //! # Engine
 //! [`BasinDriver`] is a [`LaneDriver`]: each cell is one work item; a lane integrates its cell's
@@ -143,6 +147,11 @@ impl Outcome {
     }
 }
 
+/// First outcome code of the attractors found besides the selected gait (see
+/// [`crate::attractors`]): attractor `i` of them has code `ATTRACTOR_CODE_BASE + i`. Codes below
+/// are the fixed [`Outcome`] codes.
+pub const ATTRACTOR_CODE_BASE: u8 = 10;
+
 /// `(code, name)` of every outcome, by code: the legend of a basin file.
 pub fn legend() -> Vec<(u8, &'static str)> {
     Outcome::ALL.iter().map(|o| (o.code(), o.name())).collect()
@@ -246,7 +255,8 @@ impl BasinOptions {
 pub struct BasinProblem<'a, S: Section + ?Sized> {
     /// The model.
     pub sys: &'a S,
-    /// The selected fixed point `s*` (section coordinates).
+    /// The selected fixed point `s*` (section coordinates); empty when there is none (no cell
+    /// is then labelled `gait`, e.g. past the first period doubling).
     pub gait: Vec<f64>,
     /// Other known attractors, each an orbit of section states (its period = its length).
     pub others: Vec<Vec<Vec<f64>>>,
@@ -287,7 +297,9 @@ impl<'a, S: Section + ?Sized> BasinProblem<'a, S> {
                 })
             }
         };
-        check(&self.gait)?;
+        if !self.gait.is_empty() {
+            check(&self.gait)?;
+        }
         for orbit in &self.others {
             if orbit.is_empty() {
                 return Err(LimitError::InvalidOption {
@@ -323,9 +335,15 @@ pub struct CellResult {
 }
 
 impl CellResult {
-    /// The outcome.
+    /// The outcome; an attractor code (≥ [`ATTRACTOR_CODE_BASE`], given by
+    /// [`crate::attractors::AttractorSet::relabel`]) is an attractor other than the selected
+    /// gait, [`Outcome::Other`].
     pub fn outcome(&self) -> Outcome {
-        Outcome::from_code(self.outcome).unwrap_or(Outcome::IntegratorFailure)
+        match Outcome::from_code(self.outcome) {
+            Some(o) => o,
+            None if self.outcome >= ATTRACTOR_CODE_BASE => Outcome::Other,
+            None => Outcome::IntegratorFailure,
+        }
     }
 }
 
@@ -369,7 +387,7 @@ impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
             return Some((Outcome::NonFinite, 0, u8::MAX));
         }
         let confirm = self.opts.confirm;
-        if Self::near(s, &self.problem.gait, self.opts.tol_gait) {
+        if !self.problem.gait.is_empty() && Self::near(s, &self.problem.gait, self.opts.tol_gait) {
             lane.near_gait = lane.near_gait.saturating_add(1);
             if lane.near_gait >= confirm {
                 return Some((Outcome::Gait, 0, u8::MAX));

@@ -9,6 +9,7 @@
 //!   find_fixed_point(&map, &guess, &NewtonOptions)    s*, multipliers, period, step, speed
 //! ```
 
+pub mod attractors;
 pub mod basin;
 pub mod continuation;
 pub mod error;
@@ -18,10 +19,14 @@ pub mod jacobian;
 pub mod metrics;
 pub mod newton;
 pub mod orbit;
+pub mod periodic;
 pub mod stride;
 pub mod trajectory;
 pub mod variational;
 
+pub use attractors::{
+    discover, seed_set, Attractor, AttractorKind, AttractorSet, DiscoveryOptions,
+};
 pub use basin::{
     basin_metrics, classify_cells, classify_cells_scalar, grid_cells, legend, linspace,
     BasinDriver, BasinMetrics, BasinOptions, BasinProblem, CellResult, Outcome,
@@ -39,6 +44,7 @@ pub use newton::{
     find_fixed_point, DpMethod, FixedPoint, FixedPointProblem, Newton, NewtonOptions, NewtonState,
 };
 pub use orbit::{orbit_diagram, OrbitColumn, OrbitOptions, OrbitStart};
+pub use periodic::{find_periodic_orbit, PeriodKProblem, PeriodicOrbit};
 pub use stride::{EventDriver, Stride, StrideEnd, StrideMap, StrideOutcome, MAX_EVENTS_PER_STRIDE};
 pub use trajectory::{
     initial_state, model_energy, simulate, Trajectory, TrajectoryError, TrajectoryEvent,

@@ -285,7 +285,10 @@ pub struct BasinMetrics {
     pub entropy_box: usize,
 }
 
-/// An attractor used to classify cells (the selected gait, a period-2 orbit…).
+/// An attractor used to classify cells (the selected gait, a period-2 orbit, a chaotic
+/// attractor…). Its legend entry is the one of the same name. A chaotic attractor has
+/// `period_strides` 0, `period_time` NaN, no multipliers, and a sample of consecutive points on
+/// it as `section`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attractor {
     /// Name, e.g. `"gait"`; unique in a file, no `/`.
@@ -294,10 +297,46 @@ pub struct Attractor {
     pub period_strides: u32,
     /// Duration of one period (model time units).
     pub period_time: f64,
-    /// The `period_strides` points of the orbit on the section, each of length d.
+    /// The `period_strides` points of the orbit on the section (a sample of points for a chaotic
+    /// attractor), each of length d.
     pub section: Vec<Vec<f64>>,
     /// Floquet multipliers `(re, im)`, by decreasing modulus.
     pub multipliers: Vec<(f64, f64)>,
+}
+
+impl Attractor {
+    /// Equal name and period, and every number equal bit for bit (so that a chaotic
+    /// attractor's NaN `period_time` equals itself): what [`crate::merge`] requires of shards.
+    pub fn same_as(&self, other: &Attractor) -> bool {
+        let bits = |v: &[f64], w: &[f64]| {
+            v.len() == w.len() && v.iter().zip(w).all(|(a, b)| a.to_bits() == b.to_bits())
+        };
+        self.name == other.name
+            && self.period_strides == other.period_strides
+            && self.period_time.to_bits() == other.period_time.to_bits()
+            && self.section.len() == other.section.len()
+            && self
+                .section
+                .iter()
+                .zip(&other.section)
+                .all(|(a, b)| bits(a, b))
+            && self.multipliers.len() == other.multipliers.len()
+            && self
+                .multipliers
+                .iter()
+                .zip(&other.multipliers)
+                .all(|(a, b)| bits(&[a.0, a.1], &[b.0, b.1]))
+    }
+
+    /// `name (period k, n points)`, for messages.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} (period {}, {} points)",
+            self.name,
+            self.period_strides,
+            self.section.len()
+        )
+    }
 }
 
 /// A basin file read back whole.
@@ -1114,6 +1153,8 @@ pub(crate) fn write_attractors(
     for a in list {
         let ga = g.create_group(&a.name).at(path, "creating an attractor")?;
         set_attr(path, &ga, "period_strides", &a.period_strides)?;
+        // The same number under the name of `fixedpoint --period K` (0: chaotic).
+        set_attr(path, &ga, "period_k", &a.period_strides)?;
         set_attr(path, &ga, "period_time", &a.period_time)?;
         let k = a.section.len();
         let flat: Vec<f64> = a.section.iter().flatten().copied().collect();

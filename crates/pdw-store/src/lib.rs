@@ -74,7 +74,10 @@ pub use basin::{
     BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
 };
 pub use error::StoreError;
-pub use plot::{animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, Frame};
+pub use plot::{
+    animate_gif, outcome_colours, plot_basin, plot_basin_attractors, plot_bifurcation, plot_lines,
+    Frame,
+};
 pub use shard::{merge, shard_rows, ShardSpec};
 pub use sweep::{read_sweep, write_sweep, Bifurcation, Branch, OrbitDiagram, SweepData};
 pub use trajectory::{

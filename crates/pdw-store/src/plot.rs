@@ -13,7 +13,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
-use crate::basin::{BasinHeader, NOT_COMPUTED};
+use crate::basin::{Attractor, BasinHeader, NOT_COMPUTED};
 use crate::sweep::SweepData;
 use crate::{Result, StoreError};
 
@@ -229,6 +229,82 @@ pub fn plot_basin(
     marker: Option<(f64, f64)>,
     title: &str,
 ) -> Result<()> {
+    let marks: Vec<Marks> = marker
+        .map(|m| Marks {
+            label: "fixed point".into(),
+            points: vec![m],
+            colour: None,
+            cloud: false,
+        })
+        .into_iter()
+        .collect();
+    plot_basin_marked(path, header, outcome, &marks, title)
+}
+
+/// Points marked on a basin picture.
+struct Marks {
+    label: String,
+    points: Vec<(f64, f64)>,
+    /// Fill of the ring (the attractor's basin colour), white if `None`.
+    colour: Option<[u8; 3]>,
+    /// A sample of a chaotic attractor: small dots, not ringed crosses.
+    cloud: bool,
+}
+
+/// [`plot_basin`] with every attractor's points marked: the points of a periodic orbit as
+/// ringed crosses filled with its basin's colour (the legend entry of the same name), a chaotic
+/// attractor's sample as small black dots. Points are projected on the grid's two coordinates
+/// (`header.state_names` must name `x_name` and `y_name`; otherwise nothing is marked).
+pub fn plot_basin_attractors(
+    path: impl AsRef<Path>,
+    header: &BasinHeader,
+    outcome: ArrayView2<u8>,
+    attractors: &[Attractor],
+    title: &str,
+) -> Result<()> {
+    let ix = header.state_names.iter().position(|n| *n == header.x_name);
+    let iy = header.state_names.iter().position(|n| *n == header.y_name);
+    let colours = outcome_colours(&header.legend);
+    let marks: Vec<Marks> = match (ix, iy) {
+        (Some(ix), Some(iy)) => attractors
+            .iter()
+            .map(|a| {
+                let code = header
+                    .legend
+                    .iter()
+                    .find(|(_, n)| *n == a.name)
+                    .map(|(c, _)| *c);
+                let colour = code.and_then(|c| colours.iter().find(|(k, _)| *k == c).map(|x| x.1));
+                let cloud = a.period_strides == 0;
+                Marks {
+                    label: if cloud {
+                        format!("{} (sample)", a.name)
+                    } else {
+                        format!("{} orbit", a.name)
+                    },
+                    points: a
+                        .section
+                        .iter()
+                        .filter(|p| p.len() > ix.max(iy))
+                        .map(|p| (p[ix], p[iy]))
+                        .collect(),
+                    colour,
+                    cloud,
+                }
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    plot_basin_marked(path, header, outcome, &marks, title)
+}
+
+fn plot_basin_marked(
+    path: impl AsRef<Path>,
+    header: &BasinHeader,
+    outcome: ArrayView2<u8>,
+    marks: &[Marks],
+    title: &str,
+) -> Result<()> {
     let path = path.as_ref();
     let (ny, nx) = outcome.dim();
     if ny != header.ny() || nx != header.nx() {
@@ -292,16 +368,30 @@ pub fn plot_basin(
             }
         }
     }
-    if let Some((mx, my)) = marker {
-        chart
-            .draw_series([
-                EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, WHITE.filled()),
-                EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, BLACK.stroke_width(2)),
-            ])
-            .map_err(|x| pe(path, x))?;
-        chart
-            .draw_series([Cross::new((mx, my), 6, BLACK.stroke_width(2))])
-            .map_err(|x| pe(path, x))?;
+    let inside = |&(x, y): &(f64, f64)| {
+        x.is_finite() && y.is_finite() && (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
+    };
+    for mk in marks {
+        let pts: Vec<(f64, f64)> = mk.points.iter().copied().filter(inside).collect();
+        if mk.cloud {
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 1, BLACK.filled())))
+                .map_err(|x| pe(path, x))?;
+            continue;
+        }
+        let fill = rgb(mk.colour.unwrap_or([255, 255, 255]));
+        for &(mx, my) in &pts {
+            chart
+                .draw_series([
+                    EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, fill.filled()),
+                    EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, WHITE.stroke_width(4)),
+                    EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, BLACK.stroke_width(2)),
+                ])
+                .map_err(|x| pe(path, x))?;
+            chart
+                .draw_series([Cross::new((mx, my), 6, BLACK.stroke_width(2))])
+                .map_err(|x| pe(path, x))?;
+        }
     }
 
     // Legend: outcomes present, with their fraction of computed cells.
@@ -348,17 +438,29 @@ pub fn plot_basin(
             ))
             .map_err(|x| pe(path, x))?;
     }
-    if marker.is_some() {
-        let y = legend_top + 30 * entries.len() as i32 + 10;
-        right
-            .draw(&Circle::new((21, y + 10), 8, BLACK.stroke_width(2)))
-            .map_err(|x| pe(path, x))?;
-        right
-            .draw(&Cross::new((21, y + 10), 5, BLACK.stroke_width(2)))
-            .map_err(|x| pe(path, x))?;
+    for (k, mk) in marks.iter().enumerate() {
+        let y = legend_top + 30 * (entries.len() + k) as i32 + 10;
+        if mk.cloud {
+            for d in [-6, 0, 6] {
+                right
+                    .draw(&Circle::new((21 + d, y + 10 + d / 2), 2, BLACK.filled()))
+                    .map_err(|x| pe(path, x))?;
+            }
+        } else {
+            let fill = rgb(mk.colour.unwrap_or([255, 255, 255]));
+            right
+                .draw(&Circle::new((21, y + 10), 8, fill.filled()))
+                .map_err(|x| pe(path, x))?;
+            right
+                .draw(&Circle::new((21, y + 10), 8, BLACK.stroke_width(2)))
+                .map_err(|x| pe(path, x))?;
+            right
+                .draw(&Cross::new((21, y + 10), 5, BLACK.stroke_width(2)))
+                .map_err(|x| pe(path, x))?;
+        }
         right
             .draw(&Text::new(
-                "fixed point",
+                mk.label.clone(),
                 (40, y + 2),
                 (FONT, 16).into_font(),
             ))

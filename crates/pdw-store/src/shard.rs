@@ -24,7 +24,9 @@ use std::str::FromStr;
 
 use ndarray::{s, ArrayView2};
 
-use crate::basin::{read_attractors, BasinHeader, BasinMetrics, BasinWriter, BLOCK_ROWS};
+use crate::basin::{
+    read_attractors, Attractor, BasinHeader, BasinMetrics, BasinWriter, BLOCK_ROWS,
+};
 use crate::h5util::{check_target, get_attr, open_file, rename_into_place, temp_sibling, At};
 use crate::{Result, StoreError};
 
@@ -163,12 +165,24 @@ pub fn merge<P: AsRef<Path>>(
             let mut want = first.header.clone();
             want.shard = header.shard;
             want.check_matches(&header, p)?;
-            if attractors.as_ref() != Some(&att) {
+            let same = attractors.as_ref().is_some_and(|a: &Vec<Attractor>| {
+                a.len() == att.len() && a.iter().zip(&att).all(|(x, y)| x.same_as(y))
+            });
+            if !same {
+                let list = |v: &[Attractor]| {
+                    format!(
+                        "[{}] (or different values)",
+                        v.iter()
+                            .map(Attractor::summary)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                };
                 return Err(StoreError::Mismatch {
                     path: p.to_path_buf(),
                     field: "attractors".into(),
-                    found: format!("{att:?}"),
-                    expected: format!("{:?}", attractors.unwrap_or_default()),
+                    found: list(&att),
+                    expected: list(attractors.as_deref().unwrap_or_default()),
                 });
             }
         } else {

@@ -79,6 +79,11 @@ pub struct FixedpointArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Period K of the orbits sought, in strides (1..=64): fixed points of the K-stride map
+    /// P^K, found by Newton from the guesses, from where the map takes them after a few hundred
+    /// strides, and from the period-doubling predictor at the period-one gaits.
+    #[arg(long, default_value_t = 1)]
+    pub period: usize,
     /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400).
     #[arg(long)]
     pub sweep: Option<String>,

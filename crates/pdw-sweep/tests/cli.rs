@@ -386,3 +386,139 @@ fn sweep_locates_garcia_period_doubling_and_writes_hdf5_and_png() {
     let orbit = data.orbit.unwrap();
     assert_eq!(orbit.parameter.len(), 40);
 }
+
+#[test]
+fn basins_past_the_period_doubling_label_every_attractor_for_any_shard_split() {
+    // γ = 0.016: no stable period-one gait, a stable period-2 gait (Garcia 1998's cascade).
+    let dir = tempfile::tempdir().unwrap();
+    let (o, whole) = basin(dir.path(), "w.h5", &["--slope", "0.016", "--threads", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut shards = Vec::new();
+    for (i, threads) in [(0, "1"), (1, "2")] {
+        let spec = format!("{i}/2");
+        let (o, f) = basin(
+            dir.path(),
+            &format!("s{i}.h5"),
+            &["--slope", "0.016", "--shard", &spec, "--threads", threads],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        shards.push(f);
+    }
+    let merged = p(dir.path(), "m.h5");
+    let o = bin()
+        .args(["merge", s(&shards[0]), s(&shards[1]), "--out", s(&merged)])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (a, b) = (read(&whole), read(&merged));
+    same_cells(&a, &b);
+    assert_eq!(a.attractors, b.attractors);
+    assert!(a.header.legend.contains(&(10, "period-2".to_string())));
+    assert!(a.outcome.iter().any(|&c| c == 10), "no period-2 cell");
+    assert!(a.outcome.iter().all(|&c| c != 0), "no cell may be `gait`");
+    let at = a.attractors.iter().find(|x| x.name == "period-2").unwrap();
+    assert_eq!((at.period_strides, at.section.len()), (2, 2));
+    assert!(at.multipliers.iter().all(|(re, im)| re.hypot(*im) < 1.0));
+    assert!(p(dir.path(), "w.png").exists() && p(dir.path(), "m.png").exists());
+    // γ = 0.0189: a chaotic attractor, sampled, with its own code.
+    let (o, ch) = basin(dir.path(), "c.h5", &["--slope", "0.0189"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let c = read(&ch);
+    assert!(c.header.legend.contains(&(10, "chaotic".to_string())));
+    assert!(c.outcome.iter().any(|&x| x == 10), "no chaotic cell");
+    let at = c.attractors.iter().find(|x| x.name == "chaotic").unwrap();
+    assert_eq!(at.period_strides, 0);
+    assert!(at.multipliers.is_empty() && at.section.len() > 100);
+    assert!(at.period_time.is_nan());
+    // Its shards merge (the NaN period of a chaotic attractor equals itself bit for bit).
+    let mut shards = Vec::new();
+    for i in 0..2 {
+        let spec = format!("{i}/2");
+        let (o, f) = basin(
+            dir.path(),
+            &format!("c{i}.h5"),
+            &["--slope", "0.0189", "--shard", &spec],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        shards.push(f);
+    }
+    let merged = p(dir.path(), "cm.h5");
+    let o = bin()
+        .args(["merge", s(&shards[0]), s(&shards[1]), "--out", s(&merged)])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    same_cells(&c, &read(&merged));
+    // Before the period doubling nothing changes: the stable gait keeps code 0 and is the only
+    // attractor.
+    let (o, g) = basin(dir.path(), "g.h5", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let g = read(&g);
+    assert_eq!(g.header.legend.len(), 10);
+    assert_eq!(g.attractors.len(), 1);
+    assert_eq!(g.attractors[0].name, "gait");
+    assert!(g.outcome.iter().any(|&x| x == 0));
+}
+
+#[test]
+fn fixedpoint_period_two_lists_both_points() {
+    let o = run(&[
+        "fixedpoint",
+        "--slope",
+        "0.016",
+        "--period",
+        "2",
+        "--gait",
+        "stable",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let fps = v["fixed_points"].as_array().unwrap();
+    assert_eq!(fps.len(), 1);
+    let f = &fps[0];
+    assert_eq!(f["period_k"], 2);
+    let orbit = f["orbit"].as_array().unwrap();
+    assert_eq!(orbit.len(), 2);
+    assert_eq!(f["section"], orbit[0]);
+    let th: Vec<f64> = orbit.iter().map(|p| p[0].as_f64().unwrap()).collect();
+    assert!((th[0] - th[1]).abs() > 1e-3, "{th:?}");
+    for m in f["multipliers"].as_array().unwrap() {
+        assert!(m["re"].as_f64().unwrap().hypot(m["im"].as_f64().unwrap()) < 1.0);
+    }
+    // the period is the two strides together
+    let sp: f64 = f["stride_periods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .sum();
+    assert!((f["period"].as_f64().unwrap() - sp).abs() < 1e-12);
+    // text output lists both points
+    let o = run(&[
+        "fixedpoint",
+        "--slope",
+        "0.016",
+        "--period",
+        "2",
+        "--gait",
+        "stable",
+    ]);
+    let t = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        t.contains("period-2 orbit") && t.contains("\n  1 ") && t.contains("\n  2 "),
+        "{t}"
+    );
+    // period one keeps its output and gains period_k and orbit
+    let o = run(&["fixedpoint", "--json", "--gait", "stable"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let f = &v["fixed_points"][0];
+    assert_eq!(f["period_k"], 1);
+    assert_eq!(f["orbit"][0], f["section"]);
+    // bad periods are refused
+    for bad in ["0", "65"] {
+        let o = run(&["fixedpoint", "--period", bad]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(stderr(&o).contains("--period"), "{}", stderr(&o));
+    }
+}

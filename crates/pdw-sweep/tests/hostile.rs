@@ -219,7 +219,7 @@ fn no_gait_on_a_level_floor() {
     }
     let dir = tempfile::tempdir().unwrap();
     let o = basin(&dir.path().join("b.h5"), &["--slope", "0"]);
-    assert!(refused(&o).contains("no stable period-one gait"));
+    assert!(refused(&o).contains("no period-one orbit found"));
 }
 
 #[test]

@@ -6,13 +6,13 @@ use super::{build_with, overrides, BuiltModel};
 use crate::args::{self, AxisRange, InputError};
 use crate::cli::BasinArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pdw_limit::attractors::{discover, seed_set, Attractor as LimitAttractor, DiscoveryOptions};
 use pdw_limit::basin::{
-    basin_metrics, classify_cells, grid_cells, legend, BasinOptions, BasinProblem, Outcome,
-    DEFAULT_ENTROPY_BOX,
+    basin_metrics, classify_cells, grid_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX,
 };
 use pdw_store::{
-    plot_basin, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter, ShardSpec,
-    StoreError, BLOCK_ROWS,
+    plot_basin_attractors, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter,
+    ShardSpec, StoreError, BLOCK_ROWS,
 };
 use std::io::IsTerminal;
 use std::process::ExitCode;
@@ -230,7 +230,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         }
     })?;
 
-    // ---- the attractor: the model's stable gait
+    // ---- the period-one gaits: the stable one (if any) is the selected gait, code 0
     let guesses: Vec<(String, Vec<f64>)> = m
         .walker
         .gait_guesses()
@@ -242,35 +242,32 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         eprintln!("interrupted before the grid was started; nothing written");
         return Ok(ExitCode::from(130));
     }
-    let Some(gait) = found.iter().find(|f| f.fp.stable) else {
-        eprintln!(
-            "error: no stable period-one gait found for model '{}' at slope {}; a basin needs one",
-            info.name,
-            m.slope()
-        );
-        for f in &found {
-            eprintln!("  unstable gait at {:?}", f.fp.section);
-        }
-        for (label, g, e) in &failed {
-            report_failure(label, g, e);
-        }
-        return Ok(ExitCode::from(2));
-    };
-    let fp = &gait.fp;
-    // Strides a perturbation of 1e-2 needs to shrink below the 1e-6 gait tolerance at the slowest
-    // multiplier: near a bifurcation (|λ| → 1) the default budget labels converging cells `timeout`.
-    if let Some(lmax) = fp.multipliers.first().map(|l| l.modulus()) {
-        let needed = ((1e-4f64).ln() / lmax.ln()).ceil();
-        if lmax < 1.0 && needed > f64::from(a.max_strides) {
+    let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
+    // The default grid is centred on the stable gait, else on the first period-one orbit.
+    let centre: Vec<f64> = match (gait, found.first(), &xa, &ya) {
+        (Some(fp), _, _, _) => fp.section.clone(),
+        (None, Some(f), _, _) => f.fp.section.clone(),
+        (None, None, Some(_), Some(_)) => m
+            .walker
+            .gait_guesses()
+            .first()
+            .map(|g| g.section.clone())
+            .unwrap_or_else(|| vec![0.0; names.len()]),
+        _ => {
             eprintln!(
-                "warning: the gait's slowest multiplier has |λ| = {lmax:.4}; cells converge in about \
-                 {needed} strides, more than --max-strides {}: expect `timeout` where the gait is slow",
-                a.max_strides
+                "error: no period-one orbit found for model '{}' at slope {} to centre the \
+                 default grid on; give both --x and --y",
+                info.name,
+                m.slope()
             );
+            for (label, g, e) in &failed {
+                report_failure(label, g, e);
+            }
+            return Ok(ExitCode::from(2));
         }
-    }
-    let (ix, xr) = xa.unwrap_or_else(|| (0, default_axis(names[0], fp.section[0])));
-    let (iy, yr) = ya.unwrap_or_else(|| (1, default_axis(names[1], fp.section[1])));
+    };
+    let (ix, xr) = xa.unwrap_or_else(|| (0, default_axis(names[0], centre[0])));
+    let (iy, yr) = ya.unwrap_or_else(|| (1, default_axis(names[1], centre[1])));
     if ix == iy {
         return Err(InputError(format!(
             "--x and --y both name '{}'; choose two different coordinates",
@@ -278,7 +275,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    let mut base = fp.section.clone();
+    let mut base = centre.clone();
     for (i, v) in &fixed {
         if *i == ix || *i == iy {
             return Err(InputError(format!(
@@ -296,6 +293,67 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         max_strides: a.max_strides as u16,
         ..BasinOptions::default()
     };
+
+    // ---- every attractor reached from the grid's box, found up front from a fixed seed set
+    // (identical for every shard and thread count; see pdw_limit::attractors)
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads)
+        .build()?;
+    let walker = m.walker.as_ref();
+    let fall = Outcome::of_fall;
+    let disc = DiscoveryOptions::default();
+    let extra: Vec<Vec<f64>> = found
+        .iter()
+        .map(|f| {
+            let mut s = f.fp.section.clone();
+            for (i, v) in &fixed {
+                s[*i] = *v;
+            }
+            s
+        })
+        .collect();
+    let seeds = seed_set(
+        &base,
+        ix,
+        (xr.lo, xr.hi),
+        iy,
+        (yr.lo, yr.hi),
+        disc.lattice,
+        &extra,
+    );
+    let t_disc = Instant::now();
+    let step = |x: &[f64]| walker.step_length(x);
+    let newton_map = pdw_limit::StrideMap::new(
+        walker,
+        pdw_hybrid::Options::dop853(pdw_limit::gaits::FIXEDPOINT_INTEGRATOR_TOL),
+    )?
+    .with_step_length(&step);
+    let set = discover(
+        walker,
+        &newton_map,
+        gait.map(LimitAttractor::gait),
+        &seeds,
+        &opts,
+        &disc,
+        &fall,
+        &pool,
+    )?;
+    if !a.quiet {
+        eprintln!(
+            "attractors from {} seeds in {:.2} s: {}",
+            seeds.len(),
+            t_disc.elapsed().as_secs_f64(),
+            if set.attractors.is_empty() {
+                "none (every seed fell)".to_string()
+            } else {
+                set.attractors
+                    .iter()
+                    .map(|at| at.name.clone())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        );
+    }
     let header = BasinHeader {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         model: info.name.to_string(),
@@ -306,7 +364,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
             "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
             "confirm": opts.confirm, "max_period": opts.max_period,
-            "fixed_point_residual": fp.residual,
+            "fixed_point_residual": gait.map(|fp| fp.residual),
+            "attractor_seeds": seeds.len(), "seed_strides": disc.seed_strides,
+            "chaos_radius": disc.chaos_radius, "chaos_sample": disc.cloud_points,
             "fixed": fixed.iter().map(|(i, v)| (names[*i].to_string(), *v)).collect::<std::collections::BTreeMap<_, _>>(),
         })
         .to_string(),
@@ -316,7 +376,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         y_name: names[iy].to_string(),
         y: ys.clone(),
         state_names: names.iter().map(|s| s.to_string()).collect(),
-        legend: legend().into_iter().map(|(c, n)| (c, n.to_string())).collect(),
+        legend: set.legend(),
         shard,
     };
     let mut writer = match BasinWriter::start(&a.out, &header, a.resume, a.force) {
@@ -351,12 +411,27 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     let todo = writer.rows_todo();
 
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads)
-        .build()?;
-    let walker = m.walker.as_ref();
-    let fall = Outcome::of_fall;
-    let problem = BasinProblem::new(walker, fp.section.clone(), &fall);
+    // Strides a perturbation of 1e-2 needs to shrink below the 1e-6 tolerance at an attractor's
+    // slowest multiplier (per K strides): near a bifurcation (|λ| → 1) the default budget
+    // labels converging cells `timeout`.
+    for at in set
+        .attractors
+        .iter()
+        .filter(|at| at.kind == pdw_limit::AttractorKind::Periodic)
+    {
+        if let Some(lmax) = at.multipliers.first().map(|l| l.modulus()) {
+            let needed = (at.period_k as f64 * (1e-4f64).ln() / lmax.ln()).ceil();
+            if lmax < 1.0 && needed > f64::from(a.max_strides) {
+                eprintln!(
+                    "warning: attractor `{}`: its slowest multiplier has |λ| = {lmax:.4} per {} \
+                     stride(s); cells converge in about {needed} strides, more than --max-strides \
+                     {}: expect `timeout` where `{}` is slow",
+                    at.name, at.period_k, a.max_strides, at.name
+                );
+            }
+        }
+    }
+    let problem = set.problem(walker, &fall);
 
     let total_cells = (todo.len() * nx) as u64;
     let pb = if a.quiet || !std::io::stderr().is_terminal() {
@@ -389,9 +464,10 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         let row_ys: Vec<f64> = rows.iter().map(|&r| ys[r]).collect();
         let cells = grid_cells(&base, ix, &xs, iy, &row_ys);
         let done_before = pb.position();
-        let res = classify_cells(&problem, &cells, &opts, &pool, &|n| {
+        let mut res = classify_cells(&problem, &cells, &opts, &pool, &|n| {
             pb.set_position(done_before + n as u64)
         })?;
+        set.relabel(&mut res);
         let outcome: Vec<u8> = res.iter().map(|c| c.outcome).collect();
         let strides: Vec<u16> = res.iter().map(|c| c.strides).collect();
         let fin: Vec<f64> = res
@@ -414,19 +490,14 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(130));
     }
 
-    // ---- metrics, attractor, plot
-    let attractor = Attractor {
-        name: "gait".into(),
-        period_strides: 1,
-        period_time: fp.metrics.period,
-        section: vec![fp.section.clone()],
-        multipliers: fp.multipliers.iter().map(|l| (l.re, l.im)).collect(),
-    };
+    // ---- metrics, attractors, plot
+    let attractors: Vec<Attractor> = set.attractors.iter().map(store_attractor).collect();
     let out_metrics = if shard.is_none() {
         let outcome = writer.read_outcome()?;
         let flat: Vec<u8> = outcome.iter().copied().collect();
         Some(store_metrics(
             &basin_metrics(&flat, nx, ny, DEFAULT_ENTROPY_BOX)?,
+            &header.legend,
             nx,
             ny,
         ))
@@ -439,18 +510,17 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         boundary_entropy: f64::NAN,
         entropy_box: DEFAULT_ENTROPY_BOX,
     });
-    writer.finish(&metrics, &[attractor])?;
+    writer.finish(&metrics, &attractors)?;
     let elapsed = t0.elapsed().as_secs_f64();
     if let Some(mt) = &out_metrics {
         let (h, outcome) = read_basin_outcome(&a.out)?;
-        let marker = Some((fp.section[ix], fp.section[iy]));
         let title = format!(
             "{} walker basin, slope {} rad, {} strides",
             info.name,
             m.slope(),
             a.max_strides
         );
-        plot_basin(&png, &h, outcome.view(), marker, &title)?;
+        plot_basin_attractors(&png, &h, outcome.view(), &attractors, &title)?;
         print_summary(&m, a, mt, nx, ny, elapsed, &a.out, Some(&png));
     } else {
         crate::outln!(
@@ -465,16 +535,40 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The engine's metrics in the file's plain form. The entropies are NaN ("not defined") when
-/// no box of the entropy's size fits the `nx × ny` grid.
-pub fn store_metrics(m: &pdw_limit::basin::BasinMetrics, nx: usize, ny: usize) -> BasinMetrics {
+/// An attractor in the file's plain form (`period_strides` 0 and no multipliers for a chaotic
+/// one, whose `section` is a sample of points on it).
+pub fn store_attractor(a: &LimitAttractor) -> Attractor {
+    Attractor {
+        name: a.name.clone(),
+        period_strides: a.period_k as u32,
+        period_time: a.period_time,
+        section: a.points.clone(),
+        multipliers: a.multipliers.iter().map(|l| (l.re, l.im)).collect(),
+    }
+}
+
+/// The engine's metrics in the file's plain form, one fraction per entry of the file's
+/// `legend` (attractor codes named by it). The entropies are NaN ("not defined") when no box of
+/// the entropy's size fits the `nx × ny` grid.
+pub fn store_metrics(
+    m: &pdw_limit::basin::BasinMetrics,
+    legend: &[(u8, String)],
+    nx: usize,
+    ny: usize,
+) -> BasinMetrics {
     let defined = nx >= m.box_size && ny >= m.box_size;
     let or_nan = |v: f64| if defined { v } else { f64::NAN };
     BasinMetrics {
-        fractions: m
-            .fractions
+        fractions: legend
             .iter()
-            .map(|(_, n, f)| (n.to_string(), *f))
+            .map(|(c, n)| {
+                let f = m
+                    .fractions
+                    .iter()
+                    .find(|(code, _, _)| code == c)
+                    .map_or(0.0, |(_, _, f)| *f);
+                (n.clone(), f)
+            })
             .collect(),
         basin_entropy: or_nan(m.basin_entropy),
         boundary_entropy: or_nan(m.boundary_entropy),

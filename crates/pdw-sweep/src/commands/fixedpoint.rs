@@ -1,4 +1,5 @@
-//! `pdw-sweep fixedpoint`: period-one gaits, their Floquet multipliers and gait metrics.
+//! `pdw-sweep fixedpoint`: period-one gaits (or period-K orbits, `--period K`), their Floquet
+//! multipliers and gait metrics.
 
 use super::{build_model, BuiltModel};
 use crate::args::{self, InputError};
@@ -6,7 +7,7 @@ use crate::cli::FixedpointArgs;
 use pdw_limit::{FixedPoint, LimitError};
 use std::process::ExitCode;
 
-pub use pdw_limit::gaits::{Failed, Found};
+pub use pdw_limit::gaits::{Failed, Found, FoundOrbit};
 use pdw_limit::Validity;
 
 /// Smallest `--tol`: below it the residual is integrator round-off.
@@ -59,7 +60,22 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    if !(1..=64).contains(&a.period) {
+        return Err(InputError(format!(
+            "--period: {} must be between 1 and 64 strides",
+            a.period
+        ))
+        .into());
+    }
     if a.sweep.is_some() {
+        if a.period != 1 {
+            return Err(InputError(format!(
+                "--period {} with --sweep: a sweep follows the period-one branch and switches to \
+                 period 2, 4, … at its period doublings by itself; drop --period",
+                a.period
+            ))
+            .into());
+        }
         return super::sweep::run(a);
     }
     let m = build_model(&a.model)?;
@@ -81,6 +97,9 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         }
         None => pdw_limit::gaits::model_guesses(m.walker.as_ref()),
     };
+    if a.period > 1 {
+        return run_period_k(a, &m, &guesses, which);
+    }
     let (found, failed) = search(&m, &guesses, a.tol)?;
     let selected: Vec<&Found> = found
         .iter()
@@ -110,6 +129,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
                     "residual": fp.residual,
                     "iterations": fp.iterations,
                     "validity": validity(&m, fp).map(|v| validity_json(&v)),
+                    "period_k": 1,
+                    "orbit": [&fp.section],
                 })
             })
             .collect();
@@ -218,4 +239,159 @@ fn print_fixed_point(m: &BuiltModel, f: &Found) {
 /// Prints why a Newton run failed (the error carries its residual history and last iterate).
 pub fn report_failure(label: &str, guess: &[f64], e: &LimitError) {
     eprintln!("  guess '{label}' {guess:?}: {e}");
+}
+
+/// `fixedpoint --period K` with K > 1: period-K orbits ([`pdw_limit::gaits::search_periodic`]).
+/// `section`, `state` refer to the orbit's first point (its smallest, see
+/// [`pdw_limit::periodic::canonical_start`]), `period` to the K strides together, `multipliers`
+/// to the K-step map; `orbit` lists the K section points in stride order.
+fn run_period_k(
+    a: &FixedpointArgs,
+    m: &BuiltModel,
+    guesses: &[(String, Vec<f64>)],
+    which: &str,
+) -> anyhow::Result<ExitCode> {
+    let k = a.period;
+    let (found, failed) = pdw_limit::gaits::search_periodic(m.walker.as_ref(), guesses, k, a.tol)?;
+    let selected: Vec<&FoundOrbit> = found
+        .iter()
+        .filter(|f| match which {
+            "stable" => f.orbit.stable,
+            "unstable" => !f.orbit.stable,
+            _ => true,
+        })
+        .collect();
+    if a.json {
+        let fps: Vec<serde_json::Value> = selected
+            .iter()
+            .map(|f| {
+                let o = &f.orbit;
+                let valid: Vec<Option<Validity>> = o
+                    .states
+                    .iter()
+                    .map(|x| Validity::along_step(m.walker.as_ref(), x))
+                    .collect();
+                serde_json::json!({
+                    "gait": if o.stable { "stable" } else { "unstable" },
+                    "guess": f.label,
+                    "period_k": k,
+                    "section": o.orbit[0],
+                    "orbit": o.orbit,
+                    "state_names": m.info.state_names,
+                    "state": o.states[0],
+                    "period": o.period,
+                    "stride_periods": o.strides.iter().map(|s| s.period).collect::<Vec<_>>(),
+                    "step_length": o.total_step_length().map(|l| l / k as f64),
+                    "step_lengths": o.strides.iter().map(|s| s.step_length).collect::<Vec<_>>(),
+                    "speed": o.speed(),
+                    "multipliers": o.multipliers.iter().map(|l| serde_json::json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
+                    "stable": o.stable,
+                    "residual": o.residual,
+                    "iterations": o.iterations,
+                    "validity": valid[0].as_ref().map(validity_json),
+                    "validity_per_stride": valid.iter().map(|v| v.as_ref().map(validity_json)).collect::<Vec<_>>(),
+                })
+            })
+            .collect();
+        let out = serde_json::json!({
+            "model": m.info.name,
+            "slope": m.slope(),
+            "params": m.params_json(),
+            "section_names": m.info.section_names,
+            "period_k": k,
+            "fixed_points": fps,
+        });
+        crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        crate::outln!(
+            "model {}  slope {} rad ({:.4} deg)  period-{k} orbits",
+            m.info.name,
+            m.slope(),
+            m.slope().to_degrees()
+        );
+        for f in &selected {
+            print_orbit(m, f);
+        }
+    }
+    if selected.is_empty() {
+        eprintln!(
+            "no {}period-{k} orbit found for model '{}' from {} guess(es), their iterates and \
+             the period-doubling predictors",
+            if which == "all" {
+                String::new()
+            } else {
+                format!("{which} ")
+            },
+            m.info.name,
+            guesses.len()
+        );
+        for (label, g, e) in &failed {
+            report_failure(label, g, e);
+        }
+        eprintln!(
+            "try: another --guess (section coordinates {}), another --period (the orbit diagram \
+             of a sweep shows which periods exist), or another --slope",
+            m.info.section_names.join(", ")
+        );
+        return Ok(ExitCode::from(2));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_orbit(m: &BuiltModel, f: &FoundOrbit) {
+    let o = &f.orbit;
+    let k = o.period_k;
+    crate::outln!();
+    crate::outln!(
+        "{} period-{k} orbit (from '{}')",
+        if o.stable { "stable" } else { "unstable" },
+        f.label
+    );
+    let names = &m.info.section_names;
+    crate::outln!(
+        "  {:<6}{}{:>22}{:>22}",
+        "point",
+        names.iter().map(|n| format!("{n:>22}")).collect::<String>(),
+        "stride time",
+        "step length"
+    );
+    for (j, (p, st)) in o.orbit.iter().zip(&o.strides).enumerate() {
+        crate::outln!(
+            "  {:<6}{}{:>22.15}{}",
+            j + 1,
+            p.iter().map(|v| format!("{v:>22.15}")).collect::<String>(),
+            st.period,
+            st.step_length
+                .map(|l| format!("{l:>22.15}"))
+                .unwrap_or_default()
+        );
+    }
+    crate::outln!("  period ({k} strides) {:>22.15}", o.period);
+    if let Some(v) = o.speed() {
+        crate::outln!("  speed        {v:>22.15}");
+    }
+    crate::outln!("  multipliers of the {k}-stride map (|λ|):");
+    for l in &o.multipliers {
+        crate::outln!(
+            "    {:>+20.15} {:>+20.15}i   ({:.6})",
+            l.re,
+            l.im,
+            l.modulus()
+        );
+    }
+    let flagged: Vec<usize> = o
+        .states
+        .iter()
+        .enumerate()
+        .filter(|(_, x)| Validity::along_step(m.walker.as_ref(), x).is_some_and(|v| !v.valid()))
+        .map(|(j, _)| j + 1)
+        .collect();
+    if !flagged.is_empty() {
+        crate::outln!("  validity     FLAGGED at the strides from points {flagged:?}");
+    }
+    crate::outln!(
+        "  residual ‖P^{k}(x) − x‖∞ = {:.3e} after {} Newton iterations",
+        o.residual,
+        o.iterations
+    );
 }

@@ -4,7 +4,7 @@
 use super::basin::store_metrics;
 use crate::cli::MergeArgs;
 use pdw_limit::basin::{basin_metrics, DEFAULT_ENTROPY_BOX};
-use pdw_store::{merge, plot_basin, read_basin, BasinMetrics};
+use pdw_store::{merge, plot_basin_attractors, read_basin, BasinMetrics};
 use std::process::ExitCode;
 
 pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
@@ -31,7 +31,7 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
     let header = merge(&a.shards, &a.out, a.force, &command, |h, outcome| {
         let flat: Vec<u8> = outcome.iter().copied().collect();
         match basin_metrics(&flat, h.nx(), h.ny(), DEFAULT_ENTROPY_BOX) {
-            Ok(m) => store_metrics(&m, h.nx(), h.ny()),
+            Ok(m) => store_metrics(&m, &h.legend, h.nx(), h.ny()),
             Err(e) => {
                 failure = Some(e.to_string());
                 BasinMetrics {
@@ -47,26 +47,11 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
         anyhow::bail!("metrics of the merged grid: {f}");
     }
     let data = read_basin(&a.out)?;
-    let marker = data
-        .attractors
-        .first()
-        .and_then(|at| at.section.first())
-        .and_then(|s| {
-            let ix = header
-                .state_names
-                .iter()
-                .position(|n| *n == header.x_name)?;
-            let iy = header
-                .state_names
-                .iter()
-                .position(|n| *n == header.y_name)?;
-            Some((s[ix], s[iy]))
-        });
     let title = format!(
         "{} walker basin, slope {} rad (merged)",
         header.model, header.slope
     );
-    plot_basin(&png, &header, data.outcome.view(), marker, &title)?;
+    plot_basin_attractors(&png, &header, data.outcome.view(), &data.attractors, &title)?;
     crate::outln!(
         "merged {} shard(s) into {} ({}x{} cells) and {}",
         a.shards.len(),
