@@ -162,6 +162,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
     let shard = match &a.shard {
         Some(s) => {
             let (index, count) = args::parse_shard(s)?;
@@ -294,14 +295,40 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
 
     let opts = BasinOptions {
         max_strides: a.max_strides as u16,
+        integrator,
         ..BasinOptions::default()
     };
+    // The gait was found on an accurate stride map; the cells run on the basin's integrator.
+    // If that map moves the gait by more than a tenth of the gait tolerance, cells converge to
+    // a point the classifier does not recognise: say so rather than label them `other`.
+    {
+        let map = pdw_limit::StrideMap::new(m.walker.as_ref(), opts.integrator)?;
+        let r = map
+            .apply(&fp.section)
+            .map(|p| {
+                p.iter()
+                    .zip(&fp.section)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            })
+            .unwrap_or(f64::INFINITY);
+        let close_enough = r <= 0.1 * opts.tol_gait;
+        if !close_enough {
+            eprintln!(
+                "warning: with {} the gait is a fixed point only to {r:.2e} (the cells' gait \
+                 tolerance is {:e}): cells may come out `other` or `timeout`; use a tighter \
+                 --rtol/--atol or a smaller --rk4-step",
+                super::integrator_text(&opts.integrator),
+                opts.tol_gait
+            );
+        }
+    }
     let header = BasinHeader {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         model: info.name.to_string(),
         slope: m.slope(),
         params: m.params_json().to_string(),
-        integrator: format!("{:?}", opts.integrator.method),
+        integrator: super::integrator_text(&opts.integrator),
         tolerances: serde_json::json!({
             "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
             "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,

@@ -55,6 +55,8 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             return Err(InputError(format!("--dt-out: {h} must be a positive time step")).into());
         }
     }
+    // The integrator first: a bad --rtol is reported before any gait search.
+    super::integrator(&a.integrator, TrajectoryOptions::new(1).integrator)?;
     if a.state.is_some() && a.gait.is_some() {
         return Err(InputError("--state and --gait: give one or the other".into()).into());
     }
@@ -99,9 +101,11 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             )
         }
     };
+    let base = TrajectoryOptions::new(a.steps);
     let opts = TrajectoryOptions {
         dt_out: a.dt_out,
-        ..TrajectoryOptions::new(a.steps)
+        integrator: super::integrator(&a.integrator, base.integrator)?,
+        ..base
     };
     let tr = trajectory::simulate(w, &x0, &opts).map_err(|e| InputError(e.to_string()))?;
     let data = to_store(&m, &tr, &opts, &start);
@@ -231,10 +235,7 @@ pub fn to_store(
         ),
         (
             "integrator".into(),
-            format!(
-                "{:?} rtol={:e} atol={:e}",
-                opts.integrator.method, opts.integrator.rtol, opts.integrator.atol
-            ),
+            super::integrator_text(&opts.integrator),
         ),
         (
             "dt_out".into(),

@@ -74,7 +74,18 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             .map(|g| (g.gait.to_string(), g.section))
             .collect(),
     };
-    let (found, failed) = search(&m0, &guesses, a.tol.max(1e-12))?;
+    // --integrator/--rtol/--atol, when given, integrate every stride of the sweep (the gait
+    // search, the continuation and the orbit diagram); otherwise each keeps its default.
+    let user_integrator = (a.integrator.integrator.is_some()
+        || a.integrator.rtol.is_some()
+        || a.integrator.atol.is_some()
+        || a.integrator.rk4_step.is_some())
+    .then(|| super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol)))
+    .transpose()?;
+    let (found, failed) = match &user_integrator {
+        Some(i) => super::fixedpoint::search_with(&m0, &guesses, a.tol.max(1e-12), i)?,
+        None => search(&m0, &guesses, a.tol.max(1e-12))?,
+    };
     let start = match a.gait.as_str() {
         "unstable" => found.iter().find(|f| !f.fp.stable),
         _ => found.iter().find(|f| f.fp.stable).or_else(|| found.first()),
@@ -98,6 +109,9 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     opts.ds_init = step;
     opts.ds_min = (step * 1e-6).min(opts.ds_min.max(1e-12));
     opts.max_points = 20 * sw.n;
+    if let Some(i) = user_integrator {
+        opts.integrator = i;
+    }
     let t0 = std::time::Instant::now();
     let main = continue_branch(&family, &start.fp.section, sw.lo, 1, &opts)?;
     let mut branches = vec![store_branch("period-1", &main)];
@@ -137,11 +151,14 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     // brute-force orbit diagram over the N values
     let params = pdw_limit::basin::linspace(sw.lo, sw.hi, sw.n);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
-    let oo = OrbitOptions {
+    let mut oo = OrbitOptions {
         transient: 300,
         record: 64,
         ..OrbitOptions::default()
     };
+    if let Some(i) = user_integrator {
+        oo.integrator = i;
+    }
     // Each value starts from the continued period-1 gait at the nearest parameter, nudged by
     // 1e-6 so that an unstable gait is left for whatever attracts beyond it.
     let starts: Vec<Vec<f64>> = params
