@@ -25,6 +25,7 @@ pub mod kinematics;
 pub mod naive;
 pub mod pseudo_joint;
 pub mod rnea;
+pub mod simd_path;
 pub mod spatial;
 pub mod workspace;
 
@@ -52,4 +53,5 @@ pub use kinematics::{
 pub use naive::{naive_forward_dynamics, naive_mass_matrix, NaiveWorkspace};
 pub use pseudo_joint::pseudo_joint_dynamics;
 pub use rnea::{base_reaction, bias_forces, rnea};
+pub use simd_path::simd_path;
 pub use workspace::Workspace;

@@ -64,6 +64,7 @@ pub mod basin;
 mod error;
 mod h5util;
 pub mod plot;
+pub mod provenance;
 pub mod shard;
 pub mod sweep;
 mod time;
@@ -75,6 +76,7 @@ pub use basin::{
 };
 pub use error::StoreError;
 pub use plot::{animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, Frame};
+pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
 pub use shard::{merge, shard_rows, ShardSpec};
 pub use sweep::{read_sweep, write_sweep, Bifurcation, Branch, OrbitDiagram, SweepData};
 pub use trajectory::{

@@ -368,6 +368,40 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    // ---- self-description: provenance, units, the slice, dimension scales
+    let sec_units = super::section_units(&m);
+    let slice = basin_slice(names, &sec_units, ix, iy, &base, &fp.section, &fixed);
+    let options = serde_json::json!({
+        "integrator": super::integrator_json(&opts.integrator),
+        "max_strides": opts.max_strides,
+        "tol_gait": opts.tol_gait,
+        "confirm": opts.confirm,
+        "tol_recur": opts.tol_recur,
+        "max_period": opts.max_period,
+        "lanes": opts.lanes,
+        "chunk": opts.chunk,
+        "grid": [nx, ny],
+        "x": {"name": names[ix], "lo": xr.lo, "hi": xr.hi},
+        "y": {"name": names[iy], "lo": yr.lo, "hi": yr.hi},
+        "fixed_point": {
+            "integrator": super::integrator_json(&pdw_limit::gaits::default_integrator(1e-12)),
+            "newton_tol": 1e-12,
+            "residual": fp.residual,
+            "section": fp.section,
+        },
+        "entropy_box": DEFAULT_ENTROPY_BOX,
+        "threads": a.threads,
+        "shard": a.shard,
+    });
+    let prov = super::provenance(options);
+    let units = basin_units(names, &sec_units, ix, iy);
+    let scales = pdw_store::provenance::basin_scales();
+    writer.annotate(&pdw_store::Annotations {
+        provenance: Some(&prov),
+        units: &units,
+        slice: Some(&slice),
+        scales: &scales,
+    })?;
     let damaged = writer.damaged_rows();
     if !damaged.is_empty() {
         eprintln!(
@@ -467,17 +501,31 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         entropy_box: DEFAULT_ENTROPY_BOX,
     });
     writer.finish(&metrics, &[attractor])?;
+    // The attractors exist now: their datasets get units too.
+    pdw_store::annotate(
+        &a.out,
+        &pdw_store::Annotations {
+            provenance: None,
+            units: &units,
+            slice: None,
+            scales: &[],
+        },
+    )?;
     let elapsed = t0.elapsed().as_secs_f64();
     if let Some(mt) = &out_metrics {
         let (h, outcome) = read_basin_outcome(&a.out)?;
-        let marker = Some((fp.section[ix], fp.section[iy]));
-        let title = format!(
-            "{} walker basin, slope {} rad, {} strides",
-            info.name,
-            m.slope(),
-            a.max_strides
-        );
-        plot_basin(&png, &h, outcome.view(), marker, &title)?;
+        // The gait is drawn only where it lies on the slice the grid shows.
+        let marker = slice
+            .on_fixed_point
+            .then_some((fp.section[ix], fp.section[iy]));
+        let title = basin_title(&info.name, m.slope(), a.max_strides, &slice);
+        plot_basin(
+            &png,
+            &labelled(&h, &sec_units[ix], &sec_units[iy]),
+            outcome.view(),
+            marker,
+            &title,
+        )?;
         print_summary(&m, a, mt, nx, ny, elapsed, &a.out, Some(&png));
     } else {
         crate::outln!(
@@ -490,6 +538,89 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The slice of the section the grid lies on: every coordinate but the two axes, at its
+/// `--set` value or the gait's.
+fn basin_slice(
+    names: &[&str],
+    units: &[String],
+    ix: usize,
+    iy: usize,
+    base: &[f64],
+    gait: &[f64],
+    set: &[(usize, f64)],
+) -> pdw_store::Slice {
+    let fixed: Vec<(String, f64, String, String)> = (0..names.len())
+        .filter(|&i| i != ix && i != iy)
+        .map(|i| {
+            let source = if set.iter().any(|(j, _)| *j == i) {
+                "--set"
+            } else {
+                "fixed point"
+            };
+            (
+                names[i].to_string(),
+                base[i],
+                units[i].clone(),
+                source.to_string(),
+            )
+        })
+        .collect();
+    let on = (0..names.len())
+        .filter(|&i| i != ix && i != iy)
+        .all(|i| (base[i] - gait[i]).abs() <= 1e-12 * (1.0 + gait[i].abs()));
+    pdw_store::Slice {
+        x: names[ix].to_string(),
+        y: names[iy].to_string(),
+        fixed,
+        on_fixed_point: on,
+    }
+}
+
+/// The unit of every dataset of a basin file, by path.
+fn basin_units(
+    names: &[&str],
+    units: &[String],
+    ix: usize,
+    iy: usize,
+) -> impl Fn(&str) -> Option<String> {
+    let (ux, uy) = (units[ix].clone(), units[iy].clone());
+    let list = super::units_list(units);
+    let _ = names;
+    move |p: &str| -> Option<String> {
+        match p {
+            "grid/x" => Some(ux.clone()),
+            "grid/y" => Some(uy.clone()),
+            "basin/outcome" | "basin/strides" | "basin/rows_done" => Some("1".into()),
+            "basin/final" => Some(list.clone()),
+            _ if p.starts_with("attractors/") && p.ends_with("/section") => Some(list.clone()),
+            _ if p.starts_with("attractors/") && p.contains("/multipliers_") => Some("1".into()),
+            _ => None,
+        }
+    }
+}
+
+/// The picture's title: model, slope, stride budget, and the slice when the section has more
+/// coordinates than the two axes.
+pub fn basin_title(model: &str, slope: f64, max_strides: u32, slice: &pdw_store::Slice) -> String {
+    let mut t = format!("{model} walker basin, slope {slope} rad, {max_strides} strides");
+    if !slice.fixed.is_empty() {
+        t.push_str("; slice ");
+        t.push_str(&slice.describe());
+        if !slice.on_fixed_point {
+            t.push_str(", gait off the slice");
+        }
+    }
+    t
+}
+
+/// The header with units in the axis names, for the picture's axis labels.
+fn labelled(h: &pdw_store::BasinHeader, ux: &str, uy: &str) -> pdw_store::BasinHeader {
+    let mut h = h.clone();
+    h.x_name = format!("{} [{ux}]", h.x_name);
+    h.y_name = format!("{} [{uy}]", h.y_name);
+    h
 }
 
 /// The engine's metrics in the file's plain form. The entropies are NaN ("not defined") when

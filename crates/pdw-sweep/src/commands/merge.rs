@@ -46,6 +46,13 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
     if let Some(f) = failure {
         anyhow::bail!("metrics of the merged grid: {f}");
     }
+    // Provenance: the merge's own, each shard's kept in /provenance/shards; the shards' units
+    // and slice; the grid's dimension scales.
+    let prov = super::provenance(serde_json::json!({
+        "shards": a.shards.len(),
+        "entropy_box": DEFAULT_ENTROPY_BOX,
+    }));
+    pdw_store::provenance::annotate_merged(&a.out, &inputs, &prov)?;
     let data = read_basin(&a.out)?;
     let marker = data
         .attractors
@@ -62,11 +69,29 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
                 .position(|n| *n == header.y_name)?;
             Some((s[ix], s[iy]))
         });
-    let title = format!(
-        "{} walker basin, slope {} rad (merged)",
-        header.model, header.slope
-    );
-    plot_basin(&png, &header, data.outcome.view(), marker, &title)?;
+    let slice = pdw_store::provenance::read_slice(&a.out)?;
+    // The gait is drawn only where it lies on the slice (files without /slice: as before).
+    let marker = marker.filter(|_| slice.as_ref().is_none_or(|s| s.on_fixed_point));
+    let title = match &slice {
+        Some(s) => format!(
+            "{} (merged)",
+            super::basin::basin_title(&header.model, header.slope, header.max_strides, s)
+        ),
+        None => format!(
+            "{} walker basin, slope {} rad (merged)",
+            header.model, header.slope
+        ),
+    };
+    let mut labelled = header.clone();
+    for (name, ds) in [
+        (&mut labelled.x_name, "grid/x"),
+        (&mut labelled.y_name, "grid/y"),
+    ] {
+        if let Some(u) = pdw_store::provenance::read_units(&a.out, ds)? {
+            *name = format!("{name} [{u}]");
+        }
+    }
+    plot_basin(&png, &labelled, data.outcome.view(), marker, &title)?;
     crate::outln!(
         "merged {} shard(s) into {} ({}x{} cells) and {}",
         a.shards.len(),

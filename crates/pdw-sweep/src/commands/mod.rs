@@ -250,3 +250,30 @@ pub fn section_units(m: &BuiltModel) -> Vec<String> {
         })
         .collect()
 }
+
+/// The command line as run.
+pub fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
+}
+
+/// This run's provenance: build (version, commit, profile, SIMD path), host, command line and
+/// `options` (every numerical option of the run, a JSON object).
+pub fn provenance(options: serde_json::Value) -> pdw_store::Provenance {
+    pdw_store::Provenance::new(&command_line(), &pdw_soa::simd_path(), &options)
+}
+
+/// The unit of the model parameter `name` (`""` if unknown).
+pub fn param_unit(m: &BuiltModel, name: &str) -> String {
+    m.info
+        .params
+        .iter()
+        .find(|p| p.name == name)
+        .map(|p| p.unit.clone())
+        .unwrap_or_default()
+}
+
+/// A JSON list of units, the form of a `units` attribute on a dataset whose last axis runs
+/// over components of different units.
+pub fn units_list(u: &[String]) -> String {
+    serde_json::to_string(u).unwrap_or_default()
+}

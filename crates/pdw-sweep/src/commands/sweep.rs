@@ -204,6 +204,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         orbit: Some(orbit),
     };
     write_sweep(&a.out, a.force, &data)?;
+    annotate_sweep(&a.out, &m0, &sw.name, &opts, &oo, a.tol)?;
     plot_bifurcation(&png, &data, 0)?;
     let elapsed = t0.elapsed().as_secs_f64();
     crate::outln!(
@@ -232,4 +233,62 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         elapsed
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Provenance (every numerical option: the gait search, the continuation, the orbit diagram)
+/// and units on every dataset of the sweep file.
+fn annotate_sweep(
+    out: &std::path::Path,
+    m: &BuiltModel,
+    parameter: &str,
+    c: &ContinuationOptions,
+    o: &OrbitOptions,
+    tol: f64,
+) -> anyhow::Result<()> {
+    let options = serde_json::json!({
+        "fixed_point": {"newton_tol": tol.max(1e-12)},
+        "continuation": {
+            "method": format!("{:?}", c.method),
+            "integrator": super::integrator_json(&c.integrator),
+            "direction": c.direction,
+            "ds_init": c.ds_init, "ds_min": c.ds_min, "ds_max": c.ds_max,
+            "max_points": c.max_points,
+            "mu_min": c.mu_min, "mu_max": c.mu_max,
+            "newton_tol": c.newton_tol, "max_newton": c.max_newton,
+            "dmu": c.dmu, "max_turn": c.max_turn,
+            "locate_tol": c.locate_tol, "switch_eps": c.switch_eps,
+        },
+        "orbit_diagram": {
+            "integrator": super::integrator_json(&o.integrator),
+            "transient": o.transient,
+            "record": o.record,
+            "max_period": o.max_period,
+            "tol_period": o.tol_period,
+        },
+    });
+    let prov = super::provenance(options);
+    let pu = super::param_unit(m, parameter);
+    let su = super::section_units(m);
+    let list = super::units_list(&su);
+    let first = su.first().cloned().unwrap_or_default();
+    let units = move |p: &str| -> Option<String> {
+        let leaf = p.rsplit('/').next().unwrap_or(p);
+        match leaf {
+            "parameter" => Some(pu.clone()),
+            "section" => Some(list.clone()),
+            "multipliers_re" | "multipliers_im" | "stable" => Some("1".into()),
+            "points" if p.starts_with("orbit") => Some(first.clone()),
+            _ => None,
+        }
+    };
+    pdw_store::annotate(
+        out,
+        &pdw_store::Annotations {
+            provenance: Some(&prov),
+            units: &units,
+            slice: None,
+            scales: &[],
+        },
+    )?;
+    Ok(())
 }
