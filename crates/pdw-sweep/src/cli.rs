@@ -133,7 +133,8 @@ pub struct BasinArgs {
     /// Vertical axis: NAME=A:B (inclusive).
     #[arg(long)]
     pub y: Option<String>,
-    /// Stride budget per cell.
+    /// Stride budget per cell. A stride here is one step: heel strike to the next heel strike
+    /// (one application of the stride map), not biomechanics' two steps.
     #[arg(long, default_value_t = 100)]
     pub max_strides: u32,
     /// HDF5 output file.
