@@ -123,9 +123,19 @@ impl Slice {
     pub fn describe(&self) -> String {
         self.fixed
             .iter()
-            .map(|(n, v, u, s)| format!("{n} = {v:.4} {u} ({s})"))
+            .map(|(n, v, u, s)| format!("{n} = {} {u} ({s})", short(*v)))
             .collect::<Vec<_>>()
             .join(", ")
+    }
+}
+
+/// `v` with 5 decimals, trailing zeros dropped (`0.6`, `0.05236`), for titles.
+pub fn short(v: f64) -> String {
+    let t = format!("{v:.5}");
+    if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
     }
 }
 

@@ -604,13 +604,14 @@ fn basin_units(
 /// The picture's title: model, slope, stride budget, and the slice when the section has more
 /// coordinates than the two axes.
 pub fn basin_title(model: &str, slope: f64, max_strides: u32, slice: &pdw_store::Slice) -> String {
-    let mut t = format!("{model} walker basin, slope {slope} rad, {max_strides} strides");
-    if !slice.fixed.is_empty() {
-        t.push_str("; slice ");
-        t.push_str(&slice.describe());
-        if !slice.on_fixed_point {
-            t.push_str(", gait off the slice");
-        }
+    let slope = pdw_store::provenance::short(slope);
+    if slice.fixed.is_empty() {
+        return format!("{model} walker basin, slope {slope} rad, {max_strides} strides");
+    }
+    // Short enough to fit the picture's width: the slice replaces the stride budget.
+    let mut t = format!("{model}, slope {slope} rad | {}", slice.describe());
+    if !slice.on_fixed_point {
+        t.push_str(", gait off slice");
     }
     t
 }
