@@ -205,7 +205,17 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     };
     write_sweep(&a.out, a.force, &data)?;
     annotate_sweep(&a.out, &m0, &sw.name, &opts, &oo, a.tol)?;
-    plot_bifurcation(&png, &data, 0)?;
+    // Units on the picture's axes (the file keeps the bare names, with units attributes).
+    let mut shown = data.clone();
+    shown.parameter = format!("{} [{}]", sw.name, super::param_unit(&m0, &sw.name));
+    for (n, u) in shown
+        .section_names
+        .iter_mut()
+        .zip(super::section_units(&m0))
+    {
+        *n = format!("{n} [{u}]");
+    }
+    plot_bifurcation(&png, &shown, 0)?;
     let elapsed = t0.elapsed().as_secs_f64();
     crate::outln!(
         "model {}: {} continued from {} to {} ({} points on the period-1 branch, end: {:?})",
@@ -218,9 +228,10 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     );
     for (period, kind, mu) in printed {
         crate::outln!(
-            "  {:<16} on the period-{period} branch at {} = {mu:.12}",
+            "  {:<16} on the period-{period} branch at {} = {mu:.12} {}",
             kind_name(kind),
-            sw.name
+            sw.name,
+            super::param_unit(&m0, &sw.name)
         );
     }
     let falls = cols.iter().filter(|c| c.fall.is_some()).count();
