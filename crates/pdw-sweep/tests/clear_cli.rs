@@ -244,3 +244,29 @@ fn animate_warns_on_unstable_and_flagged_gaits() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 }
+
+/// A basin integrator coarse enough to move the gait by more than a tenth of the gait
+/// tolerance is run, with a warning naming the residual; the default gives none.
+#[test]
+fn basin_warns_when_its_integrator_moves_the_gait() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b.h5");
+    let o = out.to_str().unwrap();
+    let r = run(&[
+        "basin",
+        "--integrator",
+        "rk4",
+        "--rk4-step",
+        "0.2",
+        "--grid",
+        "6x6",
+        "--quiet",
+        "--out",
+        o,
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(stderr(&r).contains("fixed point only to"), "{}", stderr(&r));
+    let r = run(&["basin", "--grid", "6x6", "--quiet", "--force", "--out", o]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(!stderr(&r).contains("warning"), "{}", stderr(&r));
+}
