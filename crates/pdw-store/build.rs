@@ -16,7 +16,15 @@ fn git(args: &[&str]) -> Option<String> {
 fn main() {
     let commit = git(&["rev-parse", "HEAD"]);
     let dirty =
-        commit.is_some() && git(&["status", "--porcelain", "--untracked-files=no"]).is_some();
+        // --no-optional-locks: status must not refresh (write) the index watched below.
+        commit.is_some()
+            && git(&[
+                "--no-optional-locks",
+                "status",
+                "--porcelain",
+                "--untracked-files=no",
+            ])
+            .is_some();
     let text = match commit {
         Some(c) if dirty => format!("{c}-dirty"),
         Some(c) => c,

@@ -204,7 +204,9 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         orbit: Some(orbit),
     };
     write_sweep(&a.out, a.force, &data)?;
-    annotate_sweep(&a.out, &m0, &sw.name, &opts, &oo, a.tol)?;
+    let fp_integrator =
+        user_integrator.unwrap_or_else(|| pdw_limit::gaits::default_integrator(a.tol.max(1e-12)));
+    annotate_sweep(&a.out, &m0, &sw.name, &opts, &oo, a.tol, &fp_integrator)?;
     // Units on the picture's axes (the file keeps the bare names, with units attributes).
     let mut shown = data.clone();
     shown.parameter = format!("{} [{}]", sw.name, super::param_unit(&m0, &sw.name));
@@ -255,9 +257,13 @@ fn annotate_sweep(
     c: &ContinuationOptions,
     o: &OrbitOptions,
     tol: f64,
+    fp_integrator: &pdw_hybrid::Options,
 ) -> anyhow::Result<()> {
     let options = serde_json::json!({
-        "fixed_point": {"newton_tol": tol.max(1e-12)},
+        "fixed_point": {
+            "newton_tol": tol.max(1e-12),
+            "integrator": super::integrator_json(fp_integrator),
+        },
         "continuation": {
             "method": format!("{:?}", c.method),
             "integrator": super::integrator_json(&c.integrator),
