@@ -494,3 +494,54 @@ fn variational_multipliers_agree_with_the_closed_form_to_1e_11() {
         );
     }
 }
+
+/// Goswami et al. 1998 report two period-one gaits of the compass at 3°: the long-period stable
+/// one and a short-period unstable one. The preset's `unstable` guess must lead to the second,
+/// and that gait must be the same fixed point, with the same multipliers, on the independent
+/// closed-form model.
+#[test]
+fn short_period_unstable_gait_of_goswami_agrees_with_the_closed_form() {
+    let (cf, cw) = models(&GOSWAMI);
+    let guess = |name: &str| {
+        cw.gait_guesses()
+            .into_iter()
+            .find(|g| g.gait == name)
+            .unwrap_or_else(|| panic!("the compass preset has a `{name}` guess"))
+            .section
+    };
+    let stable = fixed_point(&cw, &guess("stable"));
+    let (a, b) = (
+        fixed_point(&cf, &guess("unstable")),
+        fixed_point(&cw, &guess("unstable")),
+    );
+    eprintln!(
+        "unstable gait: s* = {:?}, period {} s (stable {} s), |λ| = {:?}",
+        b.section,
+        b.metrics.period,
+        stable.metrics.period,
+        b.multipliers
+            .iter()
+            .map(|m| m.modulus())
+            .collect::<Vec<_>>()
+    );
+    assert!(stable.stable && !b.stable);
+    assert!(
+        max_abs_diff(&b.section, &stable.section) > 1e-2,
+        "a different gait from the stable one"
+    );
+    assert!(
+        b.metrics.period < 0.9 * stable.metrics.period,
+        "short period: {} against {}",
+        b.metrics.period,
+        stable.metrics.period
+    );
+    assert!(b.multipliers[0].modulus() > 1.0);
+    assert!(max_abs_diff(&a.section, &b.section) <= 1e-11);
+    let dm = a
+        .multipliers
+        .iter()
+        .zip(&b.multipliers)
+        .map(|(x, y)| (x.re - y.re).abs().max((x.im - y.im).abs()))
+        .fold(0.0, f64::max);
+    assert!(dm <= 1e-10, "{:?} vs {:?}", a.multipliers, b.multipliers);
+}

@@ -41,12 +41,25 @@ pub fn search(
     guesses: &[(String, Vec<f64>)],
     tol: f64,
 ) -> Result<(Vec<Found>, Vec<Failed>), LimitError> {
+    search_with(w, guesses, tol, &default_integrator(tol))
+}
+
+/// The stride-map integrator of [`search`] for residual tolerance `tol`: DOP853 at
+/// `max(FIXEDPOINT_INTEGRATOR_TOL, tol/100)`.
+pub fn default_integrator(tol: f64) -> Options {
+    Options::dop853(FIXEDPOINT_INTEGRATOR_TOL.max(tol * 1e-2))
+}
+
+/// [`search`] with the stride map integrated by `integrator` (validated here; an invalid option
+/// is [`LimitError`]'s invalid-option error naming it).
+pub fn search_with(
+    w: &dyn Walker,
+    guesses: &[(String, Vec<f64>)],
+    tol: f64,
+    integrator: &Options,
+) -> Result<(Vec<Found>, Vec<Failed>), LimitError> {
     let step = |x: &[f64]| w.step_length(x);
-    let map = StrideMap::new(
-        w,
-        Options::dop853(FIXEDPOINT_INTEGRATOR_TOL.max(tol * 1e-2)),
-    )?
-    .with_step_length(&step);
+    let map = StrideMap::new(w, *integrator)?.with_step_length(&step);
     let opts = NewtonOptions {
         tol,
         ..NewtonOptions::default()

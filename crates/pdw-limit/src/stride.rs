@@ -53,9 +53,9 @@ impl fmt::Display for StrideOutcome {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             StrideOutcome::Ok => write!(f, "ok"),
-            StrideOutcome::Fall { kind, guard } => {
-                write!(f, "{} (guard {guard})", kind.name())
-            }
+            // The fall by name ("fell backward"); the guard index is a model detail kept in the
+            // value, not in the message.
+            StrideOutcome::Fall { kind, .. } => write!(f, "{}", kind.name()),
             StrideOutcome::Timeout => write!(f, "no heel strike within the stride time budget"),
             StrideOutcome::NonFinite => write!(f, "non-finite state"),
             StrideOutcome::StepTooSmall => write!(f, "integrator step size too small"),

@@ -372,6 +372,24 @@ pub(crate) fn legend_json(legend: &[(u8, String)]) -> String {
     serde_json::to_string(&m).unwrap_or_default()
 }
 
+/// The `legend` attribute as written: the outcome codes and the fill value
+/// [`NOT_COMPUTED`] = `"not_computed"` (a cell no run has written yet).
+pub(crate) fn file_legend_json(legend: &[(u8, String)]) -> String {
+    let mut all = legend.to_vec();
+    all.push((NOT_COMPUTED, NOT_COMPUTED_NAME.to_string()));
+    legend_json(&all)
+}
+
+/// The `description` attribute of `/basin/final`: what its states are, by outcome.
+pub const FINAL_DESCRIPTION: &str = "section coordinates of the last state of each cell: for \
+gait, other and timeout the section state after the last completed stride; for a fall, \
+nonfinite or integrator_failure the section coordinates of the state where the stride stopped \
+(projected, not on the section); NaN where not computed";
+
+/// Name of the fill value [`NOT_COMPUTED`] in the file's legend.
+pub const NOT_COMPUTED_NAME: &str = "not_computed";
+
+/// The legend read from a file: its outcome codes, without the fill value.
 fn parse_legend(path: &Path, text: &str) -> Result<Vec<(u8, String)>> {
     let bad = |d: String| StoreError::Format {
         path: path.to_path_buf(),
@@ -387,6 +405,7 @@ fn parse_legend(path: &Path, text: &str) -> Result<Vec<(u8, String)>> {
                 .map_err(|e| bad(e.to_string()))
         })
         .collect::<Result<Vec<_>>>()?;
+    v.retain(|(c, _)| *c != NOT_COMPUTED);
     v.sort_by_key(|(c, _)| *c);
     Ok(v)
 }
@@ -644,7 +663,7 @@ impl BasinWriter {
             .create("outcome")
             .at(path, "creating /basin/outcome")?;
         made.push((**outcome).clone());
-        set_str(path, &outcome, "legend", &legend_json(&h.legend))?;
+        set_str(path, &outcome, "legend", &file_legend_json(&h.legend))?;
         let strides = basin
             .new_dataset::<u16>()
             .shape([ny, nx])
@@ -668,6 +687,7 @@ impl BasinWriter {
         made.push((**final_state).clone());
         let names = serde_json::to_string(&h.state_names).unwrap_or_default();
         set_str(path, &final_state, "names", &names)?;
+        set_str(path, &final_state, "description", FINAL_DESCRIPTION)?;
         let rows_done_ds = basin
             .new_dataset::<u8>()
             .shape([ny])
@@ -999,6 +1019,22 @@ impl BasinWriter {
 
     fn elapsed(&self) -> f64 {
         self.elapsed_before + self.started.elapsed().as_secs_f64()
+    }
+
+    /// Writes provenance, units, the slice and dimension scales into the open file
+    /// ([`crate::provenance::annotate_file`]) and flushes.
+    pub fn annotate(&mut self, a: &crate::provenance::Annotations<'_>) -> Result<()> {
+        let p = self.path.clone();
+        ensure_space(&p, 0)?;
+        let r = (|| {
+            let f = &self.h().file;
+            crate::provenance::annotate_file(&p, f, a)?;
+            f.flush().at(&p, "flushing")
+        })();
+        if r.is_err() {
+            self.poisoned = true;
+        }
+        r
     }
 
     /// Writes `/metrics` and `/attractors`, sets `complete = true` and closes the file.

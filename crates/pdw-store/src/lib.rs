@@ -25,17 +25,25 @@
 //!                          params (JSON object), integrator, tolerances (JSON object),
 //!                          max_strides, elapsed_s, complete (bool);
 //!                          shard_index, shard_count (shard files only)
-//! /grid/x, /grid/y  f64 [nx], [ny]; attr `name` (a section coordinate, e.g. "theta")
-//! /basin/outcome    u8  [ny, nx]; attr `legend` = JSON object code → name; 255 = not computed
+//! /provenance       attrs crate_version, git_commit, build_profile, simd_path, host, command,
+//!                   options (JSON), created, commands (see [`provenance`])
+//! /slice            attrs x, y, fixed (JSON), one f64 per fixed coordinate, on_fixed_point
+//! /grid/x, /grid/y  f64 [nx], [ny]; attr `name` (a section coordinate, e.g. "theta");
+//!                   dimension scales of outcome, strides and final (dimensions 1 and 0)
+//! /basin/outcome    u8  [ny, nx]; attr `legend` = JSON object code → name, with the fill
+//!                   value 255 = "not_computed"
 //! /basin/strides    u16 [ny, nx]; strides until classified
-//! /basin/final      f64 [ny, nx, d]; last section state; attr `names` = JSON list of the d
-//!                   section coordinate names
+//! /basin/final      f64 [ny, nx, d]; section coordinates of the last state (after the last
+//!                   completed stride; for a fall, of the state where it stopped); attrs
+//!                   `names` = JSON list of the d section coordinate names, `description`
 //! /basin/rows_done  u8  [ny]; 1 once a row is on disk (what `--resume` skips)
 //! /attractors/NAME  attrs period_strides, period_time; section f64 [k, d] (the k points of the
 //!                   orbit on the section), multipliers_re / multipliers_im f64 [m]
 //! /metrics          attrs basin_entropy, boundary_entropy, entropy_box, fractions (JSON object
 //!                   name → fraction), fraction_NAME (one f64 per outcome)
 //! ```
+//! Every dataset carries a `units` attribute (written by the caller through
+//! [`provenance::annotate`]; the writers do not know the model).
 //! `outcome`, `strides` and `final` are chunked by blocks of [`BLOCK_ROWS`] rows and
 //! deflate-compressed (`strides` and `final` byte-shuffled first). Row `i` of every 2-D dataset
 //! belongs to `y[i]`, column `j` to `x[j]`. Files are created with HDF5's file-space strategy
@@ -64,6 +72,7 @@ pub mod basin;
 mod error;
 mod h5util;
 pub mod plot;
+pub mod provenance;
 pub mod shard;
 pub mod sweep;
 mod time;
@@ -78,6 +87,7 @@ pub use plot::{
     animate_gif, outcome_colours, plot_basin, plot_basin_attractors, plot_bifurcation, plot_lines,
     Frame,
 };
+pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
 pub use shard::{merge, shard_rows, ShardSpec};
 pub use sweep::{read_sweep, write_sweep, Bifurcation, Branch, OrbitDiagram, SweepData};
 pub use trajectory::{

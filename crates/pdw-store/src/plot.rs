@@ -254,7 +254,8 @@ struct Marks {
 /// [`plot_basin`] with every attractor's points marked: the points of a periodic orbit as
 /// ringed crosses filled with its basin's colour (the legend entry of the same name), a chaotic
 /// attractor's sample as small black dots. Points are projected on the grid's two coordinates
-/// (`header.state_names` must name `x_name` and `y_name`; otherwise nothing is marked).
+/// (`header.state_names` must name `x_name` and `y_name`, optionally followed by a unit suffix
+/// ` [unit]`; otherwise nothing is marked).
 pub fn plot_basin_attractors(
     path: impl AsRef<Path>,
     header: &BasinHeader,
@@ -262,8 +263,10 @@ pub fn plot_basin_attractors(
     attractors: &[Attractor],
     title: &str,
 ) -> Result<()> {
-    let ix = header.state_names.iter().position(|n| *n == header.x_name);
-    let iy = header.state_names.iter().position(|n| *n == header.y_name);
+    // Axis names may carry a unit suffix for the axis label ("theta [rad]").
+    let bare = |n: &str| n.split(" [").next().unwrap_or(n).to_string();
+    let ix = header.state_names.iter().position(|n| *n == bare(&header.x_name));
+    let iy = header.state_names.iter().position(|n| *n == bare(&header.y_name));
     let colours = outcome_colours(&header.legend);
     let marks: Vec<Marks> = match (ix, iy) {
         (Some(ix), Some(iy)) => attractors

@@ -271,7 +271,8 @@ pub fn read_trajectory_h5(path: impl AsRef<Path>) -> Result<TrajectoryData> {
     }
     let mut columns = Vec::new();
     for name in f.member_names().at(p, "listing datasets")? {
-        if name == "events" {
+        // Groups are not columns: `/events`, and `/provenance` (see [`crate::provenance`]).
+        if name == "events" || f.group(&name).is_ok() {
             continue;
         }
         let ds = f.dataset(&name).at(p, &name)?;

@@ -49,6 +49,27 @@ pub struct ModelOpts {
     pub set: Vec<String>,
 }
 
+/// The integrator of the stride map, shared by `fixedpoint`, `basin` and `simulate`. Every
+/// field is optional: the command's default (DOP853 at its documented tolerance) fills the rest.
+#[derive(Args, Debug, Clone, Default)]
+pub struct IntegratorOpts {
+    /// Integration method: dopri5 (Dormand–Prince 5(4)), dop853 (Dormand–Prince 8(5,3)) or rk4
+    /// (classical, fixed step; give --rk4-step). Default: dop853.
+    #[arg(long, value_parser = ["dopri5", "dop853", "rk4"])]
+    pub integrator: Option<String>,
+    /// Relative tolerance of dopri5/dop853 (0 or from 2.2e-15). Default: the command's
+    /// (fixedpoint 1e-14, basin 1e-9, simulate 1e-10).
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    /// Absolute tolerance of dopri5/dop853 (> 0, units of the state). Default: --rtol if given,
+    /// else the command's.
+    #[arg(long)]
+    pub atol: Option<f64>,
+    /// Step of --integrator rk4 (model time units, > 0).
+    #[arg(long, value_name = "H")]
+    pub rk4_step: Option<f64>,
+}
+
 #[derive(Args, Debug)]
 pub struct ModelsArgs {
     /// Print JSON instead of a table.
@@ -66,6 +87,8 @@ pub struct ModelsArgs {
 pub struct FixedpointArgs {
     #[command(flatten)]
     pub model: ModelOpts,
+    #[command(flatten)]
+    pub integrator: IntegratorOpts,
     /// Which gaits to report: stable, unstable or all.
     #[arg(long, default_value = "all")]
     pub gait: String,
@@ -103,6 +126,8 @@ pub struct FixedpointArgs {
 pub struct BasinArgs {
     #[command(flatten)]
     pub model: ModelOpts,
+    #[command(flatten)]
+    pub integrator: IntegratorOpts,
     /// Grid size NXxNY.
     #[arg(long, default_value = "401x401")]
     pub grid: String,
@@ -113,7 +138,8 @@ pub struct BasinArgs {
     /// Vertical axis: NAME=A:B (inclusive).
     #[arg(long)]
     pub y: Option<String>,
-    /// Stride budget per cell.
+    /// Stride budget per cell. A stride here is one step: heel strike to the next heel strike
+    /// (one application of the stride map), not biomechanics' two steps.
     #[arg(long, default_value_t = 100)]
     pub max_strides: u32,
     /// HDF5 output file.
@@ -173,6 +199,8 @@ pub struct AnimateArgs {
 pub struct SimulateArgs {
     #[command(flatten)]
     pub model: ModelOpts,
+    #[command(flatten)]
+    pub integrator: IntegratorOpts,
     /// Initial state just after a heel strike: section coordinates or the full state, comma
     /// separated (see `pdw-sweep models`). Default: the stable gait.
     #[arg(long, value_name = "X1,X2,..")]

@@ -318,6 +318,20 @@ fn interrupted_basin_resumes_to_the_same_file() {
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", stderr(&o));
+        // The provenance lists both command lines: the interrupted run and its resume.
+        let f = hdf5::File::open(&out).unwrap();
+        let cmds: Vec<String> = serde_json::from_str(
+            f.group("provenance")
+                .unwrap()
+                .attr("commands")
+                .unwrap()
+                .read_scalar::<hdf5::types::VarLenUnicode>()
+                .unwrap()
+                .as_str(),
+        )
+        .unwrap();
+        assert_eq!(cmds.len(), 2, "{cmds:?}");
+        assert!(!cmds[0].contains("--resume") && cmds[1].contains("--resume"));
     }
     let (a, b) = (read(&reference), read(&out));
     assert!(b.complete);

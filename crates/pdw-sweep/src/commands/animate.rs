@@ -44,6 +44,25 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(2));
     };
     let fp = &gait.fp;
+    // Say so when the picture is not of a gait a real walker would show: an unstable gait
+    // (no stable one was found) or one whose constraint forces are flagged.
+    if !fp.stable {
+        eprintln!(
+            "warning: model '{}' has no stable period-one gait from its guesses at slope {}; \
+             animating the UNSTABLE gait (largest |λ| = {:.4}): a walker started near it leaves it",
+            m.info.name,
+            m.slope(),
+            fp.multipliers.first().map_or(f64::NAN, |l| l.modulus())
+        );
+    }
+    let validity = super::fixedpoint::validity(&m, fp);
+    let flags = validity.as_ref().map(flag_list).unwrap_or_default();
+    if !flags.is_empty() {
+        eprintln!(
+            "warning: the animated gait is FLAGGED as physically invalid: {}",
+            flags.join("; ")
+        );
+    }
     let gamma = m.slope();
     let period = fp.metrics.period;
     let dt = period / FRAMES_PER_STRIDE as f64;
@@ -115,10 +134,11 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
         });
     }
     let title = format!(
-        "{} walker, slope {:.4} rad: {} gait, period {:.4}",
+        "{} walker, slope {:.4} rad: {} gait{}, period {:.4}",
         m.info.name,
         gamma,
-        if fp.stable { "stable" } else { "unstable" },
+        if fp.stable { "stable" } else { "UNSTABLE" },
+        if flags.is_empty() { "" } else { " (FLAGGED)" },
         period
     );
     animate_gif(&a.out, &frames, (640, 400), 60, &title)?;
@@ -129,4 +149,26 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
         STRIDES
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// The validity flags raised along a gait's step, in words (empty for a valid gait).
+pub fn flag_list(v: &pdw_limit::Validity) -> Vec<&'static str> {
+    [
+        (
+            v.normal_force_negative,
+            "the stance foot would lift off (normal force < 0)",
+        ),
+        (
+            v.knee_unlocks,
+            "a locked knee would unlock (lock torque < 0)",
+        ),
+        (
+            v.swing_foot_scuffs,
+            "the swing foot scuffs after mid-stance",
+        ),
+    ]
+    .into_iter()
+    .filter(|(f, _)| *f)
+    .map(|(_, w)| w)
+    .collect()
 }

@@ -162,6 +162,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
     let shard = match &a.shard {
         Some(s) => {
             let (index, count) = args::parse_shard(s)?;
@@ -291,6 +292,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
 
     let opts = BasinOptions {
         max_strides: a.max_strides as u16,
+        integrator,
         ..BasinOptions::default()
     };
 
@@ -354,12 +356,37 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             }
         );
     }
+    // The gait was found on an accurate stride map; the cells run on the basin's integrator.
+    // If that map moves the gait by more than a tenth of the gait tolerance, cells converge to
+    // a point the classifier does not recognise: say so rather than label them `other`.
+    if let Some(fp) = gait {
+        let map = pdw_limit::StrideMap::new(m.walker.as_ref(), opts.integrator)?;
+        let r = map
+            .apply(&fp.section)
+            .map(|p| {
+                p.iter()
+                    .zip(&fp.section)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            })
+            .unwrap_or(f64::INFINITY);
+        let close_enough = r <= 0.1 * opts.tol_gait;
+        if !close_enough {
+            eprintln!(
+                "warning: with {} the gait is a fixed point only to {r:.2e} (the cells' gait \
+                 tolerance is {:e}): cells may come out `other` or `timeout`; use a tighter \
+                 --rtol/--atol or a smaller --rk4-step",
+                super::integrator_text(&opts.integrator),
+                opts.tol_gait
+            );
+        }
+    }
     let header = BasinHeader {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         model: info.name.to_string(),
         slope: m.slope(),
         params: m.params_json().to_string(),
-        integrator: format!("{:?}", opts.integrator.method),
+        integrator: super::integrator_text(&opts.integrator),
         tolerances: serde_json::json!({
             "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
             "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
@@ -401,6 +428,49 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    // ---- self-description: provenance, units, the slice, dimension scales
+    let sec_units = super::section_units(&m);
+    let slice = basin_slice(
+        names,
+        &sec_units,
+        ix,
+        iy,
+        &base,
+        gait.map_or(&centre[..], |fp| &fp.section[..]),
+        &fixed,
+    );
+    let options = serde_json::json!({
+        "integrator": super::integrator_json(&opts.integrator),
+        "max_strides": opts.max_strides,
+        "tol_gait": opts.tol_gait,
+        "confirm": opts.confirm,
+        "tol_recur": opts.tol_recur,
+        "max_period": opts.max_period,
+        "lanes": opts.lanes,
+        "chunk": opts.chunk,
+        "grid": [nx, ny],
+        "x": {"name": names[ix], "lo": xr.lo, "hi": xr.hi},
+        "y": {"name": names[iy], "lo": yr.lo, "hi": yr.hi},
+        "fixed_point": gait.map(|fp| serde_json::json!({
+            "integrator": super::integrator_json(&pdw_limit::gaits::default_integrator(1e-12)),
+            "newton_tol": 1e-12,
+            "residual": fp.residual,
+            "section": fp.section,
+        })),
+        "attractors": set.attractors.iter().map(|at| at.name.clone()).collect::<Vec<_>>(),
+        "entropy_box": DEFAULT_ENTROPY_BOX,
+        "threads": a.threads,
+        "shard": a.shard,
+    });
+    let prov = super::provenance(options);
+    let units = basin_units(names, &sec_units, ix, iy);
+    let scales = pdw_store::provenance::basin_scales();
+    writer.annotate(&pdw_store::Annotations {
+        provenance: Some(&prov),
+        units: &units,
+        slice: Some(&slice),
+        scales: &scales,
+    })?;
     let damaged = writer.damaged_rows();
     if !damaged.is_empty() {
         eprintln!(
@@ -511,16 +581,34 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         entropy_box: DEFAULT_ENTROPY_BOX,
     });
     writer.finish(&metrics, &attractors)?;
+    // The attractors exist now: their datasets get units too.
+    pdw_store::annotate(
+        &a.out,
+        &pdw_store::Annotations {
+            provenance: None,
+            units: &units,
+            slice: None,
+            scales: &[],
+        },
+    )?;
     let elapsed = t0.elapsed().as_secs_f64();
     if let Some(mt) = &out_metrics {
         let (h, outcome) = read_basin_outcome(&a.out)?;
-        let title = format!(
-            "{} walker basin, slope {} rad, {} strides",
-            info.name,
-            m.slope(),
-            a.max_strides
-        );
-        plot_basin_attractors(&png, &h, outcome.view(), &attractors, &title)?;
+        // Orbit points are drawn only where the slice passes through the gait: off the slice
+        // their projection would mislead.
+        let shown: &[Attractor] = if slice.on_fixed_point {
+            &attractors
+        } else {
+            &[]
+        };
+        let title = basin_title(&info.name, m.slope(), a.max_strides, &slice);
+        plot_basin_attractors(
+            &png,
+            &labelled(&h, &sec_units[ix], &sec_units[iy]),
+            outcome.view(),
+            shown,
+            &title,
+        )?;
         print_summary(&m, a, mt, nx, ny, elapsed, &a.out, Some(&png));
     } else {
         crate::outln!(
@@ -545,6 +633,90 @@ pub fn store_attractor(a: &LimitAttractor) -> Attractor {
         section: a.points.clone(),
         multipliers: a.multipliers.iter().map(|l| (l.re, l.im)).collect(),
     }
+}
+
+/// The slice of the section the grid lies on: every coordinate but the two axes, at its
+/// `--set` value or the gait's.
+fn basin_slice(
+    names: &[&str],
+    units: &[String],
+    ix: usize,
+    iy: usize,
+    base: &[f64],
+    gait: &[f64],
+    set: &[(usize, f64)],
+) -> pdw_store::Slice {
+    let fixed: Vec<(String, f64, String, String)> = (0..names.len())
+        .filter(|&i| i != ix && i != iy)
+        .map(|i| {
+            let source = if set.iter().any(|(j, _)| *j == i) {
+                "--set"
+            } else {
+                "fixed point"
+            };
+            (
+                names[i].to_string(),
+                base[i],
+                units[i].clone(),
+                source.to_string(),
+            )
+        })
+        .collect();
+    let on = (0..names.len())
+        .filter(|&i| i != ix && i != iy)
+        .all(|i| (base[i] - gait[i]).abs() <= 1e-12 * (1.0 + gait[i].abs()));
+    pdw_store::Slice {
+        x: names[ix].to_string(),
+        y: names[iy].to_string(),
+        fixed,
+        on_fixed_point: on,
+    }
+}
+
+/// The unit of every dataset of a basin file, by path.
+fn basin_units(
+    names: &[&str],
+    units: &[String],
+    ix: usize,
+    iy: usize,
+) -> impl Fn(&str) -> Option<String> {
+    let (ux, uy) = (units[ix].clone(), units[iy].clone());
+    let list = super::units_list(units);
+    let _ = names;
+    move |p: &str| -> Option<String> {
+        match p {
+            "grid/x" => Some(ux.clone()),
+            "grid/y" => Some(uy.clone()),
+            "basin/outcome" | "basin/strides" | "basin/rows_done" => Some("1".into()),
+            "basin/final" => Some(list.clone()),
+            _ if p.starts_with("attractors/") && p.ends_with("/section") => Some(list.clone()),
+            _ if p.starts_with("attractors/") && p.contains("/multipliers_") => Some("1".into()),
+            _ => None,
+        }
+    }
+}
+
+/// The picture's title: model, slope, stride budget, and the slice when the section has more
+/// coordinates than the two axes.
+pub fn basin_title(model: &str, slope: f64, max_strides: u32, slice: &pdw_store::Slice) -> String {
+    let slope = pdw_store::provenance::short(slope);
+    if slice.fixed.is_empty() {
+        return format!("{model} walker basin, slope {slope} rad, {max_strides} strides");
+    }
+    // Short enough to fit the picture's width: the slice replaces the stride budget.
+    let mut t = format!("{model}, slope {slope} rad | {}", slice.describe());
+    if !slice.on_fixed_point {
+        t.push_str(", gait off slice");
+    }
+    t
+}
+
+/// The header with units in the axis names, for the picture's axis labels.
+fn labelled(h: &pdw_store::BasinHeader, ux: &str, uy: &str) -> pdw_store::BasinHeader {
+    let mut h = h.clone();
+    h.x_name = format!("{} [{ux}]", h.x_name);
+    h.y_name = format!("{} [{uy}]", h.y_name);
+    h
 }
 
 /// The engine's metrics in the file's plain form, one fraction per entry of the file's

@@ -25,6 +25,16 @@ pub fn search(
     pdw_limit::gaits::search(m.walker.as_ref(), guesses, tol)
 }
 
+/// [`search`] with the stride map integrated by `integrator` (`--integrator`, `--rtol`, `--atol`).
+pub fn search_with(
+    m: &BuiltModel,
+    guesses: &[(String, Vec<f64>)],
+    tol: f64,
+    integrator: &pdw_hybrid::Options,
+) -> Result<(Vec<Found>, Vec<Failed>), LimitError> {
+    pdw_limit::gaits::search_with(m.walker.as_ref(), guesses, tol, integrator)
+}
+
 /// Constraint forces and validity flags sampled along one step of a gait (every accepted
 /// integrator step and both sides of every event; [`Validity::along_step`]).
 pub fn validity(m: &BuiltModel, fp: &FixedPoint) -> Option<Validity> {
@@ -67,6 +77,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    let integrator = super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol))?;
     if a.sweep.is_some() {
         if a.period != 1 {
             return Err(InputError(format!(
@@ -74,6 +85,15 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
                  period 2, 4, … at its period doublings by itself; drop --period",
                 a.period
             ))
+            .into());
+        }
+        if a.json {
+            // Not silently ignored: a sweep writes HDF5 (--out) and a PNG, not JSON.
+            return Err(InputError(
+                "--json: a --sweep writes its results to --out (HDF5) and --png; it has no JSON \
+                 output (drop --json, or read the HDF5 file)"
+                    .into(),
+            )
             .into());
         }
         return super::sweep::run(a);
@@ -100,7 +120,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     if a.period > 1 {
         return run_period_k(a, &m, &guesses, which);
     }
-    let (found, failed) = search(&m, &guesses, a.tol)?;
+    let (found, failed) = search_with(&m, &guesses, a.tol, &integrator)?;
     let selected: Vec<&Found> = found
         .iter()
         .filter(|f| match which {
@@ -139,15 +159,19 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             "slope": m.slope(),
             "params": m.params_json(),
             "section_names": m.info.section_names,
+            "section_units": super::section_units(&m),
+            "time_unit": super::time_unit(&m),
+            "integrator": super::integrator_json(&integrator),
             "fixed_points": fps,
         });
         crate::outln!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         crate::outln!(
-            "model {}  slope {} rad ({:.4} deg)",
+            "model {}  slope {} rad ({:.4} deg)  integrator {}",
             m.info.name,
             m.slope(),
-            m.slope().to_degrees()
+            m.slope().to_degrees(),
+            super::integrator_text(&integrator)
         );
         for f in &selected {
             print_fixed_point(&m, f);
@@ -155,22 +179,80 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     }
     if selected.is_empty() {
         eprintln!(
-            "no {} period-one gait found for model '{}' from {} guess(es)",
-            if which == "all" { "" } else { which },
+            "no {}period-one gait found for model '{}' from {} guess(es)",
+            if which == "all" {
+                String::new()
+            } else {
+                format!("{which} ")
+            },
             m.info.name,
             guesses.len()
         );
         for (label, g, e) in &failed {
             report_failure(label, g, e);
         }
-        eprintln!(
-            "try: another --guess (section coordinates {}), a smaller --slope, or continuation \
-             from a slope where a gait exists (--sweep slope=A:B:N)",
-            m.info.section_names.join(", ")
-        );
+        eprintln!("try: {}", advice(&m));
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// What to try when no gait is found, by model: the rimless wheel rolls only on a slope steep
+/// enough to make up the energy its spoke impacts lose (McGeer 1990: its fixed point exists for
+/// γ above a threshold that grows as the spoke angle does), so it needs a *steeper* slope; the
+/// legged walkers lose their gaits by period doubling and falls on steep slopes, so they need a
+/// shallower one (but not level ground).
+pub fn advice(m: &BuiltModel) -> String {
+    let coords = m.info.section_names.join(", ");
+    if m.info.name == "rimless" {
+        let n = m
+            .params
+            .iter()
+            .find(|(p, _)| p == "n_spokes")
+            .map_or(8.0, |p| p.1);
+        let g_min = rimless_min_slope(n);
+        if m.slope() > g_min {
+            return format!(
+                "another --guess ({coords}; the slope {:.4} rad is above the {g_min:.4} rad the \
+                 rolling gait needs, and the model's own guess is its closed-form fixed point)",
+                m.slope()
+            );
+        }
+        format!(
+            "a steeper --slope: the rimless wheel keeps rolling only where the slope makes up the \
+             energy each spoke impact loses; with {n} spokes its rolling gait needs slope > \
+             {g_min:.4} rad ({:.2} deg), this run has {:.4} rad",
+            g_min.to_degrees(),
+            m.slope()
+        )
+    } else {
+        format!(
+            "another --guess (section coordinates {coords}), a shallower --slope (not 0: level \
+             ground has no passive gait), or continuation from a slope where a gait exists \
+             (--sweep slope=A:B:N)"
+        )
+    }
+}
+
+/// The smallest slope on which the rimless wheel with `n` spokes has a rolling gait. Its return
+/// map `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)` (α = π/n; REFERENCES §2, Tedrake ch. 4) has the
+/// fixed point `ω*² = 4 (g/l) cos² 2α sin α sin γ / sin² 2α`; the wheel vaults over the next
+/// spoke only if `½ ω*² > (g/l) (1 − cos(α − γ))` (the hub must pass the top, θ = −γ). The
+/// threshold is the root of the difference in (0, α), found by bisection (independent of g/l).
+pub fn rimless_min_slope(n: f64) -> f64 {
+    let a = std::f64::consts::PI / n;
+    let (c2, s2) = ((2.0 * a).cos(), (2.0 * a).sin());
+    let f = |g: f64| 2.0 * c2 * c2 * a.sin() * g.sin() / (s2 * s2) - (1.0 - (a - g).cos());
+    let (mut lo, mut hi) = (0.0, a);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
 }
 
 fn print_fixed_point(m: &BuiltModel, f: &Found) {
@@ -181,15 +263,22 @@ fn print_fixed_point(m: &BuiltModel, f: &Found) {
         if fp.stable { "stable" } else { "unstable" },
         f.label
     );
-    for (n, v) in m.info.section_names.iter().zip(&fp.section) {
-        crate::outln!("  {n:<12} {v:>22.15}");
+    let (tu, lu) = (super::time_unit(m), super::length_unit(m));
+    for ((n, v), u) in m
+        .info
+        .section_names
+        .iter()
+        .zip(&fp.section)
+        .zip(super::section_units(m))
+    {
+        crate::outln!("  {n:<12} {v:>22.15}  {u}");
     }
-    crate::outln!("  period       {:>22.15}", fp.metrics.period);
+    crate::outln!("  period       {:>22.15}  {tu}", fp.metrics.period);
     if let Some(l) = fp.metrics.step_length {
-        crate::outln!("  step length  {l:>22.15}");
+        crate::outln!("  step length  {l:>22.15}  {lu}");
     }
     if let Some(v) = fp.metrics.speed {
-        crate::outln!("  speed        {v:>22.15}");
+        crate::outln!("  speed        {v:>22.15}  {lu}/{tu}");
     }
     crate::outln!("  multipliers (|λ|):");
     for l in &fp.multipliers {
@@ -201,13 +290,15 @@ fn print_fixed_point(m: &BuiltModel, f: &Found) {
         );
     }
     if let Some(v) = validity(m, fp) {
+        let units = super::model_units(m);
         crate::outln!(
-            "  validity     {}: normal force ≥ {:.4}, friction needed ≤ {:.4}{}",
+            "  validity     {}: normal force ≥ {:.4} {}, friction needed ≤ {:.4}{}",
             if v.valid() { "ok" } else { "FLAGGED" },
             v.min_normal_force,
+            units.force,
             v.max_friction_required,
             v.min_knee_torque
-                .map(|k| format!(", knee-lock torque ≥ {k:.4}"))
+                .map(|k| format!(", knee-lock torque ≥ {k:.4} {}", units.torque))
                 .unwrap_or_default()
         );
         for (flag, what) in [

@@ -26,6 +26,7 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
         &inputs,
         a.force,
     )?;
+    check_same_numerics(&inputs, a.force)?;
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let mut failure: Option<String> = None;
     let header = merge(&a.shards, &a.out, a.force, &command, |h, outcome| {
@@ -46,12 +47,39 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
     if let Some(f) = failure {
         anyhow::bail!("metrics of the merged grid: {f}");
     }
+    // Provenance: the merge's own, each shard's kept in /provenance/shards; the shards' units
+    // and slice; the grid's dimension scales.
+    let prov = super::provenance(serde_json::json!({
+        "shards": a.shards.len(),
+        "entropy_box": DEFAULT_ENTROPY_BOX,
+    }));
+    pdw_store::provenance::annotate_merged(&a.out, &inputs, &prov)?;
     let data = read_basin(&a.out)?;
-    let title = format!(
-        "{} walker basin, slope {} rad (merged)",
-        header.model, header.slope
-    );
-    plot_basin_attractors(&png, &header, data.outcome.view(), &data.attractors, &title)?;
+    let slice = pdw_store::provenance::read_slice(&a.out)?;
+    // Orbit points are drawn only where the slice passes through the gait (files without
+    // /slice: as before): off the slice their projection would mislead.
+    let on_slice = slice.as_ref().is_none_or(|s| s.on_fixed_point);
+    let shown: &[_] = if on_slice { &data.attractors } else { &[] };
+    let title = match &slice {
+        Some(s) => format!(
+            "{} (merged)",
+            super::basin::basin_title(&header.model, header.slope, header.max_strides, s)
+        ),
+        None => format!(
+            "{} walker basin, slope {} rad (merged)",
+            header.model, header.slope
+        ),
+    };
+    let mut labelled = header.clone();
+    for (name, ds) in [
+        (&mut labelled.x_name, "grid/x"),
+        (&mut labelled.y_name, "grid/y"),
+    ] {
+        if let Some(u) = pdw_store::provenance::read_units(&a.out, ds)? {
+            *name = format!("{name} [{u}]");
+        }
+    }
+    plot_basin_attractors(&png, &labelled, data.outcome.view(), shown, &title)?;
     crate::outln!(
         "merged {} shard(s) into {} ({}x{} cells) and {}",
         a.shards.len(),
@@ -61,4 +89,60 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
         png.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Shards written by different builds (crate version, git commit) or numeric contracts may
+/// differ in the last bit of a state, so a cell on a basin boundary could be labelled
+/// differently by each: refuse to join them unless `--force`. Every instruction-set path of one
+/// build gives the same bits (tested), so differing `simd_path`s alone are accepted.
+fn check_same_numerics(shards: &[&std::path::Path], force: bool) -> anyhow::Result<()> {
+    let provs = pdw_store::provenance::shard_provenance(shards)?;
+    let key = |p: &Option<pdw_store::Provenance>| {
+        p.as_ref().map(|p| {
+            (
+                p.crate_version.clone(),
+                p.git_commit.clone(),
+                p.numerics.clone(),
+            )
+        })
+    };
+    let first = key(&provs[0]);
+    let odd: Vec<String> = shards
+        .iter()
+        .zip(&provs)
+        .filter(|(_, p)| key(p) != first)
+        .map(|(s, p)| match p {
+            Some(p) => format!(
+                "{} (version {}, commit {}, numerics '{}')",
+                s.display(),
+                p.crate_version,
+                p.git_commit,
+                p.numerics
+            ),
+            None => format!("{} (no provenance)", s.display()),
+        })
+        .collect();
+    if odd.is_empty() || force {
+        if !odd.is_empty() {
+            eprintln!(
+                "warning: --force: joining shards from different builds: {}",
+                odd.join("; ")
+            );
+        }
+        return Ok(());
+    }
+    let f = match &provs[0] {
+        Some(p) => format!(
+            "version {}, commit {}, numerics '{}'",
+            p.crate_version, p.git_commit, p.numerics
+        ),
+        None => "no provenance".into(),
+    };
+    Err(crate::args::InputError(format!(
+        "shards come from different builds, whose numbers may differ in the last bit: {} has \
+         {f}; differing: {}. Recompute them with one build, or pass --force to join them anyway",
+        shards[0].display(),
+        odd.join("; ")
+    ))
+    .into())
 }

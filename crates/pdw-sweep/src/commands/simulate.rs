@@ -55,6 +55,8 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             return Err(InputError(format!("--dt-out: {h} must be a positive time step")).into());
         }
     }
+    // The integrator first: a bad --rtol is reported before any gait search.
+    super::integrator(&a.integrator, TrajectoryOptions::new(1).integrator)?;
     if a.state.is_some() && a.gait.is_some() {
         return Err(InputError("--state and --gait: give one or the other".into()).into());
     }
@@ -99,15 +101,54 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             )
         }
     };
+    let base = TrajectoryOptions::new(a.steps);
     let opts = TrajectoryOptions {
         dt_out: a.dt_out,
-        ..TrajectoryOptions::new(a.steps)
+        integrator: super::integrator(&a.integrator, base.integrator)?,
+        ..base
     };
     let tr = trajectory::simulate(w, &x0, &opts).map_err(|e| InputError(e.to_string()))?;
     let data = to_store(&m, &tr, &opts, &start);
+    let prov = super::provenance(serde_json::json!({
+        "integrator": super::integrator_json(&opts.integrator),
+        "steps": opts.steps,
+        "dt_out": opts.dt_out,
+        "gait_newton_tol": GAIT_TOL,
+    }));
+    let state_units = super::units_list(&tr.units.state);
     match format {
-        Format::Hdf5 => pdw_store::write_trajectory_h5(&a.out, a.force, &data)?,
-        Format::Csv => pdw_store::write_trajectory_csv(&a.out, a.force, &data)?,
+        Format::Hdf5 => {
+            pdw_store::write_trajectory_h5(&a.out, a.force, &data)?;
+            pdw_store::annotate(
+                &a.out,
+                &pdw_store::Annotations {
+                    provenance: Some(&prov),
+                    units: &|p: &str| match p {
+                        "events/kind" | "events/step" | "events/mode_before"
+                        | "events/mode_after" => Some("1".into()),
+                        "events/pre" | "events/post" => Some(state_units.clone()),
+                        _ => None,
+                    },
+                    slice: None,
+                    scales: &[],
+                },
+            )?;
+        }
+        Format::Csv => {
+            // CSV: the provenance as `# key: value` comment lines with the other attributes.
+            let mut data = data;
+            for (k, v) in [
+                ("crate_version", &prov.crate_version),
+                ("git_commit", &prov.git_commit),
+                ("build_profile", &prov.build_profile),
+                ("simd_path", &prov.simd_path),
+                ("host", &prov.host),
+                ("options", &prov.options),
+            ] {
+                data.attrs.push((k.to_string(), v.clone()));
+            }
+            pdw_store::write_trajectory_csv(&a.out, a.force, &data)?
+        }
     }
     crate::outln!(
         "model {}  slope {} rad  from {}",
@@ -231,10 +272,7 @@ pub fn to_store(
         ),
         (
             "integrator".into(),
-            format!(
-                "{:?} rtol={:e} atol={:e}",
-                opts.integrator.method, opts.integrator.rtol, opts.integrator.atol
-            ),
+            super::integrator_text(&opts.integrator),
         ),
         (
             "dt_out".into(),

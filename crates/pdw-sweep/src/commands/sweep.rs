@@ -74,7 +74,18 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             .map(|g| (g.gait.to_string(), g.section))
             .collect(),
     };
-    let (found, failed) = search(&m0, &guesses, a.tol.max(1e-12))?;
+    // --integrator/--rtol/--atol, when given, integrate every stride of the sweep (the gait
+    // search, the continuation and the orbit diagram); otherwise each keeps its default.
+    let user_integrator = (a.integrator.integrator.is_some()
+        || a.integrator.rtol.is_some()
+        || a.integrator.atol.is_some()
+        || a.integrator.rk4_step.is_some())
+    .then(|| super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol)))
+    .transpose()?;
+    let (found, failed) = match &user_integrator {
+        Some(i) => super::fixedpoint::search_with(&m0, &guesses, a.tol.max(1e-12), i)?,
+        None => search(&m0, &guesses, a.tol.max(1e-12))?,
+    };
     let start = match a.gait.as_str() {
         "unstable" => found.iter().find(|f| !f.fp.stable),
         _ => found.iter().find(|f| f.fp.stable).or_else(|| found.first()),
@@ -98,6 +109,9 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     opts.ds_init = step;
     opts.ds_min = (step * 1e-6).min(opts.ds_min.max(1e-12));
     opts.max_points = 20 * sw.n;
+    if let Some(i) = user_integrator {
+        opts.integrator = i;
+    }
     let t0 = std::time::Instant::now();
     let main = continue_branch(&family, &start.fp.section, sw.lo, 1, &opts)?;
     let mut branches = vec![store_branch("period-1", &main)];
@@ -137,11 +151,14 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     // brute-force orbit diagram over the N values
     let params = pdw_limit::basin::linspace(sw.lo, sw.hi, sw.n);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
-    let oo = OrbitOptions {
+    let mut oo = OrbitOptions {
         transient: 300,
         record: 64,
         ..OrbitOptions::default()
     };
+    if let Some(i) = user_integrator {
+        oo.integrator = i;
+    }
     // Each value starts from the continued period-1 gait at the nearest parameter, nudged by
     // 1e-6 so that an unstable gait is left for whatever attracts beyond it.
     let starts: Vec<Vec<f64>> = params
@@ -187,7 +204,20 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         orbit: Some(orbit),
     };
     write_sweep(&a.out, a.force, &data)?;
-    plot_bifurcation(&png, &data, 0)?;
+    let fp_integrator =
+        user_integrator.unwrap_or_else(|| pdw_limit::gaits::default_integrator(a.tol.max(1e-12)));
+    annotate_sweep(&a.out, &m0, &sw.name, &opts, &oo, a.tol, &fp_integrator)?;
+    // Units on the picture's axes (the file keeps the bare names, with units attributes).
+    let mut shown = data.clone();
+    shown.parameter = format!("{} [{}]", sw.name, super::param_unit(&m0, &sw.name));
+    for (n, u) in shown
+        .section_names
+        .iter_mut()
+        .zip(super::section_units(&m0))
+    {
+        *n = format!("{n} [{u}]");
+    }
+    plot_bifurcation(&png, &shown, 0)?;
     let elapsed = t0.elapsed().as_secs_f64();
     crate::outln!(
         "model {}: {} continued from {} to {} ({} points on the period-1 branch, end: {:?})",
@@ -200,9 +230,10 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     );
     for (period, kind, mu) in printed {
         crate::outln!(
-            "  {:<16} on the period-{period} branch at {} = {mu:.12}",
+            "  {:<16} on the period-{period} branch at {} = {mu:.12} {}",
             kind_name(kind),
-            sw.name
+            sw.name,
+            super::param_unit(&m0, &sw.name)
         );
     }
     let falls = cols.iter().filter(|c| c.fall.is_some()).count();
@@ -215,4 +246,66 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         elapsed
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Provenance (every numerical option: the gait search, the continuation, the orbit diagram)
+/// and units on every dataset of the sweep file.
+fn annotate_sweep(
+    out: &std::path::Path,
+    m: &BuiltModel,
+    parameter: &str,
+    c: &ContinuationOptions,
+    o: &OrbitOptions,
+    tol: f64,
+    fp_integrator: &pdw_hybrid::Options,
+) -> anyhow::Result<()> {
+    let options = serde_json::json!({
+        "fixed_point": {
+            "newton_tol": tol.max(1e-12),
+            "integrator": super::integrator_json(fp_integrator),
+        },
+        "continuation": {
+            "method": format!("{:?}", c.method),
+            "integrator": super::integrator_json(&c.integrator),
+            "direction": c.direction,
+            "ds_init": c.ds_init, "ds_min": c.ds_min, "ds_max": c.ds_max,
+            "max_points": c.max_points,
+            "mu_min": c.mu_min, "mu_max": c.mu_max,
+            "newton_tol": c.newton_tol, "max_newton": c.max_newton,
+            "dmu": c.dmu, "max_turn": c.max_turn,
+            "locate_tol": c.locate_tol, "switch_eps": c.switch_eps,
+        },
+        "orbit_diagram": {
+            "integrator": super::integrator_json(&o.integrator),
+            "transient": o.transient,
+            "record": o.record,
+            "max_period": o.max_period,
+            "tol_period": o.tol_period,
+        },
+    });
+    let prov = super::provenance(options);
+    let pu = super::param_unit(m, parameter);
+    let su = super::section_units(m);
+    let list = super::units_list(&su);
+    let first = su.first().cloned().unwrap_or_default();
+    let units = move |p: &str| -> Option<String> {
+        let leaf = p.rsplit('/').next().unwrap_or(p);
+        match leaf {
+            "parameter" => Some(pu.clone()),
+            "section" => Some(list.clone()),
+            "multipliers_re" | "multipliers_im" | "stable" => Some("1".into()),
+            "points" if p.starts_with("orbit") => Some(first.clone()),
+            _ => None,
+        }
+    };
+    pdw_store::annotate(
+        out,
+        &pdw_store::Annotations {
+            provenance: Some(&prov),
+            units: &units,
+            slice: None,
+            scales: &[],
+        },
+    )?;
+    Ok(())
 }

@@ -1,0 +1,337 @@
+//! Every file the CLI writes describes itself: a `units` attribute on every dataset,
+//! provenance (build, host, command, every numerical option), the basin's slice, dimension
+//! scales on the grid, the fill value in the legend; a merged basin keeps each shard's command.
+//! Attributes are read back with the hdf5 crate.
+
+use hdf5::types::{FixedAscii, VarLenUnicode};
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let o = run(args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn attr_str(loc: &hdf5::Location, name: &str) -> String {
+    loc.attr(name)
+        .unwrap_or_else(|_| panic!("attribute {name}"))
+        .read_scalar::<VarLenUnicode>()
+        .unwrap()
+        .as_str()
+        .to_string()
+}
+
+/// Every dataset of the file and its `units` (panics naming a dataset without one).
+fn units_of_every_dataset(f: &hdf5::File) -> Vec<(String, String)> {
+    fn walk(g: &hdf5::Group, prefix: &str, out: &mut Vec<(String, String)>) {
+        for n in g.member_names().unwrap() {
+            let full = if prefix.is_empty() {
+                n.clone()
+            } else {
+                format!("{prefix}/{n}")
+            };
+            if let Ok(sub) = g.group(&n) {
+                walk(&sub, &full, out);
+            } else if let Ok(d) = g.dataset(&n) {
+                assert!(
+                    d.attr_names().unwrap().iter().any(|a| a == "units"),
+                    "dataset /{full} has no units"
+                );
+                out.push((full, attr_str(&d, "units")));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(f, "", &mut out);
+    assert!(!out.is_empty());
+    out
+}
+
+fn unit<'a>(all: &'a [(String, String)], ds: &str) -> &'a str {
+    &all.iter()
+        .find(|(n, _)| n == ds)
+        .unwrap_or_else(|| panic!("no dataset {ds}"))
+        .1
+}
+
+/// The provenance group holds this build's facts and the run's command and options.
+fn check_provenance(f: &hdf5::File, command_has: &str) -> serde_json::Value {
+    let p = f.group("provenance").expect("/provenance");
+    assert_eq!(attr_str(&p, "crate_version"), env!("CARGO_PKG_VERSION"));
+    let commit = attr_str(&p, "git_commit");
+    // The commit of this checkout when git is available (the build read the same repository).
+    if let Ok(o) = Command::new("git").args(["rev-parse", "HEAD"]).output() {
+        if o.status.success() {
+            let head = String::from_utf8_lossy(&o.stdout).trim().to_string();
+            assert!(commit.starts_with(&head[..12]), "{commit} vs HEAD {head}");
+        }
+    }
+    let profile = attr_str(&p, "build_profile");
+    assert_eq!(
+        profile,
+        if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+    );
+    assert!(attr_str(&p, "simd_path").starts_with("compile-time: "));
+    assert!(!attr_str(&p, "host").is_empty());
+    assert!(attr_str(&p, "command").contains(command_has));
+    assert!(!attr_str(&p, "created").is_empty());
+    serde_json::from_str(&attr_str(&p, "options")).expect("options are JSON")
+}
+
+fn read_fixed_class(d: &hdf5::Dataset) -> String {
+    d.attr("CLASS")
+        .unwrap()
+        .read_scalar::<FixedAscii<16>>()
+        .unwrap()
+        .as_str()
+        .to_string()
+}
+
+#[test]
+fn basin_file_carries_units_slice_scales_provenance_and_the_fill_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.h5");
+    let o = out.to_str().unwrap();
+    ok(&[
+        "basin", "--model", "compass", "--grid", "16x16", "--quiet", "--rtol", "1e-10", "--out", o,
+    ]);
+    let f = hdf5::File::open(&out).unwrap();
+    let units = units_of_every_dataset(&f);
+    assert_eq!(unit(&units, "grid/x"), "rad");
+    assert_eq!(unit(&units, "grid/y"), "rad/s");
+    assert_eq!(unit(&units, "basin/outcome"), "1");
+    assert_eq!(unit(&units, "basin/final"), r#"["rad","rad/s","rad/s"]"#);
+    assert_eq!(
+        unit(&units, "attractors/gait/section"),
+        r#"["rad","rad/s","rad/s"]"#
+    );
+    let opts = check_provenance(&f, "basin");
+    assert_eq!(opts["integrator"]["method"], "dop853");
+    assert_eq!(opts["integrator"]["rtol"], 1e-10);
+    assert_eq!(opts["integrator"]["atol"], 1e-10);
+    assert_eq!(opts["max_strides"], 100);
+    // The header's integrator agrees with the provenance.
+    assert_eq!(attr_str(&f, "integrator"), "dop853 rtol=1e-10 atol=1e-10");
+
+    // The slice: hip_rate held at the gait's value (defaulted), the gait on the slice.
+    let fp: serde_json::Value = serde_json::from_slice(
+        &ok(&[
+            "fixedpoint",
+            "--model",
+            "compass",
+            "--gait",
+            "stable",
+            "--json",
+        ])
+        .stdout,
+    )
+    .unwrap();
+    let hip_rate = fp["fixed_points"][0]["section"][2].as_f64().unwrap();
+    let s = f.group("slice").unwrap();
+    assert_eq!(attr_str(&s, "x"), "stance");
+    assert_eq!(attr_str(&s, "y"), "stance_rate");
+    let v: f64 = s.attr("hip_rate").unwrap().read_scalar().unwrap();
+    assert!((v - hip_rate).abs() < 1e-12, "{v} vs {hip_rate}");
+    let fixed: serde_json::Value = serde_json::from_str(&attr_str(&s, "fixed")).unwrap();
+    assert_eq!(fixed["hip_rate"]["source"], "fixed point");
+    assert_eq!(fixed["hip_rate"]["unit"], "rad/s");
+    assert!(s
+        .attr("on_fixed_point")
+        .unwrap()
+        .read_scalar::<bool>()
+        .unwrap());
+
+    // The legend names the fill value.
+    let legend: serde_json::Value =
+        serde_json::from_str(&attr_str(&f.dataset("basin/outcome").unwrap(), "legend")).unwrap();
+    assert_eq!(legend["255"], "not_computed");
+    assert_eq!(legend["0"], "gait");
+    assert!(attr_str(&f.dataset("basin/final").unwrap(), "description").contains("fall"));
+
+    // Dimension scales: /grid/x, /grid/y are scales named after their coordinates, attached
+    // to dimensions 1 and 0 of the three grid datasets.
+    for (scale, coord) in [("grid/x", "stance"), ("grid/y", "stance_rate")] {
+        let d = f.dataset(scale).unwrap();
+        assert_eq!(read_fixed_class(&d), "DIMENSION_SCALE");
+        let name = d
+            .attr("NAME")
+            .unwrap()
+            .read_scalar::<FixedAscii<32>>()
+            .unwrap();
+        assert_eq!(name.as_str(), coord);
+        assert_eq!(d.attr("REFERENCE_LIST").unwrap().shape(), vec![3]);
+    }
+    for (ds, rank) in [
+        ("basin/outcome", 2),
+        ("basin/strides", 2),
+        ("basin/final", 3),
+    ] {
+        let d = f.dataset(ds).unwrap();
+        assert_eq!(
+            d.attr("DIMENSION_LIST").unwrap().shape(),
+            vec![rank],
+            "{ds}"
+        );
+    }
+    drop(f);
+
+    // A coordinate set off the gait: the slice says so, and the file is still complete.
+    let off = dir.path().join("off.h5");
+    ok(&[
+        "basin",
+        "--model",
+        "compass",
+        "--grid",
+        "8x8",
+        "--quiet",
+        "--set",
+        "hip_rate=0.6",
+        "--out",
+        off.to_str().unwrap(),
+    ]);
+    let f = hdf5::File::open(&off).unwrap();
+    let s = f.group("slice").unwrap();
+    let v: f64 = s.attr("hip_rate").unwrap().read_scalar().unwrap();
+    assert_eq!(v, 0.6);
+    let fixed: serde_json::Value = serde_json::from_str(&attr_str(&s, "fixed")).unwrap();
+    assert_eq!(fixed["hip_rate"]["source"], "--set");
+    assert!(!s
+        .attr("on_fixed_point")
+        .unwrap()
+        .read_scalar::<bool>()
+        .unwrap());
+}
+
+#[test]
+fn simplest_walker_files_are_in_leg_units_and_merged_shards_keep_their_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n);
+    for i in 0..2 {
+        ok(&[
+            "basin",
+            "--grid",
+            "20x20",
+            "--quiet",
+            "--shard",
+            &format!("{i}/2"),
+            "--out",
+            p(&format!("s{i}.h5")).to_str().unwrap(),
+        ]);
+    }
+    let merged = p("m.h5");
+    ok(&[
+        "merge",
+        p("s0.h5").to_str().unwrap(),
+        p("s1.h5").to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    let f = hdf5::File::open(&merged).unwrap();
+    let units = units_of_every_dataset(&f);
+    assert_eq!(unit(&units, "grid/x"), "rad");
+    assert_eq!(unit(&units, "grid/y"), "rad/sqrt(l/g)");
+    check_provenance(&f, "merge");
+    let shards = f.group("provenance/shards").unwrap();
+    for i in 0..2 {
+        let g = shards.group(&format!("{i:03}")).unwrap();
+        assert!(attr_str(&g, "command").contains(&format!("--shard {i}/2")));
+        assert!(attr_str(&g, "file").ends_with(&format!("s{i}.h5")));
+        assert!(attr_str(&g, "options").contains("\"integrator\""));
+    }
+    // The simplest walker's section has just the two axes: an empty slice, the gait on it.
+    let s = f.group("slice").unwrap();
+    assert_eq!(attr_str(&s, "fixed"), "{}");
+    assert!(s
+        .attr("on_fixed_point")
+        .unwrap()
+        .read_scalar::<bool>()
+        .unwrap());
+    assert_eq!(
+        f.dataset("basin/outcome")
+            .unwrap()
+            .attr("DIMENSION_LIST")
+            .unwrap()
+            .shape(),
+        vec![2]
+    );
+}
+
+#[test]
+fn sweep_and_trajectory_files_carry_units_and_every_numerical_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let bif = dir.path().join("bif.h5");
+    ok(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.005:0.012:4",
+        "--out",
+        bif.to_str().unwrap(),
+    ]);
+    let f = hdf5::File::open(&bif).unwrap();
+    let units = units_of_every_dataset(&f);
+    assert_eq!(unit(&units, "branches/000/parameter"), "rad");
+    assert_eq!(
+        unit(&units, "branches/000/section"),
+        r#"["rad","rad/sqrt(l/g)"]"#
+    );
+    assert_eq!(unit(&units, "orbit/points"), "rad");
+    let opts = check_provenance(&f, "--sweep");
+    assert_eq!(opts["orbit_diagram"]["transient"], 300);
+    assert_eq!(opts["orbit_diagram"]["record"], 64);
+    assert_eq!(opts["continuation"]["integrator"]["method"], "dop853");
+    assert!(opts["continuation"]["ds_max"].as_f64().unwrap() > 0.0);
+    drop(f);
+
+    let traj = dir.path().join("t.h5");
+    ok(&[
+        "simulate",
+        "--model",
+        "compass",
+        "--steps",
+        "2",
+        "--integrator",
+        "dopri5",
+        "--rtol",
+        "1e-9",
+        "--out",
+        traj.to_str().unwrap(),
+    ]);
+    let f = hdf5::File::open(&traj).unwrap();
+    let units = units_of_every_dataset(&f);
+    assert_eq!(unit(&units, "t"), "s");
+    assert_eq!(unit(&units, "stance_rate"), "rad/s");
+    assert!(unit(&units, "events/pre").starts_with(r#"["rad""#));
+    let opts = check_provenance(&f, "simulate");
+    assert_eq!(opts["integrator"]["method"], "dopri5");
+    assert_eq!(opts["integrator"]["rtol"], 1e-9);
+
+    let csv = dir.path().join("t.csv");
+    ok(&["simulate", "--steps", "1", "--out", csv.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    for key in [
+        "# git_commit: ",
+        "# build_profile: ",
+        "# simd_path: ",
+        "# host: ",
+        "# options: ",
+    ] {
+        assert!(text.contains(key), "{key} missing from the CSV header");
+    }
+    assert!(Path::new(&csv).exists());
+}
