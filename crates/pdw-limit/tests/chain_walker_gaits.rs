@@ -147,3 +147,31 @@ fn exact_multipliers_agree_with_richardson_differences_to_nine_digits() {
         }
     }
 }
+
+/// Round feet (radius 0.2 of the leg, rolling without slip): the compass gait's exact
+/// multipliers agree with Richardson differences of the stride map to 9 digits, as the point
+/// foot's do.
+#[test]
+fn round_foot_multipliers_agree_with_richardson_differences() {
+    let w = pdw_walkers::presets::compass(&[]).unwrap();
+    let mut spec = w.spec().clone();
+    spec.foot_radius = pdw_walkers::spec::Num::Value(0.2);
+    let values: Vec<f64> = w.param_values().into_iter().map(|p| p.1).collect();
+    let w = pdw_walkers::ChainWalker::new(spec, &values).unwrap();
+    let fp = fixed_point(&w, &[0.3383, -1.2859, 0.8596]);
+    // a different gait from the point foot's (s₀ = 0.2710): longer steps on round feet
+    assert!((fp.section[0] - 0.3383).abs() < 1e-3, "{:?}", fp.section);
+    let map: StrideMap<'_, dyn Walker> =
+        StrideMap::new(&w as &dyn Walker, Options::dop853(1e-14)).unwrap();
+    let (_, dp_var) = dp_variational(&map, &fp.section).unwrap();
+    let dp_fd = dp_richardson3(&map, &fp.section);
+    let (mv, mf) = (
+        multipliers(&dp_var, 3).unwrap(),
+        multipliers(&dp_fd, 3).unwrap(),
+    );
+    for (a, b) in mv.iter().zip(&mf) {
+        let e =
+            ((a.re - b.re).powi(2) + (a.im - b.im).powi(2)).sqrt() / (a.re.hypot(a.im)).max(1.0);
+        assert!(e <= 1e-9, "variational {a:?} vs Richardson {b:?} ({e:.2e})");
+    }
+}
