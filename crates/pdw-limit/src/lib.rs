@@ -11,6 +11,7 @@
 
 pub mod basin;
 pub mod continuation;
+pub mod design;
 pub mod error;
 pub mod floquet;
 pub mod gaits;

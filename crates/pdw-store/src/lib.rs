@@ -61,6 +61,7 @@
 //! ```
 
 pub mod basin;
+pub mod design;
 mod error;
 mod h5util;
 pub mod plot;
@@ -73,6 +74,7 @@ pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
     BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
 };
+pub use design::{read_design, write_design, DesignData, DESIGN_FORMAT};
 pub use error::StoreError;
 pub use plot::{animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, Frame};
 pub use shard::{merge, shard_rows, ShardSpec};
