@@ -25,11 +25,12 @@
 //!    plus 0.1 per failed force constraint and 0.5 for a scuff or a missing knee strike.
 //!
 //! # The search
-//! [`search`] runs argmin's Nelder–Mead over the free parameters scaled to the unit cube
-//! `[0, 1]ᵏ` (a point outside it costs `20 + distance` and is not evaluated), from the cube's
-//! centre (or a seeded random start, `seed ≠ 0`) with an initial simplex of edge 0.25; when the
-//! simplex collapses (standard deviation of its costs below 1e-6) with budget left, it restarts
-//! from the best design found with half the edge. Every evaluated design goes through a cache
+//! [`search`] evaluates the start (the model's own values of the free parameters, or the
+//! centre of the bounds) and `init` seeded random designs, then runs argmin's Nelder–Mead over
+//! the free parameters scaled to the unit cube `[0, 1]ᵏ` (a point outside it costs
+//! `20 + distance` and is not evaluated) from the best design so far with an initial simplex of
+//! edge 0.25; when the simplex collapses (standard deviation of its costs below 1e-6) with
+//! budget left, it restarts from the best design found with half the edge. Every evaluated design goes through a cache
 //! keyed by its exact parameter bits, so that a rerun over a stored history replays the same
 //! deterministic sequence at no cost and continues where the stored run stopped (resumable), and
 //! the same seed gives the same designs (reproducible). Guesses for a design's gait: the model's
@@ -74,8 +75,13 @@ pub struct DesignOptions {
     pub knee_margin: f64,
     /// Designs evaluated (cached replays included).
     pub budget: usize,
-    /// 0: start at the box's centre; otherwise a seeded random start.
+    /// Seed of the initial random designs.
     pub seed: u64,
+    /// Start of the search (parameter values; clamped into the bounds); `None`: the centre.
+    pub start: Option<Vec<f64>>,
+    /// Seeded random designs evaluated after the start, before Nelder–Mead (which then starts
+    /// from the best design so far).
+    pub init: usize,
     /// Basin grid: `n × n` cells over the box (objective `basin`).
     pub basin_grid: usize,
     /// Half widths of the basin box in `stance` (rad) and `stance_rate` (rad/s).
@@ -385,12 +391,10 @@ impl CostFunction for Problem<'_, '_, '_> {
     }
 }
 
-/// Seeded start in the unit cube (SplitMix64; `seed = 0`: the centre).
-fn start(k: usize, seed: u64) -> Vec<f64> {
-    if seed == 0 {
-        return vec![0.5; k];
-    }
-    let mut z = seed;
+/// The `i`-th seeded random point of the unit cube (SplitMix64 on `seed` and `i`), in
+/// `[0.02, 0.98]ᵏ`.
+fn sample(k: usize, seed: u64, i: usize) -> Vec<f64> {
+    let mut z = seed ^ (i as u64).wrapping_mul(0xd6e8_feb8_6659_fd93);
     (0..k)
         .map(|_| {
             z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
@@ -398,7 +402,7 @@ fn start(k: usize, seed: u64) -> Vec<f64> {
             x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
             x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
             x ^= x >> 31;
-            0.1 + 0.8 * (x >> 11) as f64 / (1u64 << 53) as f64
+            0.02 + 0.96 * (x >> 11) as f64 / (1u64 << 53) as f64
         })
         .collect()
 }
@@ -428,9 +432,38 @@ pub fn search(
     let eval = RefCell::new(eval);
     // the stored designs replay at no cost; only new ones count against what is left
     let budget = opts.budget.saturating_sub(stored);
-    let mut x0 = start(k, opts.seed);
+    let first = Problem {
+        space,
+        history: &history,
+        evaluations: &evaluations,
+        budget,
+        eval: &eval,
+        guesses: model_guesses,
+    };
+    let x_start = match &opts.start {
+        Some(p) => space.unit(p).iter().map(|u| u.clamp(0.0, 1.0)).collect(),
+        None => vec![0.5; k],
+    };
+    let mut exhausted = first.cost_at(&x_start).is_err();
+    for i in 0..opts.init {
+        if exhausted {
+            break;
+        }
+        exhausted = first.cost_at(&sample(k, opts.seed, i)).is_err();
+    }
+    let best_unit = || {
+        history
+            .borrow()
+            .iter()
+            .min_by(|a, b| a.cost.total_cmp(&b.cost))
+            .map(|b| space.unit(&b.params))
+    };
+    let mut x0 = best_unit().unwrap_or(x_start);
     let mut edge = 0.25;
     for _restart in 0..64 {
+        if exhausted {
+            break;
+        }
         if *evaluations.borrow() >= budget {
             break;
         }
@@ -465,12 +498,8 @@ pub fn search(
             break;
         }
         // restart from the best design so far with half the edge
-        if let Some(b) = history
-            .borrow()
-            .iter()
-            .min_by(|a, b| a.cost.total_cmp(&b.cost))
-        {
-            x0 = space.unit(&b.params);
+        if let Some(b) = best_unit() {
+            x0 = b;
         }
         edge *= 0.5;
         if edge < 1e-3 {

@@ -207,9 +207,13 @@ pub struct DesignArgs {
     /// Designs evaluated in all (a rerun on the same --out counts the stored ones).
     #[arg(long, default_value_t = 60)]
     pub budget: usize,
-    /// 0: Nelder-Mead starts at the centre of the bounds; otherwise at a seeded random point.
+    /// Seed of the initial random designs (--init).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Seeded random designs evaluated after the model's own values (the start), before
+    /// Nelder-Mead starts from the best design so far.
+    #[arg(long, default_value_t = 0)]
+    pub init: usize,
     /// Largest friction coefficient the ground supplies.
     #[arg(long, default_value_t = 0.6)]
     pub mu: f64,
@@ -217,10 +221,10 @@ pub struct DesignArgs {
     #[arg(long, default_value_t = 0.1)]
     pub knee_margin: f64,
     /// Basin cells per side (objective basin).
-    #[arg(long, default_value_t = 11)]
+    #[arg(long, default_value_t = 15)]
     pub basin_grid: usize,
     /// Half widths of the basin box around the gait: DSTANCE,DSTANCE_RATE (rad, rad/s).
-    #[arg(long, default_value = "0.05,0.2")]
+    #[arg(long, default_value = "0.02,0.08")]
     pub basin_box: String,
     /// Stride budget per basin cell.
     #[arg(long, default_value_t = 40)]

@@ -219,6 +219,18 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         knee_margin: a.knee_margin,
         budget: a.budget,
         seed: a.seed,
+        start: Some(
+            names
+                .iter()
+                .map(|n| {
+                    base.params
+                        .iter()
+                        .find(|p| p.0 == *n)
+                        .map_or(f64::NAN, |p| p.1)
+                })
+                .collect(),
+        ),
+        init: a.init,
         basin_grid: a.basin_grid,
         basin_box: [bx[0], bx[1]],
         basin,
@@ -232,6 +244,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         "mu": a.mu,
         "knee_margin": a.knee_margin,
         "seed": a.seed,
+        "init": a.init,
         "basin_grid": a.basin_grid,
         "basin_box": bx,
         "max_strides": a.max_strides,
