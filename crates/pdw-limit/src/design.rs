@@ -332,6 +332,10 @@ struct Problem<'a, 'e, 'b> {
     budget: usize,
     eval: &'a RefCell<&'e mut Evaluator<'b>>,
     guesses: &'a [(String, Vec<f64>)],
+    /// Every design the search asked for, replayed or new, with its cost: the search's own
+    /// sequence, the same in a resumed run as in an uninterrupted one (a stored history may
+    /// hold designs the search has not reached yet).
+    trace: &'a RefCell<Vec<(Vec<f64>, f64)>>,
 }
 
 impl Problem<'_, '_, '_> {
@@ -352,6 +356,7 @@ impl Problem<'_, '_, '_> {
                 .zip(&p)
                 .all(|(a, b)| a.to_bits() == b.to_bits())
         }) {
+            self.trace.borrow_mut().push((u.to_vec(), e.cost));
             return Ok(e.cost);
         }
         let k = *self.evaluations.borrow();
@@ -377,6 +382,7 @@ impl Problem<'_, '_, '_> {
         }
         let ev = (self.eval.borrow_mut())(&p, &guesses);
         let cost = ev.cost;
+        self.trace.borrow_mut().push((u.to_vec(), cost));
         self.history.borrow_mut().push(ev);
         *self.evaluations.borrow_mut() += 1;
         Ok(cost)
@@ -432,6 +438,7 @@ pub fn search(
     let eval = RefCell::new(eval);
     // the stored designs replay at no cost; only new ones count against what is left
     let budget = opts.budget.saturating_sub(stored);
+    let trace = RefCell::new(Vec::new());
     let first = Problem {
         space,
         history: &history,
@@ -439,6 +446,7 @@ pub fn search(
         budget,
         eval: &eval,
         guesses: model_guesses,
+        trace: &trace,
     };
     let x_start = match &opts.start {
         Some(p) => space.unit(p).iter().map(|u| u.clamp(0.0, 1.0)).collect(),
@@ -452,11 +460,11 @@ pub fn search(
         exhausted = first.cost_at(&sample(k, opts.seed, i)).is_err();
     }
     let best_unit = || {
-        history
+        trace
             .borrow()
             .iter()
-            .min_by(|a, b| a.cost.total_cmp(&b.cost))
-            .map(|b| space.unit(&b.params))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|b| b.0.clone())
     };
     let mut x0 = best_unit().unwrap_or(x_start);
     let mut edge = 0.25;
@@ -474,6 +482,7 @@ pub fn search(
             budget,
             eval: &eval,
             guesses: model_guesses,
+            trace: &trace,
         };
         let mut simplex = vec![x0.clone()];
         for i in 0..k {
