@@ -1046,8 +1046,37 @@ impl Walker for ChainWalker {
             })
             .collect()
     }
+    /// The chain drawn from the stance contact point; with round feet the chain starts at the
+    /// stance arc centre `r` above it, and each foot is drawn as its arc (±0.6 rad about the
+    /// foot's end) with the shank continued to the foot's end.
     fn pose(&self, x: &[f64]) -> Option<Pose> {
-        Some(crate::registry::chain_pose(&x[..self.n], &self.len))
+        let mut p = crate::registry::chain_pose(&x[..self.n], &self.len);
+        let r = self.radius;
+        if r > 0.0 {
+            for l in p.links.iter_mut() {
+                l[0][1] += r;
+                l[1][1] += r;
+            }
+            for j in p.joints.iter_mut() {
+                j[1] += r;
+            }
+            let th_st = x[0];
+            let th_sw: f64 = x[..self.n].iter().sum();
+            let cs = p.links[self.n - 1][1];
+            let arc = |c: [f64; 2], th: f64| -> Vec<[[f64; 2]; 2]> {
+                let pt = |a: f64| [c[0] + r * (th + a).sin(), c[1] - r * (th + a).cos()];
+                let mut v = vec![[c, pt(0.0)]];
+                for i in 0..8 {
+                    let (a, b) = (-0.6 + 0.15 * i as f64, -0.6 + 0.15 * (i + 1) as f64);
+                    v.push([pt(a), pt(b)]);
+                }
+                v
+            };
+            p.links.extend(arc([0.0, r], th_st));
+            p.links.extend(arc(cs, th_sw));
+            p.swing_foot = Some([cs[0], cs[1] - r]);
+        }
+        Some(p)
     }
     fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
         Some(self.constraint_forces_ws(&mut Scratch::new(), mode, x))
