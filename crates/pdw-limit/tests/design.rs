@@ -4,7 +4,7 @@
 
 use pdw_limit::basin::BasinOptions;
 use pdw_limit::design::{evaluate_design, status, DesignOptions, Objective};
-use pdw_walkers::{ChainWalker, Walker, WalkerSpec};
+use pdw_walkers::{ChainWalker, WalkerSpec};
 
 fn walker() -> ChainWalker {
     let path = concat!(
