@@ -12,6 +12,7 @@
 pub mod attractors;
 pub mod basin;
 pub mod continuation;
+pub mod design;
 pub mod error;
 pub mod floquet;
 pub mod gaits;

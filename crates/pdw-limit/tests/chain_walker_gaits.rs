@@ -147,3 +147,83 @@ fn exact_multipliers_agree_with_richardson_differences_to_nine_digits() {
         }
     }
 }
+
+/// Round feet (radius 0.2 of the leg, rolling without slip): the compass gait's exact
+/// multipliers agree with Richardson differences of the stride map to 9 digits, as the point
+/// foot's do.
+#[test]
+fn round_foot_multipliers_agree_with_richardson_differences() {
+    let w = pdw_walkers::presets::compass(&[]).unwrap();
+    let mut spec = w.spec().clone();
+    spec.foot_radius = pdw_walkers::spec::Num::Value(0.2);
+    let values: Vec<f64> = w.param_values().into_iter().map(|p| p.1).collect();
+    let w = pdw_walkers::ChainWalker::new(spec, &values).unwrap();
+    let fp = fixed_point(&w, &[0.3383, -1.2859, 0.8596]);
+    // a different gait from the point foot's (s₀ = 0.2710): longer steps on round feet
+    assert!((fp.section[0] - 0.3383).abs() < 1e-3, "{:?}", fp.section);
+    let map: StrideMap<'_, dyn Walker> =
+        StrideMap::new(&w as &dyn Walker, Options::dop853(1e-14)).unwrap();
+    let (_, dp_var) = dp_variational(&map, &fp.section).unwrap();
+    let dp_fd = dp_richardson3(&map, &fp.section);
+    let (mv, mf) = (
+        multipliers(&dp_var, 3).unwrap(),
+        multipliers(&dp_fd, 3).unwrap(),
+    );
+    for (a, b) in mv.iter().zip(&mf) {
+        let e =
+            ((a.re - b.re).powi(2) + (a.im - b.im).powi(2)).sqrt() / (a.re.hypot(a.im)).max(1.0);
+        assert!(e <= 1e-9, "variational {a:?} vs Richardson {b:?} ({e:.2e})");
+    }
+}
+
+/// The shipped design `models/seed5_walking.toml` (the thesis walker's lengths and masses,
+/// found by `pdw-sweep design`): a stable gait, valid along the whole stride (normal force > 0,
+/// friction needed ≤ 0.6, every locked knee's stop pushing with ≥ 0.1 N m, no scuff), with a
+/// knee strike before the heel strike; its exact multipliers agree with Richardson differences.
+#[test]
+fn shipped_seed5_design_walks_validly_and_stably() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/seed5_walking.toml"
+    );
+    let spec = pdw_walkers::WalkerSpec::from_file(std::path::Path::new(path)).unwrap();
+    let w = pdw_walkers::ChainWalker::from_spec(spec).unwrap();
+    assert!(w.free_knee().is_some() && w.foot_radius() > 0.0);
+    let g = w.gait_guesses().into_iter().next().unwrap();
+    let fp = fixed_point(&w, &g.section);
+    let rho = fp
+        .multipliers
+        .iter()
+        .map(|l| l.re.hypot(l.im))
+        .fold(0.0, f64::max);
+    assert!(fp.stable && rho < 0.6, "max |λ| = {rho}");
+    let tr = pdw_limit::simulate(&w, &fp.state, &pdw_limit::TrajectoryOptions::new(1)).unwrap();
+    let v = pdw_limit::Validity::of(&tr).unwrap();
+    assert!(v.valid(), "{v:?}");
+    assert!(
+        v.min_normal_force > 0.0 && v.max_friction_required <= 0.6,
+        "{v:?}"
+    );
+    assert!(v.min_knee_torque.unwrap() >= 0.1, "{v:?}");
+    let kinds: Vec<&str> = tr.events.iter().map(|e| e.kind.as_str()).collect();
+    assert_eq!(
+        kinds,
+        ["knee_strike", "heel_strike"],
+        "one knee strike, then the heel strike"
+    );
+    // the stance knee is locked all step, the swing knee free until the knee strike
+    assert_eq!(w.locked_joints(pdw_walkers::chain_walker::FREE), &[1]);
+    let map: StrideMap<'_, dyn Walker> =
+        StrideMap::new(&w as &dyn Walker, Options::dop853(1e-14)).unwrap();
+    let (_, dp_var) = dp_variational(&map, &fp.section).unwrap();
+    let dp_fd = dp_richardson3(&map, &fp.section);
+    let (mv, mf) = (
+        multipliers(&dp_var, 3).unwrap(),
+        multipliers(&dp_fd, 3).unwrap(),
+    );
+    for (a, b) in mv.iter().zip(&mf) {
+        let e =
+            ((a.re - b.re).powi(2) + (a.im - b.im).powi(2)).sqrt() / (a.re.hypot(a.im)).max(1.0);
+        assert!(e <= 1e-9, "variational {a:?} vs Richardson {b:?} ({e:.2e})");
+    }
+}

@@ -36,8 +36,8 @@ pub use chain::{Chain, ChainBuilder, JointKind, Link};
 pub use closed_chain::{closed_chain_dynamics, ClosedChainForces};
 pub use crba::{crba, forward_dynamics_crba};
 pub use derivatives::{
-    aba_derivatives, joint_lock_impact_derivatives, tip_impact_derivatives,
-    tip_position_derivatives,
+    aba_derivatives, contact_impact, joint_lock_impact_derivatives, rolling_base_derivatives,
+    rolling_base_dynamics, tip_impact_derivatives, tip_position_derivatives,
 };
 pub use dual::{Dual, Scalar};
 pub use energy::{

@@ -69,6 +69,7 @@
 //! ```
 
 pub mod basin;
+pub mod design;
 mod error;
 mod h5util;
 pub mod plot;
@@ -82,6 +83,7 @@ pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
     BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
 };
+pub use design::{read_design, write_design, DesignData, DESIGN_FORMAT};
 pub use error::StoreError;
 pub use plot::{
     animate_gif, outcome_colours, plot_basin, plot_basin_attractors, plot_bifurcation, plot_lines,

@@ -32,6 +32,8 @@ pub enum Command {
     Animate(AnimateArgs),
     /// Simulate N steps and write the time series (states, events, forces, energy) to HDF5 or CSV.
     Simulate(SimulateArgs),
+    /// Search free design parameters for the most robust physically valid gait (HDF5 + PNG).
+    Design(DesignArgs),
 }
 
 /// Options shared by every command that builds a model.
@@ -221,4 +223,58 @@ pub struct SimulateArgs {
     /// Overwrite an existing --out.
     #[arg(long)]
     pub force: bool,
+}
+
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct DesignArgs {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    /// Free design parameter and its bounds, NAME=LO:HI (repeatable; any model parameter).
+    #[arg(long = "free", value_name = "NAME=LO:HI")]
+    pub free: Vec<String>,
+    /// What a feasible design is scored by: basin (fraction of a box of section states around
+    /// the gait that reaches it; larger is better) or margin (largest |multiplier|; smaller).
+    #[arg(long, default_value = "basin")]
+    pub objective: String,
+    /// Designs evaluated in all (a rerun on the same --out counts the stored ones).
+    #[arg(long, default_value_t = 60)]
+    pub budget: usize,
+    /// Seed of the initial random designs (--init).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Seeded random designs evaluated after the model's own values (the start), before
+    /// Nelder-Mead starts from the best design so far.
+    #[arg(long, default_value_t = 0)]
+    pub init: usize,
+    /// Largest friction coefficient the ground supplies.
+    #[arg(long, default_value_t = 0.6)]
+    pub mu: f64,
+    /// Smallest knee-lock torque (N m) a passive knee stop must be left with along the stride.
+    #[arg(long, default_value_t = 0.1)]
+    pub knee_margin: f64,
+    /// Basin cells per side (objective basin).
+    #[arg(long, default_value_t = 15)]
+    pub basin_grid: usize,
+    /// Half widths of the basin box around the gait: DSTANCE,DSTANCE_RATE (rad, rad/s).
+    #[arg(long, default_value = "0.02,0.08")]
+    pub basin_box: String,
+    /// Stride budget per basin cell.
+    #[arg(long, default_value_t = 40)]
+    pub max_strides: u16,
+    /// HDF5 file of every evaluated design (a rerun with the same settings continues it).
+    #[arg(long, default_value = "design.h5")]
+    pub out: PathBuf,
+    /// PNG of the search (default: the output path with .png).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Worker threads of the basin engine.
+    #[arg(long, default_value_t = 2)]
+    pub threads: usize,
+    /// Start over: replace an existing --out.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }

@@ -44,6 +44,25 @@
 //!   requires positive link masses, so the two prismatic base links carry
 //!   [`FLOATING_BASE_MASS`] = 1e-30 kg, which changes no sum of masses by even one ulp.
 //!
+//! # Round feet (`foot_radius = r > 0`)
+//! Each lowest segment ends in a circular arc of radius `r` whose centre lies on the segment's
+//! line `r` above its lower end (McGeer 1990, "Passive dynamic walking", IJRR 9(2)). The kernel
+//! chain is then rooted at the stance arc centre (the stance shank shortened by `r`, its COM
+//! measured from the arc centre) and ends at the swing arc centre. Stance: the foot rolls
+//! without slip, so the arc centre stays `r` above the slope and moves along it by
+//! `y = −r q₀` — a constant-Jacobian holonomic constraint on the floating chain `(y, z, q)`,
+//! solved by [`pdw_soa::rolling_base_dynamics`] (`Jᵀ𝓜_F J q̈ = −Jᵀ C_F`, locked knees welded),
+//! lane by lane in the batched flow (the scalar flow is its one-lane case). The swing arc's
+//! lowest point is `r` below its centre, so the swing-foot guard (lowest point of the swing
+//! arc above the slope) is the height of the swing arc centre over the stance arc centre, and
+//! the step length is the distance between the two contact points. Heel strike: plastic impact
+//! at the new contact point `[0, −r]` below the swing arc centre with the stance arc centre
+//! moving at `ẏ = −r q̇₀` before it ([`pdw_soa::contact_impact`]; afterwards the new contact
+//! point is at rest, i.e. the new stance foot rolls), then the same leg swap. Ground reaction:
+//! the floating chain's base forces `[f_y, f_z]` at the contact point from `ID_F`; knee locks
+//! from `ID_F` too. Energy counts the arc centre's travel. `r = 0` runs the point-foot code
+//! unchanged.
+//!
 //! # Section
 //! Just after heel strike, every knee straight: `q = (s₀, 0…, −2s₀, 0…)`,
 //! `q̇ = (s₁, 0…, s₂, 0…)`; reduced coordinates `(q₀, q̇₀, q̇_m)` (`"stance"`, `"stance_rate"`,
@@ -130,6 +149,8 @@ pub struct ChainWalker {
     /// signed link lengths along each link's z axis (stance `+L`, swing `−L`)
     len: Vec<f64>,
     leg_length: f64,
+    /// round-foot radius (0: point feet)
+    radius: f64,
     /// joint index of the free swing knee
     free_knee: Option<usize>,
     /// locked-joint mask per mode (index by mode)
@@ -196,8 +217,14 @@ impl ChainWalker {
         let mut table = spec.param_table();
         table.values = values.to_vec();
         let mut links = Vec::with_capacity(n);
+        // with round feet the chain is rooted at the stance foot's arc centre, `r` above the
+        // foot's lower end on the lowest segment; the swing chain ends at the swing arc centre
+        let radius = r.foot_radius;
+        let cut = |k: usize| if k == 0 { radius } else { 0.0 };
         for (k, s) in r.segments.iter().enumerate() {
             let [l, mass, c, cn, inertia] = *s;
+            let l = l - cut(k);
+            let c = c - cut(k);
             let mut link = Link {
                 to_next: [0.0, l],
                 com: [cn, c],
@@ -209,10 +236,10 @@ impl ChainWalker {
             }
             links.push(link);
         }
-        for s in r.segments.iter().rev() {
+        for (k, s) in r.segments.iter().enumerate().rev() {
             let [l, mass, c, cn, inertia] = *s;
             links.push(Link {
-                to_next: [0.0, -l],
+                to_next: [0.0, -(l - cut(k))],
                 com: [cn, -(l - c)],
                 mass,
                 inertia,
@@ -283,6 +310,7 @@ impl ChainWalker {
             floating,
             len,
             leg_length,
+            radius,
             free_knee,
             masks,
             locked,
@@ -314,6 +342,17 @@ impl ChainWalker {
     /// Leg length (sum of the segment lengths).
     pub fn leg_length(&self) -> f64 {
         self.leg_length
+    }
+
+    /// Radius of the round feet (0: point feet).
+    pub fn foot_radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// The floating chain (prismatic `y`, `z` at the stance arc centre, then the walker's
+    /// joints) used by heel strikes and round feet.
+    pub fn floating_chain(&self) -> &Chain {
+        &self.floating
     }
 
     /// Joint index of the free swing knee, if the spec has one.
@@ -427,6 +466,29 @@ impl ChainWalker {
         lock: &mut [f64],
     ) -> [f64; 3] {
         let n = self.n;
+        if self.radius > 0.0 {
+            // round feet: the rolling base; the ground force and the locks from ID_F
+            let mut tau = [0.0; FMAX];
+            let ok = pdw_soa::rolling_base_dynamics(
+                &self.floating,
+                self.radius,
+                &x[..n],
+                &x[n..2 * n],
+                &self.masks[mode],
+                qdd,
+                &mut tau[..n + 2],
+            )
+            .is_ok();
+            if !ok {
+                qdd.iter_mut().for_each(|v| *v = f64::NAN);
+                lock.iter_mut().for_each(|v| *v = f64::NAN);
+                return [f64::NAN; 3];
+            }
+            for k in 0..n {
+                lock[k] = if self.masks[mode][k] { tau[k + 2] } else { 0.0 };
+            }
+            return [tau[2], tau[0], tau[1]];
+        }
         let s = self.scratch(ws);
         let r = pdw_soa::pseudo_joint_dynamics(
             &self.chain,
@@ -495,6 +557,26 @@ impl ChainWalker {
         s.qd[..2].fill(0.0);
         s.q[2..n + 2].copy_from_slice(&x[..n]);
         s.qd[2..n + 2].copy_from_slice(&x[n..2 * n]);
+        if self.radius > 0.0 {
+            // the stance arc centre rolls: ẏ = −r q̇₀; the contact point r below the swing arc
+            // centre (the chain's tip)
+            s.qd[0] = -self.radius * x[n];
+            return match pdw_soa::contact_impact(
+                &self.floating,
+                &s.q[..n + 2],
+                &s.qd[..n + 2],
+                [0.0, -self.radius],
+                &self.floating_knees,
+                qd_post,
+                None,
+            ) {
+                Ok(imp) => imp,
+                Err(_) => {
+                    qd_post.iter_mut().for_each(|v| *v = f64::NAN);
+                    [f64::NAN; 2]
+                }
+            };
+        }
         let nl = 2 + self.floating_knees.len();
         let ok = pdw_soa::tip_impact(
             &self.floating,
@@ -526,6 +608,34 @@ impl ChainWalker {
             dx.rb_mut().col_mut(j).copy_from(x.col(n + j));
         }
         let s = self.scratch(ws);
+        if self.radius > 0.0 {
+            // round feet: lane by lane through the rolling-base dynamics (the scalar flow is
+            // the one-lane case of this loop, hence the same bits)
+            let mut q = [0.0; 2 * MAX_SEGMENTS];
+            let mut qd = [0.0; 2 * MAX_SEGMENTS];
+            let mut qdd = [0.0; 2 * MAX_SEGMENTS];
+            let mut tau = [0.0; FMAX];
+            for l in 0..x.nrows() {
+                for j in 0..n {
+                    q[j] = x[(l, j)];
+                    qd[j] = x[(l, n + j)];
+                }
+                let ok = pdw_soa::rolling_base_dynamics(
+                    &self.floating,
+                    self.radius,
+                    &q[..n],
+                    &qd[..n],
+                    &self.masks[mode],
+                    &mut qdd[..n],
+                    &mut tau[..n + 2],
+                )
+                .is_ok();
+                for j in 0..n {
+                    dx[(l, n + j)] = if ok { qdd[j] } else { f64::NAN };
+                }
+            }
+            return;
+        }
         let r = pdw_soa::batch_aba_view(
             &self.chain,
             &mut s.bw,
@@ -714,16 +824,29 @@ impl HybridSystem for ChainWalker {
         let s = self.scratch(ws);
         let mut dq = [0.0; 4 * MAX_SEGMENTS * MAX_SEGMENTS];
         let mut dqd = [0.0; 4 * MAX_SEGMENTS * MAX_SEGMENTS];
-        let ok = pdw_soa::aba_derivatives(
-            &self.chain,
-            &x[..n],
-            &x[n..d],
-            &s.zeros[..n],
-            &self.masks[mode],
-            &mut s.v[..n],
-            &mut dq[..n * n],
-            &mut dqd[..n * n],
-        )
+        let ok = if self.radius > 0.0 {
+            pdw_soa::rolling_base_derivatives(
+                &self.floating,
+                self.radius,
+                &x[..n],
+                &x[n..d],
+                &self.masks[mode],
+                &mut s.v[..n],
+                &mut dq[..n * n],
+                &mut dqd[..n * n],
+            )
+        } else {
+            pdw_soa::aba_derivatives(
+                &self.chain,
+                &x[..n],
+                &x[n..d],
+                &s.zeros[..n],
+                &self.masks[mode],
+                &mut s.v[..n],
+                &mut dq[..n * n],
+                &mut dqd[..n * n],
+            )
+        }
         .is_ok();
         jac[..d * d].fill(0.0);
         for i in 0..n {
@@ -808,15 +931,35 @@ impl HybridSystem for ChainWalker {
         s.q[2..f].copy_from_slice(&x[..n]);
         s.qd[2..f].copy_from_slice(&x[n..d]);
         let mut jf = [0.0; FMAX * 2 * FMAX];
-        let ok = pdw_soa::tip_impact_derivatives(
-            &self.floating,
-            &s.q[..f],
-            &s.qd[..f],
-            &self.floating_knees,
-            &mut s.v[..f],
-            &mut jf[..f * 2 * f],
-        )
-        .is_ok();
+        let ok = if self.radius > 0.0 {
+            s.qd[0] = -self.radius * x[n];
+            pdw_soa::contact_impact(
+                &self.floating,
+                &s.q[..f],
+                &s.qd[..f],
+                [0.0, -self.radius],
+                &self.floating_knees,
+                &mut s.v[..f],
+                Some(&mut jf[..f * 2 * f]),
+            )
+            .is_ok()
+        } else {
+            pdw_soa::tip_impact_derivatives(
+                &self.floating,
+                &s.q[..f],
+                &s.qd[..f],
+                &self.floating_knees,
+                &mut s.v[..f],
+                &mut jf[..f * 2 * f],
+            )
+            .is_ok()
+        };
+        // q̇⁻_F = (−r q̇₀, 0, q̇): the chain rule through the rolling base rate
+        if self.radius > 0.0 {
+            for row in 0..f {
+                jf[row * 2 * f + f + 2] += -self.radius * jf[row * 2 * f + f];
+            }
+        }
         let mut sm = [0.0; 4 * MAX_SEGMENTS * MAX_SEGMENTS];
         self.swap_matrix(&mut sm[..n * n]);
         for i in 0..n {
@@ -908,8 +1051,37 @@ impl Walker for ChainWalker {
             })
             .collect()
     }
+    /// The chain drawn from the stance contact point; with round feet the chain starts at the
+    /// stance arc centre `r` above it, and each foot is drawn as its arc (±0.6 rad about the
+    /// foot's end) with the shank continued to the foot's end.
     fn pose(&self, x: &[f64]) -> Option<Pose> {
-        Some(crate::registry::chain_pose(&x[..self.n], &self.len))
+        let mut p = crate::registry::chain_pose(&x[..self.n], &self.len);
+        let r = self.radius;
+        if r > 0.0 {
+            for l in p.links.iter_mut() {
+                l[0][1] += r;
+                l[1][1] += r;
+            }
+            for j in p.joints.iter_mut() {
+                j[1] += r;
+            }
+            let th_st = x[0];
+            let th_sw: f64 = x[..self.n].iter().sum();
+            let cs = p.links[self.n - 1][1];
+            let arc = |c: [f64; 2], th: f64| -> Vec<[[f64; 2]; 2]> {
+                let pt = |a: f64| [c[0] + r * (th + a).sin(), c[1] - r * (th + a).cos()];
+                let mut v = vec![[c, pt(0.0)]];
+                for i in 0..8 {
+                    let (a, b) = (-0.6 + 0.15 * i as f64, -0.6 + 0.15 * (i + 1) as f64);
+                    v.push([pt(a), pt(b)]);
+                }
+                v
+            };
+            p.links.extend(arc([0.0, r], th_st));
+            p.links.extend(arc(cs, th_sw));
+            p.swing_foot = Some([cs[0], cs[1] - r]);
+        }
+        Some(p)
     }
     fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
         Some(self.constraint_forces_ws(&mut Scratch::new(), mode, x))
@@ -919,6 +1091,19 @@ impl Walker for ChainWalker {
     }
     /// `T + V` by the kernel's `total_energy` (potential zero at the stance foot).
     fn energy(&self, x: &[f64]) -> Option<f64> {
+        let n = self.n;
+        if self.radius > 0.0 {
+            // the floating chain at the rolling base (y = −r q₀, ż = 0): the potential counts
+            // the arc centre's travel along the slope
+            let mut q = [0.0; FMAX];
+            let mut qd = [0.0; FMAX];
+            q[0] = -self.radius * x[0];
+            qd[0] = -self.radius * x[n];
+            q[2..n + 2].copy_from_slice(&x[..n]);
+            qd[2..n + 2].copy_from_slice(&x[n..2 * n]);
+            let mut ws = Workspace::new(&self.floating);
+            return pdw_soa::total_energy(&self.floating, &mut ws, &q[..n + 2], &qd[..n + 2]).ok();
+        }
         let mut ws = Workspace::new(&self.chain);
         pdw_soa::total_energy(&self.chain, &mut ws, &x[..self.n], &x[self.n..2 * self.n]).ok()
     }

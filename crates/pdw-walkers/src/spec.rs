@@ -13,6 +13,7 @@
 //! description = "Goswami et al. 1998 compass gait"
 //! source = "Goswami, Thuilot & Espiau, IJRR 17(12), 1998"
 //! hip_mass = "hip_mass"
+//! foot_radius = 0.0           # round (arc) feet rolling without slip; 0: point feet (m)
 //!
 //! [parameters]
 //! slope = { value = 0.05235987755982988, unit = "rad", description = "slope angle (3°)" }
@@ -59,6 +60,11 @@ impl Default for Num {
 }
 
 impl Num {
+    /// Whether it is the plain number 0 (for skipping a default field when writing TOML).
+    pub fn is_zero(&self) -> bool {
+        matches!(self, Num::Value(v) if *v == 0.0)
+    }
+
     /// The value as written, with its evaluation when it is an expression (for messages).
     fn shown(&self, v: f64) -> String {
         match self {
@@ -152,6 +158,12 @@ pub struct WalkerSpec {
     /// Hip point mass (≥ 0), carried by the stance leg's top segment at its upper end.
     #[serde(default)]
     pub hip_mass: Num,
+    /// Radius of the round (arc) feet (m, ≥ 0, less than the lowest segment's length; default
+    /// 0: point feet). The arc's centre lies on the lowest segment's line at this distance above
+    /// the segment's lower end (the foot's lowest point when the leg is upright); the stance foot
+    /// rolls without slip (McGeer 1990).
+    #[serde(default, skip_serializing_if = "Num::is_zero")]
+    pub foot_radius: Num,
     /// One leg's segments from the foot up (both legs are identical).
     #[serde(default)]
     pub segments: Vec<SegmentSpec>,
@@ -201,6 +213,8 @@ pub struct Resolved {
     pub gravity: f64,
     pub max_stride_time: f64,
     pub hip_mass: f64,
+    /// Radius of the round feet (0: point feet).
+    pub foot_radius: f64,
     /// Per segment (foot up): length, mass, com along, com normal, inertia about the COM.
     pub segments: Vec<[f64; 5]>,
     /// Per knee (foot side first): free-swing?
@@ -413,6 +427,27 @@ impl WalkerSpec {
             }
             segments.push([length, mass, com, com_normal, inertia]);
         }
+        let foot_radius = nonneg("foot_radius", &self.foot_radius)?;
+        if foot_radius >= segments[0][0] {
+            return Err(self.err(
+                "foot_radius",
+                self.foot_radius.shown(foot_radius),
+                format!(
+                    "the arc's centre must lie on the lowest segment: a radius in [0, {}) (the \
+                     length of segments[0])",
+                    segments[0][0]
+                ),
+            ));
+        }
+        let [_, m0, c0, cn0, i0] = segments[0];
+        if foot_radius > 0.0 && i0 + m0 * ((c0 - foot_radius).powi(2) + cn0 * cn0) <= 0.0 {
+            return Err(self.err(
+                "foot_radius",
+                self.foot_radius.shown(foot_radius),
+                "the lowest segment's COM sits on the arc's centre with no inertia about it \
+                 (singular): change the radius, move the COM or give an inertia",
+            ));
+        }
         let mut free_swing = Vec::with_capacity(self.knees.len());
         for (i, k) in self.knees.iter().enumerate() {
             let free = match k.mode.trim() {
@@ -469,6 +504,7 @@ impl WalkerSpec {
             gravity,
             max_stride_time,
             hip_mass,
+            foot_radius,
             segments,
             free_swing,
             gaits,

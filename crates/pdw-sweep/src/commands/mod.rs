@@ -2,6 +2,7 @@
 
 mod animate;
 mod basin;
+mod design;
 mod fixedpoint;
 mod merge;
 mod models;
@@ -22,6 +23,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Basin(a) => basin::run(&a),
         Command::Merge(a) => merge::run(&a),
         Command::Simulate(a) => simulate::run(&a),
+        Command::Design(a) => design::run(&a),
     }
 }
 

@@ -1,0 +1,73 @@
+//! One design evaluated: the shipped seed5 design is feasible and costs its objective; each
+//! constraint, tightened past the design's own value, makes it infeasible with a cost above every
+//! feasible one and a reason naming the constraint.
+
+use pdw_limit::basin::BasinOptions;
+use pdw_limit::design::{evaluate_design, status, DesignOptions, Objective};
+use pdw_walkers::{ChainWalker, WalkerSpec};
+
+fn walker() -> ChainWalker {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/seed5_walking.toml"
+    );
+    ChainWalker::from_spec(WalkerSpec::from_file(std::path::Path::new(path)).unwrap()).unwrap()
+}
+
+fn opts(objective: Objective) -> DesignOptions {
+    DesignOptions {
+        objective,
+        mu: 0.6,
+        knee_margin: 0.1,
+        budget: 1,
+        seed: 0,
+        start: None,
+        init: 0,
+        basin_grid: 5,
+        basin_box: [0.02, 0.08],
+        basin: BasinOptions {
+            max_strides: 30,
+            ..BasinOptions::default()
+        },
+        newton_tol: 1e-10,
+    }
+}
+
+#[test]
+fn constraints_and_objectives_of_one_design() {
+    let w = walker();
+    let guesses = pdw_limit::gaits::model_guesses(&w);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let p = [0.0];
+    let m = evaluate_design(&p, &w, &guesses, &opts(Objective::Margin), &pool);
+    assert_eq!(m.status, status::FEASIBLE, "{}", m.reason);
+    assert!((m.cost - m.rho).abs() == 0.0 && m.rho < 0.6);
+    assert!(m.min_knee_torque >= 0.1 && m.max_friction <= 0.6 && m.min_normal_force > 0.0);
+    // the basin objective: minus the gait's fraction of the box (the gait's own cell counts)
+    let b = evaluate_design(&p, &w, &guesses, &opts(Objective::Basin), &pool);
+    assert_eq!(b.status, status::FEASIBLE);
+    assert!(b.basin_fraction >= 1.0 / 25.0 && b.basin_fraction <= 1.0);
+    assert!((b.cost - (-b.basin_fraction + 1e-3 * b.rho)).abs() < 1e-15);
+    // a knee margin above the design's smallest lock torque
+    let mut o = opts(Objective::Margin);
+    o.knee_margin = m.min_knee_torque + 0.05;
+    let k = evaluate_design(&p, &w, &guesses, &o, &pool);
+    assert_eq!(k.status, status::INVALID);
+    assert!(k.reason.contains("knee torque"), "{}", k.reason);
+    assert!(k.cost > 1.0 && k.cost < 5.0);
+    // a friction bound below what the gait needs
+    let mut o = opts(Objective::Margin);
+    o.mu = m.max_friction - 0.01;
+    let f = evaluate_design(&p, &w, &guesses, &o, &pool);
+    assert_eq!(f.status, status::INVALID);
+    assert!(f.reason.contains("friction"), "{}", f.reason);
+    assert!(f.cost > 1.0 && f.cost < 5.0);
+    // no guess near a gait: no gait, the cost above every invalid one
+    let far = vec![("far".to_string(), vec![1.2, 3.0, -3.0])];
+    let n = evaluate_design(&p, &w, &far, &opts(Objective::Margin), &pool);
+    assert_eq!(n.status, status::NO_GAIT);
+    assert_eq!(n.cost, 10.0);
+}

@@ -1,0 +1,203 @@
+//! Design-search files (`pdw-sweep design`): every evaluated design of a search, in evaluation
+//! order, rewritten whole (write-then-rename) after each new design, so that a killed run
+//! leaves the last complete file and a rerun continues from it.
+//!
+//! Layout: root attributes `format` (= [`DESIGN_FORMAT`]), `version`, `created`, `settings`
+//! (JSON: model, fixed parameters, free parameters and bounds, objective, constraints, seed —
+//! a rerun must match it to continue), `free_names` (JSON array); datasets `params [N, k]`,
+//! `status [N]` (u8 codes, legend in the attribute `status_names`), `section [N, 3]`,
+//! `reasons` (UTF-8 JSON array of strings, as bytes) and one `[N]` f64 dataset per named
+//! measure (`cost`, `rho`, `basin_fraction`, …; NaN where not measured).
+
+use std::path::Path;
+
+use hdf5::File;
+use ndarray::Array2;
+
+use crate::h5util::{
+    create_file, get_str, open_file, rename_into_place, set_str, temp_sibling, At,
+};
+use crate::{time, Result, StoreError};
+
+/// Value of the root attribute `format` of a design file.
+pub const DESIGN_FORMAT: &str = "pdw-sweep design v1";
+const KIND: &str = "pdw-sweep design";
+
+/// The contents of a design file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DesignData {
+    /// JSON of the search's settings.
+    pub settings: String,
+    pub free_names: Vec<String>,
+    /// Names of the status codes, by code.
+    pub status_names: Vec<String>,
+    /// Free parameter values per design (`N × k`).
+    pub params: Vec<Vec<f64>>,
+    pub status: Vec<u8>,
+    pub reasons: Vec<String>,
+    /// Gait section state per design (NaN without a gait).
+    pub section: Vec<[f64; 3]>,
+    /// Named per-design measures, each of length `N`.
+    pub columns: Vec<(String, Vec<f64>)>,
+}
+
+impl DesignData {
+    fn validate(&self) -> Result<()> {
+        let n = self.params.len();
+        let k = self.free_names.len();
+        let bad = self.params.iter().any(|p| p.len() != k)
+            || self.status.len() != n
+            || self.reasons.len() != n
+            || self.section.len() != n
+            || self.columns.iter().any(|c| c.1.len() != n);
+        if bad {
+            return Err(StoreError::invalid(
+                "design data",
+                format!("{n} designs of {k} parameters: every column needs {n} entries"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A named measure's column.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.columns
+            .iter()
+            .find(|c| c.0 == name)
+            .map(|c| c.1.as_slice())
+    }
+}
+
+/// Writes `data` to `path`, replacing it atomically (temporary sibling, then rename).
+pub fn write_design(path: impl AsRef<Path>, data: &DesignData) -> Result<()> {
+    let path = path.as_ref();
+    data.validate()?;
+    let tmp = temp_sibling(path);
+    let res = (|| -> Result<()> {
+        let (f, _lock) = create_file(&tmp, true, false, 0)?;
+        match fill(&tmp, &f, data).and_then(|()| f.flush().at(&tmp, "flushing")) {
+            Ok(()) => f.close().at(&tmp, "closing"),
+            Err(e) => {
+                std::mem::forget(f);
+                Err(e)
+            }
+        }
+    })();
+    match res {
+        Ok(()) => rename_into_place(&tmp, path),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+fn fill(p: &Path, f: &File, d: &DesignData) -> Result<()> {
+    let names = serde_json::to_string(&d.free_names).unwrap_or_default();
+    let status_names = serde_json::to_string(&d.status_names).unwrap_or_default();
+    for (k, v) in [
+        ("format", DESIGN_FORMAT),
+        ("version", env!("CARGO_PKG_VERSION")),
+        ("created", &time::now_rfc3339()),
+        ("settings", &d.settings),
+        ("free_names", &names),
+        ("status_names", &status_names),
+    ] {
+        set_str(p, f, k, v)?;
+    }
+    let n = d.params.len();
+    let k = d.free_names.len();
+    let flat: Vec<f64> = d.params.iter().flatten().copied().collect();
+    let params = Array2::from_shape_vec((n, k), flat).expect("validated");
+    let sec: Vec<f64> = d.section.iter().flatten().copied().collect();
+    let section = Array2::from_shape_vec((n, 3), sec).expect("validated");
+    let put2 = |name: &str, a: &Array2<f64>| {
+        f.new_dataset_builder()
+            .with_data(a)
+            .create(name)
+            .map(|_| ())
+            .at(p, &format!("writing /{name}"))
+    };
+    put2("params", &params)?;
+    put2("section", &section)?;
+    f.new_dataset_builder()
+        .with_data(&d.status)
+        .create("status")
+        .map(|_| ())
+        .at(p, "writing /status")?;
+    let reasons = serde_json::to_string(&d.reasons).unwrap_or_default();
+    f.new_dataset_builder()
+        .with_data(reasons.as_bytes())
+        .create("reasons")
+        .map(|_| ())
+        .at(p, "writing /reasons")?;
+    for (name, v) in &d.columns {
+        f.new_dataset_builder()
+            .with_data(v)
+            .create(name.as_str())
+            .map(|_| ())
+            .at(p, &format!("writing /{name}"))?;
+    }
+    Ok(())
+}
+
+/// Reads a design file; `columns` are the measures to read (missing ones are an error).
+pub fn read_design(path: impl AsRef<Path>, columns: &[&str]) -> Result<DesignData> {
+    let p = path.as_ref();
+    let f = open_file(p, false)?;
+    let fmt = get_str(p, KIND, &f, "format")?;
+    let bad = |detail: String| StoreError::Format {
+        path: p.to_path_buf(),
+        expected: KIND,
+        detail,
+    };
+    if fmt != DESIGN_FORMAT {
+        return Err(bad(format!(
+            "format is {fmt:?}, expected {DESIGN_FORMAT:?}"
+        )));
+    }
+    let settings = get_str(p, KIND, &f, "settings")?;
+    let free_names: Vec<String> = serde_json::from_str(&get_str(p, KIND, &f, "free_names")?)
+        .map_err(|e| bad(format!("free_names: {e}")))?;
+    let status_names: Vec<String> = serde_json::from_str(&get_str(p, KIND, &f, "status_names")?)
+        .map_err(|e| bad(format!("status_names: {e}")))?;
+    let params = f
+        .dataset("params")
+        .and_then(|d| d.read_2d::<f64>())
+        .at(p, "params")?;
+    let section = f
+        .dataset("section")
+        .and_then(|d| d.read_2d::<f64>())
+        .at(p, "section")?;
+    let status = f
+        .dataset("status")
+        .and_then(|d| d.read_raw::<u8>())
+        .at(p, "status")?;
+    let reason_bytes = f
+        .dataset("reasons")
+        .and_then(|d| d.read_raw::<u8>())
+        .at(p, "reasons")?;
+    let reasons: Vec<String> =
+        serde_json::from_slice(&reason_bytes).map_err(|e| bad(format!("reasons: {e}")))?;
+    let mut cols = Vec::new();
+    for c in columns {
+        let v = f.dataset(c).and_then(|d| d.read_raw::<f64>()).at(p, c)?;
+        cols.push((c.to_string(), v));
+    }
+    let data = DesignData {
+        settings,
+        free_names,
+        status_names,
+        params: params.rows().into_iter().map(|r| r.to_vec()).collect(),
+        status,
+        reasons,
+        section: section
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect(),
+        columns: cols,
+    };
+    data.validate().map_err(|e| bad(e.to_string()))?;
+    Ok(data)
+}

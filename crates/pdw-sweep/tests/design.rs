@@ -1,0 +1,137 @@
+//! `pdw-sweep design` end to end: a seeded search is reproducible, an interrupted search
+//! continued on its file gives the uninterrupted run's designs bit for bit, and bad input is
+//! refused with exit code 2 naming the value.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const COLS: [&str; 3] = ["cost", "rho", "min_knee_torque"];
+
+fn search(out: &Path, budget: &str, seed: &str) -> Output {
+    run(&[
+        "design",
+        "--model",
+        "kneed",
+        "--free",
+        "hip_mass=0.3:1.2",
+        "--free",
+        "a2=0.12:0.22",
+        "--objective",
+        "margin",
+        "--budget",
+        budget,
+        "--seed",
+        seed,
+        "--init",
+        "3",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+fn bits(d: &pdw_store::DesignData) -> Vec<u64> {
+    let mut v: Vec<u64> = d.params.iter().flatten().map(|x| x.to_bits()).collect();
+    for c in COLS {
+        v.extend(d.column(c).unwrap().iter().map(|x| x.to_bits()));
+    }
+    v.extend(d.status.iter().map(|s| *s as u64));
+    v
+}
+
+#[test]
+fn seeded_search_is_reproducible_and_resumes_to_the_same_designs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, c) = (
+        dir.path().join("a.h5"),
+        dir.path().join("b.h5"),
+        dir.path().join("c.h5"),
+    );
+    // exit 0 with a feasible best, 1 without: either is a completed search
+    let o = search(&a, "14", "7");
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    let o = search(&b, "14", "7");
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    let (da, db) = (
+        pdw_store::read_design(&a, &COLS).unwrap(),
+        pdw_store::read_design(&b, &COLS).unwrap(),
+    );
+    assert_eq!(da.params.len(), 14);
+    assert_eq!(bits(&da), bits(&db), "same seed, same designs");
+    // interrupted after 6 designs, continued to 14 on the same file
+    let o = search(&c, "6", "7");
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    assert_eq!(pdw_store::read_design(&c, &COLS).unwrap().params.len(), 6);
+    let o = search(&c, "14", "7");
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("(8 new)"));
+    let dc = pdw_store::read_design(&c, &COLS).unwrap();
+    assert_eq!(bits(&da), bits(&dc), "resumed run = uninterrupted run");
+    // every design found a gait (the kneed walker walks across these bounds) and the knee
+    // torque is measured along the stride
+    assert!(da
+        .column("rho")
+        .unwrap()
+        .iter()
+        .all(|r| r.is_finite() && *r < 1.0));
+    assert!(da
+        .column("min_knee_torque")
+        .unwrap()
+        .iter()
+        .all(|k| k.is_finite()));
+    // another seed samples other initial designs (the first design is the model's own values)
+    let d = dir.path().join("d.h5");
+    let o = search(&d, "3", "8");
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    let dd = pdw_store::read_design(&d, &COLS).unwrap();
+    assert_eq!(dd.params[0], da.params[0]);
+    assert_ne!(dd.params[1], da.params[1]);
+    // a rerun with other settings is refused, naming them
+    let o = search(&c, "14", "9");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("other settings"), "{}", stderr(&o));
+}
+
+#[test]
+fn bad_design_arguments_exit_2_naming_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.h5");
+    let o = out.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--free", "nope=0:1"], "nope"),
+        (vec!["--free", "hip_mass=1:0.5"], "inverted"),
+        (
+            vec!["--free", "hip_mass=0.3:1", "--objective", "speed"],
+            "speed",
+        ),
+        (vec!["--free", "hip_mass=0.3:1", "--mu", "-1"], "--mu"),
+        (
+            vec!["--free", "hip_mass=0.3:1", "--budget", "0"],
+            "--budget",
+        ),
+        (vec!["--free", "hip_mass=-1:1"], "hip_mass"),
+        (
+            vec!["--free", "hip_mass=0.3:1", "--set", "hip_mass=0.5"],
+            "free or set",
+        ),
+        (vec![], "--free"),
+    ] {
+        let mut a = vec!["design", "--model", "kneed", "--quiet", "--out", o];
+        a.extend(args.iter().copied());
+        let r = run(&a);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {}", stderr(&r));
+        assert!(stderr(&r).contains(needle), "{args:?}: {}", stderr(&r));
+        assert!(!out.exists(), "{args:?}: nothing written on bad input");
+    }
+}

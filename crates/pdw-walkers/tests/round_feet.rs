@@ -1,0 +1,455 @@
+//! Round (arc) feet rolling without slip: the kernel's rolling base against the closed-form
+//! rolling arc (McGeer 1990), the limit r → 0 against the point foot, energy conservation along
+//! the flow, batched flow = scalar flow bit for bit, exact Jacobians against Richardson
+//! differences, and clear errors for a bad radius.
+
+use faer::Mat;
+use pdw_hybrid::{HybridSystem, Scratch};
+use pdw_soa::{ChainBuilder, Link};
+use pdw_walkers::{presets, ChainWalker, Walker};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+mod chain_common;
+use chain_common::{all_presets, random_state};
+
+/// The preset `w` with round feet of radius `r` (same parameter values).
+fn with_radius(w: &ChainWalker, r: f64) -> ChainWalker {
+    let mut spec = w.spec().clone();
+    spec.foot_radius = pdw_walkers::spec::Num::Value(r);
+    let values: Vec<f64> = w.param_values().into_iter().map(|p| p.1).collect();
+    ChainWalker::new(spec, &values).unwrap()
+}
+
+fn kneed_like() -> Vec<(&'static str, ChainWalker)> {
+    vec![
+        ("compass", presets::compass(&[]).unwrap()),
+        ("kneed", presets::kneed(&[]).unwrap()),
+        (
+            "seed5 free knee",
+            presets::seed5(&[("free_swing_knee", 1.0)]).unwrap(),
+        ),
+    ]
+}
+
+/// A one-link body whose arc foot (radius r, centre a distance ρ below the COM along the link)
+/// rolls on a slope γ: with θ the link's angle from the slope normal, the arc centre at
+/// `(−rθ, r)` and the COM at `(−rθ − ρ sin θ, r + ρ cos θ)` (y downhill, z up),
+/// Lagrange's equation is (McGeer 1990, the rolling arc foot)
+///
+/// `(I + m(r² + ρ² + 2rρ cos θ)) θ̈ − m r ρ sin θ θ̇² + m g (sin γ (r + ρ cos θ) − cos γ ρ sin θ) = 0`,
+///
+/// and the ground force is `F = m a_COM − m g⃗`. The kernel's rolling base (floating chain with
+/// the constant-Jacobian rolling constraint) must give both to roundoff.
+#[test]
+fn one_link_rolling_arc_matches_lagranges_equation_and_newtons_law() {
+    let (m, inertia, g, gamma) = (2.0, 0.15, 9.81, 0.1);
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for (r, rho) in [(0.3, 0.5), (0.5, 0.2), (0.25, -0.1), (1.0, 0.0), (0.0, 0.7)] {
+        let base = Link {
+            to_next: [0.0, 0.0],
+            com: [0.0, 0.0],
+            mass: pdw_walkers::chain_walker::FLOATING_BASE_MASS,
+            inertia: 0.0,
+        };
+        let body = Link {
+            to_next: [0.0, 1.0],
+            com: [0.0, rho],
+            mass: m,
+            inertia,
+        };
+        let chain = ChainBuilder::new()
+            .gravity(g)
+            .slope(gamma)
+            .prismatic([1.0, 0.0], base)
+            .prismatic([0.0, 1.0], base)
+            .revolute(body)
+            .build()
+            .unwrap();
+        for _ in 0..20 {
+            let th: f64 = rng.random_range(-1.2..1.2);
+            let w: f64 = rng.random_range(-3.0..3.0);
+            let (mut qdd, mut tau) = ([0.0], [0.0; 3]);
+            pdw_soa::rolling_base_dynamics(&chain, r, &[th], &[w], &[false], &mut qdd, &mut tau)
+                .unwrap();
+            let d = inertia + m * (r * r + rho * rho + 2.0 * r * rho * th.cos());
+            let rhs = m * r * rho * th.sin() * w * w
+                - m * g * (gamma.sin() * (r + rho * th.cos()) - gamma.cos() * rho * th.sin());
+            let expect = rhs / d;
+            assert!(
+                (qdd[0] - expect).abs() <= 1e-13 * (1.0 + expect.abs()),
+                "r {r} rho {rho} θ {th}: θ̈ {} vs closed form {expect}",
+                qdd[0]
+            );
+            // ground force from Newton's law on the COM
+            let a = [
+                -r * expect - rho * th.cos() * expect + rho * th.sin() * w * w,
+                -rho * th.sin() * expect - rho * th.cos() * w * w,
+            ];
+            let f = [
+                m * a[0] - m * g * gamma.sin(),
+                m * a[1] + m * g * gamma.cos(),
+            ];
+            for i in 0..2 {
+                assert!(
+                    (tau[i] - f[i]).abs() <= 1e-12 * (1.0 + f[i].abs()),
+                    "r {r} rho {rho}: ground force {i}: {} vs {}",
+                    tau[i],
+                    f[i]
+                );
+            }
+            // the rolling contact's torque about the arc centre, r f_y (the joint is passive)
+            assert!((tau[2] - r * tau[0]).abs() <= 1e-12 * (1.0 + tau[2].abs()));
+        }
+    }
+}
+
+/// The rolling disc (COM at the arc centre): uniform acceleration `g sin γ / (1 + I/(m r²))`
+/// down the slope, the textbook result.
+#[test]
+fn rolling_disc_accelerates_as_the_textbook_says() {
+    let (m, inertia, g, gamma, r) = (3.0, 0.2, 9.81, 0.2, 0.4);
+    let base = Link {
+        to_next: [0.0, 0.0],
+        com: [0.0, 0.0],
+        mass: pdw_walkers::chain_walker::FLOATING_BASE_MASS,
+        inertia: 0.0,
+    };
+    let chain = ChainBuilder::new()
+        .gravity(g)
+        .slope(gamma)
+        .prismatic([1.0, 0.0], base)
+        .prismatic([0.0, 1.0], base)
+        .revolute(Link {
+            to_next: [0.0, 1.0],
+            com: [0.0, 0.0],
+            mass: m,
+            inertia,
+        })
+        .build()
+        .unwrap();
+    let (mut qdd, mut tau) = ([0.0], [0.0; 3]);
+    pdw_soa::rolling_base_dynamics(&chain, r, &[0.7], &[2.0], &[false], &mut qdd, &mut tau)
+        .unwrap();
+    let a = -r * qdd[0];
+    let expect = g * gamma.sin() / (1.0 + inertia / (m * r * r));
+    assert!((a - expect).abs() <= 1e-14 * expect, "{a} vs {expect}");
+}
+
+/// r → 0: the rolling base at r = 0 is the pinned point foot to roundoff, the walker at
+/// r = 1e-9 differs from the point foot by O(r), and `foot_radius = 0` is the point foot bit for
+/// bit (the same code path).
+#[test]
+fn vanishing_radius_is_the_point_foot() {
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    for (name, w) in all_presets() {
+        let n = w.dim() / 2;
+        let w0 = with_radius(&w, 0.0);
+        let wr = with_radius(&w, 1e-9);
+        let mut ws = Scratch::new();
+        for mode in 0..w.n_modes() {
+            for _ in 0..5 {
+                let x = random_state(&w, &mut rng, mode);
+                let (mut f, mut f0, mut fr) =
+                    (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; 2 * n]);
+                w.flow(&mut ws, mode, &x, &mut f);
+                w0.flow(&mut ws, mode, &x, &mut f0);
+                wr.flow(&mut ws, mode, &x, &mut fr);
+                for j in 0..2 * n {
+                    assert_eq!(f[j].to_bits(), f0[j].to_bits(), "{name}: r = 0 flow {j}");
+                    assert!(
+                        (fr[j] - f[j]).abs() <= 1e-7 * (1.0 + f[j].abs()),
+                        "{name} mode {mode}: r = 1e-9 flow {j}: {} vs {}",
+                        fr[j],
+                        f[j]
+                    );
+                }
+                // the rolling-base code at exactly r = 0 against the pinned kernel
+                let mut qdd = vec![0.0; n];
+                let mut tau = vec![0.0; n + 2];
+                let locked: Vec<bool> =
+                    (0..n).map(|k| w.locked_joints(mode).contains(&k)).collect();
+                pdw_soa::rolling_base_dynamics(
+                    w.floating_chain(),
+                    0.0,
+                    &x[..n],
+                    &x[n..],
+                    &locked,
+                    &mut qdd,
+                    &mut tau,
+                )
+                .unwrap();
+                for j in 0..n {
+                    assert!(
+                        (qdd[j] - f[n + j]).abs() <= 1e-11 * (1.0 + f[n + j].abs()),
+                        "{name} mode {mode}: rolling base at r = 0, q̈{j} {} vs {}",
+                        qdd[j],
+                        f[n + j]
+                    );
+                }
+                let (c, cr) = (
+                    w.constraint_forces_ws(&mut ws, mode, &x),
+                    wr.constraint_forces_ws(&mut ws, mode, &x),
+                );
+                let scale = c.normal.abs().max(1.0);
+                assert!((c.normal - cr.normal).abs() <= 1e-7 * scale, "{name}");
+                assert!(
+                    (c.tangential - cr.tangential).abs() <= 1e-7 * scale,
+                    "{name}"
+                );
+                for (a, b) in c.knee_torque.iter().zip(&cr.knee_torque) {
+                    assert_eq!(a.is_some(), b.is_some());
+                    if let (Some(a), Some(b)) = (a, b) {
+                        assert!((a - b).abs() <= 1e-7 * scale, "{name}: knee {a} vs {b}");
+                    }
+                }
+                let (e, er) = (w.energy(&x).unwrap(), wr.energy(&x).unwrap());
+                assert!(
+                    (e - er).abs() <= 1e-7 * e.abs().max(1.0),
+                    "{name}: {e} vs {er}"
+                );
+            }
+        }
+        // heel strike: post-impact rates and the ground impulse
+        let mode = w.locked_mode();
+        let mut x = random_state(&w, &mut rng, mode);
+        x[0] = -0.2;
+        x[n / 2] = 0.4;
+        let (mut v, mut vr) = (vec![0.0; n + 2], vec![0.0; n + 2]);
+        let imp = w.heel_strike(&mut ws, &x, &mut v);
+        let impr = wr.heel_strike(&mut ws, &x, &mut vr);
+        for j in 0..n + 2 {
+            assert!(
+                (v[j] - vr[j]).abs() <= 1e-7 * (1.0 + v[j].abs()),
+                "{name}: v{j}"
+            );
+        }
+        for i in 0..2 {
+            assert!(
+                (imp[i] - impr[i]).abs() <= 1e-7 * (1.0 + imp[i].abs()),
+                "{name}: impulse {i}: {} vs {}",
+                imp[i],
+                impr[i]
+            );
+        }
+    }
+}
+
+/// Energy `T + V` (the arc centre's travel along the slope included) is conserved along the
+/// flow of both modes with round feet: classical RK4 at h = 1e-3 over 0.4 s.
+#[test]
+fn energy_is_conserved_along_the_round_foot_flow() {
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    for (name, w) in kneed_like() {
+        let w = with_radius(&w, 0.2 * w.leg_length());
+        let d = w.dim();
+        let mut ws = Scratch::new();
+        for mode in 0..w.n_modes() {
+            let mut x = random_state(&w, &mut rng, mode);
+            let e0 = w.energy(&x).unwrap();
+            let h = 1e-3;
+            let mut k = vec![vec![0.0; d]; 4];
+            let mut xt = vec![0.0; d];
+            let mut worst = 0.0f64;
+            for _ in 0..400 {
+                w.flow(&mut ws, mode, &x, &mut k[0]);
+                for (c, a) in [(1, 0.5), (2, 0.5), (3, 1.0)] {
+                    for j in 0..d {
+                        xt[j] = x[j] + a * h * k[c - 1][j];
+                    }
+                    w.flow(&mut ws, mode, &xt, &mut k[c]);
+                }
+                for j in 0..d {
+                    x[j] += h / 6.0 * (k[0][j] + 2.0 * k[1][j] + 2.0 * k[2][j] + k[3][j]);
+                }
+                worst = worst.max((w.energy(&x).unwrap() - e0).abs());
+            }
+            let scale = e0.abs().max(1.0);
+            assert!(
+                worst <= 1e-9 * scale,
+                "{name} mode {mode}: energy drift {worst:.3e} of {e0}"
+            );
+        }
+    }
+}
+
+#[test]
+fn batched_flow_equals_scalar_flow_bit_for_bit_with_round_feet() {
+    let mut rng = ChaCha8Rng::seed_from_u64(14);
+    for (name, w) in kneed_like() {
+        let w = with_radius(&w, 0.15 * w.leg_length());
+        let d = w.dim();
+        for mode in 0..w.n_modes() {
+            for lanes in [1usize, 5, 300] {
+                let states: Vec<Vec<f64>> = (0..lanes)
+                    .map(|_| random_state(&w, &mut rng, mode))
+                    .collect();
+                let x = Mat::from_fn(lanes, d, |l, j| states[l][j]);
+                let mut dx = Mat::<f64>::zeros(lanes, d);
+                let mut ws = Scratch::new();
+                w.flow_batch(&mut ws, mode, x.as_ref(), dx.as_mut());
+                let mut f = vec![0.0; d];
+                let mut ws1 = Scratch::new();
+                for (l, s) in states.iter().enumerate() {
+                    w.flow(&mut ws1, mode, s, &mut f);
+                    for j in 0..d {
+                        assert_eq!(
+                            dx[(l, j)].to_bits(),
+                            f[j].to_bits(),
+                            "{name} mode {mode} lanes {lanes} lane {l} comp {j}"
+                        );
+                    }
+                }
+                // batched guards too
+                for k in 0..w.guards(mode).len() {
+                    let mut g = vec![0.0; lanes];
+                    w.guard_batch(&mut ws, mode, k, x.as_ref(), &mut g);
+                    for (l, s) in states.iter().enumerate() {
+                        assert_eq!(g[l].to_bits(), w.guard(&mut ws1, mode, k, s).to_bits());
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Central differences of `f` at `x`, extrapolated (Richardson, steps h and h/2).
+fn richardson(f: &mut dyn FnMut(&[f64], &mut [f64]), x: &[f64], n_out: usize) -> Vec<f64> {
+    let n = x.len();
+    let mut jac = vec![0.0; n_out * n];
+    let (mut fp, mut fm) = (vec![0.0; n_out], vec![0.0; n_out]);
+    let mut xp = x.to_vec();
+    for j in 0..n {
+        let mut d = [vec![0.0; n_out], vec![0.0; n_out]];
+        for (k, h) in [1e-4, 5e-5].into_iter().enumerate() {
+            xp[j] = x[j] + h;
+            f(&xp, &mut fp);
+            xp[j] = x[j] - h;
+            f(&xp, &mut fm);
+            xp[j] = x[j];
+            for i in 0..n_out {
+                d[k][i] = (fp[i] - fm[i]) / (2.0 * h);
+            }
+        }
+        for i in 0..n_out {
+            jac[i * n + j] = (4.0 * d[1][i] - d[0][i]) / 3.0;
+        }
+    }
+    jac
+}
+
+fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
+    let scale = b.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    for (i, (u, v)) in a.iter().zip(b).enumerate() {
+        assert!(
+            (u - v).abs() <= tol * scale,
+            "{what}: entry {i}: exact {u} vs differences {v}"
+        );
+    }
+}
+
+#[test]
+fn exact_jacobians_with_round_feet_match_richardson_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(15);
+    for (name, w) in kneed_like() {
+        let w = with_radius(&w, 0.22 * w.leg_length());
+        let d = w.dim();
+        let mut ws = Scratch::new();
+        let mut ws2 = Scratch::new();
+        for mode in 0..w.n_modes() {
+            for _ in 0..4 {
+                let x = random_state(&w, &mut rng, mode);
+                let mut jac = vec![0.0; d * d];
+                w.flow_jacobian(&mut ws, mode, &x, &mut jac);
+                let fd = richardson(&mut |x, f| w.flow(&mut ws2, mode, x, f), &x, d);
+                assert_close(
+                    &jac,
+                    &fd,
+                    1e-8,
+                    &format!("{name} flow jacobian mode {mode}"),
+                );
+                for k in 0..w.guards(mode).len() {
+                    let mut g = vec![0.0; d];
+                    w.guard_gradient(&mut ws, mode, k, &x, &mut g);
+                    let fd =
+                        richardson(&mut |x, out| out[0] = w.guard(&mut ws2, mode, k, x), &x, 1);
+                    assert_close(&g, &fd, 1e-8, &format!("{name} guard {k} mode {mode}"));
+                }
+                let mut jr = vec![0.0; d * d];
+                w.reset_jacobian(&mut ws, mode, 0, &x, &mut jr);
+                let fd = richardson(
+                    &mut |x, out| {
+                        w.reset(&mut ws2, mode, 0, x, out);
+                    },
+                    &x,
+                    d,
+                );
+                assert_close(
+                    &jr,
+                    &fd,
+                    1e-8,
+                    &format!("{name} reset jacobian mode {mode}"),
+                );
+            }
+        }
+    }
+}
+
+/// After a round-foot heel strike the new stance foot rolls: the contact point (r below the
+/// new stance arc centre) is at rest, i.e. the arc centre moves at `−r θ̇` along the slope.
+#[test]
+fn heel_strike_leaves_the_new_contact_point_at_rest() {
+    let mut rng = ChaCha8Rng::seed_from_u64(16);
+    for (name, w) in kneed_like() {
+        let r = 0.2 * w.leg_length();
+        let w = with_radius(&w, r);
+        let n = w.dim() / 2;
+        let mode = w.locked_mode();
+        let mut x = random_state(&w, &mut rng, mode);
+        x[0] = -0.2;
+        x[n / 2] = 0.4;
+        let mut v = vec![0.0; n + 2];
+        let mut ws = Scratch::new();
+        let imp = w.heel_strike(&mut ws, &x, &mut v);
+        // velocity of the swing arc centre (the chain's tip) on the floating chain
+        let mut q = vec![0.0; n + 2];
+        q[2..].copy_from_slice(&x[..n]);
+        let mut jt = vec![0.0; 2 * (n + 2)];
+        let mut pos = [0.0; 2];
+        pdw_soa::tip_position_derivatives(w.floating_chain(), &q, &mut pos, &mut jt).unwrap();
+        let vc: Vec<f64> = (0..2)
+            .map(|i| (0..n + 2).map(|k| jt[i * (n + 2) + k] * v[k]).sum())
+            .collect();
+        let omega: f64 = v[2..].iter().sum(); // swing shank's absolute rate
+        assert!(
+            (vc[0] + r * omega).abs() <= 1e-12 * (1.0 + vc[0].abs()) && vc[1].abs() <= 1e-12,
+            "{name}: arc centre velocity {vc:?}, −rω = {}",
+            -r * omega
+        );
+        assert!(imp[1] > 0.0, "{name}: the ground pushes: impulse {imp:?}");
+    }
+}
+
+#[test]
+fn a_radius_off_the_lowest_segment_is_refused_naming_the_field() {
+    let w = presets::kneed(&[]).unwrap();
+    let mut spec = w.spec().clone();
+    spec.foot_radius = pdw_walkers::spec::Num::Value(0.6);
+    let e = ChainWalker::from_spec(spec.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("foot_radius") && e.contains("0.6") && e.contains("[0, 0.5)"),
+        "{e}"
+    );
+    spec.foot_radius = pdw_walkers::spec::Num::Value(-0.1);
+    let e = ChainWalker::from_spec(spec.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("foot_radius") && e.contains(">= 0"), "{e}");
+    spec.foot_radius = pdw_walkers::spec::Num::Expr("radius".into());
+    let e = ChainWalker::from_spec(spec).unwrap_err().to_string();
+    assert!(
+        e.contains("foot_radius") && e.contains("unknown parameter"),
+        "{e}"
+    );
+}
