@@ -265,8 +265,14 @@ pub fn plot_basin_attractors(
 ) -> Result<()> {
     // Axis names may carry a unit suffix for the axis label ("theta [rad]").
     let bare = |n: &str| n.split(" [").next().unwrap_or(n).to_string();
-    let ix = header.state_names.iter().position(|n| *n == bare(&header.x_name));
-    let iy = header.state_names.iter().position(|n| *n == bare(&header.y_name));
+    let ix = header
+        .state_names
+        .iter()
+        .position(|n| *n == bare(&header.x_name));
+    let iy = header
+        .state_names
+        .iter()
+        .position(|n| *n == bare(&header.y_name));
     let colours = outcome_colours(&header.legend);
     let marks: Vec<Marks> = match (ix, iy) {
         (Some(ix), Some(iy)) => attractors

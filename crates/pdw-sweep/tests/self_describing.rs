@@ -87,7 +87,9 @@ fn check_provenance(f: &hdf5::File, command_has: &str) -> serde_json::Value {
             "release"
         }
     );
-    assert!(attr_str(&p, "simd_path").starts_with("compile-time: "));
+    // The path the run chose (this process would choose the same on this CPU) and the contract.
+    assert_eq!(attr_str(&p, "simd_path"), pdw_simd::path().name());
+    assert_eq!(attr_str(&p, "numerics"), pdw_simd::NUMERICS);
     assert!(!attr_str(&p, "host").is_empty());
     assert!(attr_str(&p, "command").contains(command_has));
     assert!(!attr_str(&p, "created").is_empty());
@@ -334,4 +336,64 @@ fn sweep_and_trajectory_files_carry_units_and_every_numerical_option() {
         assert!(text.contains(key), "{key} missing from the CSV header");
     }
     assert!(Path::new(&csv).exists());
+}
+
+#[test]
+fn merge_accepts_shards_from_any_simd_path_and_refuses_other_builds_unless_forced() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    // Shard 0 on the baseline path, shard 1 on the best one: one build, the same bits.
+    for (i, path) in [(0, "baseline"), (1, pdw_simd::best_path().name())] {
+        let o = Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+            .env("PDW_SIMD", path)
+            .args(["basin", "--grid", "16x16", "--quiet", "--shard"])
+            .arg(format!("{i}/2"))
+            .args(["--out", &p(&format!("s{i}.h5"))])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let f = hdf5::File::open(p(&format!("s{i}.h5"))).unwrap();
+        assert_eq!(attr_str(&f.group("provenance").unwrap(), "simd_path"), path);
+    }
+    ok(&["merge", &p("s0.h5"), &p("s1.h5"), "--out", &p("m.h5")]);
+    // The same grid in one run equals the merged shards.
+    ok(&["basin", "--grid", "16x16", "--quiet", "--out", &p("one.h5")]);
+    let read = |f: &str| {
+        hdf5::File::open(p(f))
+            .unwrap()
+            .dataset("basin/outcome")
+            .unwrap()
+            .read_raw::<u8>()
+            .unwrap()
+    };
+    assert_eq!(read("m.h5"), read("one.h5"));
+    // Shard 1 claims another commit: refused, naming both; --force joins them with a warning.
+    {
+        let f = hdf5::File::open_rw(p("s1.h5")).unwrap();
+        let g = f.group("provenance").unwrap();
+        g.delete_attr("git_commit").unwrap();
+        let v: VarLenUnicode = "0123456789abcdef".parse().unwrap();
+        g.new_attr::<VarLenUnicode>()
+            .create("git_commit")
+            .unwrap()
+            .write_scalar(&v)
+            .unwrap();
+    }
+    let o = run(&["merge", &p("s0.h5"), &p("s1.h5"), "--out", &p("m2.h5")]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("different builds") && err.contains("0123456789abcdef"),
+        "{err}"
+    );
+    assert!(!Path::new(&p("m2.h5")).exists());
+    let o = ok(&[
+        "merge",
+        &p("s0.h5"),
+        &p("s1.h5"),
+        "--out",
+        &p("m2.h5"),
+        "--force",
+    ]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("different builds"));
 }
