@@ -84,8 +84,9 @@ pub(crate) struct EventScratch {
     pub gv: Vec<f64>,
     /// `(8 × dim)` dense-output coefficients.
     pub cont: Vec<f64>,
-    /// `(3 × dim)` DOP853's extra dense-output stages.
-    pub ext: Vec<f64>,
+    /// `(16 × dim)` the lane's DOP853 stages k₀…k₁₂ gathered contiguously, then the three
+    /// extra dense-output stages k₁₃…k₁₅.
+    pub kl: Vec<f64>,
     pub ytmp: Vec<f64>,
     /// The model's own scratch, passed to every model call made for this lane.
     pub model: Scratch,
@@ -103,7 +104,7 @@ impl EventScratch {
             xbest: vec![0.0; d],
             gv: vec![0.0; ng * M],
             cont: vec![0.0; 8 * d],
-            ext: vec![0.0; 3 * d],
+            kl: vec![0.0; 16 * d],
             ytmp: vec![0.0; d],
             model: Scratch::new(),
         }
@@ -221,24 +222,25 @@ fn build_dense<S: HybridSystem + ?Sized>(
             Interp::Dopri5
         }
         Method::Dop853 => {
-            // Stage value k_q for q ≤ 12 from the store, q = 13..15 from the extra stages.
+            // The lane's stages k₀…k₁₂, gathered once (contiguous), then k₁₃…k₁₅ appended: the
+            // sums below read them in the same order with the same weights as a strided read.
+            for q in 0..13 {
+                for j in 0..d {
+                    sc.kl[q * d + j] = kq(q, j);
+                }
+            }
             for r in 0..3 {
                 let a = tableau::DOP853_DENSE_A[r];
                 for j in 0..d {
                     let mut s = 0.0;
                     for (q, &w) in a.iter().enumerate() {
                         if w != 0.0 {
-                            let v = if q < 13 {
-                                kq(q, j)
-                            } else {
-                                sc.ext[(q - 13) * d + j]
-                            };
-                            s += w * v;
+                            s += w * sc.kl[q * d + j];
                         }
                     }
                     sc.ytmp[j] = sc.x0[j] + h * s;
                 }
-                let (_, rest) = sc.ext.split_at_mut(r * d);
+                let (_, rest) = sc.kl.split_at_mut((13 + r) * d);
                 sys.flow(&mut sc.model, mode, &sc.ytmp, &mut rest[..d]);
                 stats.rhs_evals += 1;
             }
@@ -248,12 +250,7 @@ fn build_dense<S: HybridSystem + ?Sized>(
                     let mut s = 0.0;
                     for (q, &w) in drow.iter().enumerate() {
                         if w != 0.0 {
-                            let v = if q < 13 {
-                                kq(q, j)
-                            } else {
-                                sc.ext[(q - 13) * d + j]
-                            };
-                            s += w * v;
+                            s += w * sc.kl[q * d + j];
                         }
                     }
                     sc.cont[(4 + r) * d + j] = h * s;
