@@ -60,9 +60,10 @@
 //! - a stride longer than `max_stride_time` ([`Section::max_stride_time`]).
 //!
 //! # Vectorised right-hand side
-//! `flow_batch` evaluates the trigonometric functions with `wide`'s `f64x4::sin_cos`, four lanes
-//! at a time, and the scalar [`HybridSystem::flow`] calls the very same lane-wise kernel, so the
-//! scalar and batched right-hand sides are bit-identical.
+//! `flow_batch` evaluates the trigonometric functions with `pdw_simd::sincos_lanes` eight values
+//! (four lanes, two angles) at a time, compiled for the run-time SIMD path, and the scalar
+//! [`HybridSystem::flow`] runs the same element-wise routine on its two angles, so the scalar and
+//! batched right-hand sides are bit-identical.
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
