@@ -284,7 +284,11 @@ pub(crate) fn create_file(
     Ok((file, guard))
 }
 
-/// Opens an existing file read-only or read-write with a 32 MiB chunk cache.
+/// Opens an existing file read-only or read-write with a 32 MiB chunk cache. HDF5's own file
+/// locking is off: our writers guard their files with [`OutputLock`] and turn HDF5's lock off,
+/// so a reader's HDF5 lock would protect nothing — and, HDF5 opening files without
+/// close-on-exec, a child process started meanwhile would inherit the lock and make a later
+/// writer of the same file report it busy.
 pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
     no_close_at_exit();
     if !path.exists() {
@@ -295,7 +299,7 @@ pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
         });
     }
     let mut b = hdf5::File::with_options();
-    b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0));
+    b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0).file_locking(false));
     if rw { b.open_rw(path) } else { b.open(path) }.at(path, "opening the file")
 }
 

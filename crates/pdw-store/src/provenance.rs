@@ -661,7 +661,7 @@ pub fn shard_provenance(shards: &[&Path]) -> Result<Vec<Option<Provenance>>> {
     shards
         .iter()
         .map(|p| {
-            let f = File::open(p).at(p, "opening the shard")?;
+            let f = crate::h5util::open_file(p, false)?;
             read_provenance(p, &f)
         })
         .collect()

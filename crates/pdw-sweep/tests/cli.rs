@@ -319,7 +319,7 @@ fn interrupted_basin_resumes_to_the_same_file() {
             .unwrap();
         assert!(o.status.success(), "{}", stderr(&o));
         // The provenance lists both command lines: the interrupted run and its resume.
-        let f = hdf5::File::open(&out).unwrap();
+        let f = h5_open(&out).unwrap();
         let cmds: Vec<String> = serde_json::from_str(
             f.group("provenance")
                 .unwrap()
@@ -535,4 +535,20 @@ fn fixedpoint_period_two_lists_both_points() {
         assert_eq!(o.status.code(), Some(2));
         assert!(stderr(&o).contains("--period"), "{}", stderr(&o));
     }
+}
+
+/// Opens a file for reading without HDF5's file lock: HDF5 opens files without close-on-exec,
+/// so a pdw-sweep started meanwhile by a parallel test would inherit the lock and hold it.
+fn h5_open(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
+    hdf5::File::with_options()
+        .with_fapl(|p| p.file_locking(false))
+        .open(path)
+}
+
+/// [`h5_open`] read-write.
+#[allow(dead_code)]
+fn h5_open_rw(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
+    hdf5::File::with_options()
+        .with_fapl(|p| p.file_locking(false))
+        .open_rw(path)
 }

@@ -113,7 +113,7 @@ fn basin_file_carries_units_slice_scales_provenance_and_the_fill_value() {
     ok(&[
         "basin", "--model", "compass", "--grid", "16x16", "--quiet", "--rtol", "1e-10", "--out", o,
     ]);
-    let f = hdf5::File::open(&out).unwrap();
+    let f = h5_open(&out).unwrap();
     let units = units_of_every_dataset(&f);
     assert_eq!(unit(&units, "grid/x"), "rad");
     assert_eq!(unit(&units, "grid/y"), "rad/s");
@@ -207,7 +207,7 @@ fn basin_file_carries_units_slice_scales_provenance_and_the_fill_value() {
         "--out",
         off.to_str().unwrap(),
     ]);
-    let f = hdf5::File::open(&off).unwrap();
+    let f = h5_open(&off).unwrap();
     let s = f.group("slice").unwrap();
     let v: f64 = s.attr("hip_rate").unwrap().read_scalar().unwrap();
     assert_eq!(v, 0.6);
@@ -244,7 +244,7 @@ fn simplest_walker_files_are_in_leg_units_and_merged_shards_keep_their_commands(
         "--out",
         merged.to_str().unwrap(),
     ]);
-    let f = hdf5::File::open(&merged).unwrap();
+    let f = h5_open(&merged).unwrap();
     let units = units_of_every_dataset(&f);
     assert_eq!(unit(&units, "grid/x"), "rad");
     assert_eq!(unit(&units, "grid/y"), "rad/sqrt(l/g)");
@@ -285,7 +285,7 @@ fn sweep_and_trajectory_files_carry_units_and_every_numerical_option() {
         "--out",
         bif.to_str().unwrap(),
     ]);
-    let f = hdf5::File::open(&bif).unwrap();
+    let f = h5_open(&bif).unwrap();
     let units = units_of_every_dataset(&f);
     assert_eq!(unit(&units, "branches/000/parameter"), "rad");
     assert_eq!(
@@ -314,7 +314,7 @@ fn sweep_and_trajectory_files_carry_units_and_every_numerical_option() {
         "--out",
         traj.to_str().unwrap(),
     ]);
-    let f = hdf5::File::open(&traj).unwrap();
+    let f = h5_open(&traj).unwrap();
     let units = units_of_every_dataset(&f);
     assert_eq!(unit(&units, "t"), "s");
     assert_eq!(unit(&units, "stance_rate"), "rad/s");
@@ -352,14 +352,14 @@ fn merge_accepts_shards_from_any_simd_path_and_refuses_other_builds_unless_force
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let f = hdf5::File::open(p(&format!("s{i}.h5"))).unwrap();
+        let f = h5_open(p(&format!("s{i}.h5"))).unwrap();
         assert_eq!(attr_str(&f.group("provenance").unwrap(), "simd_path"), path);
     }
     ok(&["merge", &p("s0.h5"), &p("s1.h5"), "--out", &p("m.h5")]);
     // The same grid in one run equals the merged shards.
     ok(&["basin", "--grid", "16x16", "--quiet", "--out", &p("one.h5")]);
     let read = |f: &str| {
-        hdf5::File::open(p(f))
+        h5_open(p(f))
             .unwrap()
             .dataset("basin/outcome")
             .unwrap()
@@ -369,7 +369,7 @@ fn merge_accepts_shards_from_any_simd_path_and_refuses_other_builds_unless_force
     assert_eq!(read("m.h5"), read("one.h5"));
     // Shard 1 claims another commit: refused, naming both; --force joins them with a warning.
     {
-        let f = hdf5::File::open_rw(p("s1.h5")).unwrap();
+        let f = h5_open_rw(p("s1.h5")).unwrap();
         let g = f.group("provenance").unwrap();
         g.delete_attr("git_commit").unwrap();
         let v: VarLenUnicode = "0123456789abcdef".parse().unwrap();
@@ -396,4 +396,20 @@ fn merge_accepts_shards_from_any_simd_path_and_refuses_other_builds_unless_force
         "--force",
     ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("different builds"));
+}
+
+/// Opens a file for reading without HDF5's file lock: HDF5 opens files without close-on-exec,
+/// so a pdw-sweep started meanwhile by a parallel test would inherit the lock and hold it.
+fn h5_open(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
+    hdf5::File::with_options()
+        .with_fapl(|p| p.file_locking(false))
+        .open(path)
+}
+
+/// [`h5_open`] read-write.
+#[allow(dead_code)]
+fn h5_open_rw(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
+    hdf5::File::with_options()
+        .with_fapl(|p| p.file_locking(false))
+        .open_rw(path)
 }
