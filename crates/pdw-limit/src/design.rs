@@ -148,6 +148,11 @@ impl DesignEval {
         }
     }
 
+    /// A design whose parameters do not make a model (`reason`: the model's error).
+    pub fn bad_model(params: &[f64], reason: String) -> Self {
+        Self::failed(params, status::BAD_MODEL, reason, COST_BAD_MODEL)
+    }
+
     /// Stable and physically valid.
     pub fn feasible(&self) -> bool {
         self.status == status::FEASIBLE

@@ -2,6 +2,8 @@
 //! bad input (exit code 2, a message naming the value, nothing lost), and the basin file's
 //! reproducibility across thread counts, shards and interrupted runs.
 
+mod common;
+use common::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -535,20 +537,4 @@ fn fixedpoint_period_two_lists_both_points() {
         assert_eq!(o.status.code(), Some(2));
         assert!(stderr(&o).contains("--period"), "{}", stderr(&o));
     }
-}
-
-/// Opens a file for reading without HDF5's file lock: HDF5 opens files without close-on-exec,
-/// so a pdw-sweep started meanwhile by a parallel test would inherit the lock and hold it.
-fn h5_open(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
-    hdf5::File::with_options()
-        .with_fapl(|p| p.file_locking(false))
-        .open(path)
-}
-
-/// [`h5_open`] read-write.
-#[allow(dead_code)]
-fn h5_open_rw(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
-    hdf5::File::with_options()
-        .with_fapl(|p| p.file_locking(false))
-        .open_rw(path)
 }

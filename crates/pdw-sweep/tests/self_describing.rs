@@ -3,6 +3,8 @@
 //! scales on the grid, the fill value in the legend; a merged basin keeps each shard's command.
 //! Attributes are read back with the hdf5 crate.
 
+mod common;
+use common::*;
 use hdf5::types::{FixedAscii, VarLenUnicode};
 use std::path::Path;
 use std::process::{Command, Output};
@@ -396,20 +398,4 @@ fn merge_accepts_shards_from_any_simd_path_and_refuses_other_builds_unless_force
         "--force",
     ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("different builds"));
-}
-
-/// Opens a file for reading without HDF5's file lock: HDF5 opens files without close-on-exec,
-/// so a pdw-sweep started meanwhile by a parallel test would inherit the lock and hold it.
-fn h5_open(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
-    hdf5::File::with_options()
-        .with_fapl(|p| p.file_locking(false))
-        .open(path)
-}
-
-/// [`h5_open`] read-write.
-#[allow(dead_code)]
-fn h5_open_rw(path: impl AsRef<Path>) -> hdf5::Result<hdf5::File> {
-    hdf5::File::with_options()
-        .with_fapl(|p| p.file_locking(false))
-        .open_rw(path)
 }

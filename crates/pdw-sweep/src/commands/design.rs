@@ -9,7 +9,6 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw_limit::basin::BasinOptions;
 use pdw_limit::design::{
     evaluate_design, search, status, DesignEval, DesignOptions, DesignSpace, Objective,
-    COST_BAD_MODEL,
 };
 use pdw_store::{read_design, write_design, DesignData};
 use std::io::IsTerminal;
@@ -301,20 +300,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         let set: Vec<(String, f64)> = names.iter().cloned().zip(p.iter().copied()).collect();
         let ev = match build_with(&a.model, &set) {
             Ok(m) => evaluate_design(p, m.walker.as_ref(), g, &opts, &pool),
-            Err(e) => DesignEval {
-                params: p.to_vec(),
-                status: status::BAD_MODEL,
-                reason: e.0,
-                cost: COST_BAD_MODEL,
-                basin_fraction: f64::NAN,
-                rho: f64::NAN,
-                section: [f64::NAN; 3],
-                min_normal_force: f64::NAN,
-                max_friction: f64::NAN,
-                min_knee_torque: f64::NAN,
-                period: f64::NAN,
-                step_length: f64::NAN,
-            },
+            Err(e) => DesignEval::bad_model(p, e.0),
         };
         all.push(ev.clone());
         if write_err.is_none() {
