@@ -12,7 +12,10 @@
 //! the file is created with HDF5's file-space strategy `NONE` (no reuse of freed space), so
 //! nothing the last flushed state refers to is overwritten before the next flush. A run killed
 //! at any moment (SIGKILL included, tested) therefore leaves a file whose marked rows are valid;
-//! rows of blocks not yet complete are lost and recomputed. [`BasinWriter::resume`] reopens the
+//! rows of blocks not yet complete are lost and recomputed. The chunks of a block interrupted
+//! before it was marked can be unreadable (their index entry flushed before the file's end of
+//! allocation); readers treat such a block as not computed, and an unreadable block that *is*
+//! marked done as an error. [`BasinWriter::resume`] reopens the
 //! file and reports the rows still to compute. Since the engine's labels do not depend on batch
 //! size, thread count or order, a resumed run yields the same datasets as an uninterrupted one.
 
@@ -1285,11 +1288,62 @@ pub fn read_basin_outcome(path: impl AsRef<Path>) -> Result<(BasinHeader, Array2
     let path = path.as_ref();
     let f = open_file(path, false)?;
     let h = read_header(path, &f)?;
-    let o = f
+    let rows_done = read_rows_done(path, &f)?;
+    let ds = f
         .dataset("basin/outcome")
-        .and_then(|d| d.read_2d::<u8>())
-        .at(path, "reading /basin/outcome")?;
+        .at(path, "opening /basin/outcome")?;
+    let o = read_blocks_2d(path, &ds, "outcome", &rows_done, h.nx(), NOT_COMPUTED)?;
     Ok((h, o))
+}
+
+/// Reads a (ny × nx) dataset block by block ([`BLOCK_ROWS`] rows). A block not wholly marked in
+/// `rows_done` that cannot be read (a writer killed mid-block can leave its chunk index pointing
+/// past the end of the file) reads as `fill`, the value of cells not computed; a block marked
+/// done that cannot be read is an error.
+fn read_blocks_2d<T: hdf5::H5Type + Copy>(
+    path: &Path,
+    ds: &Dataset,
+    name: &str,
+    rows_done: &[bool],
+    nx: usize,
+    fill: T,
+) -> Result<Array2<T>> {
+    let ny = rows_done.len();
+    let mut out = Array2::from_elem((ny, nx), fill);
+    for b in 0..ny.div_ceil(BLOCK_ROWS) {
+        let r = block_range(b, ny);
+        match ds.read_slice_2d::<T, _>(s![r.clone(), ..]) {
+            Ok(v) => out.slice_mut(s![r, ..]).assign(&v),
+            Err(e) if rows_done[r.clone()].iter().all(|d| *d) => {
+                return Err(e).at(path, &format!("reading /basin/{name}"))
+            }
+            Err(_) => {}
+        }
+    }
+    Ok(out)
+}
+
+/// [`read_blocks_2d`] for the (ny × nx × d) final states (NaN where not computed).
+fn read_blocks_3d(
+    path: &Path,
+    ds: &Dataset,
+    rows_done: &[bool],
+    nx: usize,
+    d: usize,
+) -> Result<Array3<f64>> {
+    let ny = rows_done.len();
+    let mut out = Array3::from_elem((ny, nx, d), f64::NAN);
+    for b in 0..ny.div_ceil(BLOCK_ROWS) {
+        let r = block_range(b, ny);
+        match ds.read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..]) {
+            Ok(v) => out.slice_mut(s![r, .., ..]).assign(&v),
+            Err(e) if rows_done[r.clone()].iter().all(|d| *d) => {
+                return Err(e).at(path, "reading /basin/final")
+            }
+            Err(_) => {}
+        }
+    }
+    Ok(out)
 }
 
 /// Reads a whole basin file.
@@ -1298,24 +1352,25 @@ pub fn read_basin(path: impl AsRef<Path>) -> Result<BasinData> {
     let f = open_file(path, false)?;
     let header = read_header(path, &f)?;
     let basin = f.group("basin").at(path, "opening /basin")?;
-    let outcome = basin
-        .dataset("outcome")
-        .and_then(|d| d.read_2d::<u8>())
-        .at(path, "reading /basin/outcome")?;
-    let strides = basin
-        .dataset("strides")
-        .and_then(|d| d.read_2d::<u16>())
-        .at(path, "reading /basin/strides")?;
-    let final_state = basin
-        .dataset("final")
-        .and_then(|d| d.read::<f64, ndarray::Ix3>())
-        .at(path, "reading /basin/final")?;
+    let rows_done = read_rows_done(path, &f)?;
+    let open = |n: &str| basin.dataset(n).at(path, &format!("opening /basin/{n}"));
+    let (nx, d) = (header.nx(), header.d());
+    let outcome = read_blocks_2d(
+        path,
+        &open("outcome")?,
+        "outcome",
+        &rows_done,
+        nx,
+        NOT_COMPUTED,
+    )?;
+    let strides = read_blocks_2d(path, &open("strides")?, "strides", &rows_done, nx, 0u16)?;
+    let final_state = read_blocks_3d(path, &open("final")?, &rows_done, nx, d)?;
     Ok(BasinData {
         version: get_str(path, KIND, &f, "version")?,
         created: get_str(path, KIND, &f, "created")?,
         elapsed_s: get_attr(path, KIND, &f, "elapsed_s")?,
         complete: get_attr(path, KIND, &f, "complete")?,
-        rows_done: read_rows_done(path, &f)?,
+        rows_done,
         metrics: read_metrics(path, &f, &header.legend)?,
         attractors: read_attractors(path, &f)?,
         header,

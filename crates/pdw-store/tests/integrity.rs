@@ -102,6 +102,74 @@ fn damaged_outcome_chunk_of_a_partial_file_is_recomputed_not_trusted() {
     assert_eq!(w.rows_todo(), todo);
 }
 
+/// A writer killed between writing a block and marking it done can leave that block's chunks
+/// unreadable (seen once in CI: the chunk index on disk pointed at the end of the allocated
+/// file). The file still reads: the block reads as not computed, the blocks marked done as
+/// written, and a resume recomputes it.
+#[test]
+fn unreadable_block_not_marked_done_reads_as_not_computed() {
+    let dir = scratch("unreadable-unmarked");
+    let p = dir.join("basin.h5");
+    let h = header(19, 40);
+    let mut w = BasinWriter::create(&p, &h, false).unwrap();
+    write_block(&mut w, 0, 32);
+    w.close().unwrap();
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        let d = f.dataset("basin/rows_done").unwrap();
+        d.write_slice(&[0u8; 16], ndarray::s![16..32]).unwrap();
+    }
+    for name in ["basin/outcome", "basin/strides", "basin/final"] {
+        let (at, len) = chunk_at(&p, name, 1);
+        damage(&p, at, len, 8);
+    }
+    let d = read_basin(&p).unwrap();
+    let (o, s, f) = block(&h, 0, 16);
+    assert_eq!(
+        d.outcome
+            .slice(ndarray::s![0..16, ..])
+            .iter()
+            .copied()
+            .collect::<Vec<_>>(),
+        o
+    );
+    assert_eq!(
+        d.strides
+            .slice(ndarray::s![0..16, ..])
+            .iter()
+            .copied()
+            .collect::<Vec<_>>(),
+        s
+    );
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let f0: Vec<f64> = d
+        .final_state
+        .slice(ndarray::s![0..16, .., ..])
+        .iter()
+        .copied()
+        .collect();
+    assert_eq!(bits(&f0), bits(&f));
+    assert!(d
+        .outcome
+        .slice(ndarray::s![16..40, ..])
+        .iter()
+        .all(|&c| c == pdw_store::NOT_COMPUTED));
+    assert!(d
+        .strides
+        .slice(ndarray::s![16..40, ..])
+        .iter()
+        .all(|&c| c == 0));
+    assert!(d
+        .final_state
+        .slice(ndarray::s![16..40, .., ..])
+        .iter()
+        .all(|v| v.is_nan()));
+    let (_, oc) = pdw_store::read_basin_outcome(&p).unwrap();
+    assert_eq!(oc, d.outcome);
+    let w = BasinWriter::resume(&p, &h).unwrap();
+    assert_eq!(w.rows_todo(), (16..40).collect::<Vec<_>>());
+}
+
 #[test]
 fn a_file_being_written_is_not_truncated_by_a_second_writer() {
     let dir = scratch("locked");
