@@ -181,7 +181,17 @@ fn method_of(tab: &Tableau) -> Method {
 /// One lane of [`stage_input`] with a compile-time row `w` (lets the compiler unroll the sum
 /// and drop the zero weights; the surviving operations and their order are unchanged).
 #[inline(always)]
-fn one_lane_row(st: &mut Store, last: bool, w: &[f64]) {
+fn one_lane_row<const N: usize>(st: &mut Store, last: bool, w: &[f64; N]) {
+    if st.stride == 1 {
+        one_lane_row_contiguous(st, last, w)
+    } else {
+        one_lane_row_strided(st, last, w)
+    }
+}
+
+/// [`one_lane_row`] for any layout (lane 0 of strided blocks).
+#[inline(always)]
+fn one_lane_row_strided(st: &mut Store, last: bool, w: &[f64]) {
     let (blk, stride, h) = (st.blk(), st.stride, st.h[0]);
     for j in 0..st.dim {
         let off = j * stride;
@@ -192,6 +202,89 @@ fn one_lane_row(st: &mut Store, last: bool, w: &[f64]) {
             st.y[off] = v;
         }
     }
+}
+
+/// Evaluates `$body` with the state dimension `$d` as a compile-time constant `$D` for the
+/// dimensions of the shipped models (2 … 12, even), else `$dynamic`: fixed-size loops unroll
+/// and vectorise where a loop over a run-time `d = 4` does not.
+macro_rules! with_dim {
+    ($d:expr, $D:ident => $body:expr, _ => $dynamic:expr) => {
+        match $d {
+            2 => {
+                const $D: usize = 2;
+                $body
+            }
+            4 => {
+                const $D: usize = 4;
+                $body
+            }
+            6 => {
+                const $D: usize = 6;
+                $body
+            }
+            8 => {
+                const $D: usize = 8;
+                $body
+            }
+            10 => {
+                const $D: usize = 10;
+                $body
+            }
+            12 => {
+                const $D: usize = 12;
+                $body
+            }
+            _ => $dynamic,
+        }
+    };
+}
+
+/// The first `D` elements of `v` as an array reference.
+#[inline(always)]
+fn arr<const D: usize>(v: &[f64]) -> &[f64; D] {
+    v[..D].try_into().expect("block holds D values")
+}
+
+/// `0 + Σ_q w_q k_q` over the nonzero weights in increasing q, componentwise, for contiguous
+/// stage vectors `k = [k₀ | k₁ | …]` of length `D`.
+#[inline(always)]
+fn combine_fixed<const D: usize, const N: usize>(k: &[f64], w: &[f64; N]) -> [f64; D] {
+    let mut acc = [0.0; D];
+    for (q, &wq) in w.iter().enumerate() {
+        if wq == 0.0 {
+            continue;
+        }
+        let kq = arr::<D>(&k[q * D..]);
+        for j in 0..D {
+            acc[j] += wq * kq[j];
+        }
+    }
+    acc
+}
+
+/// [`one_lane_row`] when the lane's blocks are contiguous (`stride = 1`, the scalar
+/// integrator) and the dimension is a compile-time `D`: each component sees the same
+/// operations in the same order (`0 + Σ_q w_q k_q` in increasing q over the nonzero weights,
+/// then `x + h·acc`).
+#[inline(always)]
+fn one_lane_row_fixed<const D: usize, const N: usize>(st: &mut Store, last: bool, w: &[f64; N]) {
+    let h = st.h[0];
+    let acc = combine_fixed::<D, N>(&st.k, w);
+    let x = arr::<D>(&st.x);
+    let out = if last {
+        &mut st.xn[..D]
+    } else {
+        &mut st.y[..D]
+    };
+    for j in 0..D {
+        out[j] = x[j] + h * acc[j];
+    }
+}
+
+/// [`one_lane_row`] for contiguous blocks: fixed dimensions unrolled, others by the lane code.
+#[inline(always)]
+fn one_lane_row_contiguous<const N: usize>(st: &mut Store, last: bool, w: &[f64; N]) {
+    with_dim!(st.dim, D => one_lane_row_fixed::<D, N>(st, last, w), _ => one_lane_row_strided(st, last, w))
 }
 
 /// [`stage_input`] for one lane, dispatched to constant rows.
@@ -267,7 +360,11 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
     let last = tab.n_stages - 1;
     let (rtol, atol) = (opts.rtol, opts.atol);
     if n == 1 {
-        st.err[0] = error_norm_one(st, method, opts);
+        st.err[0] = if st.stride == 1 {
+            with_dim!(st.dim, D => error_norm_fixed::<D>(st, method, opts), _ => error_norm_one(st, method, opts))
+        } else {
+            error_norm_one(st, method, opts)
+        };
         controller_power(st, tab, 1);
         return;
     }
@@ -400,6 +497,55 @@ fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
     }
 }
 
+/// [`error_norm_one`] when the blocks are contiguous (`stride = 1`) and the dimension is a
+/// compile-time `D`: the weighted stage sums run over whole vectors, then the norm sums over
+/// components in increasing order as before — the same operations on the same operands.
+#[inline(always)]
+fn error_norm_fixed<const D: usize>(st: &Store, method: Method, opts: &Options) -> f64 {
+    let (rtol, atol) = (opts.rtol, opts.atol);
+    let h = st.h[0];
+    let (x0, x1) = (arr::<D>(&st.x), arr::<D>(&st.xn));
+    match method {
+        Method::Rk4 { .. } => error_norm_one(st, method, opts),
+        Method::Dopri5 => {
+            let e = combine_fixed::<D, 7>(&st.k, &tableau::DOPRI5_E);
+            let f1 = arr::<D>(&st.k[6 * D..]);
+            let mut acc = 0.0;
+            for j in 0..D {
+                let sk = atol + rtol * x0[j].abs().max(x1[j].abs());
+                let r = h * e[j] / sk;
+                acc += r * r + poison(x1[j]) + poison(f1[j]);
+            }
+            (acc * (1.0 / D as f64)).sqrt()
+        }
+        Method::Dop853 => {
+            let [b1, b9, b12] = tableau::DOP853_BHH;
+            let e = combine_fixed::<D, 12>(&st.k, &tableau::DOP853_ER);
+            let bs = combine_fixed::<D, 12>(&st.k, &tableau::DOP853_B);
+            let f1 = arr::<D>(&st.k[12 * D..]);
+            let (k0, k8, k11) = (
+                arr::<D>(&st.k),
+                arr::<D>(&st.k[8 * D..]),
+                arr::<D>(&st.k[11 * D..]),
+            );
+            let (mut acc, mut acc3) = (0.0, 0.0);
+            for j in 0..D {
+                let sk = atol + rtol * x0[j].abs().max(x1[j].abs());
+                let e3 = bs[j] - b1 * k0[j] - b9 * k8[j] - b12 * k11[j];
+                let r5 = e[j] / sk;
+                let r3 = e3 / sk;
+                acc += r5 * r5 + poison(x1[j]) + poison(f1[j]);
+                acc3 += r3 * r3;
+            }
+            let mut deno = acc + 0.01 * acc3;
+            if deno <= 0.0 {
+                deno = 1.0;
+            }
+            h.abs() * acc * (1.0 / (D as f64 * deno)).sqrt()
+        }
+    }
+}
+
 /// Index of the `f(x₁)` block.
 #[inline]
 fn engine_last(method: Method) -> usize {
@@ -407,7 +553,8 @@ fn engine_last(method: Method) -> usize {
 }
 
 /// `err^α` of every lane into `st.s2` (the controller's `fac11`; HNW I eq. II.4.13), as a column
-/// kernel so that it vectorises; α = 1/8 (DOP853) as three square roots.
+/// kernel; α = 1/8 (DOP853) as three square roots, other α by [`pdw_simd::powr`] (our own
+/// `exp(α ln err)`, a few ulp from libm's `pow` at a fraction of its cost, same bits everywhere).
 #[inline(always)]
 pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
     let (err, out) = (&st.err[..n], &mut st.s2[..n]);
@@ -417,7 +564,7 @@ pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
         }
     } else if tab.alpha != 0.0 {
         for l in 0..n {
-            out[l] = err[l].powf(tab.alpha);
+            out[l] = pdw_simd::powr(err[l], tab.alpha);
         }
     }
 }
@@ -432,6 +579,10 @@ pub(crate) fn hermite_sample(st: &mut Store, tab: &Tableau, n: usize, i: usize) 
     let blk = st.blk();
     let stride = st.stride;
     let last = tab.n_stages - 1;
+    if stride == 1 {
+        // One contiguous lane (the scalar integrator): fixed-size vectors where possible.
+        with_dim!(st.dim, D => return hermite_fixed::<D>(st, c, last), _ => {})
+    }
     for j in 0..st.dim {
         let off = j * stride;
         let x0 = &st.x[off..off + n];
@@ -443,6 +594,18 @@ pub(crate) fn hermite_sample(st: &mut Store, tab: &Tableau, n: usize, i: usize) 
         for l in 0..n {
             y[l] = event::hermite_point(c, x0[l], x1[l], f0[l], f1[l], h[l]);
         }
+    }
+}
+
+/// [`hermite_sample`] for one contiguous lane of compile-time dimension `D`.
+#[inline(always)]
+fn hermite_fixed<const D: usize>(st: &mut Store, c: [f64; 4], last: usize) {
+    let (x0, x1, f0) = (arr::<D>(&st.x), arr::<D>(&st.xn), arr::<D>(&st.k));
+    let f1 = arr::<D>(&st.k[last * D..]);
+    let h = st.h[0];
+    let y = &mut st.y[..D];
+    for j in 0..D {
+        y[j] = event::hermite_point(c, x0[j], x1[j], f0[j], f1[j], h);
     }
 }
 
@@ -646,7 +809,7 @@ fn initial_step<S: HybridSystem + ?Sized>(
     let h1 = if der12 <= 1e-15 {
         (h * 1e-3).max(1e-6)
     } else {
-        (0.01 / der12).powf(1.0 / tab.hinit_order)
+        pdw_simd::powr(0.01 / der12, 1.0 / tab.hinit_order)
     };
     let h = (100.0 * h).min(h1).min(opts.h_max);
     if h.is_finite() && h > 0.0 {
@@ -718,7 +881,7 @@ fn decide(
         let fac = if tab.beta == 0.0 {
             fac11
         } else {
-            fac11 / ctl.facold.powf(tab.beta)
+            fac11 / pdw_simd::powr(ctl.facold, tab.beta)
         };
         let fac = (fac / tab.safety).clamp(1.0 / tab.fac_max, 1.0 / tab.fac_min);
         let mut h_new = h / fac;

@@ -243,8 +243,7 @@ impl Integrator {
                     self.st.gs[k * m + i] = sys.guard(&mut self.sc.ev.model, mode, k, &src[..d]);
                 }
             }
-            // One lane: the locator's own scan is the candidate test.
-            self.st.cand[0] = 1;
+            engine::mark_candidates(&mut self.st, sys.guards(mode), 0, 1);
         }
     }
 }

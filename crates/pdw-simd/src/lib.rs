@@ -21,7 +21,9 @@
 
 use std::sync::atomic::{AtomicU8, Ordering};
 
+pub mod powr;
 pub mod trig;
+pub use powr::powr;
 pub use trig::{sincos, sincos_lanes, sincos_slice};
 
 /// The numeric contract every path keeps (recorded in output files; `merge` compares it).
