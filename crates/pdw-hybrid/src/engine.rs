@@ -250,13 +250,12 @@ fn arr<const D: usize>(v: &[f64]) -> &[f64; D] {
 #[inline(always)]
 fn combine_fixed<const D: usize, const N: usize>(k: &[f64], w: &[f64; N]) -> [f64; D] {
     let mut acc = [0.0; D];
-    for (q, &wq) in w.iter().enumerate() {
+    for (&wq, kq) in w.iter().zip(k.chunks_exact(D)) {
         if wq == 0.0 {
             continue;
         }
-        let kq = arr::<D>(&k[q * D..]);
-        for j in 0..D {
-            acc[j] += wq * kq[j];
+        for (a, &kv) in acc.iter_mut().zip(kq) {
+            *a += wq * kv;
         }
     }
     acc
@@ -665,6 +664,8 @@ pub(crate) struct Ctl {
     pub last: bool,
     /// Previous accepted error norm (PI controller memory, HNW's `facold`).
     pub facold: f64,
+    /// `facold^β`, computed when `facold` is set (off the next step's critical path).
+    pub facold_pow: f64,
     /// The previous attempt was rejected (then h may not grow: HNW II.4).
     pub rejected: bool,
     /// The previous rejection was caused by non-finite values.
@@ -726,6 +727,11 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
         t_end,
         mode,
         facold: 1e-4,
+        facold_pow: if tab.beta == 0.0 {
+            1.0
+        } else {
+            pdw_simd::powr(1e-4, tab.beta)
+        },
         stats: ctl.stats,
         ..Ctl::default()
     };
@@ -881,7 +887,7 @@ fn decide(
         let fac = if tab.beta == 0.0 {
             fac11
         } else {
-            fac11 / pdw_simd::powr(ctl.facold, tab.beta)
+            fac11 / ctl.facold_pow
         };
         let fac = (fac / tab.safety).clamp(1.0 / tab.fac_max, 1.0 / tab.fac_min);
         let mut h_new = h / fac;
@@ -889,6 +895,9 @@ fn decide(
             h_new = h_new.min(h);
         }
         ctl.facold = err.max(1e-4);
+        if tab.beta != 0.0 {
+            ctl.facold_pow = pdw_simd::powr(ctl.facold, tab.beta);
+        }
         ctl.rejected = false;
         ctl.h = h_new.min(opts.h_max);
         ctl.stats.accepted += 1;

@@ -229,9 +229,12 @@ impl Integrator {
         }
         engine::error_norm(&mut self.st, self.opts.method, tab, &self.opts, 1);
         // Guard values at the Hermite samples and at x₁ (the batch does this column-wise).
-        let ng = sys.guards(mode).len();
+        // The candidate test of `engine::mark_candidates`, made as the values arrive.
+        let specs = sys.guards(mode);
+        let ng = specs.len();
         if ng > 0 {
             let m = crate::event::N_COLS;
+            let mut cand = false;
             for i in 1..m {
                 let src = if i + 1 < m {
                     engine::hermite_sample(&mut self.st, tab, 1, i);
@@ -239,11 +242,18 @@ impl Integrator {
                 } else {
                     &self.st.xn
                 };
-                for k in 0..ng {
-                    self.st.gs[k * m + i] = sys.guard(&mut self.sc.ev.model, mode, k, &src[..d]);
+                for (k, spec) in specs.iter().enumerate() {
+                    let v = sys.guard(&mut self.sc.ev.model, mode, k, &src[..d]);
+                    let prev = if i == 1 {
+                        self.st.g[k]
+                    } else {
+                        self.st.gs[k * m + i - 1]
+                    };
+                    cand |= crate::event::crosses(spec.crossing, prev, v);
+                    self.st.gs[k * m + i] = v;
                 }
             }
-            engine::mark_candidates(&mut self.st, sys.guards(mode), 0, 1);
+            self.st.cand[0] = cand as u8;
         }
     }
 }
