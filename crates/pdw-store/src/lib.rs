@@ -91,7 +91,10 @@ pub use plot::{
 };
 pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
 pub use shard::{merge, shard_rows, ShardSpec};
-pub use sweep::{read_sweep, write_sweep, Bifurcation, Branch, OrbitDiagram, SweepData};
+pub use sweep::{
+    read_sweep, sweep_csv_columns, sweep_json, write_sweep, write_sweep_csv, Bifurcation, Branch,
+    OrbitDiagram, StrideValidity, SweepData,
+};
 pub use trajectory::{
     read_trajectory_h5, write_trajectory_csv, write_trajectory_h5, TrajColumn, TrajEvents,
     TrajectoryData, TRAJECTORY_FORMAT,

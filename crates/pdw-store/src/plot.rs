@@ -20,7 +20,7 @@ use crate::{Result, StoreError};
 /// Pixel size of [`plot_basin`]'s PNG.
 pub const BASIN_PNG_SIZE: (u32, u32) = (960, 720);
 /// Pixel size of [`plot_bifurcation`]'s PNG.
-pub const BIFURCATION_PNG_SIZE: (u32, u32) = (900, 960);
+pub const BIFURCATION_PNG_SIZE: (u32, u32) = (900, 1380);
 /// Pixel size of [`plot_lines`]' PNG.
 pub const LINES_PNG_SIZE: (u32, u32) = (900, 640);
 
@@ -524,9 +524,12 @@ fn pad((lo, hi): (f64, f64), f: f64) -> (f64, f64) {
     (lo - d, hi + d)
 }
 
-/// Writes a two-panel PNG ([`BIFURCATION_PNG_SIZE`]): top, the moduli of the Floquet multipliers
-/// against the swept parameter (log scale) with the stability boundary |λ| = 1; bottom, section
-/// coordinate number `coordinate` against the parameter, with the orbit diagram's samples as grey
+/// Writes a three-panel PNG ([`BIFURCATION_PNG_SIZE`]): top, the moduli of the Floquet
+/// multipliers against the swept parameter (log scale) with the stability boundary |λ| = 1;
+/// middle, their real parts (signed) with horizontal lines at λ = −1 (red: a real multiplier
+/// crossing it is a period doubling) and λ = +1 (black: a fold or branch point), so the two are
+/// told apart; bottom, section coordinate number `coordinate` against the parameter (every one
+/// of the K points of a measured period-K branch), with the orbit diagram's samples as grey
 /// dots if present. Stable stretches solid, unstable dashed; period doublings marked by red
 /// triangles, other bifurcations by black diamonds.
 pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: usize) -> Result<()> {
@@ -546,7 +549,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     let tmp = pic.tmp.clone();
     let root = BitMapBackend::new(&tmp, BIFURCATION_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
-    let panels = root.split_evenly((2, 1));
+    let panels = root.split_evenly((3, 1));
 
     let orbit_params = data.orbit.iter().flat_map(|o| o.parameter.iter().copied());
     let pr = range_of(
@@ -590,18 +593,67 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     .map_err(|x| pe(path, x))?
     .label("|λ| = 1")
     .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK));
+    // Middle: Re λ, with the period-doubling (−1) and fold (+1) lines.
+    let res = data
+        .branches
+        .iter()
+        .flat_map(|b| b.multipliers.iter().flat_map(|v| v.iter().map(|z| z.0)));
+    let (rlo, rhi) = range_of(res).unwrap_or((-1.0, 1.0));
+    let rr = pad((rlo.min(-1.2), rhi.max(1.2)), 0.05);
+    let mut mid = ChartBuilder::on(&panels[1])
+        .caption(
+            format!("{}: real parts of the multipliers", data.model),
+            (FONT, 20),
+        )
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d(pr.0..pr.1, rr.0..rr.1)
+        .map_err(|x| pe(path, x))?;
+    mid.configure_mesh()
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .x_desc(data.parameter.as_str())
+        .y_desc("Re λ")
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    mid.draw_series(DashedLineSeries::new(
+        [(pr.0, -1.0), (pr.1, -1.0)],
+        8,
+        5,
+        RED.stroke_width(2),
+    ))
+    .map_err(|x| pe(path, x))?
+    .label("λ = −1: period doubling")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED.stroke_width(2)));
+    mid.draw_series(DashedLineSeries::new(
+        [(pr.0, 1.0), (pr.1, 1.0)],
+        8,
+        5,
+        BLACK.stroke_width(2),
+    ))
+    .map_err(|x| pe(path, x))?
+    .label("λ = +1: fold / branch point")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
     // Bottom: section coordinate.
     let sec_vals = data
         .branches
         .iter()
         .flat_map(|b| b.section.iter().map(move |s| s[coordinate]))
         .chain(
+            data.branches
+                .iter()
+                .flat_map(|b| b.orbit.iter().flatten().map(move |s| s[coordinate])),
+        )
+        .chain(
             data.orbit
                 .iter()
                 .flat_map(|o| o.points.iter().flatten().copied()),
         );
     let sr = pad(range_of(sec_vals).unwrap_or((0.0, 1.0)), 0.05);
-    let mut bot = ChartBuilder::on(&panels[1])
+    let mut bot = ChartBuilder::on(&panels[2])
         .caption(
             format!("{} on the section", data.section_names[coordinate]),
             (FONT, 20),
@@ -655,16 +707,44 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
                     top.draw_series(DashedLineSeries::new(pts, 6, 4, style))
                         .map_err(|x| pe(path, x))?;
                 }
+                let re: Vec<(f64, f64)> = run
+                    .clone()
+                    .map(|i| (b.parameter[i], b.multipliers[i][k].0))
+                    .filter(|p| p.1.is_finite())
+                    .collect();
+                if stable {
+                    mid.draw_series(LineSeries::new(re, style))
+                        .map_err(|x| pe(path, x))?;
+                } else {
+                    mid.draw_series(DashedLineSeries::new(re, 6, 4, style))
+                        .map_err(|x| pe(path, x))?;
+                }
             }
-            let pts: Vec<(f64, f64)> = run
-                .map(|i| (b.parameter[i], b.section[i][coordinate]))
-                .collect();
-            if stable {
-                bot.draw_series(LineSeries::new(pts, style))
-                    .map_err(|x| pe(path, x))?;
+            // Every point of a measured period-K orbit, else the first.
+            let kk = if b.measured() {
+                b.period_strides as usize
             } else {
-                bot.draw_series(DashedLineSeries::new(pts, 6, 4, style))
-                    .map_err(|x| pe(path, x))?;
+                1
+            };
+            for j in 0..kk {
+                let pts: Vec<(f64, f64)> = run
+                    .clone()
+                    .map(|i| {
+                        let s = b
+                            .orbit
+                            .get(i)
+                            .and_then(|o| o.get(j))
+                            .unwrap_or(&b.section[i]);
+                        (b.parameter[i], s[coordinate])
+                    })
+                    .collect();
+                if stable {
+                    bot.draw_series(LineSeries::new(pts, style))
+                        .map_err(|x| pe(path, x))?;
+                } else {
+                    bot.draw_series(DashedLineSeries::new(pts, 6, 4, style))
+                        .map_err(|x| pe(path, x))?;
+                }
             }
         }
         // Legend entries (empty series carry the label).
@@ -682,12 +762,19 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         if is_pd(&z.kind) {
             top.draw_series([TriangleMarker::new((x, 1.0), 8, RED.filled())])
                 .map_err(|x| pe(path, x))?;
+            mid.draw_series([TriangleMarker::new((x, -1.0), 8, RED.filled())])
+                .map_err(|x| pe(path, x))?;
             bot.draw_series([TriangleMarker::new((x, y), 8, RED.filled())])
                 .map_err(|x| pe(path, x))?;
         } else {
             let diamond = || Polygon::new(vec![(0, -7), (7, 0), (0, 7), (-7, 0)], BLACK.filled());
             top.draw_series([EmptyElement::at((x, 1.0)) + diamond()])
                 .map_err(|x| pe(path, x))?;
+            let k = z.kind.to_ascii_lowercase();
+            if k.contains("fold") || k.contains("branch") {
+                mid.draw_series([EmptyElement::at((x, 1.0)) + diamond()])
+                    .map_err(|x| pe(path, x))?;
+            }
             bot.draw_series([EmptyElement::at((x, y)) + diamond()])
                 .map_err(|x| pe(path, x))?;
         }
@@ -712,6 +799,13 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    mid.configure_series_labels()
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerLeft)
         .draw()
         .map_err(|x| pe(path, x))?;
     bot.configure_series_labels()

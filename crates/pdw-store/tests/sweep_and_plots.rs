@@ -6,7 +6,8 @@ use common::*;
 use pdw_store::plot::{BASIN_PNG_SIZE, BIFURCATION_PNG_SIZE, LINES_PNG_SIZE};
 use pdw_store::{
     animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, read_basin, read_sweep,
-    write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram, StoreError, SweepData,
+    write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram, StoreError, StrideValidity,
+    SweepData,
 };
 
 fn sweep() -> SweepData {
@@ -36,14 +37,43 @@ fn sweep() -> SweepData {
                     })
                     .collect(),
                 stable,
+                ..Branch::default()
             },
+            // A measured period-2 branch: both orbit points, per-stride step lengths and flags.
             Branch {
                 name: "period-2".into(),
                 period_strides: 2,
                 parameter: vec![0.0152, 0.016, 0.017],
                 section: vec![vec![0.25, -0.24], vec![0.26, -0.25], vec![0.27, -0.26]],
-                multipliers: vec![vec![(0.9, 0.0)], vec![(0.5, 0.0)], vec![(0.2, 0.0)]],
+                multipliers: vec![
+                    vec![(-0.9, 0.0), (0.1, 0.0)],
+                    vec![(-0.5, 0.2), (-0.5, -0.2)],
+                    vec![(0.2, 0.0), (0.01, 0.0)],
+                ],
                 stable: vec![true, true, true],
+                orbit: vec![
+                    vec![vec![0.25, -0.24], vec![0.23, -0.22]],
+                    vec![vec![0.26, -0.25], vec![0.22, -0.21]],
+                    vec![vec![0.27, -0.26], vec![0.21, -0.20]],
+                ],
+                period: vec![7.8, 7.79, 7.78],
+                step_length: vec![vec![0.47, 0.49], vec![0.48, 0.50], vec![0.49, 0.51]],
+                speed: vec![0.1231, 0.1245, 0.1259],
+                validity: (0..3)
+                    .map(|i| {
+                        (0..2)
+                            .map(|j| StrideValidity {
+                                checked: true,
+                                valid: i != 2,
+                                swing_foot_scuffs: i == 2 && j == 1,
+                                min_normal_force: 0.8 + 0.01 * j as f64,
+                                max_friction_required: 0.25,
+                                min_knee_torque: 0.5,
+                                ..StrideValidity::default()
+                            })
+                            .collect()
+                    })
+                    .collect(),
             },
         ],
         bifurcations: vec![
@@ -77,6 +107,11 @@ fn sweep() -> SweepData {
                 })
                 .collect(),
         }),
+        settings: vec![
+            ("continuation".into(), r#"{"ds_max":1e-4}"#.into()),
+            ("grid".into(), r#"{"n":40}"#.into()),
+        ],
+        elapsed_s: 1.25,
     }
 }
 
@@ -110,6 +145,12 @@ fn sweep_file_round_trips_and_is_not_overwritten_without_force() {
     assert_eq!(bytes(&p), before);
     write_sweep(&p, true, &s).unwrap();
 
+    let mut bad = s.clone();
+    bad.branches[1].orbit[2].pop();
+    assert!(matches!(
+        write_sweep(dir.join("x.h5"), false, &bad),
+        Err(StoreError::Invalid { .. })
+    ));
     let mut bad = s.clone();
     bad.branches[0].stable.pop();
     assert!(matches!(

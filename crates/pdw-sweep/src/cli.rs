@@ -109,7 +109,12 @@ pub struct FixedpointArgs {
     /// strides, and from the period-doubling predictor at the period-one gaits.
     #[arg(long, default_value_t = 1)]
     pub period: usize,
-    /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400).
+    /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400). The output
+    /// holds exactly N points per branch, at the N evenly spaced values A, A + (B−A)/(N−1), …, B
+    /// (on each branch where it exists; a branch that folds back has a point per crossing),
+    /// each corrected at that value; the continuation takes whatever internal steps it needs
+    /// (at most (B−A)/(N−1) in arclength) and does not store them. Bifurcations are located
+    /// to 1e-10 and stored separately. Also an orbit diagram at the same N values.
     #[arg(long)]
     pub sweep: Option<String>,
     /// HDF5 output of a sweep.
@@ -121,6 +126,18 @@ pub struct FixedpointArgs {
     /// Overwrite existing output files.
     #[arg(long)]
     pub force: bool,
+    // ---- sweep output (with --sweep; --json then prints the sweep as one JSON object)
+    /// With --sweep: also write the branches as CSV, one row per orbit point of every branch
+    /// point (columns: README "Sweep output").
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// With --sweep: worker threads (rayon pool) for the points on the output grid, their
+    /// measurements and the orbit diagram; results are identical for any count. Default 2.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// With --sweep: no progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Args, Debug)]
