@@ -1009,7 +1009,9 @@ pub struct SampledPoint {
 /// `‖P^k(s) − s‖∞ ≤ newton_tol`, and measured as every accepted point is (multipliers, period,
 /// the k orbit points in stride order). A branch that does not turn in μ crosses each value in
 /// its range once; one that folds crosses some values two or more times and yields a point per
-/// crossing. Values outside the branch's μ range yield nothing.
+/// crossing. Values outside the branch's μ range yield nothing (a branch switched onto at a
+/// period doubling begins at its first corrected point, a switching offset past the
+/// bifurcation, where μ − μ_PD ~ ε²).
 ///
 /// The continuation's own steps are whatever its step control needed; this puts its output on
 /// the user's grid. A correction that fails (Newton diverging right at a fold, where the fixed-μ

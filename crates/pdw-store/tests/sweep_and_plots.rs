@@ -232,6 +232,29 @@ fn bifurcation_and_line_pngs_have_stated_sizes() {
         px.chunks(3).any(|q| q == [255, 0, 0]),
         "no period-doubling marker drawn"
     );
+    // Three panels of equal height: |λ|, Re λ, the section coordinate. Only the middle one
+    // carries the dashed red λ = −1 line across its width (the others have red markers only),
+    // so period doublings (−1) and folds (+1) are told apart at a glance.
+    let red_in = |rows: std::ops::Range<u32>| {
+        rows.map(|y| {
+            px[(y * w * 3) as usize..((y + 1) * w * 3) as usize]
+                .chunks(3)
+                .filter(|q| *q == [255, 0, 0])
+                .count()
+        })
+        .collect::<Vec<_>>()
+    };
+    let mid = red_in(h / 3..2 * h / 3);
+    let widest = *mid.iter().max().unwrap();
+    assert!(
+        widest as f64 > 0.3 * w as f64,
+        "no λ = −1 line in the middle panel (widest red row {widest} px of {w})"
+    );
+    let top = red_in(0..h / 3);
+    assert!(
+        (*top.iter().max().unwrap() as f64) < 0.1 * w as f64,
+        "the |λ| panel has no red line"
+    );
     assert!(plot_bifurcation(dir.join("x.png"), &sweep(), 2).is_err());
 
     let series = vec![
