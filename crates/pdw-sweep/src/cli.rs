@@ -147,9 +147,9 @@ pub struct BasinArgs {
     pub model: ModelOpts,
     #[command(flatten)]
     pub integrator: IntegratorOpts,
-    /// Grid size NXxNY.
-    #[arg(long, default_value = "401x401")]
-    pub grid: String,
+    /// Grid size NXxNY. Default: 401x401; 41x41 with --over.
+    #[arg(long)]
+    pub grid: Option<String>,
     /// Horizontal axis: NAME=A:B (inclusive). Default: the model's first section coordinate
     /// around the fixed point.
     #[arg(long)]
@@ -161,9 +161,9 @@ pub struct BasinArgs {
     /// (one application of the stride map), not biomechanics' two steps.
     #[arg(long, default_value_t = 100)]
     pub max_strides: u32,
-    /// HDF5 output file.
-    #[arg(long, default_value = "basin.h5")]
-    pub out: PathBuf,
+    /// HDF5 output file. Default: basin.h5; basin_stability.h5 with --over.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     /// PNG heatmap (default: the output path with .png).
     #[arg(long)]
     pub png: Option<PathBuf>,
@@ -183,6 +183,30 @@ pub struct BasinArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    // ---- basin stability over a parameter (--over)
+    /// Basin stability over a model parameter, NAME=A:B:N (e.g. slope=0.009:0.019:6): at each
+    /// of the N evenly spaced values, the same box of section states (--x/--y, else the
+    /// default box around the gait at A) is classified by attractor, and the fraction reaching
+    /// each attractor (Menck et al. 2013), falling, or neither is written to --out (HDF5) and
+    /// drawn as a stacked chart (--png).
+    #[arg(long, value_name = "NAME=A:B:N")]
+    pub over: Option<String>,
+    /// With --over: print the fractions as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl BasinArgs {
+    /// The HDF5 output: --out, or the mode's default.
+    pub fn out_path(&self) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| {
+            if self.over.is_some() {
+                "basin_stability.h5".into()
+            } else {
+                "basin.h5".into()
+            }
+        })
+    }
 }
 
 #[derive(Args, Debug)]
