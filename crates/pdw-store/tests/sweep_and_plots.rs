@@ -321,3 +321,83 @@ fn gait_gif_has_one_frame_per_input_frame_at_stated_size() {
     assert_eq!(count, n);
     assert!(animate_gif(dir.join("e.gif"), &[], (480, 360), 50, "").is_err());
 }
+
+#[test]
+fn basin_stability_file_round_trips_refuses_bad_rows_and_draws_its_chart() {
+    use pdw_store::plot::STABILITY_PNG_SIZE;
+    use pdw_store::{
+        plot_basin_stability, read_stability, write_stability, StabilityAttractor, StabilityData,
+    };
+    let dir = scratch("stability");
+    let d = StabilityData {
+        command: "pdw-sweep basin --over slope=0.009:0.019:3".into(),
+        model: "simplest".into(),
+        parameter: "slope".into(),
+        params: "{}".into(),
+        box_json: r#"{"x":{"name":"theta"}}"#.into(),
+        max_strides: 100,
+        values: vec![0.009, 0.014, 0.019],
+        columns: vec![
+            "gait".into(),
+            "period-2".into(),
+            "fall".into(),
+            "timeout".into(),
+            "other".into(),
+        ],
+        kinds: vec![
+            "attractor".into(),
+            "attractor".into(),
+            "fall".into(),
+            "timeout".into(),
+            "other".into(),
+        ],
+        fractions: vec![
+            vec![0.25, 0.0, 0.75, 0.0, 0.0],
+            vec![0.125, 0.0, 0.75, 0.125, 0.0],
+            vec![0.0, 0.5, 0.25, 0.0, 0.25],
+        ],
+        outcome_columns: vec!["gait".into(), "other".into()],
+        outcome_fractions: vec![vec![0.25, 0.75], vec![0.125, 0.875], vec![0.0, 1.0]],
+        attractors: vec![
+            vec![StabilityAttractor {
+                name: "gait".into(),
+                period_strides: 1,
+                period_time: Some(3.8),
+                points: vec![vec![0.2, -0.2]],
+                multipliers: vec![[-0.5, 0.1], [-0.5, -0.1]],
+            }],
+            vec![],
+            vec![StabilityAttractor {
+                name: "chaotic".into(),
+                period_strides: 0,
+                period_time: None,
+                points: vec![vec![0.24, -0.23], vec![0.26, -0.25]],
+                multipliers: vec![],
+            }],
+        ],
+        settings: vec![("options".into(), r#"{"threads":2}"#.into())],
+        elapsed_s: 0.5,
+    };
+    let p = dir.join("bs.h5");
+    write_stability(&p, false, &d).unwrap();
+    assert_eq!(read_stability(&p).unwrap(), d);
+    assert!(matches!(
+        write_stability(&p, false, &d),
+        Err(StoreError::Exists { .. })
+    ));
+    let mut bad = d.clone();
+    bad.fractions[1][0] = 0.2; // the row sums to 1.075
+    let err = write_stability(dir.join("bad.h5"), false, &bad).unwrap_err();
+    assert!(err.to_string().contains("sum"), "{err}");
+    assert!(!dir.join("bad.h5").exists());
+
+    let png_path = dir.join("bs.png");
+    plot_basin_stability(&png_path, &d, "slope [rad]", "basin stability").unwrap();
+    let (w, h, px, _) = decode_png(&png_path);
+    assert_eq!((w, h), STABILITY_PNG_SIZE);
+    // Stacked bands in the basin picture's colours: the gait green and the falls red cover a
+    // share of the top panel.
+    let count = |c: [u8; 3]| px.chunks(3).filter(|q| *q == c).count();
+    assert!(count([44, 160, 44]) > 1000, "gait band missing");
+    assert!(count([214, 39, 40]) > 10000, "fall band missing");
+}
