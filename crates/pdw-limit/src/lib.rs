@@ -33,9 +33,9 @@ pub use basin::{
     BasinDriver, BasinMetrics, BasinOptions, BasinProblem, CellResult, Outcome,
 };
 pub use continuation::{
-    continue_branch, period_doubling_cascade, real_eigenvector, switch_period_doubling,
-    Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, ContinuationMethod,
-    ContinuationOptions,
+    branch_at_params, continue_branch, period_doubling_cascade, real_eigenvector,
+    switch_period_doubling, Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint,
+    ContinuationMethod, ContinuationOptions, SampledPoint,
 };
 pub use error::LimitError;
 pub use floquet::{is_stable, multipliers, Multiplier};

@@ -6,6 +6,8 @@
 //! * [`sweep`]: the parameter-continuation file (`pdw-sweep fixedpoint --sweep`): branches of
 //!   fixed points, their Floquet multipliers and stability, detected bifurcations and an optional
 //!   brute-force orbit diagram.
+//! * [`stability`]: basin stability over a parameter (`pdw-sweep basin --over`): per value, the
+//!   fraction of one box of initial conditions reaching each attractor.
 //! * [`trajectory`]: time series of a simulated walk (`pdw-sweep simulate`), HDF5 or CSV.
 //! * [`plot`]: PNG heatmaps of basins, two-panel bifurcation diagrams, line charts (log axes for
 //!   work-precision charts) and animated GIFs of a gait, drawn with `plotters`' pure-Rust bitmap
@@ -75,6 +77,7 @@ mod h5util;
 pub mod plot;
 pub mod provenance;
 pub mod shard;
+pub mod stability;
 pub mod sweep;
 mod time;
 pub mod trajectory;
@@ -86,12 +89,18 @@ pub use basin::{
 pub use design::{read_design, write_design, DesignData, DESIGN_FORMAT};
 pub use error::StoreError;
 pub use plot::{
-    animate_gif, outcome_colours, plot_basin, plot_basin_attractors, plot_bifurcation, plot_lines,
-    Frame,
+    animate_gif, outcome_colours, plot_basin, plot_basin_attractors, plot_basin_stability,
+    plot_bifurcation, plot_lines, Frame,
 };
 pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
 pub use shard::{merge, shard_rows, ShardSpec};
-pub use sweep::{read_sweep, write_sweep, Bifurcation, Branch, OrbitDiagram, SweepData};
+pub use stability::{
+    read_stability, write_stability, StabilityAttractor, StabilityData, STABILITY_FORMAT,
+};
+pub use sweep::{
+    read_sweep, sweep_csv_columns, sweep_json, write_sweep, write_sweep_csv, Bifurcation, Branch,
+    OrbitDiagram, StrideValidity, SweepData,
+};
 pub use trajectory::{
     read_trajectory_h5, write_trajectory_csv, write_trajectory_h5, TrajColumn, TrajEvents,
     TrajectoryData, TRAJECTORY_FORMAT,

@@ -20,7 +20,9 @@ use crate::{Result, StoreError};
 /// Pixel size of [`plot_basin`]'s PNG.
 pub const BASIN_PNG_SIZE: (u32, u32) = (960, 720);
 /// Pixel size of [`plot_bifurcation`]'s PNG.
-pub const BIFURCATION_PNG_SIZE: (u32, u32) = (900, 960);
+pub const BIFURCATION_PNG_SIZE: (u32, u32) = (900, 1380);
+/// Pixel size of [`plot_basin_stability`]'s PNG.
+pub const STABILITY_PNG_SIZE: (u32, u32) = (900, 960);
 /// Pixel size of [`plot_lines`]' PNG.
 pub const LINES_PNG_SIZE: (u32, u32) = (900, 640);
 
@@ -524,9 +526,12 @@ fn pad((lo, hi): (f64, f64), f: f64) -> (f64, f64) {
     (lo - d, hi + d)
 }
 
-/// Writes a two-panel PNG ([`BIFURCATION_PNG_SIZE`]): top, the moduli of the Floquet multipliers
-/// against the swept parameter (log scale) with the stability boundary |λ| = 1; bottom, section
-/// coordinate number `coordinate` against the parameter, with the orbit diagram's samples as grey
+/// Writes a three-panel PNG ([`BIFURCATION_PNG_SIZE`]): top, the moduli of the Floquet
+/// multipliers against the swept parameter (log scale) with the stability boundary |λ| = 1;
+/// middle, their real parts (signed) with horizontal lines at λ = −1 (red: a real multiplier
+/// crossing it is a period doubling) and λ = +1 (black: a fold or branch point), so the two are
+/// told apart; bottom, section coordinate number `coordinate` against the parameter (every one
+/// of the K points of a measured period-K branch), with the orbit diagram's samples as grey
 /// dots if present. Stable stretches solid, unstable dashed; period doublings marked by red
 /// triangles, other bifurcations by black diamonds.
 pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: usize) -> Result<()> {
@@ -546,7 +551,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     let tmp = pic.tmp.clone();
     let root = BitMapBackend::new(&tmp, BIFURCATION_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
-    let panels = root.split_evenly((2, 1));
+    let panels = root.split_evenly((3, 1));
 
     let orbit_params = data.orbit.iter().flat_map(|o| o.parameter.iter().copied());
     let pr = range_of(
@@ -590,18 +595,67 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     .map_err(|x| pe(path, x))?
     .label("|λ| = 1")
     .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK));
+    // Middle: Re λ, with the period-doubling (−1) and fold (+1) lines.
+    let res = data
+        .branches
+        .iter()
+        .flat_map(|b| b.multipliers.iter().flat_map(|v| v.iter().map(|z| z.0)));
+    let (rlo, rhi) = range_of(res).unwrap_or((-1.0, 1.0));
+    let rr = pad((rlo.min(-1.2), rhi.max(1.2)), 0.05);
+    let mut mid = ChartBuilder::on(&panels[1])
+        .caption(
+            format!("{}: real parts of the multipliers", data.model),
+            (FONT, 20),
+        )
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d(pr.0..pr.1, rr.0..rr.1)
+        .map_err(|x| pe(path, x))?;
+    mid.configure_mesh()
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .x_desc(data.parameter.as_str())
+        .y_desc("Re λ")
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    mid.draw_series(DashedLineSeries::new(
+        [(pr.0, -1.0), (pr.1, -1.0)],
+        8,
+        5,
+        RED.stroke_width(2),
+    ))
+    .map_err(|x| pe(path, x))?
+    .label("λ = −1: period doubling")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED.stroke_width(2)));
+    mid.draw_series(DashedLineSeries::new(
+        [(pr.0, 1.0), (pr.1, 1.0)],
+        8,
+        5,
+        BLACK.stroke_width(2),
+    ))
+    .map_err(|x| pe(path, x))?
+    .label("λ = +1: fold / branch point")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
     // Bottom: section coordinate.
     let sec_vals = data
         .branches
         .iter()
         .flat_map(|b| b.section.iter().map(move |s| s[coordinate]))
         .chain(
+            data.branches
+                .iter()
+                .flat_map(|b| b.orbit.iter().flatten().map(move |s| s[coordinate])),
+        )
+        .chain(
             data.orbit
                 .iter()
                 .flat_map(|o| o.points.iter().flatten().copied()),
         );
     let sr = pad(range_of(sec_vals).unwrap_or((0.0, 1.0)), 0.05);
-    let mut bot = ChartBuilder::on(&panels[1])
+    let mut bot = ChartBuilder::on(&panels[2])
         .caption(
             format!("{} on the section", data.section_names[coordinate]),
             (FONT, 20),
@@ -655,16 +709,44 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
                     top.draw_series(DashedLineSeries::new(pts, 6, 4, style))
                         .map_err(|x| pe(path, x))?;
                 }
+                let re: Vec<(f64, f64)> = run
+                    .clone()
+                    .map(|i| (b.parameter[i], b.multipliers[i][k].0))
+                    .filter(|p| p.1.is_finite())
+                    .collect();
+                if stable {
+                    mid.draw_series(LineSeries::new(re, style))
+                        .map_err(|x| pe(path, x))?;
+                } else {
+                    mid.draw_series(DashedLineSeries::new(re, 6, 4, style))
+                        .map_err(|x| pe(path, x))?;
+                }
             }
-            let pts: Vec<(f64, f64)> = run
-                .map(|i| (b.parameter[i], b.section[i][coordinate]))
-                .collect();
-            if stable {
-                bot.draw_series(LineSeries::new(pts, style))
-                    .map_err(|x| pe(path, x))?;
+            // Every point of a measured period-K orbit, else the first.
+            let kk = if b.measured() {
+                b.period_strides as usize
             } else {
-                bot.draw_series(DashedLineSeries::new(pts, 6, 4, style))
-                    .map_err(|x| pe(path, x))?;
+                1
+            };
+            for j in 0..kk {
+                let pts: Vec<(f64, f64)> = run
+                    .clone()
+                    .map(|i| {
+                        let s = b
+                            .orbit
+                            .get(i)
+                            .and_then(|o| o.get(j))
+                            .unwrap_or(&b.section[i]);
+                        (b.parameter[i], s[coordinate])
+                    })
+                    .collect();
+                if stable {
+                    bot.draw_series(LineSeries::new(pts, style))
+                        .map_err(|x| pe(path, x))?;
+                } else {
+                    bot.draw_series(DashedLineSeries::new(pts, 6, 4, style))
+                        .map_err(|x| pe(path, x))?;
+                }
             }
         }
         // Legend entries (empty series carry the label).
@@ -682,12 +764,19 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         if is_pd(&z.kind) {
             top.draw_series([TriangleMarker::new((x, 1.0), 8, RED.filled())])
                 .map_err(|x| pe(path, x))?;
+            mid.draw_series([TriangleMarker::new((x, -1.0), 8, RED.filled())])
+                .map_err(|x| pe(path, x))?;
             bot.draw_series([TriangleMarker::new((x, y), 8, RED.filled())])
                 .map_err(|x| pe(path, x))?;
         } else {
             let diamond = || Polygon::new(vec![(0, -7), (7, 0), (0, 7), (-7, 0)], BLACK.filled());
             top.draw_series([EmptyElement::at((x, 1.0)) + diamond()])
                 .map_err(|x| pe(path, x))?;
+            let k = z.kind.to_ascii_lowercase();
+            if k.contains("fold") || k.contains("branch") {
+                mid.draw_series([EmptyElement::at((x, 1.0)) + diamond()])
+                    .map_err(|x| pe(path, x))?;
+            }
             bot.draw_series([EmptyElement::at((x, y)) + diamond()])
                 .map_err(|x| pe(path, x))?;
         }
@@ -714,6 +803,13 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         .position(SeriesLabelPosition::UpperLeft)
         .draw()
         .map_err(|x| pe(path, x))?;
+    mid.configure_series_labels()
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerLeft)
+        .draw()
+        .map_err(|x| pe(path, x))?;
     bot.configure_series_labels()
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
@@ -721,6 +817,147 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         .position(SeriesLabelPosition::UpperLeft)
         .draw()
         .map_err(|x| pe(path, x))?;
+    root.present().map_err(|x| pe(path, x))?;
+    pic.commit(path)
+}
+
+/// Writes a two-panel PNG ([`STABILITY_PNG_SIZE`]) of basin stability against the parameter.
+/// Top: the fractions of `data` stacked (bottom to top in column order, each a filled band
+/// between the cumulative sums, linear between the parameter values, which are marked by ticks
+/// on the top edge), coloured as the basin picture colours the same names
+/// ([`outcome_colours`]: the gait green, falls red, timeout grey, `other` blue, other
+/// attractors in their own colours); columns that are zero at every value are left out of the
+/// legend. Bottom: each attractor's fraction alone (lines with a marker per value, its own
+/// scale), since basins are often a few per cent of the box.
+pub fn plot_basin_stability(
+    path: impl AsRef<Path>,
+    data: &crate::stability::StabilityData,
+    x_label: &str,
+    title: &str,
+) -> Result<()> {
+    let path = path.as_ref();
+    data.validate()?;
+    register_fonts();
+    let pic = TempPicture::new(path)?;
+    let tmp = pic.tmp.clone();
+    let root = BitMapBackend::new(&tmp, STABILITY_PNG_SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| pe(path, x))?;
+    let panels = root.split_evenly((2, 1));
+    let xr = pad(
+        range_of(data.values.iter().copied()).unwrap_or((0.0, 1.0)),
+        0.0,
+    );
+    let mut chart = ChartBuilder::on(&panels[0])
+        .caption(title, (FONT, 20))
+        .margin(14)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(xr.0..xr.1, 0.0..1.0)
+        .map_err(|x| pe(path, x))?;
+    chart
+        .configure_mesh()
+        .x_labels(10)
+        .y_labels(11)
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .x_desc(x_label)
+        .y_desc("fraction of the box")
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    // Stable colours by name: the basin picture's palette over the column names.
+    let legend: Vec<(u8, String)> = data
+        .columns
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (i as u8, n.clone()))
+        .collect();
+    let colours = outcome_colours(&legend);
+    let n = data.values.len();
+    let mut lower = vec![0.0; n];
+    for (c, name) in data.columns.iter().enumerate() {
+        let upper: Vec<f64> = (0..n).map(|i| lower[i] + data.fractions[i][c]).collect();
+        let col = rgb(colours[c].1);
+        if data.fractions.iter().any(|r| r[c] > 0.0) {
+            let mut poly: Vec<(f64, f64)> = (0..n).map(|i| (data.values[i], upper[i])).collect();
+            poly.extend((0..n).rev().map(|i| (data.values[i], lower[i])));
+            chart
+                .draw_series(std::iter::once(Polygon::new(poly, col.filled())))
+                .map_err(|x| pe(path, x))?
+                .label(name.as_str())
+                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], col.filled()));
+        }
+        lower = upper;
+    }
+    // The parameter values computed.
+    chart
+        .draw_series(
+            data.values
+                .iter()
+                .map(|&v| PathElement::new([(v, 1.0), (v, 0.97)], BLACK.stroke_width(2))),
+        )
+        .map_err(|x| pe(path, x))?;
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    // Bottom: the attractors' fractions on their own scale.
+    let att: Vec<usize> = (0..data.columns.len())
+        .filter(|&c| data.kinds[c] == "attractor")
+        .collect();
+    let top = att
+        .iter()
+        .flat_map(|&c| data.fractions.iter().map(move |r| r[c]))
+        .fold(0.0f64, f64::max);
+    let top = if top > 0.0 {
+        (top * 1.15).min(1.0)
+    } else {
+        1.0
+    };
+    let mut bot = ChartBuilder::on(&panels[1])
+        .caption("basin stability of each attractor", (FONT, 18))
+        .margin(14)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(xr.0..xr.1, 0.0..top)
+        .map_err(|x| pe(path, x))?;
+    bot.configure_mesh()
+        .x_labels(10)
+        .y_labels(10)
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .x_desc(x_label)
+        .y_desc("fraction of the box")
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 17))
+        .draw()
+        .map_err(|x| pe(path, x))?;
+    for &c in &att {
+        let col = rgb(colours[c].1);
+        let pts: Vec<(f64, f64)> = (0..n)
+            .map(|i| (data.values[i], data.fractions[i][c]))
+            .collect();
+        bot.draw_series(LineSeries::new(pts.iter().copied(), col.stroke_width(2)))
+            .map_err(|x| pe(path, x))?
+            .label(data.columns[c].as_str())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
+        bot.draw_series(pts.iter().map(|&p| Circle::new(p, 4, col.filled())))
+            .map_err(|x| pe(path, x))?;
+    }
+    if !att.is_empty() {
+        bot.configure_series_labels()
+            .label_font((FONT, 14))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|x| pe(path, x))?;
+    }
     root.present().map_err(|x| pe(path, x))?;
     pic.commit(path)
 }

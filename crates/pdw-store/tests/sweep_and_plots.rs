@@ -6,7 +6,8 @@ use common::*;
 use pdw_store::plot::{BASIN_PNG_SIZE, BIFURCATION_PNG_SIZE, LINES_PNG_SIZE};
 use pdw_store::{
     animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, read_basin, read_sweep,
-    write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram, StoreError, SweepData,
+    write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram, StoreError, StrideValidity,
+    SweepData,
 };
 
 fn sweep() -> SweepData {
@@ -36,14 +37,43 @@ fn sweep() -> SweepData {
                     })
                     .collect(),
                 stable,
+                ..Branch::default()
             },
+            // A measured period-2 branch: both orbit points, per-stride step lengths and flags.
             Branch {
                 name: "period-2".into(),
                 period_strides: 2,
                 parameter: vec![0.0152, 0.016, 0.017],
                 section: vec![vec![0.25, -0.24], vec![0.26, -0.25], vec![0.27, -0.26]],
-                multipliers: vec![vec![(0.9, 0.0)], vec![(0.5, 0.0)], vec![(0.2, 0.0)]],
+                multipliers: vec![
+                    vec![(-0.9, 0.0), (0.1, 0.0)],
+                    vec![(-0.5, 0.2), (-0.5, -0.2)],
+                    vec![(0.2, 0.0), (0.01, 0.0)],
+                ],
                 stable: vec![true, true, true],
+                orbit: vec![
+                    vec![vec![0.25, -0.24], vec![0.23, -0.22]],
+                    vec![vec![0.26, -0.25], vec![0.22, -0.21]],
+                    vec![vec![0.27, -0.26], vec![0.21, -0.20]],
+                ],
+                period: vec![7.8, 7.79, 7.78],
+                step_length: vec![vec![0.47, 0.49], vec![0.48, 0.50], vec![0.49, 0.51]],
+                speed: vec![0.1231, 0.1245, 0.1259],
+                validity: (0..3)
+                    .map(|i| {
+                        (0..2)
+                            .map(|j| StrideValidity {
+                                checked: true,
+                                valid: i != 2,
+                                swing_foot_scuffs: i == 2 && j == 1,
+                                min_normal_force: 0.8 + 0.01 * j as f64,
+                                max_friction_required: 0.25,
+                                min_knee_torque: 0.5,
+                                ..StrideValidity::default()
+                            })
+                            .collect()
+                    })
+                    .collect(),
             },
         ],
         bifurcations: vec![
@@ -77,6 +107,11 @@ fn sweep() -> SweepData {
                 })
                 .collect(),
         }),
+        settings: vec![
+            ("continuation".into(), r#"{"ds_max":1e-4}"#.into()),
+            ("grid".into(), r#"{"n":40}"#.into()),
+        ],
+        elapsed_s: 1.25,
     }
 }
 
@@ -110,6 +145,12 @@ fn sweep_file_round_trips_and_is_not_overwritten_without_force() {
     assert_eq!(bytes(&p), before);
     write_sweep(&p, true, &s).unwrap();
 
+    let mut bad = s.clone();
+    bad.branches[1].orbit[2].pop();
+    assert!(matches!(
+        write_sweep(dir.join("x.h5"), false, &bad),
+        Err(StoreError::Invalid { .. })
+    ));
     let mut bad = s.clone();
     bad.branches[0].stable.pop();
     assert!(matches!(
@@ -191,6 +232,29 @@ fn bifurcation_and_line_pngs_have_stated_sizes() {
         px.chunks(3).any(|q| q == [255, 0, 0]),
         "no period-doubling marker drawn"
     );
+    // Three panels of equal height: |λ|, Re λ, the section coordinate. Only the middle one
+    // carries the dashed red λ = −1 line across its width (the others have red markers only),
+    // so period doublings (−1) and folds (+1) are told apart at a glance.
+    let red_in = |rows: std::ops::Range<u32>| {
+        rows.map(|y| {
+            px[(y * w * 3) as usize..((y + 1) * w * 3) as usize]
+                .chunks(3)
+                .filter(|q| *q == [255, 0, 0])
+                .count()
+        })
+        .collect::<Vec<_>>()
+    };
+    let mid = red_in(h / 3..2 * h / 3);
+    let widest = *mid.iter().max().unwrap();
+    assert!(
+        widest as f64 > 0.3 * w as f64,
+        "no λ = −1 line in the middle panel (widest red row {widest} px of {w})"
+    );
+    let top = red_in(0..h / 3);
+    assert!(
+        (*top.iter().max().unwrap() as f64) < 0.1 * w as f64,
+        "the |λ| panel has no red line"
+    );
     assert!(plot_bifurcation(dir.join("x.png"), &sweep(), 2).is_err());
 
     let series = vec![
@@ -256,4 +320,84 @@ fn gait_gif_has_one_frame_per_input_frame_at_stated_size() {
     }
     assert_eq!(count, n);
     assert!(animate_gif(dir.join("e.gif"), &[], (480, 360), 50, "").is_err());
+}
+
+#[test]
+fn basin_stability_file_round_trips_refuses_bad_rows_and_draws_its_chart() {
+    use pdw_store::plot::STABILITY_PNG_SIZE;
+    use pdw_store::{
+        plot_basin_stability, read_stability, write_stability, StabilityAttractor, StabilityData,
+    };
+    let dir = scratch("stability");
+    let d = StabilityData {
+        command: "pdw-sweep basin --over slope=0.009:0.019:3".into(),
+        model: "simplest".into(),
+        parameter: "slope".into(),
+        params: "{}".into(),
+        box_json: r#"{"x":{"name":"theta"}}"#.into(),
+        max_strides: 100,
+        values: vec![0.009, 0.014, 0.019],
+        columns: vec![
+            "gait".into(),
+            "period-2".into(),
+            "fall".into(),
+            "timeout".into(),
+            "other".into(),
+        ],
+        kinds: vec![
+            "attractor".into(),
+            "attractor".into(),
+            "fall".into(),
+            "timeout".into(),
+            "other".into(),
+        ],
+        fractions: vec![
+            vec![0.25, 0.0, 0.75, 0.0, 0.0],
+            vec![0.125, 0.0, 0.75, 0.125, 0.0],
+            vec![0.0, 0.5, 0.25, 0.0, 0.25],
+        ],
+        outcome_columns: vec!["gait".into(), "other".into()],
+        outcome_fractions: vec![vec![0.25, 0.75], vec![0.125, 0.875], vec![0.0, 1.0]],
+        attractors: vec![
+            vec![StabilityAttractor {
+                name: "gait".into(),
+                period_strides: 1,
+                period_time: Some(3.8),
+                points: vec![vec![0.2, -0.2]],
+                multipliers: vec![[-0.5, 0.1], [-0.5, -0.1]],
+            }],
+            vec![],
+            vec![StabilityAttractor {
+                name: "chaotic".into(),
+                period_strides: 0,
+                period_time: None,
+                points: vec![vec![0.24, -0.23], vec![0.26, -0.25]],
+                multipliers: vec![],
+            }],
+        ],
+        settings: vec![("options".into(), r#"{"threads":2}"#.into())],
+        elapsed_s: 0.5,
+    };
+    let p = dir.join("bs.h5");
+    write_stability(&p, false, &d).unwrap();
+    assert_eq!(read_stability(&p).unwrap(), d);
+    assert!(matches!(
+        write_stability(&p, false, &d),
+        Err(StoreError::Exists { .. })
+    ));
+    let mut bad = d.clone();
+    bad.fractions[1][0] = 0.2; // the row sums to 1.075
+    let err = write_stability(dir.join("bad.h5"), false, &bad).unwrap_err();
+    assert!(err.to_string().contains("sum"), "{err}");
+    assert!(!dir.join("bad.h5").exists());
+
+    let png_path = dir.join("bs.png");
+    plot_basin_stability(&png_path, &d, "slope [rad]", "basin stability").unwrap();
+    let (w, h, px, _) = decode_png(&png_path);
+    assert_eq!((w, h), STABILITY_PNG_SIZE);
+    // Stacked bands in the basin picture's colours: the gait green and the falls red cover a
+    // share of the top panel.
+    let count = |c: [u8; 3]| px.chunks(3).filter(|q| *q == c).count();
+    assert!(count([44, 160, 44]) > 1000, "gait band missing");
+    assert!(count([214, 39, 40]) > 10000, "fall band missing");
 }

@@ -141,18 +141,19 @@ pub struct Sweep {
     pub n: usize,
 }
 
-pub fn parse_sweep(s: &str) -> Result<Sweep, InputError> {
+/// `NAME=A:B:N` of the option `opt` (e.g. `--sweep`, `--over`); see [`parse_sweep`].
+pub fn parse_range_count(s: &str, opt: &str) -> Result<Sweep, InputError> {
     let Some((name, rest)) = s.split_once('=') else {
         return err(format!(
-            "--sweep: '{s}' is not of the form NAME=A:B:N (e.g. slope=0.001:0.019:400)"
+            "{opt}: '{s}' is not of the form NAME=A:B:N (e.g. slope=0.001:0.019:400)"
         ));
     };
     let parts: Vec<&str> = rest.split(':').collect();
     if parts.len() != 3 {
-        return err(format!("--sweep: '{rest}' is not of the form A:B:N"));
+        return err(format!("{opt}: '{rest}' is not of the form A:B:N"));
     }
     let name = name.trim().to_string();
-    let flag = format!("--sweep {name}");
+    let flag = format!("{opt} {name}");
     let conv = |t: &str| {
         if name == "slope" {
             parse_slope_for(t, &flag)
@@ -166,20 +167,25 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, InputError> {
         Ok(n) if (2..=MAX_SWEEP_POINTS).contains(&n) => n,
         _ => {
             return err(format!(
-                "--sweep: point count '{}' must be an integer from 2 to {MAX_SWEEP_POINTS}",
+                "{opt}: point count '{}' must be an integer from 2 to {MAX_SWEEP_POINTS}",
                 parts[2]
             ))
         }
     };
     if lo == hi {
-        return err(format!("--sweep: range {lo}:{hi} is empty"));
+        return err(format!("{opt}: range {lo}:{hi} is empty"));
     }
     if !(hi - lo).is_finite() {
         return err(format!(
-            "--sweep: range '{rest}' is too wide (its width overflows a double)"
+            "{opt}: range '{rest}' is too wide (its width overflows a double)"
         ));
     }
     Ok(Sweep { name, lo, hi, n })
+}
+
+/// `--sweep NAME=A:B:N`: N evenly spaced values from A to B inclusive.
+pub fn parse_sweep(s: &str) -> Result<Sweep, InputError> {
+    parse_range_count(s, "--sweep")
 }
 
 /// A shard `I/N` with 0 ≤ I < N.

@@ -109,7 +109,12 @@ pub struct FixedpointArgs {
     /// strides, and from the period-doubling predictor at the period-one gaits.
     #[arg(long, default_value_t = 1)]
     pub period: usize,
-    /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400).
+    /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400). The output
+    /// holds exactly N points per branch, at the N evenly spaced values A, A + (B−A)/(N−1), …, B
+    /// (on each branch where it exists; a branch that folds back has a point per crossing),
+    /// each corrected at that value; the continuation takes whatever internal steps it needs
+    /// (at most (B−A)/(N−1) in arclength) and does not store them. Bifurcations are located
+    /// to 1e-10 and stored separately. Also an orbit diagram at the same N values.
     #[arg(long)]
     pub sweep: Option<String>,
     /// HDF5 output of a sweep.
@@ -121,6 +126,18 @@ pub struct FixedpointArgs {
     /// Overwrite existing output files.
     #[arg(long)]
     pub force: bool,
+    // ---- sweep output (with --sweep; --json then prints the sweep as one JSON object)
+    /// With --sweep: also write the branches as CSV, one row per orbit point of every branch
+    /// point (columns: README "Sweep output").
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// With --sweep: worker threads (rayon pool) for the points on the output grid, their
+    /// measurements and the orbit diagram; results are identical for any count. Default 2.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// With --sweep: no progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -130,9 +147,9 @@ pub struct BasinArgs {
     pub model: ModelOpts,
     #[command(flatten)]
     pub integrator: IntegratorOpts,
-    /// Grid size NXxNY.
-    #[arg(long, default_value = "401x401")]
-    pub grid: String,
+    /// Grid size NXxNY. Default: 401x401; 41x41 with --over.
+    #[arg(long)]
+    pub grid: Option<String>,
     /// Horizontal axis: NAME=A:B (inclusive). Default: the model's first section coordinate
     /// around the fixed point.
     #[arg(long)]
@@ -144,9 +161,9 @@ pub struct BasinArgs {
     /// (one application of the stride map), not biomechanics' two steps.
     #[arg(long, default_value_t = 100)]
     pub max_strides: u32,
-    /// HDF5 output file.
-    #[arg(long, default_value = "basin.h5")]
-    pub out: PathBuf,
+    /// HDF5 output file. Default: basin.h5; basin_stability.h5 with --over.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     /// PNG heatmap (default: the output path with .png).
     #[arg(long)]
     pub png: Option<PathBuf>,
@@ -166,6 +183,30 @@ pub struct BasinArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    // ---- basin stability over a parameter (--over)
+    /// Basin stability over a model parameter, NAME=A:B:N (e.g. slope=0.009:0.019:6): at each
+    /// of the N evenly spaced values, the same box of section states (--x/--y, else the
+    /// default box around the gait at A) is classified by attractor, and the fraction reaching
+    /// each attractor (Menck et al. 2013), falling, or neither is written to --out (HDF5) and
+    /// drawn as a stacked chart (--png).
+    #[arg(long, value_name = "NAME=A:B:N")]
+    pub over: Option<String>,
+    /// With --over: print the fractions as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl BasinArgs {
+    /// The HDF5 output: --out, or the mode's default.
+    pub fn out_path(&self) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| {
+            if self.over.is_some() {
+                "basin_stability.h5".into()
+            } else {
+                "basin.h5".into()
+            }
+        })
+    }
 }
 
 #[derive(Args, Debug)]

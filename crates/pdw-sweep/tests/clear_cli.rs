@@ -119,7 +119,7 @@ fn integrator_options_that_would_be_ignored_are_refused() {
 }
 
 #[test]
-fn slope_given_twice_and_sweep_with_json_are_refused() {
+fn slope_given_twice_and_sweep_options_without_sweep_are_refused() {
     for cmd in ["fixedpoint", "basin", "simulate", "animate"] {
         exits_2_naming(
             &[cmd, "--slope", "0.01", "--set", "slope=0.02"],
@@ -130,19 +130,15 @@ fn slope_given_twice_and_sweep_with_json_are_refused() {
         &["fixedpoint", "--set", "gravity=1", "--set", "gravity=2"],
         &["gravity", "twice"],
     );
+    // --csv and --threads shape a sweep's output only: without --sweep they are refused, not
+    // ignored (`--sweep … --json` prints the sweep: tests/sweep_output.rs).
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("bif.h5");
+    let out = dir.path().join("s.csv");
     exits_2_naming(
-        &[
-            "fixedpoint",
-            "--sweep",
-            "slope=0.001:0.01:3",
-            "--json",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        &["--json", "--sweep"],
+        &["fixedpoint", "--csv", out.to_str().unwrap()],
+        &["--csv", "--sweep"],
     );
+    exits_2_naming(&["fixedpoint", "--threads", "2"], &["--threads", "--sweep"]);
     assert!(!out.exists(), "nothing is computed or written");
 }
 

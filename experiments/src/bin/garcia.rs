@@ -68,6 +68,7 @@ fn store_branch(name: &str, b: &Branch) -> pdw_store::Branch {
             .map(|p| p.multipliers.iter().map(|m| (m.re, m.im)).collect())
             .collect(),
         stable: b.points.iter().map(|p| p.stable).collect(),
+        ..Default::default()
     }
 }
 
@@ -252,6 +253,7 @@ fn main() -> anyhow::Result<()> {
         branches: sb.clone(),
         bifurcations: sbif.clone(),
         orbit: Some(orbit.clone()),
+        ..Default::default()
     };
     pdw_store::write_sweep(dir.join("garcia.h5"), true, &data)?;
     pdw_store::plot_bifurcation(dir.join("bifurcation_full.png"), &data, 0)?;
@@ -271,6 +273,7 @@ fn main() -> anyhow::Result<()> {
                     section: keep.iter().map(|&i| b.section[i].clone()).collect(),
                     multipliers: keep.iter().map(|&i| b.multipliers[i].clone()).collect(),
                     stable: keep.iter().map(|&i| b.stable[i]).collect(),
+                    ..Default::default()
                 }
             })
             .collect(),

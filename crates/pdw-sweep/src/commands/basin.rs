@@ -84,7 +84,7 @@ fn gib(b: u64) -> String {
 
 /// Refuses grids whose row of cells exceeds HDF5's chunk limit or whose estimated memory
 /// exceeds what is available, before anything is computed.
-fn check_memory(nx: usize, ny: usize, d: usize, dim: usize) -> Result<(), InputError> {
+pub(super) fn check_memory(nx: usize, ny: usize, d: usize, dim: usize) -> Result<(), InputError> {
     let chunk = BLOCK_ROWS.min(ny) as u64 * nx as u64 * d as u64 * 8;
     if chunk > MAX_CHUNK_BYTES {
         return Err(InputError(format!(
@@ -111,7 +111,7 @@ fn check_memory(nx: usize, ny: usize, d: usize, dim: usize) -> Result<(), InputE
 
 /// Default half-width of an axis around the fixed point: 25 % of the coordinate, at least 0.05.
 /// For the simplest walker at γ = 0.009 this gives θ ∈ [0.150, 0.250], θ̇ ∈ [−0.250, −0.150].
-fn default_axis(name: &str, centre: f64) -> AxisRange {
+pub(super) fn default_axis(name: &str, centre: f64) -> AxisRange {
     let half = (0.25 * centre.abs()).max(0.05);
     AxisRange {
         name: name.to_string(),
@@ -121,10 +121,10 @@ fn default_axis(name: &str, centre: f64) -> AxisRange {
 }
 
 /// `--set` values: model parameters by name, and fixed section coordinates by index.
-type SplitSets = (Vec<(String, f64)>, Vec<(usize, f64)>);
+pub(super) type SplitSets = (Vec<(String, f64)>, Vec<(usize, f64)>);
 
 /// Splits `--set` into model parameters and fixed section coordinates.
-fn split_sets(a: &BasinArgs, section_names: &[&str]) -> Result<SplitSets, InputError> {
+pub(super) fn split_sets(a: &BasinArgs, section_names: &[&str]) -> Result<SplitSets, InputError> {
     let mut fixed = Vec::new();
     let mut rest = Vec::new();
     for (n, v) in overrides(&a.model)? {
@@ -137,6 +137,17 @@ fn split_sets(a: &BasinArgs, section_names: &[&str]) -> Result<SplitSets, InputE
 }
 
 pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
+    if a.over.is_some() {
+        return super::basin_over::run(a);
+    }
+    if a.json {
+        return Err(InputError(
+            "--json: a basin writes its grid to --out (HDF5) and --png; only `basin --over` \
+             prints JSON (add --over NAME=A:B:N, or drop --json)"
+                .into(),
+        )
+        .into());
+    }
     let t0 = Instant::now();
     // ---- signals first: Ctrl-C or SIGTERM at any moment exits 130, leaving a resumable file
     let stop = Arc::new(AtomicBool::new(false));
@@ -146,7 +157,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
     }
     // ---- validate everything before touching any file
-    let (nx, ny) = args::parse_grid(&a.grid)?;
+    let (nx, ny) = args::parse_grid(a.grid.as_deref().unwrap_or("401x401"))?;
     if a.max_strides == 0 || a.max_strides > u32::from(u16::MAX) {
         return Err(InputError(format!(
             "--max-strides: {} must be between 1 and {}",
@@ -208,12 +219,13 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         };
     let xa = axis(&a.x, "--x")?;
     let ya = axis(&a.y, "--y")?;
-    let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
+    let out = a.out_path();
+    let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
     // A shard writes no picture. With --resume an existing --out is expected, and an existing
     // picture is refused below unless the file turns out complete (then nothing is written).
     let mut outputs = vec![args::Output {
         flag: "--out",
-        path: &a.out,
+        path: &out,
         may_exist: a.resume,
     }];
     if shard.is_none() {
@@ -304,46 +316,22 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let walker = m.walker.as_ref();
     let fall = Outcome::of_fall;
     let disc = DiscoveryOptions::default();
-    let extra: Vec<Vec<f64>> = found
-        .iter()
-        .map(|f| {
-            let mut s = f.fp.section.clone();
-            for (i, v) in &fixed {
-                s[*i] = *v;
-            }
-            s
-        })
-        .collect();
-    let seeds = seed_set(
-        &base,
-        ix,
-        (xr.lo, xr.hi),
-        iy,
-        (yr.lo, yr.hi),
-        disc.lattice,
-        &extra,
-    );
     let t_disc = Instant::now();
-    let step = |x: &[f64]| walker.step_length(x);
-    let newton_map = pdw_limit::StrideMap::new(
+    let (set, seeds) = box_attractors(
         walker,
-        pdw_hybrid::Options::dop853(pdw_limit::gaits::FIXEDPOINT_INTEGRATOR_TOL),
-    )?
-    .with_step_length(&step);
-    let set = discover(
-        walker,
-        &newton_map,
-        gait.map(LimitAttractor::gait),
-        &seeds,
+        &found,
+        gait,
+        &fixed,
+        &base,
+        (ix, &xr),
+        (iy, &yr),
         &opts,
-        &disc,
-        &fall,
         &pool,
     )?;
     if !a.quiet {
         eprintln!(
             "attractors from {} seeds in {:.2} s: {}",
-            seeds.len(),
+            seeds,
             t_disc.elapsed().as_secs_f64(),
             if set.attractors.is_empty() {
                 "none (every seed fell)".to_string()
@@ -392,7 +380,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
             "confirm": opts.confirm, "max_period": opts.max_period,
             "fixed_point_residual": gait.map(|fp| fp.residual),
-            "attractor_seeds": seeds.len(), "seed_strides": disc.seed_strides,
+            "attractor_seeds": seeds, "seed_strides": disc.seed_strides,
             "chaos_radius": disc.chaos_radius, "chaos_sample": disc.cloud_points,
             "fixed": fixed.iter().map(|(i, v)| (names[*i].to_string(), *v)).collect::<std::collections::BTreeMap<_, _>>(),
         })
@@ -406,14 +394,14 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         legend: set.legend(),
         shard,
     };
-    let mut writer = match BasinWriter::start(&a.out, &header, a.resume, a.force) {
+    let mut writer = match BasinWriter::start(&out, &header, a.resume, a.force) {
         Ok(w) => w,
         Err(StoreError::AlreadyComplete { .. }) => {
             // A requeued cluster task that had finished: success, nothing to do.
             crate::outln!(
                 "{} is already complete for this command (checked: same run, every block's \
                  checksum); nothing to do",
-                a.out.display()
+                out.display()
             );
             return Ok(ExitCode::SUCCESS);
         }
@@ -476,7 +464,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         eprintln!(
             "warning: {} row(s) of {} were damaged on disk (checksum or content); recomputing them",
             damaged.len(),
-            a.out.display()
+            out.display()
         );
     }
     let todo = writer.rows_todo();
@@ -555,7 +543,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         writer.close()?;
         eprintln!(
             "interrupted: finished rows are in {}; continue with --resume",
-            a.out.display()
+            out.display()
         );
         return Ok(ExitCode::from(130));
     }
@@ -583,7 +571,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     writer.finish(&metrics, &attractors)?;
     // The attractors exist now: their datasets get units too.
     pdw_store::annotate(
-        &a.out,
+        &out,
         &pdw_store::Annotations {
             provenance: None,
             units: &units,
@@ -593,7 +581,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     )?;
     let elapsed = t0.elapsed().as_secs_f64();
     if let Some(mt) = &out_metrics {
-        let (h, outcome) = read_basin_outcome(&a.out)?;
+        let (h, outcome) = read_basin_outcome(&out)?;
         // Orbit points are drawn only where the slice passes through the gait: off the slice
         // their projection would mislead.
         let shown: &[Attractor] = if slice.on_fixed_point {
@@ -609,18 +597,75 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             shown,
             &title,
         )?;
-        print_summary(&m, a, mt, nx, ny, elapsed, &a.out, Some(&png));
+        print_summary(&m, a, mt, nx, ny, elapsed, &out, Some(&png));
     } else {
         crate::outln!(
             "shard {} of {}: {} rows written to {} in {:.2} s; join the shards with `pdw-sweep merge`",
             shard.map(|s| s.index).unwrap_or(0),
             shard.map(|s| s.count).unwrap_or(1),
             todo.len(),
-            a.out.display(),
+            out.display(),
             elapsed
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Every attractor reached from the box of a basin grid (`ix`, `iy` over their ranges, the
+/// other coordinates at `base`): [`discover`] from the deterministic [`seed_set`] (the
+/// period-one orbits `found`, with the `fixed` coordinates applied, and a lattice over the box),
+/// the selected `gait` first. Returns the set and the seeds' count. Shared by `basin` and
+/// `basin --over`, so both label the same box identically.
+#[allow(clippy::too_many_arguments)]
+pub fn box_attractors(
+    walker: &dyn pdw_walkers::Walker,
+    found: &[super::fixedpoint::Found],
+    gait: Option<&pdw_limit::FixedPoint>,
+    fixed: &[(usize, f64)],
+    base: &[f64],
+    (ix, xr): (usize, &AxisRange),
+    (iy, yr): (usize, &AxisRange),
+    opts: &BasinOptions,
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<(pdw_limit::AttractorSet, usize)> {
+    let fall = Outcome::of_fall;
+    let disc = DiscoveryOptions::default();
+    let extra: Vec<Vec<f64>> = found
+        .iter()
+        .map(|f| {
+            let mut s = f.fp.section.clone();
+            for (i, v) in fixed {
+                s[*i] = *v;
+            }
+            s
+        })
+        .collect();
+    let seeds = seed_set(
+        base,
+        ix,
+        (xr.lo, xr.hi),
+        iy,
+        (yr.lo, yr.hi),
+        disc.lattice,
+        &extra,
+    );
+    let step = |x: &[f64]| walker.step_length(x);
+    let newton_map = pdw_limit::StrideMap::new(
+        walker,
+        pdw_hybrid::Options::dop853(pdw_limit::gaits::FIXEDPOINT_INTEGRATOR_TOL),
+    )?
+    .with_step_length(&step);
+    let set = discover(
+        walker,
+        &newton_map,
+        gait.map(LimitAttractor::gait),
+        &seeds,
+        opts,
+        &disc,
+        &fall,
+        pool,
+    )?;
+    Ok((set, seeds.len()))
 }
 
 /// An attractor in the file's plain form (`period_strides` 0 and no multipliers for a chaotic

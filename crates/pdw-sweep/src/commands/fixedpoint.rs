@@ -87,16 +87,19 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             ))
             .into());
         }
-        if a.json {
-            // Not silently ignored: a sweep writes HDF5 (--out) and a PNG, not JSON.
-            return Err(InputError(
-                "--json: a --sweep writes its results to --out (HDF5) and --png; it has no JSON \
-                 output (drop --json, or read the HDF5 file)"
-                    .into(),
-            )
+        return super::sweep::run(a);
+    }
+    // Not silently ignored: these shape a sweep's output only.
+    for (given, flag) in [
+        (a.csv.is_some(), "--csv"),
+        (a.threads.is_some(), "--threads"),
+    ] {
+        if given {
+            return Err(InputError(format!(
+                "{flag}: only a --sweep NAME=A:B:N uses it (add --sweep, or drop {flag})"
+            ))
             .into());
         }
-        return super::sweep::run(a);
     }
     let m = build_model(&a.model)?;
     let ds = m.info.section_names.len();

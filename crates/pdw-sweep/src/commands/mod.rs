@@ -2,6 +2,7 @@
 
 mod animate;
 mod basin;
+mod basin_over;
 mod design;
 mod fixedpoint;
 mod merge;

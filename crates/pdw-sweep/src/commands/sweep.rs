@@ -2,17 +2,28 @@
 //! (pseudo-arclength, with period-doubling, fold and Neimark–Sacker detection and a switch onto
 //! the period-2 branch at the first period doubling), plus a brute-force orbit diagram over the
 //! N parameter values; written to HDF5 and drawn as a PNG bifurcation diagram.
+//!
+//! The output holds exactly the N requested values per branch ([`pdw_limit::branch_at_params`]
+//! corrects the branch at each), every point measured (all K orbit points, the K-stride
+//! period, step lengths, speed, validity along each stride, signed complex multipliers);
+//! `--json` prints the same data, `--csv FILE` writes it as one row per orbit point.
 
 use super::fixedpoint::{report_failure, search};
 use super::{build_with, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw_limit::{
-    continue_branch, orbit_diagram, switch_period_doubling, BifurcationKind, Branch,
-    ContinuationOptions, OrbitOptions, OrbitStart,
+    branch_at_params, continue_branch, orbit_diagram, switch_period_doubling, BifurcationKind,
+    Branch, BranchPoint, ContinuationOptions, OrbitOptions, OrbitStart, StrideMap, Validity,
 };
-use pdw_store::{plot_bifurcation, write_sweep, Bifurcation, OrbitDiagram, SweepData};
+use pdw_store::{
+    plot_bifurcation, write_sweep, Bifurcation, OrbitDiagram, StrideValidity, SweepData,
+};
+use rayon::prelude::*;
+use std::io::IsTerminal;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 fn kind_name(k: BifurcationKind) -> &'static str {
     match k {
@@ -23,46 +34,178 @@ fn kind_name(k: BifurcationKind) -> &'static str {
     }
 }
 
-fn store_branch(name: &str, b: &Branch) -> pdw_store::Branch {
+/// What is measured along each stride of a branch point's orbit.
+struct Measured {
+    step_length: Vec<f64>,
+    validity: Vec<StrideValidity>,
+}
+
+/// Step length of each of the K strides from the orbit's points (the model's own step length at
+/// heel strike, as `fixedpoint` reports it) and the validity along each stride
+/// ([`Validity::along_step`]: constraint forces at every accepted step and both sides of every
+/// event). NaN / unchecked where the model reports neither.
+fn measure(
+    m: &BuiltModel,
+    p: &BranchPoint,
+    integrator: pdw_hybrid::Options,
+) -> Result<Measured, String> {
+    let w = m.walker.as_ref();
+    let step = |x: &[f64]| w.step_length(x);
+    let map = StrideMap::new(w, integrator)
+        .map_err(|e| e.to_string())?
+        .with_step_length(&step);
+    let mut out = Measured {
+        step_length: Vec::new(),
+        validity: Vec::new(),
+    };
+    for s in &p.orbit {
+        let st = map.stride(s).map_err(|e| e.to_string())?;
+        if !st.outcome.is_ok() {
+            return Err(format!("the stride from {s:?} ended: {}", st.outcome));
+        }
+        out.step_length.push(st.step_length.unwrap_or(f64::NAN));
+        out.validity
+            .push(Validity::along_step(w, &map.lift(s)).map_or_else(
+                StrideValidity::unchecked,
+                |v| StrideValidity {
+                    checked: true,
+                    valid: v.valid(),
+                    normal_force_negative: v.normal_force_negative,
+                    knee_unlocks: v.knee_unlocks,
+                    swing_foot_scuffs: v.swing_foot_scuffs,
+                    min_normal_force: v.min_normal_force,
+                    max_friction_required: v.max_friction_required,
+                    min_knee_torque: v.min_knee_torque.unwrap_or(f64::NAN),
+                },
+            ));
+    }
+    Ok(out)
+}
+
+/// The branch in the file's form, from its points on the output grid, each measured.
+fn store_branch(name: &str, k: usize, pts: &[(BranchPoint, Measured)]) -> pdw_store::Branch {
     pdw_store::Branch {
         name: name.to_string(),
-        period_strides: b.period_strides as u32,
-        parameter: b.points.iter().map(|p| p.param).collect(),
-        section: b.points.iter().map(|p| p.section.clone()).collect(),
-        multipliers: b
-            .points
+        period_strides: k as u32,
+        parameter: pts.iter().map(|(p, _)| p.param).collect(),
+        section: pts.iter().map(|(p, _)| p.section.clone()).collect(),
+        multipliers: pts
             .iter()
-            .map(|p| p.multipliers.iter().map(|l| (l.re, l.im)).collect())
+            .map(|(p, _)| p.multipliers.iter().map(|l| (l.re, l.im)).collect())
             .collect(),
-        stable: b.points.iter().map(|p| p.stable).collect(),
+        stable: pts.iter().map(|(p, _)| p.stable).collect(),
+        orbit: pts.iter().map(|(p, _)| p.orbit.clone()).collect(),
+        period: pts.iter().map(|(p, _)| p.period).collect(),
+        speed: pts
+            .iter()
+            .map(|(p, m)| m.step_length.iter().sum::<f64>() / p.period)
+            .collect(),
+        step_length: pts.iter().map(|(_, m)| m.step_length.clone()).collect(),
+        validity: pts.iter().map(|(_, m)| m.validity.clone()).collect(),
+    }
+}
+
+/// Progress of a sweep: one bar through its stages (the continuation, by the share of the
+/// parameter range reached; the points on the output grid; the orbit diagram, by values
+/// started). Hidden with `--quiet` or when stderr is not a terminal.
+struct Progress {
+    pb: ProgressBar,
+    /// Range of the current continuation stage (f64 bits), and the furthest position reached.
+    from: AtomicU64,
+    to: AtomicU64,
+    best: AtomicU64,
+    tracking: std::sync::atomic::AtomicBool,
+}
+
+impl Progress {
+    fn new(quiet: bool) -> Self {
+        let pb = if quiet || !std::io::stderr().is_terminal() {
+            ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden())
+        } else {
+            ProgressBar::new(1000)
+        };
+        pb.set_style(
+            ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {pos}/{len} {msg}")
+                .expect("valid template"),
+        );
+        Self {
+            pb,
+            from: AtomicU64::new(0f64.to_bits()),
+            to: AtomicU64::new(1f64.to_bits()),
+            best: AtomicU64::new(0),
+            tracking: std::sync::atomic::AtomicBool::new(false),
+        }
+    }
+
+    /// A stage with `len` units; `range` = Some((from, to)) tracks the parameter reached.
+    fn stage(&self, msg: &str, len: u64, range: Option<(f64, f64)>) {
+        self.pb.set_length(len.max(1));
+        self.pb.set_position(0);
+        self.pb.set_message(msg.to_string());
+        self.best.store(0, Ordering::Relaxed);
+        if let Some((a, b)) = range {
+            self.from.store(a.to_bits(), Ordering::Relaxed);
+            self.to.store(b.to_bits(), Ordering::Relaxed);
+        }
+        self.tracking.store(range.is_some(), Ordering::Relaxed);
+    }
+
+    /// A model is built at `mu`: in a continuation stage, the range share reached.
+    fn at(&self, mu: f64) {
+        let from = f64::from_bits(self.from.load(Ordering::Relaxed));
+        let to = f64::from_bits(self.to.load(Ordering::Relaxed));
+        if self.tracking.load(Ordering::Relaxed) && to != from {
+            let len = self.pb.length().unwrap_or(1);
+            let f = ((mu - from) / (to - from)).clamp(0.0, 1.0);
+            let pos = (f * len as f64).round() as u64;
+            if self.best.fetch_max(pos, Ordering::Relaxed) < pos {
+                self.pb.set_position(pos);
+            }
+        }
+    }
+
+    fn inc(&self) {
+        self.pb.inc(1);
     }
 }
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let sw = args::parse_sweep(a.sweep.as_deref().unwrap_or_default())?;
     let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
-    args::check_outputs(
-        &[
-            args::Output {
-                flag: "--out",
-                path: &a.out,
-                may_exist: false,
-            },
-            args::Output {
-                flag: "--png",
-                path: &png,
-                may_exist: false,
-            },
-        ],
-        &[],
-        a.force,
-    )?;
+    let threads = a.threads.unwrap_or(2);
+    if !(1..=1024).contains(&threads) {
+        return Err(InputError(format!("--threads: {threads} must be between 1 and 1024")).into());
+    }
+    let mut outputs = vec![
+        args::Output {
+            flag: "--out",
+            path: &a.out,
+            may_exist: false,
+        },
+        args::Output {
+            flag: "--png",
+            path: &png,
+            may_exist: false,
+        },
+    ];
+    if let Some(c) = &a.csv {
+        outputs.push(args::Output {
+            flag: "--csv",
+            path: c,
+            may_exist: false,
+        });
+    }
+    args::check_outputs(&outputs, &[], a.force)?;
     let at = |mu: f64| -> Result<BuiltModel, InputError> {
         build_with(&a.model, &[(sw.name.clone(), mu)])
     };
     let m0 = at(sw.lo)?;
     at(sw.hi)?; // both ends must be valid parameter values
-    let family = |mu: f64| at(mu).map(|m| m.walker);
+    let progress = Progress::new(a.quiet);
+    let family = |mu: f64| {
+        progress.at(mu);
+        at(mu).map(|m| m.walker)
+    };
 
     // the gait to continue, at the start of the range
     let guesses: Vec<(String, Vec<f64>)> = match &a.guess {
@@ -82,6 +225,10 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         || a.integrator.rk4_step.is_some())
     .then(|| super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol)))
     .transpose()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    let t0 = std::time::Instant::now();
     let (found, failed) = match &user_integrator {
         Some(i) => super::fixedpoint::search_with(&m0, &guesses, a.tol.max(1e-12), i)?,
         None => search(&m0, &guesses, a.tol.max(1e-12))?,
@@ -112,9 +259,10 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     if let Some(i) = user_integrator {
         opts.integrator = i;
     }
-    let t0 = std::time::Instant::now();
+    let n_units = sw.n as u64;
+    progress.stage("period-1 branch", n_units, Some((sw.lo, sw.hi)));
     let main = continue_branch(&family, &start.fp.section, sw.lo, 1, &opts)?;
-    let mut branches = vec![store_branch("period-1", &main)];
+    let mut continued: Vec<(&'static str, Branch)> = vec![("period-1", main.clone())];
     let mut bifs: Vec<Bifurcation> = Vec::new();
     let mut printed = Vec::new();
     for b in &main.bifurcations {
@@ -132,6 +280,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         .iter()
         .find(|b| b.kind == BifurcationKind::PeriodDoubling)
     {
+        progress.stage("period-2 branch", n_units, Some((pd.param, sw.hi)));
         match switch_period_doubling(&family, pd, &opts) {
             Ok(b2) => {
                 for b in &b2.bifurcations {
@@ -143,14 +292,62 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
                     });
                     printed.push((2, b.kind, b.param));
                 }
-                branches.push(store_branch("period-2", &b2));
+                continued.push(("period-2", b2));
             }
             Err(e) => eprintln!("warning: switching onto the period-2 branch failed: {e}"),
         }
     }
-    // brute-force orbit diagram over the N values
+    // every branch on the output grid: the N values, each point corrected there and measured
     let params = pdw_limit::basin::linspace(sw.lo, sw.hi, sw.n);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let mut branches = Vec::new();
+    let mut grid_failures = 0usize;
+    for (name, b) in &continued {
+        progress.stage(&format!("{name} on the output grid"), 2, None);
+        let sampled = branch_at_params(&family, b, &params, &opts, &pool)?;
+        progress.inc();
+        let ok: Vec<BranchPoint> = sampled
+            .into_iter()
+            .filter_map(|sp| match sp.point {
+                Ok(p) => Some(p),
+                Err(e) => {
+                    grid_failures += 1;
+                    eprintln!(
+                        "warning: {name} branch at {} = {}: {e}; the point is left out",
+                        sw.name, params[sp.index]
+                    );
+                    None
+                }
+            })
+            .collect();
+        progress.stage(
+            &format!("measuring the {name} points"),
+            ok.len() as u64,
+            None,
+        );
+        let measured: Vec<Result<(BranchPoint, Measured), String>> = pool.install(|| {
+            ok.into_par_iter()
+                .map(|p| {
+                    let r = at(p.param)
+                        .map_err(|e| e.0)
+                        .and_then(|m| measure(&m, &p, opts.integrator));
+                    progress.inc();
+                    r.map(|mm| (p, mm))
+                })
+                .collect()
+        });
+        let mut pts = Vec::with_capacity(measured.len());
+        for r in measured {
+            match r {
+                Ok(v) => pts.push(v),
+                Err(e) => {
+                    grid_failures += 1;
+                    eprintln!("warning: {name} branch: a point could not be measured ({e}); it is left out");
+                }
+            }
+        }
+        branches.push(store_branch(name, b.period_strides, &pts));
+    }
+    // brute-force orbit diagram over the N values (independent values, run in parallel)
     let mut oo = OrbitOptions {
         transient: 300,
         record: 64,
@@ -175,7 +372,13 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             v
         })
         .collect();
-    let cols = orbit_diagram(&family, &params, &OrbitStart::PerParam(starts), &oo, &pool)?;
+    progress.stage("orbit diagram", params.len() as u64, None);
+    let counted = |mu: f64| {
+        progress.inc();
+        at(mu).map(|m| m.walker)
+    };
+    let cols = orbit_diagram(&counted, &params, &OrbitStart::PerParam(starts), &oo, &pool)?;
+    progress.pb.finish_and_clear();
     let orbit = OrbitDiagram {
         coordinate: m0.info.section_names[0].to_string(),
         parameter: params.clone(),
@@ -188,6 +391,10 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             })
             .collect(),
     };
+    let fp_integrator =
+        user_integrator.unwrap_or_else(|| pdw_limit::gaits::default_integrator(a.tol.max(1e-12)));
+    let elapsed = t0.elapsed().as_secs_f64();
+    let settings = sweep_settings(&sw, &m0, &opts, &oo, a.tol, &fp_integrator, threads);
     let data = SweepData {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         model: m0.info.name.to_string(),
@@ -202,11 +409,20 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         branches,
         bifurcations: bifs,
         orbit: Some(orbit),
+        settings,
+        elapsed_s: elapsed,
     };
     write_sweep(&a.out, a.force, &data)?;
-    let fp_integrator =
-        user_integrator.unwrap_or_else(|| pdw_limit::gaits::default_integrator(a.tol.max(1e-12)));
-    annotate_sweep(&a.out, &m0, &sw.name, &opts, &oo, a.tol, &fp_integrator)?;
+    annotate_sweep(
+        &a.out,
+        &m0,
+        &sw.name,
+        &opts,
+        &oo,
+        a.tol,
+        &fp_integrator,
+        threads,
+    )?;
     // Units on the picture's axes (the file keeps the bare names, with units attributes).
     let mut shown = data.clone();
     shown.parameter = format!("{} [{}]", sw.name, super::param_unit(&m0, &sw.name));
@@ -218,9 +434,26 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         *n = format!("{n} [{u}]");
     }
     plot_bifurcation(&png, &shown, 0)?;
-    let elapsed = t0.elapsed().as_secs_f64();
+    if let Some(c) = &a.csv {
+        let comments = csv_comments(&m0, &sw.name);
+        pdw_store::write_sweep_csv(c, a.force, &data, &comments)?;
+    }
+    if a.json {
+        let mut j = pdw_store::sweep_json(&data);
+        j["parameter_unit"] = serde_json::json!(super::param_unit(&m0, &sw.name));
+        j["section_units"] = serde_json::json!(super::section_units(&m0));
+        j["time_unit"] = serde_json::json!(super::time_unit(&m0));
+        j["length_unit"] = serde_json::json!(super::length_unit(&m0));
+        j["files"] = serde_json::json!({
+            "hdf5": a.out.display().to_string(),
+            "png": png.display().to_string(),
+            "csv": a.csv.as_ref().map(|c| c.display().to_string()),
+        });
+        crate::outln!("{}", serde_json::to_string_pretty(&j)?);
+        return Ok(ExitCode::SUCCESS);
+    }
     crate::outln!(
-        "model {}: {} continued from {} to {} ({} points on the period-1 branch, end: {:?})",
+        "model {}: {} continued from {} to {} ({} internal steps on the period-1 branch, end: {:?})",
         m0.info.name,
         sw.name,
         sw.lo,
@@ -228,6 +461,17 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         main.points.len(),
         main.end
     );
+    for b in &data.branches {
+        crate::outln!(
+            "  {:<16} {} points on the output grid of {} values",
+            b.name,
+            b.parameter.len(),
+            sw.n
+        );
+    }
+    if grid_failures > 0 {
+        crate::outln!("  {grid_failures} point(s) of the output grid left out (see the warnings)");
+    }
     for (period, kind, mu) in printed {
         crate::outln!(
             "  {:<16} on the period-{period} branch at {} = {mu:.12} {}",
@@ -238,18 +482,108 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     }
     let falls = cols.iter().filter(|c| c.fall.is_some()).count();
     crate::outln!(
-        "  orbit diagram: {} values, {} with a fall; wrote {} and {} in {:.2} s",
+        "  orbit diagram: {} values, {} with a fall; wrote {} and {}{} in {:.2} s ({} thread(s))",
         params.len(),
         falls,
         a.out.display(),
         png.display(),
-        elapsed
+        a.csv
+            .as_ref()
+            .map(|c| format!(" and {}", c.display()))
+            .unwrap_or_default(),
+        elapsed,
+        threads
     );
     Ok(ExitCode::SUCCESS)
 }
 
+/// The CSV's comment lines: units of every column and the command.
+fn csv_comments(m: &BuiltModel, parameter: &str) -> Vec<(String, String)> {
+    let su = super::section_units(m);
+    let (tu, lu) = (super::time_unit(m), super::length_unit(m));
+    let u = super::model_units(m);
+    let mut units = vec![format!("param={}", super::param_unit(m, parameter))];
+    for (n, x) in m.info.section_names.iter().zip(&su) {
+        units.push(format!("{n}={x}"));
+    }
+    units.push(format!("period={tu}"));
+    units.push(format!("step_length={lu}"));
+    units.push(format!("speed={lu}/{tu}"));
+    units.push(format!("min_normal_force={}", u.force));
+    units.push("max_friction_required=1".into());
+    units.push(format!("min_knee_torque={}", u.torque));
+    units.push("lambda*=1".into());
+    vec![
+        ("command".into(), super::command_line()),
+        ("units".into(), units.join(",")),
+        (
+            "rows".into(),
+            "one per orbit point (point = 0..period_k-1) of every branch point; period, speed, \
+             stable and the multipliers (of the period_k-stride map) belong to the whole orbit"
+                .into(),
+        ),
+    ]
+}
+
+/// The file's settings attributes: the output grid, the continuation, the integrators and
+/// tolerances of every stage, the thread count.
+fn sweep_settings(
+    sw: &args::Sweep,
+    m: &BuiltModel,
+    c: &ContinuationOptions,
+    o: &OrbitOptions,
+    tol: f64,
+    fp_integrator: &pdw_hybrid::Options,
+    threads: usize,
+) -> Vec<(String, String)> {
+    let j = |v: serde_json::Value| v.to_string();
+    vec![
+        ("continuation".into(), j(continuation_json(c))),
+        (
+            "grid".into(),
+            j(serde_json::json!({
+                "parameter": sw.name, "from": sw.lo, "to": sw.hi, "n": sw.n,
+                "unit": super::param_unit(m, &sw.name),
+            })),
+        ),
+        (
+            "integrator".into(),
+            j(serde_json::json!({
+                "fixed_point": super::integrator_json(fp_integrator),
+                "continuation": super::integrator_json(&c.integrator),
+                "orbit_diagram": super::integrator_json(&o.integrator),
+            })),
+        ),
+        ("threads".into(), j(serde_json::json!(threads))),
+        (
+            "tolerances".into(),
+            j(serde_json::json!({
+                "fixed_point_newton_tol": tol.max(1e-12),
+                "continuation_newton_tol": c.newton_tol,
+                "bifurcation_locate_tol": c.locate_tol,
+                "orbit_diagram_tol_period": o.tol_period,
+            })),
+        ),
+    ]
+}
+
+fn continuation_json(c: &ContinuationOptions) -> serde_json::Value {
+    serde_json::json!({
+        "method": format!("{:?}", c.method),
+        "integrator": super::integrator_json(&c.integrator),
+        "direction": c.direction,
+        "ds_init": c.ds_init, "ds_min": c.ds_min, "ds_max": c.ds_max,
+        "max_points": c.max_points,
+        "mu_min": c.mu_min, "mu_max": c.mu_max,
+        "newton_tol": c.newton_tol, "max_newton": c.max_newton,
+        "dmu": c.dmu, "max_turn": c.max_turn,
+        "locate_tol": c.locate_tol, "switch_eps": c.switch_eps,
+    })
+}
+
 /// Provenance (every numerical option: the gait search, the continuation, the orbit diagram)
 /// and units on every dataset of the sweep file.
+#[allow(clippy::too_many_arguments)]
 fn annotate_sweep(
     out: &std::path::Path,
     m: &BuiltModel,
@@ -258,23 +592,15 @@ fn annotate_sweep(
     o: &OrbitOptions,
     tol: f64,
     fp_integrator: &pdw_hybrid::Options,
+    threads: usize,
 ) -> anyhow::Result<()> {
     let options = serde_json::json!({
         "fixed_point": {
             "newton_tol": tol.max(1e-12),
             "integrator": super::integrator_json(fp_integrator),
         },
-        "continuation": {
-            "method": format!("{:?}", c.method),
-            "integrator": super::integrator_json(&c.integrator),
-            "direction": c.direction,
-            "ds_init": c.ds_init, "ds_min": c.ds_min, "ds_max": c.ds_max,
-            "max_points": c.max_points,
-            "mu_min": c.mu_min, "mu_max": c.mu_max,
-            "newton_tol": c.newton_tol, "max_newton": c.max_newton,
-            "dmu": c.dmu, "max_turn": c.max_turn,
-            "locate_tol": c.locate_tol, "switch_eps": c.switch_eps,
-        },
+        "continuation": continuation_json(c),
+        "threads": threads,
         "orbit_diagram": {
             "integrator": super::integrator_json(&o.integrator),
             "transient": o.transient,
@@ -288,11 +614,24 @@ fn annotate_sweep(
     let su = super::section_units(m);
     let list = super::units_list(&su);
     let first = su.first().cloned().unwrap_or_default();
+    let (tu, lu) = (super::time_unit(m), super::length_unit(m));
+    let mu = super::model_units(m);
     let units = move |p: &str| -> Option<String> {
         let leaf = p.rsplit('/').next().unwrap_or(p);
         match leaf {
             "parameter" => Some(pu.clone()),
-            "section" => Some(list.clone()),
+            "section" | "orbit" => Some(list.clone()),
+            "period" => Some(tu.clone()),
+            "step_length" => Some(lu.clone()),
+            "speed" => Some(format!("{lu}/{tu}")),
+            "min_normal_force" => Some(mu.force.clone()),
+            "min_knee_torque" => Some(mu.torque.clone()),
+            "max_friction_required"
+            | "validity_checked"
+            | "valid"
+            | "normal_force_negative"
+            | "knee_unlocks"
+            | "swing_foot_scuffs" => Some("1".into()),
             "multipliers_re" | "multipliers_im" | "stable" => Some("1".into()),
             "points" if p.starts_with("orbit") => Some(first.clone()),
             _ => None,

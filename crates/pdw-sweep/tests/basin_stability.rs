@@ -1,0 +1,259 @@
+//! `basin --over NAME=A:B:N`: basin stability over a parameter. The fractions at a value equal a
+//! plain `basin` run's on the same box (counted here from that run's own outcome grid), every
+//! row sums to 1, `--json` holds the file's values, the default box is the one around the gait
+//! at A, and bad input is refused.
+
+mod common;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+const BOX: [&str; 6] = [
+    "--x",
+    "theta=0.19:0.27",
+    "--y",
+    "thetadot=-0.27:-0.19",
+    "--grid",
+    "41x41",
+];
+
+/// Fractions of a plain basin file by column: an attractor's name (the gait, codes ≥ 10),
+/// `fall` (every fall kind), `timeout`, `other` (the rest), counted from its outcome grid.
+fn plain_fractions(path: &Path) -> Vec<(String, f64)> {
+    let d = pdw_store::read_basin(path).unwrap();
+    let name_of = |code: u8| -> String {
+        let n = d
+            .header
+            .legend
+            .iter()
+            .find(|(c, _)| *c == code)
+            .map(|(_, n)| n.clone())
+            .unwrap();
+        if code == 0 || code >= 10 {
+            n
+        } else if n.starts_with("fall") {
+            "fall".into()
+        } else if n == "timeout" {
+            "timeout".into()
+        } else {
+            "other".into()
+        }
+    };
+    let mut out: Vec<(String, usize)> = Vec::new();
+    for &c in d.outcome.iter() {
+        let n = name_of(c);
+        match out.iter_mut().find(|(m, _)| *m == n) {
+            Some(e) => e.1 += 1,
+            None => out.push((n, 1)),
+        }
+    }
+    let total = d.outcome.len() as f64;
+    out.into_iter()
+        .map(|(n, k)| (n, k as f64 / total))
+        .collect()
+}
+
+#[test]
+fn basin_stability_equals_plain_basin_runs_and_sums_to_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bs.h5");
+    let mut args = vec![
+        "basin",
+        "--over",
+        "slope=0.013:0.017:3",
+        "--out",
+        s(&out),
+        "--json",
+        "--threads",
+        "1",
+    ];
+    args.extend(BOX);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let d = pdw_store::read_stability(&out).unwrap();
+    assert_eq!(d.values, vec![0.013, 0.015, 0.017]);
+    assert_eq!(d.parameter, "slope");
+    assert!(dir.path().join("bs.png").exists());
+    // Every row sums to 1 (cells are counted once each).
+    for (mu, r) in d.values.iter().zip(&d.fractions) {
+        let sum: f64 = r.iter().sum();
+        assert!((sum - 1.0).abs() < 1e-12, "{mu}: {r:?} sums to {sum}");
+    }
+    for r in &d.outcome_fractions {
+        assert!((r.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+    // The attractors met: the gait at 0.013, the period-2 orbit at 0.017 (Garcia 1998: the
+    // gait period-doubles near 0.0151).
+    let names = |i: usize| {
+        d.attractors[i]
+            .iter()
+            .map(|a| a.name.clone())
+            .collect::<Vec<_>>()
+    };
+    assert!(names(0).contains(&"gait".to_string()), "{:?}", names(0));
+    assert!(names(2).contains(&"period-2".to_string()), "{:?}", names(2));
+    let p2 = d.attractors[2]
+        .iter()
+        .find(|a| a.name == "period-2")
+        .unwrap();
+    assert_eq!((p2.period_strides, p2.points.len()), (2, 2));
+    // At two of the values, the fractions equal a plain `basin` run's on the same box.
+    for (i, slope) in [(0, "0.013"), (2, "0.017")] {
+        let plain = dir.path().join(format!("plain{i}.h5"));
+        let mut args = vec!["basin", "--slope", slope, "--out", s(&plain), "--quiet"];
+        args.extend(BOX);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let reference = plain_fractions(&plain);
+        for (c, name) in d.columns.iter().enumerate() {
+            let want = reference
+                .iter()
+                .find(|(n, _)| n == name)
+                .map_or(0.0, |r| r.1);
+            assert_eq!(d.fractions[i][c], want, "slope {slope}, column {name}");
+        }
+        for (name, f) in &reference {
+            assert!(d.columns.contains(name), "{name} ({f}) missing");
+        }
+    }
+    // --json: the file's values.
+    assert_eq!(json["columns"], serde_json::json!(d.columns));
+    for (i, v) in json["values"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(v["param"].as_f64(), Some(d.values[i]));
+        for (c, name) in d.columns.iter().enumerate() {
+            assert_eq!(v["fractions"][name].as_f64(), Some(d.fractions[i][c]));
+        }
+    }
+    assert_eq!(json["box"]["source"], "--x and --y");
+    // The same on two threads.
+    let out2 = dir.path().join("bs2.h5");
+    let mut args = vec![
+        "basin",
+        "--over",
+        "slope=0.013:0.017:3",
+        "--out",
+        s(&out2),
+        "--threads",
+        "2",
+    ];
+    args.extend(BOX);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let d2 = pdw_store::read_stability(&out2).unwrap();
+    assert_eq!((d2.columns, d2.fractions), (d.columns, d.fractions));
+}
+
+#[test]
+fn the_default_box_is_the_basin_box_around_the_gait_at_the_first_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d.h5");
+    let o = run(&[
+        "basin",
+        "--over",
+        "slope=0.009:0.011:2",
+        "--grid",
+        "11x11",
+        "--out",
+        s(&out),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The stable gait at 0.009 from `fixedpoint`.
+    let fp = run(&[
+        "fixedpoint",
+        "--slope",
+        "0.009",
+        "--gait",
+        "stable",
+        "--json",
+    ]);
+    let fp: serde_json::Value = serde_json::from_slice(&fp.stdout).unwrap();
+    let g = &fp["fixed_points"][0]["section"];
+    for (axis, k) in [("x", 0), ("y", 1)] {
+        let (lo, hi) = (
+            j["box"][axis]["lo"].as_f64().unwrap(),
+            j["box"][axis]["hi"].as_f64().unwrap(),
+        );
+        let c = g[k].as_f64().unwrap();
+        assert!(
+            ((lo + hi) / 2.0 - c).abs() < 1e-12,
+            "{axis}: {lo}..{hi} around {c}"
+        );
+    }
+    assert!(
+        j["box"]["source"]
+            .as_str()
+            .unwrap()
+            .contains("slope = 0.009"),
+        "{}",
+        j["box"]
+    );
+    assert_eq!(j["box"]["x"]["n"], 11);
+}
+
+#[test]
+fn bad_over_input_is_refused_naming_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.h5");
+    let o_ = s(&out);
+    for (args, needles) in [
+        (
+            vec!["basin", "--over", "nosuch=1:2:3", "--out", o_],
+            vec!["nosuch", "parameters"],
+        ),
+        (
+            vec![
+                "basin",
+                "--over",
+                "slope=0.01:0.02:3",
+                "--slope",
+                "0.01",
+                "--out",
+                o_,
+            ],
+            vec!["--over slope", "once"],
+        ),
+        (
+            vec![
+                "basin",
+                "--over",
+                "slope=0.01:0.02:3",
+                "--resume",
+                "--out",
+                o_,
+            ],
+            vec!["--resume"],
+        ),
+        (
+            vec!["basin", "--over", "slope=0.01:0.02:1", "--out", o_],
+            vec!["--over", "point count"],
+        ),
+        (
+            vec!["basin", "--json", "--out", o_],
+            vec!["--json", "--over"],
+        ),
+    ] {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        for n in needles {
+            assert!(stderr(&o).contains(n), "{args:?}: {}", stderr(&o));
+        }
+    }
+    assert!(!out.exists());
+}
