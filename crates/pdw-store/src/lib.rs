@@ -6,6 +6,8 @@
 //! * [`sweep`]: the parameter-continuation file (`pdw-sweep fixedpoint --sweep`): branches of
 //!   fixed points, their Floquet multipliers and stability, detected bifurcations and an optional
 //!   brute-force orbit diagram.
+//! * [`curve`]: the two-parameter bifurcation-curve file (`pdw-sweep fixedpoint --follow`): the
+//!   curve's points, the critical gait at each, and an optional region map of the plane.
 //! * [`trajectory`]: time series of a simulated walk (`pdw-sweep simulate`), HDF5 or CSV.
 //! * [`plot`]: PNG heatmaps of basins, two-panel bifurcation diagrams, line charts (log axes for
 //!   work-precision charts) and animated GIFs of a gait, drawn with `plotters`' pure-Rust bitmap
@@ -69,6 +71,7 @@
 //! ```
 
 pub mod basin;
+pub mod curve;
 pub mod design;
 mod error;
 mod h5util;
@@ -83,6 +86,7 @@ pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
     BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
 };
+pub use curve::{plot_curve, read_curve_points, write_curve, CurveData, RegionMap, CURVE_FORMAT};
 pub use design::{read_design, write_design, DesignData, DESIGN_FORMAT};
 pub use error::StoreError;
 pub use plot::{

@@ -121,6 +121,21 @@ pub struct FixedpointArgs {
     /// Overwrite existing output files.
     #[arg(long)]
     pub force: bool,
+    /// Follow a bifurcation of the period-one gait in two parameters: pd (period doubling) or
+    /// fold. Needs --sweep NAME=A:B:N (the stepped parameter; N curve points) and --free NAME
+    /// (the parameter solved for). Writes the curve to --out, the two-parameter diagram to
+    /// --png (if given), and prints a table or, with --json, the curve.
+    #[arg(long, value_name = "pd|fold")]
+    pub follow: Option<String>,
+    /// The free parameter of --follow: NAME, or NAME=LO:HI to bound it (the curve ends where it
+    /// leaves LO:HI; also the vertical range of --png). Default bounds: a quarter to four times
+    /// the model's value.
+    #[arg(long, value_name = "NAME[=LO:HI]")]
+    pub free: Option<String>,
+    /// Cells of the --follow region map drawn under the curve in --png, NXxNY (columns along
+    /// the --sweep parameter, rows along --free).
+    #[arg(long, value_name = "NXxNY")]
+    pub map_grid: Option<String>,
 }
 
 #[derive(Args, Debug)]

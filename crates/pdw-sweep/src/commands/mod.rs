@@ -4,6 +4,7 @@ mod animate;
 mod basin;
 mod design;
 mod fixedpoint;
+mod follow;
 mod merge;
 mod models;
 mod simulate;
