@@ -36,7 +36,7 @@
 //! `g_z = −wᵀ A_z v` would need second derivatives of the stride map, which the project does
 //! not compute. Measured accuracy (test `gradient_of_the_test_function_is_accurate`): against
 //! the Richardson extrapolation of steps 1e-4 / 5e-5, the default step 1e-5 is accurate to
-//! ~1e-7 relative on the compass gait; Newton only needs a few digits of the Jacobian, the
+//! 5e-7 relative at the compass gait's period doubling; Newton only needs a few digits of the Jacobian, the
 //! accuracy of the solution is set by the residual `F` alone.
 //!
 //! # Corrector and stepping
