@@ -11,6 +11,7 @@
 
 pub mod attractors;
 pub mod basin;
+pub mod codim2;
 pub mod continuation;
 pub mod design;
 pub mod error;
@@ -31,6 +32,10 @@ pub use attractors::{
 pub use basin::{
     basin_metrics, classify_cells, classify_cells_scalar, grid_cells, legend, linspace,
     BasinDriver, BasinMetrics, BasinOptions, BasinProblem, CellResult, Outcome,
+};
+pub use codim2::{
+    follow_curve, region_map, Codim2Kind, Codim2Options, Curve, CurveEnd, CurvePoint, CurveStart,
+    LostReason, Region, RegionOptions,
 };
 pub use continuation::{
     branch_at_params, continue_branch, period_doubling_cascade, real_eigenvector,

@@ -8,6 +8,8 @@
 //!   brute-force orbit diagram.
 //! * [`stability`]: basin stability over a parameter (`pdw-sweep basin --over`): per value, the
 //!   fraction of one box of initial conditions reaching each attractor.
+//! * [`curve`]: the two-parameter bifurcation-curve file (`pdw-sweep fixedpoint --follow`): the
+//!   curve's points, the critical gait at each, and an optional region map of the plane.
 //! * [`trajectory`]: time series of a simulated walk (`pdw-sweep simulate`), HDF5 or CSV.
 //! * [`plot`]: PNG heatmaps of basins, two-panel bifurcation diagrams, line charts (log axes for
 //!   work-precision charts) and animated GIFs of a gait, drawn with `plotters`' pure-Rust bitmap
@@ -71,6 +73,7 @@
 //! ```
 
 pub mod basin;
+pub mod curve;
 pub mod design;
 mod error;
 mod h5util;
@@ -86,6 +89,7 @@ pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
     BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
 };
+pub use curve::{plot_curve, read_curve_points, write_curve, CurveData, RegionMap, CURVE_FORMAT};
 pub use design::{read_design, write_design, DesignData, DESIGN_FORMAT};
 pub use error::StoreError;
 pub use plot::{

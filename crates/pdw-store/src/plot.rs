@@ -26,9 +26,9 @@ pub const STABILITY_PNG_SIZE: (u32, u32) = (900, 960);
 /// Pixel size of [`plot_lines`]' PNG.
 pub const LINES_PNG_SIZE: (u32, u32) = (900, 640);
 
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
-fn register_fonts() {
+pub(crate) fn register_fonts() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The embedded fonts are valid TrueType files; failure would only disable text.
@@ -40,7 +40,7 @@ fn register_fonts() {
 /// A drawing error, told in words: plotters' backend errors embed the image encoder's Debug
 /// text (`ImageError(IoError(Custom { .. }))`); an operating-system error inside is reported
 /// by its own message instead.
-fn pe<E: std::fmt::Display>(path: &Path, e: E) -> StoreError {
+pub(crate) fn pe<E: std::fmt::Display>(path: &Path, e: E) -> StoreError {
     let text = e.to_string();
     let os = text.find("(os error ").and_then(|i| {
         let digits: String = text[i + 10..]
@@ -65,13 +65,13 @@ fn pe<E: std::fmt::Display>(path: &Path, e: E) -> StoreError {
 /// A picture is drawn into a temporary sibling and renamed onto its path only once complete:
 /// a failed drawing (full disk, …) leaves no truncated picture and does not touch an existing
 /// one. Dropped without [`commit`](Self::commit), it removes the temporary file.
-struct TempPicture {
-    tmp: std::path::PathBuf,
+pub(crate) struct TempPicture {
+    pub(crate) tmp: std::path::PathBuf,
     done: bool,
 }
 
 impl TempPicture {
-    fn new(path: &Path) -> Result<Self> {
+    pub(crate) fn new(path: &Path) -> Result<Self> {
         crate::h5util::check_regular(path)?;
         // The encoder is chosen by the extension, so the temporary name keeps it.
         let tmp = crate::h5util::temp_sibling(path);
@@ -86,7 +86,7 @@ impl TempPicture {
         };
         Ok(TempPicture { tmp, done: false })
     }
-    fn commit(mut self, path: &Path) -> Result<()> {
+    pub(crate) fn commit(mut self, path: &Path) -> Result<()> {
         self.done = true;
         crate::h5util::rename_into_place(&self.tmp, path)
     }
@@ -102,7 +102,7 @@ impl Drop for TempPicture {
 
 /// Compact tick label: plain decimals for 1e-3 ≤ |v| < 1e4 (up to 4 decimals, trailing zeros
 /// dropped), otherwise `1.5e-7` style.
-fn tick(v: &f64) -> String {
+pub(crate) fn tick(v: &f64) -> String {
     let a = v.abs();
     if *v == 0.0 {
         "0".into()
@@ -137,7 +137,7 @@ fn tick_log(v: &f64) -> String {
     }
 }
 
-fn rgb(c: [u8; 3]) -> RGBColor {
+pub(crate) fn rgb(c: [u8; 3]) -> RGBColor {
     RGBColor(c[0], c[1], c[2])
 }
 
@@ -185,7 +185,7 @@ pub fn outcome_colours(legend: &[(u8, String)]) -> Vec<(u8, [u8; 3])> {
 }
 
 /// Index of the grid point nearest to `v` (grid monotone, ascending or descending).
-fn nearest(grid: &[f64], v: f64) -> usize {
+pub(crate) fn nearest(grid: &[f64], v: f64) -> usize {
     let asc = grid.len() < 2 || grid[0] <= grid[grid.len() - 1];
     let k = if asc {
         grid.partition_point(|&g| g < v)
@@ -206,7 +206,7 @@ fn nearest(grid: &[f64], v: f64) -> usize {
 }
 
 /// Extent of a grid of cell centres: from half a spacing before the first to half after the last.
-fn cell_extent(g: &[f64]) -> (f64, f64) {
+pub(crate) fn cell_extent(g: &[f64]) -> (f64, f64) {
     let (lo, hi) = g
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {

@@ -132,12 +132,28 @@ pub struct FixedpointArgs {
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// With --sweep: worker threads (rayon pool) for the points on the output grid, their
-    /// measurements and the orbit diagram; results are identical for any count. Default 2.
+    /// measurements and the orbit diagram (with --follow: the region map); results are
+    /// identical for any count. Default 2.
     #[arg(long)]
     pub threads: Option<usize>,
-    /// With --sweep: no progress bar.
+    /// With --sweep (or --follow): no progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Follow a bifurcation of the period-one gait in two parameters: pd (period doubling) or
+    /// fold. Needs --sweep NAME=A:B:N (the stepped parameter; N curve points) and --free NAME
+    /// (the parameter solved for). Writes the curve to --out, the two-parameter diagram to
+    /// --png (if given), and prints a table or, with --json, the curve.
+    #[arg(long, value_name = "pd|fold")]
+    pub follow: Option<String>,
+    /// The free parameter of --follow: NAME, or NAME=LO:HI to bound it (the curve ends where it
+    /// leaves LO:HI; also the vertical range of --png). Default bounds: a quarter to four times
+    /// the model's value.
+    #[arg(long, value_name = "NAME[=LO:HI]")]
+    pub free: Option<String>,
+    /// Cells of the --follow region map drawn under the curve in --png, NXxNY (columns along
+    /// the --sweep parameter, rows along --free).
+    #[arg(long, value_name = "NXxNY")]
+    pub map_grid: Option<String>,
 }
 
 #[derive(Args, Debug)]

@@ -55,6 +55,9 @@ pub fn validity_json(v: &Validity) -> serde_json::Value {
 }
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
+    if a.follow.is_some() || a.free.is_some() || a.map_grid.is_some() {
+        return super::follow::run(a);
+    }
     if !(MIN_TOL..=MAX_TOL).contains(&a.tol) {
         return Err(InputError(format!(
             "--tol: {} is outside [{MIN_TOL:e}, {MAX_TOL:e}]; the residual tolerance is relative \

@@ -5,6 +5,7 @@ mod basin;
 mod basin_over;
 mod design;
 mod fixedpoint;
+mod follow;
 mod merge;
 mod models;
 mod simulate;
