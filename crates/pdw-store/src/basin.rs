@@ -15,8 +15,11 @@
 //! rows of blocks not yet complete are lost and recomputed. The chunks of a block interrupted
 //! before it was marked can be unreadable (their index entry flushed before the file's end of
 //! allocation); readers treat such a block as not computed, and an unreadable block that *is*
-//! marked done as an error. [`BasinWriter::resume`] reopens the
-//! file and reports the rows still to compute. Since the engine's labels do not depend on batch
+//! marked done as an error. [`BasinWriter::resume`] checks every
+//! marked block, copies the good ones into a fresh file beside the old one and renames it over
+//! the old (a killed file is never written in place: its last flush may have been cut between
+//! the chunk index and the superblock, and HDF5 would then allocate over live metadata), and
+//! reports the rows still to compute; a kill during that copy leaves the old file as it was. Since the engine's labels do not depend on batch
 //! size, thread count or order, a resumed run yields the same datasets as an uninterrupted one.
 
 use std::collections::BTreeMap;
@@ -28,7 +31,7 @@ use ndarray::{s, Array2, Array3, ArrayView2, ArrayView3};
 
 use crate::h5util::{
     create_file, ensure_space, get_attr, get_str, has_attr, lock_existing, open_file, open_locked,
-    set_attr, set_str, At, OutputLock,
+    rename_into_place, set_attr, set_str, temp_sibling, At, OutputLock,
 };
 use crate::shard::{shard_rows, ShardSpec};
 use crate::{time, Result, StoreError};
@@ -726,61 +729,84 @@ impl BasinWriter {
     pub fn resume(path: impl AsRef<Path>, expected: &BasinHeader) -> Result<Self> {
         let path = path.as_ref();
         expected.validate()?;
-        let lock = lock_existing(path)?;
-        let (mut rows_done, damaged, complete) = {
-            let f = open_locked(path, false)?;
-            let found = read_header(path, &f)?;
-            expected.check_matches(&found, path)?;
-            let complete = get_attr::<bool>(path, KIND, &f, "complete")?;
-            let mut rows_done = read_rows_done(path, &f)?;
-            // Only whole blocks are ever written; a partly marked block (not made by this
-            // writer) is redone whole.
-            for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
-                let r = block_range(b, found.ny());
-                if !rows_done[r.clone()].iter().all(|d| *d) {
-                    rows_done[r].iter_mut().for_each(|d| *d = false);
-                }
+        let old_lock = lock_existing(path)?;
+        let old = open_locked(path, false)?;
+        let found = read_header(path, &old)?;
+        expected.check_matches(&found, path)?;
+        let complete = get_attr::<bool>(path, KIND, &old, "complete")?;
+        let mut rows_done = read_rows_done(path, &old)?;
+        // Only whole blocks are ever written; a partly marked block (not made by this writer)
+        // is redone whole.
+        for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
+            let r = block_range(b, found.ny());
+            if !rows_done[r.clone()].iter().all(|d| *d) {
+                rows_done[r].iter_mut().for_each(|d| *d = false);
             }
-            let damaged = damaged_blocks(&f, &found, &rows_done);
-            let extras_ok = !complete
-                || (read_metrics(path, &f, &found.legend).is_ok_and(|m| m.is_some())
-                    && read_attractors(path, &f).is_ok());
-            if complete && damaged.is_empty() && extras_ok {
-                return Err(StoreError::AlreadyComplete {
-                    path: path.to_path_buf(),
-                });
-            }
-            (rows_done, damaged, complete)
-        };
+        }
+        let damaged = damaged_blocks(&old, &found, &rows_done);
+        let extras_ok = !complete
+            || (read_metrics(path, &old, &found.legend).is_ok_and(|m| m.is_some())
+                && read_attractors(path, &old).is_ok());
+        if complete && damaged.is_empty() && extras_ok {
+            return Err(StoreError::AlreadyComplete {
+                path: path.to_path_buf(),
+            });
+        }
         for &b in &damaged {
             let r = block_range(b, expected.ny());
             rows_done[r].iter_mut().for_each(|d| *d = false);
         }
-        let file = open_locked(path, true)?;
-        let header = read_header(path, &file)?;
-        if complete {
-            // Not complete until the damaged blocks (or metrics) are rewritten.
-            set_attr(path, &file, "complete", &false)?;
-            file.flush().at(path, "flushing")?;
-        }
-        let elapsed_before = get_attr::<f64>(path, KIND, &file, "elapsed_s")?;
-        let basin = file.group("basin").at(path, "opening /basin")?;
-        let open = |n: &str| basin.dataset(n).at(path, "opening the basin datasets");
-        let h = Handles {
-            outcome: open("outcome")?,
-            strides: open("strides")?,
-            final_state: open("final")?,
-            rows_done_ds: open("rows_done")?,
-            file,
+        let elapsed_before = get_attr::<f64>(path, KIND, &old, "elapsed_s")?;
+        let created = get_str(path, KIND, &old, "created").ok();
+        // The verified blocks go into a fresh file beside the old one, which then replaces it
+        // (one rename). Writing into a killed file in place is not safe: its last flush may
+        // have been cut between the chunk index and the superblock's end-of-allocation, and
+        // HDF5 then allocates new space over live metadata ("addr overflow" on the next flush;
+        // observed under repeated SIGKILL). Until the rename the old file is untouched, so a
+        // kill during the rebuild loses nothing.
+        let tmp = temp_sibling(path);
+        let reserve = 64 * 1024
+            + 8 * (found.nx() + found.ny()) as u64
+            + found.ny() as u64
+            + std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+        let (file, lock) = create_file(&tmp, true, true, reserve)?;
+        let mut made = Vec::new();
+        let rebuilt = Self::init(&tmp, &file, &found, &mut made).and_then(|h| {
+            copy_done_blocks(path, &old, &tmp, &h, &found, &rows_done)?;
+            set_attr(&tmp, &h.file, "elapsed_s", &elapsed_before)?;
+            if let Some(c) = &created {
+                set_str(&tmp, &h.file, "created", c)?;
+            }
+            let marks: Vec<u8> = rows_done.iter().map(|&d| d as u8).collect();
+            h.rows_done_ds
+                .write_raw(&marks)
+                .at(&tmp, "writing /basin/rows_done")?;
+            h.file.flush().at(&tmp, "flushing")?;
+            Ok(h)
+        });
+        let h = match rebuilt {
+            Ok(h) => h,
+            Err(e) => {
+                // As in `create`: leak the half-made objects, remove the partial file.
+                std::mem::forget(made);
+                std::mem::forget(file);
+                let _ = std::fs::remove_file(&tmp);
+                return Err(e);
+            }
         };
-        let own = own_mask(&header);
+        drop(made);
+        drop(file);
+        rename_into_place(&tmp, path)?;
+        drop(old);
+        drop(old_lock);
+        let own = own_mask(&found);
         Ok(BasinWriter {
             path: path.to_path_buf(),
             h: Some(h),
             _lock: lock,
             poisoned: false,
             damaged,
-            header,
+            header: found,
             rows_done,
             own,
             pending: BTreeMap::new(),
@@ -1114,6 +1140,48 @@ fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
         }
     }
     bad
+}
+
+/// Copies every block whose rows are all marked in `rows_done` from the open file `old` into
+/// the new file's datasets `h` (whole chunk blocks, each written once; [`resume`]).
+///
+/// [`resume`]: BasinWriter::resume
+fn copy_done_blocks(
+    old_path: &Path,
+    old: &File,
+    new_path: &Path,
+    h: &Handles,
+    header: &BasinHeader,
+    rows_done: &[bool],
+) -> Result<()> {
+    let basin = old.group("basin").at(old_path, "opening /basin")?;
+    let open = |n: &str| basin.dataset(n).at(old_path, "opening the basin datasets");
+    let (o, st, fs) = (open("outcome")?, open("strides")?, open("final")?);
+    for b in 0..header.ny().div_ceil(BLOCK_ROWS) {
+        let r = block_range(b, header.ny());
+        if !rows_done[r.clone()].iter().all(|d| *d) {
+            continue;
+        }
+        let ob = o
+            .read_slice_2d::<u8, _>(s![r.clone(), ..])
+            .at(old_path, "reading /basin/outcome")?;
+        let sb = st
+            .read_slice_2d::<u16, _>(s![r.clone(), ..])
+            .at(old_path, "reading /basin/strides")?;
+        let fb = fs
+            .read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..])
+            .at(old_path, "reading /basin/final")?;
+        h.outcome
+            .write_slice(&ob, s![r.clone(), ..])
+            .at(new_path, "writing /basin/outcome")?;
+        h.strides
+            .write_slice(&sb, s![r.clone(), ..])
+            .at(new_path, "writing /basin/strides")?;
+        h.final_state
+            .write_slice(&fb, s![r.clone(), .., ..])
+            .at(new_path, "writing /basin/final")?;
+    }
+    Ok(())
 }
 
 /// Rows `start .. end` of chunk block `b` of a grid of `ny` rows.

@@ -7,7 +7,7 @@ use std::process::Command;
 use std::time::Duration;
 
 use common::*;
-use pdw_store::{read_basin, BasinWriter};
+use pdw_store::{read_basin, BasinWriter, BLOCK_ROWS};
 
 const NX: usize = 300;
 const NY: usize = 3200;
@@ -64,11 +64,16 @@ fn killed_writer_resumes_to_uninterrupted_result() {
             .spawn()
             .unwrap();
         std::thread::sleep(Duration::from_millis(delay_ms));
-        if child.try_wait().unwrap().is_none() {
+        let killed = child.try_wait().unwrap().is_none();
+        if killed {
             child.kill().unwrap(); // SIGKILL: no destructor, no flush
             kills += 1;
         }
-        child.wait().unwrap();
+        let status = child.wait().unwrap();
+        assert!(
+            killed || status.success(),
+            "a writer that was not killed failed: {status}"
+        );
         // Whatever the moment, the file must reopen and read (a block the kill interrupted may
         // have its chunk index past the end of the file: it reads as not computed), and every
         // row marked done must be right.
@@ -86,6 +91,13 @@ fn killed_writer_resumes_to_uninterrupted_result() {
                 "row {i}"
             );
         }
+        // And every killed file takes writes again: resume it and write one whole block here
+        // (its data and marks are flushed; the next child resumes after it).
+        let mut w = BasinWriter::resume(&p, &h).unwrap();
+        for r in w.rows_todo().into_iter().take(BLOCK_ROWS) {
+            write_block(&mut w, r, 1);
+        }
+        w.close().unwrap();
     }
     assert!(
         kills >= 4,
