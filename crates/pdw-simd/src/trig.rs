@@ -47,6 +47,13 @@ const C6: f64 = -1.135_964_755_778_819_482_65e-11;
 /// angles stay far below).
 pub const REDUCED_RANGE: f64 = 1.0e3;
 
+/// Below this |x| the reduction is the identity (`n = 0`, `r = x`, quadrant 0): |x·2/π| < 0.4966
+/// rounds to 0, so `r = ((x − 0·P₁) − 0·P₂) − 0·P₃ = x` exactly (also for −0). [`sincos_lanes`]
+/// (up to four values) then skips the reduction: the same bits, without its chain of dependent
+/// operations. Walker
+/// angles (θ − γ, φ, segment angles near the vertical) mostly live here.
+pub const SMALL: f64 = 0.78;
+
 /// The reduced kernel for one value (valid for |x| ≤ [`REDUCED_RANGE`]; NaN for NaN/±∞).
 #[inline(always)]
 fn kernel(x: f64) -> (f64, f64) {
@@ -54,19 +61,31 @@ fn kernel(x: f64) -> (f64, f64) {
     let n = t - ROUND;
     let q = (t.to_bits() & 3) as u32;
     let r = ((x - n * P1) - n * P2) - n * P3;
-    let z = r * r;
-    let v = z * r;
-    let ps = S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)));
-    // r = ±0 returns r itself (sin(−0) = −0, as libm; the polynomial would give +0).
-    let s = if r == 0.0 { r } else { r + v * (S1 + z * ps) };
-    let pc = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
-    let hz = 0.5 * z;
-    let w = 1.0 - hz;
-    let c = w + (((1.0 - w) - hz) + z * pc);
+    let (s, c) = kernel_reduced(r);
     let (a, b) = if q & 1 == 0 { (s, c) } else { (c, s) };
     let sa = if q & 2 == 0 { a } else { -a };
     let cb = if (q + 1) & 2 == 0 { b } else { -b };
     (sa, cb)
+}
+
+/// `(sin r, cos r)` for a reduced |r| ≤ π/4 (step 3 of the module docs). The polynomials are
+/// evaluated by Estrin's scheme (pairs of coefficients, then powers of r²): the same operations
+/// on every path, with half the dependent steps of Horner's rule — a right-hand side waits for
+/// this value before the integrator's next stage can start.
+#[inline(always)]
+fn kernel_reduced(r: f64) -> (f64, f64) {
+    let z = r * r;
+    let v = z * r;
+    let z2 = z * z;
+    let ps = (S2 + z * S3) + z2 * ((S4 + z * S5) + z2 * S6);
+    // r = ±0 returns r itself (sin(−0) = −0, as libm; the polynomial would give +0).
+    let s = if r == 0.0 { r } else { r + v * (S1 + z * ps) };
+    let z4 = z2 * z2;
+    let pc = z * (((C1 + z * C2) + z2 * (C3 + z * C4)) + z4 * (C5 + z * C6));
+    let hz = 0.5 * z;
+    let w = 1.0 - hz;
+    let c = w + (((1.0 - w) - hz) + z * pc);
+    (s, c)
 }
 
 /// `(sin x, cos x)` for one value: the same bits as the element of [`sincos_lanes`].
@@ -81,6 +100,14 @@ pub fn sincos(x: f64) -> (f64, f64) {
 pub fn sincos_lanes<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut s = [0.0; N];
     let mut c = [0.0; N];
+    // The identity-reduction shortcut pays off for the few values of a scalar right-hand side
+    // (latency-bound); a vector of lanes is throughput-bound and keeps one branch-free path.
+    if N <= 4 && x.iter().all(|v| v.abs() < SMALL) {
+        for i in 0..N {
+            (s[i], c[i]) = kernel_reduced(x[i]);
+        }
+        return (s, c);
+    }
     let mut big = false;
     for i in 0..N {
         (s[i], c[i]) = kernel(x[i]);
@@ -177,6 +204,40 @@ mod tests {
             assert!(ulps(s, sl) <= 2 || (s - sl).abs() < 1e-300, "sin {x}");
             assert!(ulps(c, cl) <= 2, "cos {x}");
         }
+    }
+
+    #[test]
+    fn the_small_argument_path_equals_the_full_reduction_bit_for_bit() {
+        let mut xs: Vec<f64> = (0..=400_000)
+            .map(|k| (k as f64 - 200_000.0) / 200_000.0 * SMALL)
+            .collect();
+        xs.extend([
+            0.0,
+            -0.0,
+            f64::MIN_POSITIVE,
+            -1e-300,
+            SMALL.next_down(),
+            -SMALL.next_down(),
+        ]);
+        for &x in &xs {
+            let (s, c) = sincos(x);
+            let (sf, cf) = kernel(x);
+            assert_eq!(
+                (s.to_bits(), c.to_bits()),
+                (sf.to_bits(), cf.to_bits()),
+                "x = {x}"
+            );
+        }
+        // A lane above SMALL sends all lanes through the reduction: still the same bits.
+        let (s2, c2) = sincos_lanes([0.3, 2.5]);
+        assert_eq!(
+            (s2[0].to_bits(), c2[0].to_bits()),
+            (sincos(0.3).0.to_bits(), sincos(0.3).1.to_bits())
+        );
+        assert_eq!(
+            (s2[1].to_bits(), c2[1].to_bits()),
+            (kernel(2.5).0.to_bits(), kernel(2.5).1.to_bits())
+        );
     }
 
     #[test]
