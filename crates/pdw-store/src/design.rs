@@ -7,7 +7,10 @@
 //! a rerun must match it to continue), `free_names` (JSON array); datasets `params [N, k]`,
 //! `status [N]` (u8 codes, legend in the attribute `status_names`), `section [N, 3]`,
 //! `reasons` (UTF-8 JSON array of strings, as bytes) and one `[N]` f64 dataset per named
-//! measure (`cost`, `rho`, `basin_fraction`, …; NaN where not measured).
+//! measure (`cost`, `rho`, `basin_fraction`, …; NaN where not measured). Written by
+//! [`write_design_annotated`], every dataset also carries a `units` attribute and the file a
+//! `/provenance` group whose `commands` list every run that wrote the search, a continued run's
+//! after the earlier ones.
 
 use std::path::Path;
 
@@ -15,8 +18,9 @@ use hdf5::File;
 use ndarray::Array2;
 
 use crate::h5util::{
-    create_file, get_str, open_file, rename_into_place, set_str, temp_sibling, At,
+    create_file, get_str, has_attr, open_file, rename_into_place, set_str, temp_sibling, At,
 };
+use crate::provenance::{annotate_file, Annotations};
 use crate::{time, Result, StoreError};
 
 /// Value of the root attribute `format` of a design file.
@@ -70,12 +74,39 @@ impl DesignData {
 
 /// Writes `data` to `path`, replacing it atomically (temporary sibling, then rename).
 pub fn write_design(path: impl AsRef<Path>, data: &DesignData) -> Result<()> {
+    write_design_annotated(path, data, None, &[])
+}
+
+/// [`write_design`], then, in the same atomic write, the annotations `ann` (units on every
+/// dataset, provenance). `earlier_commands` are the command lines of the runs that wrote the
+/// search before this one (see [`read_design_commands`]); the provenance's `commands` lists
+/// them, then this run's command.
+pub fn write_design_annotated(
+    path: impl AsRef<Path>,
+    data: &DesignData,
+    ann: Option<&Annotations<'_>>,
+    earlier_commands: &[String],
+) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
     let tmp = temp_sibling(path);
     let res = (|| -> Result<()> {
         let (f, _lock) = create_file(&tmp, true, false, 0)?;
-        match fill(&tmp, &f, data).and_then(|()| f.flush().at(&tmp, "flushing")) {
+        let write = || -> Result<()> {
+            fill(&tmp, &f, data)?;
+            if let Some(a) = ann {
+                if a.provenance.is_some() && !earlier_commands.is_empty() {
+                    let g = f
+                        .create_group("provenance")
+                        .at(&tmp, "creating /provenance")?;
+                    let c = serde_json::to_string(earlier_commands).unwrap_or_default();
+                    set_str(&tmp, &g, "commands", &c)?;
+                }
+                annotate_file(&tmp, &f, a)?;
+            }
+            f.flush().at(&tmp, "flushing")
+        };
+        match write() {
             Ok(()) => f.close().at(&tmp, "closing"),
             Err(e) => {
                 std::mem::forget(f);
@@ -139,6 +170,24 @@ fn fill(p: &Path, f: &File, d: &DesignData) -> Result<()> {
             .at(p, &format!("writing /{name}"))?;
     }
     Ok(())
+}
+
+/// The command lines stored in a design file's `/provenance` (empty for a file without one).
+pub fn read_design_commands(path: impl AsRef<Path>) -> Result<Vec<String>> {
+    let p = path.as_ref();
+    let f = open_file(p, false)?;
+    let Ok(g) = f.group("provenance") else {
+        return Ok(Vec::new());
+    };
+    if !has_attr(&g, "commands") {
+        return Ok(Vec::new());
+    }
+    let c = get_str(p, KIND, &g, "commands")?;
+    serde_json::from_str(&c).map_err(|e| StoreError::Format {
+        path: p.to_path_buf(),
+        expected: KIND,
+        detail: format!("/provenance commands: {e}"),
+    })
 }
 
 /// Reads a design file; `columns` are the measures to read (missing ones are an error).

@@ -90,7 +90,10 @@ pub use basin::{
     BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
 };
 pub use curve::{plot_curve, read_curve_points, write_curve, CurveData, RegionMap, CURVE_FORMAT};
-pub use design::{read_design, write_design, DesignData, DESIGN_FORMAT};
+pub use design::{
+    read_design, read_design_commands, write_design, write_design_annotated, DesignData,
+    DESIGN_FORMAT,
+};
 pub use error::StoreError;
 pub use plot::{
     animate_gif, outcome_colours, plot_basin, plot_basin_attractors, plot_basin_stability,

@@ -399,3 +399,62 @@ fn merge_accepts_shards_from_any_simd_path_and_refuses_other_builds_unless_force
     ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("different builds"));
 }
+
+/// A design search's file: units on every dataset (the compass in SI, Goswami et al. 1998's
+/// kg, m, s), the provenance with the search's settings, and the commands of every run that
+/// wrote it (a continued search lists the first run, then its own).
+#[test]
+fn design_file_carries_units_and_the_commands_of_every_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("design.h5");
+    let search = |budget: &str| {
+        let o = run(&[
+            "design",
+            "--model",
+            "compass",
+            "--free",
+            "hip_mass=8:12",
+            "--objective",
+            "margin",
+            "--budget",
+            budget,
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        // exit 0 with a feasible best, 1 without: either is a completed search
+        assert!(
+            matches!(o.status.code(), Some(0 | 1)),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    search("2");
+    search("3");
+    let f = h5_open(&out).unwrap();
+    let units = units_of_every_dataset(&f);
+    assert_eq!(unit(&units, "params"), r#"["kg"]"#);
+    assert_eq!(unit(&units, "section"), r#"["rad","rad/s","rad/s"]"#);
+    assert_eq!(unit(&units, "min_normal_force"), "N");
+    assert_eq!(unit(&units, "min_knee_torque"), "N m");
+    assert_eq!(unit(&units, "period"), "s");
+    assert_eq!(unit(&units, "step_length"), "m");
+    for ds in ["cost", "rho", "basin_fraction", "max_friction", "status"] {
+        assert_eq!(unit(&units, ds), "1", "{ds}");
+    }
+    let opts = check_provenance(&f, "--budget 3");
+    assert_eq!(opts["objective"], "margin");
+    assert_eq!(opts["mu"], 0.6);
+    assert_eq!(opts["threads"], 2);
+    let p = f.group("provenance").unwrap();
+    let commands: Vec<String> = serde_json::from_str(&attr_str(&p, "commands")).unwrap();
+    assert_eq!(commands.len(), 2, "{commands:?}");
+    assert!(commands[0].contains("--budget 2") && commands[1].contains("--budget 3"));
+    assert_eq!(
+        pdw_store::read_design(&out, &["cost"])
+            .unwrap()
+            .params
+            .len(),
+        3
+    );
+}

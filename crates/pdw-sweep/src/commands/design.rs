@@ -10,7 +10,7 @@ use pdw_limit::basin::BasinOptions;
 use pdw_limit::design::{
     evaluate_design, search, status, DesignEval, DesignOptions, DesignSpace, Objective,
 };
-use pdw_store::{read_design, write_design, DesignData};
+use pdw_store::{read_design, read_design_commands, write_design_annotated, DesignData};
 use std::io::IsTerminal;
 use std::process::ExitCode;
 
@@ -251,6 +251,39 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
     })
     .to_string();
 
+    // ---- what the file says besides the designs: units of every dataset, provenance
+    let mut options: serde_json::Value = serde_json::from_str(&settings)?;
+    options["threads"] = serde_json::json!(a.threads);
+    let prov = super::provenance(options);
+    let param_units = super::units_list(
+        &names
+            .iter()
+            .map(|n| super::param_unit(&base, n))
+            .collect::<Vec<_>>(),
+    );
+    let section_units = super::units_list(&super::section_units(&base));
+    let mu = super::model_units(&base);
+    let (tu, lu) = (super::time_unit(&base), super::length_unit(&base));
+    let units = move |ds: &str| -> Option<String> {
+        Some(match ds {
+            "params" => param_units.clone(),
+            "section" => section_units.clone(),
+            "min_normal_force" => mu.force.clone(),
+            "min_knee_torque" => mu.torque.clone(),
+            "period" => tu.clone(),
+            "step_length" => lu.clone(),
+            // codes, fractions, multiplier moduli, friction coefficients, costs, the reasons' text
+            _ => "1".into(),
+        })
+    };
+    let ann = pdw_store::Annotations {
+        provenance: Some(&prov),
+        units: &units,
+        slice: None,
+        scales: &[],
+    };
+    let mut earlier_commands = Vec::new();
+
     // ---- a stored run with the same settings continues
     let mut history = Vec::new();
     if a.out.exists() && !a.force {
@@ -266,7 +299,11 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
             .into());
         }
         history = from_data(&d);
+        earlier_commands = read_design_commands(&a.out)?;
     }
+    let write_design = |path: &std::path::Path, d: &DesignData| {
+        write_design_annotated(path, d, Some(&ann), &earlier_commands)
+    };
     let stored = history.len();
     let space = DesignSpace {
         names: names.clone(),
