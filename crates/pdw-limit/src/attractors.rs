@@ -44,10 +44,12 @@ use crate::basin::{
 };
 use crate::error::LimitError;
 use crate::floquet::Multiplier;
+use crate::gaits::Found;
 use crate::newton::{FixedPoint, NewtonOptions};
 use crate::periodic::{canonical_start, find_periodic_orbit, same_orbit, PeriodicOrbit};
 use crate::stride::StrideMap;
 use pdw_hybrid::{FallKind, Integrator, Section};
+use pdw_walkers::Walker;
 
 /// Periodic or chaotic.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -398,6 +400,76 @@ pub fn discover<S: Section + ?Sized>(
     }
     name_and_code(&mut found);
     Ok(AttractorSet { attractors: found })
+}
+
+/// The point a basin grid's default box is centred on (and whose other section coordinates the
+/// grid's cells take): the stable period-one gait among `found`, else the first period-one orbit
+/// found; when both axes are given explicitly and no orbit was found, the model's first gait
+/// guess (or the origin of its section). `None` when an axis must default and there is no
+/// orbit to centre it on.
+pub fn grid_centre(walker: &dyn Walker, found: &[Found], axes_given: bool) -> Option<Vec<f64>> {
+    if let Some(f) = found.iter().find(|f| f.fp.stable).or(found.first()) {
+        return Some(f.fp.section.clone());
+    }
+    axes_given.then(|| {
+        walker
+            .gait_guesses()
+            .first()
+            .map(|g| g.section.clone())
+            .unwrap_or_else(|| vec![0.0; walker.section_dim()])
+    })
+}
+
+/// Every attractor reached from the box of a basin grid (coordinates `ix`, `iy` over their
+/// ranges, the other coordinates at `base`): [`discover`] from the deterministic [`seed_set`]
+/// (the period-one orbits `found`, with the `fixed` coordinates applied, and a
+/// [`DiscoveryOptions::default`] lattice over the box), the selected `gait` first; periodic
+/// orbits are confirmed on the fixed-point search's integrator
+/// ([`crate::gaits::FIXEDPOINT_INTEGRATOR_TOL`]). Returns the set and the seeds' count. Every
+/// basin (the CLI's `basin`, `basin --over`, Python's `basin`) labels a box with this, so they
+/// agree cell for cell.
+#[allow(clippy::too_many_arguments)]
+pub fn box_attractors(
+    walker: &dyn Walker,
+    found: &[Found],
+    gait: Option<&FixedPoint>,
+    fixed: &[(usize, f64)],
+    base: &[f64],
+    (ix, xr): (usize, (f64, f64)),
+    (iy, yr): (usize, (f64, f64)),
+    opts: &BasinOptions,
+    pool: &rayon::ThreadPool,
+) -> Result<(AttractorSet, usize), LimitError> {
+    let fall = Outcome::of_fall;
+    let disc = DiscoveryOptions::default();
+    let extra: Vec<Vec<f64>> = found
+        .iter()
+        .map(|f| {
+            let mut s = f.fp.section.clone();
+            for (i, v) in fixed {
+                s[*i] = *v;
+            }
+            s
+        })
+        .collect();
+    let seeds = seed_set(base, ix, xr, iy, yr, disc.lattice, &extra);
+    let step = |x: &[f64]| walker.step_length(x);
+    let newton_map = StrideMap::new(
+        walker,
+        pdw_hybrid::Options::dop853(crate::gaits::FIXEDPOINT_INTEGRATOR_TOL),
+    )?
+    .with_step_length(&step);
+    let set = discover(
+        walker,
+        &newton_map,
+        gait.map(Attractor::gait),
+        &seeds,
+        opts,
+        &disc,
+        &fall,
+        pool,
+    )?;
+    Ok((set, seeds.len()))
 }
 
 /// `n` consecutive section states from `s` (strides of the basin integrator), or `None` if a

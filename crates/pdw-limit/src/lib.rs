@@ -23,11 +23,13 @@ pub mod newton;
 pub mod orbit;
 pub mod periodic;
 pub mod stride;
+pub mod sweep;
 pub mod trajectory;
 pub mod variational;
 
 pub use attractors::{
-    discover, seed_set, Attractor, AttractorKind, AttractorSet, DiscoveryOptions,
+    box_attractors, discover, grid_centre, seed_set, Attractor, AttractorKind, AttractorSet,
+    DiscoveryOptions,
 };
 pub use basin::{
     basin_metrics, classify_cells, classify_cells_scalar, grid_cells, legend, linspace,
@@ -52,6 +54,7 @@ pub use newton::{
 pub use orbit::{orbit_diagram, OrbitColumn, OrbitOptions, OrbitStart};
 pub use periodic::{find_periodic_orbit, PeriodKProblem, PeriodicOrbit};
 pub use stride::{EventDriver, Stride, StrideEnd, StrideMap, StrideOutcome, MAX_EVENTS_PER_STRIDE};
+pub use sweep::{grid_options, GridBranch, MeasuredPoint, Sweep, SweepProgress};
 pub use trajectory::{
     initial_state, model_energy, simulate, Trajectory, TrajectoryError, TrajectoryEvent,
     TrajectoryOptions, Validity,

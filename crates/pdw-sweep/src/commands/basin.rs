@@ -6,7 +6,7 @@ use super::{build_with, overrides, BuiltModel};
 use crate::args::{self, AxisRange, InputError};
 use crate::cli::BasinArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use pdw_limit::attractors::{discover, seed_set, Attractor as LimitAttractor, DiscoveryOptions};
+use pdw_limit::attractors::{Attractor as LimitAttractor, DiscoveryOptions};
 use pdw_limit::basin::{
     basin_metrics, classify_cells, grid_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX,
 };
@@ -257,27 +257,19 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
     // The default grid is centred on the stable gait, else on the first period-one orbit.
-    let centre: Vec<f64> = match (gait, found.first(), &xa, &ya) {
-        (Some(fp), _, _, _) => fp.section.clone(),
-        (None, Some(f), _, _) => f.fp.section.clone(),
-        (None, None, Some(_), Some(_)) => m
-            .walker
-            .gait_guesses()
-            .first()
-            .map(|g| g.section.clone())
-            .unwrap_or_else(|| vec![0.0; names.len()]),
-        _ => {
-            eprintln!(
-                "error: no period-one orbit found for model '{}' at slope {} to centre the \
-                 default grid on; give both --x and --y",
-                info.name,
-                m.slope()
-            );
-            for (label, g, e) in &failed {
-                report_failure(label, g, e);
-            }
-            return Ok(ExitCode::from(2));
+    let Some(centre) =
+        pdw_limit::grid_centre(m.walker.as_ref(), &found, xa.is_some() && ya.is_some())
+    else {
+        eprintln!(
+            "error: no period-one orbit found for model '{}' at slope {} to centre the \
+             default grid on; give both --x and --y",
+            info.name,
+            m.slope()
+        );
+        for (label, g, e) in &failed {
+            report_failure(label, g, e);
         }
+        return Ok(ExitCode::from(2));
     };
     let (ix, xr) = xa.unwrap_or_else(|| (0, default_axis(names[0], centre[0])));
     let (iy, yr) = ya.unwrap_or_else(|| (1, default_axis(names[1], centre[1])));
@@ -611,11 +603,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Every attractor reached from the box of a basin grid (`ix`, `iy` over their ranges, the
-/// other coordinates at `base`): [`discover`] from the deterministic [`seed_set`] (the
-/// period-one orbits `found`, with the `fixed` coordinates applied, and a lattice over the box),
-/// the selected `gait` first. Returns the set and the seeds' count. Shared by `basin` and
-/// `basin --over`, so both label the same box identically.
+/// Every attractor reached from the box of a basin grid: [`pdw_limit::box_attractors`] with
+/// the axes as given on the command line. Shared by `basin` and `basin --over` (and, through
+/// the library, Python's `basin`), so all label the same box identically.
 #[allow(clippy::too_many_arguments)]
 pub fn box_attractors(
     walker: &dyn pdw_walkers::Walker,
@@ -628,44 +618,17 @@ pub fn box_attractors(
     opts: &BasinOptions,
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<(pdw_limit::AttractorSet, usize)> {
-    let fall = Outcome::of_fall;
-    let disc = DiscoveryOptions::default();
-    let extra: Vec<Vec<f64>> = found
-        .iter()
-        .map(|f| {
-            let mut s = f.fp.section.clone();
-            for (i, v) in fixed {
-                s[*i] = *v;
-            }
-            s
-        })
-        .collect();
-    let seeds = seed_set(
+    Ok(pdw_limit::box_attractors(
+        walker,
+        found,
+        gait,
+        fixed,
         base,
-        ix,
-        (xr.lo, xr.hi),
-        iy,
-        (yr.lo, yr.hi),
-        disc.lattice,
-        &extra,
-    );
-    let step = |x: &[f64]| walker.step_length(x);
-    let newton_map = pdw_limit::StrideMap::new(
-        walker,
-        pdw_hybrid::Options::dop853(pdw_limit::gaits::FIXEDPOINT_INTEGRATOR_TOL),
-    )?
-    .with_step_length(&step);
-    let set = discover(
-        walker,
-        &newton_map,
-        gait.map(LimitAttractor::gait),
-        &seeds,
+        (ix, (xr.lo, xr.hi)),
+        (iy, (yr.lo, yr.hi)),
         opts,
-        &disc,
-        &fall,
         pool,
-    )?;
-    Ok((set, seeds.len()))
+    )?)
 }
 
 /// An attractor in the file's plain form (`period_strides` 0 and no multipliers for a chaotic

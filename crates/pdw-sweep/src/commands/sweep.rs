@@ -14,13 +14,12 @@ use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw_limit::{
-    branch_at_params, continue_branch, orbit_diagram, switch_period_doubling, BifurcationKind,
-    Branch, BranchPoint, ContinuationOptions, OrbitOptions, OrbitStart, StrideMap, Validity,
+    orbit_diagram, BifurcationKind, ContinuationOptions, GridBranch, MeasuredPoint, OrbitOptions,
+    OrbitStart, Validity,
 };
 use pdw_store::{
     plot_bifurcation, write_sweep, Bifurcation, OrbitDiagram, StrideValidity, SweepData,
 };
-use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -34,74 +33,42 @@ fn kind_name(k: BifurcationKind) -> &'static str {
     }
 }
 
-/// What is measured along each stride of a branch point's orbit.
-struct Measured {
-    step_length: Vec<f64>,
-    validity: Vec<StrideValidity>,
+/// A stride's validity in the file's form (unchecked where the model reports no forces).
+fn store_validity(v: &Option<Validity>) -> StrideValidity {
+    v.as_ref()
+        .map_or_else(StrideValidity::unchecked, |v| StrideValidity {
+            checked: true,
+            valid: v.valid(),
+            normal_force_negative: v.normal_force_negative,
+            knee_unlocks: v.knee_unlocks,
+            swing_foot_scuffs: v.swing_foot_scuffs,
+            min_normal_force: v.min_normal_force,
+            max_friction_required: v.max_friction_required,
+            min_knee_torque: v.min_knee_torque.unwrap_or(f64::NAN),
+        })
 }
 
-/// Step length of each of the K strides from the orbit's points (the model's own step length at
-/// heel strike, as `fixedpoint` reports it) and the validity along each stride
-/// ([`Validity::along_step`]: constraint forces at every accepted step and both sides of every
-/// event). NaN / unchecked where the model reports neither.
-fn measure(
-    m: &BuiltModel,
-    p: &BranchPoint,
-    integrator: pdw_hybrid::Options,
-) -> Result<Measured, String> {
-    let w = m.walker.as_ref();
-    let step = |x: &[f64]| w.step_length(x);
-    let map = StrideMap::new(w, integrator)
-        .map_err(|e| e.to_string())?
-        .with_step_length(&step);
-    let mut out = Measured {
-        step_length: Vec::new(),
-        validity: Vec::new(),
-    };
-    for s in &p.orbit {
-        let st = map.stride(s).map_err(|e| e.to_string())?;
-        if !st.outcome.is_ok() {
-            return Err(format!("the stride from {s:?} ended: {}", st.outcome));
-        }
-        out.step_length.push(st.step_length.unwrap_or(f64::NAN));
-        out.validity
-            .push(Validity::along_step(w, &map.lift(s)).map_or_else(
-                StrideValidity::unchecked,
-                |v| StrideValidity {
-                    checked: true,
-                    valid: v.valid(),
-                    normal_force_negative: v.normal_force_negative,
-                    knee_unlocks: v.knee_unlocks,
-                    swing_foot_scuffs: v.swing_foot_scuffs,
-                    min_normal_force: v.min_normal_force,
-                    max_friction_required: v.max_friction_required,
-                    min_knee_torque: v.min_knee_torque.unwrap_or(f64::NAN),
-                },
-            ));
-    }
-    Ok(out)
-}
-
-/// The branch in the file's form, from its points on the output grid, each measured.
-fn store_branch(name: &str, k: usize, pts: &[(BranchPoint, Measured)]) -> pdw_store::Branch {
+/// The branch in the file's form, from its measured points on the output grid.
+fn store_branch(b: &GridBranch) -> pdw_store::Branch {
+    let pts = &b.points;
     pdw_store::Branch {
-        name: name.to_string(),
-        period_strides: k as u32,
-        parameter: pts.iter().map(|(p, _)| p.param).collect(),
-        section: pts.iter().map(|(p, _)| p.section.clone()).collect(),
+        name: b.name.clone(),
+        period_strides: b.period_k as u32,
+        parameter: pts.iter().map(|p| p.point.param).collect(),
+        section: pts.iter().map(|p| p.point.section.clone()).collect(),
         multipliers: pts
             .iter()
-            .map(|(p, _)| p.multipliers.iter().map(|l| (l.re, l.im)).collect())
+            .map(|p| p.point.multipliers.iter().map(|l| (l.re, l.im)).collect())
             .collect(),
-        stable: pts.iter().map(|(p, _)| p.stable).collect(),
-        orbit: pts.iter().map(|(p, _)| p.orbit.clone()).collect(),
-        period: pts.iter().map(|(p, _)| p.period).collect(),
-        speed: pts
+        stable: pts.iter().map(|p| p.point.stable).collect(),
+        orbit: pts.iter().map(|p| p.point.orbit.clone()).collect(),
+        period: pts.iter().map(|p| p.point.period).collect(),
+        speed: pts.iter().map(MeasuredPoint::speed).collect(),
+        step_length: pts.iter().map(|p| p.step_length.clone()).collect(),
+        validity: pts
             .iter()
-            .map(|(p, m)| m.step_length.iter().sum::<f64>() / p.period)
+            .map(|p| p.validity.iter().map(store_validity).collect())
             .collect(),
-        step_length: pts.iter().map(|(_, m)| m.step_length.clone()).collect(),
-        validity: pts.iter().map(|(_, m)| m.validity.clone()).collect(),
     }
 }
 
@@ -166,6 +133,15 @@ impl Progress {
 
     fn inc(&self) {
         self.pb.inc(1);
+    }
+}
+
+impl pdw_limit::SweepProgress for Progress {
+    fn stage(&self, msg: &str, len: u64, range: Option<(f64, f64)>) {
+        Progress::stage(self, msg, len, range);
+    }
+    fn inc(&self) {
+        Progress::inc(self);
     }
 }
 
@@ -248,105 +224,39 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         eprintln!("try: another start of the range, or --guess");
         return Ok(ExitCode::from(2));
     };
-    let span = sw.hi - sw.lo;
-    let step = span.abs() / (sw.n - 1) as f64;
-    let mut opts = ContinuationOptions::new(sw.lo.min(sw.hi), sw.lo.max(sw.hi));
-    opts.direction = span.signum();
-    opts.ds_max = step;
-    opts.ds_init = step;
-    opts.ds_min = (step * 1e-6).min(opts.ds_min.max(1e-12));
-    opts.max_points = 20 * sw.n;
+    let mut opts = pdw_limit::grid_options(sw.lo, sw.hi, sw.n);
     if let Some(i) = user_integrator {
         opts.integrator = i;
     }
-    let n_units = sw.n as u64;
-    progress.stage("period-1 branch", n_units, Some((sw.lo, sw.hi)));
-    let main = continue_branch(&family, &start.fp.section, sw.lo, 1, &opts)?;
-    let mut continued: Vec<(&'static str, Branch)> = vec![("period-1", main.clone())];
+    let result = pdw_limit::sweep::sweep(
+        &family,
+        &sw.name,
+        &start.fp.section,
+        (sw.lo, sw.hi, sw.n),
+        &opts,
+        &pool,
+        &progress,
+    )?;
+    for w in &result.warnings {
+        eprintln!("warning: {w}");
+    }
+    let main = &result.continued[0].1;
     let mut bifs: Vec<Bifurcation> = Vec::new();
     let mut printed = Vec::new();
-    for b in &main.bifurcations {
-        bifs.push(Bifurcation {
-            kind: kind_name(b.kind).into(),
-            parameter: b.param,
-            branch: 0,
-            section: b.section.clone(),
-        });
-        printed.push((1, b.kind, b.param));
-    }
-    // period-2 branch from the first period doubling
-    if let Some(pd) = main
-        .bifurcations
-        .iter()
-        .find(|b| b.kind == BifurcationKind::PeriodDoubling)
-    {
-        progress.stage("period-2 branch", n_units, Some((pd.param, sw.hi)));
-        match switch_period_doubling(&family, pd, &opts) {
-            Ok(b2) => {
-                for b in &b2.bifurcations {
-                    bifs.push(Bifurcation {
-                        kind: kind_name(b.kind).into(),
-                        parameter: b.param,
-                        branch: 1,
-                        section: b.section.clone(),
-                    });
-                    printed.push((2, b.kind, b.param));
-                }
-                continued.push(("period-2", b2));
-            }
-            Err(e) => eprintln!("warning: switching onto the period-2 branch failed: {e}"),
+    for (i, (_, b)) in result.continued.iter().enumerate() {
+        for bf in &b.bifurcations {
+            bifs.push(Bifurcation {
+                kind: kind_name(bf.kind).into(),
+                parameter: bf.param,
+                branch: i,
+                section: bf.section.clone(),
+            });
+            printed.push((b.period_strides, bf.kind, bf.param));
         }
     }
-    // every branch on the output grid: the N values, each point corrected there and measured
-    let params = pdw_limit::basin::linspace(sw.lo, sw.hi, sw.n);
-    let mut branches = Vec::new();
-    let mut grid_failures = 0usize;
-    for (name, b) in &continued {
-        progress.stage(&format!("{name} on the output grid"), 2, None);
-        let sampled = branch_at_params(&family, b, &params, &opts, &pool)?;
-        progress.inc();
-        let ok: Vec<BranchPoint> = sampled
-            .into_iter()
-            .filter_map(|sp| match sp.point {
-                Ok(p) => Some(p),
-                Err(e) => {
-                    grid_failures += 1;
-                    eprintln!(
-                        "warning: {name} branch at {} = {}: {e}; the point is left out",
-                        sw.name, params[sp.index]
-                    );
-                    None
-                }
-            })
-            .collect();
-        progress.stage(
-            &format!("measuring the {name} points"),
-            ok.len() as u64,
-            None,
-        );
-        let measured: Vec<Result<(BranchPoint, Measured), String>> = pool.install(|| {
-            ok.into_par_iter()
-                .map(|p| {
-                    let r = at(p.param)
-                        .map_err(|e| e.0)
-                        .and_then(|m| measure(&m, &p, opts.integrator));
-                    progress.inc();
-                    r.map(|mm| (p, mm))
-                })
-                .collect()
-        });
-        let mut pts = Vec::with_capacity(measured.len());
-        for r in measured {
-            match r {
-                Ok(v) => pts.push(v),
-                Err(e) => {
-                    grid_failures += 1;
-                    eprintln!("warning: {name} branch: a point could not be measured ({e}); it is left out");
-                }
-            }
-        }
-        branches.push(store_branch(name, b.period_strides, &pts));
-    }
+    let params = result.params.clone();
+    let grid_failures = result.grid_failures;
+    let branches: Vec<pdw_store::Branch> = result.branches.iter().map(store_branch).collect();
     // brute-force orbit diagram over the N values (independent values, run in parallel)
     let mut oo = OrbitOptions {
         transient: 300,
