@@ -117,9 +117,10 @@ pub struct FixedpointArgs {
     /// to 1e-10 and stored separately. Also an orbit diagram at the same N values.
     #[arg(long)]
     pub sweep: Option<String>,
-    /// HDF5 output of a sweep.
-    #[arg(long, default_value = "bif.h5")]
-    pub out: PathBuf,
+    /// HDF5 output of a sweep (default bif.h5), or of --follow KIND (default KIND.h5: pd.h5,
+    /// fold.h5).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     /// PNG bifurcation diagram of a sweep.
     #[arg(long)]
     pub png: Option<PathBuf>,
@@ -154,6 +155,16 @@ pub struct FixedpointArgs {
     /// the --sweep parameter, rows along --free).
     #[arg(long, value_name = "NXxNY")]
     pub map_grid: Option<String>,
+}
+
+impl FixedpointArgs {
+    /// `--out`, else `bif.h5` for a sweep and `KIND.h5` for `--follow KIND`.
+    pub fn out_path(&self) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| match &self.follow {
+            Some(kind) => format!("{kind}.h5").into(),
+            None => "bif.h5".into(),
+        })
+    }
 }
 
 #[derive(Args, Debug)]

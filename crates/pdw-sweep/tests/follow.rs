@@ -367,3 +367,33 @@ fn bad_input_exits_2_with_a_clear_message() {
         &["hip_mass = -2"],
     );
 }
+
+/// Without --out the curve goes to `pd.h5` (the kind's name), not to a sweep's `bif.h5`: a
+/// sweep's file in the same directory is left alone.
+#[test]
+fn follow_defaults_its_output_to_the_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bif.h5"), b"a sweep's file").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+        .current_dir(dir.path())
+        .args([
+            "fixedpoint",
+            "--model",
+            "compass",
+            "--follow",
+            "pd",
+            "--sweep",
+            "hip_mass=8:10:2",
+            "--free",
+            "slope",
+            "--quiet",
+        ])
+        .output()
+        .expect("the binary runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.path().join("pd.h5").exists());
+    assert_eq!(
+        std::fs::read(dir.path().join("bif.h5")).unwrap(),
+        b"a sweep's file"
+    );
+}

@@ -84,6 +84,7 @@ fn unknown(m: &BuiltModel, flag: &str, name: &str) -> InputError {
 }
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
+    let out = a.out_path();
     let kind =
         match a.follow.as_deref() {
             None => return Err(InputError(
@@ -227,7 +228,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let outputs = [
         Some(args::Output {
             flag: "--out",
-            path: &a.out,
+            path: &out,
             may_exist: false,
         }),
         a.png.as_deref().map(|p| args::Output {
@@ -350,8 +351,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
 
     // Outputs.
     let data = curve_data(&m_a, &sw.name, &free.name, &curve, map);
-    pdw_store::write_curve(&a.out, a.force, &data)?;
-    annotate(&a.out, &m_a, &sw.name, &free.name, &copts, &o2, &ropts)?;
+    pdw_store::write_curve(&out, a.force, &data)?;
+    annotate(&out, &m_a, &sw.name, &free.name, &copts, &o2, &ropts)?;
     if let Some(png) = &a.png {
         let label = |n: &str| format!("{n} [{}]", super::param_unit(&m_a, n));
         pdw_store::plot_curve(
@@ -402,7 +403,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
                 "newton_iterations": p.newton_iters,
             })).collect::<Vec<_>>(),
             "integrator": super::integrator_json(&integrator),
-            "out": a.out.display().to_string(),
+            "out": out.display().to_string(),
             "png": a.png.as_ref().map(|p| p.display().to_string()),
             "elapsed_s": elapsed,
         });
@@ -450,7 +451,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             curve.points.len(),
             sw.n,
             curve.solves,
-            a.out.display(),
+            out.display(),
             a.png
                 .as_ref()
                 .map(|p| format!(" and {}", p.display()))

@@ -147,7 +147,8 @@ impl pdw_limit::SweepProgress for Progress {
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let sw = args::parse_sweep(a.sweep.as_deref().unwrap_or_default())?;
-    let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
+    let out = a.out_path();
+    let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
     let threads = a.threads.unwrap_or(2);
     if !(1..=1024).contains(&threads) {
         return Err(InputError(format!("--threads: {threads} must be between 1 and 1024")).into());
@@ -155,7 +156,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let mut outputs = vec![
         args::Output {
             flag: "--out",
-            path: &a.out,
+            path: &out,
             may_exist: false,
         },
         args::Output {
@@ -322,9 +323,9 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         settings,
         elapsed_s: elapsed,
     };
-    write_sweep(&a.out, a.force, &data)?;
+    write_sweep(&out, a.force, &data)?;
     annotate_sweep(
-        &a.out,
+        &out,
         &m0,
         &sw.name,
         &opts,
@@ -355,7 +356,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         j["time_unit"] = serde_json::json!(super::time_unit(&m0));
         j["length_unit"] = serde_json::json!(super::length_unit(&m0));
         j["files"] = serde_json::json!({
-            "hdf5": a.out.display().to_string(),
+            "hdf5": out.display().to_string(),
             "png": png.display().to_string(),
             "csv": a.csv.as_ref().map(|c| c.display().to_string()),
         });
@@ -395,7 +396,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         "  orbit diagram: {} values, {} with a fall; wrote {} and {}{} in {:.2} s ({} thread(s))",
         params.len(),
         falls,
-        a.out.display(),
+        out.display(),
         png.display(),
         a.csv
             .as_ref()
