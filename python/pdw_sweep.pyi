@@ -66,14 +66,27 @@ def basin(
     x: Optional[Tuple[str, float, float]] = None,
     y: Optional[Tuple[str, float, float]] = None,
     max_strides: int = 100,
+    threads: int = 2,
     **params: float,
 ) -> Tuple[npt.NDArray[np.uint8], dict[int, str], dict[str, Any]]:
-    """Basin of attraction of the stable gait over a grid of section states: `grid = (nx, ny)`
-    points on the inclusive ranges `x = (name, lo, hi)`, `y = (name, lo, hi)` (default: the
-    CLI's, 25 % around the gait); the other section coordinates at the gait's values. Returns
-    (outcome codes (ny, nx), legend {code: name}, metrics: fractions, basin_entropy,
-    boundary_entropy, box_size, x_name, y_name, x, y, gait, gait_multipliers). Labels equal
-    `pdw-sweep basin`'s for the same grid."""
+    """Basins of every attractor over a grid of section states, as `pdw-sweep basin`: `grid =
+    (nx, ny)` points on the inclusive ranges `x = (name, lo, hi)`, `y = (name, lo, hi)` (default:
+    the CLI's, 25 % around the stable period-one gait, else around the first period-one orbit
+    found; both must be given when there is none); the other section coordinates at that
+    orbit's values. The attractors reached from the grid's box (period-k gaits, chaotic ones)
+    are discovered first from a fixed seed set, then each cell is labelled by the attractor it
+    reaches, a fall, `other`, `nonfinite` or `timeout`. Labels, legend and attractors equal the
+    CLI's for the same grid, for any `threads`.
+
+    Returns (outcome codes (ny, nx) uint8, legend {code: name}: the fixed codes (0 `gait` — the
+    stable period-one gait, if there is one —, falls, other, nonfinite, timeout, ...) and one
+    code from 10 up per other attractor (`period-2`, `period-2b`, `chaotic`, ...), metrics):
+    metrics has fractions {name: fraction of cells}, basin_entropy, boundary_entropy, box_size,
+    x_name, y_name, x (nx,), y (ny,), attractors (list of dicts in discovery order: name, code,
+    kind ("periodic" or "chaotic"), period_k (0 if chaotic), points (k × d_s, the orbit in
+    stride order; a chaotic attractor's sample), multipliers (complex, of the k-stride map;
+    empty if chaotic), period_time, radius), gait and gait_multipliers (the stable period-one
+    gait's section and multipliers, None without one). Raises ValueError for invalid input."""
 
 def continuation(
     model: str = "simplest",
@@ -82,13 +95,27 @@ def continuation(
     stop: float = 0.019,
     points: int = 100,
     gait: str = "stable",
+    threads: int = 2,
     **params: float,
 ) -> list[dict[str, Any]]:
-    """Pseudo-arclength continuation of the gait in `parameter` from `start` to `stop`
-    (`pdw-sweep fixedpoint --sweep NAME=start:stop:points`), plus the period-2 branch from the
-    first period doubling. One dict per branch: name, period_k, parameter (n,), section (n, d_s),
-    multipliers (n, m) complex, stable (n,), period (n,), bifurcations (list of dicts: kind,
-    parameter, section, multipliers)."""
+    """`pdw-sweep fixedpoint --sweep NAME=start:stop:points`: pseudo-arclength continuation of
+    the period-one gait (`gait`: the stable one, else the first found; or "unstable") in
+    `parameter`, plus the period-2 branch switched onto at the first period doubling, each put
+    on the `points` evenly spaced values start, ..., stop: exactly one point per value where the
+    branch exists (a branch that folds back: one per crossing; the period-2 branch: the values
+    past the doubling), corrected at that value. A value whose correction fails is left out
+    with a UserWarning.
+
+    One dict per branch (n = its points, K = period_k, m = multipliers per point): name
+    ("period-1", "period-2"), period_k, parameter (n,), section (n, d_s; the orbit's first
+    point), orbit (n, K, d_s; all K points in stride order), period (n,; the K strides
+    together), step_length (n, K; per stride), speed (n,; K step lengths over the period),
+    stable (n,), valid (n, K; validity along each stride, True where unchecked), validity
+    (n lists of K dicts or None, the keys of `fixed_point`'s validity), multipliers (n, m)
+    complex (of the K-stride map, signed), bifurcations (list of dicts located on this branch:
+    kind ("period_doubling", "fold", "branch_point", "neimark_sacker"), parameter, section,
+    multipliers), internal_points (the continuation's own steps). Equal to the CLI's `--json`
+    branches."""
 
 def simulate(
     model: str = "simplest",

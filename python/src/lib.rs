@@ -12,12 +12,12 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use pdw_limit::basin::{self as lbasin, BasinOptions, BasinProblem, Outcome};
+use pdw_limit::basin::{self as lbasin, BasinOptions, Outcome};
 use pdw_limit::gaits::{self, Found};
 use pdw_limit::trajectory::{self, TrajectoryOptions, Validity};
+use pdw_limit::{Attractor, AttractorKind};
 use pdw_limit::{
-    continue_branch, switch_period_doubling, BifurcationKind, Branch, ContinuationOptions,
-    StrideMap, StrideOutcome,
+    Bifurcation, BifurcationKind, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome,
 };
 use pdw_walkers::{ModelInfo, Walker};
 
@@ -491,43 +491,63 @@ fn stride_map<'py>(
     ))
 }
 
-/// An axis `(name, lo, hi)` of a basin grid: the index of the section coordinate and its range.
+/// An axis `(name, lo, hi)` of a basin grid: the index of the section coordinate and its range
+/// (`None` if not given).
 fn axis(
     m: &Model,
     a: Option<(String, f64, f64)>,
     which: &str,
-    default: usize,
-    centre: &[f64],
-) -> PyResult<(usize, f64, f64)> {
+) -> PyResult<Option<(usize, f64, f64)>> {
     let names = &m.info.section_names;
-    match a {
-        Some((name, lo, hi)) => {
-            let i = names.iter().position(|n| *n == name).ok_or_else(|| {
-                err(format!(
-                    "{which}: model '{}' has no section coordinate '{name}'; its coordinates are {}",
-                    m.info.name,
-                    names.join(", ")
-                ))
-            })?;
-            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                return Err(err(format!(
-                    "{which}: range {lo}:{hi} is empty or inverted; the first bound must be below the second"
-                )));
-            }
-            Ok((i, lo, hi))
-        }
-        None => {
-            // The CLI's default: 25 % of the coordinate around the gait, at least 0.05.
-            let c = centre[default];
-            let half = (0.25 * c.abs()).max(0.05);
-            Ok((default, c - half, c + half))
-        }
+    let Some((name, lo, hi)) = a else {
+        return Ok(None);
+    };
+    let i = names.iter().position(|n| *n == name).ok_or_else(|| {
+        err(format!(
+            "{which}: model '{}' has no section coordinate '{name}'; its coordinates are {}",
+            m.info.name,
+            names.join(", ")
+        ))
+    })?;
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(err(format!(
+            "{which}: range {lo}:{hi} is empty or inverted; the first bound must be below the second"
+        )));
     }
+    Ok(Some((i, lo, hi)))
 }
 
-/// `basin(model="simplest", slope=None, grid=(nx, ny), x=None, y=None, max_strides=100, **params)`.
+/// The CLI's default axis: 25 % of the coordinate around the grid's centre, at least 0.05.
+fn default_axis(i: usize, centre: &[f64]) -> (usize, f64, f64) {
+    let c = centre[i];
+    let half = (0.25 * c.abs()).max(0.05);
+    (i, c - half, c + half)
+}
+
+fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("name", &a.name)?;
+    d.set_item("code", a.code)?;
+    d.set_item(
+        "kind",
+        match a.kind {
+            AttractorKind::Periodic => "periodic",
+            AttractorKind::Chaotic => "chaotic",
+        },
+    )?;
+    d.set_item("period_k", a.period_k)?;
+    let ds = a.points.first().map_or(0, Vec::len);
+    d.set_item("points", rows_to_array(py, a.points.concat(), ds)?)?;
+    d.set_item("multipliers", complex_array(py, &a.multipliers))?;
+    d.set_item("period_time", a.period_time)?;
+    d.set_item("radius", a.radius)?;
+    Ok(d)
+}
+
+/// `basin(model="simplest", slope=None, grid=(nx, ny), x=None, y=None, max_strides=100,
+/// threads=2, **params)`: every cell labelled by the attractor it reaches, as `pdw-sweep basin`.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, grid=(101, 101), x=None, y=None, max_strides=100, **params))]
+#[pyo3(signature = (model="simplest", slope=None, grid=(101, 101), x=None, y=None, max_strides=100, threads=THREADS, **params))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn basin<'py>(
     py: Python<'py>,
@@ -537,6 +557,7 @@ fn basin<'py>(
     x: Option<(String, f64, f64)>,
     y: Option<(String, f64, f64)>,
     max_strides: u32,
+    threads: usize,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
     let (nx, ny) = grid;
@@ -551,6 +572,11 @@ fn basin<'py>(
             u16::MAX
         )));
     }
+    if !(1..=1024).contains(&threads) {
+        return Err(err(format!(
+            "threads: {threads} must be between 1 and 1024"
+        )));
+    }
     let m = build_kw(model, slope, params)?;
     if m.info.section_names.len() < 2 {
         return Err(err(format!(
@@ -559,13 +585,26 @@ fn basin<'py>(
             m.info.section_names.join(", ")
         )));
     }
+    let xa = axis(&m, x, "x")?;
+    let ya = axis(&m, y, "y")?;
     let (found, failed, n) = py.detach(|| find_gaits(&m, None, 1e-12))?;
-    let Some(g) = found.iter().find(|f| f.fp.stable) else {
-        return Err(no_gait_error(&m, "stable", n, &failed));
+    let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
+    let Some(centre) =
+        pdw_limit::grid_centre(m.walker.as_ref(), &found, xa.is_some() && ya.is_some())
+    else {
+        let mut e = format!(
+            "no period-one orbit found for model '{}' at slope {} from {n} guess(es) to centre \
+             the default grid on; give both x and y",
+            m.info.name,
+            m.slope()
+        );
+        for (label, g, le) in &failed {
+            e.push_str(&format!("\n  guess '{label}' {g:?}: {le}"));
+        }
+        return Err(err(e));
     };
-    let fp = &g.fp;
-    let (ix, xlo, xhi) = axis(&m, x, "x", 0, &fp.section)?;
-    let (iy, ylo, yhi) = axis(&m, y, "y", 1, &fp.section)?;
+    let (ix, xlo, xhi) = xa.unwrap_or_else(|| default_axis(0, &centre));
+    let (iy, ylo, yhi) = ya.unwrap_or_else(|| default_axis(1, &centre));
     if ix == iy {
         return Err(err(format!(
             "x and y both name '{}'; choose two different coordinates",
@@ -578,30 +617,48 @@ fn basin<'py>(
         max_strides: max_strides as u16,
         ..BasinOptions::default()
     };
-    let (outcome, metrics) = py.detach(|| -> PyResult<_> {
+    let (outcome, metrics, set) = py.detach(|| -> PyResult<_> {
         let w = m.walker.as_ref();
-        let problem = BasinProblem::new(w, fp.section.clone(), &Outcome::of_fall);
         let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(THREADS)
+            .num_threads(threads)
             .build()
             .map_err(err)?;
-        let cells = lbasin::grid_cells(&fp.section, ix, &xs, iy, &ys);
-        let res = lbasin::classify_cells(&problem, &cells, &opts, &pool, &|_| {}).map_err(err)?;
+        let (set, _) = pdw_limit::box_attractors(
+            w,
+            &found,
+            gait,
+            &[],
+            &centre,
+            (ix, (xlo, xhi)),
+            (iy, (ylo, yhi)),
+            &opts,
+            &pool,
+        )
+        .map_err(err)?;
+        let fall = Outcome::of_fall;
+        let problem = set.problem(w, &fall);
+        let cells = lbasin::grid_cells(&centre, ix, &xs, iy, &ys);
+        let mut res =
+            lbasin::classify_cells(&problem, &cells, &opts, &pool, &|_| {}).map_err(err)?;
+        set.relabel(&mut res);
         let outcome: Vec<u8> = res.iter().map(|c| c.outcome).collect();
         let metrics =
             lbasin::basin_metrics(&outcome, nx, ny, lbasin::DEFAULT_ENTROPY_BOX).map_err(err)?;
-        Ok((outcome, metrics))
+        Ok((outcome, metrics, set))
     })?;
     let arr = Array2::from_shape_vec((ny, nx), outcome).map_err(err)?;
     let legend = PyDict::new(py);
-    for (c, name) in lbasin::legend() {
+    let fr = PyDict::new(py);
+    for (c, name) in set.legend() {
+        let f = metrics
+            .fractions
+            .iter()
+            .find(|(code, _, _)| *code == c)
+            .map_or(0.0, |(_, _, f)| *f);
+        fr.set_item(&name, f)?;
         legend.set_item(c, name)?;
     }
     let md = PyDict::new(py);
-    let fr = PyDict::new(py);
-    for (_, name, f) in &metrics.fractions {
-        fr.set_item(*name, *f)?;
-    }
     md.set_item("fractions", fr)?;
     md.set_item("basin_entropy", metrics.basin_entropy)?;
     md.set_item("boundary_entropy", metrics.boundary_entropy)?;
@@ -610,8 +667,16 @@ fn basin<'py>(
     md.set_item("y_name", &m.info.section_names[iy])?;
     md.set_item("x", xs.into_pyarray(py))?;
     md.set_item("y", ys.into_pyarray(py))?;
-    md.set_item("gait", fp.section.clone().into_pyarray(py))?;
-    md.set_item("gait_multipliers", complex_array(py, &fp.multipliers))?;
+    let atts = PyList::empty(py);
+    for a in &set.attractors {
+        atts.append(attractor_dict(py, a)?)?;
+    }
+    md.set_item("attractors", atts)?;
+    md.set_item("gait", gait.map(|fp| fp.section.clone().into_pyarray(py)))?;
+    md.set_item(
+        "gait_multipliers",
+        gait.map(|fp| complex_array(py, &fp.multipliers)),
+    )?;
     Ok((arr.into_pyarray(py).into_any(), legend, md))
 }
 
@@ -624,20 +689,32 @@ fn kind_name(k: BifurcationKind) -> &'static str {
     }
 }
 
+fn bifurcation_dict<'py>(py: Python<'py>, bf: &Bifurcation) -> PyResult<Bound<'py, PyDict>> {
+    let bd = PyDict::new(py);
+    bd.set_item("kind", kind_name(bf.kind))?;
+    bd.set_item("parameter", bf.param)?;
+    bd.set_item("section", bf.section.clone().into_pyarray(py))?;
+    bd.set_item("multipliers", complex_array(py, &bf.multipliers))?;
+    Ok(bd)
+}
+
+/// A branch on the output grid as arrays (n = its points on the grid, K = `period_k`).
 fn branch_dict<'py>(
     py: Python<'py>,
-    name: &str,
-    b: &Branch,
+    b: &GridBranch,
+    continued: &Branch,
     ds: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("name", name)?;
-    d.set_item("period_k", b.period_strides)?;
     let p = &b.points;
+    let k = b.period_k;
+    let n = p.len();
+    d.set_item("name", &b.name)?;
+    d.set_item("period_k", k)?;
     d.set_item(
         "parameter",
         p.iter()
-            .map(|q| q.param)
+            .map(|q| q.point.param)
             .collect::<Vec<_>>()
             .into_pyarray(py),
     )?;
@@ -645,52 +722,105 @@ fn branch_dict<'py>(
         "section",
         rows_to_array(
             py,
-            p.iter().flat_map(|q| q.section.iter().copied()).collect(),
+            p.iter()
+                .flat_map(|q| q.point.section.iter().copied())
+                .collect(),
             ds,
         )?,
     )?;
-    let nm = p.first().map_or(0, |q| q.multipliers.len());
-    let mult: Vec<Complex64> = p
+    let orbit: Vec<f64> = p
         .iter()
-        .flat_map(|q| q.multipliers.iter().map(|l| Complex64::new(l.re, l.im)))
+        .flat_map(|q| q.point.orbit.iter().flatten().copied())
         .collect();
-    let rows = mult.len().checked_div(nm).unwrap_or(0);
     d.set_item(
-        "multipliers",
-        Array2::from_shape_vec((rows, nm), mult)
+        "orbit",
+        numpy::ndarray::Array3::from_shape_vec((n, k, ds), orbit)
             .map_err(err)?
-            .into_pyarray(py),
-    )?;
-    d.set_item(
-        "stable",
-        p.iter()
-            .map(|q| q.stable)
-            .collect::<Vec<_>>()
             .into_pyarray(py),
     )?;
     d.set_item(
         "period",
         p.iter()
-            .map(|q| q.period)
+            .map(|q| q.point.period)
             .collect::<Vec<_>>()
             .into_pyarray(py),
     )?;
+    d.set_item(
+        "step_length",
+        rows_to_array(
+            py,
+            p.iter()
+                .flat_map(|q| q.step_length.iter().copied())
+                .collect(),
+            k,
+        )?,
+    )?;
+    d.set_item(
+        "speed",
+        p.iter()
+            .map(MeasuredPoint::speed)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    d.set_item(
+        "stable",
+        p.iter()
+            .map(|q| q.point.stable)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    let valid: Vec<bool> = p
+        .iter()
+        .flat_map(|q| {
+            q.validity
+                .iter()
+                .map(|v| v.as_ref().is_none_or(Validity::valid))
+        })
+        .collect();
+    d.set_item(
+        "valid",
+        Array2::from_shape_vec((n, k), valid)
+            .map_err(err)?
+            .into_pyarray(py),
+    )?;
+    let validity = PyList::empty(py);
+    for q in p {
+        let per = PyList::empty(py);
+        for v in &q.validity {
+            per.append(v.as_ref().map(|v| validity_dict(py, v)).transpose()?)?;
+        }
+        validity.append(per)?;
+    }
+    d.set_item("validity", validity)?;
+    let nm = p.first().map_or(0, |q| q.point.multipliers.len());
+    let mult: Vec<Complex64> = p
+        .iter()
+        .flat_map(|q| {
+            q.point
+                .multipliers
+                .iter()
+                .map(|l| Complex64::new(l.re, l.im))
+        })
+        .collect();
+    d.set_item(
+        "multipliers",
+        Array2::from_shape_vec((n, nm), mult)
+            .map_err(err)?
+            .into_pyarray(py),
+    )?;
     let bifs = PyList::empty(py);
-    for bf in &b.bifurcations {
-        let bd = PyDict::new(py);
-        bd.set_item("kind", kind_name(bf.kind))?;
-        bd.set_item("parameter", bf.param)?;
-        bd.set_item("section", bf.section.clone().into_pyarray(py))?;
-        bd.set_item("multipliers", complex_array(py, &bf.multipliers))?;
-        bifs.append(bd)?;
+    for bf in &continued.bifurcations {
+        bifs.append(bifurcation_dict(py, bf)?)?;
     }
     d.set_item("bifurcations", bifs)?;
+    d.set_item("internal_points", continued.points.len())?;
     Ok(d)
 }
 
-/// `continuation(model, parameter="slope", start, stop, points=100, gait="stable", **params)`.
+/// `continuation(model, parameter="slope", start, stop, points=100, gait="stable", threads=2,
+/// **params)`: `pdw-sweep fixedpoint --sweep NAME=start:stop:points`, branch by branch.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", parameter="slope", start=0.001, stop=0.019, points=100, gait="stable", **params))]
+#[pyo3(signature = (model="simplest", parameter="slope", start=0.001, stop=0.019, points=100, gait="stable", threads=THREADS, **params))]
 #[allow(clippy::too_many_arguments)]
 fn continuation<'py>(
     py: Python<'py>,
@@ -700,6 +830,7 @@ fn continuation<'py>(
     stop: f64,
     points: usize,
     gait: &str,
+    threads: usize,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     if points < 2 {
@@ -713,6 +844,11 @@ fn continuation<'py>(
             "gait: '{gait}' is not one of stable, unstable"
         )));
     }
+    if !(1..=1024).contains(&threads) {
+        return Err(err(format!(
+            "threads: {threads} must be between 1 and 1024"
+        )));
+    }
     let mut base = overrides(None, params)?;
     base.retain(|(n, _)| n != parameter);
     let at = |mu: f64| -> PyResult<Model> {
@@ -723,38 +859,45 @@ fn continuation<'py>(
     let m0 = at(start)?;
     at(stop)?;
     let ds = m0.walker.section_dim();
-    let branches = py.detach(|| -> PyResult<Vec<(String, Branch)>> {
+    let result = py.detach(|| -> PyResult<pdw_limit::Sweep> {
         let (found, failed, n) = find_gaits(&m0, None, 1e-12)?;
-        let Some(s) = found.iter().find(|f| f.fp.stable == (gait == "stable")) else {
+        // The CLI's choice: the first unstable gait, or the stable one (else the first found).
+        let s = match gait {
+            "unstable" => found.iter().find(|f| !f.fp.stable),
+            _ => found.iter().find(|f| f.fp.stable).or(found.first()),
+        };
+        let Some(s) = s else {
             return Err(no_gait_error(&m0, gait, n, &failed));
         };
         let family = |mu: f64| at(mu).map(|m| m.walker);
-        // The CLI's `--sweep` settings: steps of one grid spacing, up to 20 points per value.
-        let span = stop - start;
-        let step = span.abs() / (points - 1) as f64;
-        let mut opts = ContinuationOptions::new(start.min(stop), start.max(stop));
-        opts.direction = span.signum();
-        opts.ds_max = step;
-        opts.ds_init = step;
-        opts.ds_min = (step * 1e-6).min(opts.ds_min.max(1e-12));
-        opts.max_points = 20 * points;
-        let main = continue_branch(&family, &s.fp.section, start, 1, &opts).map_err(err)?;
-        let pd = main
-            .bifurcations
-            .iter()
-            .find(|b| b.kind == BifurcationKind::PeriodDoubling)
-            .cloned();
-        let mut out = vec![("period-1".to_string(), main)];
-        if let Some(pd) = pd {
-            if let Ok(b2) = switch_period_doubling(&family, &pd, &opts) {
-                out.push(("period-2".to_string(), b2));
-            }
-        }
-        Ok(out)
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(err)?;
+        let opts = pdw_limit::grid_options(start, stop, points);
+        pdw_limit::sweep::sweep(
+            &family,
+            parameter,
+            &s.fp.section,
+            (start, stop, points),
+            &opts,
+            &pool,
+            &pdw_limit::sweep::Silent,
+        )
+        .map_err(err)
     })?;
+    for w in &result.warnings {
+        let msg = std::ffi::CString::new(w.as_str()).map_err(err)?;
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
     let list = PyList::empty(py);
-    for (name, b) in &branches {
-        list.append(branch_dict(py, name, b, ds)?)?;
+    for (b, (_, c)) in result.branches.iter().zip(&result.continued) {
+        list.append(branch_dict(py, b, c, ds)?)?;
     }
     Ok(list)
 }

@@ -93,23 +93,72 @@ def test_batched_stride_map_equals_one_at_a_time():
     assert c[0] == 0 and np.max(np.abs(n[0] - [GARCIA_THETA, GARCIA_THETADOT])) < 1e-9
 
 
-def test_basin_labels_equal_the_cli_for_a_small_grid():
-    exe = cli()
-    h5py = pytest.importorskip("h5py") if exe else None
-    if exe is None:
-        pytest.skip("pdw-sweep binary not built")
-    outcome, legend, metrics = pdw.basin("simplest", slope=0.009, grid=(9, 7),
-                                         x=("theta", 0.15, 0.25), y=("thetadot", -0.25, -0.15),
-                                         max_strides=60)
-    assert outcome.shape == (7, 9) and legend[0] == "gait"
+def cli_basin(exe, h5py, args):
+    """Labels, legend and attractors of a `pdw-sweep basin` run (the reference)."""
     with tempfile.TemporaryDirectory() as d:
         path = os.path.join(d, "b.h5")
-        subprocess.run([exe, "basin", "--grid", "9x7", "--x", "theta=0.15:0.25",
-                        "--y", "thetadot=-0.25:-0.15", "--max-strides", "60", "--out", path,
-                        "--quiet"], check=True, capture_output=True)
+        subprocess.run([exe, "basin", *args, "--out", path, "--quiet"], check=True,
+                       capture_output=True)
         with h5py.File(path) as f:
-            np.testing.assert_array_equal(f["basin/outcome"][()], outcome)
+            outcome = f["basin/outcome"][()]
+            legend = {int(k): v for k, v in json.loads(f["basin/outcome"].attrs["legend"]).items()}
+            atts = {}
+            for name, g in f["attractors"].items():
+                atts[name] = {
+                    "period_k": int(g.attrs["period_k"]),
+                    "section": g["section"][()],
+                    "multipliers": g["multipliers_re"][()] + 1j * g["multipliers_im"][()],
+                }
+    return outcome, legend, atts
+
+
+@pytest.mark.parametrize("slope", [0.009, 0.016])
+def test_basin_labels_and_attractors_equal_the_cli_for_a_small_grid(slope):
+    # At 0.009 one stable period-one gait (code 0, "gait"); at 0.016, past the first period
+    # doubling, no stable period-one gait: the cells reach the period-2 gait (Garcia et al. 1998).
+    exe = cli()
+    if exe is None:
+        pytest.skip("pdw-sweep binary not built")
+    h5py = pytest.importorskip("h5py")
+    outcome, legend, metrics = pdw.basin("simplest", slope=slope, grid=(9, 7),
+                                         x=("theta", 0.18, 0.30), y=("thetadot", -0.30, -0.18),
+                                         max_strides=100)
+    ref_outcome, ref_legend, ref_atts = cli_basin(
+        exe, h5py, ["--slope", str(slope), "--grid", "9x7", "--x", "theta=0.18:0.30",
+                    "--y", "thetadot=-0.30:-0.18", "--max-strides", "100"])
+    assert outcome.shape == (7, 9)
+    np.testing.assert_array_equal(outcome, ref_outcome)
+    assert {int(k): v for k, v in legend.items() if k != 255} == \
+        {k: v for k, v in ref_legend.items() if k != 255}
+    got = {a["name"]: a for a in metrics["attractors"]}
+    assert set(got) == set(ref_atts)
+    for name, a in got.items():
+        r = ref_atts[name]
+        assert a["period_k"] == r["period_k"] and legend[a["code"]] == name
+        np.testing.assert_array_equal(a["points"], r["section"])
+        np.testing.assert_array_equal(a["multipliers"], r["multipliers"])
     assert abs(sum(metrics["fractions"].values()) - 1) < 1e-12
+    if slope == 0.009:
+        assert legend[0] == "gait" and "gait" in got and metrics["gait"] is not None
+    else:
+        assert metrics["gait"] is None and "period-2" in got
+        code = got["period-2"]["code"]
+        assert np.any(outcome == code) and metrics["fractions"]["period-2"] > 0
+        # The attractor is the stable period-2 orbit of `fixed_point(period=2)`.
+        ref = pdw.fixed_point(slope=slope, period=2, gait="stable")[0]
+        np.testing.assert_allclose(got["period-2"]["points"], ref["orbit"], atol=1e-8)
+
+
+def test_basin_default_grid_without_a_stable_period_one_gait():
+    exe = cli()
+    if exe is None:
+        pytest.skip("pdw-sweep binary not built")
+    h5py = pytest.importorskip("h5py")
+    outcome, legend, metrics = pdw.basin("simplest", slope=0.016, grid=(5, 4), max_strides=40)
+    ref_outcome, ref_legend, _ = cli_basin(
+        exe, h5py, ["--slope", "0.016", "--grid", "5x4", "--max-strides", "40"])
+    np.testing.assert_array_equal(outcome, ref_outcome)
+    assert "period-2" in legend.values()
 
 
 def test_continuation_finds_garcia_period_doubling():
@@ -167,3 +216,62 @@ def test_period_two_orbit_matches_the_cli():
     assert g["period_k"] == 2 and g["orbit"].shape == (2, 2)
     np.testing.assert_array_equal(g["orbit"], np.array(r["orbit"]))
     assert np.all(np.abs(g["multipliers"]) < 1.0)
+
+
+def test_continuation_gives_n_grid_points_per_branch_with_whole_orbits():
+    n = 10
+    branches = pdw.continuation("simplest", "slope", 0.010, 0.019, points=n)
+    grid = np.linspace(0.010, 0.019, n)
+    main = branches[0]
+    assert main["name"] == "period-1" and main["period_k"] == 1
+    # The period-1 gait exists over the whole range (unstable past the doubling): all N values.
+    np.testing.assert_allclose(main["parameter"], grid, rtol=0, atol=1e-15)
+    assert main["orbit"].shape == (n, 1, 2) and main["multipliers"].dtype == np.complex128
+    assert main["step_length"].shape == (n, 1) and main["valid"].shape == (n, 1)
+    # Each point is the fixed point at its grid value.
+    fp = pdw.fixed_point(slope=main["parameter"][0], gait="stable")[0]
+    np.testing.assert_allclose(main["section"][0], fp["section"], atol=1e-8)
+    np.testing.assert_allclose(main["multipliers"][0], fp["multipliers"], atol=1e-6)
+    np.testing.assert_allclose(main["speed"][0], fp["speed"], rtol=1e-8)
+    # The period-2 branch holds the grid values past the doubling (0.0151), both orbit points.
+    two = [b for b in branches if b["period_k"] == 2]
+    assert len(two) == 1
+    two = two[0]
+    assert two["name"] == "period-2" and two["orbit"].shape[1:] == (2, 2)
+    np.testing.assert_allclose(two["parameter"], grid[grid > 0.0151], rtol=0, atol=1e-15)
+    i = int(np.argmin(np.abs(two["parameter"] - 0.016)))
+    ref = pdw.fixed_point(slope=two["parameter"][i], period=2, gait="stable")[0]
+    # The same orbit: the branch lists its points in stride order from wherever it starts.
+    orbit = two["orbit"][i]
+    shift = int(np.argmin(np.abs(orbit - ref["orbit"][0]).max(axis=1)))
+    np.testing.assert_allclose(np.roll(orbit, -shift, axis=0), ref["orbit"], atol=1e-8)
+    np.testing.assert_allclose(two["period"][i], ref["period"], rtol=1e-8)
+    np.testing.assert_allclose(np.abs(two["multipliers"][i]), np.abs(ref["multipliers"]),
+                               atol=1e-6)
+    assert two["stable"][i]
+
+
+def test_continuation_equals_the_cli_sweep_json():
+    exe = cli()
+    if exe is None:
+        pytest.skip("pdw-sweep binary not built")
+    branches = pdw.continuation("simplest", "slope", 0.010, 0.019, points=8)
+    with tempfile.TemporaryDirectory() as d:
+        out = subprocess.run([exe, "fixedpoint", "--sweep", "slope=0.010:0.019:8", "--json",
+                              "--quiet", "--out", os.path.join(d, "s.h5")],
+                             check=True, capture_output=True, text=True).stdout
+    ref = json.loads(out)
+    assert [b["name"] for b in branches] == [b["name"] for b in ref["branches"]]
+    for b, r in zip(branches, ref["branches"]):
+        pts = r["points"]
+        assert b["period_k"] == r["period_k"] and len(b["parameter"]) == len(pts)
+        np.testing.assert_array_equal(b["parameter"], [p["param"] for p in pts])
+        np.testing.assert_array_equal(b["orbit"], [p["orbit"] for p in pts])
+        np.testing.assert_array_equal(b["period"], [p["period"] for p in pts])
+        np.testing.assert_array_equal(b["step_length"], [p["step_length"] for p in pts])
+        np.testing.assert_array_equal(b["speed"], [p["speed"] for p in pts])
+        np.testing.assert_array_equal(b["stable"], [p["stable"] for p in pts])
+        np.testing.assert_array_equal(
+            b["multipliers"], [[m["re"] + 1j * m["im"] for m in p["multipliers"]] for p in pts])
+        bifs = [x for x in ref["bifurcations"] if x["branch"] == r["id"]]
+        assert [x["parameter"] for x in b["bifurcations"]] == [x["parameter"] for x in bifs]
