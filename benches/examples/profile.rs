@@ -64,13 +64,14 @@ fn main() {
             }
             let s = integ.stats();
             println!(
-                "{n} scalar strides ({:?}): {:.3} µs/stride, mean period {:.6}, {} accepted, {} rejected, {} rhs",
+                "{n} scalar strides ({:?}): {:.3} µs/stride, mean period {:.6}, {} accepted, {} rejected, {} rhs, {} sampled",
                 opts.method,
                 t0.elapsed().as_secs_f64() * 1e6 / n as f64,
                 acc / n as f64,
                 s.accepted,
                 s.rejected,
-                s.rhs_evals
+                s.rhs_evals,
+                s.sampled
             );
         }
         "compass-stride" | "compass-batch" => {

@@ -383,40 +383,38 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                 &self.opts,
                 n_active,
             );
-            // Guard values at the Hermite samples and at x₁: one guard_batch per mode range.
-            let m_cols = crate::event::N_COLS;
-            for i in 1..m_cols {
-                if i + 1 < m_cols {
-                    engine::hermite_sample(&mut self.st, self.tab, n_active, i);
-                }
-                let Store { y, xn, gs, .. } = &mut self.st;
-                let src: &[f64] = if i + 1 < m_cols { y } else { xn };
-                for m in 0..self.n_modes {
-                    let (a, b) = (self.range[m], self.range[m + 1]);
-                    if b > a {
-                        let xv = MatRef::from_column_major_slice_with_stride(
-                            &src[a..],
-                            b - a,
-                            d,
-                            stride,
-                        );
-                        for k in 0..self.sys.guards(m).len() {
-                            let col = (k * m_cols + i) * stride;
-                            self.sys.guard_batch(
-                                &mut self.sc.ev.model,
-                                m,
-                                k,
-                                xv,
-                                &mut gs[col + a..col + b],
-                            );
-                        }
-                    }
-                }
-            }
+            // Guard values and rates at x₁, one call per mode range, then the column test of
+            // which lanes may see a crossing inside the step.
+            let last = n_stages - 1;
             for m in 0..self.n_modes {
                 let (a, b) = (self.range[m], self.range[m + 1]);
-                if b > a {
-                    engine::mark_candidates(&mut self.st, self.sys.guards(m), a, b);
+                let ng = self.sys.guards(m).len();
+                if b > a && ng > 0 {
+                    let Store { xn, k, g1, r1, .. } = &mut self.st;
+                    fn view(v: &[f64], a: usize, n: usize, d: usize, s: usize) -> MatRef<'_, f64> {
+                        MatRef::from_column_major_slice_with_stride(&v[a..], n, d, s)
+                    }
+                    let gv = MatMut::from_column_major_slice_with_stride_mut(
+                        &mut g1[a..],
+                        b - a,
+                        ng,
+                        stride,
+                    );
+                    let rv = MatMut::from_column_major_slice_with_stride_mut(
+                        &mut r1[a..],
+                        b - a,
+                        ng,
+                        stride,
+                    );
+                    self.sys.guards_with_rates_batch(
+                        &mut self.sc.ev.model,
+                        m,
+                        view(xn, a, b - a, d, stride),
+                        view(&k[last * blk..(last + 1) * blk], a, b - a, d, stride),
+                        gv,
+                        rv,
+                    );
+                    engine::mark_near(&mut self.st, self.sys.guards(m), a, b);
                 }
             }
             // Per-lane accept/reject, events, commit; stopped lanes go to the driver.

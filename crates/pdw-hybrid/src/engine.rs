@@ -10,8 +10,9 @@
 //! exactly as the scalar loop). A one-lane call (`n = 1`) takes a branch with compile-time stage
 //! rows that performs the same operations in the same order (the batch tests compare both
 //! branches bit for bit). The only other difference is the model call: `flow_batch` and
-//! `guard_batch` in the batch, `flow` and `guard` in the scalar path, which
-//! [`HybridSystem::flow_batch`] and [`HybridSystem::guard_batch`] require to agree bit for bit.
+//! `guards_with_rates_batch` in the batch, `flow` and `guards_with_rates` in the scalar path,
+//! which [`HybridSystem::flow_batch`] and [`HybridSystem::guards_with_rates_batch`] require to
+//! agree bit for bit.
 //! Flow evaluations that concern a single lane (`f(x₀)` at a segment start, the starting-step
 //! trial, DOP853's three dense-output stages) use `flow` in both paths.
 
@@ -51,19 +52,22 @@ pub(crate) struct Store {
     /// `(lanes × ng)` guard values at x₀ (zero band applied at segment start), used as the left
     /// end of the next step's crossing scan.
     pub g: Vec<f64>,
-    /// `(lanes × ng·(N_SAMPLES + 2))` guard values of the attempt at θ = i/(N_SAMPLES + 1):
-    /// column `k·(N_SAMPLES + 2) + i` for i = 1..=N_SAMPLES (Hermite samples) and
-    /// i = N_SAMPLES + 1 (x₁); column i = 0 is unused (the left values are in `g`).
-    pub gs: Vec<f64>,
-    /// `(lanes)` 1 when some guard of the lane's attempt shows a directional crossing between
-    /// consecutive values of `g` and `gs` (set by [`mark_candidates`]); lanes with 0 skip the
-    /// event locator.
+    /// `(lanes × ng)` guard rates `ġ = ∇g·f` at x₀ (`+∞` where the model gives none).
+    pub gr: Vec<f64>,
+    /// `(lanes × ng)` guard values at the attempt's x₁.
+    pub g1: Vec<f64>,
+    /// `(lanes × ng)` guard rates at the attempt's x₁.
+    pub r1: Vec<f64>,
+    /// `(lanes)` bit `k` set ([`event::guard_bit`]) when guard `k` of the lane's attempt may
+    /// cross zero inside the step ([`mark_near`]); lanes with 0 skip the event locator, and
+    /// the locator samples only the flagged guards.
     pub cand: Vec<u8>,
     /// `(lanes)` step of the current attempt.
     pub h: Vec<f64>,
     /// `(lanes)` error norm of the current attempt (0 or NaN for RK4: a finiteness check).
     pub err: Vec<f64>,
-    /// `(lanes)` scratch columns for the error kernels.
+    /// `(lanes)` scratch columns for the error kernels (`s2`: `err^α`, the controller's
+    /// `fac11`).
     pub s1: Vec<f64>,
     pub s2: Vec<f64>,
     pub s3: Vec<f64>,
@@ -83,7 +87,9 @@ impl Store {
             xn: vec![0.0; blk],
             k: vec![0.0; blk * tab.n_stages],
             g: vec![0.0; ng * stride],
-            gs: vec![0.0; ng * event::N_COLS * stride],
+            gr: vec![0.0; ng * stride],
+            g1: vec![0.0; ng * stride],
+            r1: vec![0.0; ng * stride],
             cand: vec![0; lanes],
             h: vec![0.0; lanes],
             err: vec![0.0; lanes],
@@ -124,6 +130,7 @@ impl Store {
         }
         for k in 0..self.ng {
             self.g.swap(k * s + a, k * s + b);
+            self.gr.swap(k * s + a, k * s + b);
         }
     }
 }
@@ -568,80 +575,23 @@ pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
     }
 }
 
-/// Cubic Hermite sample `i` (θ = i/(N_SAMPLES + 1)) of the attempt into `st.y`, lanes `0..n`:
-/// `x(θ) = c₀₀ x₀ + c₀₁ x₁ + h (c₁₀ f₀ + c₁₁ f₁)` with the Hermite basis
-/// `c₀₀ = (1+2θ)(1−θ)²`, `c₀₁ = θ²(3−2θ)`, `c₁₀ = θ(1−θ)²`, `c₁₁ = −θ²(1−θ)` (HNW I, II.6).
+/// Candidate flags of rows `a..b` for the guards `specs` of their mode, from the step's end
+/// points alone: bit k of `cand[l]` set when [`event::may_cross`] holds for guard k — the
+/// guard's cubic over the step, from its end values and rates, comes near zero. A column kernel over lanes; the per-lane locator samples
+/// the interior and locates events only where it is 1.
 #[inline(always)]
-pub(crate) fn hermite_sample(st: &mut Store, tab: &Tableau, n: usize, i: usize) {
-    let theta = i as f64 / (event::N_SAMPLES + 1) as f64;
-    let c = event::hermite_basis(theta);
-    let blk = st.blk();
+pub(crate) fn mark_near(st: &mut Store, specs: &[crate::GuardSpec], a: usize, b: usize) {
     let stride = st.stride;
-    let last = tab.n_stages - 1;
-    if stride == 1 {
-        // One contiguous lane (the scalar integrator): fixed-size vectors where possible.
-        with_dim!(st.dim, D => return hermite_fixed::<D>(st, c, last), _ => {})
-    }
-    for j in 0..st.dim {
-        let off = j * stride;
-        let x0 = &st.x[off..off + n];
-        let x1 = &st.xn[off..off + n];
-        let f0 = &st.k[off..off + n];
-        let f1 = &st.k[last * blk + off..last * blk + off + n];
-        let h = &st.h[..n];
-        let y = &mut st.y[off..off + n];
-        for l in 0..n {
-            y[l] = event::hermite_point(c, x0[l], x1[l], f0[l], f1[l], h[l]);
-        }
-    }
-}
-
-/// [`hermite_sample`] for one contiguous lane of compile-time dimension `D`.
-#[inline(always)]
-fn hermite_fixed<const D: usize>(st: &mut Store, c: [f64; 4], last: usize) {
-    let (x0, x1, f0) = (arr::<D>(&st.x), arr::<D>(&st.xn), arr::<D>(&st.k));
-    let f1 = arr::<D>(&st.k[last * D..]);
-    let h = st.h[0];
-    let y = &mut st.y[..D];
-    for j in 0..D {
-        y[j] = event::hermite_point(c, x0[j], x1[j], f0[j], f1[j], h);
-    }
-}
-
-/// Candidate flags of rows `a..b` for the guards `specs` of their mode: `cand[l] = 1` when a
-/// directional crossing ([`event::crosses`]) shows between θ = 0 (`g`) and the samples and x₁
-/// (`gs`) of any guard. A column kernel over lanes; the per-lane locator runs only where it is 1.
-#[inline(always)]
-pub(crate) fn mark_candidates(st: &mut Store, specs: &[crate::GuardSpec], a: usize, b: usize) {
-    let stride = st.stride;
-    let m = event::N_COLS;
     let cand = &mut st.cand[a..b];
     cand.fill(0);
-    for (k, spec) in specs.iter().enumerate() {
-        let mut prev = &st.g[k * stride + a..k * stride + b];
-        for i in 1..m {
-            let col = (k * m + i) * stride;
-            let cur = &st.gs[col + a..col + b];
-            match spec.crossing {
-                Crossing::Rising => {
-                    for l in 0..cand.len() {
-                        cand[l] |= (prev[l] < 0.0 && cur[l] >= 0.0) as u8;
-                    }
-                }
-                Crossing::Falling => {
-                    for l in 0..cand.len() {
-                        cand[l] |= (prev[l] > 0.0 && cur[l] <= 0.0) as u8;
-                    }
-                }
-                Crossing::Either => {
-                    for l in 0..cand.len() {
-                        cand[l] |= ((prev[l] < 0.0 && cur[l] >= 0.0)
-                            || (prev[l] > 0.0 && cur[l] <= 0.0))
-                            as u8;
-                    }
-                }
-            }
-            prev = cur;
+    let h = &st.h[a..b];
+    for k in 0..specs.len() {
+        let c = k * stride;
+        let (g0, r0) = (&st.g[c + a..c + b], &st.gr[c + a..c + b]);
+        let (g1, r1) = (&st.g1[c + a..c + b], &st.r1[c + a..c + b]);
+        let bit = event::guard_bit(k);
+        for l in 0..cand.len() {
+            cand[l] |= bit * event::may_cross(g0[l], g1[l], r0[l], r1[l], h[l]) as u8;
         }
     }
 }
@@ -761,13 +711,16 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
     };
     ctl.h = h.min(opts.h_max);
     let ng = sys.guards(mode).len();
+    let (gv, rv) = sc.ev.gv.split_at_mut(ng);
+    sys.guards_with_rates(&mut sc.ev.model, mode, &sc.xg, &sc.fg, gv, &mut rv[..ng]);
     for k in 0..ng {
-        let g = sys.guard(&mut sc.ev.model, mode, k, &sc.xg);
+        let g = gv[k];
         st.g[k * stride + l] = if g.abs() <= sys.guard_tolerance(mode, k) {
             0.0
         } else {
             g
         };
+        st.gr[k * stride + l] = rv[k];
     }
     None
 }

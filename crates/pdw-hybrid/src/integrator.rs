@@ -88,7 +88,9 @@ impl Integrator {
         if ng > self.st.ng {
             self.st.ng = ng;
             self.st.g = vec![0.0; ng];
-            self.st.gs = vec![0.0; ng * crate::event::N_COLS];
+            self.st.gr = vec![0.0; ng];
+            self.st.g1 = vec![0.0; ng];
+            self.st.r1 = vec![0.0; ng];
             self.sc.ev.gv = vec![0.0; ng * (crate::event::N_SAMPLES + 2)];
         }
     }
@@ -228,32 +230,22 @@ impl Integrator {
             );
         }
         engine::error_norm(&mut self.st, self.opts.method, tab, &self.opts, 1);
-        // Guard values at the Hermite samples and at x₁ (the batch does this column-wise).
-        // The candidate test of `engine::mark_candidates`, made as the values arrive.
+        // Guard values and rates at x₁ (the batch does this column-wise), then the test of
+        // `engine::mark_near`: may a guard cross inside the step?
         let specs = sys.guards(mode);
         let ng = specs.len();
         if ng > 0 {
-            let m = crate::event::N_COLS;
-            let mut cand = false;
-            for i in 1..m {
-                let src = if i + 1 < m {
-                    engine::hermite_sample(&mut self.st, tab, 1, i);
-                    &self.st.y
-                } else {
-                    &self.st.xn
-                };
-                for (k, spec) in specs.iter().enumerate() {
-                    let v = sys.guard(&mut self.sc.ev.model, mode, k, &src[..d]);
-                    let prev = if i == 1 {
-                        self.st.g[k]
-                    } else {
-                        self.st.gs[k * m + i - 1]
-                    };
-                    cand |= crate::event::crosses(spec.crossing, prev, v);
-                    self.st.gs[k * m + i] = v;
-                }
-            }
-            self.st.cand[0] = cand as u8;
+            let last = tab.n_stages - 1;
+            let st = &mut self.st;
+            sys.guards_with_rates(
+                &mut self.sc.ev.model,
+                mode,
+                &st.xn[..d],
+                &st.k[last * d..(last + 1) * d],
+                &mut st.g1[..ng],
+                &mut st.r1[..ng],
+            );
+            engine::mark_near(st, specs, 0, 1);
         }
     }
 }

@@ -21,9 +21,11 @@
 //!   controller memory reset). A call's result depends only on its arguments, which makes runs
 //!   deterministic and lets any lane of a batch reproduce the scalar path. The cost is two flow
 //!   evaluations and a conservative first step per call (per reset).
-//! - **Events** (see [`event`]): guard values at the step ends and at 4 interior points of the
-//!   step's cubic Hermite interpolant (subdivision, not an extremum search) detect directional
-//!   crossings, including a step that straddles two sign changes; a detected crossing is confirmed
+//! - **Events** (see [`event`]): guard values and rates at the step ends clear most steps at
+//!   once (the guard's cubic over the step cannot reach zero); on the others, guard values at 4
+//!   interior points of the step's cubic Hermite interpolant (subdivision, not an extremum
+//!   search) detect directional crossings, including a step that straddles two sign changes;
+//!   a detected crossing is confirmed
 //!   and solved on the method's dense output (Illinois, bracket ≤ 4ε·|t|), and the right-hand end
 //!   of the bracket is returned: at a `Guard` stop the guard is on its post-crossing side or zero.
 //!   Admissibility is tested at the root; inadmissible crossings are skipped. Terminal guards stop
@@ -32,14 +34,15 @@
 //!   side first. Start values with `|g| ≤` [`HybridSystem::guard_tolerance`] (default 1e-12)
 //!   count as 0, so a state placed on a guard surface by a reset (roundoff on either side) and a
 //!   restart from a `Guard` stop point cannot report the same event again.
-//! - **Batches** (see [`batch`]): column kernels over lanes for stages, error norms and Hermite
-//!   samples; `flow_batch` and `guard_batch` once per mode (lanes are kept grouped by mode, moved
-//!   between groups by row swaps at their events); accept/reject, event refinement and the driver
-//!   per lane. No allocation inside the lockstep loop.
+//! - **Batches** (see [`batch`]): column kernels over lanes for stages, error norms and the
+//!   end-point event test; `flow_batch` and `guards_with_rates_batch` once per mode (lanes are
+//!   kept grouped by mode, moved between groups by row swaps at their events); accept/reject,
+//!   interior samples of flagged steps, event refinement and the driver per lane. No allocation
+//!   inside the lockstep loop.
 //! - **Bit-for-bit equality** of batch and scalar: both run the same kernels (the scalar path is
 //!   one lane with stride 1); Rust does not contract `a·b + c` into FMAs, so vectorised and scalar
 //!   loops round identically. The only assumption is the trait's: a model's `flow_batch` and
-//!   `guard_batch` agree bit for bit with `flow` and `guard`.
+//!   `guards_with_rates_batch` agree bit for bit with `flow` and `guards_with_rates`.
 
 pub mod batch;
 mod engine;
@@ -57,4 +60,7 @@ pub use batch::{
 pub use error::HybridError;
 pub use integrator::Integrator;
 pub use options::{Method, Options, Stats, StopReason};
-pub use system::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+pub use system::{
+    guards_with_rates_by_lane, Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch,
+    Section,
+};

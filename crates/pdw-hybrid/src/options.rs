@@ -148,6 +148,9 @@ pub struct Stats {
     pub rejected: u64,
     /// Right-hand-side (flow) evaluations, lane by lane.
     pub rhs_evals: u64,
+    /// Accepted steps whose interior was sampled for guard crossings (the others were cleared
+    /// from their end points alone, see [`event`](crate::event)).
+    pub sampled: u64,
 }
 
 impl std::ops::AddAssign for Stats {
@@ -155,5 +158,6 @@ impl std::ops::AddAssign for Stats {
         self.accepted += o.accepted;
         self.rejected += o.rejected;
         self.rhs_evals += o.rhs_evals;
+        self.sampled += o.sampled;
     }
 }

@@ -209,6 +209,58 @@ pub trait HybridSystem: Send + Sync {
         }
     }
 
+    /// Every guard of `mode` at `x` and its rate of change along the flow: `g[k] = g_k(x)` (the
+    /// bits of [`guard`](HybridSystem::guard)) and `rate[k] = ∇g_k(x)·f`, where `f = f(x)` is
+    /// the caller's own evaluation of the flow at `x`.
+    ///
+    /// The integrator uses the rates to decide, from the step's end points alone, that no guard
+    /// can cross zero inside a step (see [`event`](crate::event)): only where a guard is near
+    /// does it sample the step's interior. The default writes `rate[k] = +∞` ("unknown"), which
+    /// makes every step sample its interior, as for a model without rates; models with exact
+    /// guard gradients override it (exact rates, or upper bounds of `|ġ|`, are required: an
+    /// underestimate can hide a crossing).
+    fn guards_with_rates(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        _f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        for (k, (gk, rk)) in g.iter_mut().zip(rate.iter_mut()).enumerate() {
+            *gk = self.guard(ws, mode, k, x);
+            *rk = f64::INFINITY;
+        }
+    }
+
+    /// Is guard `k` of `mode` an affine function of the state (e.g. `φ − 2θ`, a joint angle)?
+    ///
+    /// On a step that may see a crossing of such a guard, the integrator samples the guard's own
+    /// cubic Hermite (from its end values and rates) instead of the guard on the state's
+    /// interpolant: for an affine guard the two are the same curve, and the cubic needs no
+    /// state. Default `false` (the state is sampled).
+    fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
+        false
+    }
+
+    /// Batched [`guards_with_rates`](HybridSystem::guards_with_rates) over lanes that are all in
+    /// `mode`: `x` and `f` are `(lanes × dim)`, `g` and `rate` are `(lanes × n_guards)`.
+    ///
+    /// The default gathers each lane and calls `guards_with_rates`; an override must give, per
+    /// lane, exactly the same bits.
+    fn guards_with_rates_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        f: MatRef<'_, f64>,
+        g: MatMut<'_, f64>,
+        rate: MatMut<'_, f64>,
+    ) {
+        guards_with_rates_by_lane(self, ws, mode, x, f, g, rate)
+    }
+
     /// Whether a crossing of guard `k` at `x` counts (e.g. the simplest walker's heel strike only
     /// with the swing foot ahead of the stance foot; the mid-stance scuffing crossing does not).
     fn admissible(&self, _mode: usize, _k: usize, _x: &[f64]) -> bool {
@@ -312,4 +364,48 @@ pub trait Section: HybridSystem {
     /// Upper bound on the duration of one stride (model time units); a stride that takes longer
     /// is a fall of kind "no heel strike in time".
     fn max_stride_time(&self) -> f64;
+}
+
+/// [`HybridSystem::guards_with_rates_batch`] lane by lane: gathers each lane of `x` and `f`
+/// and calls [`HybridSystem::guards_with_rates`] (the trait's default, and a fallback for
+/// models whose vectorised version needs contiguous columns).
+pub fn guards_with_rates_by_lane<S: HybridSystem + ?Sized>(
+    sys: &S,
+    ws: &mut Scratch,
+    mode: usize,
+    x: MatRef<'_, f64>,
+    f: MatRef<'_, f64>,
+    mut g: MatMut<'_, f64>,
+    mut rate: MatMut<'_, f64>,
+) {
+    let d = sys.dim();
+    let ng = g.ncols();
+    const S: usize = 16;
+    let (mut sx, mut sf, mut sg, mut sr) = ([0.0; S], [0.0; S], [0.0; S], [0.0; S]);
+    let (mut hx, mut hf, mut hg, mut hr) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (xi, fi): (&mut [f64], &mut [f64]) = if d <= S {
+        (&mut sx[..d], &mut sf[..d])
+    } else {
+        hx.resize(d, 0.0);
+        hf.resize(d, 0.0);
+        (&mut hx, &mut hf)
+    };
+    let (gi, ri): (&mut [f64], &mut [f64]) = if ng <= S {
+        (&mut sg[..ng], &mut sr[..ng])
+    } else {
+        hg.resize(ng, 0.0);
+        hr.resize(ng, 0.0);
+        (&mut hg, &mut hr)
+    };
+    for l in 0..x.nrows() {
+        for j in 0..d {
+            xi[j] = x[(l, j)];
+            fi[j] = f[(l, j)];
+        }
+        sys.guards_with_rates(ws, mode, xi, fi, gi, ri);
+        for k in 0..ng {
+            g[(l, k)] = gi[k];
+            rate[(l, k)] = ri[k];
+        }
+    }
 }

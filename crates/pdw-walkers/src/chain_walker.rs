@@ -429,6 +429,53 @@ impl ChainWalker {
         }
     }
 
+    /// Swing-foot height (the bits of [`ChainWalker::swing_foot`]'s second component) and its
+    /// rate along the flow `ż = ∇z·f = −Σ_i len_i sin θ_i θ̇_i`, with `θ_i = q₀ + … + q_i` and
+    /// `θ̇_i = f₀ + … + f_i` read from `f = (q̇, q̈)`.
+    fn foot_height_and_rate(&self, x: &[f64], f: &[f64]) -> (f64, f64) {
+        let (mut th, mut thd, mut z, mut zr) = (0.0, 0.0, 0.0, 0.0);
+        for ((qk, fk), len) in x[..self.n].iter().zip(&f[..self.n]).zip(&self.len) {
+            th += qk;
+            thd += fk;
+            let (s, c) = pdw_simd::sincos(th);
+            z += len * c;
+            zr -= len * s * thd;
+        }
+        (z, zr)
+    }
+
+    /// [`ChainWalker::foot_height_and_rate`] for every lane (four at a time, the same operations
+    /// per lane), from column slices of `x` and `f`.
+    #[inline(always)]
+    fn foot_height_rate_lanes(
+        &self,
+        xc: &[&[f64]],
+        fc: &[&[f64]],
+        lanes: usize,
+        z_out: &mut [f64],
+        r_out: &mut [f64],
+    ) {
+        let mut l0 = 0;
+        while l0 < lanes {
+            let w = (lanes - l0).min(4);
+            let (mut th, mut thd, mut z, mut zr) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+            for ((xk, fk), len) in xc.iter().zip(fc).zip(&self.len) {
+                for i in 0..w {
+                    th[i] += xk[l0 + i];
+                    thd[i] += fk[l0 + i];
+                }
+                let (s, c) = pdw_simd::sincos_lanes(th);
+                for i in 0..4 {
+                    z[i] += *len * c[i];
+                    zr[i] -= *len * s[i] * thd[i];
+                }
+            }
+            z_out[l0..l0 + w].copy_from_slice(&z[..w]);
+            r_out[l0..l0 + w].copy_from_slice(&zr[..w]);
+            l0 += w;
+        }
+    }
+
     /// Absolute angle of the stance leg's top segment (the stance leg's angle when its knees
     /// are straight).
     fn stance_angle(&self, x: &[f64]) -> f64 {
@@ -751,6 +798,104 @@ impl HybridSystem for ChainWalker {
                 _ => column(0, out, FRAC_PI_2),
             },
         }
+    }
+
+    /// Every guard with its exact rate `∇g·f`: the knee angle (rate `q̇_knee`), the swing-foot
+    /// height ([`ChainWalker::foot_height_and_rate`]), the stance rate (rate `q̈₀`), the stance
+    /// angle (rate `q̇₀`); `f = (q̇, q̈)`.
+    fn guards_with_rates(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        let n = self.n;
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        let ng = self.guards(mode).len();
+        for k in 0..ng {
+            (g[k], rate[k]) = match (free, k) {
+                (true, 0) => {
+                    let j = self.free_knee.unwrap_or(0);
+                    (x[j], f[j])
+                }
+                (_, k) if k < lead => self.foot_height_and_rate(x, f),
+                (_, k) => match k - lead {
+                    0 => (x[n], f[n]),
+                    1 => (x[0] - FRAC_PI_2, f[0]),
+                    _ => (x[0] + FRAC_PI_2, f[0]),
+                },
+            };
+        }
+    }
+
+    /// [`HybridSystem::guards_with_rates`] over all lanes: columns of `x` and `f` directly, the
+    /// swing-foot height and its rate four lanes at a time (same bits per lane).
+    fn guards_with_rates_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        f: MatRef<'_, f64>,
+        mut g: MatMut<'_, f64>,
+        mut rate: MatMut<'_, f64>,
+    ) {
+        let (n, lanes) = (self.n, x.nrows());
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        let ng = self.guards(mode).len();
+        let mut xc: [&[f64]; 4 * MAX_SEGMENTS] = [&[]; 4 * MAX_SEGMENTS];
+        let mut fc: [&[f64]; 4 * MAX_SEGMENTS] = [&[]; 4 * MAX_SEGMENTS];
+        for j in 0..2 * n {
+            match (x.col(j).try_as_col_major(), f.col(j).try_as_col_major()) {
+                (Some(a), Some(b)) => (xc[j], fc[j]) = (a.as_slice(), b.as_slice()),
+                _ => return pdw_hybrid::guards_with_rates_by_lane(self, ws, mode, x, f, g, rate),
+            }
+        }
+        if g.row_stride() != 1 || rate.row_stride() != 1 {
+            return pdw_hybrid::guards_with_rates_by_lane(self, ws, mode, x, f, g, rate);
+        }
+        for k in 0..ng {
+            let (Some(gk), Some(rk)) = (
+                g.rb_mut().col_mut(k).try_as_col_major_mut(),
+                rate.rb_mut().col_mut(k).try_as_col_major_mut(),
+            ) else {
+                unreachable!("columns of a view with unit row stride are contiguous")
+            };
+            let (gk, rk) = (gk.as_slice_mut(), rk.as_slice_mut());
+            // x[j] itself (shift None) or x[j] ± π/2: the expressions of `guard`.
+            let mut copy = |j: usize, shift: Option<f64>| {
+                for l in 0..lanes {
+                    gk[l] = shift.map_or(xc[j][l], |s| xc[j][l] + s);
+                    rk[l] = fc[j][l];
+                }
+            };
+            match (free, k) {
+                (true, 0) => copy(self.free_knee.unwrap_or(0), None),
+                (_, k) if k < lead => pdw_simd::dispatch(
+                    #[inline(always)]
+                    || self.foot_height_rate_lanes(&xc[..n], &fc[..n], lanes, gk, rk),
+                ),
+                (_, k) => match k - lead {
+                    0 => copy(n, None),
+                    1 => copy(0, Some(-FRAC_PI_2)),
+                    _ => copy(0, Some(FRAC_PI_2)),
+                },
+            }
+        }
+    }
+
+    /// Every guard but the swing-foot height is a state coordinate (plus a constant).
+    fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        let lead = if self.free_knee.is_some() && mode == FREE {
+            2
+        } else {
+            1
+        };
+        !(k < lead && !(lead == 2 && k == 0))
     }
 
     fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {

@@ -185,6 +185,30 @@ fn rhs1(gamma: f64, x: &[f64]) -> ([f64; 4], [f64; 3]) {
     ([thd, s, phd, phdd], [c, sp, cp])
 }
 
+/// The guards of [`HybridSystem::guard`] at `(θ, θ̇, φ)` and their rates from
+/// `f = (θ̇, θ̈, φ̇, ·)`: heel strike `φ − 2θ` (rate `φ̇ − 2θ̇`), stance reversal `θ̇` (rate
+/// `θ̈`), hip on the ground behind `θ − π/2` and ahead `θ + π/2` (rate `θ̇`).
+#[inline(always)]
+fn guards_and_rates(th: f64, thd: f64, ph: f64, f0: f64, f1: f64, f2: f64) -> ([f64; 4], [f64; 4]) {
+    (
+        [ph - 2.0 * th, thd, th - FRAC_PI_2, th + FRAC_PI_2],
+        [f2 - 2.0 * f0, f1, f0, f0],
+    )
+}
+
+/// The four columns of a `(lanes × 4)` view as slices, when they are contiguous.
+fn cols4_mut(m: MatMut<'_, f64>) -> Option<[&mut [f64]; 4]> {
+    let (a, b) = m.split_at_col_mut(2);
+    let (c0, c1) = a.split_at_col_mut(1);
+    let (c2, c3) = b.split_at_col_mut(1);
+    Some([
+        c0.col_mut(0).try_as_col_major_mut()?.as_slice_mut(),
+        c1.col_mut(0).try_as_col_major_mut()?.as_slice_mut(),
+        c2.col_mut(0).try_as_col_major_mut()?.as_slice_mut(),
+        c3.col_mut(0).try_as_col_major_mut()?.as_slice_mut(),
+    ])
+}
+
 /// Which of Garcia's two period-one gaits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GarciaGait {
@@ -394,6 +418,72 @@ impl HybridSystem for Simplest {
             2 => x[0] - FRAC_PI_2,
             _ => x[0] + FRAC_PI_2,
         }
+    }
+
+    /// The four guards (linear in the state) and their exact rates `∇g·f`:
+    /// `(φ̇ − 2θ̇, θ̈, θ̇, θ̇)` read from `f = (θ̇, θ̈, φ̇, φ̈)`.
+    fn guards_with_rates(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        let (gv, rv) = guards_and_rates(x[0], x[1], x[2], f[0], f[1], f[2]);
+        g[..4].copy_from_slice(&gv);
+        rate[..4].copy_from_slice(&rv);
+    }
+
+    /// [`HybridSystem::guards_with_rates`] as column loops over lanes (same expressions, same
+    /// bits per lane).
+    fn guards_with_rates_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        f: MatRef<'_, f64>,
+        g: MatMut<'_, f64>,
+        rate: MatMut<'_, f64>,
+    ) {
+        let lanes = x.nrows();
+        fn col(m: MatRef<'_, f64>, j: usize) -> Option<&[f64]> {
+            m.col(j).try_as_col_major().map(|c| c.as_slice())
+        }
+        let (Some(th), Some(thd), Some(ph), Some(f0), Some(f1), Some(f2)) = (
+            col(x, 0),
+            col(x, 1),
+            col(x, 2),
+            col(f, 0),
+            col(f, 1),
+            col(f, 2),
+        ) else {
+            return pdw_hybrid::guards_with_rates_by_lane(self, ws, mode, x, f, g, rate);
+        };
+        if g.row_stride() != 1 || rate.row_stride() != 1 {
+            return pdw_hybrid::guards_with_rates_by_lane(self, ws, mode, x, f, g, rate);
+        }
+        let (Some(gc), Some(rc)) = (cols4_mut(g), cols4_mut(rate)) else {
+            unreachable!("columns of a view with unit row stride are contiguous")
+        };
+        let [g0, g1, g2, g3] = gc;
+        let [r0, r1, r2, r3] = rc;
+        pdw_simd::dispatch(
+            #[inline(always)]
+            || {
+                for l in 0..lanes {
+                    let (gv, rv) = guards_and_rates(th[l], thd[l], ph[l], f0[l], f1[l], f2[l]);
+                    (g0[l], g1[l], g2[l], g3[l]) = (gv[0], gv[1], gv[2], gv[3]);
+                    (r0[l], r1[l], r2[l], r3[l]) = (rv[0], rv[1], rv[2], rv[3]);
+                }
+            },
+        );
+    }
+
+    /// All four guards are affine in the state.
+    fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
+        true
     }
 
     fn admissible(&self, _mode: usize, k: usize, x: &[f64]) -> bool {

@@ -343,3 +343,87 @@ fn batched_guards_equal_scalar_guards_bit_for_bit() {
         }
     }
 }
+
+/// The guards' rates are their time derivatives along the flow: `ġ = ∇g·f` against central
+/// differences of the guard along the flow direction, `(g(x + εf) − g(x − εf)) / 2ε`; the values
+/// are the bits of `guard`; the batched version equals the scalar one bit for bit; and a guard
+/// declared affine is affine (its differences along two directions add up).
+#[test]
+fn guard_rates_are_the_derivatives_along_the_flow() {
+    let mut r = ChaCha8Rng::seed_from_u64(16);
+    for (name, w) in all_presets() {
+        let d = w.dim();
+        for mode in 0..w.n_modes() {
+            let ng = w.guards(mode).len();
+            let lanes = 29;
+            let states: Vec<Vec<f64>> =
+                (0..lanes).map(|_| random_state(&w, &mut r, mode)).collect();
+            let mut ws = Scratch::new();
+            let flows: Vec<Vec<f64>> = states
+                .iter()
+                .map(|x| {
+                    let mut f = vec![0.0; d];
+                    w.flow(&mut ws, mode, x, &mut f);
+                    f
+                })
+                .collect();
+            let xm = Mat::from_fn(lanes, d, |l, j| states[l][j]);
+            let fm = Mat::from_fn(lanes, d, |l, j| flows[l][j]);
+            let (mut gb, mut rb) = (Mat::<f64>::zeros(lanes, ng), Mat::<f64>::zeros(lanes, ng));
+            w.guards_with_rates_batch(
+                &mut ws,
+                mode,
+                xm.as_ref(),
+                fm.as_ref(),
+                gb.as_mut(),
+                rb.as_mut(),
+            );
+            for (l, (x, f)) in states.iter().zip(&flows).enumerate() {
+                let (mut g, mut rate) = (vec![0.0; ng], vec![0.0; ng]);
+                w.guards_with_rates(&mut ws, mode, x, f, &mut g, &mut rate);
+                let eps = 1e-6;
+                let shifted = |s: f64| -> Vec<f64> {
+                    x.iter().zip(f).map(|(xi, fi)| xi + s * eps * fi).collect()
+                };
+                let (xp, xn) = (shifted(1.0), shifted(-1.0));
+                for k in 0..ng {
+                    let at = format!("{name} mode {mode} guard {k} lane {l}");
+                    assert_eq!(
+                        g[k].to_bits(),
+                        w.guard(&mut ws, mode, k, x).to_bits(),
+                        "{at}"
+                    );
+                    assert_eq!(gb[(l, k)].to_bits(), g[k].to_bits(), "{at}: batch value");
+                    assert_eq!(rb[(l, k)].to_bits(), rate[k].to_bits(), "{at}: batch rate");
+                    let fd = (w.guard(&mut ws, mode, k, &xp) - w.guard(&mut ws, mode, k, &xn))
+                        / (2.0 * eps);
+                    let scale = 1.0 + rate[k].abs();
+                    assert!(
+                        (fd - rate[k]).abs() <= 1e-7 * scale,
+                        "{at}: {} vs {fd}",
+                        rate[k]
+                    );
+                    if w.guard_is_linear(mode, k) {
+                        // affine: g(x + a) + g(x + b) = g(x) + g(x + a + b)
+                        let (a, b): (Vec<f64>, Vec<f64>) = (
+                            x.iter().zip(f).map(|(xi, fi)| xi + 0.3 * fi).collect(),
+                            x.iter()
+                                .enumerate()
+                                .map(|(j, xi)| xi - 0.2 * (j as f64 - 1.5))
+                                .collect(),
+                        );
+                        let ab: Vec<f64> = a
+                            .iter()
+                            .zip(&b)
+                            .zip(x)
+                            .map(|((ai, bi), xi)| ai + bi - xi)
+                            .collect();
+                        let lhs = w.guard(&mut ws, mode, k, &a) + w.guard(&mut ws, mode, k, &b);
+                        let rhs = w.guard(&mut ws, mode, k, x) + w.guard(&mut ws, mode, k, &ab);
+                        assert!((lhs - rhs).abs() <= 1e-12, "{at}: declared affine, is not");
+                    }
+                }
+            }
+        }
+    }
+}

@@ -312,3 +312,148 @@ fn ground_reaction_is_hip_mass_times_acceleration_minus_gravity() {
     let cf = w.constraint_forces(0, &[gamma, 0.0, 0.0, 0.0]).unwrap();
     assert!((cf.normal - gamma.cos()).abs() < 1e-15 && (cf.tangential + gamma.sin()).abs() < 1e-15);
 }
+
+/// The simplest walker's guard rates equal the derivative of each guard along the flow
+/// (central differences), its values are `guard`'s bits, the batch gives the scalar bits, and
+/// every guard is affine as declared.
+#[test]
+fn simplest_guard_rates_are_the_derivatives_along_the_flow() {
+    let w = Simplest::new(SimplestParams::default()).unwrap();
+    let mut ws = Scratch::new();
+    let states: Vec<[f64; 4]> = (0..23)
+        .map(|i| {
+            let t = i as f64 / 23.0;
+            [
+                0.3 - 0.6 * t,
+                -0.2 + 0.1 * t,
+                0.4 - 0.5 * t,
+                0.05 * (t - 0.5),
+            ]
+        })
+        .collect();
+    let flows: Vec<[f64; 4]> = states
+        .iter()
+        .map(|x| {
+            let mut f = [0.0; 4];
+            w.flow(&mut ws, 0, x, &mut f);
+            f
+        })
+        .collect();
+    let n = states.len();
+    let xm = Mat::from_fn(n, 4, |l, j| states[l][j]);
+    let fm = Mat::from_fn(n, 4, |l, j| flows[l][j]);
+    let (mut gb, mut rb) = (Mat::<f64>::zeros(n, 4), Mat::<f64>::zeros(n, 4));
+    w.guards_with_rates_batch(
+        &mut ws,
+        0,
+        xm.as_ref(),
+        fm.as_ref(),
+        gb.as_mut(),
+        rb.as_mut(),
+    );
+    for (l, (x, f)) in states.iter().zip(&flows).enumerate() {
+        let (mut g, mut r) = ([0.0; 4], [0.0; 4]);
+        w.guards_with_rates(&mut ws, 0, x, f, &mut g, &mut r);
+        let eps = 1e-6;
+        let xp: Vec<f64> = x.iter().zip(f).map(|(a, b)| a + eps * b).collect();
+        let xn: Vec<f64> = x.iter().zip(f).map(|(a, b)| a - eps * b).collect();
+        for k in 0..4 {
+            assert!(w.guard_is_linear(0, k));
+            assert_eq!(g[k].to_bits(), w.guard(&mut ws, 0, k, x).to_bits());
+            assert_eq!(gb[(l, k)].to_bits(), g[k].to_bits());
+            assert_eq!(rb[(l, k)].to_bits(), r[k].to_bits());
+            let fd = (w.guard(&mut ws, 0, k, &xp) - w.guard(&mut ws, 0, k, &xn)) / (2.0 * eps);
+            assert!(
+                (fd - r[k]).abs() <= 1e-9,
+                "guard {k} lane {l}: {} vs {fd}",
+                r[k]
+            );
+        }
+    }
+}
+
+/// The simplest walker behind a wrapper that gives no guard rates (so every step samples its
+/// interior, the detection without the end-point test).
+struct NoRates(Simplest);
+
+impl HybridSystem for NoRates {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn guards(&self, mode: usize) -> &[pdw_hybrid::GuardSpec] {
+        self.0.guards(mode)
+    }
+    fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+        self.0.flow(ws, mode, x, dx)
+    }
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        self.0.guard(ws, mode, k, x)
+    }
+    fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
+        self.0.admissible(mode, k, x)
+    }
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        self.0.reset(ws, mode, k, x, out)
+    }
+}
+
+/// Clearing steps from their end points changes nothing: 40 steps from perturbed gaits with
+/// every method give the same stop reasons, times and states, bit for bit, with and without the
+/// guard rates, while the rates leave only a few steps per stride to sample.
+#[test]
+fn end_point_test_changes_no_event() {
+    use pdw_hybrid::{Integrator, Options, StopReason};
+    let w = Simplest::new(SimplestParams::default()).unwrap();
+    let plain = NoRates(w.clone());
+    let mut rng = ChaCha8Rng::seed_from_u64(40);
+    for opts in [
+        Options::dopri5(1e-9),
+        Options::dop853(1e-11),
+        Options::rk4(0.05),
+    ] {
+        let (mut a, mut b) = (
+            Integrator::new(4, opts).unwrap(),
+            Integrator::new(4, opts).unwrap(),
+        );
+        for _ in 0..8 {
+            let s = [
+                0.2 + rng.random_range(-0.02..0.02),
+                -0.2 + rng.random_range(-0.02..0.02),
+            ];
+            let mut xa = [0.0; 4];
+            w.lift(&s, &mut xa);
+            let mut xb = xa;
+            let (mut ta, mut tb) = (0.0, 0.0);
+            for _ in 0..5 {
+                let (ea, eb) = (ta + 12.0, tb + 12.0);
+                let ra = a.integrate(&w, 0, &mut ta, &mut xa, ea);
+                let rb = b.integrate(&plain, 0, &mut tb, &mut xb, eb);
+                assert_eq!(ra, rb, "{opts:?}");
+                assert_eq!(ta.to_bits(), tb.to_bits(), "{opts:?}");
+                for j in 0..4 {
+                    assert_eq!(xa[j].to_bits(), xb[j].to_bits(), "{opts:?}");
+                }
+                match ra {
+                    StopReason::Guard { guard: HEEL_STRIKE } => {
+                        let mut out = [0.0; 4];
+                        w.reset(a.scratch(), 0, HEEL_STRIKE, &xa, &mut out);
+                        (xa, xb) = (out, out);
+                    }
+                    _ => break,
+                }
+            }
+        }
+        let (sa, sb) = (a.stats(), b.stats());
+        assert_eq!(sa.accepted, sb.accepted);
+        assert_eq!(
+            sb.sampled, sb.accepted,
+            "without rates every step is sampled"
+        );
+        assert!(
+            2 * sa.sampled < sa.accepted,
+            "{opts:?}: {} of {} steps sampled",
+            sa.sampled,
+            sa.accepted
+        );
+    }
+}
