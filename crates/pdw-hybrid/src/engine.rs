@@ -577,8 +577,9 @@ pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
 
 /// Candidate flags of rows `a..b` for the guards `specs` of their mode, from the step's end
 /// points alone: bit k of `cand[l]` set when [`event::may_cross`] holds for guard k — the
-/// guard's cubic over the step, from its end values and rates, comes near zero. A column kernel over lanes; the per-lane locator samples
-/// the interior and locates events only where it is 1.
+/// guard's cubic over the step, from its end values and rates, comes near zero. A column
+/// kernel over lanes; the per-lane locator samples the flagged guards and locates events only
+/// where some bit is set.
 #[inline(always)]
 pub(crate) fn mark_near(st: &mut Store, specs: &[crate::GuardSpec], a: usize, b: usize) {
     let stride = st.stride;

@@ -27,10 +27,10 @@
 //! **Confirmation and refinement.** If any sub-interval shows a crossing, the method's own dense
 //! output is built (RK4: the Hermite cubic itself; DOPRI5: Shampine's 4th-order continuous
 //! extension, free; DOP853: the 7th-order one, three extra flow evaluations), the interior
-//! samples of every guard are recomputed on it, and for each guard the first crossing sub-interval is refined
-//! with the Illinois variant of regula falsi (Dowell & Jarratt 1971), with a bisection step when
-//! three iterations fail to halve the bracket, until the bracket is ≤ 4ε·max(|t₀|, |t₁|) in time
-//! (≈ 1e-15 for t ≈ 1). The *right-hand* end of the final bracket is reported: the returned state
+//! samples of every guard are recomputed on it, and for each guard the first crossing
+//! sub-interval is refined with the Illinois variant of regula falsi (Dowell & Jarratt 1971),
+//! with a bisection step when three iterations fail to halve the bracket, until the bracket is
+//! ≤ 4ε·max(|t₀|, |t₁|) in time (≈ 1e-15 for t ≈ 1). The *right-hand* end of the final bracket is reported: the returned state
 //! is the dense-output state at that θ and its guard value is on the post-crossing side or zero.
 //!
 //! **Admissibility.** [`HybridSystem::admissible`] is tested at the root; an inadmissible crossing
