@@ -7,6 +7,9 @@
 //!   stable fixed point, one reused integrator (default DOP853 at 1e-10);
 //! - `profile batch N [TOL] [dopri5|dop853] [LANES]`: N strides from perturbed copies of the
 //!   fixed point through the serial lockstep engine (default 64 lanes);
+//! - `profile fixedpoint N`: N fixed points of the simplest walker to 1e-12 from Garcia's
+//!   guess (DOP853 at 1e-14, the CLI's settings), with the cost of its parts: one stride and one
+//!   variational stride at the same tolerance;
 //! - `profile compass-stride N [TOL] [METHOD]`, `profile compass-batch N [TOL] [METHOD] [LANES]`:
 //!   the same for the compass gait (Goswami preset, 3°) from its fixed point.
 //!
@@ -14,6 +17,7 @@
 
 use std::time::Instant;
 
+use pdw_hybrid::Section;
 use pdw_hybrid::{Integrator, Options};
 use pdw_limit::{
     classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem,
@@ -72,6 +76,56 @@ fn main() {
                 s.rejected,
                 s.rhs_evals,
                 s.sampled
+            );
+        }
+        "fixedpoint" => {
+            let n: usize = arg(&args, 1, 200);
+            let guess = GarciaGait::LongPeriod.section_guess(GAMMA);
+            let mut fp1 = None;
+            for _ in 0..n {
+                fp1 = Some(
+                    find_fixed_point(&fp_map, &guess, &NewtonOptions::default())
+                        .expect("fixed point"),
+                );
+            }
+            let t_fp = t0.elapsed().as_secs_f64() * 1e3 / n as f64;
+            let fp1 = fp1.expect("n >= 1");
+            let t1 = Instant::now();
+            for _ in 0..n {
+                fp_map.stride(&guess).expect("stride");
+            }
+            let t_stride = t1.elapsed().as_secs_f64() * 1e6 / n as f64;
+            let t2 = Instant::now();
+            for _ in 0..n {
+                pdw_limit::dp_variational(&fp_map, &guess).expect("variational stride");
+            }
+            let t_var = t2.elapsed().as_secs_f64() * 1e6 / n as f64;
+            // Work of one stride and one variational stride from the guess.
+            let work = |sys: &dyn pdw_hybrid::HybridSystem, z0: &[f64]| {
+                let mut integ =
+                    Integrator::new(sys.dim(), *fp_map.options()).expect("valid options");
+                pdw_hybrid::run_scalar_with(&mut integ, sys, &fp_map.driver(), &z0.to_vec())
+                    .expect("stride");
+                let s = integ.stats();
+                (s.accepted + s.rejected, s.rhs_evals)
+            };
+            let x0 = fp_map.lift(&guess);
+            let (sm, sg) = sys.section_guard();
+            let var = pdw_limit::Variational::new(&sys, 2).poincare_at(sm, sg);
+            let mut z0 = x0.clone();
+            z0.extend_from_slice(&pdw_limit::richardson_jacobian(
+                |a, b| sys.lift(a, b),
+                &guess,
+                4,
+            ));
+            let (steps_s, evals_s) = work(&sys, &x0);
+            let (steps_v, evals_v) = work(&var, &z0);
+            println!(
+                "{n} fixed points (DOP853 1e-14, tol 1e-12): {t_fp:.4} ms each, {} iterations, \
+                 residual {:.2e}; one stride {t_stride:.2} µs ({steps_s} steps, {evals_s} \
+                 evaluations), one variational stride {t_var:.2} µs ({steps_v} steps, {evals_v} \
+                 evaluations)",
+                fp1.iterations, fp1.residual
             );
         }
         "compass-stride" | "compass-batch" => {

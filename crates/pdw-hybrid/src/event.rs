@@ -171,8 +171,15 @@ pub(crate) fn may_cross(g0: f64, g1: f64, r0: f64, r1: f64, h: f64) -> bool {
     let (b01, b12, b23) = (0.5 * (b0 + b1), 0.5 * (b1 + b2), 0.5 * (b2 + b3));
     let (b012, b123) = (0.5 * (b01 + b12), 0.5 * (b12 + b23));
     let mid = 0.5 * (b012 + b123);
-    let lo = b0.min(b3).min(b01.min(b23)).min(b012.min(b123)).min(mid);
-    let hi = b0.max(b3).max(b01.max(b23)).max(b012.max(b123)).max(mid);
+    // Plain comparisons (one instruction each; f64::min/max add NaN handling): a non-finite
+    // input or control point (an overflow: ∞ in b₀₁ or b₂₃, NaN only after it) leaves `lo`,
+    // `hi` or `m` non-finite, so `finite` is false and the NaN rules never decide the result.
+    let (min, max) = (
+        |a: f64, b: f64| if a < b { a } else { b },
+        |a: f64, b: f64| if a > b { a } else { b },
+    );
+    let lo = min(min(min(b0, b3), min(b01, b23)), min(min(b012, b123), mid));
+    let hi = max(max(max(b0, b3), max(b01, b23)), max(max(b012, b123), mid));
     let m = 1e-12 * (1.0 + g0.abs() + g1.abs())
         + NONLINEAR_SLACK * SLOPE_BASIS_MAX * h.abs() * (r0.abs() + r1.abs());
     let finite = (g0 + g1 + m + lo + hi).is_finite();
@@ -325,6 +332,15 @@ fn build_dense<S: HybridSystem + ?Sized>(
             Interp::Dopri5
         }
         Method::Dop853 => {
+            match d {
+                2 => return dop853_dense_fixed::<S, 2>(sys, mode, st, l, h, sc, stats),
+                4 => return dop853_dense_fixed::<S, 4>(sys, mode, st, l, h, sc, stats),
+                6 => return dop853_dense_fixed::<S, 6>(sys, mode, st, l, h, sc, stats),
+                8 => return dop853_dense_fixed::<S, 8>(sys, mode, st, l, h, sc, stats),
+                10 => return dop853_dense_fixed::<S, 10>(sys, mode, st, l, h, sc, stats),
+                12 => return dop853_dense_fixed::<S, 12>(sys, mode, st, l, h, sc, stats),
+                _ => {}
+            }
             // The lane's stages k₀…k₁₂, gathered once (contiguous), then k₁₃…k₁₅ appended: the
             // sums below read them in the same order with the same weights as a strided read.
             for q in 0..13 {
@@ -362,6 +378,61 @@ fn build_dense<S: HybridSystem + ?Sized>(
             Interp::Dop853
         }
     }
+}
+
+/// DOP853's dense output (HNW I, §II.10: the three extra stages k₁₃…k₁₅ and the coefficient
+/// rows `d`) for a compile-time dimension `D`: the lane's stages in a stack array, every sum
+/// unrolled over the nonzero weights — the same terms in the same order as the loop of
+/// [`build_dense`], so the same bits.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // indexed as the loops of `build_dense` it reproduces
+fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
+    sys: &S,
+    mode: usize,
+    st: &Store,
+    l: usize,
+    h: f64,
+    sc: &mut EventScratch,
+    stats: &mut Stats,
+) -> Interp {
+    let (stride, blk) = (st.stride, st.blk());
+    let mut kl = [[0.0f64; D]; 16];
+    for (q, kq) in kl.iter_mut().enumerate().take(13) {
+        for (j, v) in kq.iter_mut().enumerate() {
+            *v = st.k[q * blk + j * stride + l];
+        }
+    }
+    let x0: [f64; D] = sc.x0[..D].try_into().expect("D values");
+    for r in 0..3 {
+        let a = tableau::DOP853_DENSE_A[r];
+        let mut y = [0.0; D];
+        for j in 0..D {
+            let mut s = 0.0;
+            for (q, &w) in a.iter().enumerate() {
+                if w != 0.0 {
+                    s += w * kl[q][j];
+                }
+            }
+            y[j] = x0[j] + h * s;
+        }
+        let mut f = [0.0; D];
+        sys.flow(&mut sc.model, mode, &y, &mut f);
+        kl[13 + r] = f;
+        stats.rhs_evals += 1;
+    }
+    hermite_coefficients(sc, h);
+    for (r, drow) in tableau::DOP853_D.iter().enumerate() {
+        for j in 0..D {
+            let mut s = 0.0;
+            for (q, &w) in drow.iter().enumerate() {
+                if w != 0.0 {
+                    s += w * kl[q][j];
+                }
+            }
+            sc.cont[(4 + r) * D + j] = h * s;
+        }
+    }
+    Interp::Dop853
 }
 
 /// Illinois iteration for a root of guard `k` on `(θa, θb]` with `g(θa)` strictly before and

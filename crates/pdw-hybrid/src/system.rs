@@ -283,6 +283,22 @@ pub trait HybridSystem: Send + Sync {
     /// Only called for guards of kind [`GuardKind::Reset`].
     fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize;
 
+    /// The flow and its Jacobian at one point: `dx = f(x)` as [`flow`](Self::flow) gives it
+    /// and `jac = Df(x)` as [`flow_jacobian`](Self::flow_jacobian) gives it, bit for bit. The
+    /// variational equations call it at every stage; a model whose Jacobian repeats the flow's
+    /// work (its sines and cosines) overrides it to do that work once. Default: the two calls.
+    fn flow_with_jacobian(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut [f64],
+    ) {
+        self.flow(ws, mode, x, dx);
+        self.flow_jacobian(ws, mode, x, jac);
+    }
+
     /// Jacobian of the flow, `jac[i*d + j] = ∂f_i/∂x_j` (row-major d×d).
     ///
     /// Default: central differences with a step of ε^(1/3)·max(1, |x_j|) (truncation and

@@ -211,11 +211,7 @@ fn rotate_to_canonical<S: pdw_hybrid::Section + ?Sized>(
     orbit.orbit.rotate_left(shift);
     orbit.states.rotate_left(shift);
     orbit.strides.rotate_left(shift);
-    let prob = PeriodKProblem {
-        map,
-        k: orbit.period_k,
-        dp: opts.dp_report,
-    };
+    let prob = PeriodKProblem::new(map, orbit.period_k, opts.dp_report);
     orbit.dp = prob.dp_k(&orbit.orbit[0])?;
     orbit.multipliers = multipliers(&orbit.dp, orbit.orbit[0].len())?;
     orbit.stable = is_stable(&orbit.multipliers);

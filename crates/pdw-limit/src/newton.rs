@@ -7,6 +7,11 @@
 //! `J δ = −F(s)` by LU with partial pivoting (faer). Near a regular root (`J` non-singular, i.e.
 //! no multiplier equal to 1) the iteration converges quadratically.
 //!
+//! With the variational Jacobian, `F` and `DP` come from one integration of the variational
+//! equations per point ([`FixedPointProblem`]): each iterate costs one variational stride, and
+//! the Jacobian of the converged point (for its multipliers) is the one its last evaluation
+//! gave. Acceptance is decided on the plain stride map (below).
+//!
 //! # Globalisation
 //! Backtracking on `‖F‖₂` (Armijo, Dennis & Schnabel §6.3): accept `s + λδ` with the first
 //! `λ ∈ {1, ½, ¼, …}` such that the trial stride reaches the section and
@@ -18,9 +23,14 @@
 //! states it tightens with them, so that a residual of 10⁻¹² on a state of 10⁻⁵ (a walker barely
 //! moving, whose stride map is the identity to within 10⁻⁷) is not mistaken for a solution.
 //! The solver reports convergence on that test; [`find_fixed_point`] never trusts it: it
-//! re-runs the stride from the returned point with a fresh integrator and accepts only if
-//! `‖P(s) − s‖∞ ≤ tol · σ(s)`; otherwise it returns [`LimitError::NoConvergence`] with the
-//! residual history and the last iterate.
+//! re-runs the stride from the returned point on the plain stride map `P` with a fresh
+//! integrator and accepts only if `‖P(s) − s‖∞ ≤ tol · σ(s)`. With the variational Jacobian the
+//! solver converged on the variational integration's `P`, which differs from the plain `P` by
+//! about the integration tolerance; when that difference exceeds `tol` (a loose integrator, e.g.
+//! DOP853 at 10⁻¹² against `tol` = 10⁻¹²) and the solver did converge, up to four chord steps `s ← s − (DP − I)⁻¹(P(s) − s)`
+//! on the plain map, with the `DP` of the last iterate, finish the convergence (each counted as
+//! an iteration, its residual appended to the history). If the test still fails it returns
+//! [`LimitError::NoConvergence`] with the residual history and the last iterate.
 //!
 //! # Degenerate gaits
 //! On a level floor (slope 0) the passive walkers lose energy at every heel strike and have no
@@ -69,6 +79,50 @@ pub struct NewtonOptions {
     pub min_step_length: f64,
 }
 
+/// Chord steps on the plain stride map after the solver converged on the variational one.
+const MAX_POLISH: usize = 4;
+
+/// Up to [`MAX_POLISH`] chord steps `s ← s − (DP − I)⁻¹(P(s) − s)` on a plain map with a fixed
+/// `dp` (row-major), from `last` with its evaluation `eval_last` (image `image(eval_last)`) and
+/// residual `residual`, while `residual > tol · σ(s)`; a step is kept only if it lowers the
+/// residual. `eval(s)` gives the evaluation at `s` and its residual (None: the map failed).
+/// Returns the number of steps kept (their residuals are appended to `history`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn chord_polish<T>(
+    dp: &[f64],
+    tol: f64,
+    last: &mut Vec<f64>,
+    eval_last: &mut T,
+    residual: &mut f64,
+    history: &mut Vec<f64>,
+    image: impl Fn(&T) -> &Vec<f64>,
+    eval: impl Fn(&[f64]) -> Option<(T, f64)>,
+) -> u64 {
+    let n = last.len();
+    if !residual.is_finite() || *residual <= tol * residual_scale(last) || dp.len() != n * n {
+        return 0;
+    }
+    let jac = Mat::from_fn(n, n, |i, k| dp[i * n + k] - if i == k { 1.0 } else { 0.0 });
+    let lu = jac.partial_piv_lu();
+    let mut kept = 0;
+    for _ in 0..MAX_POLISH {
+        let rhs = Mat::<f64>::from_fn(n, 1, |i, _| last[i] - image(eval_last)[i]);
+        let delta = lu.solve(&rhs);
+        let trial: Vec<f64> = (0..n).map(|i| last[i] + delta[(i, 0)]).collect();
+        let Some((e, r)) = eval(&trial) else { break };
+        if r.is_nan() || r >= *residual {
+            break;
+        }
+        (*last, *eval_last, *residual) = (trial, e, r);
+        history.push(r);
+        kept += 1;
+        if r <= tol * residual_scale(last) {
+            break;
+        }
+    }
+    kept
+}
+
 /// Default [`NewtonOptions::min_step_length`]: a millionth of a leg.
 pub const MIN_STEP_LENGTH: f64 = 1e-6;
 
@@ -91,14 +145,45 @@ impl Default for NewtonOptions {
 }
 
 /// The argmin problem `F(s) = P(s) − s` with Jacobian `DP(s) − I`.
+///
+/// With [`DpMethod::Variational`] every evaluation of `F` integrates the variational equations
+/// once: one integration gives both `P(s)` (the state part, under error control together with
+/// the tangent block) and `DP(s)`, which is kept for the Jacobian at that same `s` (the Newton
+/// step from an accepted point, and the multipliers of the converged point, cost no extra
+/// integration). The plain stride map `P` decides acceptance in [`find_fixed_point`].
 pub struct FixedPointProblem<'m, 'a, S: Section + ?Sized> {
     pub map: &'m StrideMap<'a, S>,
     pub dp: DpMethod,
+    /// `(s, DP(s))` of the last variational evaluation of `F`.
+    kept: std::cell::RefCell<Option<(Vec<f64>, Vec<f64>)>>,
 }
 
-impl<S: Section + ?Sized> FixedPointProblem<'_, '_, S> {
-    /// `DP(s)` (row-major) by the configured method.
+impl<'m, 'a, S: Section + ?Sized> FixedPointProblem<'m, 'a, S> {
+    /// The problem on `map` with the Jacobian from `dp`.
+    pub fn new(map: &'m StrideMap<'a, S>, dp: DpMethod) -> Self {
+        Self {
+            map,
+            dp,
+            kept: std::cell::RefCell::new(None),
+        }
+    }
+
+    /// The `DP` kept from the variational evaluation of `F` at exactly `s`, if the last one
+    /// was there.
+    pub fn kept_at(&self, s: &[f64]) -> Option<Vec<f64>> {
+        self.kept
+            .borrow()
+            .as_ref()
+            .filter(|(at, _)| at.as_slice() == s)
+            .map(|(_, dp)| dp.clone())
+    }
+
+    /// `DP(s)` (row-major) by the configured method (the one kept from the evaluation of `F`
+    /// at exactly this `s`, if there was one).
     pub fn dp(&self, s: &[f64]) -> Result<Vec<f64>, LimitError> {
+        if let Some(dp) = self.kept_at(s) {
+            return Ok(dp);
+        }
         match self.dp {
             DpMethod::Variational => Ok(dp_variational(self.map, s)?.1),
             DpMethod::FiniteDifference { scheme, lanes } => {
@@ -113,7 +198,14 @@ impl<S: Section + ?Sized> Operator for FixedPointProblem<'_, '_, S> {
     type Output = Vec<f64>;
 
     fn apply(&self, s: &Vec<f64>) -> Result<Vec<f64>, ArgminError> {
-        let p = self.map.apply(s)?;
+        let p = match self.dp {
+            DpMethod::Variational => {
+                let (stride, dp) = dp_variational(self.map, s)?;
+                *self.kept.borrow_mut() = Some((s.clone(), dp));
+                stride.next
+            }
+            DpMethod::FiniteDifference { .. } => self.map.apply(s)?,
+        };
         Ok(p.iter().zip(s).map(|(a, b)| a - b).collect())
     }
 }
@@ -283,7 +375,7 @@ pub fn find_fixed_point<S: Section + ?Sized>(
     opts: &NewtonOptions,
 ) -> Result<FixedPoint, LimitError> {
     map.check_dim(guess)?;
-    let problem = FixedPointProblem { map, dp: opts.dp };
+    let problem = FixedPointProblem::new(map, opts.dp);
     let solver = Newton::new(opts.tol, opts.max_backtracks)?;
     let guess_v = guess.to_vec();
     let run = Executor::new(problem, solver)
@@ -324,48 +416,75 @@ pub fn find_fixed_point<S: Section + ?Sized>(
         }
     };
     let state = res.state();
-    let iterations = state.get_iter();
+    let mut iterations = state.get_iter();
     let termination = state
         .get_termination_reason()
         .map(|r| r.text().to_string())
         .unwrap_or_else(|| "not terminated".into());
-    let history = res.solver().history.clone();
-    let last = state
+    let mut history = res.solver().history.clone();
+    let mut last = state
         .get_best_param()
         .or(state.get_param())
         .cloned()
         .unwrap_or_else(|| guess.to_vec());
     // The iterates collapsed towards the standing state s = 0 (a level floor has no gait).
     let shrunk = norm_inf(&last) < 0.25 * norm_inf(guess);
-    let collapsed = |why: String| LimitError::NoConvergence {
-        reason: format!(
-            "degenerate: the iterates shrink towards standing still (‖s‖∞ from {:.3e} at the \
-             guess to {:.3e}), so there is no gait to converge to ({why})",
-            norm_inf(guess),
-            norm_inf(&last)
-        ),
-        iterations,
-        last: last.clone(),
-        history: history.clone(),
-    };
-    // Independent check with a fresh integrator.
-    let check = match map.stride(&last) {
+    let collapsed =
+        |why: String, last: &[f64], iterations: u64, history: &[f64]| LimitError::NoConvergence {
+            reason: format!(
+                "degenerate: the iterates shrink towards standing still (‖s‖∞ from {:.3e} at \
+                 the guess to {:.3e}), so there is no gait to converge to ({why})",
+                norm_inf(guess),
+                norm_inf(last)
+            ),
+            iterations,
+            last: last.to_vec(),
+            history: history.to_vec(),
+        };
+    // Independent check on the plain stride map, with a fresh integrator.
+    let mut check = match map.stride(&last) {
         Ok(c) => c,
-        Err(e) if shrunk => return Err(collapsed(e.to_string())),
+        Err(e) if shrunk => return Err(collapsed(e.to_string(), &last, iterations, &history)),
         Err(e) => return Err(e),
     };
-    let residual = if check.outcome.is_ok() {
-        norm_inf(
-            &check
-                .next
+    let plain_residual = |c: &crate::stride::Stride, s: &[f64]| {
+        if c.outcome.is_ok() {
+            c.next
                 .iter()
-                .zip(&last)
-                .map(|(a, b)| a - b)
-                .collect::<Vec<_>>(),
-        )
-    } else {
-        f64::INFINITY
+                .zip(s)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+        } else {
+            f64::INFINITY
+        }
     };
+    let mut residual = plain_residual(&check, &last);
+    // The solver converged on the variational integration's map, which differs from the plain
+    // map by about the integration tolerance; where that exceeds `tol` (a loose integrator),
+    // chord steps on the plain map with the DP kept at the last iterate finish the job.
+    // Only after the solver converged: an iteration limit stays a failure.
+    let converged = state.get_termination_reason() == Some(&TerminationReason::SolverConverged);
+    if let Some(dp) = res
+        .problem
+        .problem
+        .as_ref()
+        .filter(|_| converged)
+        .and_then(|p| p.kept_at(&last))
+    {
+        iterations += chord_polish(
+            &dp,
+            opts.tol,
+            &mut last,
+            &mut check,
+            &mut residual,
+            &mut history,
+            |c| &c.next,
+            |s| {
+                let c = map.stride(s).ok()?;
+                let r = plain_residual(&c, s);
+                Some((c, r))
+            },
+        );
+    }
     let accepted = residual.is_finite() && residual <= opts.tol * residual_scale(&last);
     let step = check
         .outcome
@@ -399,7 +518,7 @@ pub fn find_fixed_point<S: Section + ?Sized>(
                  the guess, {l:.3e} at the last iterate), so there is no gait to converge to \
                  ({termination})"
             ),
-            _ if shrunk => return Err(collapsed(termination)),
+            _ if shrunk => return Err(collapsed(termination, &last, iterations, &history)),
             _ => termination,
         };
         return Err(LimitError::NoConvergence {
@@ -409,11 +528,12 @@ pub fn find_fixed_point<S: Section + ?Sized>(
             history,
         });
     }
-    let fp_problem = FixedPointProblem {
-        map,
-        dp: opts.dp_report,
+    // DP at the converged point: kept from the solver's last evaluation when it was there and
+    // by the same method, else computed.
+    let dp = match res.problem.problem.as_ref() {
+        Some(p) if p.dp == opts.dp_report => p.dp(&last)?,
+        _ => FixedPointProblem::new(map, opts.dp_report).dp(&last)?,
     };
-    let dp = fp_problem.dp(&last)?;
     let ds = last.len();
     let mult = multipliers(&dp, ds)?;
     Ok(FixedPoint {

@@ -20,18 +20,24 @@ use crate::error::LimitError;
 use crate::floquet::{is_stable, multipliers, Multiplier};
 use crate::jacobian::{dp_finite_difference, dp_variational};
 use crate::metrics::GaitMetrics;
-use crate::newton::{residual_scale, DpMethod, Newton, NewtonOptions};
+use crate::newton::{chord_polish, residual_scale, DpMethod, Newton, NewtonOptions};
 use crate::stride::StrideMap;
-use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State};
+use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, TerminationReason};
 use faer::Mat;
 use pdw_hybrid::Section;
 
 /// The argmin problem `F(s) = P^K(s) − s` with Jacobian `DP^K(s) − I`.
+///
+/// As for period one ([`crate::FixedPointProblem`]): with [`DpMethod::Variational`] an
+/// evaluation of `F` integrates the variational equations along the K strides once, giving
+/// `P^K(s)` and `DP^K(s)` together; the Jacobian at that `s` is kept.
 pub struct PeriodKProblem<'m, 'a, S: Section + ?Sized> {
     pub map: &'m StrideMap<'a, S>,
     /// K ≥ 1.
     pub k: usize,
     pub dp: DpMethod,
+    /// `(s, DP^K(s))` of the last variational evaluation of `F`.
+    kept: std::cell::RefCell<Option<(Vec<f64>, Vec<f64>)>>,
 }
 
 /// `C = A · B` for row-major `n × n` matrices.
@@ -64,8 +70,28 @@ impl<S: Section + ?Sized> PeriodKProblem<'_, '_, S> {
         Ok(x)
     }
 
-    /// `DP^K(s) = DP(s_{K−1}) ⋯ DP(s_0)` (row-major) by the configured method.
+    /// `DP^K(s) = DP(s_{K−1}) ⋯ DP(s_0)` (row-major) by the configured method (the one kept
+    /// from the evaluation of `F` at exactly this `s`, if there was one).
     pub fn dp_k(&self, s: &[f64]) -> Result<Vec<f64>, LimitError> {
+        match self.kept_at(s) {
+            Some(dp) => Ok(dp),
+            None => Ok(self.orbit_and_dp(s)?.1),
+        }
+    }
+
+    /// The `DP^K` kept from the variational evaluation of `F` at exactly `s`, if the last one
+    /// was there.
+    pub fn kept_at(&self, s: &[f64]) -> Option<Vec<f64>> {
+        self.kept
+            .borrow()
+            .as_ref()
+            .filter(|(at, _)| at.as_slice() == s)
+            .map(|(_, dp)| dp.clone())
+    }
+
+    /// `s_K` along the strides the Jacobian is taken on (the variational integration's, or the
+    /// plain map's with finite differences) and `DP^K(s)`.
+    fn orbit_and_dp(&self, s: &[f64]) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
         let n = s.len();
         let mut prod: Vec<f64> = (0..n * n)
             .map(|i| if i % (n + 1) == 0 { 1.0 } else { 0.0 })
@@ -85,7 +111,19 @@ impl<S: Section + ?Sized> PeriodKProblem<'_, '_, S> {
             prod = matmul(&dp, &prod, n);
             x = next;
         }
-        Ok(prod)
+        Ok((x, prod))
+    }
+}
+
+impl<'m, 'a, S: Section + ?Sized> PeriodKProblem<'m, 'a, S> {
+    /// The K-step problem on `map` with the Jacobian from `dp`.
+    pub fn new(map: &'m StrideMap<'a, S>, k: usize, dp: DpMethod) -> Self {
+        Self {
+            map,
+            k,
+            dp,
+            kept: std::cell::RefCell::new(None),
+        }
     }
 }
 
@@ -94,7 +132,14 @@ impl<S: Section + ?Sized> Operator for PeriodKProblem<'_, '_, S> {
     type Output = Vec<f64>;
 
     fn apply(&self, s: &Vec<f64>) -> Result<Vec<f64>, ArgminError> {
-        let p = self.iterate(s)?;
+        let p = match self.dp {
+            DpMethod::Variational => {
+                let (p, dp) = self.orbit_and_dp(s)?;
+                *self.kept.borrow_mut() = Some((s.clone(), dp));
+                p
+            }
+            DpMethod::FiniteDifference { .. } => self.iterate(s)?,
+        };
         Ok(p.iter().zip(s).map(|(a, b)| a - b).collect())
     }
 }
@@ -208,11 +253,7 @@ pub fn find_periodic_orbit<S: Section + ?Sized>(
         });
     }
     map.check_dim(guess)?;
-    let problem = PeriodKProblem {
-        map,
-        k,
-        dp: opts.dp,
-    };
+    let problem = PeriodKProblem::new(map, k, opts.dp);
     let solver = Newton::new(opts.tol, opts.max_backtracks)?;
     let run = Executor::new(problem, solver)
         .configure(|s| s.param(guess.to_vec()).max_iters(opts.max_iters))
@@ -233,26 +274,52 @@ pub fn find_periodic_orbit<S: Section + ?Sized>(
         }
     };
     let state = res.state();
-    let iterations = state.get_iter();
+    let mut iterations = state.get_iter();
     let termination = state
         .get_termination_reason()
         .map(|r| r.text().to_string())
         .unwrap_or_else(|| "not terminated".into());
-    let history = res.solver().history.clone();
-    let last = state
+    let mut history = res.solver().history.clone();
+    let mut last = state
         .get_best_param()
         .or(state.get_param())
         .cloned()
         .unwrap_or_else(|| guess.to_vec());
+    // Independent check on the plain stride map, with fresh integrators; chord steps on it
+    // where the solver's (variational) map differs from it by more than tol (see
+    // `crate::newton`).
+    let mut orbit_end = integrate_orbit(map, &last, k)?;
+    let mut residual = dist_inf(&orbit_end.0[k], &orbit_end.0[0]);
+    let converged = state.get_termination_reason() == Some(&TerminationReason::SolverConverged);
+    if let Some(dpk) = res
+        .problem
+        .problem
+        .as_ref()
+        .filter(|_| converged)
+        .and_then(|p| p.kept_at(&last))
+    {
+        iterations += chord_polish(
+            &dpk,
+            opts.tol,
+            &mut last,
+            &mut orbit_end,
+            &mut residual,
+            &mut history,
+            |(pts, _)| &pts[k],
+            |s| {
+                let e = integrate_orbit(map, s, k).ok()?;
+                let r = dist_inf(&e.0[k], &e.0[0]);
+                Some((e, r))
+            },
+        );
+    }
+    let (pts, metrics) = orbit_end;
     let fail = |reason: String, last: Vec<f64>| LimitError::NoConvergence {
         reason,
         iterations,
         last,
         history: history.clone(),
     };
-    // Independent check with fresh integrators.
-    let (pts, metrics) = integrate_orbit(map, &last, k)?;
-    let residual = dist_inf(&pts[k], &pts[0]);
     if !(residual.is_finite() && residual <= opts.tol * residual_scale(&last)) {
         return Err(fail(
             format!("‖P^{k}(s) − s‖∞ = {residual:.3e} at the last iterate ({termination})"),
@@ -285,12 +352,10 @@ pub fn find_periodic_orbit<S: Section + ?Sized>(
             last,
         ));
     }
-    let report = PeriodKProblem {
-        map,
-        k,
-        dp: opts.dp_report,
+    let dp = match res.problem.problem.as_ref() {
+        Some(p) if p.dp == opts.dp_report => p.dp_k(&last)?,
+        _ => PeriodKProblem::new(map, k, opts.dp_report).dp_k(&last)?,
     };
-    let dp = report.dp_k(&last)?;
     let mult = multipliers(&dp, last.len())?;
     let orbit: Vec<Vec<f64>> = pts[..k].to_vec();
     Ok(PeriodicOrbit {

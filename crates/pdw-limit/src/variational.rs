@@ -106,6 +106,18 @@ impl<'a, S: HybridSystem + ?Sized> Variational<'a, S> {
     }
 }
 
+/// Calls `f` with `n` zeroed values on the stack (up to 64), else on the heap.
+#[inline(always)]
+fn with_scratch<R>(n: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    if n <= 16 {
+        f(&mut [0.0; 16][..n])
+    } else if n <= 64 {
+        f(&mut [0.0; 64][..n])
+    } else {
+        f(&mut vec![0.0; n])
+    }
+}
+
 impl<S: HybridSystem + ?Sized> HybridSystem for Variational<'_, S> {
     fn dim(&self) -> usize {
         self.d + self.d * self.m
@@ -123,29 +135,49 @@ impl<S: HybridSystem + ?Sized> HybridSystem for Variational<'_, S> {
         let (d, m) = (self.d, self.m);
         let (x, phi) = z.split_at(d);
         let (dx, dphi) = dz.split_at_mut(d);
-        self.sys.flow(ws, mode, x, dx);
-        let mut stack = [0.0; 256];
-        let mut heap = Vec::new();
-        let jac: &mut [f64] = if d * d <= stack.len() {
-            &mut stack[..d * d]
-        } else {
-            heap.resize(d * d, 0.0);
-            &mut heap
-        };
-        self.sys.flow_jacobian(ws, mode, x, jac);
-        for i in 0..d {
-            for j in 0..m {
-                let mut acc = 0.0;
-                for k in 0..d {
-                    acc += jac[i * d + k] * phi[k * m + j];
+        // The Jacobian in a stack buffer sized to the model: a fixed buffer of 256 values,
+        // zeroed at every call, cost as much as the flow of a four-state model.
+        with_scratch(d * d, |jac| {
+            self.sys.flow_with_jacobian(ws, mode, x, dx, jac);
+            for i in 0..d {
+                for j in 0..m {
+                    let mut acc = 0.0;
+                    for k in 0..d {
+                        acc += jac[i * d + k] * phi[k * m + j];
+                    }
+                    dphi[i * m + j] = acc;
                 }
-                dphi[i * m + j] = acc;
             }
-        }
+        })
     }
 
     fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, z: &[f64]) -> f64 {
         self.sys.guard(ws, mode, k, &z[..self.d])
+    }
+
+    /// The guards depend on `x` alone: their values and rates `ġ = ∇g·ẋ` are the wrapped
+    /// system's, from `x` and its derivative `ẋ = f(x)` (the first `d` components of `ż`).
+    fn guards_with_rates(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        z: &[f64],
+        dz: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        let d = self.d;
+        self.sys
+            .guards_with_rates(ws, mode, &z[..d], &dz[..d], g, rate)
+    }
+
+    /// A guard affine in `x` is affine in `z = (x, Φ)`.
+    fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        self.sys.guard_is_linear(mode, k)
+    }
+
+    fn guard_tolerance(&self, mode: usize, k: usize) -> f64 {
+        self.sys.guard_tolerance(mode, k)
     }
 
     fn admissible(&self, mode: usize, k: usize, z: &[f64]) -> bool {

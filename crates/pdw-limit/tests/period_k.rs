@@ -96,14 +96,14 @@ fn period_two_at_gamma_0_016_is_found_stable_and_agrees_with_iterating_the_map()
 
     // Route 4: the multipliers from a finite-difference K-step Jacobian (Richardson, product
     // of per-stride FD Jacobians) agree with the exact (variational) ones.
-    let fd = PeriodKProblem {
-        map: &map,
-        k: 2,
-        dp: DpMethod::FiniteDifference {
+    let fd = PeriodKProblem::new(
+        &map,
+        2,
+        DpMethod::FiniteDifference {
             scheme: FdScheme::default(),
             lanes: 8,
         },
-    };
+    );
     let mfd = multipliers(&fd.dp_k(&o.orbit[0]).unwrap(), 2).unwrap();
     for (a, b) in o.multipliers.iter().zip(&mfd) {
         assert!(

@@ -311,6 +311,20 @@ impl Simplest {
     }
 }
 
+/// The flow Jacobian of [`Simplest`] from the flow `f = rhs1(x)` and its `[cos(θ − γ), sin φ,
+/// cos φ]`: rows `(0,1,0,0)`, `(c,0,0,0)`, `(0,0,0,1)`, `(c + s sin φ, 2θ̇ sin φ,
+/// (θ̇² − c) cos φ, 0)` with `s = f[1] = sin(θ − γ)`.
+fn jacobian_from(x: &[f64], f: &[f64; 4], [c, sp, cp]: [f64; 3], jac: &mut [f64]) {
+    let s = f[1];
+    jac[..16].fill(0.0);
+    jac[1] = 1.0;
+    jac[4] = c;
+    jac[2 * 4 + 3] = 1.0;
+    jac[3 * 4] = c + s * sp;
+    jac[3 * 4 + 1] = 2.0 * x[1] * sp;
+    jac[3 * 4 + 2] = (x[1] * x[1] - c) * cp;
+}
+
 impl HybridSystem for Simplest {
     fn dim(&self) -> usize {
         4
@@ -511,15 +525,22 @@ impl HybridSystem for Simplest {
     /// Closed form: rows `(0,1,0,0)`, `(c,0,0,0)`, `(0,0,0,1)`,
     /// `(c + s sin φ, 2θ̇ sin φ, (θ̇² − c) cos φ, 0)` with `s, c = sin, cos(θ − γ)`.
     fn flow_jacobian(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], jac: &mut [f64]) {
-        let (f, [c, sp, cp]) = rhs1(self.gamma, x);
-        let s = f[1];
-        jac[..16].fill(0.0);
-        jac[1] = 1.0;
-        jac[4] = c;
-        jac[2 * 4 + 3] = 1.0;
-        jac[3 * 4] = c + s * sp;
-        jac[3 * 4 + 1] = 2.0 * x[1] * sp;
-        jac[3 * 4 + 2] = (x[1] * x[1] - c) * cp;
+        let (f, trig) = rhs1(self.gamma, x);
+        jacobian_from(x, &f, trig, jac);
+    }
+
+    /// Flow and Jacobian from one evaluation of the sines and cosines.
+    fn flow_with_jacobian(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut [f64],
+    ) {
+        let (f, trig) = rhs1(self.gamma, x);
+        dx[..4].copy_from_slice(&f);
+        jacobian_from(x, &f, trig, jac);
     }
 
     fn guard_gradient(

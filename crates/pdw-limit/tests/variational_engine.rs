@@ -1,0 +1,108 @@
+//! The variational stride as the engine runs it: the wrapper's guard rates and the model's
+//! one-pass flow-and-Jacobian change its cost, never its bits.
+
+use pdw_hybrid::{GuardSpec, HybridSystem, Options, Scratch, Section};
+use pdw_limit::{richardson_jacobian, StrideMap, Variational};
+use pdw_walkers::simplest::{GarciaGait, Simplest, SimplestParams};
+
+fn walker(gamma: f64) -> Simplest {
+    Simplest::new(SimplestParams {
+        slope: gamma,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// A system that hides the guard rates and the affine declarations of the one it wraps (the
+/// trait's defaults: every step is sampled on the state's interpolant), and computes flow and
+/// Jacobian by the two separate calls.
+struct Plain<'a, S: ?Sized>(&'a S);
+
+impl<S: HybridSystem + ?Sized> HybridSystem for Plain<'_, S> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn n_modes(&self) -> usize {
+        self.0.n_modes()
+    }
+    fn guards(&self, mode: usize) -> &[GuardSpec] {
+        self.0.guards(mode)
+    }
+    fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+        self.0.flow(ws, mode, x, dx)
+    }
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        self.0.guard(ws, mode, k, x)
+    }
+    fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
+        self.0.admissible(mode, k, x)
+    }
+    fn guard_tolerance(&self, mode: usize, k: usize) -> f64 {
+        self.0.guard_tolerance(mode, k)
+    }
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        self.0.reset(ws, mode, k, x, out)
+    }
+    fn flow_jacobian(&self, ws: &mut Scratch, mode: usize, x: &[f64], jac: &mut [f64]) {
+        self.0.flow_jacobian(ws, mode, x, jac)
+    }
+    fn guard_gradient(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], g: &mut [f64]) {
+        self.0.guard_gradient(ws, mode, k, x, g)
+    }
+    fn reset_jacobian(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], j: &mut [f64]) {
+        self.0.reset_jacobian(ws, mode, k, x, j)
+    }
+}
+
+#[test]
+fn one_pass_flow_and_jacobian_equal_the_two_calls_bit_for_bit() {
+    let m = walker(0.009);
+    let mut ws = Scratch::new();
+    let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut uniform = move || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..1000 {
+        let x: Vec<f64> = (0..4).map(|_| 2.0 * uniform() - 1.0).collect();
+        let (mut f1, mut j1) = ([0.0; 4], [0.0; 16]);
+        let (mut f2, mut j2) = ([0.0; 4], [0.0; 16]);
+        m.flow_with_jacobian(&mut ws, 0, &x, &mut f1, &mut j1);
+        m.flow(&mut ws, 0, &x, &mut f2);
+        m.flow_jacobian(&mut ws, 0, &x, &mut j2);
+        assert_eq!(f1.map(f64::to_bits), f2.map(f64::to_bits), "at {x:?}");
+        assert_eq!(j1.map(f64::to_bits), j2.map(f64::to_bits), "at {x:?}");
+    }
+}
+
+/// A whole variational stride (state, tangent block, event time) from the Garcia guess: on the
+/// model itself (the wrapper forwards its exact guard rates, so most steps skip sampling, and
+/// flow and Jacobian come from one pass) and on the model behind [`Plain`] (no rates, two
+/// calls): the same bits, for DOP853 at two tolerances and DOPRI5.
+#[test]
+fn variational_stride_with_guard_rates_equals_the_one_without_bit_for_bit() {
+    let m = walker(0.009);
+    let (sm, sg) = m.section_guard();
+    let s = GarciaGait::LongPeriod.section_guess(0.009);
+    for opts in [
+        Options::dop853(1e-14),
+        Options::dop853(1e-9),
+        Options::dopri5(1e-10),
+    ] {
+        let map = StrideMap::new(&m, opts).unwrap();
+        let mut z0 = map.lift(&s);
+        z0.extend_from_slice(&richardson_jacobian(|a, b| m.lift(a, b), &s, 4));
+        let fast = Variational::new(&m, 2).poincare_at(sm, sg);
+        let hidden = Plain(&m);
+        let slow = Variational::new(&hidden, 2).poincare_at(sm, sg);
+        let a = pdw_hybrid::run_scalar(&fast, &map.driver(), &z0, &opts).unwrap();
+        let b = pdw_hybrid::run_scalar(&slow, &map.driver(), &z0, &opts).unwrap();
+        assert!(a.outcome.is_ok(), "{:?}", a.outcome);
+        assert_eq!(a.t.to_bits(), b.t.to_bits(), "{opts:?}");
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a.post), bits(&b.post), "{opts:?}");
+        assert_eq!(bits(&a.pre), bits(&b.pre), "{opts:?}");
+    }
+}
