@@ -27,9 +27,9 @@
 //! integrator and accepts only if `‖P(s) − s‖∞ ≤ tol · σ(s)`. With the variational Jacobian the
 //! solver converged on the variational integration's `P`, which differs from the plain `P` by
 //! about the integration tolerance; when that difference exceeds `tol` (a loose integrator, e.g.
-//! DOP853 at 10⁻¹² against `tol` = 10⁻¹²) and the solver did converge, up to four chord steps `s ← s − (DP − I)⁻¹(P(s) − s)`
-//! on the plain map, with the `DP` of the last iterate, finish the convergence (each counted as
-//! an iteration, its residual appended to the history). If the test still fails it returns
+//! DOP853 at 10⁻¹² against `tol` = 10⁻¹²) and the solver did converge, up to four chord steps
+//! `s ← s − (DP − I)⁻¹(P(s) − s)` on the plain map, with the `DP` of the last iterate, finish
+//! the convergence (each counted as an iteration, its residual appended to the history). If the test still fails it returns
 //! [`LimitError::NoConvergence`] with the residual history and the last iterate.
 //!
 //! # Degenerate gaits
@@ -77,6 +77,26 @@ pub struct NewtonOptions {
     /// Smallest step length (model length units, legs are O(1)) of an accepted gait; shorter
     /// ones are degenerate (standing still). Applies only to maps that report a step length.
     pub min_step_length: f64,
+}
+
+/// The Jacobian an evaluation of `F` produced on the way, keyed by the exact point `s`.
+#[derive(Default)]
+pub(crate) struct KeptJacobian(std::cell::RefCell<Option<(Vec<f64>, Vec<f64>)>>);
+
+impl KeptJacobian {
+    /// Keep `dp` as the Jacobian at `s` (replacing the previous one).
+    pub(crate) fn keep(&self, s: &[f64], dp: Vec<f64>) {
+        *self.0.borrow_mut() = Some((s.to_vec(), dp));
+    }
+
+    /// The kept Jacobian if it was taken at exactly `s`.
+    pub(crate) fn at(&self, s: &[f64]) -> Option<Vec<f64>> {
+        self.0
+            .borrow()
+            .as_ref()
+            .filter(|(at, _)| at.as_slice() == s)
+            .map(|(_, dp)| dp.clone())
+    }
 }
 
 /// Chord steps on the plain stride map after the solver converged on the variational one.
@@ -154,8 +174,8 @@ impl Default for NewtonOptions {
 pub struct FixedPointProblem<'m, 'a, S: Section + ?Sized> {
     pub map: &'m StrideMap<'a, S>,
     pub dp: DpMethod,
-    /// `(s, DP(s))` of the last variational evaluation of `F`.
-    kept: std::cell::RefCell<Option<(Vec<f64>, Vec<f64>)>>,
+    /// `DP(s)` of the last variational evaluation of `F`.
+    kept: KeptJacobian,
 }
 
 impl<'m, 'a, S: Section + ?Sized> FixedPointProblem<'m, 'a, S> {
@@ -164,18 +184,14 @@ impl<'m, 'a, S: Section + ?Sized> FixedPointProblem<'m, 'a, S> {
         Self {
             map,
             dp,
-            kept: std::cell::RefCell::new(None),
+            kept: KeptJacobian::default(),
         }
     }
 
     /// The `DP` kept from the variational evaluation of `F` at exactly `s`, if the last one
     /// was there.
     pub fn kept_at(&self, s: &[f64]) -> Option<Vec<f64>> {
-        self.kept
-            .borrow()
-            .as_ref()
-            .filter(|(at, _)| at.as_slice() == s)
-            .map(|(_, dp)| dp.clone())
+        self.kept.at(s)
     }
 
     /// `DP(s)` (row-major) by the configured method (the one kept from the evaluation of `F`
@@ -201,7 +217,7 @@ impl<S: Section + ?Sized> Operator for FixedPointProblem<'_, '_, S> {
         let p = match self.dp {
             DpMethod::Variational => {
                 let (stride, dp) = dp_variational(self.map, s)?;
-                *self.kept.borrow_mut() = Some((s.clone(), dp));
+                self.kept.keep(s, dp);
                 stride.next
             }
             DpMethod::FiniteDifference { .. } => self.map.apply(s)?,

@@ -20,7 +20,7 @@ use crate::error::LimitError;
 use crate::floquet::{is_stable, multipliers, Multiplier};
 use crate::jacobian::{dp_finite_difference, dp_variational};
 use crate::metrics::GaitMetrics;
-use crate::newton::{chord_polish, residual_scale, DpMethod, Newton, NewtonOptions};
+use crate::newton::{chord_polish, residual_scale, DpMethod, KeptJacobian, Newton, NewtonOptions};
 use crate::stride::StrideMap;
 use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, TerminationReason};
 use faer::Mat;
@@ -36,8 +36,8 @@ pub struct PeriodKProblem<'m, 'a, S: Section + ?Sized> {
     /// K ≥ 1.
     pub k: usize,
     pub dp: DpMethod,
-    /// `(s, DP^K(s))` of the last variational evaluation of `F`.
-    kept: std::cell::RefCell<Option<(Vec<f64>, Vec<f64>)>>,
+    /// `DP^K(s)` of the last variational evaluation of `F`.
+    kept: KeptJacobian,
 }
 
 /// `C = A · B` for row-major `n × n` matrices.
@@ -82,11 +82,7 @@ impl<S: Section + ?Sized> PeriodKProblem<'_, '_, S> {
     /// The `DP^K` kept from the variational evaluation of `F` at exactly `s`, if the last one
     /// was there.
     pub fn kept_at(&self, s: &[f64]) -> Option<Vec<f64>> {
-        self.kept
-            .borrow()
-            .as_ref()
-            .filter(|(at, _)| at.as_slice() == s)
-            .map(|(_, dp)| dp.clone())
+        self.kept.at(s)
     }
 
     /// `s_K` along the strides the Jacobian is taken on (the variational integration's, or the
@@ -122,7 +118,7 @@ impl<'m, 'a, S: Section + ?Sized> PeriodKProblem<'m, 'a, S> {
             map,
             k,
             dp,
-            kept: std::cell::RefCell::new(None),
+            kept: KeptJacobian::default(),
         }
     }
 }
@@ -135,7 +131,7 @@ impl<S: Section + ?Sized> Operator for PeriodKProblem<'_, '_, S> {
         let p = match self.dp {
             DpMethod::Variational => {
                 let (p, dp) = self.orbit_and_dp(s)?;
-                *self.kept.borrow_mut() = Some((s.clone(), dp));
+                self.kept.keep(s, dp);
                 p
             }
             DpMethod::FiniteDifference { .. } => self.iterate(s)?,
