@@ -281,6 +281,8 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
         let ng = (0..n_modes).map(|m| sys.guards(m).len()).max().unwrap_or(0);
         let nl = opts.lanes.min(items.len());
         let tab = engine::tableau_of(opts.integrator.method);
+        let mut st = Store::new(d, nl, ng, tab);
+        st.err_dim = sys.error_dim().clamp(1, d);
         Self {
             sys,
             driver,
@@ -288,7 +290,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             opts: opts.integrator,
             tab,
             n_modes,
-            st: Store::new(d, nl, ng, tab),
+            st,
             sc: LaneScratch::new(d, ng),
             xd: vec![0.0; d],
             ctl: vec![Ctl::default(); nl],

@@ -36,6 +36,9 @@ pub(crate) fn tableau_of(method: Method) -> &'static Tableau {
 /// Lane-major block storage for one batch (or one scalar integrator: `lanes = stride = 1`).
 pub(crate) struct Store {
     pub dim: usize,
+    /// Components `0..err_dim` enter the error norm and the starting step
+    /// ([`HybridSystem::error_dim`], clamped to `1..=dim`; set by the runner for its system).
+    pub err_dim: usize,
     pub lanes: usize,
     pub stride: usize,
     /// Largest number of guards of any mode.
@@ -79,6 +82,7 @@ impl Store {
         let blk = dim * stride;
         Self {
             dim,
+            err_dim: dim,
             lanes,
             stride,
             ng,
@@ -366,7 +370,7 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
     let last = tab.n_stages - 1;
     let (rtol, atol) = (opts.rtol, opts.atol);
     if n == 1 {
-        st.err[0] = if st.stride == 1 {
+        st.err[0] = if st.stride == 1 && st.err_dim == st.dim {
             with_dim!(st.dim, D => error_norm_fixed::<D>(st, method, opts), _ => error_norm_one(st, method, opts))
         } else {
             error_norm_one(st, method, opts)
@@ -376,8 +380,19 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
     }
     st.err[..n].fill(0.0);
     st.s3[..n].fill(0.0);
+    let err_dim = st.err_dim;
     for j in 0..dim {
         let off = j * stride;
+        if j >= err_dim {
+            // Outside the error control: only the finiteness check (adds +0.0 when finite).
+            let x1 = &st.xn[off..off + n];
+            let f1 = &st.k[last * blk + off..last * blk + off + n];
+            let acc = &mut st.err[..n];
+            for l in 0..n {
+                acc[l] += poison(x1[l]) + poison(f1[l]);
+            }
+            continue;
+        }
         match method {
             Method::Rk4 { .. } => {}
             Method::Dopri5 => weighted_sum(n, &st.k, blk, off, &tableau::DOPRI5_E, &mut st.s1),
@@ -426,13 +441,13 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
     match method {
         Method::Rk4 { .. } => {}
         Method::Dopri5 => {
-            let inv_d = 1.0 / dim as f64;
+            let inv_d = 1.0 / err_dim as f64;
             for e in &mut st.err[..n] {
                 *e = (*e * inv_d).sqrt();
             }
         }
         Method::Dop853 => {
-            let d = dim as f64;
+            let d = err_dim as f64;
             let (err, e3) = (&mut st.err[..n], &st.s3[..n]);
             let h = &st.h[..n];
             for l in 0..n {
@@ -454,6 +469,7 @@ fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
     let blk = st.blk();
     let stride = st.stride;
     let dim = st.dim;
+    let err_dim = st.err_dim;
     let last = engine_last(method);
     let (rtol, atol) = (opts.rtol, opts.atol);
     let h = st.h[0];
@@ -462,6 +478,11 @@ fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
     for j in 0..dim {
         let off = j * stride;
         let (x0, x1, f1) = (st.x[off], st.xn[off], st.k[last * blk + off]);
+        if j >= err_dim {
+            // Outside the error control: only the finiteness check (adds +0.0 when finite).
+            acc += poison(x1) + poison(f1);
+            continue;
+        }
         match method {
             Method::Rk4 { .. } => {
                 acc += poison(x1) + poison(f1);
@@ -489,11 +510,11 @@ fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
     match method {
         Method::Rk4 { .. } => acc,
         Method::Dopri5 => {
-            let inv_d = 1.0 / dim as f64;
+            let inv_d = 1.0 / err_dim as f64;
             (acc * inv_d).sqrt()
         }
         Method::Dop853 => {
-            let d = dim as f64;
+            let d = err_dim as f64;
             let mut deno = acc + 0.01 * acc3;
             if deno <= 0.0 {
                 deno = 1.0;
@@ -707,7 +728,7 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
         Method::Rk4 { h } => h,
         _ => match opts.h_init {
             Some(h) => h,
-            None => initial_step(sys, mode, tab, opts, ctl, sc),
+            None => initial_step(sys, st.err_dim, mode, tab, opts, ctl, sc),
         },
     };
     ctl.h = h.min(opts.h_max);
@@ -729,9 +750,11 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
 /// Starting step (HNW I, §II.4, "starting step size", in the form of the codes DOPRI5/DOP853):
 /// `h₀ = 0.01·‖x₀‖/‖f₀‖` (or 10⁻⁶), one explicit Euler step to estimate ‖f'‖ ≈ ‖f(x₀+h₀f₀) − f₀‖/h₀,
 /// `h₁ = (0.01/max(‖f₀‖, ‖f'‖))^{1/p}`, `h = min(100·h₀, h₁, h_max)`; norms weighted by
-/// `atol + rtol·|x₀ᵢ|`. Reads x₀ from `sc.xg` and f₀ from `sc.fg`; one flow evaluation.
+/// `atol + rtol·|x₀ᵢ|`, over the error-controlled components `0..err_dim`. Reads x₀ from
+/// `sc.xg` and f₀ from `sc.fg`; one flow evaluation.
 fn initial_step<S: HybridSystem + ?Sized>(
     sys: &S,
+    err_dim: usize,
     mode: usize,
     tab: &Tableau,
     opts: &Options,
@@ -739,8 +762,9 @@ fn initial_step<S: HybridSystem + ?Sized>(
     sc: &mut LaneScratch,
 ) -> f64 {
     let (rtol, atol) = (opts.rtol, opts.atol);
+    let ne = err_dim;
     let (mut dnf, mut dny) = (0.0, 0.0);
-    for (&x, &f) in sc.xg.iter().zip(&sc.fg) {
+    for (&x, &f) in sc.xg[..ne].iter().zip(&sc.fg[..ne]) {
         let sk = atol + rtol * x.abs();
         dnf += (f / sk) * (f / sk);
         dny += (x / sk) * (x / sk);
@@ -758,7 +782,7 @@ fn initial_step<S: HybridSystem + ?Sized>(
     sys.flow(&mut sc.ev.model, mode, &sc.ytmp, &mut f1);
     ctl.stats.rhs_evals += 1;
     let mut der2 = 0.0;
-    for ((&a, &b), &x) in f1.iter().zip(&sc.fg).zip(&sc.xg) {
+    for ((&a, &b), &x) in f1[..ne].iter().zip(&sc.fg[..ne]).zip(&sc.xg[..ne]) {
         let sk = atol + rtol * x.abs();
         der2 += ((a - b) / sk) * ((a - b) / sk);
     }

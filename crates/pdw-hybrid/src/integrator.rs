@@ -84,6 +84,7 @@ impl Integrator {
             "state length differs from the integrator's dimension"
         );
         assert!(mode < sys.n_modes(), "mode {mode} out of range");
+        self.st.err_dim = sys.error_dim().clamp(1, d);
         let ng = sys.guards(mode).len();
         if ng > self.st.ng {
             self.st.ng = ng;

@@ -132,6 +132,18 @@ pub trait HybridSystem: Send + Sync {
     /// State dimension d.
     fn dim(&self) -> usize;
 
+    /// Number of leading state components that enter the step-size control (the error norm
+    /// and the starting-step heuristic): components `0..error_dim()`. The remaining ones are
+    /// integrated on the step sequence those choose; a non-finite value in any component still
+    /// rejects the step. Default: all `dim()`. The variational equations can exclude their
+    /// tangent columns (pdw-limit's `Variational` with `ErrorControl::State`, as CVODES does
+    /// for sensitivities with `errconS` off), so that the state part of the augmented
+    /// integration takes exactly the plain integration's steps. Values outside `1..=dim()`
+    /// are clamped into it.
+    fn error_dim(&self) -> usize {
+        self.dim()
+    }
+
     /// Number of modes (default 1).
     fn n_modes(&self) -> usize {
         1

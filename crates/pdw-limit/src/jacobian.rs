@@ -15,7 +15,7 @@
 
 use crate::error::LimitError;
 use crate::stride::{Stride, StrideEnd, StrideMap};
-use crate::variational::Variational;
+use crate::variational::{ErrorControl, Variational};
 use pdw_hybrid::{run_scalar, Section};
 
 /// Finite-difference scheme of [`dp_finite_difference`]. The step for coordinate `j` is
@@ -72,15 +72,29 @@ pub fn richardson_jacobian(f: impl Fn(&[f64], &mut [f64]), x: &[f64], n_out: usi
 /// Exact `DP(s)` by the variational equations, together with the stride itself (from the
 /// augmented integration; its `next` agrees with [`StrideMap::stride`] to the tolerance).
 /// Fails with [`LimitError::StrideFailed`] when the stride does not reach the section.
+/// The step-size control sees the whole augmented state ([`ErrorControl::Full`]).
 pub fn dp_variational<S: Section + ?Sized>(
     map: &StrideMap<'_, S>,
     s: &[f64],
+) -> Result<(Stride, Vec<f64>), LimitError> {
+    dp_variational_with(map, s, ErrorControl::Full)
+}
+
+/// [`dp_variational`] with a choice of [`ErrorControl`]. With [`ErrorControl::State`] the
+/// returned stride is [`StrideMap::stride`]'s bit for bit (the same steps, events and resets
+/// on the state components) and `DP` rides on those steps.
+pub fn dp_variational_with<S: Section + ?Sized>(
+    map: &StrideMap<'_, S>,
+    s: &[f64],
+    control: ErrorControl,
 ) -> Result<(Stride, Vec<f64>), LimitError> {
     map.check_dim(s)?;
     let sys = map.system();
     let (d, ds) = (sys.dim(), sys.section_dim());
     let (sm, sg) = sys.section_guard();
-    let var = Variational::new(sys, ds).poincare_at(sm, sg);
+    let var = Variational::new(sys, ds)
+        .poincare_at(sm, sg)
+        .error_control(control);
     // Φ(0) = DL(s)
     let dl = richardson_jacobian(|a, b| sys.lift(a, b), s, d);
     let mut z0 = map.lift(s);

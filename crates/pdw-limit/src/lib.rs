@@ -46,7 +46,9 @@ pub use continuation::{
 };
 pub use error::LimitError;
 pub use floquet::{is_stable, multipliers, Multiplier};
-pub use jacobian::{dp_finite_difference, dp_variational, richardson_jacobian, FdScheme};
+pub use jacobian::{
+    dp_finite_difference, dp_variational, dp_variational_with, richardson_jacobian, FdScheme,
+};
 pub use metrics::GaitMetrics;
 pub use newton::{
     find_fixed_point, DpMethod, FixedPoint, FixedPointProblem, Newton, NewtonOptions, NewtonState,
@@ -59,4 +61,4 @@ pub use trajectory::{
     initial_state, model_energy, simulate, Trajectory, TrajectoryError, TrajectoryEvent,
     TrajectoryOptions, Validity,
 };
-pub use variational::Variational;
+pub use variational::{ErrorControl, Variational};

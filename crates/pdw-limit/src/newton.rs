@@ -10,7 +10,11 @@
 //! With the variational Jacobian, `F` and `DP` come from one integration of the variational
 //! equations per point ([`FixedPointProblem`]): each iterate costs one variational stride, and
 //! the Jacobian of the converged point (for its multipliers) is the one its last evaluation
-//! gave. Acceptance is decided on the plain stride map (below).
+//! gave. That integration controls the step size on the state alone
+//! ([`ErrorControl::State`]): its state part takes the plain integration's steps, events and
+//! resets, so the `F` Newton sees is the plain stride map's bit for bit, and the tangent
+//! columns ride on those steps (their accuracy against finite differences and the fully
+//! controlled `DP` is tested). Acceptance is decided on the plain stride map (below).
 //!
 //! # Globalisation
 //! Backtracking on `‖F‖₂` (Armijo, Dennis & Schnabel §6.3): accept `s + λδ` with the first
@@ -25,12 +29,14 @@
 //! The solver reports convergence on that test; [`find_fixed_point`] never trusts it: it
 //! re-runs the stride from the returned point on the plain stride map `P` with a fresh
 //! integrator and accepts only if `‖P(s) − s‖∞ ≤ tol · σ(s)`. With the variational Jacobian the
-//! solver converged on the variational integration's `P`, which differs from the plain `P` by
-//! about the integration tolerance; when that difference exceeds `tol` (a loose integrator, e.g.
-//! DOP853 at 10⁻¹² against `tol` = 10⁻¹²) and the solver did converge, up to four chord steps
+//! solver converged on the variational integration's `P`, which is the plain `P` bit for bit
+//! as long as the model's [`flow_with_jacobian`](pdw_hybrid::HybridSystem::flow_with_jacobian)
+//! gives its flow bit for bit; a model that breaks that contract makes the two maps differ, and
+//! when the difference exceeds `tol` and the solver did converge, up to four chord steps
 //! `s ← s − (DP − I)⁻¹(P(s) − s)` on the plain map, with the `DP` of the last iterate, finish
-//! the convergence (each counted as an iteration, its residual appended to the history). If the test still fails it returns
-//! [`LimitError::NoConvergence`] with the residual history and the last iterate.
+//! the convergence (each counted as an iteration, its residual appended to the history). If
+//! the test still fails it returns [`LimitError::NoConvergence`] with the residual history and
+//! the last iterate.
 //!
 //! # Degenerate gaits
 //! On a level floor (slope 0) the passive walkers lose energy at every heel strike and have no
@@ -41,9 +47,10 @@
 
 use crate::error::LimitError;
 use crate::floquet::{is_stable, multipliers, Multiplier};
-use crate::jacobian::{dp_finite_difference, dp_variational, FdScheme};
+use crate::jacobian::{dp_finite_difference, dp_variational, dp_variational_with, FdScheme};
 use crate::metrics::GaitMetrics;
 use crate::stride::StrideMap;
+use crate::variational::ErrorControl;
 use argmin::core::{
     Error as ArgminError, Executor, IterState, Jacobian, Operator, Problem, Solver, State,
     TerminationReason, TerminationStatus, KV,
@@ -216,7 +223,7 @@ impl<S: Section + ?Sized> Operator for FixedPointProblem<'_, '_, S> {
     fn apply(&self, s: &Vec<f64>) -> Result<Vec<f64>, ArgminError> {
         let p = match self.dp {
             DpMethod::Variational => {
-                let (stride, dp) = dp_variational(self.map, s)?;
+                let (stride, dp) = dp_variational_with(self.map, s, ErrorControl::State)?;
                 self.kept.keep(s, dp);
                 stride.next
             }
@@ -474,9 +481,10 @@ pub fn find_fixed_point<S: Section + ?Sized>(
         }
     };
     let mut residual = plain_residual(&check, &last);
-    // The solver converged on the variational integration's map, which differs from the plain
-    // map by about the integration tolerance; where that exceeds `tol` (a loose integrator),
-    // chord steps on the plain map with the DP kept at the last iterate finish the job.
+    // The solver converged on the variational integration's map, the plain map's bit for bit
+    // unless the model's one-pass flow differs from its flow; where that makes the residual
+    // exceed `tol`, chord steps on the plain map with the DP kept at the last iterate finish
+    // the job.
     // Only after the solver converged: an iteration limit stays a failure.
     let converged = state.get_termination_reason() == Some(&TerminationReason::SolverConverged);
     if let Some(dp) = res

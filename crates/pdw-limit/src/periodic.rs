@@ -5,7 +5,8 @@
 //! `P^K(s) = P(s_{K−1})` with `s_0 = s`, `s_{j+1} = P(s_j)`. By the chain rule its Jacobian is
 //! the product of the per-stride Jacobians along the orbit, `DP^K(s) = DP(s_{K−1}) ⋯ DP(s_0)`;
 //! with [`DpMethod::Variational`] every factor is exact (variational equations with saltation
-//! matrices, [`dp_variational`]). The multipliers of a period-K orbit are the eigenvalues of
+//! matrices, [`crate::dp_variational_with`] with state-only error control, so that the strides
+//! are the plain map's bit for bit). The multipliers of a period-K orbit are the eigenvalues of
 //! `DP^K` at any of its points (the products in another cyclic order are similar matrices).
 //!
 //! # Acceptance
@@ -18,10 +19,11 @@
 
 use crate::error::LimitError;
 use crate::floquet::{is_stable, multipliers, Multiplier};
-use crate::jacobian::{dp_finite_difference, dp_variational};
+use crate::jacobian::{dp_finite_difference, dp_variational_with};
 use crate::metrics::GaitMetrics;
 use crate::newton::{chord_polish, residual_scale, DpMethod, KeptJacobian, Newton, NewtonOptions};
 use crate::stride::StrideMap;
+use crate::variational::ErrorControl;
 use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, TerminationReason};
 use faer::Mat;
 use pdw_hybrid::Section;
@@ -96,7 +98,7 @@ impl<S: Section + ?Sized> PeriodKProblem<'_, '_, S> {
         for _ in 0..self.k {
             let (next, dp) = match self.dp {
                 DpMethod::Variational => {
-                    let (st, dp) = dp_variational(self.map, &x)?;
+                    let (st, dp) = dp_variational_with(self.map, &x, ErrorControl::State)?;
                     (st.next, dp)
                 }
                 DpMethod::FiniteDifference { scheme, lanes } => {

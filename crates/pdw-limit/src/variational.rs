@@ -27,8 +27,28 @@
 //! [`Variational::poincare_at`] selects the `(mode, guard)` whose reset ends a stride; that
 //! reset uses `Ξ_P`, every other reset (e.g. a knee strike inside a stride) the full `Ξ`.
 //! Then `DP = DΠ(x⁺) · Ξ_P · Φ(T⁻) · DL(s)` in section coordinates (lift `L`, projection `Π`).
+//!
+//! # Error control
+//! By default the step-size control sees all of `z` ([`ErrorControl::Full`]). With
+//! [`ErrorControl::State`] it sees `x` alone ([`HybridSystem::error_dim`] = `d`), as CVODES
+//! does for sensitivities with `errconS` off: the tangent columns ride on the steps the state
+//! chooses. Every operation on the state components is then the plain integration's (same
+//! stages, same steps, same guard values and event location, same resets), so the `x` part —
+//! the stride map `P(s)` — is the plain map's bit for bit (tested); `Φ` carries the local
+//! errors of a step sequence chosen for `x`, measured against the fully controlled `Φ` and
+//! finite differences in the tests and the README.
 
 use pdw_hybrid::{GuardSpec, HybridSystem, Scratch};
+
+/// Which components of `z = (x, Φ)` the step-size control sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ErrorControl {
+    /// All of `z`: the tangent's local errors bound the steps too.
+    #[default]
+    Full,
+    /// `x` alone: the steps, events and `x` part are the plain integration's, bit for bit.
+    State,
+}
 
 /// Variational extension of `sys` carrying `m` tangent columns.
 pub struct Variational<'a, S: ?Sized> {
@@ -36,6 +56,7 @@ pub struct Variational<'a, S: ?Sized> {
     d: usize,
     m: usize,
     poincare: Option<(usize, usize)>,
+    control: ErrorControl,
 }
 
 impl<'a, S: HybridSystem + ?Sized> Variational<'a, S> {
@@ -47,7 +68,14 @@ impl<'a, S: HybridSystem + ?Sized> Variational<'a, S> {
             d: sys.dim(),
             m,
             poincare: None,
+            control: ErrorControl::Full,
         }
+    }
+
+    /// The components the step-size control sees (see "Error control").
+    pub fn error_control(mut self, control: ErrorControl) -> Self {
+        self.control = control;
+        self
     }
 
     /// Use the Poincaré-section matrix `Ξ_P` at the reset of `(mode, guard)`.
@@ -121,6 +149,13 @@ fn with_scratch<R>(n: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
 impl<S: HybridSystem + ?Sized> HybridSystem for Variational<'_, S> {
     fn dim(&self) -> usize {
         self.d + self.d * self.m
+    }
+
+    fn error_dim(&self) -> usize {
+        match self.control {
+            ErrorControl::Full => self.dim(),
+            ErrorControl::State => self.d,
+        }
     }
 
     fn n_modes(&self) -> usize {

@@ -250,13 +250,13 @@ fn next_order_coefficients_follow_garcia_except_the_long_period_theta1() {
     }
 }
 
-/// With the variational Jacobian Newton converges on the variational integration's map; at a
-/// loose integrator (DOP853 1e-10) that map differs from the plain one by more than tol =
-/// 1e-11, and the chord steps on the plain map must still deliver a point whose *plain*
-/// residual is below tol — the same point (to tol) that Newton with finite-difference
-/// Jacobians finds on the plain map alone.
+/// Newton with the variational Jacobian at a loose integrator (DOP853 1e-10, tol 1e-11): the
+/// tangent rides on the state's steps, so every evaluation of `F` is the plain map's bit for
+/// bit; the independent re-run agrees with the solver's last residual exactly, no chord step
+/// is needed, and the point is the one Newton with finite-difference Jacobians finds on the
+/// plain map alone (to what tol allows).
 #[test]
-fn variational_newton_is_checked_and_finished_on_the_plain_map() {
+fn variational_newton_converges_on_the_plain_map_itself() {
     let m = walker(0.009);
     let map = StrideMap::new(&m, Options::dop853(1e-10)).unwrap();
     let guess = GarciaGait::LongPeriod.section_guess(0.009);
@@ -270,9 +270,35 @@ fn variational_newton_is_checked_and_finished_on_the_plain_map() {
         },
     )
     .unwrap();
-    let fd = find_fixed_point(
-        &map,
-        &guess,
+    let fd = fd_fixed_point(&map, &guess, tol);
+    // the residual is the plain map's, recomputed here independently
+    let p = map.apply(&var.section).unwrap();
+    assert!(
+        max_abs_diff(&p, &var.section) <= tol,
+        "{:?}",
+        var.residual_history
+    );
+    assert_eq!(max_abs_diff(&p, &var.section), var.residual);
+    // the solver's own last residual is that same number: no chord step ran
+    assert_eq!(*var.residual_history.last().unwrap(), var.residual);
+    assert_eq!(var.residual_history.len() as u64, var.iterations + 1);
+    // both fixed points of the plain map, within what tol allows (|λ| = 0.59: ‖δs‖ ≲ tol/(1−0.59))
+    assert!(
+        max_abs_diff(&var.section, &fd.section) < 5.0 * tol,
+        "{:?} vs {:?}",
+        var.section,
+        fd.section
+    );
+}
+
+fn fd_fixed_point<S: pdw_hybrid::Section + ?Sized>(
+    map: &StrideMap<'_, S>,
+    guess: &[f64],
+    tol: f64,
+) -> FixedPoint {
+    find_fixed_point(
+        map,
+        guess,
         &NewtonOptions {
             tol,
             dp: DpMethod::FiniteDifference {
@@ -282,8 +308,132 @@ fn variational_newton_is_checked_and_finished_on_the_plain_map() {
             ..Default::default()
         },
     )
+    .unwrap()
+}
+
+/// A model whose one-pass flow-and-Jacobian breaks its contract: the flow it gives there has
+/// its last component off by 1e-9 (the variational stride then integrates a slightly different
+/// vector field from the plain one).
+struct Skewed(Simplest);
+
+impl pdw_hybrid::HybridSystem for Skewed {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn guards(&self, mode: usize) -> &[pdw_hybrid::GuardSpec] {
+        self.0.guards(mode)
+    }
+    fn flow(&self, ws: &mut pdw_hybrid::Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+        self.0.flow(ws, mode, x, dx)
+    }
+    fn flow_with_jacobian(
+        &self,
+        ws: &mut pdw_hybrid::Scratch,
+        mode: usize,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut [f64],
+    ) {
+        self.0.flow_with_jacobian(ws, mode, x, dx, jac);
+        // (A uniform factor would only rescale time, which the stride map does not see.)
+        dx[dx.len() - 1] += 1e-9;
+    }
+    fn guard(&self, ws: &mut pdw_hybrid::Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        self.0.guard(ws, mode, k, x)
+    }
+    fn guards_with_rates(
+        &self,
+        ws: &mut pdw_hybrid::Scratch,
+        mode: usize,
+        x: &[f64],
+        dx: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        self.0.guards_with_rates(ws, mode, x, dx, g, rate)
+    }
+    fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
+        self.0.admissible(mode, k, x)
+    }
+    fn reset(
+        &self,
+        ws: &mut pdw_hybrid::Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
+        self.0.reset(ws, mode, k, x, out)
+    }
+    fn flow_jacobian(&self, ws: &mut pdw_hybrid::Scratch, mode: usize, x: &[f64], j: &mut [f64]) {
+        self.0.flow_jacobian(ws, mode, x, j)
+    }
+    fn guard_gradient(
+        &self,
+        ws: &mut pdw_hybrid::Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        g: &mut [f64],
+    ) {
+        self.0.guard_gradient(ws, mode, k, x, g)
+    }
+    fn reset_jacobian(
+        &self,
+        ws: &mut pdw_hybrid::Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        j: &mut [f64],
+    ) {
+        self.0.reset_jacobian(ws, mode, k, x, j)
+    }
+}
+
+impl pdw_hybrid::Section for Skewed {
+    fn section_dim(&self) -> usize {
+        self.0.section_dim()
+    }
+    fn section_names(&self) -> &[&'static str] {
+        self.0.section_names()
+    }
+    fn section_mode(&self) -> usize {
+        self.0.section_mode()
+    }
+    fn section_guard(&self) -> (usize, usize) {
+        self.0.section_guard()
+    }
+    fn lift(&self, s: &[f64], x: &mut [f64]) {
+        self.0.lift(s, x)
+    }
+    fn project(&self, x: &[f64], s: &mut [f64]) {
+        self.0.project(x, s)
+    }
+    fn max_stride_time(&self) -> f64 {
+        self.0.max_stride_time()
+    }
+}
+
+/// When the variational evaluation's map is not the plain one (here: a model breaking the
+/// one-pass contract by 1e-9), the solver converges on the wrong map; the independent re-run
+/// on the plain map sees a residual above tol and chord steps with the kept DP finish the job:
+/// the plain residual ends below tol, at the plain map's fixed point.
+#[test]
+fn a_variational_map_off_the_plain_one_is_caught_and_finished_by_chord_steps() {
+    let m = Skewed(walker(0.009));
+    let map = StrideMap::new(&m, Options::dop853(1e-13)).unwrap();
+    let guess = GarciaGait::LongPeriod.section_guess(0.009);
+    let tol = 1e-11;
+    let var = find_fixed_point(
+        &map,
+        &guess,
+        &NewtonOptions {
+            tol,
+            ..Default::default()
+        },
+    )
     .unwrap();
-    // the residual is the plain map's, recomputed here independently
+    let fd = fd_fixed_point(&map, &guess, tol);
     let p = map.apply(&var.section).unwrap();
     assert!(
         max_abs_diff(&p, &var.section) <= tol,
@@ -291,15 +441,18 @@ fn variational_newton_is_checked_and_finished_on_the_plain_map() {
         var.residual_history
     );
     assert_eq!(max_abs_diff(&p, &var.section), var.residual);
-    // both fixed points of the plain map, within what tol allows (|λ| = 0.59: ‖δs‖ ≲ tol/(1−0.59))
+    // the chord steps ran: the solver's converged residual (on the skewed map, the first one
+    // below tol·σ) is followed by plain-map residuals; each step counts as an iteration
+    let h = &var.residual_history;
+    let converged = tol * pdw_limit::newton::residual_scale(&var.section);
+    let solver_done = h.iter().position(|&r| r <= converged).unwrap();
+    assert!(solver_done + 1 < h.len(), "no chord step ran: {h:?}");
+    assert_eq!(*h.last().unwrap(), var.residual);
+    assert_eq!(h.len() as u64, var.iterations + 1);
     assert!(
         max_abs_diff(&var.section, &fd.section) < 5.0 * tol,
         "{:?} vs {:?}",
         var.section,
         fd.section
     );
-    // the chord steps ran (the variational map's fixed point alone misses tol here): the
-    // history ends with a plain-map residual, and each step counts as an iteration
-    assert_eq!(*var.residual_history.last().unwrap(), var.residual);
-    assert_eq!(var.residual_history.len() as u64, var.iterations + 1);
 }

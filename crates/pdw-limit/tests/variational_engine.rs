@@ -106,3 +106,69 @@ fn variational_stride_with_guard_rates_equals_the_one_without_bit_for_bit() {
         assert_eq!(bits(&a.pre), bits(&b.pre), "{opts:?}");
     }
 }
+
+/// With the step-size control on the state alone ([`ErrorControl::State`]), the variational
+/// stride takes the plain stride's steps, events and resets: its stride (image, period, pre-
+/// and post-event states, step length, events) is [`StrideMap::stride`]'s bit for bit, for the
+/// simplest walker and the chain-walker presets (compass, kneed with its knee strike, seed5),
+/// DOP853 at two tolerances and DOPRI5. With full control the steps differ, so the image
+/// differs in the last digits (here only checked to be close: the control matters).
+#[test]
+fn state_controlled_variational_stride_is_the_plain_stride_bit_for_bit() {
+    use pdw_limit::{dp_variational_with, ErrorControl};
+    use pdw_walkers::Walker;
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let mut walkers: Vec<(String, Box<dyn Walker>, Vec<f64>)> = Vec::new();
+    for gamma in [0.009, 0.016] {
+        let s = GarciaGait::LongPeriod.section_guess(gamma);
+        walkers.push((
+            format!("simplest {gamma}"),
+            Box::new(walker(gamma)),
+            s.to_vec(),
+        ));
+    }
+    for name in ["compass", "kneed", "seed5"] {
+        let w = pdw_walkers::build(name, &[]).unwrap();
+        let s = w.gait_guesses()[0].section.clone();
+        walkers.push((name.to_string(), w, s));
+    }
+    let mut full_differs = 0;
+    for (name, w, s) in &walkers {
+        for opts in [
+            Options::dop853(1e-14),
+            Options::dop853(1e-9),
+            Options::dopri5(1e-10),
+        ] {
+            let map: StrideMap<'_, dyn Walker> = StrideMap::new(w.as_ref(), opts).unwrap();
+            let plain = map.stride(s).unwrap();
+            assert!(
+                plain.outcome.is_ok(),
+                "{name} {opts:?}: {:?}",
+                plain.outcome
+            );
+            let (var, dp) = dp_variational_with(&map, s, ErrorControl::State).unwrap();
+            let what = format!("{name} {opts:?}");
+            assert_eq!(var.outcome, plain.outcome, "{what}");
+            assert_eq!(bits(&var.next), bits(&plain.next), "{what}");
+            assert_eq!(var.period.to_bits(), plain.period.to_bits(), "{what}");
+            assert_eq!(bits(&var.pre_event), bits(&plain.pre_event), "{what}");
+            assert_eq!(bits(&var.post_event), bits(&plain.post_event), "{what}");
+            assert_eq!(var.events, plain.events, "{what}");
+            assert!(dp.iter().all(|v| v.is_finite()), "{what}");
+            let (full, _) = dp_variational_with(&map, s, ErrorControl::Full).unwrap();
+            let gap = full
+                .next
+                .iter()
+                .zip(&plain.next)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(
+                gap <= 1e3 * opts.rtol,
+                "{what}: full control off by {gap:.2e}"
+            );
+            if gap > 0.0 {
+                full_differs += 1;
+            }
+        }
+    }
+    assert!(full_differs > 0, "full control never changed a step");
+}
