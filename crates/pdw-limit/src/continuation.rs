@@ -4,7 +4,9 @@
 //! # The extended system
 //! A period-k orbit is a fixed point of `P^k`: `G(s, μ) = P^k(s; μ) − s = 0`, `n = d_s`
 //! equations in the `n + 1` unknowns `y = (s, μ)`. Its Jacobian `[DP^k − I | G_μ]` (n × (n+1))
-//! uses `DP^k = DP(s_{k−1}) ⋯ DP(s_0)` from the variational equations ([`dp_variational`]) and
+//! uses `DP^k = DP(s_{k−1}) ⋯ DP(s_0)` from the variational equations
+//! ([`crate::dp_variational_with`], step sizes set by the state alone, so that `G` itself is the
+//! plain stride map's, bit for bit, like the fixed points of [`crate::find_fixed_point`]) and
 //! `G_μ = (P^k(s; μ+h) − P^k(s; μ−h)) / 2h` by central differences on μ (the model is rebuilt at
 //! μ ± h by the caller's model family).
 //!
@@ -49,8 +51,9 @@
 
 use crate::error::LimitError;
 use crate::floquet::{is_stable, multipliers, Multiplier};
-use crate::jacobian::dp_variational;
+use crate::jacobian::dp_variational_with;
 use crate::stride::StrideMap;
+use crate::variational::ErrorControl;
 use pdw_hybrid::{Options, Section};
 use std::fmt::Display;
 
@@ -433,7 +436,7 @@ where
         let mut period = 0.0;
         for _ in 0..self.k {
             orbit.push(s.clone());
-            let (stride, d) = dp_variational(&map, &s)?;
+            let (stride, d) = dp_variational_with(&map, &s, ErrorControl::State)?;
             let mut prod = vec![0.0; n * n];
             for i in 0..n {
                 for j in 0..n {
