@@ -259,26 +259,8 @@ fn next_order_coefficients_follow_garcia_except_the_long_period_theta1() {
 fn variational_newton_converges_on_the_plain_map_itself() {
     let m = walker(0.009);
     let map = StrideMap::new(&m, Options::dop853(1e-10)).unwrap();
-    let guess = GarciaGait::LongPeriod.section_guess(0.009);
     let tol = 1e-11;
-    let var = find_fixed_point(
-        &map,
-        &guess,
-        &NewtonOptions {
-            tol,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let fd = fd_fixed_point(&map, &guess, tol);
-    // the residual is the plain map's, recomputed here independently
-    let p = map.apply(&var.section).unwrap();
-    assert!(
-        max_abs_diff(&p, &var.section) <= tol,
-        "{:?}",
-        var.residual_history
-    );
-    assert_eq!(max_abs_diff(&p, &var.section), var.residual);
+    let (var, fd) = variational_and_fd_newton(&map, tol);
     // the solver's own last residual is that same number: no chord step ran
     assert_eq!(*var.residual_history.last().unwrap(), var.residual);
     assert_eq!(var.residual_history.len() as u64, var.iterations + 1);
@@ -289,6 +271,33 @@ fn variational_newton_converges_on_the_plain_map_itself() {
         var.section,
         fd.section
     );
+}
+
+/// Newton from Garcia's long-period guess at γ = 0.009 with the variational Jacobian (checked
+/// here: its residual is the plain map's, recomputed independently, and ≤ tol) and with
+/// finite-difference Jacobians.
+fn variational_and_fd_newton<S: pdw_hybrid::Section + ?Sized>(
+    map: &StrideMap<'_, S>,
+    tol: f64,
+) -> (FixedPoint, FixedPoint) {
+    let guess = GarciaGait::LongPeriod.section_guess(0.009);
+    let var = find_fixed_point(
+        map,
+        &guess,
+        &NewtonOptions {
+            tol,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let p = map.apply(&var.section).unwrap();
+    assert!(
+        max_abs_diff(&p, &var.section) <= tol,
+        "{:?}",
+        var.residual_history
+    );
+    assert_eq!(max_abs_diff(&p, &var.section), var.residual);
+    (var, fd_fixed_point(map, &guess, tol))
 }
 
 fn fd_fixed_point<S: pdw_hybrid::Section + ?Sized>(
@@ -422,25 +431,8 @@ impl pdw_hybrid::Section for Skewed {
 fn a_variational_map_off_the_plain_one_is_caught_and_finished_by_chord_steps() {
     let m = Skewed(walker(0.009));
     let map = StrideMap::new(&m, Options::dop853(1e-13)).unwrap();
-    let guess = GarciaGait::LongPeriod.section_guess(0.009);
     let tol = 1e-11;
-    let var = find_fixed_point(
-        &map,
-        &guess,
-        &NewtonOptions {
-            tol,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let fd = fd_fixed_point(&map, &guess, tol);
-    let p = map.apply(&var.section).unwrap();
-    assert!(
-        max_abs_diff(&p, &var.section) <= tol,
-        "{:?}",
-        var.residual_history
-    );
-    assert_eq!(max_abs_diff(&p, &var.section), var.residual);
+    let (var, fd) = variational_and_fd_newton(&map, tol);
     // the chord steps ran: the solver's converged residual (on the skewed map, the first one
     // below tol·σ) is followed by plain-map residuals; each step counts as an iteration
     let h = &var.residual_history;
