@@ -3,8 +3,9 @@
 //! - `profile basin N [THREADS]`: the simplest walker's basin at γ = 0.009 on an N × N grid over
 //!   θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100 strides, default engine options
 //!   (`profile basin-dyn N [THREADS]`: the same model behind `Box<dyn Walker>`, as the CLI);
-//! - `profile stride N [TOL] [dopri5|dop853]`: N scalar strides of the simplest walker from its
-//!   stable fixed point, one reused integrator (default DOP853 at 1e-10);
+//! - `profile stride N [TOL] [dopri5|dop853] [general]`: N scalar strides of the simplest walker
+//!   from its stable fixed point, one reused integrator (default DOP853 at 1e-10); `general`
+//!   runs the integrator's general step loop instead of its register loop (same bits);
 //! - `profile batch N [TOL] [dopri5|dop853] [LANES]`: N strides from perturbed copies of the
 //!   fixed point through the serial lockstep engine (default 64 lanes);
 //! - `profile fixedpoint N`: N fixed points of the simplest walker to 1e-12 from Garcia's
@@ -62,14 +63,17 @@ fn main() {
             let opts = method(&args, 3, arg(&args, 2, 1e-10));
             let map = StrideMap::new(&sys, opts).expect("valid options");
             let mut integ = Integrator::new(4, opts).expect("valid options");
+            let general = args.get(4).is_some_and(|a| a == "general");
+            integ.set_register_loop(!general);
             let mut acc = 0.0;
             for _ in 0..n {
                 acc += map.stride_with(&mut integ, &fp).expect("stride").period;
             }
             let s = integ.stats();
             println!(
-                "{n} scalar strides ({:?}): {:.3} µs/stride, mean period {:.6}, {} accepted, {} rejected, {} rhs, {} sampled",
+                "{n} scalar strides ({:?}, {} loop): {:.3} µs/stride, mean period {:.6}, {} accepted, {} rejected, {} rhs, {} sampled",
                 opts.method,
+                if general { "general" } else { "register" },
                 t0.elapsed().as_secs_f64() * 1e6 / n as f64,
                 acc / n as f64,
                 s.accepted,

@@ -249,6 +249,7 @@ macro_rules! with_dim {
         }
     };
 }
+pub(crate) use with_dim;
 
 /// The first `D` elements of `v` as an array reference.
 #[inline(always)]
@@ -278,17 +279,31 @@ fn combine_fixed<const D: usize, const N: usize>(k: &[f64], w: &[f64; N]) -> [f6
 /// then `x + h·acc`).
 #[inline(always)]
 fn one_lane_row_fixed<const D: usize, const N: usize>(st: &mut Store, last: bool, w: &[f64; N]) {
-    let h = st.h[0];
-    let acc = combine_fixed::<D, N>(&st.k, w);
-    let x = arr::<D>(&st.x);
+    let v = row_fixed::<D, N>(arr::<D>(&st.x), st.h[0], &st.k, w);
     let out = if last {
         &mut st.xn[..D]
     } else {
         &mut st.y[..D]
     };
+    out.copy_from_slice(&v);
+}
+
+/// `x₀ + h·(0 + Σ_q w_q k_q)` componentwise, the sum over the nonzero weights in increasing q,
+/// for contiguous stage vectors `k = [k₀ | k₁ | …]` of length `D`: the one-lane stage input
+/// of [`one_lane_row_fixed`] and of the scalar integrator's register loop.
+#[inline(always)]
+pub(crate) fn row_fixed<const D: usize, const N: usize>(
+    x: &[f64; D],
+    h: f64,
+    k: &[f64],
+    w: &[f64; N],
+) -> [f64; D] {
+    let acc = combine_fixed::<D, N>(k, w);
+    let mut out = [0.0; D];
     for j in 0..D {
         out[j] = x[j] + h * acc[j];
     }
+    out
 }
 
 /// [`one_lane_row`] for contiguous blocks: fixed dimensions unrolled, others by the lane code.
@@ -371,7 +386,10 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
     let (rtol, atol) = (opts.rtol, opts.atol);
     if n == 1 {
         st.err[0] = if st.stride == 1 && st.err_dim == st.dim {
-            with_dim!(st.dim, D => error_norm_fixed::<D>(st, method, opts), _ => error_norm_one(st, method, opts))
+            with_dim!(st.dim, D => match method {
+                Method::Rk4 { .. } => error_norm_one(st, method, opts),
+                _ => error_norm_fixed::<D>(arr::<D>(&st.x), arr::<D>(&st.xn), &st.k, st.h[0], method, opts),
+            }, _ => error_norm_one(st, method, opts))
         } else {
             error_norm_one(st, method, opts)
         };
@@ -524,19 +542,25 @@ fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
     }
 }
 
-/// [`error_norm_one`] when the blocks are contiguous (`stride = 1`) and the dimension is a
-/// compile-time `D`: the weighted stage sums run over whole vectors, then the norm sums over
+/// [`error_norm_one`] of DOPRI5 or DOP853 (not RK4) for one lane whose error is controlled on
+/// every component, with a compile-time dimension `D`: x₀, x₁ and the contiguous stage vectors
+/// `k = [k₀ | k₁ | …]`. The weighted stage sums run over whole vectors, then the norm sums over
 /// components in increasing order as before — the same operations on the same operands.
 #[inline(always)]
-fn error_norm_fixed<const D: usize>(st: &Store, method: Method, opts: &Options) -> f64 {
+pub(crate) fn error_norm_fixed<const D: usize>(
+    x0: &[f64; D],
+    x1: &[f64; D],
+    k: &[f64],
+    h: f64,
+    method: Method,
+    opts: &Options,
+) -> f64 {
     let (rtol, atol) = (opts.rtol, opts.atol);
-    let h = st.h[0];
-    let (x0, x1) = (arr::<D>(&st.x), arr::<D>(&st.xn));
     match method {
-        Method::Rk4 { .. } => error_norm_one(st, method, opts),
+        Method::Rk4 { .. } => unreachable!("RK4 has no error estimate"),
         Method::Dopri5 => {
-            let e = combine_fixed::<D, 7>(&st.k, &tableau::DOPRI5_E);
-            let f1 = arr::<D>(&st.k[6 * D..]);
+            let e = combine_fixed::<D, 7>(k, &tableau::DOPRI5_E);
+            let f1 = arr::<D>(&k[6 * D..]);
             let mut acc = 0.0;
             for j in 0..D {
                 let sk = atol + rtol * x0[j].abs().max(x1[j].abs());
@@ -547,14 +571,10 @@ fn error_norm_fixed<const D: usize>(st: &Store, method: Method, opts: &Options) 
         }
         Method::Dop853 => {
             let [b1, b9, b12] = tableau::DOP853_BHH;
-            let e = combine_fixed::<D, 12>(&st.k, &tableau::DOP853_ER);
-            let bs = combine_fixed::<D, 12>(&st.k, &tableau::DOP853_B);
-            let f1 = arr::<D>(&st.k[12 * D..]);
-            let (k0, k8, k11) = (
-                arr::<D>(&st.k),
-                arr::<D>(&st.k[8 * D..]),
-                arr::<D>(&st.k[11 * D..]),
-            );
+            let e = combine_fixed::<D, 12>(k, &tableau::DOP853_ER);
+            let bs = combine_fixed::<D, 12>(k, &tableau::DOP853_B);
+            let f1 = arr::<D>(&k[12 * D..]);
+            let (k0, k8, k11) = (arr::<D>(k), arr::<D>(&k[8 * D..]), arr::<D>(&k[11 * D..]));
             let (mut acc, mut acc3) = (0.0, 0.0);
             for j in 0..D {
                 let sk = atol + rtol * x0[j].abs().max(x1[j].abs());
@@ -593,6 +613,16 @@ pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
         for l in 0..n {
             out[l] = pdw_simd::powr(err[l], tab.alpha);
         }
+    }
+}
+
+/// [`controller_power`] of one error norm (DOPRI5 or DOP853: α ≠ 0), the same operations.
+#[inline(always)]
+pub(crate) fn controller_power_one(err: f64, tab: &Tableau) -> f64 {
+    if tab.alpha == 0.125 {
+        err.sqrt().sqrt().sqrt()
+    } else {
+        pdw_simd::powr(err, tab.alpha)
     }
 }
 
@@ -833,8 +863,8 @@ pub(crate) fn prepare(opts: &Options, ctl: &mut Ctl) -> Result<f64, StopReason> 
 /// eq. II.4.13 with the PI stabilisation `fac = err^α / facold^β`, safety factor, clamps
 /// `h_new/h ∈ [fac_min, fac_max]`, and no growth right after a rejection). A non-finite norm
 /// is a rejection with `h ← h/10`. RK4 accepts every finite step and stops on a non-finite one.
-#[inline]
-fn decide(
+#[inline(always)]
+pub(crate) fn decide(
     method: Method,
     tab: &Tableau,
     opts: &Options,
@@ -905,9 +935,23 @@ pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
     let err = st.err[l];
     ctl.stats.rhs_evals += (tab.n_stages - 1) as u64;
     match decide(method, tab, opts, ctl, err, st.s2[l]) {
-        After::Accepted => {}
-        other => return other,
+        After::Accepted => after_accept(sys, method, tab, st, l, ctl, sc),
+        other => other,
     }
+}
+
+/// The part of [`after_attempt`] after an acceptance: event location on the step, then the
+/// commit of x₁ (or the stop at the event or at `t_end`). Returns `Accepted` or `Stop`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn after_accept<S: HybridSystem + ?Sized>(
+    sys: &S,
+    method: Method,
+    tab: &Tableau,
+    st: &mut Store,
+    l: usize,
+    ctl: &mut Ctl,
+    sc: &mut LaneScratch,
+) -> After {
     let h = ctl.h_used;
     let t0 = ctl.t;
     let t1 = if ctl.last { ctl.t_end } else { t0 + h };

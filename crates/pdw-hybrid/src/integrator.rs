@@ -10,9 +10,13 @@
 //! handled is not reported again (see the [`event`](crate::event) module).
 
 use crate::engine::{self, After, Ctl, LaneScratch, Store};
+use crate::event;
 use crate::options::{Method, Options, Stats, StopReason};
 use crate::tableau::Tableau;
 use crate::{HybridError, HybridSystem};
+
+/// Most guards a mode may have for the register loop ([`Integrator::run_registers`]).
+const FAST_GUARDS: usize = 8;
 
 /// Callback receiving `(t, x)`.
 type Observer<'a> = &'a mut dyn FnMut(f64, &[f64]);
@@ -25,6 +29,8 @@ pub struct Integrator {
     st: Store,
     sc: LaneScratch,
     ctl: Ctl,
+    /// Take the register loop where it applies (see [`Integrator::set_register_loop`]).
+    registers: bool,
 }
 
 impl Integrator {
@@ -41,6 +47,7 @@ impl Integrator {
             st: Store::new(dim, 1, 0, tab),
             sc: LaneScratch::new(dim, 0),
             ctl: Ctl::default(),
+            registers: true,
         })
     }
 
@@ -63,6 +70,13 @@ impl Integrator {
     /// model calls between integrations, e.g. resets, so that they allocate nothing either).
     pub fn scratch(&mut self) -> &mut crate::Scratch {
         &mut self.sc.ev.model
+    }
+
+    /// Use the register loop for DOPRI5 and DOP853 at the shipped dimensions (the default), or
+    /// always the general step loop. Both give the same bits, the same stops and the same
+    /// counters; the switch exists so that tests and benchmarks can compare them.
+    pub fn set_register_loop(&mut self, on: bool) {
+        self.registers = on;
     }
 
     /// Zero the counters.
@@ -126,8 +140,9 @@ impl Integrator {
         self.run(sys, mode, t, x, t_end, Some(obs))
     }
 
-    /// Compiled per instruction set (pdw-simd) with the step kernels inlined; same bits on
-    /// every path.
+    /// The general loop is compiled per instruction set (pdw-simd) with the step kernels
+    /// inlined; the register loop once, for the baseline (its vectors are one state, a few
+    /// elements wide). Same bits on every path.
     fn run<S: HybridSystem + ?Sized>(
         &mut self,
         sys: &S,
@@ -137,14 +152,28 @@ impl Integrator {
         t_end: f64,
         obs: Option<Observer<'_>>,
     ) -> StopReason {
-        pdw_simd::dispatch(
-            #[inline(always)]
-            || self.run_inner(sys, mode, t, x, t_end, obs),
-        )
+        let d = self.st.dim;
+        let registers = self.registers
+            && !matches!(self.opts.method, Method::Rk4 { .. })
+            && sys.dim() == d
+            && sys.error_dim() == d
+            && mode < sys.n_modes()
+            && sys.guards(mode).len() <= FAST_GUARDS
+            && matches!(d, 2 | 4 | 6 | 8 | 10 | 12); // the dimensions of `engine::with_dim!`
+        if registers {
+            self.run_inner::<S, true>(sys, mode, t, x, t_end, obs)
+        } else {
+            pdw_simd::dispatch(
+                #[inline(always)]
+                || self.run_inner::<S, false>(sys, mode, t, x, t_end, obs),
+            )
+        }
     }
 
+    /// One integration (see [`integrate`](Self::integrate)); `REGISTERS`: take the register
+    /// loop (the caller has checked that it applies).
     #[inline(always)]
-    fn run_inner<S: HybridSystem + ?Sized>(
+    fn run_inner<S: HybridSystem + ?Sized, const REGISTERS: bool>(
         &mut self,
         sys: &S,
         mode: usize,
@@ -176,6 +205,9 @@ impl Integrator {
             }
             if let Some(o) = obs.as_mut() {
                 o(self.ctl.t, &self.st.x);
+            }
+            if REGISTERS {
+                engine::with_dim!(d, D => break 'outer self.run_registers::<S, D>(sys, mode, &mut obs), _ => {});
             }
             loop {
                 match engine::prepare(&opts, &mut self.ctl) {
@@ -209,6 +241,116 @@ impl Integrator {
             o(*t, x);
         }
         stop
+    }
+
+    /// The step loop of [`run_inner`](Self::run_inner) for DOPRI5 and DOP853 at a compile-time
+    /// dimension `D` (error control on every component, at most [`FAST_GUARDS`] guards), with
+    /// the accepted state, the stages and the guard values in local arrays (registers) instead
+    /// of the workspace, and the method's stage rows unrolled. Every value is computed by the
+    /// functions the general loop uses (`row_fixed`, `error_norm_fixed`, `controller_power_one`,
+    /// `decide`, `may_cross`), on the same operands in the same order, so the two loops give the
+    /// same bits. A step that may hold an event, or ends the segment, is written to the
+    /// workspace and finished by the general code (`after_accept`), after which the loop reloads
+    /// the committed state. Returns the stop reason with the stop state in `st.x`.
+    #[inline(always)]
+    fn run_registers<S: HybridSystem + ?Sized, const D: usize>(
+        &mut self,
+        sys: &S,
+        mode: usize,
+        obs: &mut Option<Observer<'_>>,
+    ) -> StopReason {
+        let Self {
+            opts,
+            tab,
+            st,
+            sc,
+            ctl,
+            ..
+        } = self;
+        let (opts, tab) = (*opts, *tab);
+        let method = opts.method;
+        let ns = tab.n_stages;
+        let last = ns - 1;
+        let specs = sys.guards(mode);
+        let ng = specs.len();
+        let mut x: [f64; D] = st.x[..D].try_into().expect("D values");
+        let mut k = [[0.0f64; D]; 13];
+        k[0].copy_from_slice(&st.k[..D]);
+        let (mut g, mut gr) = ([0.0f64; FAST_GUARDS], [0.0f64; FAST_GUARDS]);
+        g[..ng].copy_from_slice(&st.g[..ng]);
+        gr[..ng].copy_from_slice(&st.gr[..ng]);
+        let (mut g1, mut r1) = ([0.0f64; FAST_GUARDS], [0.0f64; FAST_GUARDS]);
+        loop {
+            let h = match engine::prepare(&opts, ctl) {
+                Ok(h) => h,
+                Err(r) => {
+                    st.x[..D].copy_from_slice(&x);
+                    return r;
+                }
+            };
+            let x1 = stages_fixed::<S, D>(sys, &mut sc.ev.model, mode, method, &x, h, &mut k);
+            let err = engine::error_norm_fixed::<D>(&x, &x1, k.as_flattened(), h, method, &opts);
+            let fac11 = engine::controller_power_one(err, tab);
+            let mut cand = 0u8;
+            if ng > 0 {
+                sys.guards_with_rates(
+                    &mut sc.ev.model,
+                    mode,
+                    &x1,
+                    &k[last],
+                    &mut g1[..ng],
+                    &mut r1[..ng],
+                );
+                for i in 0..ng {
+                    cand |=
+                        event::guard_bit(i) * event::may_cross(g[i], g1[i], gr[i], r1[i], h) as u8;
+                }
+            }
+            ctl.stats.rhs_evals += (ns - 1) as u64;
+            match engine::decide(method, tab, &opts, ctl, err, fac11) {
+                After::Rejected => continue,
+                After::Stop(r) => {
+                    st.x[..D].copy_from_slice(&x);
+                    return r;
+                }
+                After::Accepted => {}
+            }
+            if cand == 0 && !ctl.last {
+                // No guard can cross inside the step: commit x₀ ← x₁, f(x₀) ← f(x₁) and the
+                // guard values at x₁ (what `after_accept` and `event::locate` do here).
+                x = x1;
+                k[0] = k[last];
+                g = g1;
+                gr = r1;
+                ctl.t += h;
+                if let Some(o) = obs.as_mut() {
+                    o(ctl.t, &x);
+                }
+                continue;
+            }
+            st.x[..D].copy_from_slice(&x);
+            st.xn[..D].copy_from_slice(&x1);
+            st.k[..ns * D].copy_from_slice(k[..ns].as_flattened());
+            st.g[..ng].copy_from_slice(&g[..ng]);
+            st.gr[..ng].copy_from_slice(&gr[..ng]);
+            st.g1[..ng].copy_from_slice(&g1[..ng]);
+            st.r1[..ng].copy_from_slice(&r1[..ng]);
+            st.cand[0] = cand;
+            st.h[0] = h;
+            match engine::after_accept(sys, method, tab, st, 0, ctl, sc) {
+                After::Accepted => {
+                    x.copy_from_slice(&st.x[..D]);
+                    k[0].copy_from_slice(&st.k[..D]);
+                    g[..ng].copy_from_slice(&st.g[..ng]);
+                    gr[..ng].copy_from_slice(&st.gr[..ng]);
+                    if let Some(o) = obs.as_mut() {
+                        o(ctl.t, &x);
+                    }
+                }
+                After::Stop(r) => return r,
+                After::Rejected => unreachable!("after_accept accepts or stops"),
+            }
+        }
     }
 
     /// Stages and error norm of one attempt (one lane, stride 1: blocks are contiguous vectors).
@@ -259,5 +401,54 @@ impl Method {
             Method::Dopri5 => 5,
             Method::Dop853 => 8,
         }
+    }
+}
+
+/// The stages of one DOPRI5 or DOP853 attempt from `x` with step `h` at a compile-time dimension
+/// `D`: `k[q] = f(x + h·Σ_p a_{qp} k_p)` for q = 1 … s − 1 (`k[0] = f(x)` given), the last
+/// stage's input (row b) returned as x₁. The rows are the tableau's constant rows, summed by
+/// [`engine::row_fixed`] as in the general loop.
+#[inline(always)]
+fn stages_fixed<S: HybridSystem + ?Sized, const D: usize>(
+    sys: &S,
+    ws: &mut crate::Scratch,
+    mode: usize,
+    method: Method,
+    x: &[f64; D],
+    h: f64,
+    k: &mut [[f64; D]; 13],
+) -> [f64; D] {
+    use crate::tableau::*;
+    macro_rules! stage {
+        ($q:expr, $w:expr) => {{
+            let y = engine::row_fixed::<D, _>(x, h, k.as_flattened(), &$w);
+            sys.flow(ws, mode, &y, &mut k[$q]);
+            y
+        }};
+    }
+    match method {
+        Method::Dopri5 => {
+            stage!(1, DP5_A1);
+            stage!(2, DP5_A2);
+            stage!(3, DP5_A3);
+            stage!(4, DP5_A4);
+            stage!(5, DP5_A5);
+            stage!(6, DP5_A6)
+        }
+        Method::Dop853 => {
+            stage!(1, DOP_A1);
+            stage!(2, DOP_A2);
+            stage!(3, DOP_A3);
+            stage!(4, DOP_A4);
+            stage!(5, DOP_A5);
+            stage!(6, DOP_A6);
+            stage!(7, DOP_A7);
+            stage!(8, DOP_A8);
+            stage!(9, DOP_A9);
+            stage!(10, DOP_A10);
+            stage!(11, DOP_A11);
+            stage!(12, DOP_A12)
+        }
+        Method::Rk4 { .. } => unreachable!("the register loop runs DOPRI5 and DOP853"),
     }
 }

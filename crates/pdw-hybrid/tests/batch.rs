@@ -302,3 +302,114 @@ fn soft_ball_contact_conserves_energy_across_mode_switches() {
         assert!(((e - e0) / e0).abs() < 1e-10, "energy {e} vs {e0}");
     }
 }
+
+/// The soft ball with exact guard rates (`ġ = ẏ` for both guards, which are affine): steps
+/// far from the floor are cleared from their end points and committed without sampling.
+struct RatedSoftBall(SoftBall);
+
+impl HybridSystem for RatedSoftBall {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn n_modes(&self) -> usize {
+        2
+    }
+    fn guards(&self, mode: usize) -> &[pdw_hybrid::GuardSpec] {
+        self.0.guards(mode)
+    }
+    fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+        self.0.flow(ws, mode, x, dx)
+    }
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        self.0.guard(ws, mode, k, x)
+    }
+    fn guards_with_rates(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        for (k, (gk, rk)) in g.iter_mut().zip(rate.iter_mut()).enumerate() {
+            *gk = self.0.guard(ws, mode, k, x);
+            *rk = f[0];
+        }
+    }
+    fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
+        true
+    }
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        self.0.reset(ws, mode, k, x, out)
+    }
+}
+
+/// The scalar integrator's register loop (DOPRI5 and DOP853 at a shipped dimension, here 2)
+/// and its general step loop give the same outputs bit for bit, the same stops and the same
+/// work counters: with events and mode changes, non-finite starts, empty spans, falls, runs cut
+/// by `max_steps`, and rejected steps (the loose tolerance); the observer sees the same points.
+/// Run on the soft ball without guard rates (every step sampled: the loop hands each step to
+/// the general event code) and with them (most steps committed in registers).
+#[test]
+fn register_loop_equals_general_loop_bit_for_bit() {
+    register_loop_case(&soft(), false);
+    register_loop_case(&RatedSoftBall(soft()), true);
+}
+
+fn register_loop_case<S: HybridSystem>(sys: &S, rated: bool) {
+    let drv = Bouncer {
+        max_events: 12,
+        start_mode: 0,
+    };
+    let its = items(600, 21);
+    for base in [
+        Options::dopri5(1e-9),
+        Options::dop853(1e-11),
+        Options::dopri5(1e-4),
+    ] {
+        for max_steps in [base.max_steps, 3] {
+            let opts = Options { max_steps, ..base };
+            let mut fast = Integrator::new(2, opts).unwrap();
+            let mut general = Integrator::new(2, opts).unwrap();
+            general.set_register_loop(false);
+            let mut cut = 0;
+            for (i, it) in its.iter().enumerate() {
+                let a = pdw_hybrid::run_scalar_with(&mut fast, sys, &drv, it).unwrap();
+                let b = pdw_hybrid::run_scalar_with(&mut general, sys, &drv, it).unwrap();
+                assert_eq!(a, b, "{:?} max_steps {max_steps}, item {i}", opts.method);
+                cut += usize::from(a.last == Some(StopReason::MaxSteps));
+            }
+            let (sa, sb) = (fast.stats(), general.stats());
+            assert_eq!(sa, sb, "{:?} max_steps {max_steps}", opts.method);
+            assert!(sa.rejected > 0 && sa.sampled > 0, "{sa:?}");
+            // With rates most steps are cleared without sampling (the register commit).
+            assert_eq!(rated, 2 * sa.sampled < sa.accepted, "{sa:?}");
+            assert_eq!(
+                cut > 0,
+                max_steps == 3,
+                "{:?} {}: {cut} runs cut",
+                opts.method,
+                opts.rtol
+            );
+        }
+        let mut seen = [Vec::new(), Vec::new()];
+        for (on, log) in [true, false].into_iter().zip(&mut seen) {
+            let mut integ = Integrator::new(2, base).unwrap();
+            integ.set_register_loop(on);
+            // In contact (the free flight is a parabola, a step or two).
+            let (mut t, mut x) = (0.0, [-1e-3, -2.0]);
+            let stop = integ.integrate_observed(sys, 1, &mut t, &mut x, 5.0, &mut |t, x| {
+                log.push((t.to_bits(), x[0].to_bits(), x[1].to_bits()))
+            });
+            assert_eq!(stop, StopReason::Guard { guard: 0 }, "{:?}", base.method);
+        }
+        assert!(
+            seen[0].len() > 5,
+            "{:?}: {} points",
+            base.method,
+            seen[0].len()
+        );
+        assert_eq!(seen[0], seen[1], "{:?}: observed points", base.method);
+    }
+}

@@ -334,6 +334,7 @@ impl HybridSystem for Simplest {
         &GUARDS
     }
 
+    #[inline(always)]
     fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         let (f, _) = rhs1(self.gamma, x);
         dx[..4].copy_from_slice(&f);
@@ -436,6 +437,7 @@ impl HybridSystem for Simplest {
 
     /// The four guards (linear in the state) and their exact rates `∇g·f`:
     /// `(φ̇ − 2θ̇, θ̈, θ̇, θ̇)` read from `f = (θ̇, θ̈, φ̇, φ̈)`.
+    #[inline(always)]
     fn guards_with_rates(
         &self,
         _ws: &mut Scratch,
