@@ -108,18 +108,10 @@ fn variational_stride_with_guard_rates_equals_the_one_without_bit_for_bit() {
     }
 }
 
-/// With the step-size control on the state alone ([`ErrorControl::State`]), the variational
-/// stride takes the plain stride's steps, events and resets: its stride (image, period, pre-
-/// and post-event states, step length, events) is [`StrideMap::stride`]'s bit for bit, for the
-/// simplest walker and the chain-walker presets (compass, kneed with its knee strike, seed5),
-/// DOP853 at two tolerances and DOPRI5. With full control the steps differ, so the image
-/// differs in the last digits (here only checked to be close: the control matters).
-#[test]
-fn state_controlled_variational_stride_is_the_plain_stride_bit_for_bit() {
-    use pdw_limit::{dp_variational_with, ErrorControl};
-    use pdw_walkers::Walker;
-    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    let mut walkers: Vec<(String, Box<dyn Walker>, Vec<f64>)> = Vec::new();
+/// The simplest walker at γ = 0.009 and 0.016 and the chain-walker presets (compass, kneed,
+/// seed5), each with the section state of its first gait guess.
+fn gait_walkers() -> Vec<(String, Box<dyn pdw_walkers::Walker>, Vec<f64>)> {
+    let mut walkers: Vec<(String, Box<dyn pdw_walkers::Walker>, Vec<f64>)> = Vec::new();
     for gamma in [0.009, 0.016] {
         let s = GarciaGait::LongPeriod.section_guess(gamma);
         walkers.push((
@@ -133,6 +125,21 @@ fn state_controlled_variational_stride_is_the_plain_stride_bit_for_bit() {
         let s = w.gait_guesses()[0].section.clone();
         walkers.push((name.to_string(), w, s));
     }
+    walkers
+}
+
+/// With the step-size control on the state alone ([`ErrorControl::State`]), the variational
+/// stride takes the plain stride's steps, events and resets: its stride (image, period, pre-
+/// and post-event states, step length, events) is [`StrideMap::stride`]'s bit for bit, for the
+/// simplest walker and the chain-walker presets (compass, kneed with its knee strike, seed5),
+/// DOP853 at two tolerances and DOPRI5. With full control the steps differ, so the image
+/// differs in the last digits (here only checked to be close: the control matters).
+#[test]
+fn state_controlled_variational_stride_is_the_plain_stride_bit_for_bit() {
+    use pdw_limit::{dp_variational_with, ErrorControl};
+    use pdw_walkers::Walker;
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let walkers = gait_walkers();
     let mut full_differs = 0;
     for (name, w, s) in &walkers {
         for opts in [
@@ -183,20 +190,7 @@ fn register_loop_stride_is_the_general_loop_stride_bit_for_bit() {
     use pdw_hybrid::Integrator;
     use pdw_walkers::Walker;
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    let mut walkers: Vec<(String, Box<dyn Walker>, Vec<f64>)> = Vec::new();
-    for gamma in [0.009, 0.016] {
-        let s = GarciaGait::LongPeriod.section_guess(gamma);
-        walkers.push((
-            format!("simplest {gamma}"),
-            Box::new(walker(gamma)),
-            s.to_vec(),
-        ));
-    }
-    for name in ["compass", "kneed", "seed5"] {
-        let w = pdw_walkers::build(name, &[]).unwrap();
-        let s = w.gait_guesses()[0].section.clone();
-        walkers.push((name.to_string(), w, s));
-    }
+    let walkers = gait_walkers();
     for (name, w, s) in &walkers {
         for opts in [
             Options::dop853(1e-14),
