@@ -260,7 +260,7 @@ fn arr<const D: usize>(v: &[f64]) -> &[f64; D] {
 /// `0 + Σ_q w_q k_q` over the nonzero weights in increasing q, componentwise, for contiguous
 /// stage vectors `k = [k₀ | k₁ | …]` of length `D`.
 #[inline(always)]
-fn combine_fixed<const D: usize, const N: usize>(k: &[f64], w: &[f64; N]) -> [f64; D] {
+pub(crate) fn combine_fixed<const D: usize, const N: usize>(k: &[f64], w: &[f64; N]) -> [f64; D] {
     let mut acc = [0.0; D];
     for (&wq, kq) in w.iter().zip(k.chunks_exact(D)) {
         if wq == 0.0 {

@@ -332,60 +332,69 @@ fn build_dense<S: HybridSystem + ?Sized>(
             Interp::Dopri5
         }
         Method::Dop853 => {
-            match d {
-                2 => return dop853_dense_fixed::<S, 2>(sys, mode, st, l, h, sc, stats),
-                4 => return dop853_dense_fixed::<S, 4>(sys, mode, st, l, h, sc, stats),
-                6 => return dop853_dense_fixed::<S, 6>(sys, mode, st, l, h, sc, stats),
-                8 => return dop853_dense_fixed::<S, 8>(sys, mode, st, l, h, sc, stats),
-                10 => return dop853_dense_fixed::<S, 10>(sys, mode, st, l, h, sc, stats),
-                12 => return dop853_dense_fixed::<S, 12>(sys, mode, st, l, h, sc, stats),
-                _ => {}
-            }
-            // The lane's stages k₀…k₁₂, gathered once (contiguous), then k₁₃…k₁₅ appended: the
-            // sums below read them in the same order with the same weights as a strided read.
-            for q in 0..13 {
-                for j in 0..d {
-                    sc.kl[q * d + j] = kq(q, j);
-                }
-            }
-            for r in 0..3 {
-                let a = tableau::DOP853_DENSE_A[r];
-                for j in 0..d {
-                    let mut s = 0.0;
-                    for (q, &w) in a.iter().enumerate() {
-                        if w != 0.0 {
-                            s += w * sc.kl[q * d + j];
-                        }
-                    }
-                    sc.ytmp[j] = sc.x0[j] + h * s;
-                }
-                let (_, rest) = sc.kl.split_at_mut((13 + r) * d);
-                sys.flow(&mut sc.model, mode, &sc.ytmp, &mut rest[..d]);
-                stats.rhs_evals += 1;
-            }
-            hermite_coefficients(sc, h);
-            for (r, drow) in tableau::DOP853_D.iter().enumerate() {
-                for j in 0..d {
-                    let mut s = 0.0;
-                    for (q, &w) in drow.iter().enumerate() {
-                        if w != 0.0 {
-                            s += w * sc.kl[q * d + j];
-                        }
-                    }
-                    sc.cont[(4 + r) * d + j] = h * s;
-                }
-            }
-            Interp::Dop853
+            crate::engine::with_dim!(d,
+                D => dop853_dense_fixed::<S, D>(sys, mode, st, l, h, sc, stats),
+                _ => dop853_dense_dyn(sys, mode, st, l, h, sc, stats))
         }
     }
 }
 
+/// DOP853's dense output for any dimension: the lane's stages k₀…k₁₂ gathered once
+/// (contiguous), then k₁₃…k₁₅ appended; the sums read them in the same order with the same
+/// weights as [`dop853_dense_fixed`].
+#[allow(clippy::too_many_arguments)]
+fn dop853_dense_dyn<S: HybridSystem + ?Sized>(
+    sys: &S,
+    mode: usize,
+    st: &Store,
+    l: usize,
+    h: f64,
+    sc: &mut EventScratch,
+    stats: &mut Stats,
+) -> Interp {
+    let d = st.dim;
+    let (stride, blk) = (st.stride, st.blk());
+    for q in 0..13 {
+        for j in 0..d {
+            sc.kl[q * d + j] = st.k[q * blk + j * stride + l];
+        }
+    }
+    for r in 0..3 {
+        let a = tableau::DOP853_DENSE_A[r];
+        for j in 0..d {
+            let mut s = 0.0;
+            for (q, &w) in a.iter().enumerate() {
+                if w != 0.0 {
+                    s += w * sc.kl[q * d + j];
+                }
+            }
+            sc.ytmp[j] = sc.x0[j] + h * s;
+        }
+        let (_, rest) = sc.kl.split_at_mut((13 + r) * d);
+        sys.flow(&mut sc.model, mode, &sc.ytmp, &mut rest[..d]);
+        stats.rhs_evals += 1;
+    }
+    hermite_coefficients(sc, h);
+    for (r, drow) in tableau::DOP853_D.iter().enumerate() {
+        for j in 0..d {
+            let mut s = 0.0;
+            for (q, &w) in drow.iter().enumerate() {
+                if w != 0.0 {
+                    s += w * sc.kl[q * d + j];
+                }
+            }
+            sc.cont[(4 + r) * d + j] = h * s;
+        }
+    }
+    Interp::Dop853
+}
+
 /// DOP853's dense output (HNW I, §II.10: the three extra stages k₁₃…k₁₅ and the coefficient
-/// rows `d`) for a compile-time dimension `D`: the lane's stages in a stack array, every sum
-/// unrolled over the nonzero weights — the same terms in the same order as the loop of
-/// [`build_dense`], so the same bits.
+/// rows `d`) for a compile-time dimension `D`: the lane's stages contiguous in a stack array,
+/// every row a constant of the tableau, so each sum is unrolled over its nonzero weights with
+/// no test of a weight at run time — the same terms in the same order as the loop of
+/// [`build_dense`] (`0 + Σ_q w_q k_q` in increasing q), so the same bits.
 #[inline(always)]
-#[allow(clippy::needless_range_loop)] // indexed as the loops of `build_dense` it reproduces
 fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
     sys: &S,
     mode: usize,
@@ -395,7 +404,9 @@ fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
     sc: &mut EventScratch,
     stats: &mut Stats,
 ) -> Interp {
+    use crate::engine::{combine_fixed, row_fixed};
     let (stride, blk) = (st.stride, st.blk());
+    // k₀…k₁₅; `flat` reads them as one contiguous slice, stage q at [q·D, (q + 1)·D).
     let mut kl = [[0.0f64; D]; 16];
     for (q, kq) in kl.iter_mut().enumerate().take(13) {
         for (j, v) in kq.iter_mut().enumerate() {
@@ -403,33 +414,28 @@ fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
         }
     }
     let x0: [f64; D] = sc.x0[..D].try_into().expect("D values");
-    for r in 0..3 {
-        let a = tableau::DOP853_DENSE_A[r];
-        let mut y = [0.0; D];
-        for j in 0..D {
-            let mut s = 0.0;
-            for (q, &w) in a.iter().enumerate() {
-                if w != 0.0 {
-                    s += w * kl[q][j];
-                }
-            }
-            y[j] = x0[j] + h * s;
-        }
-        let mut f = [0.0; D];
-        sys.flow(&mut sc.model, mode, &y, &mut f);
-        kl[13 + r] = f;
+    let model = &mut sc.model;
+    let mut extra = |kl: &mut [[f64; D]; 16], q: usize, y: [f64; D]| {
+        sys.flow(model, mode, &y, &mut kl[q]);
         stats.rhs_evals += 1;
-    }
+    };
+    let y = row_fixed::<D, 13>(&x0, h, kl.as_flattened(), &tableau::DOP853_DENSE_A13);
+    extra(&mut kl, 13, y);
+    let y = row_fixed::<D, 14>(&x0, h, kl.as_flattened(), &tableau::DOP853_DENSE_A14);
+    extra(&mut kl, 14, y);
+    let y = row_fixed::<D, 15>(&x0, h, kl.as_flattened(), &tableau::DOP853_DENSE_A15);
+    extra(&mut kl, 15, y);
+    let kl = kl.as_flattened();
     hermite_coefficients(sc, h);
-    for (r, drow) in tableau::DOP853_D.iter().enumerate() {
-        for j in 0..D {
-            let mut s = 0.0;
-            for (q, &w) in drow.iter().enumerate() {
-                if w != 0.0 {
-                    s += w * kl[q][j];
-                }
-            }
-            sc.cont[(4 + r) * D + j] = h * s;
+    let rows = [
+        combine_fixed::<D, 16>(kl, &tableau::DOP853_D[0]),
+        combine_fixed::<D, 16>(kl, &tableau::DOP853_D[1]),
+        combine_fixed::<D, 16>(kl, &tableau::DOP853_D[2]),
+        combine_fixed::<D, 16>(kl, &tableau::DOP853_D[3]),
+    ];
+    for (r, s) in rows.iter().enumerate() {
+        for (c, &v) in sc.cont[(4 + r) * D..(5 + r) * D].iter_mut().zip(s) {
+            *c = h * v;
         }
     }
     Interp::Dop853
@@ -751,5 +757,100 @@ mod tests {
         assert!(may_cross(-0.01, -0.01, 1.0, -1.0, 0.1));
         assert!(!may_cross(-0.5, -0.4, 1.0, 1.0, 0.1));
         assert!(!may_cross(0.5, 0.4, -1.0, -1.0, 0.1));
+    }
+
+    /// A nonlinear flow of any dimension for the dense-output build (no guards).
+    struct Coupled(usize);
+
+    impl HybridSystem for Coupled {
+        fn dim(&self) -> usize {
+            self.0
+        }
+        fn guards(&self, _mode: usize) -> &[crate::GuardSpec] {
+            &[]
+        }
+        fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
+            let d = x.len();
+            for j in 0..d {
+                dx[j] = x[(j + 1) % d].sin() - 0.3 * x[j] * x[j];
+            }
+        }
+        fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, _x: &[f64]) -> f64 {
+            0.0
+        }
+        fn reset(
+            &self,
+            _: &mut Scratch,
+            mode: usize,
+            _: usize,
+            x: &[f64],
+            out: &mut [f64],
+        ) -> usize {
+            out.copy_from_slice(x);
+            mode
+        }
+    }
+
+    /// The DOP853 dense output of the shipped dimensions (compile-time rows) is the general
+    /// loop's, bit for bit, on a strided lane of a batch store: coefficients, the three extra
+    /// evaluations, and the interpolated states.
+    #[test]
+    fn dop853_dense_output_of_fixed_dimensions_is_the_general_loops() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let tab = crate::engine::tableau_of(Method::Dop853);
+        for d in [2, 4, 6, 8, 10, 12] {
+            let sys = Coupled(d);
+            let (lanes, l) = (5, 3);
+            let mut st = Store::new(d, lanes, 0, tab);
+            for v in
+                st.k.iter_mut()
+                    .chain(st.x.iter_mut())
+                    .chain(st.xn.iter_mut())
+            {
+                *v = 2.0 * uniform() - 1.0;
+            }
+            let h = 0.01 + 0.1 * uniform();
+            let run = |fixed: bool| {
+                let mut sc = EventScratch::new(d, 0);
+                gather_ends(&st, l, Method::Dop853, &mut sc);
+                let mut stats = Stats::default();
+                let interp = if fixed {
+                    crate::engine::with_dim!(d,
+                        D => dop853_dense_fixed::<Coupled, D>(&sys, 0, &st, l, h, &mut sc, &mut stats),
+                        _ => unreachable!("{d} is a shipped dimension"))
+                } else {
+                    dop853_dense_dyn(&sys, 0, &st, l, h, &mut sc, &mut stats)
+                };
+                let dense = Dense {
+                    interp,
+                    h,
+                    x0: &sc.x0,
+                    x1: &sc.x1,
+                    f0: &sc.f0,
+                    f1: &sc.f1,
+                    cont: &sc.cont,
+                };
+                let mut states = vec![0.0; 3 * d];
+                for (i, out) in states.chunks_exact_mut(d).enumerate() {
+                    dense.eval(0.2 + 0.3 * i as f64, out);
+                }
+                (sc.cont[..8 * d].to_vec(), states, stats.rhs_evals)
+            };
+            let (fixed, dynamic) = (run(true), run(false));
+            assert_eq!(fixed.2, 3);
+            assert_eq!(fixed.2, dynamic.2);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fixed.0), bits(&dynamic.0), "coefficients, d = {d}");
+            assert_eq!(bits(&fixed.1), bits(&dynamic.1), "states, d = {d}");
+            assert!(
+                fixed.0.iter().all(|v| v.is_finite()) && fixed.0[4 * d..].iter().any(|&v| v != 0.0)
+            );
+        }
     }
 }
