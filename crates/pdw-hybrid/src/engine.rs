@@ -792,9 +792,8 @@ fn initial_step<S: HybridSystem + ?Sized>(
     sc: &mut LaneScratch,
 ) -> f64 {
     let (rtol, atol) = (opts.rtol, opts.atol);
-    let ne = err_dim;
     let (mut dnf, mut dny) = (0.0, 0.0);
-    for (&x, &f) in sc.xg[..ne].iter().zip(&sc.fg[..ne]) {
+    for (&x, &f) in sc.xg[..err_dim].iter().zip(&sc.fg[..err_dim]) {
         let sk = atol + rtol * x.abs();
         dnf += (f / sk) * (f / sk);
         dny += (x / sk) * (x / sk);
@@ -812,7 +811,11 @@ fn initial_step<S: HybridSystem + ?Sized>(
     sys.flow(&mut sc.ev.model, mode, &sc.ytmp, &mut f1);
     ctl.stats.rhs_evals += 1;
     let mut der2 = 0.0;
-    for ((&a, &b), &x) in f1[..ne].iter().zip(&sc.fg[..ne]).zip(&sc.xg[..ne]) {
+    for ((&a, &b), &x) in f1[..err_dim]
+        .iter()
+        .zip(&sc.fg[..err_dim])
+        .zip(&sc.xg[..err_dim])
+    {
         let sk = atol + rtol * x.abs();
         der2 += ((a - b) / sk) * ((a - b) / sk);
     }

@@ -278,8 +278,7 @@ impl Integrator {
         let method = opts.method;
         let ns = tab.n_stages;
         let last = ns - 1;
-        let specs = sys.guards(mode);
-        let ng = specs.len();
+        let ng = sys.guards(mode).len();
         let mut x: [f64; D] = st.x[..D].try_into().expect("D values");
         let mut k = [[0.0f64; D]; 13];
         k[0].copy_from_slice(&st.k[..D]);
