@@ -342,7 +342,6 @@ fn build_dense<S: HybridSystem + ?Sized>(
 /// DOP853's dense output for any dimension: the lane's stages k₀…k₁₂ gathered once
 /// (contiguous), then k₁₃…k₁₅ appended; the sums read them in the same order with the same
 /// weights as [`dop853_dense_fixed`].
-#[allow(clippy::too_many_arguments)]
 fn dop853_dense_dyn<S: HybridSystem + ?Sized>(
     sys: &S,
     mode: usize,
@@ -392,8 +391,8 @@ fn dop853_dense_dyn<S: HybridSystem + ?Sized>(
 /// DOP853's dense output (HNW I, §II.10: the three extra stages k₁₃…k₁₅ and the coefficient
 /// rows `d`) for a compile-time dimension `D`: the lane's stages contiguous in a stack array,
 /// every row a constant of the tableau, so each sum is unrolled over its nonzero weights with
-/// no test of a weight at run time — the same terms in the same order as the loop of
-/// [`build_dense`] (`0 + Σ_q w_q k_q` in increasing q), so the same bits.
+/// no test of a weight at run time — the same terms in the same order as
+/// [`dop853_dense_dyn`] (`0 + Σ_q w_q k_q` in increasing q), so the same bits.
 #[inline(always)]
 fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
     sys: &S,
@@ -406,7 +405,7 @@ fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
 ) -> Interp {
     use crate::engine::{combine_fixed, row_fixed};
     let (stride, blk) = (st.stride, st.blk());
-    // k₀…k₁₅; `flat` reads them as one contiguous slice, stage q at [q·D, (q + 1)·D).
+    // k₀…k₁₅; `as_flattened` reads them as one slice, stage q at [q·D, (q + 1)·D).
     let mut kl = [[0.0f64; D]; 16];
     for (q, kq) in kl.iter_mut().enumerate().take(13) {
         for (j, v) in kq.iter_mut().enumerate() {
