@@ -773,6 +773,7 @@ impl BasinWriter {
         let mut made = Vec::new();
         let rebuilt = Self::init(&tmp, &file, &found, &mut made).and_then(|h| {
             copy_done_blocks(path, &old, &tmp, &h, &found, &rows_done)?;
+            crate::provenance::carry_history(path, &old, &tmp, &h.file)?;
             set_attr(&tmp, &h.file, "elapsed_s", &elapsed_before)?;
             if let Some(c) = &created {
                 set_str(&tmp, &h.file, "created", c)?;

@@ -243,6 +243,28 @@ pub fn write_provenance(path: &Path, file: &File, p: &Provenance) -> Result<()> 
     )
 }
 
+/// Carries the history in `/provenance` of `src` — `commands` and `created` — into `dst`, a
+/// file rebuilt from it (a resumed basin): the next [`write_provenance`] on `dst` extends the
+/// command list instead of starting a new one. A `src` without provenance carries nothing.
+pub fn carry_history(src_path: &Path, src: &File, dst_path: &Path, dst: &File) -> Result<()> {
+    let Ok(sg) = src.group("provenance") else {
+        return Ok(());
+    };
+    let g = match dst.group("provenance") {
+        Ok(g) => g,
+        Err(_) => dst
+            .create_group("provenance")
+            .at(dst_path, "creating /provenance")?,
+    };
+    for k in ["commands", "created"] {
+        if has_attr(&sg, k) {
+            let v = get_str(src_path, "pdw-sweep file", &sg, k)?;
+            set_str(dst_path, &g, k, &v)?;
+        }
+    }
+    Ok(())
+}
+
 /// Reads `/provenance` of an open file (`None` for files written before it existed).
 pub fn read_provenance(path: &Path, file: &File) -> Result<Option<Provenance>> {
     let Ok(g) = file.group("provenance") else {
