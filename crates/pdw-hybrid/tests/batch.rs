@@ -1,7 +1,7 @@
 //! Batched lockstep integration reproduces the scalar integrator bit for bit, per lane, for any
 //! lane count, chunk size and thread count.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pdw_hybrid::{

@@ -1,6 +1,6 @@
 //! Event-location claims against closed forms.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 

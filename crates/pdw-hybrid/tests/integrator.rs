@@ -1,6 +1,6 @@
 //! Integrator claims: convergence orders, conservation, failure reporting, option validation.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pdw_hybrid::{HybridError, Integrator, Method, Options, StopReason};

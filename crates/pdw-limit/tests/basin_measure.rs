@@ -1,5 +1,5 @@
 //! Measurements of the basin engine (not assertions on speed): run with
-//! `cargo test --release -p pdw-limit --test basin_measure -- --ignored --nocapture`.
+//! `cargo test --release -p pdw-limit --test limit basin_measure:: -- --ignored --nocapture`.
 
 use pdw_hybrid::{Options, Section};
 use pdw_limit::{

@@ -2,8 +2,7 @@
 //! closed-form fixed points and 2-cycles (maps run as hybrid systems whose stride map is exactly
 //! the map), through a period doubling and around a fold.
 
-#[path = "continuation_maps/mod.rs"]
-mod maps;
+use crate::continuation_maps as maps;
 
 use maps::{logistic, saddle_node};
 use pdw_limit::{

@@ -1,8 +1,7 @@
 //! Continuation, bifurcation location and branch switching on maps whose bifurcations are known
 //! in closed form (each map is run as a hybrid system whose stride map is exactly the map).
 
-#[path = "continuation_maps/mod.rs"]
-mod maps;
+use crate::continuation_maps as maps;
 
 use maps::{logistic, neimark_sacker, saddle_node, NS_OMEGA};
 use pdw_limit::{

@@ -1,5 +1,5 @@
 //! Measurements (printed, not asserted): run with
-//! `cargo test --release -p pdw-limit --test continuation_measure -- --ignored --nocapture`.
+//! `cargo test --release -p pdw-limit --test limit continuation_measure:: -- --ignored --nocapture`.
 
 use pdw_limit::{continue_branch, period_doubling_cascade, ContinuationOptions};
 use pdw_walkers::simplest::{Simplest, SimplestParams};

@@ -1,6 +1,6 @@
 //! Every lane of the batched kernels equals the scalar kernel bit for bit.
 
-mod common;
+use crate::common;
 
 use common::*;
 use faer::Mat;

@@ -1,6 +1,6 @@
 //! Locked joints, closed chains and impacts against independent formulations.
 
-mod common;
+use crate::common;
 
 use common::*;
 use faer::linalg::solvers::DenseSolveCore;

@@ -1,7 +1,7 @@
 //! Cross-checks of the four dynamics routes (RNEA, ABA, CRBA + Cholesky, naive dense operators)
 //! on seeded random chains, and the double pendulum against its closed form.
 
-mod common;
+use crate::common;
 
 use common::*;
 use faer::Side;

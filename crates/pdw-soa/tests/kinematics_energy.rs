@@ -1,7 +1,7 @@
 //! Kinematics (Jacobian, J̇q̇, pseudo-inverse IK) and energy against finite differences,
 //! conservation laws and the seed's leg-lift task.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pdw_soa::*;

@@ -213,14 +213,17 @@ pub fn dataset_paths(path: &Path, file: &File) -> Result<Vec<String>> {
     Ok(out)
 }
 
+/// The group `name` of `parent`, created when it is missing (`what` names the step in the error).
+fn group_at(path: &Path, parent: &hdf5::Group, name: &str, what: &str) -> Result<hdf5::Group> {
+    match parent.group(name) {
+        Ok(g) => Ok(g),
+        Err(_) => parent.create_group(name).at(path, what),
+    }
+}
+
 /// `/provenance`: the attributes of `p`, `created`, and `commands` extended by this command.
 pub fn write_provenance(path: &Path, file: &File, p: &Provenance) -> Result<()> {
-    let g = match file.group("provenance") {
-        Ok(g) => g,
-        Err(_) => file
-            .create_group("provenance")
-            .at(path, "creating /provenance")?,
-    };
+    let g = group_at(path, file, "provenance", "creating /provenance")?;
     let mut commands: Vec<String> = if has_attr(&g, "commands") {
         serde_json::from_str(&get_str(path, "pdw-sweep file", &g, "commands")?).unwrap_or_default()
     } else {
@@ -250,12 +253,7 @@ pub fn carry_history(src_path: &Path, src: &File, dst_path: &Path, dst: &File) -
     let Ok(sg) = src.group("provenance") else {
         return Ok(());
     };
-    let g = match dst.group("provenance") {
-        Ok(g) => g,
-        Err(_) => dst
-            .create_group("provenance")
-            .at(dst_path, "creating /provenance")?,
-    };
+    let g = group_at(dst_path, dst, "provenance", "creating /provenance")?;
     for k in ["commands", "created"] {
         if has_attr(&sg, k) {
             let v = get_str(src_path, "pdw-sweep file", &sg, k)?;
@@ -291,25 +289,12 @@ fn read_provenance_at(path: &Path, g: &Location) -> Result<Provenance> {
 /// Copies each shard's provenance into `/provenance/shards/NNN` of the merged `file` (with the
 /// shard's `file` name); a shard without one keeps at least its root `command`.
 pub fn copy_shard_provenance(path: &Path, file: &File, shards: &[&Path]) -> Result<()> {
-    let g = match file.group("provenance") {
-        Ok(g) => g,
-        Err(_) => file
-            .create_group("provenance")
-            .at(path, "creating /provenance")?,
-    };
-    let sg = match g.group("shards") {
-        Ok(s) => s,
-        Err(_) => g
-            .create_group("shards")
-            .at(path, "creating /provenance/shards")?,
-    };
+    let g = group_at(path, file, "provenance", "creating /provenance")?;
+    let sg = group_at(path, &g, "shards", "creating /provenance/shards")?;
     for (i, sp) in shards.iter().enumerate() {
         let sf = File::open(sp).at(sp, "opening a shard")?;
         let name = format!("{i:03}");
-        let dst = match sg.group(&name) {
-            Ok(d) => d,
-            Err(_) => sg.create_group(&name).at(path, "creating a shard entry")?,
-        };
+        let dst = group_at(path, &sg, &name, "creating a shard entry")?;
         set_str(path, &dst, "file", &sp.display().to_string())?;
         match read_provenance(sp, &sf)? {
             Some(p) => {
@@ -346,10 +331,7 @@ pub fn copy_units_and_slice(path: &Path, file: &File, src: &Path) -> Result<()> 
         }
     }
     if let Ok(sl) = sf.group("slice") {
-        let dst = match file.group("slice") {
-            Ok(g) => g,
-            Err(_) => file.create_group("slice").at(path, "creating /slice")?,
-        };
+        let dst = group_at(path, file, "slice", "creating /slice")?;
         for name in sl.attr_names().at(src, "listing /slice")? {
             let a = sl.attr(&name).at(src, "reading /slice")?;
             // bool first: HDF5 converts its enum to f64, not the other way.
@@ -368,10 +350,7 @@ pub fn copy_units_and_slice(path: &Path, file: &File, src: &Path) -> Result<()> 
 
 /// `/slice` (see the module docs).
 pub fn write_slice(path: &Path, file: &File, s: &Slice) -> Result<()> {
-    let g = match file.group("slice") {
-        Ok(g) => g,
-        Err(_) => file.create_group("slice").at(path, "creating /slice")?,
-    };
+    let g = group_at(path, file, "slice", "creating /slice")?;
     set_str(path, &g, "x", &s.x)?;
     set_str(path, &g, "y", &s.y)?;
     let fixed: serde_json::Map<String, serde_json::Value> = s

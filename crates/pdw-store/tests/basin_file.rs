@@ -1,6 +1,6 @@
 //! The basin file: round trip, overwrite protection, resume, error paths.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pdw_store::{read_basin, BasinWriter, StoreError, NOT_COMPUTED};

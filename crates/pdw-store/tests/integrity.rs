@@ -1,7 +1,7 @@
 //! Nothing damaged is trusted, nothing running is clobbered: checksummed blocks verified on
 //! resume, and the output lock that keeps a second writer off a file being written.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pdw_store::{read_basin, BasinWriter, StoreError};

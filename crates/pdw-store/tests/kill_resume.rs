@@ -1,7 +1,7 @@
 //! A writer process killed with SIGKILL at arbitrary moments leaves a file that resumes to the
 //! same datasets as an uninterrupted run.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 use std::time::Duration;
@@ -40,6 +40,11 @@ fn killed_writer_resumes_to_uninterrupted_result() {
     let p = dir.join("killed.h5");
     BasinWriter::create(&p, &h, false).unwrap();
     let exe = std::env::current_exe().unwrap();
+    // The child's test name as the harness lists it: its module path without the crate name.
+    let child_test = match module_path!().split_once("::") {
+        Some((_, m)) => format!("{m}::child_writer_process"),
+        None => "child_writer_process".to_string(),
+    };
     let mut kills = 0;
     // `PDW_KILL_TRIALS=N` runs N kills at spread delays instead (a stress run).
     let mut delays = vec![40u64, 75, 20, 110, 55, 90, 30, 140, 65, 25, 85, 45];
@@ -53,7 +58,7 @@ fn killed_writer_resumes_to_uninterrupted_result() {
         let mut child = Command::new(&exe)
             .args([
                 "--exact",
-                "child_writer_process",
+                &child_test,
                 "--ignored",
                 "--nocapture",
                 "--test-threads=1",

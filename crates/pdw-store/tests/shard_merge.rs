@@ -1,6 +1,6 @@
 //! Sharding the grid and merging the shards back.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -1,6 +1,6 @@
 //! The sweep file round trip, and the pictures: size, format, and colours where they matter.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pdw_store::plot::{BASIN_PNG_SIZE, BIFURCATION_PNG_SIZE, LINES_PNG_SIZE};

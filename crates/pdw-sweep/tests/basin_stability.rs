@@ -3,7 +3,6 @@
 //! row sums to 1, `--json` holds the file's values, the default box is the one around the gait
 //! at A, and bad input is refused.
 
-mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 

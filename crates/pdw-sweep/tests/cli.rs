@@ -2,7 +2,7 @@
 //! bad input (exit code 2, a message naming the value, nothing lost), and the basin file's
 //! reproducibility across thread counts, shards and interrupted runs.
 
-mod common;
+use crate::common;
 use common::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -2,7 +2,7 @@
 //! (units, provenance, no overwrite without --force), the picture, a curve lost on the way, and
 //! bad input refused with exit 2.
 
-mod common;
+use crate::common;
 
 use std::process::{Command, Output};
 

@@ -3,7 +3,7 @@
 //! scales on the grid, the fill value in the legend; a merged basin keeps each shard's command.
 //! Attributes are read back with the hdf5 crate.
 
-mod common;
+use crate::common;
 use common::*;
 use hdf5::types::{FixedAscii, VarLenUnicode};
 use std::path::Path;

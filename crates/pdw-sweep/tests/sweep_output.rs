@@ -3,7 +3,6 @@
 //! against iterating the stride map), the measurements per point, `--json` and `--csv` holding
 //! the HDF5 file's values, and results independent of `--threads`.
 
-mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 

@@ -2,9 +2,9 @@
 //! batched flows equal to the scalar flow bit for bit, exact Jacobians against Richardson
 //! differences (allocation: `chain_walker_alloc.rs`).
 
+use crate::chain_common;
 use faer::Mat;
 use pdw_hybrid::{HybridSystem, Scratch, Section};
-mod chain_common;
 
 use chain_common::{all_presets, random_state};
 use pdw_walkers::{presets, ChainWalker, Walker, WalkerError, WalkerSpec};

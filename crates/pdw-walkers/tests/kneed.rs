@@ -6,7 +6,7 @@
 //! State `(q₀, q₁, q₂, q₃, q̇₀ … q̇₃)`: stance leg, stance knee (locked, 0), hip, swing knee
 //! (flexion `q₃ < 0`). Modes: 0 swing knee free, 1 every knee locked.
 
-mod common;
+use crate::common;
 
 use common::{ang_mom, check_flow_against_point_masses, kinetic, param, PointChain};
 use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};

@@ -3,14 +3,14 @@
 //! the flow, batched flow = scalar flow bit for bit, exact Jacobians against Richardson
 //! differences, and clear errors for a bad radius.
 
+use crate::chain_common;
+use chain_common::{all_presets, random_state};
 use faer::Mat;
 use pdw_hybrid::{HybridSystem, Scratch};
 use pdw_soa::{ChainBuilder, Link};
 use pdw_walkers::{presets, ChainWalker, Walker};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-mod chain_common;
-use chain_common::{all_presets, random_state};
 
 /// The preset `w` with round feet of radius `r` (same parameter values).
 fn with_radius(w: &ChainWalker, r: f64) -> ChainWalker {

@@ -8,7 +8,7 @@
 //! `free_swing_knee = 0` (the thesis' walker) one mode, 0, every knee locked; with
 //! `free_swing_knee = 1` mode 0 has the swing knee free and mode 1 every knee locked.
 
-mod common;
+use crate::common;
 
 use common::{ang_mom, check_flow_against_point_masses, kinetic, param, PointChain};
 use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, Section, StopReason};

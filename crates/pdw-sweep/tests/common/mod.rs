@@ -1,4 +1,4 @@
-//! Helpers shared by the CLI test binaries.
+//! Helpers shared by the CLI test modules.
 
 use std::path::Path;
 

@@ -1,4 +1,5 @@
-//! Presets and random states shared by the chain-walker test binaries.
+//! Presets and random states shared by the chain-walker tests (the merged binary and the
+//! allocation test).
 
 use pdw_hybrid::{HybridSystem, Section};
 use pdw_walkers::{presets, ChainWalker};

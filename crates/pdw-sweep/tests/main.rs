@@ -1,0 +1,15 @@
+//! The integration tests of pdw-sweep, built as one test binary: one link and one set of generic
+//! instantiations instead of one per file. Each file is a module; run one with
+//! `cargo test --release -p pdw-sweep --test sweep <file>::`.
+
+mod basin_stability;
+mod clear_cli;
+mod cli;
+mod common;
+mod design;
+mod follow;
+mod hostile;
+mod lock;
+mod self_describing;
+mod simulate;
+mod sweep_output;
