@@ -162,9 +162,10 @@ fn basin(dir: &Path, name: &str, extra: &[&str]) -> (Output, PathBuf) {
     basin_grid(dir, name, "48x40", extra)
 }
 
-fn basin_grid(dir: &Path, name: &str, grid: &str, extra: &[&str]) -> (Output, PathBuf) {
-    let out = p(dir, name);
-    let mut args = vec![
+/// `basin` on a `grid`, at most 40 strides, quiet, into `out`, then `extra`.
+fn basin_cmd(out: &Path, grid: &str, extra: &[&str]) -> Command {
+    let mut c = bin();
+    c.args([
         "basin",
         "--grid",
         grid,
@@ -172,10 +173,15 @@ fn basin_grid(dir: &Path, name: &str, grid: &str, extra: &[&str]) -> (Output, Pa
         "40",
         "--quiet",
         "--out",
-        s(&out),
-    ];
-    args.extend_from_slice(extra);
-    let o = bin().args(&args).output().unwrap();
+        s(out),
+    ])
+    .args(extra);
+    c
+}
+
+fn basin_grid(dir: &Path, name: &str, grid: &str, extra: &[&str]) -> (Output, PathBuf) {
+    let out = p(dir, name);
+    let o = basin_cmd(&out, grid, extra).output().unwrap();
     (o, out)
 }
 
@@ -281,21 +287,7 @@ fn interrupted_basin_resumes_to_the_same_file() {
     let (o, reference) = basin_grid(dir.path(), "ref.h5", GRID, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = p(dir.path(), "cut.h5");
-    let mut child = bin()
-        .args([
-            "basin",
-            "--grid",
-            GRID,
-            "--max-strides",
-            "40",
-            "--quiet",
-            "--threads",
-            "1",
-            "--out",
-            s(&out),
-        ])
-        .spawn()
-        .unwrap();
+    let mut child = basin_cmd(&out, GRID, &["--threads", "1"]).spawn().unwrap();
     // wait until the file is created, then SIGTERM
     let t0 = std::time::Instant::now();
     while !out.exists() && t0.elapsed().as_secs() < 60 {
@@ -309,20 +301,7 @@ fn interrupted_basin_resumes_to_the_same_file() {
     assert_eq!(status.code(), Some(130), "SIGTERM exits with 130");
     let part = read(&out);
     assert!(!part.complete);
-    let o = bin()
-        .args([
-            "basin",
-            "--grid",
-            GRID,
-            "--max-strides",
-            "40",
-            "--quiet",
-            "--resume",
-            "--out",
-            s(&out),
-        ])
-        .output()
-        .unwrap();
+    let o = basin_cmd(&out, GRID, &["--resume"]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     // The provenance lists both command lines: the interrupted run and its resume.
     let f = h5_open(&out).unwrap();
