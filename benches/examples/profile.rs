@@ -3,11 +3,14 @@
 //! - `profile basin N [THREADS]`: the simplest walker's basin at γ = 0.009 on an N × N grid over
 //!   θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100 strides, default engine options
 //!   (`profile basin-dyn N [THREADS]`: the same model behind `Box<dyn Walker>`, as the CLI);
-//! - `profile stride N [TOL] [dopri5|dop853] [general]`: N scalar strides of the simplest walker
-//!   from its stable fixed point, one reused integrator (default DOP853 at 1e-10); `general`
-//!   runs the integrator's general step loop instead of its register loop (same bits);
-//! - `profile batch N [TOL] [dopri5|dop853] [LANES]`: N strides from perturbed copies of the
-//!   fixed point through the serial lockstep engine (default 64 lanes);
+//! - `profile stride N [TOL] [dopri5|dop853] [general|register] [H0]`: N scalar strides of the
+//!   simplest walker from its stable fixed point, one reused integrator (default DOP853 at
+//!   1e-10); `general` runs the integrator's general step loop instead of its register loop
+//!   (same bits); `H0` starts every stride with that step instead of the starting-step
+//!   heuristic;
+//! - `profile batch N [TOL] [dopri5|dop853] [LANES] [THREADS CHUNK]`: N strides from perturbed
+//!   copies of the fixed point through the serial lockstep engine (default 64 lanes), or in
+//!   chunks of CHUNK states on a pool of THREADS threads;
 //! - `profile fixedpoint N`: N fixed points of the simplest walker to 1e-12 from Garcia's
 //!   guess (DOP853 at 1e-14, the CLI's settings), with the cost of its parts: one stride and one
 //!   variational stride at the same tolerance;
@@ -60,7 +63,8 @@ fn main() {
     match what {
         "stride" => {
             let n: usize = arg(&args, 1, 2000);
-            let opts = method(&args, 3, arg(&args, 2, 1e-10));
+            let mut opts = method(&args, 3, arg(&args, 2, 1e-10));
+            opts.h_init = args.get(5).and_then(|s| s.parse().ok());
             let map = StrideMap::new(&sys, opts).expect("valid options");
             let mut integ = Integrator::new(4, opts).expect("valid options");
             let general = args.get(4).is_some_and(|a| a == "general");
@@ -170,7 +174,18 @@ fn main() {
                     vec![fp[0] * (1.0 + e), fp[1] * (1.0 - e)]
                 })
                 .collect();
-            let res = map.strides(&states, lanes).expect("strides");
+            let res = match args.get(5).and_then(|s| s.parse::<usize>().ok()) {
+                Some(threads) => {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .expect("thread pool");
+                    let chunk: usize = arg(&args, 6, 256);
+                    map.strides_par(&states, lanes, &pool, chunk, &|_| {})
+                }
+                None => map.strides(&states, lanes),
+            }
+            .expect("strides");
             println!(
                 "{n} batched strides ({:?}, {lanes} lanes): {:.3} µs/lane-stride, {} ok",
                 opts.method,
@@ -197,7 +212,9 @@ fn main() {
                 1,
                 &linspace(-0.25, -0.15, n),
             );
-            let opts = BasinOptions::default();
+            let mut opts = BasinOptions::default();
+            opts.lanes = arg(&args, 3, opts.lanes);
+            opts.chunk = arg(&args, 4, opts.chunk);
             let res = if what == "basin-dyn" {
                 classify_cells(&problem_dyn, &cells, &opts, &pool, &|_| {})
             } else {

@@ -14,9 +14,14 @@
 //!   h = 0.05; pdw-sweep starts each stride with HNW's starting-step heuristic.
 //! - Scalar: one stride at a time from the fixed point (one reused integrator). Batched: 1024
 //!   perturbed copies (relative 1e-4, seeded) through the lockstep engine, 64 lanes, chunks of
-//!   256, on a 2-thread pool; time per lane-stride.
+//!   256, on a 2-thread pool; time per lane-stride (mean over ≥ 1.5 s of repeated calls).
 //! - The default basin: 1000 × 1000 cells over θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100
 //!   strides, `BasinOptions::default()` (DOP853 1e-9), 2 threads, without file output.
+//!
+//! - Where a batched stride's time goes: the batched times of each method over the tolerances
+//!   fitted as `a + b·steps` (per-stride and per-step cost), and the per-step cost split into
+//!   the right-hand side (`flow_batch` timed alone, on the same pool and on one thread) and
+//!   the rest.
 //!
 //! Run with nothing else on the machine; the load average is printed with the figures.
 
@@ -45,6 +50,8 @@ struct Row {
     scalar_us: f64,
     batch_us: f64,
     evals: f64,
+    /// Step attempts (accepted + rejected) per stride.
+    steps: f64,
     err_fp: f64,
     err_stride: f64,
     print_limited: bool,
@@ -105,6 +112,107 @@ fn run_peer() -> Result<Vec<PeerRow>, String> {
     Ok(rows)
 }
 
+/// Wall time per lane-evaluation of the simplest walker's batched right-hand side
+/// (`flow_batch` on blocks of 256 lanes, as the lockstep engine calls it) on `pool`, each thread
+/// on its own block (seconds).
+fn rhs_per_lane_eval(sys: &Simplest, states: &[Vec<f64>], pool: &rayon::ThreadPool) -> f64 {
+    use faer::{MatMut, MatRef};
+    use pdw_hybrid::HybridSystem;
+    const LANES: usize = 256;
+    const REPS: usize = 20_000;
+    use pdw_hybrid::Section;
+    let mut x0 = vec![0.0; 4 * LANES];
+    let mut x = [0.0; 4];
+    for l in 0..LANES {
+        sys.lift(&states[l % states.len()], &mut x);
+        for j in 0..4 {
+            x0[j * LANES + l] = x[j];
+        }
+    }
+    let (_, t) = time_mean(0.5, || {
+        pool.broadcast(|_| {
+            let mut x = x0.clone();
+            let mut k = vec![0.0; 4 * LANES];
+            let mut ws = pdw_hybrid::Scratch::new();
+            let mut acc = 0.0;
+            for _ in 0..REPS {
+                let xv = MatRef::from_column_major_slice_with_stride(&x, LANES, 4, LANES);
+                let kv = MatMut::from_column_major_slice_with_stride_mut(&mut k, LANES, 4, LANES);
+                sys.flow_batch(&mut ws, 0, xv, kv);
+                // Feed a tiny step back so that no evaluation can be hoisted out of the loop.
+                for (xi, ki) in x.iter_mut().zip(&k) {
+                    *xi += 1e-12 * ki;
+                }
+                acc += k[3 * LANES];
+            }
+            acc
+        })
+    });
+    t / (pool.current_num_threads() * REPS * LANES) as f64
+}
+
+/// Least-squares line `y = a + b·x`.
+fn fit_line(pts: &[(f64, f64)]) -> (f64, f64) {
+    let n = pts.len() as f64;
+    let (sx, sy) = pts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x, b + y));
+    let (mx, my) = (sx / n, sy / n);
+    let sxy: f64 = pts.iter().map(|&(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = pts.iter().map(|&(x, _)| (x - mx) * (x - mx)).sum();
+    let b = sxy / sxx;
+    (my - b * mx, b)
+}
+
+/// Where a batched lane-stride's time goes: the batched times over the tolerances fitted as
+/// `a + b·(steps per stride)` (a: per-stride cost — segment start, event location, driver; b:
+/// per step attempt), and b split into the right-hand side (evaluations per step × the measured
+/// cost of one lane-evaluation) and the rest.
+fn cost_model(md: &mut String, rows: &[Row], t_rhs: f64, t_rhs1: f64) {
+    let _ = writeln!(md, "\n## Where a batched stride's time goes\n");
+    let _ = writeln!(
+        md,
+        "The batched times above, per method over the four tolerances, fitted as `a + b·steps` \
+         (steps: attempts per stride, from the scalar run: the same steps). One lane-evaluation \
+         of the batched right-hand side (`flow_batch`, 256 lanes): {:.2} ns on 2 threads, \
+         {:.2} ns on one (the two threads give {:.2}× on the right-hand side alone).\n",
+        t_rhs * 1e9,
+        t_rhs1 * 1e9,
+        t_rhs1 / t_rhs
+    );
+    let _ = writeln!(
+        md,
+        "| method | steps at 1e-6 … 1e-12 | a: per stride (µs) | b: per step (ns) | of b: right-hand side (ns) | of b: the rest (ns) | at 1e-10: a / steps·b (µs) |\n|---|---|---|---|---|---|---|"
+    );
+    for (method, evals_per_step) in [("DOPRI5", 6.0), ("DOP853", 12.0)] {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.engine == "pdw-sweep" && r.method == method)
+            .map(|r| (r.steps, r.batch_us))
+            .collect();
+        if pts.len() < 2 {
+            continue;
+        }
+        let (a, b) = fit_line(&pts);
+        let rhs = evals_per_step * t_rhs * 1e9;
+        let steps: Vec<String> = pts.iter().map(|p| format!("{:.0}", p.0)).collect();
+        let at = rows
+            .iter()
+            .find(|r| r.engine == "pdw-sweep" && r.method == method && r.tol == sci(1e-10))
+            .map_or(String::from("–"), |r| {
+                format!("{a:.2} / {:.2}", r.steps * b)
+            });
+        let _ = writeln!(
+            md,
+            "| {method} | {} | {a:.2} | {:.0} | {rhs:.0} ({evals_per_step:.0} × {:.2}) | {:.0} | {at} |",
+            steps.join(", "),
+            b * 1e3,
+            t_rhs * 1e9,
+            b * 1e3 - rhs
+        );
+    }
+}
+
 fn main() -> anyhow::Result<()> {
     let dir = results_dir("engine")?;
     let load_start = loadavg();
@@ -151,8 +259,9 @@ fn main() -> anyhow::Result<()> {
         integ.reset_stats();
         map.stride_with(&mut integ, &s_ref)?;
         let evals = integ.stats().rhs_evals as f64;
+        let steps = (integ.stats().accepted + integ.stats().rejected) as f64;
         let err_stride = pdw_experiments::max_abs_diff(&st.next, &p_ref);
-        let (_, tb) = time_mean(0.6, || {
+        let (_, tb) = time_mean(1.5, || {
             map.strides_par(&states, 64, &pool, 256, &|_| {})
                 .map(|v| v.len())
         });
@@ -179,6 +288,7 @@ fn main() -> anyhow::Result<()> {
             scalar_us: t * 1e6,
             batch_us: tb / states.len() as f64 * 1e6,
             evals,
+            steps,
             err_fp,
             err_stride,
             print_limited: false,
@@ -201,6 +311,7 @@ fn main() -> anyhow::Result<()> {
                     scalar_us: us,
                     batch_us: f64::NAN,
                     evals: nf,
+                    steps: f64::NAN,
                     err_fp: err,
                     err_stride: f64::NAN,
                     print_limited: err < 5e-11,
@@ -229,6 +340,9 @@ fn main() -> anyhow::Result<()> {
     let (_, t_fp) = time_mean(1.0, || {
         find_fixed_point(&refmap, &guess, &NewtonOptions::default()).map(|f| f.residual)
     });
+    let t_rhs = rhs_per_lane_eval(&sys, &states, &pool);
+    let pool1 = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let t_rhs1 = rhs_per_lane_eval(&sys, &states, &pool1);
     let load_end = loadavg();
 
     let mut tab = Table::new(&[
@@ -313,6 +427,7 @@ fn main() -> anyhow::Result<()> {
         );
     }
     let _ = writeln!(md, "\nBasin: {gait_cells} of 10⁶ cells reach the gait.");
+    cost_model(&mut md, &rows, t_rhs, t_rhs1);
     write_text(&dir, "table.md", &md)?;
 
     let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
