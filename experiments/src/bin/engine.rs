@@ -17,7 +17,6 @@
 //!   256, on a 2-thread pool; time per lane-stride (mean over ≥ 1.5 s of repeated calls).
 //! - The default basin: 1000 × 1000 cells over θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100
 //!   strides, `BasinOptions::default()` (DOP853 1e-9), 2 threads, without file output.
-//!
 //! - Where a batched stride's time goes: the batched times of each method over the tolerances
 //!   fitted as `a + b·steps` (per-stride and per-step cost), and the per-step cost split into
 //!   the right-hand side (`flow_batch` timed alone, on the same pool and on one thread) and
@@ -117,10 +116,9 @@ fn run_peer() -> Result<Vec<PeerRow>, String> {
 /// on its own block (seconds).
 fn rhs_per_lane_eval(sys: &Simplest, states: &[Vec<f64>], pool: &rayon::ThreadPool) -> f64 {
     use faer::{MatMut, MatRef};
-    use pdw_hybrid::HybridSystem;
+    use pdw_hybrid::{HybridSystem, Section};
     const LANES: usize = 256;
     const REPS: usize = 20_000;
-    use pdw_hybrid::Section;
     let mut x0 = vec![0.0; 4 * LANES];
     let mut x = [0.0; 4];
     for l in 0..LANES {
