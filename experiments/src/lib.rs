@@ -109,6 +109,17 @@ pub fn sci(x: f64) -> String {
     }
 }
 
+/// Least-squares line through `pts`: `(a, b)` of `y = a + b·x`.
+pub fn fit_line(pts: &[(f64, f64)]) -> (f64, f64) {
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = pts.iter().map(|&(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = pts.iter().map(|&(x, _)| (x - mx) * (x - mx)).sum();
+    let b = sxy / sxx;
+    (my - b * mx, b)
+}
+
 /// Largest absolute componentwise difference of two equally long vectors.
 pub fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter()

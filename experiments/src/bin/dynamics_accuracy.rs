@@ -95,12 +95,7 @@ fn max(v: &[f64]) -> f64 {
 /// Least-squares slope of `log y` against `log x`.
 fn loglog_slope(pts: &[(f64, f64)]) -> f64 {
     let l: Vec<(f64, f64)> = pts.iter().map(|(x, y)| (x.ln(), y.ln())).collect();
-    let k = l.len() as f64;
-    let mx = l.iter().map(|p| p.0).sum::<f64>() / k;
-    let my = l.iter().map(|p| p.1).sum::<f64>() / k;
-    let sxy: f64 = l.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = l.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
-    sxy / sxx
+    pdw_experiments::fit_line(&l).1
 }
 
 /// Per-n statistics over the random chains.

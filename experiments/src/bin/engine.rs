@@ -29,7 +29,9 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use anyhow::Context;
-use pdw_experiments::{command, results_dir, sci, time_mean, time_once, write_text, Table};
+use pdw_experiments::{
+    command, fit_line, results_dir, sci, time_mean, time_once, write_text, Table,
+};
 use pdw_hybrid::{Integrator, Options};
 use pdw_limit::{
     classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem, DpMethod,
@@ -147,19 +149,6 @@ fn rhs_per_lane_eval(sys: &Simplest, states: &[Vec<f64>], pool: &rayon::ThreadPo
         })
     });
     t / (pool.current_num_threads() * REPS * LANES) as f64
-}
-
-/// Least-squares line `y = a + b·x`.
-fn fit_line(pts: &[(f64, f64)]) -> (f64, f64) {
-    let n = pts.len() as f64;
-    let (sx, sy) = pts
-        .iter()
-        .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x, b + y));
-    let (mx, my) = (sx / n, sy / n);
-    let sxy: f64 = pts.iter().map(|&(x, y)| (x - mx) * (y - my)).sum();
-    let sxx: f64 = pts.iter().map(|&(x, _)| (x - mx) * (x - mx)).sum();
-    let b = sxy / sxx;
-    (my - b * mx, b)
 }
 
 /// Where a batched lane-stride's time goes: the batched times over the tolerances fitted as
