@@ -1,9 +1,10 @@
 //! A small, fixed workload for profilers (`valgrind --tool=callgrind`, `perf record`):
 //!
-//! - `profile basin N [THREADS] [LANES] [CHUNK]`: the simplest walker's basin at γ = 0.009 on an
-//!   N × N grid over θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100 strides, default engine options
-//!   (or that many lanes per lockstep batch and cells per chunk; `profile basin-dyn …`: the
-//!   same model behind `Box<dyn Walker>`, as the CLI);
+//! - `profile basin N [THREADS] [LANES] [CHUNK] [cold]`: the simplest walker's basin at
+//!   γ = 0.009 on an N × N grid over θ ∈ [0.15, 0.25], θ̇ ∈ [−0.25, −0.15], 100 strides, default
+//!   engine options (or that many lanes per lockstep batch and cells per chunk; `cold`: every
+//!   stride starts with the starting-step heuristic, `Options::warm_restart = false`;
+//!   `profile basin-dyn …`: the same model behind `Box<dyn Walker>`, as the CLI);
 //! - `profile stride N [TOL] [dopri5|dop853] [general|register] [H0]`: N scalar strides of the
 //!   simplest walker from its stable fixed point, one reused integrator (default DOP853 at
 //!   1e-10); `general` runs the integrator's general step loop instead of its register loop
@@ -216,6 +217,7 @@ fn main() {
             let mut opts = BasinOptions::default();
             opts.lanes = arg(&args, 3, opts.lanes);
             opts.chunk = arg(&args, 4, opts.chunk);
+            opts.integrator.warm_restart = args.get(5).is_none_or(|a| a != "cold");
             let res = if what == "basin-dyn" {
                 classify_cells(&problem_dyn, &cells, &opts, &pool, &|_| {})
             } else {

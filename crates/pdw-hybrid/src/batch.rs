@@ -7,7 +7,9 @@
 //! rejects its attempt, locates events on an accepted step, and commits. A lane that stops
 //! (guard, end time, failure) is handed to the [`LaneDriver`]: it applies a reset and continues
 //! the same work item, or finishes it, in which case the lane is refilled with the next item of
-//! the queue, so lanes stay busy until the queue is empty.
+//! the queue, so lanes stay busy until the queue is empty. A continued segment starts with the
+//! step the controller proposed at the stop ([`Options::warm_restart`]), as the scalar
+//! [`Integrator::resume`] does; an item's first segment never inherits anything from the lane.
 //!
 //! **Modes.** Lanes are kept grouped by mode: the rows of the batch are partitioned into
 //! contiguous ranges, one per mode (plus a last range of idle lanes), and each stage calls
@@ -38,7 +40,9 @@ use crate::{HybridError, HybridSystem, Integrator, Scratch};
 /// What a lane does after a stop.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Control {
-    /// Integrate on in `mode` (the driver has written the post-reset state) until `t_end`.
+    /// Integrate on in `mode` (the driver has written the post-reset state) until `t_end`. The
+    /// segment continues the work item: with [`Options::warm_restart`] its first step is the
+    /// one the controller proposed at the stop.
     Continue { mode: usize, t_end: f64 },
     /// The work item is done: [`LaneDriver::finish`] is called and the lane is refilled.
     Finish,
@@ -147,9 +151,15 @@ where
     let mut x = vec![0.0; d];
     let (mut mode, mut t_end) = driver.start(sys, item, &mut lane, &mut x);
     let mut t = 0.0;
+    let mut resume = false;
     loop {
         check_mode(sys, mode)?;
-        let stop = integ.integrate(sys, mode, &mut t, &mut x, t_end);
+        let stop = if resume {
+            integ.resume(sys, mode, &mut t, &mut x, t_end)
+        } else {
+            integ.integrate(sys, mode, &mut t, &mut x, t_end)
+        };
+        resume = true;
         match driver.on_stop(sys, integ.scratch(), item, &mut lane, stop, mode, t, &mut x) {
             Control::Continue { mode: m, t_end: te } => {
                 mode = m;
@@ -457,16 +467,18 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
         let (mode, t_end) =
             self.driver
                 .start(self.sys, &self.items[i], &mut self.lane[l], &mut self.xd);
-        self.begin(l, mode, 0.0, t_end)
+        self.begin(l, mode, 0.0, t_end, false)
     }
 
-    /// Write the driver's state into lane `l` and start a segment there.
+    /// Write the driver's state into lane `l` and start a segment there (`resume`: the segment
+    /// continues the lane's work item, see [`engine::start_segment`]).
     fn begin(
         &mut self,
         l: usize,
         mode: usize,
         t: f64,
         t_end: f64,
+        resume: bool,
     ) -> Result<Option<StopReason>, HybridError> {
         check_mode(self.sys, mode)?;
         let stride = self.st.stride;
@@ -482,6 +494,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             mode,
             t,
             t_end,
+            resume,
             &mut self.sc,
         ))
     }
@@ -512,7 +525,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                 &mut self.xd,
             );
             let next = match ctrl {
-                Control::Continue { mode, t_end } => self.begin(l, mode, t, t_end)?,
+                Control::Continue { mode, t_end } => self.begin(l, mode, t, t_end, true)?,
                 Control::Finish => {
                     let lane = std::mem::take(&mut self.lane[l]);
                     self.outputs[i] = Some(self.driver.finish(self.sys, item, lane, t, &self.xd));

@@ -664,6 +664,9 @@ pub(crate) struct Ctl {
     pub h_used: f64,
     /// The attempt in flight ends exactly at `t_end`.
     pub last: bool,
+    /// The last step committed in full — accepted, no event inside, not shortened to land on
+    /// `t_end` (0 before the first): the cap of a warm restart (see [`start_segment`]).
+    pub h_full: f64,
     /// Previous accepted error norm (PI controller memory, HNW's `facold`).
     pub facold: f64,
     /// `facold^β`, computed when `facold` is set (off the next step's critical path).
@@ -709,6 +712,18 @@ impl LaneScratch {
 /// strictly on its pre-crossing side at a later point first, so that a state placed on a guard
 /// surface by a reset (with roundoff on either side) cannot re-trigger the same event.
 ///
+/// The first step: the method's fixed step (RK4), else `opts.h_init`, else — when `resume` is
+/// set and [`Options::warm_restart`] holds — the step the controller proposed when the lane's
+/// previous segment of the same trajectory stopped (`ctl.h` on entry), capped by that
+/// segment's last step committed in full (`ctl.h_full`, not the step that held the event: no
+/// growth across a reset — on a flow the method integrates exactly, the error estimate
+/// vanishes, the proposal is the largest growth factor times the last step and the event's
+/// step may be far longer than the motion it ended, long enough to step over a whole flight
+/// phase of a bouncing ball), else the starting-step heuristic. A segment without such a step
+/// (a single step to its event or to `t_end`, or a failure) restarts cold. `resume`
+/// is set only for a segment that continues the same work item, never for a lane's first
+/// segment of an item: a lane's result never depends on what ran in it before.
+///
 /// Returns a stop reason when the segment cannot start: `NonFinite` if t is not finite,
 /// `EndTime` if `t_end ≤ t` (or NaN), `NonFinite` if x₀ or f(x₀) is not finite.
 #[allow(clippy::too_many_arguments)]
@@ -722,8 +737,11 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
     mode: usize,
     t: f64,
     t_end: f64,
+    resume: bool,
     sc: &mut LaneScratch,
 ) -> Option<StopReason> {
+    let h_prev = ctl.h.min(ctl.h_full);
+    let warm = resume && opts.warm_restart && h_prev.is_finite() && h_prev > 0.0;
     *ctl = Ctl {
         t,
         t_end,
@@ -758,6 +776,7 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
         Method::Rk4 { h } => h,
         _ => match opts.h_init {
             Some(h) => h,
+            None if warm => h_prev,
             None => initial_step(sys, st.err_dim, mode, tab, opts, ctl, sc),
         },
     };
@@ -994,6 +1013,7 @@ pub(crate) fn after_accept<S: HybridSystem + ?Sized>(
         }
         After::Stop(StopReason::EndTime)
     } else {
+        ctl.h_full = h;
         After::Accepted
     }
 }

@@ -5,7 +5,9 @@
 //! controller. Nothing is carried over from an earlier call except the work counters, so the
 //! result of a call is a function of `(sys, mode, t, x, t_end, options)` alone — the property the
 //! batched runner relies on to reproduce it bit for bit in any lane. After a reset the caller
-//! calls `integrate` again from the event time; guard values within
+//! calls `integrate` again from the event time — or [`Integrator::resume`], which differs only in
+//! the first step: the one the controller proposed when the previous call stopped
+//! ([`Options::warm_restart`](crate::Options::warm_restart)); guard values within
 //! [`HybridSystem::guard_tolerance`] of zero at the start count as zero, so the event just
 //! handled is not reported again (see the [`event`](crate::event) module).
 
@@ -123,7 +125,7 @@ impl Integrator {
         x: &mut [f64],
         t_end: f64,
     ) -> StopReason {
-        self.run(sys, mode, t, x, t_end, None)
+        self.run(sys, mode, t, x, t_end, false, None)
     }
 
     /// Same, calling `obs(t, x)` at the start, after every accepted step that does not end the
@@ -137,12 +139,44 @@ impl Integrator {
         t_end: f64,
         obs: &mut dyn FnMut(f64, &[f64]),
     ) -> StopReason {
-        self.run(sys, mode, t, x, t_end, Some(obs))
+        self.run(sys, mode, t, x, t_end, false, Some(obs))
+    }
+
+    /// [`integrate`](Self::integrate) for a segment that continues the trajectory of the
+    /// previous call on this integrator (after a reset, or from an `EndTime` stop): with
+    /// [`Options::warm_restart`] it starts with the step the controller proposed when that call
+    /// stopped instead of the starting-step heuristic — what the batched runner does on
+    /// [`Control::Continue`](crate::Control::Continue), with the same bits. The result is then a
+    /// function of the previous call's stop as well; everything else starts afresh.
+    pub fn resume<S: HybridSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+    ) -> StopReason {
+        self.run(sys, mode, t, x, t_end, true, None)
+    }
+
+    /// [`resume`](Self::resume) with the observer of
+    /// [`integrate_observed`](Self::integrate_observed).
+    pub fn resume_observed<S: HybridSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        obs: &mut dyn FnMut(f64, &[f64]),
+    ) -> StopReason {
+        self.run(sys, mode, t, x, t_end, true, Some(obs))
     }
 
     /// The general loop is compiled per instruction set (pdw-simd) with the step kernels
     /// inlined; the register loop once, for the baseline (its vectors are one state, a few
     /// elements wide). Same bits on every path.
+    #[allow(clippy::too_many_arguments)]
     fn run<S: HybridSystem + ?Sized>(
         &mut self,
         sys: &S,
@@ -150,6 +184,7 @@ impl Integrator {
         t: &mut f64,
         x: &mut [f64],
         t_end: f64,
+        resume: bool,
         obs: Option<Observer<'_>>,
     ) -> StopReason {
         let d = self.st.dim;
@@ -161,11 +196,11 @@ impl Integrator {
             && sys.guards(mode).len() <= FAST_GUARDS
             && matches!(d, 2 | 4 | 6); // the dimensions `run_inner` instantiates
         if registers {
-            self.run_inner::<S, true>(sys, mode, t, x, t_end, obs)
+            self.run_inner::<S, true>(sys, mode, t, x, t_end, resume, obs)
         } else {
             pdw_simd::dispatch(
                 #[inline(always)]
-                || self.run_inner::<S, false>(sys, mode, t, x, t_end, obs),
+                || self.run_inner::<S, false>(sys, mode, t, x, t_end, resume, obs),
             )
         }
     }
@@ -173,6 +208,7 @@ impl Integrator {
     /// One integration (see [`integrate`](Self::integrate)); `REGISTERS`: take the register
     /// loop (the caller has checked that it applies).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn run_inner<S: HybridSystem + ?Sized, const REGISTERS: bool>(
         &mut self,
         sys: &S,
@@ -180,6 +216,7 @@ impl Integrator {
         t: &mut f64,
         x: &mut [f64],
         t_end: f64,
+        resume: bool,
         mut obs: Option<Observer<'_>>,
     ) -> StopReason {
         self.fit(sys, mode, x);
@@ -199,6 +236,7 @@ impl Integrator {
                 mode,
                 *t,
                 t_end,
+                resume,
                 &mut self.sc,
             ) {
                 break 'outer r;
@@ -329,6 +367,7 @@ impl Integrator {
                 g = g1;
                 gr = r1;
                 ctl.t += h;
+                ctl.h_full = h;
                 if let Some(o) = obs.as_mut() {
                     o(ctl.t, &x);
                 }

@@ -28,6 +28,21 @@ pub struct Options {
     pub atol: f64,
     /// First step of every `integrate` call; `None` = the HNW II.4 starting-step heuristic.
     pub h_init: Option<f64>,
+    /// A segment that continues the same trajectory after a stop — the batched runner's
+    /// [`Control::Continue`](crate::Control::Continue), the scalar
+    /// [`Integrator::resume`](crate::Integrator::resume) — starts with the step the controller
+    /// proposed when the previous segment stopped, instead of the starting-step heuristic
+    /// (`h_init` takes precedence). Default `false`.
+    ///
+    /// It pays where a reset leaves the motion on its time scale: the strides of a walker (on
+    /// the simplest walker at 1e-9 it saves two of the ten step attempts of every stride after
+    /// the first — the heuristic's small first step and the rejection that follows the
+    /// controller's largest growth factor), which is why
+    /// `pdw_limit::BasinOptions::default_integrator` turns it on. It costs where a reset
+    /// switches time scales — a soft contact after a flight phase: the flight's long step is
+    /// rejected several times at touch-down (tested on the soft ball, where it takes more step
+    /// attempts than the heuristic).
+    pub warm_restart: bool,
     /// Largest step (time units); `f64::INFINITY` for no limit.
     pub h_max: f64,
     /// A proposed step below `h_min` stops the integration with `StepTooSmall`.
@@ -43,6 +58,7 @@ impl Options {
             rtol: tol,
             atol: tol,
             h_init: None,
+            warm_restart: false,
             h_max: f64::INFINITY,
             h_min: 0.0,
             max_steps: 100_000,
@@ -66,6 +82,7 @@ impl Options {
             rtol: 0.0,
             atol: 0.0,
             h_init: None,
+            warm_restart: false,
             h_max: f64::INFINITY,
             h_min: 0.0,
             max_steps: usize::MAX,

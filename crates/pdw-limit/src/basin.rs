@@ -204,8 +204,18 @@ impl BasinOptions {
     /// DOPRI5 1e-6: 5 cells (0.0125 %), 1e-7: 2, 1e-8: 1, 1e-9: 0 (1.7 s), 1e-10: 0 (3.0 s);
     /// DOP853 1e-7: 1 (0.7 s), 1e-9: 0 (1.0 s); RK4 h = 0.05: 3, h = 0.02: 0 (5.3 s).
     /// DOP853 at 1e-9 is the cheapest setting that changed no label.
+    ///
+    /// With [`Options::warm_restart`]: every stride after a cell's first starts with the step the
+    /// controller proposed at the heel strike, not with the starting-step heuristic (whose small
+    /// first step and the rejection after the controller's largest growth cost two of the ten
+    /// attempts of a simplest-walker stride at 1e-9). Measured: the 300 × 300 basin on one
+    /// thread 0.52 s instead of 0.61 s, and the 200 × 200 labels identical cell for cell to the
+    /// cold restarts'.
     pub fn default_integrator() -> Options {
-        Options::dop853(1e-9)
+        Options {
+            warm_restart: true,
+            ..Options::dop853(1e-9)
+        }
     }
 
     /// Reject options the engine cannot honour.

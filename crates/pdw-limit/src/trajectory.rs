@@ -362,6 +362,8 @@ pub fn simulate(
     let mut s = vec![0.0; w.section_dim()];
     // Next output time (index k of t = k h) when sampling on a grid.
     let mut k_out: u64 = 0;
+    // Every segment after the first continues the same trajectory (`Integrator::resume`).
+    let mut resume = false;
     match opts.dt_out {
         None => rec.push(t, &x, mode, 0),
         Some(_) => {
@@ -377,16 +379,25 @@ pub fn simulate(
                 None => {
                     let mut first = true;
                     let m0 = mode;
-                    integ.integrate_observed(w, mode, &mut t, &mut x, t_budget, &mut |ts, xs| {
+                    let mut obs = |ts: f64, xs: &[f64]| {
                         if !std::mem::take(&mut first) {
                             rec.push(ts, xs, m0, step);
                         }
-                    })
+                    };
+                    if std::mem::replace(&mut resume, true) {
+                        integ.resume_observed(w, mode, &mut t, &mut x, t_budget, &mut obs)
+                    } else {
+                        integ.integrate_observed(w, mode, &mut t, &mut x, t_budget, &mut obs)
+                    }
                 }
                 Some(h) => loop {
                     let t_next = k_out as f64 * h;
                     let t_end = t_next.min(t_budget);
-                    let stop = integ.integrate(w, mode, &mut t, &mut x, t_end);
+                    let stop = if std::mem::replace(&mut resume, true) {
+                        integ.resume(w, mode, &mut t, &mut x, t_end)
+                    } else {
+                        integ.integrate(w, mode, &mut t, &mut x, t_end)
+                    };
                     if stop != StopReason::EndTime || t_end == t_budget {
                         break stop;
                     }

@@ -129,9 +129,13 @@ fn basin_file_carries_units_slice_scales_provenance_and_the_fill_value() {
     assert_eq!(opts["integrator"]["method"], "dop853");
     assert_eq!(opts["integrator"]["rtol"], 1e-10);
     assert_eq!(opts["integrator"]["atol"], 1e-10);
+    assert_eq!(opts["integrator"]["warm_restart"], true);
     assert_eq!(opts["max_strides"], 100);
     // The header's integrator agrees with the provenance.
-    assert_eq!(attr_str(&f, "integrator"), "dop853 rtol=1e-10 atol=1e-10");
+    assert_eq!(
+        attr_str(&f, "integrator"),
+        "dop853 rtol=1e-10 atol=1e-10 warm-restart"
+    );
 
     // The slice: hip_rate held at the gait's value (defaulted), the gait on the slice.
     let fp: serde_json::Value = serde_json::from_slice(

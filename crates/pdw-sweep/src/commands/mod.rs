@@ -194,24 +194,33 @@ pub fn integrator(o: &IntegratorOpts, default: Options) -> Result<Options, Input
 }
 
 /// The integrator as a JSON object for files and `--json` (method, tolerances or step).
+/// `"warm_restart": true` when continued segments start from the controller's last proposal
+/// ([`Options::warm_restart`], the basin's default), which changes results at the tolerance's
+/// level; absent otherwise.
 pub fn integrator_json(o: &Options) -> serde_json::Value {
-    match o.method {
-        Method::Rk4 { h } => serde_json::json!({"method": "rk4", "h": h}),
+    let mut v = match o.method {
+        Method::Rk4 { h } => return serde_json::json!({"method": "rk4", "h": h}),
         Method::Dopri5 => {
             serde_json::json!({"method": "dopri5", "rtol": o.rtol, "atol": o.atol})
         }
         Method::Dop853 => {
             serde_json::json!({"method": "dop853", "rtol": o.rtol, "atol": o.atol})
         }
+    };
+    if o.warm_restart {
+        v["warm_restart"] = serde_json::Value::Bool(true);
     }
+    v
 }
 
-/// The integrator in one line of text, e.g. `dop853 rtol=1e-14 atol=1e-14`.
+/// The integrator in one line of text, e.g. `dop853 rtol=1e-14 atol=1e-14` (plus
+/// ` warm-restart` when [`Options::warm_restart`] is set).
 pub fn integrator_text(o: &Options) -> String {
+    let warm = if o.warm_restart { " warm-restart" } else { "" };
     match o.method {
         Method::Rk4 { h } => format!("rk4 h={h:e}"),
-        Method::Dopri5 => format!("dopri5 rtol={:e} atol={:e}", o.rtol, o.atol),
-        Method::Dop853 => format!("dop853 rtol={:e} atol={:e}", o.rtol, o.atol),
+        Method::Dopri5 => format!("dopri5 rtol={:e} atol={:e}{warm}", o.rtol, o.atol),
+        Method::Dop853 => format!("dop853 rtol={:e} atol={:e}{warm}", o.rtol, o.atol),
     }
 }
 
