@@ -70,6 +70,12 @@ pub struct IntegratorOpts {
     /// Step of --integrator rk4 (model time units, > 0).
     #[arg(long, value_name = "H")]
     pub rk4_step: Option<f64>,
+    /// Start every segment with the starting-step heuristic, also one that continues a cell's
+    /// run after an impact (basin commands otherwise start it with the step the controller
+    /// proposed at the impact: faster, results different at the tolerance's level). Other
+    /// commands restart cold already.
+    #[arg(long)]
+    pub cold_restarts: bool,
 }
 
 #[derive(Args, Debug)]

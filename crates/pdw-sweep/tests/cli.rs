@@ -274,6 +274,26 @@ fn shards_merged_equal_a_single_run() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    // a shard computed with --cold-restarts does not join warm ones: its integrator differs
+    let (o, cold) = basin(
+        dir.path(),
+        "cold2.h5",
+        &["--shard", "2/3", "--cold-restarts"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = bin()
+        .args([
+            "merge",
+            s(&shards[0]),
+            s(&shards[1]),
+            s(&cold),
+            "--out",
+            s(&p(dir.path(), "m3.h5")),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("integrator"), "{}", stderr(&o));
 }
 
 /// SIGTERM during a basin exits 130 leaving a resumable file; `--resume` finishes it with the

@@ -137,6 +137,26 @@ fn basin_file_carries_units_slice_scales_provenance_and_the_fill_value() {
         "dop853 rtol=1e-10 atol=1e-10 warm-restart"
     );
 
+    // --cold-restarts: the same basin with every segment started cold, recorded as such.
+    let cold = dir.path().join("cold.h5");
+    ok(&[
+        "basin",
+        "--model",
+        "compass",
+        "--grid",
+        "16x16",
+        "--quiet",
+        "--rtol",
+        "1e-10",
+        "--cold-restarts",
+        "--out",
+        cold.to_str().unwrap(),
+    ]);
+    let fc = h5_open(&cold).unwrap();
+    let opts_cold = check_provenance(&fc, "basin");
+    assert!(opts_cold["integrator"].get("warm_restart").is_none());
+    assert_eq!(attr_str(&fc, "integrator"), "dop853 rtol=1e-10 atol=1e-10");
+
     // The slice: hip_rate held at the gait's value (defaulted), the gait on the slice.
     let fp: serde_json::Value = serde_json::from_slice(
         &ok(&[

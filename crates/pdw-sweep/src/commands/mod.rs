@@ -174,6 +174,10 @@ pub fn integrator(o: &IntegratorOpts, default: Options) -> Result<Options, Input
             }
         }
     };
+    let opts = Options {
+        warm_restart: opts.warm_restart && !o.cold_restarts,
+        ..opts
+    };
     opts.validate().map_err(|e| match e {
         pdw_hybrid::HybridError::InvalidOption {
             name,
