@@ -5,11 +5,12 @@
 //!   engine options (or that many lanes per lockstep batch and cells per chunk; `cold`: every
 //!   stride starts with the starting-step heuristic, `Options::warm_restart = false`;
 //!   `profile basin-dyn …`: the same model behind `Box<dyn Walker>`, as the CLI);
-//! - `profile stride N [TOL] [dopri5|dop853] [general|register] [H0]`: N scalar strides of the
-//!   simplest walker from its stable fixed point, one reused integrator (default DOP853 at
-//!   1e-10); `general` runs the integrator's general step loop instead of its register loop
-//!   (same bits); `H0` starts every stride with that step instead of the starting-step
-//!   heuristic;
+//! - `profile stride N [TOL] [dopri5|dopri5-elementary|dop853] [general|register] [H0]`: N
+//!   scalar strides of the simplest walker from its stable fixed point, one reused integrator
+//!   (default DOP853 at 1e-10); `dopri5-elementary` is DOPRI5 with
+//!   `Controller::Elementary`; `general` runs the integrator's general step loop instead of
+//!   its register loop (same bits); `H0` starts every stride with that step instead of the
+//!   starting-step heuristic;
 //! - `profile batch N [TOL] [dopri5|dop853] [LANES] [THREADS CHUNK]`: N strides from perturbed
 //!   copies of the fixed point through the serial lockstep engine (default 64 lanes), or in
 //!   chunks of CHUNK states on a pool of THREADS threads;
@@ -41,6 +42,10 @@ fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> T {
 fn method(args: &[String], i: usize, tol: f64) -> Options {
     match args.get(i).map(String::as_str) {
         Some("dopri5") => Options::dopri5(tol),
+        Some("dopri5-elementary") => Options {
+            controller: pdw_hybrid::Controller::Elementary,
+            ..Options::dopri5(tol)
+        },
         _ => Options::dop853(tol),
     }
 }

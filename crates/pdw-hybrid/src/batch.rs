@@ -290,7 +290,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
         let n_modes = sys.n_modes();
         let ng = (0..n_modes).map(|m| sys.guards(m).len()).max().unwrap_or(0);
         let nl = opts.lanes.min(items.len());
-        let tab = engine::tableau_of(opts.integrator.method);
+        let tab = engine::tableau_for(&opts.integrator);
         let mut st = Store::new(d, nl, ng, tab);
         st.err_dim = sys.error_dim().clamp(1, d);
         Self {

@@ -33,6 +33,14 @@ pub(crate) fn tableau_of(method: Method) -> &'static Tableau {
     }
 }
 
+/// The tableau of the options' method with its controller ([`Options::controller`]).
+pub(crate) fn tableau_for(opts: &Options) -> &'static Tableau {
+    match (opts.method, opts.controller) {
+        (Method::Dopri5, crate::Controller::Elementary) => &tableau::DOPRI5_ELEMENTARY,
+        (m, _) => tableau_of(m),
+    }
+}
+
 /// Lane-major block storage for one batch (or one scalar integrator: `lanes = stride = 1`).
 pub(crate) struct Store {
     pub dim: usize,
@@ -385,15 +393,14 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
     let last = tab.n_stages - 1;
     let (rtol, atol) = (opts.rtol, opts.atol);
     if n == 1 {
-        st.err[0] = if st.stride == 1 && st.err_dim == st.dim {
+        (st.err[0], st.s2[0]) = if st.stride == 1 && st.err_dim == st.dim {
             with_dim!(st.dim, D => match method {
-                Method::Rk4 { .. } => error_norm_one(st, method, opts),
-                _ => error_norm_fixed::<D>(arr::<D>(&st.x), arr::<D>(&st.xn), &st.k, st.h[0], method, opts),
-            }, _ => error_norm_one(st, method, opts))
+                Method::Rk4 { .. } => error_norm_one(st, method, tab, opts),
+                _ => error_norm_fixed::<D>(arr::<D>(&st.x), arr::<D>(&st.xn), &st.k, st.h[0], method, tab, opts),
+            }, _ => error_norm_one(st, method, tab, opts))
         } else {
-            error_norm_one(st, method, opts)
+            error_norm_one(st, method, tab, opts)
         };
-        controller_power(st, tab, 1);
         return;
     }
     st.err[..n].fill(0.0);
@@ -460,8 +467,9 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
         Method::Rk4 { .. } => {}
         Method::Dopri5 => {
             let inv_d = 1.0 / err_dim as f64;
-            for e in &mut st.err[..n] {
-                *e = (*e * inv_d).sqrt();
+            let (err, q) = (&mut st.err[..n], &mut st.s2[..n]);
+            for l in 0..n {
+                (err[l], q[l]) = dopri5_norm(err[l] * inv_d, tab);
             }
         }
         Method::Dop853 => {
@@ -476,14 +484,18 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
                 }
                 err[l] = h[l].abs() * e5 * (1.0 / (d * deno)).sqrt();
             }
+            let (err, q) = (&st.err[..n], &mut st.s2[..n]);
+            for l in 0..n {
+                q[l] = dop853_inverse_power(err[l]);
+            }
         }
     }
-    controller_power(st, tab, n);
 }
 
-/// [`error_norm`] for a single lane (lane 0): the same operations in the same order.
+/// [`error_norm`] for a single lane (lane 0): the same operations in the same order. Returns
+/// the norm and the controller's `q = err^(−α)` (see [`decide`]; 0 for RK4).
 #[inline(always)]
-fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
+fn error_norm_one(st: &Store, method: Method, tab: &Tableau, opts: &Options) -> (f64, f64) {
     let blk = st.blk();
     let stride = st.stride;
     let dim = st.dim;
@@ -526,10 +538,10 @@ fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
         }
     }
     match method {
-        Method::Rk4 { .. } => acc,
+        Method::Rk4 { .. } => (acc, 0.0),
         Method::Dopri5 => {
             let inv_d = 1.0 / err_dim as f64;
-            (acc * inv_d).sqrt()
+            dopri5_norm(acc * inv_d, tab)
         }
         Method::Dop853 => {
             let d = err_dim as f64;
@@ -537,7 +549,8 @@ fn error_norm_one(st: &Store, method: Method, opts: &Options) -> f64 {
             if deno <= 0.0 {
                 deno = 1.0;
             }
-            h.abs() * acc * (1.0 / (d * deno)).sqrt()
+            let err = h.abs() * acc * (1.0 / (d * deno)).sqrt();
+            (err, dop853_inverse_power(err))
         }
     }
 }
@@ -553,8 +566,9 @@ pub(crate) fn error_norm_fixed<const D: usize>(
     k: &[f64],
     h: f64,
     method: Method,
+    tab: &Tableau,
     opts: &Options,
-) -> f64 {
+) -> (f64, f64) {
     let (rtol, atol) = (opts.rtol, opts.atol);
     match method {
         Method::Rk4 { .. } => unreachable!("RK4 has no error estimate"),
@@ -567,7 +581,7 @@ pub(crate) fn error_norm_fixed<const D: usize>(
                 let r = h * e[j] / sk;
                 acc += r * r + poison(x1[j]) + poison(f1[j]);
             }
-            (acc * (1.0 / D as f64)).sqrt()
+            dopri5_norm(acc * (1.0 / D as f64), tab)
         }
         Method::Dop853 => {
             let [b1, b9, b12] = tableau::DOP853_BHH;
@@ -588,7 +602,8 @@ pub(crate) fn error_norm_fixed<const D: usize>(
             if deno <= 0.0 {
                 deno = 1.0;
             }
-            h.abs() * acc * (1.0 / (D as f64 * deno)).sqrt()
+            let err = h.abs() * acc * (1.0 / (D as f64 * deno)).sqrt();
+            (err, dop853_inverse_power(err))
         }
     }
 }
@@ -599,31 +614,20 @@ fn engine_last(method: Method) -> usize {
     tableau_of(method).n_stages - 1
 }
 
-/// `err^α` of every lane into `st.s2` (the controller's `fac11`; HNW I eq. II.4.13), as a column
-/// kernel; α = 1/8 (DOP853) as three square roots, other α by [`pdw_simd::powr`] (our own
-/// `exp(α ln err)`, a few ulp from libm's `pow` at a fraction of its cost, same bits everywhere).
+/// DOPRI5's norm and the controller's `q = err^(−α)` from the mean square `ms = err²` of the
+/// scaled error (HNW I eq. II.4.11): `err = √ms`, `q = ms^(−α/2)` by [`pdw_simd::powr`] (our own
+/// `exp(a·ln x)`, a few ulp from libm's `pow`, same bits everywhere). `q` is taken from `ms`,
+/// not from `err`, so that the next step waits for one power, not for a square root and then a
+/// power; `err` (the acceptance test and the PI memory) is computed beside it.
 #[inline(always)]
-pub(crate) fn controller_power(st: &mut Store, tab: &Tableau, n: usize) {
-    let (err, out) = (&st.err[..n], &mut st.s2[..n]);
-    if tab.alpha == 0.125 {
-        for l in 0..n {
-            out[l] = err[l].sqrt().sqrt().sqrt();
-        }
-    } else if tab.alpha != 0.0 {
-        for l in 0..n {
-            out[l] = pdw_simd::powr(err[l], tab.alpha);
-        }
-    }
+fn dopri5_norm(ms: f64, tab: &Tableau) -> (f64, f64) {
+    (ms.sqrt(), pdw_simd::powr(ms, -0.5 * tab.alpha))
 }
 
-/// [`controller_power`] of one error norm (DOPRI5 or DOP853: α ≠ 0), the same operations.
+/// DOP853's `q = err^(−1/8)` (α = 1/8, HNW's dop853) as the reciprocal of three square roots.
 #[inline(always)]
-pub(crate) fn controller_power_one(err: f64, tab: &Tableau) -> f64 {
-    if tab.alpha == 0.125 {
-        err.sqrt().sqrt().sqrt()
-    } else {
-        pdw_simd::powr(err, tab.alpha)
-    }
+fn dop853_inverse_power(err: f64) -> f64 {
+    1.0 / err.sqrt().sqrt().sqrt()
 }
 
 /// Candidate flags of rows `a..b` for the guards `specs` of their mode, from the step's end
@@ -669,8 +673,8 @@ pub(crate) struct Ctl {
     pub h_full: f64,
     /// Previous accepted error norm (PI controller memory, HNW's `facold`).
     pub facold: f64,
-    /// `facold^β`, computed when `facold` is set (off the next step's critical path).
-    pub facold_pow: f64,
+    /// `safety·facold^β`, computed when `facold` is set (off the next step's critical path).
+    pub pi_scale: f64,
     /// The previous attempt was rejected (then h may not grow: HNW II.4).
     pub rejected: bool,
     /// The previous rejection was caused by non-finite values.
@@ -747,10 +751,10 @@ pub(crate) fn start_segment<S: HybridSystem + ?Sized>(
         t_end,
         mode,
         facold: 1e-4,
-        facold_pow: if tab.beta == 0.0 {
-            1.0
+        pi_scale: if tab.beta == 0.0 {
+            tab.safety
         } else {
-            pdw_simd::powr(1e-4, tab.beta)
+            tab.safety * pdw_simd::powr(1e-4, tab.beta)
         },
         stats: ctl.stats,
         ..Ctl::default()
@@ -882,9 +886,16 @@ pub(crate) fn prepare(opts: &Options, ctl: &mut Ctl) -> Result<f64, StopReason> 
 }
 
 /// Accept or reject an attempt with error norm `err` and choose the next step (HNW I,
-/// eq. II.4.13 with the PI stabilisation `fac = err^α / facold^β`, safety factor, clamps
-/// `h_new/h ∈ [fac_min, fac_max]`, and no growth right after a rejection). A non-finite norm
+/// eq. II.4.13 with the PI stabilisation of the codes DOPRI5/DOP853: `h_new = h/fac`,
+/// `fac = clamp(err^α / facold^β / safety, 1/fac_max, 1/fac_min)`, and no growth right after a
+/// rejection; a rejection takes `h_new = h / min(1/fac_min, err^α/safety)`). A non-finite norm
 /// is a rejection with `h ← h/10`. RK4 accepts every finite step and stops on a non-finite one.
+///
+/// The same rule in reciprocal form, so that the next step waits for one power and one
+/// multiplication instead of three divisions: `q = err^(−α)` comes with the norm
+/// ([`error_norm`]), `ctl.pi_scale = safety·facold^β` is set at the previous acceptance, and
+/// `h_new = h·clamp(pi_scale·q, fac_min, fac_max)` on acceptance, `h·max(fac_min, safety·q)` on
+/// rejection.
 #[inline(always)]
 pub(crate) fn decide(
     method: Method,
@@ -892,7 +903,7 @@ pub(crate) fn decide(
     opts: &Options,
     ctl: &mut Ctl,
     err: f64,
-    fac11: f64,
+    q: f64,
 ) -> After {
     ctl.attempts += 1;
     let h = ctl.h_used;
@@ -914,26 +925,34 @@ pub(crate) fn decide(
     }
     ctl.nonfinite = false;
     if err <= 1.0 {
-        let fac = if tab.beta == 0.0 {
-            fac11
+        // q = +∞ (err = 0) gives the largest growth; plain comparisons (q is never NaN here).
+        let r = ctl.pi_scale * q;
+        let r = if r > tab.fac_max {
+            tab.fac_max
+        } else if r < tab.fac_min {
+            tab.fac_min
         } else {
-            fac11 / ctl.facold_pow
+            r
         };
-        let fac = (fac / tab.safety).clamp(1.0 / tab.fac_max, 1.0 / tab.fac_min);
-        let mut h_new = h / fac;
-        if ctl.rejected {
-            h_new = h_new.min(h);
+        let mut h_new = h * r;
+        if ctl.rejected && h_new > h {
+            h_new = h;
         }
-        ctl.facold = err.max(1e-4);
+        ctl.facold = if err > 1e-4 { err } else { 1e-4 };
         if tab.beta != 0.0 {
-            ctl.facold_pow = pdw_simd::powr(ctl.facold, tab.beta);
+            ctl.pi_scale = tab.safety * pdw_simd::powr(ctl.facold, tab.beta);
         }
         ctl.rejected = false;
-        ctl.h = h_new.min(opts.h_max);
+        ctl.h = if h_new > opts.h_max {
+            opts.h_max
+        } else {
+            h_new
+        };
         ctl.stats.accepted += 1;
         After::Accepted
     } else {
-        ctl.h = h / (fac11 / tab.safety).min(1.0 / tab.fac_min);
+        let r = tab.safety * q;
+        ctl.h = h * if r < tab.fac_min { tab.fac_min } else { r };
         ctl.rejected = true;
         ctl.stats.rejected += 1;
         After::Rejected

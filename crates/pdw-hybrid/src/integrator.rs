@@ -42,7 +42,7 @@ impl Integrator {
         if dim == 0 {
             return Err(HybridError::ZeroDimension { dim });
         }
-        let tab = engine::tableau_of(opts.method);
+        let tab = engine::tableau_for(&opts);
         Ok(Self {
             opts,
             tab,
@@ -292,9 +292,9 @@ impl Integrator {
     /// dimension `D` (error control on every component, at most [`FAST_GUARDS`] guards), with
     /// the accepted state, the stages and the guard values in local arrays (registers) instead
     /// of the workspace, and the method's stage rows unrolled. Every value is computed by the
-    /// functions the general loop uses (`row_fixed`, `error_norm_fixed`, `controller_power_one`,
-    /// `decide`, `may_cross`), on the same operands in the same order, so the two loops give the
-    /// same bits. A step that may hold an event, or ends the segment, is written to the
+    /// functions the general loop uses (`row_fixed`, `error_norm_fixed`, `decide`,
+    /// `may_cross`), on the same operands in the same order, so the two loops give the same
+    /// bits. A step that may hold an event, or ends the segment, is written to the
     /// workspace and finished by the general code (`after_accept`), after which the loop reloads
     /// the committed state. Returns the stop reason with the stop state in `st.x`.
     #[inline(always)]
@@ -333,8 +333,8 @@ impl Integrator {
                 }
             };
             let x1 = stages_fixed::<S, D>(sys, &mut sc.ev.model, mode, method, &x, h, &mut k);
-            let err = engine::error_norm_fixed::<D>(&x, &x1, k.as_flattened(), h, method, &opts);
-            let fac11 = engine::controller_power_one(err, tab);
+            let (err, q) =
+                engine::error_norm_fixed::<D>(&x, &x1, k.as_flattened(), h, method, tab, &opts);
             let mut cand = 0u8;
             if ng > 0 {
                 sys.guards_with_rates(
@@ -351,7 +351,7 @@ impl Integrator {
                 }
             }
             ctl.stats.rhs_evals += (ns - 1) as u64;
-            match engine::decide(method, tab, &opts, ctl, err, fac11) {
+            match engine::decide(method, tab, &opts, ctl, err, q) {
                 After::Rejected => continue,
                 After::Stop(r) => {
                     st.x[..D].copy_from_slice(&x);

@@ -59,7 +59,7 @@ pub use batch::{
 };
 pub use error::HybridError;
 pub use integrator::Integrator;
-pub use options::{Method, Options, Stats, StopReason};
+pub use options::{Controller, Method, Options, Stats, StopReason};
 pub use system::{
     guards_with_rates_by_lane, Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch,
     Section,

@@ -43,12 +43,27 @@ pub struct Options {
     /// rejected several times at touch-down (tested on the soft ball, where it takes more step
     /// attempts than the heuristic).
     pub warm_restart: bool,
+    /// Step-size controller of DOPRI5 (DOP853's own is elementary either way; RK4 has none).
+    /// Default [`Controller::Pi`], the code dopri5's.
+    pub controller: Controller,
     /// Largest step (time units); `f64::INFINITY` for no limit.
     pub h_max: f64,
     /// A proposed step below `h_min` stops the integration with `StepTooSmall`.
     pub h_min: f64,
     /// Largest number of step attempts (accepted + rejected) per `integrate` call.
     pub max_steps: usize,
+}
+
+/// Step-size controller of DOPRI5 (HNW I eq. II.4.13 and §IV.2): `h_new = h·fac` with
+/// `fac = 0.9·err^(−α)·facold^β`, clamped to `[0.2, 10]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Controller {
+    /// The PI controller of the code dopri5 (its defaults: β = 0.04, α = 1/5 − 0.75β = 0.17):
+    /// smoother step sequences, a few per cent more steps.
+    #[default]
+    Pi,
+    /// The elementary controller (β = 0, α = 1/5), as MATLAB's `ode45` and SciPy's `RK45` use.
+    Elementary,
 }
 
 impl Options {
@@ -59,6 +74,7 @@ impl Options {
             atol: tol,
             h_init: None,
             warm_restart: false,
+            controller: Controller::Pi,
             h_max: f64::INFINITY,
             h_min: 0.0,
             max_steps: 100_000,
@@ -83,6 +99,7 @@ impl Options {
             atol: 0.0,
             h_init: None,
             warm_restart: false,
+            controller: Controller::Pi,
             h_max: f64::INFINITY,
             h_min: 0.0,
             max_steps: usize::MAX,

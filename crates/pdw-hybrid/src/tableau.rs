@@ -90,6 +90,20 @@ pub(crate) static DOPRI5: Tableau = Tableau {
     safety: 0.9,
 };
 
+/// DOPRI5 with the elementary controller ([`crate::Controller::Elementary`]): β = 0,
+/// α = 1/5 (HNW I eq. II.4.13 without the PI term; the code dopri5 with `WORK(5) = BETA = 0`);
+/// everything else as [`DOPRI5`].
+pub(crate) static DOPRI5_ELEMENTARY: Tableau = Tableau {
+    n_stages: 7,
+    a: &[&[], &DP5_A1, &DP5_A2, &DP5_A3, &DP5_A4, &DP5_A5, &DP5_A6],
+    hinit_order: 5.0,
+    alpha: 0.2,
+    beta: 0.0,
+    fac_min: 0.2,
+    fac_max: 10.0,
+    safety: 0.9,
+};
+
 /// DOPRI5 error weights e = b − b̂ over k₀..k₆ (HNW I, Table II.5.2).
 pub(crate) const DOPRI5_E: [f64; 7] = [
     71.0 / 57600.0,

@@ -3,7 +3,7 @@
 use crate::common;
 
 use common::*;
-use pdw_hybrid::{HybridError, Integrator, Method, Options, StopReason};
+use pdw_hybrid::{Controller, HybridError, Integrator, Method, Options, StopReason};
 
 /// Max-norm error at t = T of a fixed-step run with step h = T/n (adaptive methods are made
 /// fixed-step by h_init = h_max = h and a tolerance so loose that no step is rejected).
@@ -78,16 +78,24 @@ fn dop853_converges_with_order_8() {
 
 /// Adaptive runs are tolerance-proportional: the achieved global error scales like the
 /// tolerance (slope of log err vs log tol ≈ 1 over five decades) and stays within a small
-/// multiple of it.
+/// multiple of it — for DOPRI5 with either step-size controller, and DOP853. The two DOPRI5
+/// controllers take different step sequences (the option is not ignored).
 #[test]
 fn adaptive_error_is_proportional_to_tolerance() {
-    for method in [Method::Dopri5, Method::Dop853] {
+    let mut evals_by_controller = Vec::new();
+    for (method, controller) in [
+        (Method::Dopri5, Controller::Pi),
+        (Method::Dopri5, Controller::Elementary),
+        (Method::Dop853, Controller::Pi),
+    ] {
         let mut lt = Vec::new();
         let mut le = Vec::new();
+        let mut evals = Vec::new();
         for k in 0..6 {
             let tol = 10f64.powi(-5 - k);
             let opts = Options {
                 method,
+                controller,
                 ..Options::dopri5(tol)
             };
             let mut integ = Integrator::new(3, opts).unwrap();
@@ -103,20 +111,29 @@ fn adaptive_error_is_proportional_to_tolerance() {
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
             eprintln!(
-                "{method:?} tol {tol:.0e}: err {err:.3e}, evals {}",
+                "{method:?} {controller:?} tol {tol:.0e}: err {err:.3e}, evals {}",
                 integ.stats().rhs_evals
             );
-            assert!(err < 10.0 * tol, "{method:?} tol {tol:e}: err {err:e}");
+            assert!(
+                err < 10.0 * tol,
+                "{method:?} {controller:?} tol {tol:e}: err {err:e}"
+            );
             lt.push(tol.ln());
             le.push(err.ln());
+            evals.push(integ.stats().rhs_evals);
         }
         let s = slope(&lt, &le);
-        eprintln!("{method:?}: d log err / d log tol = {s:.3}");
+        eprintln!("{method:?} {controller:?}: d log err / d log tol = {s:.3}");
         assert!(
             (s - 1.0).abs() < 0.1,
-            "{method:?} tolerance proportionality slope {s}"
+            "{method:?} {controller:?} tolerance proportionality slope {s}"
         );
+        evals_by_controller.push(evals);
     }
+    assert_ne!(
+        evals_by_controller[0], evals_by_controller[1],
+        "DOPRI5's PI and elementary controllers took the same steps"
+    );
 }
 
 /// The pendulum's energy ω²/2 − cos θ is a first integral: DOP853 at tolerance 1e-13 keeps it

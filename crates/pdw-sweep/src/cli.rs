@@ -76,6 +76,10 @@ pub struct IntegratorOpts {
     /// commands restart cold already.
     #[arg(long)]
     pub cold_restarts: bool,
+    /// Step-size controller of dopri5: pi (the code dopri5's, β = 0.04; the default) or
+    /// elementary (β = 0, h·0.9·err^(−1/5), as MATLAB's ode45). dop853's is elementary either way.
+    #[arg(long, value_parser = ["pi", "elementary"])]
+    pub controller: Option<String>,
 }
 
 #[derive(Args, Debug)]

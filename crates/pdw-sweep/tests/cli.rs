@@ -84,6 +84,56 @@ fn fixedpoint_json_reproduces_garcia_both_gaits() {
     }
 }
 
+/// `--controller elementary` (DOPRI5 only): the same Garcia gait as the default PI controller
+/// to the tolerance's level, recorded in `--json`'s integrator; refused for dop853.
+#[test]
+fn dopri5_controllers_find_garcias_gait_and_are_recorded() {
+    let mut sections = Vec::new();
+    for controller in [None, Some("elementary"), Some("pi")] {
+        let mut args = vec![
+            "fixedpoint",
+            "--json",
+            "--gait",
+            "stable",
+            "--integrator",
+            "dopri5",
+            "--rtol",
+            "1e-12",
+        ];
+        if let Some(c) = controller {
+            args.extend(["--controller", c]);
+        }
+        let o = run(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let elementary = controller == Some("elementary");
+        assert_eq!(
+            v["integrator"].get("controller").and_then(|c| c.as_str()),
+            elementary.then_some("elementary"),
+            "{v}"
+        );
+        let sec: Vec<f64> =
+            serde_json::from_value(v["fixed_points"][0]["section"].clone()).unwrap();
+        for (a, b) in sec.iter().zip(STABLE) {
+            assert!(
+                (a - b).abs() < 1e-9,
+                "{controller:?}: {sec:?} vs Garcia {STABLE:?}"
+            );
+        }
+        sections.push(sec);
+    }
+    // Different step sequences, the same gait to the tolerance's level; "pi" is the default.
+    assert_ne!(sections[0], sections[1]);
+    assert_eq!(sections[0], sections[2]);
+    assert!(sections[0]
+        .iter()
+        .zip(&sections[1])
+        .all(|(a, b)| (a - b).abs() < 1e-10));
+    let o = run(&["fixedpoint", "--controller", "elementary"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--controller"), "{}", stderr(&o));
+}
+
 #[test]
 fn fixedpoint_gait_filter_and_rimless_closed_form() {
     let o = run(&["fixedpoint", "--json", "--gait", "unstable"]);

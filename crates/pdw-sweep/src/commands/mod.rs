@@ -174,8 +174,20 @@ pub fn integrator(o: &IntegratorOpts, default: Options) -> Result<Options, Input
             }
         }
     };
+    let controller = match o.controller.as_deref() {
+        None | Some("pi") => pdw_hybrid::Controller::Pi,
+        Some(_) if !matches!(opts.method, Method::Dopri5) => {
+            return Err(InputError(
+                "--controller: only --integrator dopri5 has a choice of step-size controller \
+                 (dop853's is elementary, rk4 has none)"
+                    .into(),
+            ))
+        }
+        Some(_) => pdw_hybrid::Controller::Elementary,
+    };
     let opts = Options {
         warm_restart: opts.warm_restart && !o.cold_restarts,
+        controller,
         ..opts
     };
     opts.validate().map_err(|e| match e {
@@ -200,7 +212,8 @@ pub fn integrator(o: &IntegratorOpts, default: Options) -> Result<Options, Input
 /// The integrator as a JSON object for files and `--json` (method, tolerances or step).
 /// `"warm_restart": true` when continued segments start from the controller's last proposal
 /// ([`Options::warm_restart`], the basin's default), which changes results at the tolerance's
-/// level; absent otherwise.
+/// level; absent otherwise. `"controller": "elementary"` for DOPRI5 with
+/// [`pdw_hybrid::Controller::Elementary`] (absent for the default PI controller).
 pub fn integrator_json(o: &Options) -> serde_json::Value {
     let mut v = match o.method {
         Method::Rk4 { h } => return serde_json::json!({"method": "rk4", "h": h}),
@@ -214,13 +227,23 @@ pub fn integrator_json(o: &Options) -> serde_json::Value {
     if o.warm_restart {
         v["warm_restart"] = serde_json::Value::Bool(true);
     }
+    if o.controller == pdw_hybrid::Controller::Elementary {
+        v["controller"] = serde_json::Value::from("elementary");
+    }
     v
 }
 
 /// The integrator in one line of text, e.g. `dop853 rtol=1e-14 atol=1e-14` (plus
-/// ` warm-restart` when [`Options::warm_restart`] is set).
+/// ` warm-restart` when [`Options::warm_restart`] is set, ` elementary` for DOPRI5 with the
+/// elementary controller).
 pub fn integrator_text(o: &Options) -> String {
-    let warm = if o.warm_restart { " warm-restart" } else { "" };
+    let elementary = o.controller == pdw_hybrid::Controller::Elementary;
+    let warm = match (o.warm_restart, elementary) {
+        (false, false) => "",
+        (true, false) => " warm-restart",
+        (false, true) => " elementary",
+        (true, true) => " elementary warm-restart",
+    };
     match o.method {
         Method::Rk4 { h } => format!("rk4 h={h:e}"),
         Method::Dopri5 => format!("dopri5 rtol={:e} atol={:e}{warm}", o.rtol, o.atol),

@@ -199,7 +199,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let user_integrator = (a.integrator.integrator.is_some()
         || a.integrator.rtol.is_some()
         || a.integrator.atol.is_some()
-        || a.integrator.rk4_step.is_some())
+        || a.integrator.rk4_step.is_some()
+        || a.integrator.controller.is_some())
     .then(|| super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol)))
     .transpose()?;
     let pool = rayon::ThreadPoolBuilder::new()
