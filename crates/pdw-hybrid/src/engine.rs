@@ -474,7 +474,7 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
         }
         Method::Dop853 => {
             let d = err_dim as f64;
-            let (err, e3) = (&mut st.err[..n], &st.s3[..n]);
+            let (err, q, e3) = (&mut st.err[..n], &mut st.s2[..n], &st.s3[..n]);
             let h = &st.h[..n];
             for l in 0..n {
                 let e5 = err[l];
@@ -483,9 +483,6 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
                     deno = 1.0;
                 }
                 err[l] = h[l].abs() * e5 * (1.0 / (d * deno)).sqrt();
-            }
-            let (err, q) = (&st.err[..n], &mut st.s2[..n]);
-            for l in 0..n {
                 q[l] = dop853_inverse_power(err[l]);
             }
         }
@@ -624,7 +621,8 @@ fn dopri5_norm(ms: f64, tab: &Tableau) -> (f64, f64) {
     (ms.sqrt(), pdw_simd::powr(ms, -0.5 * tab.alpha))
 }
 
-/// DOP853's `q = err^(−1/8)` (α = 1/8, HNW's dop853) as the reciprocal of three square roots.
+/// DOP853's `q = err^(−1/8)` (HNW's dop853: α = 1/8, the `alpha` of [`tableau::DOP853`]) as
+/// the reciprocal of three square roots.
 #[inline(always)]
 fn dop853_inverse_power(err: f64) -> f64 {
     1.0 / err.sqrt().sqrt().sqrt()
