@@ -32,6 +32,16 @@
 //! with a bisection step when three iterations fail to halve the bracket, until the bracket is
 //! ≤ 4ε·max(|t₀|, |t₁|) in time (≈ 1e-15 for t ≈ 1). The *right-hand* end of the final bracket is reported: the returned state
 //! is the dense-output state at that θ and its guard value is on the post-crossing side or zero.
+//! A guard the model declares affine ([`HybridSystem::guard_is_linear`]) is, on the nested
+//! dense output of DOPRI5 or DOP853, a scalar polynomial in θ with the same nesting: its rows
+//! are the guard applied to the rows of the state's interpolant (`g(c₀)`, then
+//! `g(c_r) − g(0)`). Its interior samples and its root then come from that polynomial — the
+//! root by Newton's method from the bracket's secant point, safeguarded by the bracket and
+//! closed to the same width by a probe across the root (about four polynomial evaluations
+//! against seven Illinois iterations on states, each a dense-output state and a guard call);
+//! the state at the root must show the crossing too, or the root moves right by up to four
+//! bracket widths, and where neither holds (a grazing root hidden by rounding) the Illinois
+//! iteration on states decides.
 //!
 //! **Admissibility.** [`HybridSystem::admissible`] is tested at the root; an inadmissible crossing
 //! is skipped and the scan continues with the guard's later sub-intervals. The earliest admissible
@@ -98,6 +108,12 @@ pub(crate) struct EventScratch {
     /// extra dense-output stages k₁₃…k₁₅.
     pub kl: Vec<f64>,
     pub ytmp: Vec<f64>,
+    /// `(ng × 8)` coefficients of each affine guard along the dense output ([`guard_poly`]).
+    pub poly: Vec<f64>,
+    /// `(ng)` guard k has its polynomial in `poly`.
+    pub lin: Vec<bool>,
+    /// `(dim)` zeros (the affine guards' constant term is `g(0)`).
+    pub zero: Vec<f64>,
     /// The model's own scratch, passed to every model call made for this lane.
     pub model: Scratch,
 }
@@ -116,8 +132,18 @@ impl EventScratch {
             cont: vec![0.0; 8 * d],
             kl: vec![0.0; 16 * d],
             ytmp: vec![0.0; d],
+            poly: vec![0.0; ng * POLY_ROWS],
+            lin: vec![false; ng],
+            zero: vec![0.0; d],
             model: Scratch::new(),
         }
+    }
+
+    /// Room for `ng` guards per mode.
+    pub fn reserve_guards(&mut self, ng: usize) {
+        self.gv = vec![0.0; ng * M];
+        self.poly = vec![0.0; ng * POLY_ROWS];
+        self.lin = vec![false; ng];
     }
 }
 
@@ -440,6 +466,199 @@ fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
     Interp::Dop853
 }
 
+/// Largest number of dense-output coefficient rows (DOP853's 8).
+const POLY_ROWS: usize = 8;
+
+/// Number of coefficient rows of a dense output in nested form (0: not in nested form).
+#[inline]
+fn nested_rows(interp: Interp) -> usize {
+    match interp {
+        Interp::Hermite => 0,
+        Interp::Dopri5 => 5,
+        Interp::Dop853 => POLY_ROWS,
+    }
+}
+
+/// The dense outputs of DOPRI5 and DOP853 in their nested form (HNW I, eq. II.6.12 and the
+/// code DOP853's `contd8`), `c₀ + θ(c₁ + (1−θ)(c₂ + θ(c₃ + (1−θ)(c₄ + …))))`, with `n` rows
+/// `c = [c₀, …, c_{n−1}]` of scalars, and its derivative in θ carried along the same Horner
+/// chain (`v_r = c_r + s_r v_{r+1}`, `s_r = θ` for even r and `1 − θ` for odd r, so
+/// `v'_r = s_r v'_{r+1} ± v_{r+1}`). The multipliers are those of [`Dense::eval`].
+#[inline(always)]
+fn nested_with_derivative(c: &[f64], n: usize, theta: f64) -> (f64, f64) {
+    match n {
+        5 => nested_fixed::<5>(c, theta),
+        _ => nested_fixed::<POLY_ROWS>(c, theta),
+    }
+}
+
+/// The value of [`nested_with_derivative`] at several points at once (the same operations per
+/// point, so the same bits; the points side by side in vector registers).
+#[inline(always)]
+fn nested_values<const P: usize>(c: &[f64], n: usize, theta: [f64; P]) -> [f64; P] {
+    fn fixed<const N: usize, const P: usize>(c: &[f64], theta: [f64; P]) -> [f64; P] {
+        let c: &[f64; N] = c[..N].try_into().expect("N rows");
+        let mut v = [c[N - 1]; P];
+        for r in (0..N - 1).rev() {
+            for p in 0..P {
+                let s = if r % 2 == 0 { theta[p] } else { 1.0 - theta[p] };
+                v[p] = c[r] + s * v[p];
+            }
+        }
+        v
+    }
+    match n {
+        5 => fixed::<5, P>(c, theta),
+        _ => fixed::<POLY_ROWS, P>(c, theta),
+    }
+}
+
+/// [`nested_with_derivative`] with a compile-time number of rows `N` (unrolled).
+#[inline(always)]
+fn nested_fixed<const N: usize>(c: &[f64], theta: f64) -> (f64, f64) {
+    let c: &[f64; N] = c[..N].try_into().expect("N rows");
+    let t1 = 1.0 - theta;
+    let mut v = c[N - 1];
+    let mut dv = 0.0;
+    for r in (0..N - 1).rev() {
+        if r % 2 == 0 {
+            dv = theta * dv + v;
+            v = c[r] + theta * v;
+        } else {
+            dv = t1 * dv - v;
+            v = c[r] + t1 * v;
+        }
+    }
+    (v, dv)
+}
+
+/// Coefficients of an affine guard `g(x) = a·x + b` along the dense output in nested form:
+/// since every row of the state's interpolant enters linearly, `g(x(θ))` is the same nested
+/// polynomial with the scalar rows `G₀ = g(c₀)` (c₀ = x₀) and `G_r = g(c_r) − g(0) = a·c_r`
+/// for r ≥ 1. Written to `out[..rows]`.
+#[allow(clippy::too_many_arguments)]
+fn guard_poly<S: HybridSystem + ?Sized>(
+    sys: &S,
+    ws: &mut Scratch,
+    mode: usize,
+    k: usize,
+    cont: &[f64],
+    zero: &[f64],
+    rows: usize,
+    out: &mut [f64],
+) {
+    let d = zero.len();
+    let b = sys.guard(ws, mode, k, zero);
+    out[0] = sys.guard(ws, mode, k, &cont[..d]);
+    for r in 1..rows {
+        out[r] = sys.guard(ws, mode, k, &cont[r * d..(r + 1) * d]) - b;
+    }
+}
+
+/// Safeguarded Newton iteration for a root of an affine guard's polynomial `poly` (see
+/// [`guard_poly`]) on `(θa, θb]`, with `g(θa)` strictly before and `g(θb)` after or at the
+/// crossing — the bracket [`refine`] starts from, and the same result contract, to the same
+/// bracket width `tol`: the right-hand end θ* of a final bracket `[θ*−w, θ*]` with `w ≤ tol`
+/// whose left end is before the crossing and whose right end after it or at zero.
+///
+/// Newton's iterates (value and derivative from one Horner pass) converge quadratically from
+/// the secant point of the bracket; an iterate that leaves the bracket is replaced by the
+/// bracket's secant point, or its midpoint. When a step is shorter than half the width, the
+/// next point probes the other side of the root at 0.99·tol from the current one, which closes
+/// the bracket. The guard is then evaluated on the state at θ* (`xr`), and the crossing must
+/// hold there too. Returns `None` — the caller falls back on [`refine`] on the state — when
+/// the polynomial's rounding hides the root (a grazing crossing, `|ġ|` tiny), after 40 points,
+/// on a non-finite value, or when the guard on the state disagrees with its polynomial.
+#[allow(clippy::too_many_arguments)]
+fn refine_linear<S: HybridSystem + ?Sized>(
+    sys: &S,
+    ws: &mut Scratch,
+    mode: usize,
+    k: usize,
+    dense: &Dense<'_>,
+    poly: &[f64],
+    rows: usize,
+    tol: f64,
+    (theta_a, ga): (f64, f64),
+    (theta_b, gb): (f64, f64),
+    xr: &mut [f64],
+) -> Option<f64> {
+    let sig = if ga < 0.0 { 1.0 } else { -1.0 };
+    let (mut a, mut fa, mut b, mut fb) = (theta_a, sig * ga, theta_b, sig * gb);
+    let secant = |a: f64, fa: f64, b: f64, fb: f64| {
+        let c = b - fb * (b - a) / (fb - fa);
+        if c > a && c < b {
+            c
+        } else {
+            0.5 * (a + b)
+        }
+    };
+    let mut c = secant(a, fa, b, fb);
+    let mut closed = fb == 0.0 || b - a <= tol;
+    for _ in 0..40 {
+        if closed {
+            break;
+        }
+        if !(c > a && c < b) {
+            return None;
+        }
+        let (v, dv) = nested_with_derivative(poly, rows, c);
+        let (fc, dc) = (sig * v, sig * dv);
+        if !(fc.is_finite() && dc.is_finite()) {
+            return None;
+        }
+        if fc < 0.0 {
+            (a, fa) = (c, fc);
+        } else {
+            (b, fb) = (c, fc);
+        }
+        if fc == 0.0 || b - a <= tol {
+            closed = true;
+            continue;
+        }
+        let step = fc / dc;
+        let newton = c - step;
+        c = if step.abs() <= 0.5 * tol {
+            // Converged to within half the width: probe across the root.
+            let probe = if fc < 0.0 {
+                c + 0.99 * tol
+            } else {
+                c - 0.99 * tol
+            };
+            if probe > a && probe < b {
+                probe
+            } else {
+                secant(a, fa, b, fb)
+            }
+        } else if newton > a && newton < b {
+            newton
+        } else {
+            secant(a, fa, b, fb)
+        };
+    }
+    if !closed {
+        return None;
+    }
+    // The state at θ* must show the crossing too; the guard on the state and its polynomial
+    // differ by rounding, so a root within that rounding of the state's side is moved right by
+    // up to four bracket widths (never past θ_b).
+    for j in 0..5 {
+        let theta = if j == 0 { b } else { b + j as f64 * tol };
+        if theta > theta_b {
+            break;
+        }
+        if theta == 1.0 {
+            xr.copy_from_slice(dense.x1);
+        } else {
+            dense.eval(theta, xr);
+        }
+        if sig * sys.guard(ws, mode, k, xr) >= 0.0 {
+            return Some(theta);
+        }
+    }
+    None
+}
+
 /// Illinois iteration for a root of guard `k` on `(θa, θb]` with `g(θa)` strictly before and
 /// `g(θb)` after or at the crossing. Returns the right-hand end θ* of the final bracket and leaves
 /// the state at θ* in `xr`.
@@ -457,7 +676,7 @@ fn refine<S: HybridSystem + ?Sized>(
 ) -> f64 {
     let sig = if ga < 0.0 { 1.0 } else { -1.0 };
     let (mut a, mut fa, mut b, mut fb) = (theta_a, sig * ga, theta_b, sig * gb);
-    let tol = (4.0 * f64::EPSILON * t_scale / dense.h.abs()).max(4.0 * f64::EPSILON);
+    let tol = bracket_tol(t_scale, dense.h);
     let mut side = 0i8;
     let mut w_ref = b - a;
     let mut since = 0u8;
@@ -514,6 +733,12 @@ fn refine<S: HybridSystem + ?Sized>(
         dense.eval(b, xr);
     }
     b
+}
+
+/// Width in θ of the final bracket of a root: 4ε·max(|t₀|, |t₁|) in time.
+#[inline]
+fn bracket_tol(t_scale: f64, h: f64) -> f64 {
+    (4.0 * f64::EPSILON * t_scale / h.abs()).max(4.0 * f64::EPSILON)
 }
 
 /// x₀, x₁, f(x₀), f(x₁) of lane `l` into the scratch's contiguous vectors.
@@ -622,6 +847,9 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
         xbest,
         gv,
         cont,
+        poly,
+        lin,
+        zero,
         model,
         ..
     } = sc;
@@ -634,12 +862,36 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
         f1,
         cont,
     };
+    // An affine guard on the dense output is a scalar polynomial in θ: its samples and its root
+    // come from that polynomial, not from states (see `refine_linear`).
+    let rows = nested_rows(interp);
+    let mut all_linear = true;
+    for k in 0..ng {
+        lin[k] = rows > 0 && sys.guard_is_linear(mode, k);
+        if lin[k] {
+            let p = &mut poly[k * POLY_ROWS..(k + 1) * POLY_ROWS];
+            guard_poly(sys, model, mode, k, dense.cont, zero, rows, p);
+        } else {
+            all_linear = false;
+        }
+    }
     // The guards on the method's own interpolant at the same points: the brackets the root
     // finder starts from hold the guard's values on the curve it solves on.
-    for i in 1..=N_SAMPLES {
-        dense.eval(i as f64 * inv, xs);
-        for k in 0..ng {
-            gv[k * M + i] = sys.guard(model, mode, k, xs);
+    let thetas: [f64; N_SAMPLES] = std::array::from_fn(|i| (i + 1) as f64 * inv);
+    for k in 0..ng {
+        if lin[k] {
+            let v = nested_values(&poly[k * POLY_ROWS..], rows, thetas);
+            gv[k * M + 1..=k * M + N_SAMPLES].copy_from_slice(&v);
+        }
+    }
+    if !all_linear {
+        for (i, &theta) in thetas.iter().enumerate() {
+            dense.eval(theta, xs);
+            for k in 0..ng {
+                if !lin[k] {
+                    gv[k * M + i + 1] = sys.guard(model, mode, k, xs);
+                }
+            }
         }
     }
     let t_scale = t0.abs().max(t1.abs());
@@ -661,17 +913,13 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
             } else {
                 (i + 1) as f64 * inv
             };
-            let root = refine(
-                sys,
-                model,
-                mode,
-                k,
-                &dense,
-                t_scale,
-                (theta_a, ga),
-                (theta_b, gb),
-                xr,
-            );
+            let (lo, hi) = ((theta_a, ga), (theta_b, gb));
+            let poly_k = &poly[k * POLY_ROWS..(k + 1) * POLY_ROWS];
+            let tol = bracket_tol(t_scale, h);
+            let root = lin[k]
+                .then(|| refine_linear(sys, model, mode, k, &dense, poly_k, rows, tol, lo, hi, xr))
+                .flatten()
+                .unwrap_or_else(|| refine(sys, model, mode, k, &dense, t_scale, lo, hi, xr));
             if best.is_some_and(|(_, tb)| root >= tb) {
                 break;
             }
@@ -851,5 +1099,186 @@ mod tests {
                 fixed.0.iter().all(|v| v.is_finite()) && fixed.0[4 * d..].iter().any(|&v| v != 0.0)
             );
         }
+    }
+
+    /// The flow of [`Coupled`] with one affine guard `x₀ − c` (Either direction).
+    struct Plane {
+        d: usize,
+        c: f64,
+    }
+
+    impl HybridSystem for Plane {
+        fn dim(&self) -> usize {
+            self.d
+        }
+        fn guards(&self, _mode: usize) -> &[crate::GuardSpec] {
+            &[]
+        }
+        fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+            Coupled(self.d).flow(ws, mode, x, dx)
+        }
+        fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, x: &[f64]) -> f64 {
+            x[0] - self.c
+        }
+        fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
+            true
+        }
+        fn reset(
+            &self,
+            _: &mut Scratch,
+            mode: usize,
+            _: usize,
+            x: &[f64],
+            out: &mut [f64],
+        ) -> usize {
+            out.copy_from_slice(x);
+            mode
+        }
+    }
+
+    /// The nested polynomial's value has the bits of [`Dense::eval`] on a one-component state
+    /// (the same operations in the same order), and its derivative is the derivative: checked
+    /// against a central difference of the value on random coefficients, for DOPRI5's five rows
+    /// and DOP853's eight.
+    #[test]
+    fn nested_polynomial_is_the_dense_output_and_its_derivative() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (interp, rows) in [(Interp::Dopri5, 5), (Interp::Dop853, 8)] {
+            for _ in 0..200 {
+                let c: Vec<f64> = (0..8).map(|_| 2.0 * uniform() - 1.0).collect();
+                let z = [0.0];
+                let dense = Dense {
+                    interp,
+                    h: 0.1,
+                    x0: &z,
+                    x1: &z,
+                    f0: &z,
+                    f1: &z,
+                    cont: &c,
+                };
+                let theta = uniform();
+                let mut out = [0.0];
+                dense.eval(theta, &mut out);
+                let (v, dv) = nested_with_derivative(&c, rows, theta);
+                assert_eq!(v.to_bits(), out[0].to_bits(), "{rows} rows at θ = {theta}");
+                let four = nested_values(&c, rows, [theta, 0.2, 0.4, 0.8]);
+                assert_eq!(four[0].to_bits(), v.to_bits());
+                for (i, t) in [0.2, 0.4, 0.8].into_iter().enumerate() {
+                    let one = nested_with_derivative(&c, rows, t).0;
+                    assert_eq!(four[i + 1].to_bits(), one.to_bits());
+                }
+                let e = 1e-6;
+                let fd = (nested_with_derivative(&c, rows, theta + e).0
+                    - nested_with_derivative(&c, rows, theta - e).0)
+                    / (2.0 * e);
+                assert!(
+                    (dv - fd).abs() <= 1e-8 * (1.0 + dv.abs()),
+                    "{dv} against {fd}"
+                );
+            }
+        }
+    }
+
+    /// The Newton iteration on an affine guard's polynomial finds the root the Illinois
+    /// iteration finds on the states, to within the width of their brackets (a few 1e-15 of
+    /// the step), and its state lies on the post-crossing side, for DOPRI5 and DOP853 dense
+    /// outputs of a nonlinear flow, in dimensions 2 and 4, on random steps and random roots
+    /// in both directions.
+    #[test]
+    fn newton_on_the_guard_polynomial_finds_the_illinois_root() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut roots = 0;
+        for method in [Method::Dopri5, Method::Dop853] {
+            let tab = crate::engine::tableau_of(method);
+            for d in [2, 4] {
+                for _ in 0..300 {
+                    let mut st = Store::new(d, 1, 1, tab);
+                    for v in st.k.iter_mut().chain(st.x.iter_mut()) {
+                        *v = 2.0 * uniform() - 1.0;
+                    }
+                    // A consistent step: x₁ from the stages with the method's weights b.
+                    let h = 0.05 + 0.5 * uniform();
+                    let last = tab.n_stages - 1;
+                    for j in 0..d {
+                        let mut s = 0.0;
+                        for (q, &w) in tab.a[last].iter().enumerate() {
+                            s += w * st.k[q * d + j];
+                        }
+                        st.xn[j] = st.x[j] + h * s;
+                    }
+                    let mut sc = EventScratch::new(d, 1);
+                    gather_ends(&st, 0, method, &mut sc);
+                    let mut stats = Stats::default();
+                    let sys0 = Plane { d, c: 0.0 };
+                    let interp = build_dense(&sys0, method, 0, &st, 0, h, &mut sc, &mut stats);
+                    let dense = Dense {
+                        interp,
+                        h,
+                        x0: &sc.x0,
+                        x1: &sc.x1,
+                        f0: &sc.f0,
+                        f1: &sc.f1,
+                        cont: &sc.cont,
+                    };
+                    // The guard's level: the first component at a random interior point.
+                    let mut xs = vec![0.0; d];
+                    dense.eval(0.05 + 0.9 * uniform(), &mut xs);
+                    let sys = Plane { d, c: xs[0] };
+                    let mut ws = Scratch::new();
+                    let rows = nested_rows(interp);
+                    let mut poly = [0.0; POLY_ROWS];
+                    let zero = vec![0.0; d];
+                    guard_poly(&sys, &mut ws, 0, 0, dense.cont, &zero, rows, &mut poly);
+                    let g_at = |theta: f64, xr: &mut [f64], ws: &mut Scratch| {
+                        if theta == 1.0 {
+                            xr.copy_from_slice(dense.x1);
+                        } else {
+                            dense.eval(theta, xr);
+                        }
+                        sys.guard(ws, 0, 0, xr)
+                    };
+                    let mut xr = vec![0.0; d];
+                    let gs: Vec<f64> = (0..M)
+                        .map(|i| g_at(i as f64 / (M - 1) as f64, &mut xr, &mut ws))
+                        .collect();
+                    let Some(i) = (0..M - 1).find(|&i| crosses(Crossing::Either, gs[i], gs[i + 1]))
+                    else {
+                        continue;
+                    };
+                    let (ta, tb) = (i as f64 / (M - 1) as f64, (i + 1) as f64 / (M - 1) as f64);
+                    let t_scale = 1.0 + h;
+                    let tol = bracket_tol(t_scale, h);
+                    let lo = (ta, gs[i]);
+                    let hi = (tb, gs[i + 1]);
+                    let mut xl = vec![0.0; d];
+                    let newton = refine_linear(
+                        &sys, &mut ws, 0, 0, &dense, &poly, rows, tol, lo, hi, &mut xl,
+                    )
+                    .expect("the polynomial's root");
+                    let illinois = refine(&sys, &mut ws, 0, 0, &dense, t_scale, lo, hi, &mut xr);
+                    assert!(
+                        (newton - illinois).abs() <= 6.0 * tol,
+                        "{method:?} d = {d}: Newton {newton}, Illinois {illinois}, tol {tol:e}"
+                    );
+                    assert!(newton > ta && newton <= tb);
+                    let sig = if gs[i] < 0.0 { 1.0 } else { -1.0 };
+                    assert!(sig * sys.guard(&mut ws, 0, 0, &xl) >= 0.0);
+                    roots += 1;
+                }
+            }
+        }
+        assert!(roots > 600, "{roots} roots tested");
     }
 }

@@ -108,7 +108,7 @@ impl Integrator {
             self.st.gr = vec![0.0; ng];
             self.st.g1 = vec![0.0; ng];
             self.st.r1 = vec![0.0; ng];
-            self.sc.ev.gv = vec![0.0; ng * (crate::event::N_SAMPLES + 2)];
+            self.sc.ev.reserve_guards(ng);
         }
     }
 

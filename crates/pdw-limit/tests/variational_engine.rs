@@ -14,9 +14,10 @@ fn walker(gamma: f64) -> Simplest {
     .unwrap()
 }
 
-/// A system that hides the guard rates and the affine declarations of the one it wraps (the
-/// trait's defaults: every step is sampled on the state's interpolant), and computes flow and
-/// Jacobian by the two separate calls.
+/// A system that hides the guard rates of the one it wraps (the trait's default: every step is
+/// sampled on the state's interpolant) and computes flow and Jacobian by the two separate
+/// calls. It keeps the affine declarations: they choose how a located root is refined (Newton
+/// on the guard's polynomial, or Illinois on states), which changes the last bits of an event.
 struct Plain<'a, S: ?Sized>(&'a S);
 
 impl<S: HybridSystem + ?Sized> HybridSystem for Plain<'_, S> {
@@ -37,6 +38,9 @@ impl<S: HybridSystem + ?Sized> HybridSystem for Plain<'_, S> {
     }
     fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
         self.0.admissible(mode, k, x)
+    }
+    fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        self.0.guard_is_linear(mode, k)
     }
     fn guard_tolerance(&self, mode: usize, k: usize) -> f64 {
         self.0.guard_tolerance(mode, k)

@@ -373,7 +373,8 @@ fn simplest_guard_rates_are_the_derivatives_along_the_flow() {
 }
 
 /// The simplest walker behind a wrapper that gives no guard rates (so every step samples its
-/// interior, the detection without the end-point test).
+/// interior, the detection without the end-point test). It keeps the affine declarations,
+/// which choose how a located root is refined.
 struct NoRates(Simplest);
 
 impl HybridSystem for NoRates {
@@ -391,6 +392,9 @@ impl HybridSystem for NoRates {
     }
     fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
         self.0.admissible(mode, k, x)
+    }
+    fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        self.0.guard_is_linear(mode, k)
     }
     fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
         self.0.reset(ws, mode, k, x, out)
