@@ -216,12 +216,20 @@ fn parallel_batches_are_identical_for_any_thread_count_and_chunk_size() {
             .unwrap();
         for chunk in [1, 97, 1000] {
             let done = std::sync::atomic::AtomicUsize::new(0);
+            let calls = std::sync::atomic::AtomicUsize::new(0);
             let progress = |n: usize| {
                 done.fetch_max(n, std::sync::atomic::Ordering::Relaxed);
+                calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             };
             let out = run_batch_par(&sys, &drv, &its, &opts, &pool, chunk, &progress).unwrap();
             assert!(out == reference, "{threads} threads, chunk {chunk}");
             assert_eq!(done.into_inner(), its.len());
+            // A report per `chunk` items finished (and one at the end of each batch).
+            let calls = calls.into_inner();
+            assert!(
+                calls >= (its.len() / chunk).max(1),
+                "{calls} reports, chunk {chunk}"
+            );
         }
     }
 }
@@ -272,7 +280,22 @@ fn bad_batch_arguments_are_errors() {
             n_modes: 2
         }
     );
+    // On two threads sharing one queue: the failing batches stop, the error is returned.
+    let pool2 = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    assert_eq!(
+        run_batch_par(&sys, &bad, &its, &bo, &pool2, 3, &|_| {}).unwrap_err(),
+        HybridError::ModeOutOfRange {
+            mode: 2,
+            n_modes: 2
+        }
+    );
     assert!(run_batch(&sys, &drv, &[], &bo).unwrap().is_empty());
+    assert!(run_batch_par(&sys, &drv, &[], &bo, &pool2, 3, &|_| {})
+        .unwrap()
+        .is_empty());
 }
 
 #[test]

@@ -164,7 +164,8 @@ pub struct BasinOptions {
     pub integrator: Options,
     /// Lanes stepped in lockstep per batch.
     pub lanes: usize,
-    /// Cells per parallel task (fixed: results do not depend on it).
+    /// Cells claimed at a time by a batch from the run's shared queue, and the granularity of
+    /// the progress reports (results do not depend on it).
     pub chunk: usize,
     /// Stride budget per cell (≥ 1).
     pub max_strides: u16,
@@ -180,7 +181,7 @@ pub struct BasinOptions {
 
 impl Default for BasinOptions {
     /// DOP853 at `rtol = atol = 1e-9` (chosen from label agreement against DOP853 at 1e-12,
-    /// see [`BasinOptions::default_integrator`]), 256 lanes, chunks of 1024 cells, 100 strides,
+    /// see [`BasinOptions::default_integrator`]), 256 lanes, blocks of 1024 cells, 100 strides,
     /// `tol_gait = 1e-6`, `confirm = 2`, `tol_recur = 1e-10`, `max_period = 8`.
     fn default() -> Self {
         Self {
@@ -609,7 +610,7 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
 }
 
 /// Classify every cell (section states of the model's section dimension), batched on `pool`
-/// (see the module docs); `progress(n_done)` is called as chunks finish. Results in cell order,
+/// (see the module docs); `progress(n_done)` is called as blocks of `chunk` cells finish. Results in cell order,
 /// identical for any thread count, lane count, chunk size and split of `cells`.
 pub fn classify_cells<S: Section + ?Sized>(
     problem: &BasinProblem<'_, S>,
