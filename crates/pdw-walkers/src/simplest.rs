@@ -516,7 +516,8 @@ impl HybridSystem for Simplest {
         out: &mut [f64],
     ) -> usize {
         let (th, thd) = (x[0], x[1]);
-        let c2 = (2.0 * th).cos();
+        // pdw-simd's cosine: the same bits with every libm (shards merge across machines).
+        let c2 = pdw_simd::sincos(2.0 * th).1;
         out[0] = -th;
         out[1] = c2 * thd;
         out[2] = -2.0 * th;
@@ -574,7 +575,7 @@ impl HybridSystem for Simplest {
         jac: &mut [f64],
     ) {
         let (th, thd) = (x[0], x[1]);
-        let (s2, c2) = (2.0 * th).sin_cos();
+        let (s2, c2) = pdw_simd::sincos(2.0 * th);
         jac[..16].fill(0.0);
         jac[0] = -1.0;
         jac[4] = -2.0 * s2 * thd;
@@ -600,7 +601,7 @@ impl Section for Simplest {
         (0, HEEL_STRIKE)
     }
     fn lift(&self, s: &[f64], x: &mut [f64]) {
-        let c2 = (2.0 * s[0]).cos();
+        let c2 = pdw_simd::sincos(2.0 * s[0]).1;
         x[0] = s[0];
         x[1] = s[1];
         x[2] = 2.0 * s[0];
