@@ -961,6 +961,7 @@ pub(crate) fn decide(
 /// location on the accepted step, and commit of the new point. On `Stop(Guard)` the lane's `x`
 /// holds the event state and `ctl.t` the event time; on `Stop(EndTime)` `x = x₁`, `t = t_end`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
     sys: &S,
     method: Method,
@@ -982,6 +983,7 @@ pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
 /// The part of [`after_attempt`] after an acceptance: event location on the step, then the
 /// commit of x₁ (or the stop at the event or at `t_end`). Returns `Accepted` or `Stop`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn after_accept<S: HybridSystem + ?Sized>(
     sys: &S,
     method: Method,

@@ -432,8 +432,15 @@ fn dop853_dense_fixed<S: HybridSystem + ?Sized, const D: usize>(
     use crate::engine::{combine_fixed, row_fixed};
     let (stride, blk) = (st.stride, st.blk());
     // k₀…k₁₅; `as_flattened` reads them as one slice, stage q at [q·D, (q + 1)·D).
+    // Only the stages some row weighs (k₁…k₄ have zero weight in all of them): the others
+    // would be strided loads never read.
     let mut kl = [[0.0f64; D]; 16];
     for (q, kq) in kl.iter_mut().enumerate().take(13) {
+        let used = tableau::DOP853_DENSE_A.iter().any(|a| a[q] != 0.0)
+            || tableau::DOP853_D.iter().any(|d| d[q] != 0.0);
+        if !used {
+            continue;
+        }
         for (j, v) in kq.iter_mut().enumerate() {
             *v = st.k[q * blk + j * stride + l];
         }
@@ -757,7 +764,44 @@ fn gather_ends(st: &Store, l: usize, method: Method, sc: &mut EventScratch) {
 /// `sc.xbest`; without an event, keeps the guard values and rates at x₁ (in `st.g`, `st.gr`)
 /// for the next step.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn locate<S: HybridSystem + ?Sized>(
+    sys: &S,
+    method: Method,
+    mode: usize,
+    st: &mut Store,
+    l: usize,
+    h: f64,
+    t0: f64,
+    t1: f64,
+    sc: &mut EventScratch,
+    stats: &mut Stats,
+) -> Option<(usize, f64)> {
+    if st.cand[l] == 0 {
+        // No guard can cross inside the step (the column kernel `mark_near`; no guards, no
+        // flags): the step's end values are the next step's start values. Inlined into the
+        // step loops, the common case.
+        store_end(st, sys.guards(mode).len(), l);
+        return None;
+    }
+    locate_flagged(sys, method, mode, st, l, h, t0, t1, sc, stats)
+}
+
+/// Keep the guard values and rates at x₁ of lane `l` (in `st.g`, `st.gr`) for the next step.
+#[inline(always)]
+fn store_end(st: &mut Store, ng: usize, l: usize) {
+    let stride = st.stride;
+    for k in 0..ng {
+        let i = k * stride + l;
+        st.g[i] = st.g1[i];
+        st.gr[i] = st.r1[i];
+    }
+}
+
+/// [`locate`] on a step with some guard flagged.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn locate_flagged<S: HybridSystem + ?Sized>(
     sys: &S,
     method: Method,
     mode: usize,
@@ -775,18 +819,7 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
         return None;
     }
     let stride = st.stride;
-    let store_end = |st: &mut Store| {
-        for k in 0..ng {
-            let i = k * stride + l;
-            st.g[i] = st.g1[i];
-            st.gr[i] = st.r1[i];
-        }
-    };
-    if st.cand[l] == 0 {
-        // No guard can cross inside the step (the column kernel `mark_near`).
-        store_end(st);
-        return None;
-    }
+    let store_end = |st: &mut Store| store_end(st, ng, l);
     stats.sampled += 1;
     // Values at θ = 0, at the interior points θ = i/5 and at θ = 1 of each flagged guard on the
     // state's cubic Hermite interpolant — for an affine guard with rates, its own cubic Hermite
