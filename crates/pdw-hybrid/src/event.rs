@@ -27,7 +27,8 @@
 //! **Confirmation and refinement.** If any sub-interval shows a crossing, the method's own dense
 //! output is built (RK4: the Hermite cubic itself; DOPRI5: Shampine's 4th-order continuous
 //! extension, free; DOP853: the 7th-order one, three extra flow evaluations), the interior
-//! samples of every guard are recomputed on it, and for each guard the first crossing
+//! samples of every flagged guard are recomputed on it (a guard the end-point test cleared
+//! keeps g(x₀) inside: it has no crossing to show), and for each guard the first crossing
 //! sub-interval is refined with the Illinois variant of regula falsi (Dowell & Jarratt 1971),
 //! with a bisection step when three iterations fail to halve the bracket, until the bracket is
 //! ≤ 4ε·max(|t₀|, |t₁|) in time (≈ 1e-15 for t ≈ 1). The *right-hand* end of the final bracket is reported: the returned state
@@ -898,14 +899,17 @@ fn locate_flagged<S: HybridSystem + ?Sized>(
     // An affine guard on the dense output is a scalar polynomial in θ: its samples and its root
     // come from that polynomial, not from states (see `refine_linear`).
     let rows = nested_rows(interp);
-    let mut all_linear = true;
+    // Only the flagged guards: a guard whose step `mark_near` cleared has no crossing to show
+    // (its interior values stay g(x₀), as in the Hermite samples above).
+    let mut states_needed = false;
     for k in 0..ng {
-        lin[k] = rows > 0 && sys.guard_is_linear(mode, k);
+        let flagged = flags & guard_bit(k) != 0;
+        lin[k] = flagged && rows > 0 && sys.guard_is_linear(mode, k);
         if lin[k] {
             let p = &mut poly[k * POLY_ROWS..(k + 1) * POLY_ROWS];
             guard_poly(sys, model, mode, k, dense.cont, zero, rows, p);
-        } else {
-            all_linear = false;
+        } else if flagged {
+            states_needed = true;
         }
     }
     // The guards on the method's own interpolant at the same points: the brackets the root
@@ -917,11 +921,11 @@ fn locate_flagged<S: HybridSystem + ?Sized>(
             gv[k * M + 1..=k * M + N_SAMPLES].copy_from_slice(&v);
         }
     }
-    if !all_linear {
+    if states_needed {
         for (i, &theta) in thetas.iter().enumerate() {
             dense.eval(theta, xs);
             for k in 0..ng {
-                if !lin[k] {
+                if !lin[k] && flags & guard_bit(k) != 0 {
                     gv[k * M + i + 1] = sys.guard(model, mode, k, xs);
                 }
             }
