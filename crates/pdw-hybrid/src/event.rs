@@ -1043,6 +1043,16 @@ mod tests {
         assert!(!may_cross(0.5, 0.4, -1.0, -1.0, 0.1));
     }
 
+    /// A seeded xorshift generator of uniform values in [0, 1) (no dependency).
+    fn xorshift(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// A nonlinear flow of any dimension for the dense-output build (no guards).
     struct Coupled(usize);
 
@@ -1080,13 +1090,7 @@ mod tests {
     /// evaluations, and the interpolated states.
     #[test]
     fn dop853_dense_output_of_fixed_dimensions_is_the_general_loops() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = xorshift(0x2545_f491_4f6c_dd1du64);
         let tab = crate::engine::tableau_of(Method::Dop853);
         for d in [2, 4, 6, 8, 10, 12] {
             let sys = Coupled(d);
@@ -1162,14 +1166,13 @@ mod tests {
         }
         fn reset(
             &self,
-            _: &mut Scratch,
+            ws: &mut Scratch,
             mode: usize,
-            _: usize,
+            k: usize,
             x: &[f64],
-            out: &mut [f64],
+            o: &mut [f64],
         ) -> usize {
-            out.copy_from_slice(x);
-            mode
+            Coupled(self.d).reset(ws, mode, k, x, o)
         }
     }
 
@@ -1179,13 +1182,7 @@ mod tests {
     /// and DOP853's eight.
     #[test]
     fn nested_polynomial_is_the_dense_output_and_its_derivative() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut uniform = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = xorshift(0x9e37_79b9_7f4a_7c15u64);
         for (interp, rows) in [(Interp::Dopri5, 5), (Interp::Dop853, 8)] {
             for _ in 0..200 {
                 let c: Vec<f64> = (0..8).map(|_| 2.0 * uniform() - 1.0).collect();
@@ -1229,13 +1226,7 @@ mod tests {
     /// in both directions.
     #[test]
     fn newton_on_the_guard_polynomial_finds_the_illinois_root() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = xorshift(0x2545_f491_4f6c_dd1du64);
         let mut roots = 0;
         for method in [Method::Dopri5, Method::Dop853] {
             let tab = crate::engine::tableau_of(method);
