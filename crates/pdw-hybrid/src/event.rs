@@ -932,6 +932,7 @@ fn locate_flagged<S: HybridSystem + ?Sized>(
         }
     }
     let t_scale = t0.abs().max(t1.abs());
+    let tol = bracket_tol(t_scale, h);
     let mut best: Option<(usize, f64)> = None;
     for (k, spec) in guards.iter().enumerate() {
         for i in 0..M - 1 {
@@ -952,7 +953,6 @@ fn locate_flagged<S: HybridSystem + ?Sized>(
             };
             let (lo, hi) = ((theta_a, ga), (theta_b, gb));
             let poly_k = &poly[k * POLY_ROWS..(k + 1) * POLY_ROWS];
-            let tol = bracket_tol(t_scale, h);
             let root = lin[k]
                 .then(|| refine_linear(sys, model, mode, k, &dense, poly_k, rows, tol, lo, hi, xr))
                 .flatten()
