@@ -630,7 +630,8 @@ fn dop853_inverse_power(err: f64) -> f64 {
 
 /// Candidate flags of rows `a..b` for the guards `specs` of their mode, from the step's end
 /// points alone: bit k of `cand[l]` set when [`event::may_cross`] holds for guard k — the
-/// guard's cubic over the step, from its end values and rates, comes near zero. A column
+/// guard's cubic over the step, from its end values and rates, comes near zero (the locator
+/// first clears the flags [`event::clears_direction`] rules out). A column
 /// kernel over lanes; the per-lane locator samples the flagged guards and locates events only
 /// where some bit is set.
 #[inline(always)]

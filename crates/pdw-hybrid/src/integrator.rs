@@ -345,9 +345,13 @@ impl Integrator {
                     &mut g1[..ng],
                     &mut r1[..ng],
                 );
+                let specs = sys.guards(mode);
                 for i in 0..ng {
-                    cand |=
-                        event::guard_bit(i) * event::may_cross(g[i], g1[i], gr[i], r1[i], h) as u8;
+                    if event::may_cross(g[i], g1[i], gr[i], r1[i], h)
+                        && !event::clears_direction(specs[i].crossing, g[i], g1[i], gr[i], r1[i], h)
+                    {
+                        cand |= event::guard_bit(i);
+                    }
                 }
             }
             ctl.stats.rhs_evals += (ns - 1) as u64;
