@@ -11,9 +11,9 @@
 //!   `Controller::Elementary`; `general` runs the integrator's general step loop instead of
 //!   its register loop (same bits); `H0` starts every stride with that step instead of the
 //!   starting-step heuristic;
-//! - `profile batch N [TOL] [dopri5|dop853] [LANES] [THREADS CHUNK]`: N strides from perturbed
-//!   copies of the fixed point through the serial lockstep engine (default 64 lanes), or in
-//!   chunks of CHUNK states on a pool of THREADS threads;
+//! - `profile batch N [TOL] [dopri5|dop853] [LANES] [THREADS CHUNK [REPEAT]]`: N strides from
+//!   perturbed copies of the fixed point through the serial lockstep engine (default 64 lanes),
+//!   or in blocks of CHUNK states on a pool of THREADS threads, REPEAT calls on the same states;
 //! - `profile fixedpoint N`: N fixed points of the simplest walker to 1e-12 from Garcia's
 //!   guess (DOP853 at 1e-14, the CLI's settings), with the cost of its parts: one stride and one
 //!   variational stride at the same tolerance;
@@ -171,7 +171,7 @@ fn main() {
             );
         }
         "batch" => {
-            let n: usize = arg(&args, 1, 8192);
+            let mut n: usize = arg(&args, 1, 8192);
             let opts = method(&args, 3, arg(&args, 2, 1e-10));
             let lanes: usize = arg(&args, 4, 64);
             let map = StrideMap::new(&sys, opts).expect("valid options");
@@ -188,6 +188,14 @@ fn main() {
                         .build()
                         .expect("thread pool");
                     let chunk: usize = arg(&args, 6, 256);
+                    // REPEAT: the same states again that many times (as the engine experiment,
+                    // which times repeated calls on 1024 states); the time is per lane-stride.
+                    let repeat: usize = arg(&args, 7, 1);
+                    for _ in 1..repeat {
+                        map.strides_par(&states, lanes, &pool, chunk, &|_| {})
+                            .expect("strides");
+                    }
+                    n *= repeat;
                     map.strides_par(&states, lanes, &pool, chunk, &|_| {})
                 }
                 None => map.strides(&states, lanes),
