@@ -309,13 +309,12 @@ impl<'a, S: Section + ?Sized> StrideMap<'a, S> {
 
     /// One stride from each section state, `lanes` strides in lockstep (serial).
     pub fn strides(&self, states: &[Vec<f64>], lanes: usize) -> Result<Vec<Stride>, LimitError> {
-        let items = self.lift_all(states)?;
+        self.check_all(states)?;
         let opts = BatchOptions {
             lanes,
             integrator: self.opts,
         };
-        let ends = run_batch(self.sys, &self.driver(), &items, &opts)?;
-        Ok(ends.into_iter().map(|e| self.to_stride(e)).collect())
+        Ok(run_batch(self.sys, &self.section_driver(), states, &opts)?)
     }
 
     /// [`strides`](Self::strides) on a rayon pool in chunks of `chunk` states; results are
@@ -328,30 +327,73 @@ impl<'a, S: Section + ?Sized> StrideMap<'a, S> {
         chunk: usize,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<Stride>, LimitError> {
-        let items = self.lift_all(states)?;
+        self.check_all(states)?;
         let opts = BatchOptions {
             lanes,
             integrator: self.opts,
         };
-        let ends = run_batch_par(
+        Ok(run_batch_par(
             self.sys,
-            &self.driver(),
-            &items,
+            &self.section_driver(),
+            states,
             &opts,
             pool,
             chunk,
             progress,
-        )?;
-        Ok(ends.into_iter().map(|e| self.to_stride(e)).collect())
+        )?)
     }
 
-    fn lift_all(&self, states: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, LimitError> {
-        states
-            .iter()
-            .map(|s| {
-                self.check_dim(s)?;
-                Ok(self.lift(s))
-            })
-            .collect()
+    /// The batched strides' driver: section states lifted in the lane, strides finished there.
+    fn section_driver(&self) -> SectionDriver<'_, 'a, S> {
+        SectionDriver {
+            map: self,
+            inner: self.driver(),
+        }
+    }
+
+    fn check_all(&self, states: &[Vec<f64>]) -> Result<(), LimitError> {
+        states.iter().try_for_each(|s| self.check_dim(s))
+    }
+}
+
+/// Lane driver of the batched stride map: an item is a section state `s`, lifted to `L(s)`
+/// in the lane when it starts (no lifted copy of the whole input), and a lane's result is the
+/// finished [`Stride`], projected by the thread that ran it. Resets and stops are those of the
+/// [`EventDriver`], so a batched stride has the bits of a scalar one.
+struct SectionDriver<'m, 'a, S: Section + ?Sized> {
+    map: &'m StrideMap<'a, S>,
+    inner: EventDriver,
+}
+
+impl<S: Section + ?Sized> LaneDriver<S> for SectionDriver<'_, '_, S> {
+    type Item = Vec<f64>;
+    type Output = Stride;
+    type Lane = EventLane;
+
+    fn start(&self, sys: &S, item: &Vec<f64>, lane: &mut EventLane, x: &mut [f64]) -> (usize, f64) {
+        // As `StrideMap::lift`: L(s) written over zeros.
+        x.fill(0.0);
+        sys.lift(item, x);
+        lane.buf.resize(x.len(), 0.0);
+        (self.inner.start_mode, self.inner.t_max)
+    }
+
+    fn on_stop(
+        &self,
+        sys: &S,
+        ws: &mut Scratch,
+        item: &Vec<f64>,
+        lane: &mut EventLane,
+        stop: StopReason,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+    ) -> Control {
+        <EventDriver as LaneDriver<S>>::on_stop(&self.inner, sys, ws, item, lane, stop, mode, t, x)
+    }
+
+    fn finish(&self, sys: &S, item: &Vec<f64>, lane: EventLane, t: f64, x: &[f64]) -> Stride {
+        let end = <EventDriver as LaneDriver<S>>::finish(&self.inner, sys, item, lane, t, x);
+        self.map.to_stride(end)
     }
 }

@@ -171,6 +171,55 @@ fn batched_strides_equal_scalar_strides_bit_for_bit() {
     }
 }
 
+/// The pool's batches lift each section state in the lane and finish its stride there: every
+/// field of every stride (states before and after the heel strike, step length, falls) equals
+/// the scalar stride's, for 2 threads, 3 lanes and blocks of 2 states; a state of the wrong
+/// dimension is an error, not a panic.
+#[test]
+fn strides_on_a_pool_equal_scalar_strides_field_for_field() {
+    let m = walker(0.009);
+    let sl = |x: &[f64]| m.step_length(x);
+    let map = StrideMap::new(&m, Options::dop853(1e-10))
+        .unwrap()
+        .with_step_length(&sl);
+    // Walking states and falling ones (θ̇ too small: backward; too large: forward).
+    let mut states: Vec<Vec<f64>> = (0..9)
+        .map(|i| vec![0.19 + 0.002 * i as f64, -0.2 + 0.001 * i as f64])
+        .collect();
+    states.push(vec![0.2, -0.05]);
+    states.push(vec![0.2, -0.6]);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let par = map.strides_par(&states, 3, &pool, 2, &|_| {}).unwrap();
+    assert_eq!(par.len(), states.len());
+    let mut falls = 0;
+    for (s, b) in states.iter().zip(&par) {
+        let sc = map.stride(s).unwrap();
+        assert_eq!(&sc, b, "from {s:?}");
+        assert_eq!(sc.outcome.is_ok(), sc.step_length.is_some());
+        falls += usize::from(!sc.outcome.is_ok());
+    }
+    assert!(falls >= 2 && falls < states.len(), "{falls} falls");
+    let mut bad = states.clone();
+    bad[4] = vec![0.2];
+    assert!(matches!(
+        map.strides_par(&bad, 3, &pool, 2, &|_| {}),
+        Err(LimitError::SectionDim {
+            expected: 2,
+            got: 1
+        })
+    ));
+    assert!(matches!(
+        map.strides(&bad, 3),
+        Err(LimitError::SectionDim {
+            expected: 2,
+            got: 1
+        })
+    ));
+}
+
 #[test]
 fn a_walker_without_energy_falls_backward_and_newton_reports_it() {
     let m = walker(0.009);
