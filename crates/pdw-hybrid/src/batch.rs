@@ -350,6 +350,9 @@ struct Batch<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> {
     /// The run's shared queue and the block of it this batch has claimed.
     queue: &'a Queue,
     claimed: std::ops::Range<usize>,
+    /// The queue returned an empty block: no more claims (each would be an atomic operation on
+    /// the queue's shared cache line, once per lane left idle at the end of the run).
+    drained: bool,
     /// Finished items, tagged with their index.
     outputs: Vec<(usize, D::Output)>,
     /// Items finished since the last progress report.
@@ -393,6 +396,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             dirty: true,
             queue,
             claimed: 0..0,
+            drained: false,
             outputs: Vec::new(),
             unreported: 0,
             progress,
@@ -539,8 +543,9 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
     /// Put the next item of the queue into lane `l` and start its first segment; `Ok(None)` if
     /// the queue is empty (the lane becomes idle) or the segment started.
     fn assign(&mut self, l: usize) -> Result<Option<StopReason>, HybridError> {
-        if self.claimed.is_empty() {
+        if self.claimed.is_empty() && !self.drained {
             self.claimed = self.queue.claim();
+            self.drained = self.claimed.is_empty();
             self.outputs.reserve(self.claimed.len());
         }
         let Some(i) = self.claimed.next() else {
