@@ -20,7 +20,9 @@
 //! - `profile compass-stride N [TOL] [METHOD]`, `profile compass-batch N [TOL] [METHOD] [LANES]`:
 //!   the same for the compass gait (Goswami preset, 3°) from its fixed point.
 //!
-//! Prints the work done, so that an instruction count can be turned into a per-stride cost.
+//! Prints the work done, so that an instruction count can be turned into a per-stride cost, and
+//! for a basin a checksum of every cell's outcome, stride count and final-state bits (two builds
+//! with equal checksums computed the same basin bit for bit).
 
 use std::time::Instant;
 
@@ -247,6 +249,20 @@ fn main() {
                 strides as f64 / secs,
                 res.iter().filter(|c| c.outcome() == Outcome::Gait).count()
             );
+            // FNV-1a over every cell's outcome, stride count and final-state bits: equal
+            // checksums, the same basin bit for bit.
+            let mut hash = 0xcbf2_9ce4_8422_2325u64;
+            let mut eat = |v: u64| {
+                for b in v.to_le_bytes() {
+                    hash = (hash ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+                }
+            };
+            for c in &res {
+                eat(u64::from(c.outcome));
+                eat(u64::from(c.strides));
+                c.final_state.iter().for_each(|v| eat(v.to_bits()));
+            }
+            println!("checksum {hash:016x}");
         }
     }
 }

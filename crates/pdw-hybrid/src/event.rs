@@ -6,7 +6,10 @@
 //! numbers alone a column kernel decides whether the guard can show a crossing inside the step
 //! ([`may_cross`]: the guard's cubic Hermite over the step, bounded by the convex hull of its
 //! Bernstein control points, stays away from zero). Most steps of most guards are cleared
-//! there. For a flagged guard the interior is sampled at [`N_SAMPLES`] = 4 points `θ = i/5` of
+//! there. A flagged step is then cleared after all when its cubic rules out a crossing in the
+//! guard's direction (`clears_direction`: it starts on the guard after a reset and moves
+//! away, or crosses the other way), so that a stride samples only the step of its heel strike.
+//! For a flagged guard the interior is sampled at [`N_SAMPLES`] = 4 points `θ = i/5` of
 //! the step's cubic Hermite interpolant built from `(x₀, f(x₀), x₁, f(x₁))` — the guard on the
 //! interpolated state, or, for a guard the model declares affine
 //! ([`HybridSystem::guard_is_linear`]), the guard's own cubic from its end values and rates,
