@@ -1171,69 +1171,26 @@ mod tests {
     /// `Either`.
     #[test]
     fn directional_clearing_cases() {
-        // Rising guard at 0 after a reset, moving up (away from a rising crossing).
+        use Crossing::{Either, Falling, Rising};
+        // (g₀, g₁, ġ₀, ġ₁, h)
+        let clears = |dir, [g0, g1, r0, r1, h]: [f64; 5]| clears_direction(dir, g0, g1, r0, r1, h);
+        let up_from_zero = [0.0, 0.3, 1.0, 1.0, 0.3];
+        let falling = [0.1, -0.1, -0.7, -0.7, 0.3];
+        // A rising guard at 0 after a reset, moving up (away from a rising crossing), which the
+        // hull test cannot clear; and moving down: no sample is ≥ 0 after the start.
         assert!(may_cross(0.0, 0.3, 1.0, 1.0, 0.3));
-        assert!(clears_direction(Crossing::Rising, 0.0, 0.3, 1.0, 1.0, 0.3));
-        // ... and moving down: no sample is ≥ 0 after the start.
-        assert!(clears_direction(
-            Crossing::Rising,
-            0.0,
-            -0.3,
-            -1.0,
-            -1.0,
-            0.3
-        ));
-        // A falling crossing of a rising guard.
-        assert!(clears_direction(
-            Crossing::Rising,
-            0.1,
-            -0.1,
-            -0.7,
-            -0.7,
-            0.3
-        ));
-        assert!(!clears_direction(
-            Crossing::Falling,
-            0.1,
-            -0.1,
-            -0.7,
-            -0.7,
-            0.3
-        ));
-        // A rising crossing is kept; so is a dip below zero and back for a falling guard.
-        assert!(!clears_direction(
-            Crossing::Rising,
-            -0.1,
-            0.1,
-            0.7,
-            0.7,
-            0.3
-        ));
-        assert!(!clears_direction(
-            Crossing::Falling,
-            0.01,
-            0.01,
-            -1.0,
-            1.0,
-            0.1
-        ));
-        assert!(!clears_direction(Crossing::Either, 0.0, 0.3, 1.0, 1.0, 0.3));
-        assert!(!clears_direction(
-            Crossing::Rising,
-            0.0,
-            0.3,
-            f64::NAN,
-            1.0,
-            0.3
-        ));
-        assert!(!clears_direction(
-            Crossing::Rising,
-            0.0,
-            0.3,
-            f64::INFINITY,
-            1.0,
-            0.3
-        ));
+        assert!(clears(Rising, up_from_zero));
+        assert!(clears(Rising, [0.0, -0.3, -1.0, -1.0, 0.3]));
+        // A falling crossing clears a rising guard, not a falling one.
+        assert!(clears(Rising, falling));
+        assert!(!clears(Falling, falling));
+        // Kept: a rising crossing; a dip below zero and back for a falling guard; `Either`;
+        // a NaN or unknown rate.
+        assert!(!clears(Rising, [-0.1, 0.1, 0.7, 0.7, 0.3]));
+        assert!(!clears(Falling, [0.01, 0.01, -1.0, 1.0, 0.1]));
+        assert!(!clears(Either, up_from_zero));
+        assert!(!clears(Rising, [0.0, 0.3, f64::NAN, 1.0, 0.3]));
+        assert!(!clears(Rising, [0.0, 0.3, f64::INFINITY, 1.0, 0.3]));
     }
 
     /// Steps the test cannot clear: an end on zero (a reset placed the state on the guard),
