@@ -14,6 +14,9 @@
 //! - `profile batch N [TOL] [dopri5|dop853] [LANES] [THREADS CHUNK [REPEAT]]`: N strides from
 //!   perturbed copies of the fixed point through the serial lockstep engine (default 64 lanes),
 //!   or in blocks of CHUNK states on a pool of THREADS threads, REPEAT calls on the same states;
+//! - `profile rhs N [SPREAD]`: N calls of the simplest walker's batched right-hand side on 256
+//!   lanes around the fixed point (SPREAD: the half-width of θ's spread; 0.5 puts some angles
+//!   beyond the trigonometric shortcut);
 //! - `profile fixedpoint N`: N fixed points of the simplest walker to 1e-12 from Garcia's
 //!   guess (DOP853 at 1e-14, the CLI's settings), with the cost of its parts: one stride and one
 //!   variational stride at the same tolerance;
@@ -170,6 +173,35 @@ fn main() {
                 "{n} compass strides ({what}, {:?}): {:.3} µs/stride",
                 opts.method,
                 t0.elapsed().as_secs_f64() * 1e6 / n as f64
+            );
+        }
+        "rhs" => {
+            // `profile rhs N [SPREAD]`: N calls of the batched right-hand side on 256 lanes,
+            // states θ = θ* + SPREAD·u, φ = 2θ with u uniform in [−1, 1] (SPREAD 0: all near
+            // the gait; larger: some angles beyond the trigonometric shortcut).
+            use pdw_hybrid::HybridSystem;
+            let n: usize = arg(&args, 1, 200_000);
+            let spread: f64 = arg(&args, 2, 0.0);
+            let lanes = 256;
+            let mut x = faer::Mat::<f64>::zeros(lanes, 4);
+            for l in 0..lanes {
+                let u = 2.0 * (l as f64 * 0.618_034).fract() - 1.0;
+                let th = fp[0] + spread * u;
+                x[(l, 0)] = th;
+                x[(l, 1)] = fp[1];
+                x[(l, 2)] = 2.0 * th;
+                x[(l, 3)] = 0.1 * u;
+            }
+            let mut k = faer::Mat::<f64>::zeros(lanes, 4);
+            let mut ws = pdw_hybrid::Scratch::default();
+            let t0 = Instant::now();
+            for _ in 0..n {
+                sys.flow_batch(&mut ws, 0, x.as_ref(), k.as_mut());
+                x[(0, 1)] += k[(0, 0)] * 1e-300;
+            }
+            println!(
+                "{n} calls of flow_batch on {lanes} lanes (spread {spread}): {:.3} ns per lane",
+                t0.elapsed().as_secs_f64() * 1e9 / (n * lanes) as f64
             );
         }
         "batch" => {

@@ -24,7 +24,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 pub mod powr;
 pub mod trig;
 pub use powr::powr;
-pub use trig::{sincos, sincos_lanes, sincos_slice};
+pub use trig::{sin_small, sincos, sincos_lanes, sincos_reduced_range, sincos_slice, sincos_small};
 
 /// The numeric contract every path keeps (recorded in output files; `merge` compares it).
 pub const NUMERICS: &str = "ieee754-binary64, no fma contraction, sequential lane order";

@@ -60,10 +60,12 @@
 //! - a stride longer than `max_stride_time` ([`Section::max_stride_time`]).
 //!
 //! # Vectorised right-hand side
-//! `flow_batch` evaluates the trigonometric functions with `pdw_simd::sincos_lanes` eight values
-//! (four lanes, two angles) at a time, compiled for the run-time SIMD path, and the scalar
-//! [`HybridSystem::flow`] runs the same element-wise routine on its two angles, so the scalar and
-//! batched right-hand sides are bit-identical.
+//! `flow_batch` runs column loops over lanes, compiled for the run-time SIMD path, in blocks of
+//! 64 lanes: a block whose angles `θ − γ` and `φ` are all below `pdw_simd::trig::SMALL` skips
+//! the trigonometric reduction (the identity there) and `cos φ`, any other block takes the full
+//! branch-free routine. Both give the bits of `pdw_simd::sincos`, which the scalar
+//! [`HybridSystem::flow`] runs on its two angles, so the scalar and batched right-hand sides are
+//! bit-identical.
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
@@ -71,7 +73,6 @@ use crate::validity::{ConstraintForces, StepFlags};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::FRAC_PI_2;
-use wide::f64x4;
 
 /// Guard index of the heel strike.
 pub const HEEL_STRIKE: usize = 0;
@@ -158,31 +159,76 @@ pub struct Simplest {
     max_stride_time: f64,
 }
 
-/// Lane-wise right-hand side on four lanes: returns `(θ̇, θ̈, φ̇, φ̈)`. Every operation is
-/// lane-wise, so a lane's result depends only on its own inputs.
+/// `φ̈ = sin(θ − γ) + (θ̇² − cos(θ − γ))·sin φ` (Garcia 1998 eq. 4, swing leg) from
+/// `s = sin(θ − γ)`, `c = cos(θ − γ)`, `sp = sin φ`: one expression for the scalar and the
+/// batched right-hand side, so both round alike.
 #[inline(always)]
-fn rhs4(gamma: f64, th: f64x4, thd: f64x4, ph: f64x4, phd: f64x4) -> [f64x4; 4] {
-    let a = (th - f64x4::splat(gamma)).to_array();
-    let p = ph.to_array();
-    let (sv, cv) = pdw_simd::sincos_lanes([a[0], a[1], a[2], a[3], p[0], p[1], p[2], p[3]]);
-    let s = f64x4::from([sv[0], sv[1], sv[2], sv[3]]);
-    let c = f64x4::from([cv[0], cv[1], cv[2], cv[3]]);
-    let sp = f64x4::from([sv[4], sv[5], sv[6], sv[7]]);
-    let phdd = s + (thd * thd - c) * sp;
-    [thd, s, phd, phdd]
+fn phi_ddot(s: f64, c: f64, sp: f64, thd: f64) -> f64 {
+    s + (thd * thd - c) * sp
 }
 
-/// Scalar evaluation with the operations of [`rhs4`] on one state: `θ − γ` and `φ` in one
-/// two-element `sincos_lanes` (element-wise, so every value has the bits `rhs4` gives that
-/// state's lane).
+/// The right-hand side `(θ̇, θ̈, φ̇, φ̈)` of one state (Garcia 1998 eqs. 3–4), with
+/// `[cos(θ − γ), sin φ, cos φ]` for the Jacobian: `θ − γ` and `φ` in one two-element
+/// `sincos_lanes` (element-wise, so every value has the bits `flow_batch` gives that state's
+/// lane).
 #[inline(always)]
 fn rhs1(gamma: f64, x: &[f64]) -> ([f64; 4], [f64; 3]) {
     let (th, thd, ph, phd) = (x[0], x[1], x[2], x[3]);
     let a = th - gamma;
     let (sv, cv) = pdw_simd::sincos_lanes([a, ph]);
     let (s, c, sp, cp) = (sv[0], cv[0], sv[1], cv[1]);
-    let phdd = s + (thd * thd - c) * sp;
+    let phdd = phi_ddot(s, c, sp, thd);
     ([thd, s, phd, phdd], [c, sp, cp])
+}
+
+/// Lanes per trigonometric choice of [`rhs_block`].
+const RHS_BLOCK: usize = 64;
+
+/// `θ̈` and `φ̈` of a block of lanes (columns θ, θ̇, φ in, θ̈ and φ̈ out), every value with the
+/// bits of [`rhs1`] on that lane's state. When every angle of the block is below
+/// `pdw_simd::trig::SMALL` (walkers near their gait) the trigonometric reduction is the
+/// identity and is skipped, and cos φ, not needed, is not evaluated: under half the
+/// operations. Otherwise the full routine runs on all lanes of the block.
+#[inline(always)]
+fn rhs_block(gamma: f64, th: &[f64], thd: &[f64], ph: &[f64], o1: &mut [f64], o3: &mut [f64]) {
+    use pdw_simd::trig::{REDUCED_RANGE, SMALL};
+    let n = th.len();
+    let (thd, ph, o1, o3) = (&thd[..n], &ph[..n], &mut o1[..n], &mut o3[..n]);
+    let mut small = true;
+    for l in 0..n {
+        small &= ((th[l] - gamma).abs() < SMALL) & (ph[l].abs() < SMALL);
+    }
+    if small {
+        for l in 0..n {
+            let (s, c) = pdw_simd::sincos_small(th[l] - gamma);
+            let sp = pdw_simd::sin_small(ph[l]);
+            o1[l] = s;
+            o3[l] = phi_ddot(s, c, sp, thd[l]);
+        }
+        return;
+    }
+    let mut big = false;
+    for l in 0..n {
+        let a = th[l] - gamma;
+        let (s, c) = pdw_simd::sincos_reduced_range(a);
+        let sp = pdw_simd::sincos_reduced_range(ph[l]).0;
+        big |= (a.abs() > REDUCED_RANGE) | (ph[l].abs() > REDUCED_RANGE);
+        o1[l] = s;
+        o3[l] = phi_ddot(s, c, sp, thd[l]);
+    }
+    if big {
+        // Angles beyond the reduced range (a state far off any walking motion): those lanes
+        // again through `sincos`, which takes libm's values there.
+        for l in 0..n {
+            let a = th[l] - gamma;
+            if a.abs() > REDUCED_RANGE || ph[l].abs() > REDUCED_RANGE {
+                let (s, c) = pdw_simd::sincos(a);
+                let sp = pdw_simd::sincos(ph[l]).0;
+                o1[l] = s;
+                o3[l] = phi_ddot(s, c, sp, thd[l]);
+            }
+        }
+    }
 }
 
 /// The guards of [`HybridSystem::guard`] at `(θ, θ̇, φ)` and their rates from
@@ -377,50 +423,35 @@ impl HybridSystem for Simplest {
             d3.as_slice_mut(),
         ];
         let [o0, o1, o2, o3] = out;
-        let load = |c: &[f64], l: usize, n: usize| {
-            let mut a = [c[l + n - 1]; 4];
-            a[..n].copy_from_slice(&c[l..l + n]);
-            f64x4::from(a)
-        };
-        let load4 = |c: &[f64], l: usize| {
-            let a: [f64; 4] = c[l..l + 4].try_into().expect("four lanes");
-            f64x4::from(a)
-        };
-        // Compiled per instruction set (pdw-simd); same bits on every path. Full groups of four
-        // lanes move as fixed-size arrays; the last group (fewer lanes) repeats its last lane.
+        let [th, thd, ph, phd] = cols.map(|c| &c[..lanes]);
+        let (o0, o1, o2, o3) = (
+            &mut o0[..lanes],
+            &mut o1[..lanes],
+            &mut o2[..lanes],
+            &mut o3[..lanes],
+        );
+        let gamma = self.gamma;
+        // Column loops over lanes, compiled per instruction set (pdw-simd) and vectorised at
+        // its full width; every value has the bits of `rhs1` on that lane's state. When every
+        // angle of the call is below SMALL (walkers near their gait) the trigonometric
+        // reduction is the identity and is skipped, and cos φ, not needed, is not evaluated:
+        // under half the operations. The choice is one branch per call. (Measured and not
+        // kept: a choice per group of four lanes, or per lane with the large lanes flagged and
+        // recomputed, mispredicts or re-scans wherever walking and falling lanes alternate,
+        // as in a basin, and gained nothing there; a choice per block of 32 lanes did not
+        // vectorise.)
         pdw_simd::dispatch(
             #[inline(always)]
             || {
-                let mut l = 0;
-                while l + 4 <= lanes {
-                    let f = rhs4(
-                        self.gamma,
-                        load4(cols[0], l),
-                        load4(cols[1], l),
-                        load4(cols[2], l),
-                        load4(cols[3], l),
-                    );
-                    let f = f.map(|v| v.to_array());
-                    o0[l..l + 4].copy_from_slice(&f[0]);
-                    o1[l..l + 4].copy_from_slice(&f[1]);
-                    o2[l..l + 4].copy_from_slice(&f[2]);
-                    o3[l..l + 4].copy_from_slice(&f[3]);
-                    l += 4;
-                }
-                if l < lanes {
-                    let n = lanes - l;
-                    let f = rhs4(
-                        self.gamma,
-                        load(cols[0], l, n),
-                        load(cols[1], l, n),
-                        load(cols[2], l, n),
-                        load(cols[3], l, n),
-                    );
-                    let f = f.map(|v| v.to_array());
-                    o0[l..].copy_from_slice(&f[0][..n]);
-                    o1[l..].copy_from_slice(&f[1][..n]);
-                    o2[l..].copy_from_slice(&f[2][..n]);
-                    o3[l..].copy_from_slice(&f[3][..n]);
+                o0.copy_from_slice(thd);
+                o2.copy_from_slice(phd);
+                for (((th, thd), ph), (o1, o3)) in th
+                    .chunks(RHS_BLOCK)
+                    .zip(thd.chunks(RHS_BLOCK))
+                    .zip(ph.chunks(RHS_BLOCK))
+                    .zip(o1.chunks_mut(RHS_BLOCK).zip(o3.chunks_mut(RHS_BLOCK)))
+                {
+                    rhs_block(gamma, th, thd, ph, o1, o3);
                 }
             },
         );
