@@ -163,15 +163,27 @@ fn poison(v: f64) -> f64 {
 #[inline(always)]
 fn weighted_sum(n: usize, k: &[f64], blk: usize, off: usize, w: &[f64], acc: &mut [f64]) {
     let acc = &mut acc[..n];
-    acc.fill(0.0);
+    // The first nonzero term is written as `0 + w·k` (the sum's first addition, same bits),
+    // without first clearing the column and reading it back.
+    let mut first = true;
     for (q, &wq) in w.iter().enumerate() {
         if wq == 0.0 {
             continue;
         }
         let kq = &k[q * blk + off..q * blk + off + n];
-        for (a, &kv) in acc.iter_mut().zip(kq) {
-            *a += wq * kv;
+        if first {
+            for (a, &kv) in acc.iter_mut().zip(kq) {
+                *a = 0.0 + wq * kv;
+            }
+            first = false;
+        } else {
+            for (a, &kv) in acc.iter_mut().zip(kq) {
+                *a += wq * kv;
+            }
         }
+    }
+    if first {
+        acc.fill(0.0);
     }
 }
 
