@@ -432,14 +432,12 @@ impl HybridSystem for Simplest {
         );
         let gamma = self.gamma;
         // Column loops over lanes, compiled per instruction set (pdw-simd) and vectorised at
-        // its full width; every value has the bits of `rhs1` on that lane's state. When every
-        // angle of the call is below SMALL (walkers near their gait) the trigonometric
-        // reduction is the identity and is skipped, and cos φ, not needed, is not evaluated:
-        // under half the operations. The choice is one branch per call. (Measured and not
-        // kept: a choice per group of four lanes, or per lane with the large lanes flagged and
-        // recomputed, mispredicts or re-scans wherever walking and falling lanes alternate,
-        // as in a basin, and gained nothing there; a choice per block of 32 lanes did not
-        // vectorise.)
+        // its full width, in blocks of RHS_BLOCK lanes with one trigonometric choice each
+        // (`rhs_block`); every value has the bits of `rhs1` on that lane's state. (Measured
+        // and not kept: a choice per group of four lanes, or per lane with the large lanes
+        // flagged and recomputed, mispredicts or re-scans wherever walking and falling lanes
+        // alternate, as in a basin, and gained nothing there; one choice per call of 256
+        // lanes rarely finds a basin's call free of falling lanes.)
         pdw_simd::dispatch(
             #[inline(always)]
             || {
