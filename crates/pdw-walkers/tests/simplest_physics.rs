@@ -253,7 +253,7 @@ fn batched_flow_is_bit_identical_to_scalar_flow() {
 
 #[test]
 fn simd_trigonometry_agrees_with_libm() {
-    // wide's sin/cos vs libm through the vector field: |Δθ̈| within a few ulp.
+    // pdw-simd's sin/cos vs libm through the vector field: |Δθ̈| within a few ulp.
     let mut rng = ChaCha8Rng::seed_from_u64(13);
     let m = model(0.0);
     for _ in 0..1000 {
