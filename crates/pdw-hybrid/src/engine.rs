@@ -158,32 +158,110 @@ fn poison(v: f64) -> f64 {
 // Column kernels over lanes 0..n. Loops run lanes innermost over contiguous column slices.
 // ---------------------------------------------------------------------------------------------
 
-/// `acc = 0 + Σ_q w_q k_q` over the nonzero weights, in increasing q, for column `off` of every
-/// stage block, lanes `0..n`.
+/// Most terms one pass of [`sum_pass`] adds.
+const PASS: usize = 4;
+
+/// One pass over lanes `0..n` adding `T` terms in order to a running sum:
+/// `s = (((s₀ + w₁k₁) + w₂k₂) + …)`, with `s₀ = 0` when `FIRST` (the sum's first addition,
+/// `0 + w·k`) and `acc[l]` otherwise; the result goes to `acc`, or when `LAST` to
+/// `out = x + h ⊙ s`. Several terms per pass read and write the running sum once instead of
+/// once per term; each lane sees the same operations in the same order either way.
 #[inline(always)]
-fn weighted_sum(n: usize, k: &[f64], blk: usize, off: usize, w: &[f64], acc: &mut [f64]) {
+#[allow(clippy::too_many_arguments)]
+fn sum_pass<const T: usize, const FIRST: bool, const LAST: bool>(
+    n: usize,
+    ks: [&[f64]; T],
+    ws: [f64; T],
+    acc: &mut [f64],
+    x: &[f64],
+    h: &[f64],
+    out: &mut [f64],
+) {
+    let ks: [&[f64]; T] = ks.map(|k| &k[..n]);
     let acc = &mut acc[..n];
-    // The first nonzero term is written as `0 + w·k` (the sum's first addition, same bits),
-    // without first clearing the column and reading it back.
-    let mut first = true;
-    for (q, &wq) in w.iter().enumerate() {
-        if wq == 0.0 {
-            continue;
+    if LAST {
+        let (x, h, out) = (&x[..n], &h[..n], &mut out[..n]);
+        for l in 0..n {
+            let mut s = if FIRST { 0.0 } else { acc[l] };
+            for t in 0..T {
+                s += ws[t] * ks[t][l];
+            }
+            out[l] = x[l] + h[l] * s;
         }
-        let kq = &k[q * blk + off..q * blk + off + n];
-        if first {
-            for (a, &kv) in acc.iter_mut().zip(kq) {
-                *a = 0.0 + wq * kv;
+    } else {
+        for l in 0..n {
+            let mut s = if FIRST { 0.0 } else { acc[l] };
+            for t in 0..T {
+                s += ws[t] * ks[t][l];
             }
-            first = false;
-        } else {
-            for (a, &kv) in acc.iter_mut().zip(kq) {
-                *a += wq * kv;
-            }
+            acc[l] = s;
         }
     }
-    if first {
-        acc.fill(0.0);
+}
+
+/// `acc = 0 + Σ_q w_q k_q` over the nonzero weights, in increasing q, for column `off` of every
+/// stage block, lanes `0..n`; with `tail = Some((x, h, out))` instead `out = x + h ⊙ acc`
+/// (`acc` then holds a partial sum). The terms go through [`sum_pass`] up to [`PASS`] at a
+/// time: the same additions in the same order as one term per pass, so the same bits.
+#[inline(always)]
+fn weighted_sum(
+    n: usize,
+    k: &[f64],
+    blk: usize,
+    off: usize,
+    w: &[f64],
+    acc: &mut [f64],
+    tail: Option<(&[f64], &[f64], &mut [f64])>,
+) {
+    let col = |q: usize| &k[q * blk + off..q * blk + off + n];
+    // Rows have at most 16 weights (DOP853's dense rows; its stage rows 12).
+    debug_assert!(w.len() <= 16, "a row of {} weights", w.len());
+    let mut terms = [(0usize, 0.0f64); 16];
+    let mut m = 0;
+    for (q, &wq) in w.iter().enumerate() {
+        if wq != 0.0 {
+            terms[m] = (q, wq);
+            m += 1;
+        }
+    }
+    let (x, h, out, last) = match tail {
+        Some((x, h, out)) => (x, h, out, true),
+        None => (&[][..], &[][..], &mut [][..], false),
+    };
+    if m == 0 {
+        acc[..n].fill(0.0);
+        if last {
+            for l in 0..n {
+                out[l] = x[l] + h[l] * acc[l];
+            }
+        }
+        return;
+    }
+    let mut i = 0;
+    while i < m {
+        let t = (m - i).min(PASS);
+        let first = i == 0;
+        let fin = last && i + t == m;
+        let g = &terms[i..i + t];
+        macro_rules! go {
+            ($T:literal) => {{
+                let ks: [&[f64]; $T] = std::array::from_fn(|j| col(g[j].0));
+                let ws: [f64; $T] = std::array::from_fn(|j| g[j].1);
+                match (first, fin) {
+                    (true, true) => sum_pass::<$T, true, true>(n, ks, ws, acc, x, h, out),
+                    (true, false) => sum_pass::<$T, true, false>(n, ks, ws, acc, x, h, out),
+                    (false, true) => sum_pass::<$T, false, true>(n, ks, ws, acc, x, h, out),
+                    (false, false) => sum_pass::<$T, false, false>(n, ks, ws, acc, x, h, out),
+                }
+            }};
+        }
+        match t {
+            1 => go!(1),
+            2 => go!(2),
+            3 => go!(3),
+            _ => go!(4),
+        }
+        i += t;
     }
 }
 
@@ -376,15 +454,9 @@ pub(crate) fn stage_input(st: &mut Store, tab: &Tableau, n: usize, q: usize) {
     }
     for j in 0..st.dim {
         let off = j * stride;
-        weighted_sum(n, &st.k, blk, off, a, &mut st.s1);
-        let x = &st.x[off..off + n];
         let out = if last { &mut st.xn } else { &mut st.y };
-        let out = &mut out[off..off + n];
-        let h = &st.h[..n];
-        let acc = &st.s1[..n];
-        for l in 0..n {
-            out[l] = x[l] + h[l] * acc[l];
-        }
+        let tail = (&st.x[off..off + n], &st.h[..n], &mut out[off..off + n]);
+        weighted_sum(n, &st.k, blk, off, a, &mut st.s1, Some(tail));
     }
 }
 
@@ -432,10 +504,12 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
         }
         match method {
             Method::Rk4 { .. } => {}
-            Method::Dopri5 => weighted_sum(n, &st.k, blk, off, &tableau::DOPRI5_E, &mut st.s1),
+            Method::Dopri5 => {
+                weighted_sum(n, &st.k, blk, off, &tableau::DOPRI5_E, &mut st.s1, None)
+            }
             Method::Dop853 => {
-                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_ER, &mut st.s1);
-                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_B, &mut st.s2);
+                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_ER, &mut st.s1, None);
+                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_B, &mut st.s2, None);
             }
         }
         let x0 = &st.x[off..off + n];
