@@ -265,6 +265,92 @@ fn weighted_sum(
     }
 }
 
+/// [`sum_pass`] for two rows over the same `T` stage columns: both running sums in one pass,
+/// each column read once.
+#[inline(always)]
+fn sum_pass2<const T: usize, const FIRST: bool>(
+    n: usize,
+    ks: [&[f64]; T],
+    wa: [f64; T],
+    wb: [f64; T],
+    acc_a: &mut [f64],
+    acc_b: &mut [f64],
+) {
+    let ks: [&[f64]; T] = ks.map(|k| &k[..n]);
+    let (acc_a, acc_b) = (&mut acc_a[..n], &mut acc_b[..n]);
+    for l in 0..n {
+        let mut a = if FIRST { 0.0 } else { acc_a[l] };
+        let mut b = if FIRST { 0.0 } else { acc_b[l] };
+        for t in 0..T {
+            a += wa[t] * ks[t][l];
+            b += wb[t] * ks[t][l];
+        }
+        acc_a[l] = a;
+        acc_b[l] = b;
+    }
+}
+
+/// Two [`weighted_sum`]s, `acc_a = 0 + Σ_q wa_q k_q` and `acc_b = 0 + Σ_q wb_q k_q`: when the
+/// two rows have their nonzero weights at the same stages (DOP853's error rows), both sums run
+/// in the same passes ([`sum_pass2`]); otherwise one after the other. Same bits either way.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn weighted_sum2(
+    n: usize,
+    k: &[f64],
+    blk: usize,
+    off: usize,
+    wa: &[f64],
+    wb: &[f64],
+    acc_a: &mut [f64],
+    acc_b: &mut [f64],
+) {
+    let same = wa.len() == wb.len() && wa.iter().zip(wb).all(|(a, b)| (*a == 0.0) == (*b == 0.0));
+    if !same || wa.len() > 16 {
+        weighted_sum(n, k, blk, off, wa, acc_a, None);
+        weighted_sum(n, k, blk, off, wb, acc_b, None);
+        return;
+    }
+    let col = |q: usize| &k[q * blk + off..q * blk + off + n];
+    let mut terms = [(0usize, 0.0f64, 0.0f64); 16];
+    let mut m = 0;
+    for (q, (&a, &b)) in wa.iter().zip(wb).enumerate() {
+        if a != 0.0 {
+            terms[m] = (q, a, b);
+            m += 1;
+        }
+    }
+    if m == 0 {
+        acc_a[..n].fill(0.0);
+        acc_b[..n].fill(0.0);
+        return;
+    }
+    let mut i = 0;
+    while i < m {
+        let t = (m - i).min(PASS);
+        let g = &terms[i..i + t];
+        macro_rules! go {
+            ($T:literal) => {{
+                let ks: [&[f64]; $T] = std::array::from_fn(|j| col(g[j].0));
+                let wa: [f64; $T] = std::array::from_fn(|j| g[j].1);
+                let wb: [f64; $T] = std::array::from_fn(|j| g[j].2);
+                if i == 0 {
+                    sum_pass2::<$T, true>(n, ks, wa, wb, acc_a, acc_b)
+                } else {
+                    sum_pass2::<$T, false>(n, ks, wa, wb, acc_a, acc_b)
+                }
+            }};
+        }
+        match t {
+            1 => go!(1),
+            2 => go!(2),
+            3 => go!(3),
+            _ => go!(4),
+        }
+        i += t;
+    }
+}
+
 /// One lane of [`weighted_sum`]: the same terms, skipped and ordered identically.
 #[inline(always)]
 fn lane_sum(k: &[f64], blk: usize, off: usize, w: &[f64]) -> f64 {
@@ -508,8 +594,16 @@ pub(crate) fn error_norm(st: &mut Store, method: Method, tab: &Tableau, opts: &O
                 weighted_sum(n, &st.k, blk, off, &tableau::DOPRI5_E, &mut st.s1, None)
             }
             Method::Dop853 => {
-                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_ER, &mut st.s1, None);
-                weighted_sum(n, &st.k, blk, off, &tableau::DOP853_B, &mut st.s2, None);
+                weighted_sum2(
+                    n,
+                    &st.k,
+                    blk,
+                    off,
+                    &tableau::DOP853_ER,
+                    &tableau::DOP853_B,
+                    &mut st.s1,
+                    &mut st.s2,
+                );
             }
         }
         let x0 = &st.x[off..off + n];
