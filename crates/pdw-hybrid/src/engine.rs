@@ -161,6 +161,26 @@ fn poison(v: f64) -> f64 {
 /// Most terms one pass of [`sum_pass`] adds.
 const PASS: usize = 4;
 
+/// Calls `$go!(i, T)` for the consecutive groups of `$m` terms, each of up to [`PASS`] terms:
+/// `i` the group's first term, `T` its length as a literal (so that a pass's term loop has a
+/// compile-time length).
+macro_rules! in_passes {
+    ($m:expr, $go:ident) => {{
+        let m: usize = $m;
+        let mut i = 0;
+        while i < m {
+            let t = (m - i).min(PASS);
+            match t {
+                1 => $go!(i, 1),
+                2 => $go!(i, 2),
+                3 => $go!(i, 3),
+                _ => $go!(i, 4),
+            }
+            i += t;
+        }
+    }};
+}
+
 /// One pass over lanes `0..n` adding `T` terms in order to a running sum:
 /// `s = (((s₀ + w₁k₁) + w₂k₂) + …)`, with `s₀ = 0` when `FIRST` (the sum's first addition,
 /// `0 + w·k`) and `acc[l]` otherwise; the result goes to `acc`, or when `LAST` to
@@ -237,32 +257,20 @@ fn weighted_sum(
         }
         return;
     }
-    let mut i = 0;
-    while i < m {
-        let t = (m - i).min(PASS);
-        let first = i == 0;
-        let fin = last && i + t == m;
-        let g = &terms[i..i + t];
-        macro_rules! go {
-            ($T:literal) => {{
-                let ks: [&[f64]; $T] = std::array::from_fn(|j| col(g[j].0));
-                let ws: [f64; $T] = std::array::from_fn(|j| g[j].1);
-                match (first, fin) {
-                    (true, true) => sum_pass::<$T, true, true>(n, ks, ws, acc, x, h, out),
-                    (true, false) => sum_pass::<$T, true, false>(n, ks, ws, acc, x, h, out),
-                    (false, true) => sum_pass::<$T, false, true>(n, ks, ws, acc, x, h, out),
-                    (false, false) => sum_pass::<$T, false, false>(n, ks, ws, acc, x, h, out),
-                }
-            }};
-        }
-        match t {
-            1 => go!(1),
-            2 => go!(2),
-            3 => go!(3),
-            _ => go!(4),
-        }
-        i += t;
+    macro_rules! go {
+        ($i:expr, $T:literal) => {{
+            let g = &terms[$i..$i + $T];
+            let ks: [&[f64]; $T] = std::array::from_fn(|j| col(g[j].0));
+            let ws: [f64; $T] = std::array::from_fn(|j| g[j].1);
+            match ($i == 0, last && $i + $T == m) {
+                (true, true) => sum_pass::<$T, true, true>(n, ks, ws, acc, x, h, out),
+                (true, false) => sum_pass::<$T, true, false>(n, ks, ws, acc, x, h, out),
+                (false, true) => sum_pass::<$T, false, true>(n, ks, ws, acc, x, h, out),
+                (false, false) => sum_pass::<$T, false, false>(n, ks, ws, acc, x, h, out),
+            }
+        }};
     }
+    in_passes!(m, go);
 }
 
 /// [`sum_pass`] for two rows over the same `T` stage columns: both running sums in one pass,
@@ -325,30 +333,20 @@ fn weighted_sum2(
         acc_b[..n].fill(0.0);
         return;
     }
-    let mut i = 0;
-    while i < m {
-        let t = (m - i).min(PASS);
-        let g = &terms[i..i + t];
-        macro_rules! go {
-            ($T:literal) => {{
-                let ks: [&[f64]; $T] = std::array::from_fn(|j| col(g[j].0));
-                let wa: [f64; $T] = std::array::from_fn(|j| g[j].1);
-                let wb: [f64; $T] = std::array::from_fn(|j| g[j].2);
-                if i == 0 {
-                    sum_pass2::<$T, true>(n, ks, wa, wb, acc_a, acc_b)
-                } else {
-                    sum_pass2::<$T, false>(n, ks, wa, wb, acc_a, acc_b)
-                }
-            }};
-        }
-        match t {
-            1 => go!(1),
-            2 => go!(2),
-            3 => go!(3),
-            _ => go!(4),
-        }
-        i += t;
+    macro_rules! go {
+        ($i:expr, $T:literal) => {{
+            let g = &terms[$i..$i + $T];
+            let ks: [&[f64]; $T] = std::array::from_fn(|j| col(g[j].0));
+            let wa: [f64; $T] = std::array::from_fn(|j| g[j].1);
+            let wb: [f64; $T] = std::array::from_fn(|j| g[j].2);
+            if $i == 0 {
+                sum_pass2::<$T, true>(n, ks, wa, wb, acc_a, acc_b)
+            } else {
+                sum_pass2::<$T, false>(n, ks, wa, wb, acc_a, acc_b)
+            }
+        }};
     }
+    in_passes!(m, go);
 }
 
 /// One lane of [`weighted_sum`]: the same terms, skipped and ordered identically.
