@@ -14,6 +14,10 @@
 //! - `profile batch N [TOL] [dopri5|dop853] [LANES] [THREADS CHUNK [REPEAT]]`: N strides from
 //!   perturbed copies of the fixed point through the serial lockstep engine (default 64 lanes),
 //!   or in blocks of CHUNK states on a pool of THREADS threads, REPEAT calls on the same states;
+//!   built with `--features pdw-hybrid/phase-timing`, it also prints where the lockstep loop's
+//!   time goes, phase by phase ([`pdw_hybrid::phases`]), as nanoseconds per lane-stride: each
+//!   phase's share of the counted ticks times the wall-clock time per lane-stride (so does
+//!   `profile basin`);
 //! - `profile rhs N [SPREAD]`: N calls of the simplest walker's batched right-hand side on 256
 //!   lanes around the fixed point (SPREAD: the half-width of θ's spread; 0.5 puts some angles
 //!   beyond the trigonometric shortcut);
@@ -53,6 +57,31 @@ fn method(args: &[String], i: usize, tol: f64) -> Options {
         },
         _ => Options::dop853(tol),
     }
+}
+
+/// Where the batched runs since the last [`pdw_hybrid::phases::reset`] spent their time, as
+/// nanoseconds per lane-stride (`per`: wall-clock nanoseconds per lane-stride of `n`); nothing
+/// without the `phase-timing` feature.
+fn print_phases(per: f64, n: usize) {
+    use pdw_hybrid::phases;
+    if !phases::ENABLED {
+        return;
+    }
+    let p = phases::take();
+    let total: u64 = p.ticks.iter().sum();
+    if total == 0 {
+        return;
+    }
+    println!("phase                                          ns/lane-stride   share");
+    for (name, &t) in phases::NAMES.iter().zip(&p.ticks) {
+        let share = t as f64 / total as f64;
+        println!("{name:<46} {:>10.1} {:>9.1} %", share * per, 100.0 * share);
+    }
+    println!(
+        "located steps per stride {:.3}, dense outputs per stride {:.3}",
+        p.located as f64 / n as f64,
+        p.dense as f64 / n as f64
+    );
 }
 
 fn main() {
@@ -215,6 +244,8 @@ fn main() {
                     vec![fp[0] * (1.0 + e), fp[1] * (1.0 - e)]
                 })
                 .collect();
+            pdw_hybrid::phases::reset();
+            let t0 = Instant::now();
             let res = match args.get(5).and_then(|s| s.parse::<usize>().ok()) {
                 Some(threads) => {
                     let pool = rayon::ThreadPoolBuilder::new()
@@ -235,12 +266,14 @@ fn main() {
                 None => map.strides(&states, lanes),
             }
             .expect("strides");
+            let per = t0.elapsed().as_secs_f64() * 1e9 / n as f64;
             println!(
                 "{n} batched strides ({:?}, {lanes} lanes): {:.3} µs/lane-stride, {} ok",
                 opts.method,
-                t0.elapsed().as_secs_f64() * 1e6 / n as f64,
+                per * 1e-3,
                 res.iter().filter(|s| s.outcome.is_ok()).count()
             );
+            print_phases(per, n);
         }
         _ => {
             let n: usize = arg(&args, 1, 60);
@@ -265,6 +298,7 @@ fn main() {
             opts.lanes = arg(&args, 3, opts.lanes);
             opts.chunk = arg(&args, 4, opts.chunk);
             opts.integrator.warm_restart = args.get(5).is_none_or(|a| a != "cold");
+            pdw_hybrid::phases::reset();
             let res = if what == "basin-dyn" {
                 classify_cells(&problem_dyn, &cells, &opts, &pool, &|_| {})
             } else {
@@ -295,6 +329,7 @@ fn main() {
                 c.final_state.iter().for_each(|v| eat(v.to_bits()));
             }
             println!("checksum {hash:016x}");
+            print_phases(secs * 1e9 / strides as f64, strides);
         }
     }
 }

@@ -43,6 +43,7 @@ use rayon::prelude::*;
 
 use crate::engine::{self, After, Ctl, LaneScratch, Store};
 use crate::options::{Options, Stats, StopReason};
+use crate::phases::{self, lap};
 use crate::tableau::Tableau;
 use crate::{HybridError, HybridSystem, Integrator, Scratch};
 
@@ -415,6 +416,8 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
 
     #[inline(always)]
     fn run_lockstep(&mut self) -> Result<(), HybridError> {
+        // Phase clock (`phases`; no code without the `phase-timing` feature).
+        let mut tt = phases::now();
         let nl = self.st.lanes;
         for l in 0..nl {
             if let Some(r) = self.assign(l)? {
@@ -422,6 +425,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             }
         }
         self.partition();
+        lap(7, &mut tt);
         let stride = self.st.stride;
         let d = self.st.dim;
         let blk = self.st.blk();
@@ -447,6 +451,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             if self.dirty {
                 self.partition();
             }
+            lap(0, &mut tt);
             let n_active = self.range[self.n_modes];
             if n_active == 0 {
                 break;
@@ -476,6 +481,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     }
                 }
             }
+            lap(1, &mut tt);
             engine::error_norm(
                 &mut self.st,
                 self.opts.method,
@@ -483,6 +489,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                 &self.opts,
                 n_active,
             );
+            lap(2, &mut tt);
             // Guard values and rates at x₁, one call per mode range, then the column test of
             // which lanes may see a crossing inside the step.
             let last = n_stages - 1;
@@ -517,6 +524,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     engine::mark_near(&mut self.st, self.sys.guards(m), a, b);
                 }
             }
+            lap(3, &mut tt);
             // Per-lane accept/reject, events, commit; stopped lanes go to the driver.
             for l in 0..n_active {
                 let r = engine::after_attempt(
@@ -530,10 +538,14 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     &mut self.sc,
                 );
                 if let After::Stop(r) = r {
+                    lap(4, &mut tt);
                     self.handle_stop(l, r)?;
+                    lap(7, &mut tt);
                 }
             }
+            lap(4, &mut tt);
         }
+        phases::flush();
         for c in &self.ctl {
             self.stats += c.stats;
         }

@@ -842,7 +842,10 @@ pub(crate) fn locate<S: HybridSystem + ?Sized>(
         store_end(st, sys.guards(mode).len(), l);
         return None;
     }
-    locate_flagged(sys, method, mode, st, l, h, t0, t1, sc, stats)
+    let t = crate::phases::now();
+    let found = locate_flagged(sys, method, mode, st, l, h, t0, t1, sc, stats);
+    crate::phases::charge_locate(crate::phases::now().wrapping_sub(t));
+    found
 }
 
 /// Clear the flag of every guard of lane `l` whose step [`clears_direction`] rules out.
@@ -944,7 +947,9 @@ fn locate_flagged<S: HybridSystem + ?Sized>(
     if !gathered {
         gather_ends(st, l, method, sc);
     }
+    let t_dense = crate::phases::now();
     let interp = build_dense(sys, method, mode, st, l, h, sc, stats);
+    crate::phases::charge_dense(crate::phases::now().wrapping_sub(t_dense));
     let EventScratch {
         x0,
         x1,

@@ -50,6 +50,7 @@ pub mod error;
 pub mod event;
 pub mod integrator;
 pub mod options;
+pub mod phases;
 pub mod system;
 mod tableau;
 
