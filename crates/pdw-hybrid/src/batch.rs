@@ -527,7 +527,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             lap(3, &mut tt);
             // Per-lane accept/reject, events, commit; stopped lanes go to the driver.
             for l in 0..n_active {
-                let r = engine::after_attempt(
+                let r = engine::after_attempt_deferred(
                     self.sys,
                     self.opts.method,
                     self.tab,
@@ -541,6 +541,14 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     lap(4, &mut tt);
                     self.handle_stop(l, r)?;
                     lap(7, &mut tt);
+                }
+            }
+            // The commits the per-lane pass left to columns (rows keep their places until the
+            // next partition; a lane that stopped and restarted above is not marked).
+            for m in 0..self.n_modes {
+                let (a, b) = (self.range[m], self.range[m + 1]);
+                if b > a {
+                    engine::commit_columns(&mut self.st, self.tab, a, b, self.sys.guards(m).len());
                 }
             }
             lap(4, &mut tt);

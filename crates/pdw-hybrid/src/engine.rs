@@ -73,6 +73,9 @@ pub(crate) struct Store {
     /// cross zero inside the step ([`mark_near`]); lanes with 0 skip the event locator, and
     /// the locator samples only the flagged guards.
     pub cand: Vec<u8>,
+    /// `(lanes)` 1 where the lane's accepted step is committed by [`commit_columns`] (see
+    /// [`after_attempt_deferred`]), 0 elsewhere; set by the per-lane pass of a batch.
+    pub commit: Vec<u8>,
     /// `(lanes)` step of the current attempt.
     pub h: Vec<f64>,
     /// `(lanes)` error norm of the current attempt (0 or NaN for RK4: a finiteness check).
@@ -103,6 +106,7 @@ impl Store {
             g1: vec![0.0; ng * stride],
             r1: vec![0.0; ng * stride],
             cand: vec![0; lanes],
+            commit: vec![0; lanes],
             h: vec![0.0; lanes],
             err: vec![0.0; lanes],
             s1: vec![0.0; lanes],
@@ -1157,6 +1161,74 @@ pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
         After::Accepted => after_accept(sys, method, tab, st, l, ctl, sc),
         other => other,
     }
+}
+
+/// [`after_attempt`] for a lane of a batch: an accepted step that is not the segment's last
+/// and on which no guard is flagged (`cand[l] = 0`, the common case) is decided here — time,
+/// `h_full` — and marked in `st.commit`; its commit (x₀ ← x₁, f(x₀) ← f(x₁), the guard values
+/// and rates at x₁ kept for the next step) is left to [`commit_columns`] over all lanes after
+/// the per-lane pass. Every other outcome is [`after_accept`]'s, as in the scalar path. The
+/// same values land in the same places: the commit is a copy.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn after_attempt_deferred<S: HybridSystem + ?Sized>(
+    sys: &S,
+    method: Method,
+    tab: &Tableau,
+    opts: &Options,
+    st: &mut Store,
+    l: usize,
+    ctl: &mut Ctl,
+    sc: &mut LaneScratch,
+) -> After {
+    let err = st.err[l];
+    ctl.stats.rhs_evals += (tab.n_stages - 1) as u64;
+    match decide(method, tab, opts, ctl, err, st.s2[l]) {
+        After::Accepted if st.cand[l] == 0 && !ctl.last => {
+            // `after_accept` with no flagged guard and not the last step: `locate` keeps the end
+            // values, the state is committed, t₁ = t₀ + h, and the step was committed in full.
+            let h = ctl.h_used;
+            ctl.t += h;
+            ctl.h_full = h;
+            st.commit[l] = 1;
+            After::Accepted
+        }
+        After::Accepted => after_accept(sys, method, tab, st, l, ctl, sc),
+        other => other,
+    }
+}
+
+/// The commits [`after_attempt_deferred`] left for rows `a..b` (all in a mode with `ng`
+/// guards), as column selects: where `commit` is set, x₀ ← x₁, f(x₀) ← f(x₁) and the guard
+/// values and rates at x₁ become the next step's start values; the flags are cleared.
+#[inline(always)]
+pub(crate) fn commit_columns(st: &mut Store, tab: &Tableau, a: usize, b: usize, ng: usize) {
+    let stride = st.stride;
+    let blk = st.blk();
+    let last = tab.n_stages - 1;
+    let c = &st.commit[a..b];
+    // A bitwise select (all ones where the flag is set): branch-free, so it runs at vector
+    // width whatever the flags, and copies the bits.
+    let sel = |dst: &mut [f64], src: &[f64]| {
+        let n = c.len();
+        let (dst, src) = (&mut dst[..n], &src[..n]);
+        for l in 0..n {
+            let m = 0u64.wrapping_sub(u64::from(c[l]));
+            dst[l] = f64::from_bits((src[l].to_bits() & m) | (dst[l].to_bits() & !m));
+        }
+    };
+    for j in 0..st.dim {
+        let (o, e) = (j * stride + a, j * stride + b);
+        sel(&mut st.x[o..e], &st.xn[o..e]);
+        let (k0, kl) = st.k.split_at_mut(last * blk);
+        sel(&mut k0[o..e], &kl[o..e]);
+    }
+    for k in 0..ng {
+        let (o, e) = (k * stride + a, k * stride + b);
+        sel(&mut st.g[o..e], &st.g1[o..e]);
+        sel(&mut st.gr[o..e], &st.r1[o..e]);
+    }
+    st.commit[a..b].fill(0);
 }
 
 /// The part of [`after_attempt`] after an acceptance: event location on the step, then the
