@@ -527,7 +527,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             lap(3, &mut tt);
             // Per-lane accept/reject, events, commit; stopped lanes go to the driver.
             for l in 0..n_active {
-                let r = engine::after_attempt_deferred(
+                let r = engine::after_attempt::<S, true>(
                     self.sys,
                     self.opts.method,
                     self.tab,

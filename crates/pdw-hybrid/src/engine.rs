@@ -74,7 +74,7 @@ pub(crate) struct Store {
     /// the locator samples only the flagged guards.
     pub cand: Vec<u8>,
     /// `(lanes)` 1 where the lane's accepted step is committed by [`commit_columns`] (see
-    /// [`after_attempt_deferred`]), 0 elsewhere; set by the per-lane pass of a batch.
+    /// [`after_attempt`]), 0 elsewhere; set by the per-lane pass of a batch.
     pub commit: Vec<u8>,
     /// `(lanes)` step of the current attempt.
     pub h: Vec<f64>,
@@ -1143,9 +1143,15 @@ pub(crate) fn decide(
 /// Everything that happens to lane `l` after the stage and error kernels: accept/reject, event
 /// location on the accepted step, and commit of the new point. On `Stop(Guard)` the lane's `x`
 /// holds the event state and `ctl.t` the event time; on `Stop(EndTime)` `x = x₁`, `t = t_end`.
+///
+/// With `DEFER` (a lane of a batch), an accepted step that is not the segment's last and on
+/// which no guard is flagged (`cand[l] = 0`, the common case) is decided here — time, `h_full`
+/// — and marked in `st.commit`; its commit (x₀ ← x₁, f(x₀) ← f(x₁), the guard values and rates
+/// at x₁ kept for the next step) is left to [`commit_columns`] over all lanes after the
+/// per-lane pass. The same values land in the same places: the commit is a copy.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
+pub(crate) fn after_attempt<S: HybridSystem + ?Sized, const DEFER: bool>(
     sys: &S,
     method: Method,
     tab: &Tableau,
@@ -1158,33 +1164,7 @@ pub(crate) fn after_attempt<S: HybridSystem + ?Sized>(
     let err = st.err[l];
     ctl.stats.rhs_evals += (tab.n_stages - 1) as u64;
     match decide(method, tab, opts, ctl, err, st.s2[l]) {
-        After::Accepted => after_accept(sys, method, tab, st, l, ctl, sc),
-        other => other,
-    }
-}
-
-/// [`after_attempt`] for a lane of a batch: an accepted step that is not the segment's last
-/// and on which no guard is flagged (`cand[l] = 0`, the common case) is decided here — time,
-/// `h_full` — and marked in `st.commit`; its commit (x₀ ← x₁, f(x₀) ← f(x₁), the guard values
-/// and rates at x₁ kept for the next step) is left to [`commit_columns`] over all lanes after
-/// the per-lane pass. Every other outcome is [`after_accept`]'s, as in the scalar path. The
-/// same values land in the same places: the commit is a copy.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub(crate) fn after_attempt_deferred<S: HybridSystem + ?Sized>(
-    sys: &S,
-    method: Method,
-    tab: &Tableau,
-    opts: &Options,
-    st: &mut Store,
-    l: usize,
-    ctl: &mut Ctl,
-    sc: &mut LaneScratch,
-) -> After {
-    let err = st.err[l];
-    ctl.stats.rhs_evals += (tab.n_stages - 1) as u64;
-    match decide(method, tab, opts, ctl, err, st.s2[l]) {
-        After::Accepted if st.cand[l] == 0 && !ctl.last => {
+        After::Accepted if DEFER && st.cand[l] == 0 && !ctl.last => {
             // `after_accept` with no flagged guard and not the last step: `locate` keeps the end
             // values, the state is committed, t₁ = t₀ + h, and the step was committed in full.
             let h = ctl.h_used;
@@ -1198,7 +1178,7 @@ pub(crate) fn after_attempt_deferred<S: HybridSystem + ?Sized>(
     }
 }
 
-/// The commits [`after_attempt_deferred`] left for rows `a..b` (all in a mode with `ng`
+/// The commits [`after_attempt`] left (with `DEFER`) for rows `a..b` (all in a mode with `ng`
 /// guards), as column selects: where `commit` is set, x₀ ← x₁, f(x₀) ← f(x₁) and the guard
 /// values and rates at x₁ become the next step's start values; the flags are cleared.
 #[inline(always)]

@@ -260,7 +260,7 @@ impl Integrator {
                     Err(r) => break 'outer r,
                 }
                 self.attempt(sys, mode);
-                match engine::after_attempt(
+                match engine::after_attempt::<S, false>(
                     sys,
                     method,
                     tab,
