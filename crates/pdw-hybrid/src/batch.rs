@@ -425,7 +425,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             }
         }
         self.partition();
-        lap(7, &mut tt);
+        lap(phases::DRIVER, &mut tt);
         let stride = self.st.stride;
         let d = self.st.dim;
         let blk = self.st.blk();
@@ -451,7 +451,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             if self.dirty {
                 self.partition();
             }
-            lap(0, &mut tt);
+            lap(phases::STEP_SIZES, &mut tt);
             let n_active = self.range[self.n_modes];
             if n_active == 0 {
                 break;
@@ -481,7 +481,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     }
                 }
             }
-            lap(1, &mut tt);
+            lap(phases::STAGES, &mut tt);
             engine::error_norm(
                 &mut self.st,
                 self.opts.method,
@@ -489,7 +489,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                 &self.opts,
                 n_active,
             );
-            lap(2, &mut tt);
+            lap(phases::ERROR_NORM, &mut tt);
             // Guard values and rates at x₁, one call per mode range, then the column test of
             // which lanes may see a crossing inside the step.
             let last = n_stages - 1;
@@ -524,7 +524,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     engine::mark_near(&mut self.st, self.sys.guards(m), a, b);
                 }
             }
-            lap(3, &mut tt);
+            lap(phases::GUARDS, &mut tt);
             // Per-lane accept/reject, events, commit; stopped lanes go to the driver.
             for l in 0..n_active {
                 let r = engine::after_attempt::<S, true>(
@@ -538,9 +538,9 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     &mut self.sc,
                 );
                 if let After::Stop(r) = r {
-                    lap(4, &mut tt);
+                    lap(phases::PASS, &mut tt);
                     self.handle_stop(l, r)?;
-                    lap(7, &mut tt);
+                    lap(phases::DRIVER, &mut tt);
                 }
             }
             // The commits the per-lane pass left to columns (rows keep their places until the
@@ -551,7 +551,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                     engine::commit_columns(&mut self.st, self.tab, a, b, self.sys.guards(m).len());
                 }
             }
-            lap(4, &mut tt);
+            lap(phases::PASS, &mut tt);
         }
         phases::flush();
         for c in &self.ctl {

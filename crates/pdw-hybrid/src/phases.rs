@@ -5,7 +5,7 @@
 //! empty inline function and [`take`] returns zeros ([`ENABLED`] says which). A tick is one
 //! count of the time-stamp counter on x86-64 (a constant rate, the same on every core of a
 //! machine), a nanosecond elsewhere: compare phases by their shares, or scale the shares by a
-//! wall-clock time measured around the run (as `profile phases` does).
+//! wall-clock time measured around the run (as `profile batch` and `profile basin` do).
 //!
 //! Each thread adds to its own counters; a batch moves them to the process-wide totals when
 //! its loop ends, and [`take`] reads and clears the totals. Reading the counter costs ~10 ns;
@@ -41,11 +41,17 @@ pub struct PhaseTimes {
     pub dense: u64,
 }
 
-// Raw slots: the per-lane pass is measured with the locator inside it, and the locator with
-// the dense output inside it; `take` subtracts the nested phases.
-const PASS: usize = 4;
+// The phases, as indices of `NAMES` and of the raw slots. The per-lane pass is measured with
+// the locator inside it, and the locator with the dense output inside it; `take` subtracts
+// the nested phases.
+pub(crate) const STEP_SIZES: usize = 0;
+pub(crate) const STAGES: usize = 1;
+pub(crate) const ERROR_NORM: usize = 2;
+pub(crate) const GUARDS: usize = 3;
+pub(crate) const PASS: usize = 4;
 const LOCATE: usize = 5;
 const DENSE: usize = 6;
+pub(crate) const DRIVER: usize = 7;
 const SLOTS: usize = N + 2;
 const LOCATED: usize = N;
 const DENSE_COUNT: usize = N + 1;
