@@ -971,11 +971,69 @@ struct Labels<'a> {
     log_y: bool,
 }
 
+/// Colours of the polylines of [`plot_lines`] (ten, so that a work-precision chart's series
+/// each get their own; an eleventh series starts over with square markers).
+const LINE_COLOURS: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+];
+
+/// The corner of the plot area for the legend of [`plot_lines`]: the one whose quarter of the
+/// area (the 45 % × 45 % box at that corner, in axis coordinates: logarithmic on a log axis)
+/// holds the fewest points, ties in the order upper right, upper left, lower right, lower left.
+fn legend_corner(
+    series: &[(String, Vec<(f64, f64)>)],
+    (xr, yr): ((f64, f64), (f64, f64)),
+    (log_x, log_y): (bool, bool),
+) -> SeriesLabelPosition {
+    let unit = |v: f64, (lo, hi): (f64, f64), log: bool| {
+        if log {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            (v - lo) / (hi - lo)
+        }
+    };
+    let corners = [
+        (SeriesLabelPosition::UpperRight, true, true),
+        (SeriesLabelPosition::UpperLeft, false, true),
+        (SeriesLabelPosition::LowerRight, true, false),
+        (SeriesLabelPosition::LowerLeft, false, false),
+    ];
+    let count = |right: bool, upper: bool| {
+        series
+            .iter()
+            .flat_map(|(_, v)| v.iter())
+            .filter(|p| {
+                let (u, w) = (unit(p.0, xr, log_x), unit(p.1, yr, log_y));
+                (if right { u >= 0.55 } else { u <= 0.45 })
+                    && (if upper { w >= 0.55 } else { w <= 0.45 })
+            })
+            .count()
+    };
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (pos, right, upper) in corners {
+        let n = count(right, upper);
+        if n < best.0 {
+            best = (n, pos);
+        }
+    }
+    best.1
+}
+
 fn draw_lines<XR, YR>(
     area: &DrawingArea<BitMapBackend<'_>, Shift>,
     path: &Path,
     labels: &Labels<'_>,
     series: &[(String, Vec<(f64, f64)>)],
+    legend_at: SeriesLabelPosition,
     xr: XR,
     yr: YR,
 ) -> Result<()>
@@ -1005,18 +1063,27 @@ where
         .draw()
         .map_err(|x| pe(path, x))?;
     for (k, (name, pts)) in series.iter().enumerate() {
-        let col = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];
+        let col = LINE_COLOURS[k % LINE_COLOURS.len()];
         chart
             .draw_series(LineSeries::new(pts.iter().copied(), col.stroke_width(2)))
             .map_err(|x| pe(path, x))?
             .label(name.as_str())
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, col.filled())))
-            .map_err(|x| pe(path, x))?;
+        if k < LINE_COLOURS.len() {
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, col.filled())))
+                .map_err(|x| pe(path, x))?;
+        } else {
+            chart
+                .draw_series(pts.iter().map(|&p| {
+                    EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], col.filled())
+                }))
+                .map_err(|x| pe(path, x))?;
+        }
     }
     chart
         .configure_series_labels()
+        .position(legend_at)
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
@@ -1077,13 +1144,15 @@ pub fn plot_lines(
     };
     let (xa, xb, ya, yb) = (xr.0, xr.1, yr.0, yr.1);
     let lin = |a: f64, b: f64| a..b;
+    let at = legend_corner(&series, (xr, yr), (log_x, log_y));
     match (log_x, log_y) {
-        (false, false) => draw_lines(&root, path, &labels, &series, lin(xa, xb), lin(ya, yb)),
+        (false, false) => draw_lines(&root, path, &labels, &series, at, lin(xa, xb), lin(ya, yb)),
         (true, false) => draw_lines(
             &root,
             path,
             &labels,
             &series,
+            at,
             lin(xa, xb).log_scale(),
             lin(ya, yb),
         ),
@@ -1092,6 +1161,7 @@ pub fn plot_lines(
             path,
             &labels,
             &series,
+            at,
             lin(xa, xb),
             lin(ya, yb).log_scale(),
         ),
@@ -1100,6 +1170,7 @@ pub fn plot_lines(
             path,
             &labels,
             &series,
+            at,
             lin(xa, xb).log_scale(),
             lin(ya, yb).log_scale(),
         ),
@@ -1263,6 +1334,36 @@ pub fn animate_gif(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_legend_goes_to_the_emptiest_corner() {
+        let s = |pts: &[(f64, f64)]| vec![("a".to_string(), pts.to_vec())];
+        let lin = ((0.0, 1.0), (0.0, 1.0));
+        // Points in every corner but the lower left.
+        let three = s(&[(0.9, 0.9), (0.1, 0.9), (0.9, 0.1), (0.5, 0.5)]);
+        assert!(matches!(
+            legend_corner(&three, lin, (false, false)),
+            SeriesLabelPosition::LowerLeft
+        ));
+        // An empty chart area keeps the first choice, the upper right.
+        assert!(matches!(
+            legend_corner(&s(&[(0.5, 0.5)]), lin, (false, false)),
+            SeriesLabelPosition::UpperRight
+        ));
+        // Log axes over x ∈ [1, 100], y ∈ [10⁻⁸, 1]: 10 is the middle of x, 10⁻⁵ in the lower
+        // half of y; the upper left is empty there. On linear axes all four points have
+        // x ≤ 30 (the left 30 %), so the first choice, the upper right, is empty.
+        let logs = s(&[(3.0, 1e-5), (30.0, 1e-5), (10.0, 0.5), (30.0, 0.5)]);
+        let r = ((1.0, 100.0), (1e-8, 1.0));
+        assert!(matches!(
+            legend_corner(&logs, r, (true, true)),
+            SeriesLabelPosition::UpperLeft
+        ));
+        assert!(matches!(
+            legend_corner(&logs, r, (false, false)),
+            SeriesLabelPosition::UpperRight
+        ));
+    }
 
     #[test]
     fn tick_labels_are_compact() {
