@@ -481,13 +481,20 @@ fn plot_basin_marked(
     pic.commit(path)
 }
 
-const BRANCH_COLOURS: [RGBColor; 6] = [
+/// Colours of the branches of a bifurcation diagram and of the polylines of [`plot_lines`]
+/// (ten, so that a work-precision chart's series each get their own; there an eleventh series
+/// starts over with square markers).
+const SERIES_COLOURS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
     RGBColor(255, 127, 14),
     RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
 ];
 
 /// Splits a branch into maximal runs of equal stability; consecutive runs share their boundary
@@ -687,7 +694,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     }
 
     for (bi, b) in data.branches.iter().enumerate() {
-        let col = BRANCH_COLOURS[bi % BRANCH_COLOURS.len()];
+        let col = SERIES_COLOURS[bi % SERIES_COLOURS.len()];
         let m = b.multipliers.first().map_or(0, |v| v.len());
         for (run, stable) in stability_runs(&b.stable) {
             let style = col.stroke_width(if stable { 2 } else { 1 });
@@ -971,21 +978,6 @@ struct Labels<'a> {
     log_y: bool,
 }
 
-/// Colours of the polylines of [`plot_lines`] (ten, so that a work-precision chart's series
-/// each get their own; an eleventh series starts over with square markers).
-const LINE_COLOURS: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(255, 127, 14),
-    RGBColor(23, 190, 207),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-];
-
 /// The corner of the plot area for the legend of [`plot_lines`]: the one whose quarter of the
 /// area (the 45 % × 45 % box at that corner, in axis coordinates: logarithmic on a log axis)
 /// holds the fewest points, ties in the order upper right, upper left, lower right, lower left.
@@ -1063,13 +1055,13 @@ where
         .draw()
         .map_err(|x| pe(path, x))?;
     for (k, (name, pts)) in series.iter().enumerate() {
-        let col = LINE_COLOURS[k % LINE_COLOURS.len()];
+        let col = SERIES_COLOURS[k % SERIES_COLOURS.len()];
         chart
             .draw_series(LineSeries::new(pts.iter().copied(), col.stroke_width(2)))
             .map_err(|x| pe(path, x))?
             .label(name.as_str())
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
-        if k < LINE_COLOURS.len() {
+        if k < SERIES_COLOURS.len() {
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, col.filled())))
                 .map_err(|x| pe(path, x))?;
