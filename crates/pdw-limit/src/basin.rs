@@ -180,8 +180,8 @@ pub struct BasinOptions {
 }
 
 impl Default for BasinOptions {
-    /// DOP853 at `rtol = atol = 1e-9` (chosen from label agreement against DOP853 at 1e-12,
-    /// see [`BasinOptions::default_integrator`]), 256 lanes, blocks of 1024 cells, 100 strides,
+    /// DOP853 at `rtol = atol = 1e-9` (chosen from label agreement against tighter
+    /// tolerances, see [`BasinOptions::default_integrator`]), 256 lanes, blocks of 1024 cells, 100 strides,
     /// `tol_gait = 1e-6`, `confirm = 2`, `tol_recur = 1e-10`, `max_period = 8`.
     fn default() -> Self {
         Self {
@@ -204,7 +204,16 @@ impl BasinOptions {
     /// θ̇ ∈ [−0.25, −0.15], 100 strides, 2 threads), labels changed against DOP853 at 1e-12:
     /// DOPRI5 1e-6: 5 cells (0.0125 %), 1e-7: 2, 1e-8: 1, 1e-9: 0 (1.7 s), 1e-10: 0 (3.0 s);
     /// DOP853 1e-7: 1 (0.7 s), 1e-9: 0 (1.0 s); RK4 h = 0.05: 3, h = 0.02: 0 (5.3 s).
-    /// DOP853 at 1e-9 is the cheapest setting that changed no label.
+    /// DOP853 at 1e-9 is the cheapest setting that changed no label (engine of 24 Nov).
+    ///
+    /// Measured again on 26 Nov, on the CLI's default grid (θ, θ̇ within 25 % of the gait),
+    /// against DOP853 at 1e-14: one cell of 40 000 differs at 1e-9 (θ = 0.1769,
+    /// θ̇ = −0.1835, on the boundary of the gait's basin: a forward fall after 21 strides, the
+    /// gait after 42 at 1e-10 … 1e-14), none at 1e-10 (the test
+    /// `default_basin_labels_against_a_dop853_1e14_reference` of pdw-sweep). On 1000 × 1000
+    /// cells: 5 at 1e-9, 1 at 1e-10, 0 at 1e-11, every one on a boundary, for +19 % (1e-10)
+    /// and +37 % (1e-11) of the CLI's time. The default stays at 1e-9: a label that flips with
+    /// the tolerance belongs to a cell whose outcome a change at that level decides.
     ///
     /// With [`Options::warm_restart`]: every stride after a cell's first starts with the step the
     /// controller proposed at the heel strike, not with the starting-step heuristic (whose small
