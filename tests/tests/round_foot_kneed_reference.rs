@@ -1,0 +1,1120 @@
+//! Acceptance: the chain walker with round feet and knees (`seed5_walking` and a variant with
+//! inertia about each COM and a larger foot) against an independent closed-form model, to 1e-10.
+//!
+//! [`Reference`] is a planar kneed walker with arc feet written from the physics only: no
+//! kernel, no chain, no recursion. Four rigid segments (stance shank, stance thigh, swing thigh,
+//! swing shank) with point masses at their COMs (along and normal to the segment), rotational
+//! inertia about each COM and a hip point mass; minimal coordinates are the absolute segment
+//! angles `θ = (θ₀, θ₁, θ₂, θ₃)` from the slope normal. The stance foot is an arc of radius `r`
+//! whose centre lies on the shank's line `r` above the shank's lower end; it rolls without slip,
+//! so the arc centre is at `A = (−r θ₀, r)` (McGeer 1990, "Passive dynamic walking", IJRR 9(2),
+//! the rolling arc foot). Every point of the walker is
+//!
+//! ```text
+//! P = A + Σ_k (α_k e(θ_k) + β_k n(θ_k)),   e(θ) = (−sin θ, cos θ),   n(θ) = (cos θ, sin θ)
+//! ```
+//!
+//! (slope frame: `y` downhill, `z` normal up; `e` along the segment, up when upright; `n` normal
+//! to it, forward), so that with `u_k = ∂P/∂θ_k = −α_k n(θ_k) + β_k e(θ_k)` and the rolling term
+//! `ρ = ∂A/∂θ₀ = (−r, 0)` Lagrange's equations `M(θ) θ̈ + c(θ, θ̇) = Q(θ)` (Garcia et al. 1998
+//! and Hsu Chen 2007 write the same sums for their kneed walkers) have the closed forms
+//!
+//! ```text
+//! M_jk = Σ_i m_i [(α_ij α_ik + β_ij β_ik) cos(θ_j − θ_k) + (β_ij α_ik − α_ij β_ik) sin(θ_j − θ_k)
+//!                 + δ_j0 ρ·u_ik + δ_k0 ρ·u_ij + δ_j0 δ_k0 r²] + Σ_{i on link j} I_i δ_jk
+//! ρ·u_ik = r (α_ik cos θ_k + β_ik sin θ_k)
+//! c_j = Σ_i m_i Σ_k θ̇_k² [(α_ij α_ik + β_ij β_ik) sin(θ_j − θ_k) + (α_ij β_ik − β_ij α_ik) cos(θ_j − θ_k)
+//!                         − δ_j0 r (α_ik sin θ_k − β_ik cos θ_k)]
+//! Q_j = Σ_i m_i g [α_ij sin(θ_j − γ) − β_ij cos(θ_j − γ)] − δ_j0 m_tot g r sin γ
+//! V   = Σ_i m_i g Σ_k [α_ik cos(θ_k − γ) + β_ik sin(θ_k − γ)] + m_tot g r (θ₀ sin γ + cos γ)
+//! ```
+//!
+//! Locked knees are constraints `θ̇₁ − θ̇₀ = 0` (stance knee), `θ̇₃ − θ̇₂ = 0` (swing knee) with
+//! Lagrange multipliers (the lock torques, positive towards `q` increasing):
+//! `[M −Gᵀ; G 0] [θ̈; τ] = [Q − c; 0]`. The ground force on the stance foot is Newton's law for
+//! the whole walker, `F = Σ_i m_i (a_i − g⃗)`, `g⃗ = (g sin γ, −g cos γ)`. Impacts are plastic
+//! (Hurmuzlu & Marghitu 1994; McGeer 1990 for the arc foot): `[M −Gᵀ; G 0] [θ̇⁺; Λ] = [M θ̇⁻; 0]`,
+//! at heel strike on the floating walker `(A_y, A_z, θ)` with the new contact point (r below
+//! the swing arc centre) brought to rest and both knees held; at knee strike on the rolling
+//! walker with the swing knee stopped and the stance knee held. The linear systems are solved
+//! by plain Gaussian elimination with partial pivoting ([`solve`]).
+//!
+//! The engine's conventions (read from the chain walker's module docs, nothing else): joints
+//! `q = (q₀, q₁, q₂, q₃) = (θ₀, θ₁ − θ₀, θ₂ − θ₁, θ₃ − θ₂)`; mode 0 (`FREE`) the swing knee
+//! free, mode 1 (`LOCKED`) every knee locked; the leg swap after heel strike relabels the
+//! segments, `θ' = (θ₃, θ₂, θ₁, θ₀)`.
+//!
+//! Checked here: the reference's own energy conservation and impact momenta; the engine's flow,
+//! energy, constraint loads and heel strike (impact, ground impulse, leg swap) against it at
+//! random states; the reference's stride map (its own RK4 with event location and Newton) at
+//! the `seed5_walking` gait, where its impacts' impulses are printed and the engine's heel
+//! strike is compared again. The reference knee strike ([`Reference::knee_strike`]: rolling
+//! stance foot, the contact point at rest, angular momenta about the contact point and, for the
+//! swing leg, about the hip conserved) is the map an engine knee strike with round feet must
+//! equal.
+
+use pdw_hybrid::{HybridSystem, Scratch};
+use pdw_walkers::{ChainWalker, Walker, WalkerSpec};
+
+/// Mode with the swing knee free (the stance knee locked).
+const FREE: usize = 0;
+/// Mode with both knees locked.
+const LOCKED: usize = 1;
+
+/// A point of the walker: `P = A + Σ_k (α_k e(θ_k) + β_k n(θ_k))` (module docs).
+#[derive(Clone, Copy, Debug)]
+struct Point {
+    alpha: [f64; 4],
+    beta: [f64; 4],
+}
+
+/// A rigid body: its COM, mass (kg), inertia about the COM (kg m²), the segment it turns with.
+#[derive(Clone, Copy, Debug)]
+struct Body {
+    com: Point,
+    mass: f64,
+    inertia: f64,
+    link: usize,
+}
+
+/// Body indices: stance shank, stance thigh, hip mass, swing thigh, swing shank.
+const STANCE_LEG: [usize; 2] = [0, 1];
+const SWING_LEG: [usize; 2] = [3, 4];
+
+/// `e(θ)`: along a segment (up when the segment is upright).
+fn e(th: f64) -> [f64; 2] {
+    [-th.sin(), th.cos()]
+}
+
+/// `n(θ)`: normal to a segment, forward.
+fn n(th: f64) -> [f64; 2] {
+    [th.cos(), th.sin()]
+}
+
+/// `u_k = ∂P/∂θ_k = −α_k n(θ_k) + β_k e(θ_k)` (without the rolling term).
+fn u(p: &Point, k: usize, th: &[f64; 4]) -> [f64; 2] {
+    let (a, b, t) = (p.alpha[k], p.beta[k], th[k]);
+    [-a * t.cos() - b * t.sin(), -a * t.sin() + b * t.cos()]
+}
+
+/// `d_k = ∂u_k/∂θ_k = −α_k e(θ_k) − β_k n(θ_k)` (centripetal direction).
+fn d(p: &Point, k: usize, th: &[f64; 4]) -> [f64; 2] {
+    let (a, b, t) = (p.alpha[k], p.beta[k], th[k]);
+    [a * t.sin() - b * t.cos(), -a * t.cos() - b * t.sin()]
+}
+
+/// 2-D cross product `a × b` (positive from `+y` to `+z`, the sense of the angles).
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// Solves `A x = b` in place (`A` row-major `n × n`, `b` becomes `x`) by Gaussian elimination
+/// with partial pivoting.
+fn solve(a: &mut [f64], b: &mut [f64], n: usize) {
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))
+            .unwrap();
+        assert!(
+            a[piv * n + col].abs() > 0.0,
+            "singular system at column {col}"
+        );
+        if piv != col {
+            for k in 0..n {
+                a.swap(piv * n + k, col * n + k);
+            }
+            b.swap(piv, col);
+        }
+        for i in col + 1..n {
+            let f = a[i * n + col] / a[col * n + col];
+            if f == 0.0 {
+                continue;
+            }
+            for k in col..n {
+                a[i * n + k] -= f * a[col * n + k];
+            }
+            b[i] -= f * b[col];
+        }
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= a[i * n + k] * b[k];
+        }
+        b[i] = s / a[i * n + i];
+    }
+}
+
+/// Solves the constrained system `[M −Gᵀ; G 0] [v; λ] = [f; 0]` (`M` `nv × nv`, `G` `nc × nv`,
+/// both row-major): returns `(v, λ)`.
+fn kkt(mm: &[f64], g: &[f64], f: &[f64], nv: usize, nc: usize) -> (Vec<f64>, Vec<f64>) {
+    let nt = nv + nc;
+    let mut a = vec![0.0; nt * nt];
+    let mut b = vec![0.0; nt];
+    for i in 0..nv {
+        for j in 0..nv {
+            a[i * nt + j] = mm[i * nv + j];
+        }
+        b[i] = f[i];
+    }
+    for c in 0..nc {
+        for j in 0..nv {
+            a[(nv + c) * nt + j] = g[c * nv + j];
+            a[j * nt + nv + c] = -g[c * nv + j];
+        }
+    }
+    solve(&mut a, &mut b, nt);
+    (b[..nv].to_vec(), b[nv..].to_vec())
+}
+
+/// Absolute segment angles (or rates) from the joint angles (or rates).
+fn angles(q: &[f64]) -> [f64; 4] {
+    [
+        q[0],
+        q[0] + q[1],
+        q[0] + q[1] + q[2],
+        q[0] + q[1] + q[2] + q[3],
+    ]
+}
+
+/// Joint angles (or rates) from the absolute segment angles (or rates).
+fn joints(th: &[f64]) -> [f64; 4] {
+    [th[0], th[1] - th[0], th[2] - th[1], th[3] - th[2]]
+}
+
+/// Knee constraint rows in angle space: stance knee `θ₁ − θ₀`, swing knee `θ₃ − θ₂`.
+const KNEE_ROWS: [[f64; 4]; 2] = [[-1.0, 1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 1.0]];
+
+/// Accelerations, lock torques and ground force at one state.
+#[derive(Clone, Copy, Debug)]
+struct Dynamics {
+    /// Joint accelerations `q̈` (rad/s²).
+    qdd: [f64; 4],
+    /// Lock torques `[stance knee, swing knee]` on `q₁`, `q₃` (N m, positive towards `q`
+    /// increasing; `None` where the knee is free).
+    lock: [Option<f64>; 2],
+    /// Ground force on the stance foot `[f_y, f_z]` (N).
+    ground: [f64; 2],
+}
+
+/// The reference knee strike (rolling stance foot, stance knee held, swing knee stopped).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct KneeStrike {
+    /// State just after the impact, swing knee angle and both knee rates set to exactly 0.
+    pub x_post: [f64; 8],
+    /// Joint rates just after the impact as solved (knee rates 0 to rounding).
+    pub rates_post: [f64; 4],
+    /// Ground impulse on the stance foot `[Λ_y, Λ_z]` (N s).
+    pub ground_impulse: [f64; 2],
+    /// Stop impulse of the stance knee (N m s, positive towards flexion).
+    pub stance_knee_impulse: f64,
+    /// Stop impulse of the striking swing knee (N m s, positive towards flexion).
+    pub swing_knee_impulse: f64,
+}
+
+/// The reference heel strike (plastic impact at the new contact point, knees held, old stance
+/// foot free) and the leg swap.
+#[derive(Clone, Copy, Debug)]
+struct HeelStrike {
+    /// State after the impact and the leg swap.
+    x_post: [f64; 8],
+    /// Floating rates `(Ȧ_y, Ȧ_z, q̇)` after the impact, before the leg swap.
+    floating_post: [f64; 6],
+    /// Ground impulse on the new stance foot `[Λ_y, Λ_z]` (N s).
+    contact_impulse: [f64; 2],
+    /// Stop impulse of the trailing (old stance) knee (N m s, positive towards flexion).
+    trailing_knee_impulse: f64,
+    /// Stop impulse of the new stance (old swing) knee (N m s, positive towards flexion).
+    new_stance_knee_impulse: f64,
+    /// Velocity of the trailing foot's contact point after the impact `[slip along +y, normal
+    /// separation]` (m/s).
+    trailing_foot_velocity: [f64; 2],
+}
+
+/// The closed-form round-foot kneed walker (module docs).
+#[derive(Clone, Debug)]
+pub(crate) struct Reference {
+    bodies: [Body; 5],
+    /// hip (top of the stance thigh)
+    hip: Point,
+    /// swing arc centre (on the swing shank's line, `r` above its lower end)
+    swing_arc: Point,
+    radius: f64,
+    gravity: f64,
+    slope: f64,
+    total_mass: f64,
+    leg_length: f64,
+}
+
+impl Reference {
+    /// The reference with the spec's evaluated geometry (`[L, m, c, c⊥, I]` per segment from
+    /// the foot up, hip mass, foot radius, gravity, slope).
+    fn new(w: &ChainWalker) -> Self {
+        let rs = w.resolved();
+        assert_eq!(rs.segments.len(), 2, "two segments per leg");
+        let [l0, m0, c0, cn0, i0] = rs.segments[0];
+        let [l1, m1, c1, cn1, i1] = rs.segments[1];
+        let r = rs.foot_radius;
+        let pt = |alpha: [f64; 4], beta: [f64; 4]| Point { alpha, beta };
+        let bodies = [
+            Body {
+                com: pt([c0 - r, 0.0, 0.0, 0.0], [cn0, 0.0, 0.0, 0.0]),
+                mass: m0,
+                inertia: i0,
+                link: 0,
+            },
+            Body {
+                com: pt([l0 - r, c1, 0.0, 0.0], [0.0, cn1, 0.0, 0.0]),
+                mass: m1,
+                inertia: i1,
+                link: 1,
+            },
+            Body {
+                com: pt([l0 - r, l1, 0.0, 0.0], [0.0; 4]),
+                mass: rs.hip_mass,
+                inertia: 0.0,
+                link: 1,
+            },
+            Body {
+                com: pt([l0 - r, l1, -(l1 - c1), 0.0], [0.0, 0.0, cn1, 0.0]),
+                mass: m1,
+                inertia: i1,
+                link: 2,
+            },
+            Body {
+                com: pt([l0 - r, l1, -l1, -(l0 - c0)], [0.0, 0.0, 0.0, cn0]),
+                mass: m0,
+                inertia: i0,
+                link: 3,
+            },
+        ];
+        Self {
+            bodies,
+            hip: pt([l0 - r, l1, 0.0, 0.0], [0.0; 4]),
+            swing_arc: pt([l0 - r, l1, -l1, -(l0 - r)], [0.0; 4]),
+            radius: r,
+            gravity: rs.gravity,
+            slope: rs.slope,
+            total_mass: 2.0 * (m0 + m1) + rs.hip_mass,
+            leg_length: l0 + l1,
+        }
+    }
+
+    /// `g⃗ = (g sin γ, −g cos γ)`.
+    fn gvec(&self) -> [f64; 2] {
+        [
+            self.gravity * self.slope.sin(),
+            -self.gravity * self.slope.cos(),
+        ]
+    }
+
+    /// Stance arc centre `A = (−r θ₀, r)` (contact point at the origin for `θ₀ = 0`).
+    fn arc_centre(&self, th: &[f64; 4]) -> [f64; 2] {
+        [-self.radius * th[0], self.radius]
+    }
+
+    fn position(&self, p: &Point, a: [f64; 2], th: &[f64; 4]) -> [f64; 2] {
+        let mut x = a;
+        for (k, &t) in th.iter().enumerate() {
+            let (ek, nk) = (e(t), n(t));
+            x[0] += p.alpha[k] * ek[0] + p.beta[k] * nk[0];
+            x[1] += p.alpha[k] * ek[1] + p.beta[k] * nk[1];
+        }
+        x
+    }
+
+    fn velocity(&self, p: &Point, adot: [f64; 2], th: &[f64; 4], thd: &[f64; 4]) -> [f64; 2] {
+        let mut v = adot;
+        for (k, &w) in thd.iter().enumerate() {
+            let uk = u(p, k, th);
+            v[0] += uk[0] * w;
+            v[1] += uk[1] * w;
+        }
+        v
+    }
+
+    /// Rolling mass matrix `M(θ)` in angle space (module docs), row-major 4 × 4.
+    fn mass_matrix(&self, th: &[f64; 4]) -> [f64; 16] {
+        let r = self.radius;
+        let mut mm = [0.0; 16];
+        for b in &self.bodies {
+            let (al, be, m) = (b.com.alpha, b.com.beta, b.mass);
+            for j in 0..4 {
+                for k in 0..4 {
+                    let dl = th[j] - th[k];
+                    mm[j * 4 + k] += m
+                        * ((al[j] * al[k] + be[j] * be[k]) * dl.cos()
+                            + (be[j] * al[k] - al[j] * be[k]) * dl.sin());
+                }
+            }
+            for k in 0..4 {
+                let rho_u = r * (al[k] * th[k].cos() + be[k] * th[k].sin());
+                mm[k] += m * rho_u;
+                mm[k * 4] += m * rho_u;
+            }
+            mm[0] += m * r * r;
+            mm[b.link * 5] += b.inertia;
+        }
+        mm
+    }
+
+    /// Floating mass matrix in `(A_y, A_z, θ)` (arc centre free), row-major 6 × 6.
+    fn floating_mass_matrix(&self, th: &[f64; 4]) -> [f64; 36] {
+        let mut mm = [0.0; 36];
+        for b in &self.bodies {
+            let (al, be, m) = (b.com.alpha, b.com.beta, b.mass);
+            mm[0] += m;
+            mm[7] += m;
+            for k in 0..4 {
+                let uk = u(&b.com, k, th);
+                for a in 0..2 {
+                    mm[a * 6 + 2 + k] += m * uk[a];
+                    mm[(2 + k) * 6 + a] += m * uk[a];
+                }
+            }
+            for j in 0..4 {
+                for k in 0..4 {
+                    let dl = th[j] - th[k];
+                    mm[(2 + j) * 6 + 2 + k] += m
+                        * ((al[j] * al[k] + be[j] * be[k]) * dl.cos()
+                            + (be[j] * al[k] - al[j] * be[k]) * dl.sin());
+                }
+            }
+            mm[(2 + b.link) * 7] += b.inertia;
+        }
+        mm
+    }
+
+    /// `Q(θ) − c(θ, θ̇)` of the rolling walker (module docs).
+    fn forces(&self, th: &[f64; 4], thd: &[f64; 4]) -> [f64; 4] {
+        let (g, gam, r) = (self.gravity, self.slope, self.radius);
+        let mut f = [0.0; 4];
+        for b in &self.bodies {
+            let (al, be, m) = (b.com.alpha, b.com.beta, b.mass);
+            for j in 0..4 {
+                f[j] += m * g * (al[j] * (th[j] - gam).sin() - be[j] * (th[j] - gam).cos());
+                for k in 0..4 {
+                    let (dl, w2) = (th[j] - th[k], thd[k] * thd[k]);
+                    f[j] -= m
+                        * w2
+                        * ((al[j] * al[k] + be[j] * be[k]) * dl.sin()
+                            + (al[j] * be[k] - be[j] * al[k]) * dl.cos());
+                }
+            }
+            for k in 0..4 {
+                f[0] += m * thd[k] * thd[k] * r * (al[k] * th[k].sin() - be[k] * th[k].cos());
+            }
+        }
+        f[0] -= self.total_mass * g * r * gam.sin();
+        f
+    }
+
+    /// Joint accelerations, lock torques and the ground force in `mode` at `x = (q, q̇)`.
+    fn dynamics(&self, mode: usize, x: &[f64]) -> Dynamics {
+        let (th, thd) = (angles(&x[..4]), angles(&x[4..8]));
+        let mm = self.mass_matrix(&th);
+        let f = self.forces(&th, &thd);
+        let nc = if mode == FREE { 1 } else { 2 };
+        let g: Vec<f64> = KNEE_ROWS[..nc].iter().flatten().copied().collect();
+        let (thdd, tau) = kkt(&mm, &g, &f, 4, nc);
+        let thdd: [f64; 4] = thdd.try_into().unwrap();
+        // Newton: F = Σ m (a − g⃗), a = Ä + Σ_k (u_k θ̈_k + d_k θ̇_k²), Ä = (−r θ̈₀, 0)
+        let gv = self.gvec();
+        let mut ground = [0.0; 2];
+        for b in &self.bodies {
+            let mut a = [-self.radius * thdd[0], 0.0];
+            for k in 0..4 {
+                let (uk, dk) = (u(&b.com, k, &th), d(&b.com, k, &th));
+                for c in 0..2 {
+                    a[c] += uk[c] * thdd[k] + dk[c] * thd[k] * thd[k];
+                }
+            }
+            for c in 0..2 {
+                ground[c] += b.mass * (a[c] - gv[c]);
+            }
+        }
+        Dynamics {
+            qdd: joints(&thdd),
+            lock: [Some(tau[0]), if nc == 2 { Some(tau[1]) } else { None }],
+            ground,
+        }
+    }
+
+    /// The flow `ẋ = (q̇, q̈)` in `mode`.
+    fn flow(&self, mode: usize, x: &[f64]) -> [f64; 8] {
+        let qdd = self.dynamics(mode, x).qdd;
+        let mut dx = [0.0; 8];
+        dx[..4].copy_from_slice(&x[4..8]);
+        dx[4..].copy_from_slice(&qdd);
+        dx
+    }
+
+    /// Kinetic energy `½ Σ m |v|² + ½ Σ I θ̇²` from the point velocities (rolling arc centre).
+    fn kinetic_energy(&self, x: &[f64]) -> f64 {
+        let (th, thd) = (angles(&x[..4]), angles(&x[4..8]));
+        let adot = [-self.radius * thd[0], 0.0];
+        self.bodies
+            .iter()
+            .map(|b| {
+                let v = self.velocity(&b.com, adot, &th, &thd);
+                0.5 * b.mass * (v[0] * v[0] + v[1] * v[1])
+                    + 0.5 * b.inertia * thd[b.link] * thd[b.link]
+            })
+            .sum()
+    }
+
+    /// Total energy `T + V`, `V = −Σ m g⃗·P` (zero at the contact point's height, arc centre
+    /// at height `r`).
+    fn energy(&self, x: &[f64]) -> f64 {
+        let th = angles(&x[..4]);
+        let a = self.arc_centre(&th);
+        let gv = self.gvec();
+        let v: f64 = self
+            .bodies
+            .iter()
+            .map(|b| {
+                let p = self.position(&b.com, a, &th);
+                -b.mass * (gv[0] * p[0] + gv[1] * p[1])
+            })
+            .sum();
+        self.kinetic_energy(x) + v
+    }
+
+    /// Angular momentum of `bodies` about the point `o` (fixed in space), with the arc centre
+    /// moving at `adot`: `Σ m (P − o) × v + I θ̇`.
+    fn angular_momentum(
+        &self,
+        bodies: &[usize],
+        o: [f64; 2],
+        a: [f64; 2],
+        adot: [f64; 2],
+        th: &[f64; 4],
+        thd: &[f64; 4],
+    ) -> f64 {
+        bodies
+            .iter()
+            .map(|&i| {
+                let b = &self.bodies[i];
+                let p = self.position(&b.com, a, th);
+                let v = self.velocity(&b.com, adot, th, thd);
+                b.mass * cross([p[0] - o[0], p[1] - o[1]], v) + b.inertia * thd[b.link]
+            })
+            .sum()
+    }
+
+    /// Linear momentum `Σ m v`.
+    fn momentum(&self, adot: [f64; 2], th: &[f64; 4], thd: &[f64; 4]) -> [f64; 2] {
+        let mut p = [0.0; 2];
+        for b in &self.bodies {
+            let v = self.velocity(&b.com, adot, th, thd);
+            p[0] += b.mass * v[0];
+            p[1] += b.mass * v[1];
+        }
+        p
+    }
+
+    /// Knee strike at `x` (free swing knee at 0): plastic stop of the swing knee with the
+    /// stance knee held and the stance foot rolling (the contact point at rest, the arc centre
+    /// at `−r θ̇₀` before and after): `[M −Gᵀ; G 0] [θ̇⁺; μ] = [M θ̇⁻; 0]`, `G` the two knee
+    /// rows; the ground impulse is the change of the linear momentum.
+    pub(crate) fn knee_strike(&self, x: &[f64]) -> KneeStrike {
+        let (th, thd) = (angles(&x[..4]), angles(&x[4..8]));
+        let mm = self.mass_matrix(&th);
+        let mut f = [0.0; 4];
+        for j in 0..4 {
+            f[j] = (0..4).map(|k| mm[j * 4 + k] * thd[k]).sum();
+        }
+        let g: Vec<f64> = KNEE_ROWS.iter().flatten().copied().collect();
+        let (thd_post, mu) = kkt(&mm, &g, &f, 4, 2);
+        let thd_post: [f64; 4] = thd_post.try_into().unwrap();
+        let p0 = self.momentum([-self.radius * thd[0], 0.0], &th, &thd);
+        let p1 = self.momentum([-self.radius * thd_post[0], 0.0], &th, &thd_post);
+        let mut x_post = [0.0; 8];
+        x_post[..4].copy_from_slice(&x[..4]);
+        x_post[3] = 0.0;
+        x_post[4..].copy_from_slice(&joints(&thd_post));
+        x_post[5] = 0.0;
+        x_post[7] = 0.0;
+        KneeStrike {
+            x_post,
+            rates_post: joints(&thd_post),
+            ground_impulse: [p1[0] - p0[0], p1[1] - p0[1]],
+            // a stance knee flexes with q₁ > 0, a swing knee with q₃ < 0
+            stance_knee_impulse: mu[0],
+            swing_knee_impulse: -mu[1],
+        }
+    }
+
+    /// Rows of the new contact point's velocity in floating rates `(Ȧ_y, Ȧ_z, θ̇)`: the material
+    /// point of the swing foot `r` below the swing arc centre, `v = Ȧ + Σ u_k θ̇_k + θ̇₃ (r, 0)`.
+    fn contact_rows(&self, th: &[f64; 4]) -> [[f64; 6]; 2] {
+        let mut g = [[0.0; 6]; 2];
+        for (c, row) in g.iter_mut().enumerate() {
+            row[c] = 1.0;
+            for k in 0..4 {
+                row[2 + k] = u(&self.swing_arc, k, th)[c];
+            }
+        }
+        g[0][5] += self.radius;
+        g
+    }
+
+    /// Heel strike at `x` (knees locked): `[M_F −Gᵀ; G 0] [ṗ⁺; λ] = [M_F ṗ⁻; 0]` on the floating
+    /// walker `p = (A, θ)` with `Ȧ⁻ = (−r θ̇₀, 0)`, `G` the new contact point's two rows and the
+    /// two knee rows; then the leg swap `θ' = (θ₃, θ₂, θ₁, θ₀)`.
+    fn heel_strike(&self, x: &[f64]) -> HeelStrike {
+        let (th, thd) = (angles(&x[..4]), angles(&x[4..8]));
+        let mm = self.floating_mass_matrix(&th);
+        let mut pd = [0.0; 6];
+        pd[0] = -self.radius * thd[0];
+        pd[2..].copy_from_slice(&thd);
+        let mut f = [0.0; 6];
+        for j in 0..6 {
+            f[j] = (0..6).map(|k| mm[j * 6 + k] * pd[k]).sum();
+        }
+        let mut g = Vec::with_capacity(24);
+        for row in self.contact_rows(&th) {
+            g.extend_from_slice(&row);
+        }
+        for row in KNEE_ROWS {
+            g.extend_from_slice(&[0.0, 0.0]);
+            g.extend_from_slice(&row);
+        }
+        let (pd_post, lam) = kkt(&mm, &g, &f, 6, 4);
+        let thd_post = [pd_post[2], pd_post[3], pd_post[4], pd_post[5]];
+        let mut floating_post = [0.0; 6];
+        floating_post[..2].copy_from_slice(&pd_post[..2]);
+        floating_post[2..].copy_from_slice(&joints(&thd_post));
+        let th_new = [th[3], th[2], th[1], th[0]];
+        let thd_new = [thd_post[3], thd_post[2], thd_post[1], thd_post[0]];
+        let mut x_post = [0.0; 8];
+        x_post[..4].copy_from_slice(&joints(&th_new));
+        x_post[4..].copy_from_slice(&joints(&thd_new));
+        HeelStrike {
+            x_post,
+            floating_post,
+            contact_impulse: [lam[0], lam[1]],
+            trailing_knee_impulse: lam[2],
+            new_stance_knee_impulse: -lam[3],
+            // the old stance foot's contact point, r below A on the shank: Ȧ + θ̇₀ (r, 0)
+            trailing_foot_velocity: [pd_post[0] + self.radius * thd_post[0], pd_post[1]],
+        }
+    }
+
+    /// Natural scales: `g/l` (accelerations), `√(g/l)` (rates), `m g` (forces), `m g l`
+    /// (torques, energies), `m √(g l)` (impulses), `m l √(g l)` (angular momenta).
+    fn scales(&self) -> Scales {
+        let (m, g, l) = (self.total_mass, self.gravity, self.leg_length);
+        Scales {
+            acc: g / l,
+            rate: (g / l).sqrt(),
+            force: m * g,
+            torque: m * g * l,
+            impulse: m * (g * l).sqrt(),
+            ang: m * l * (g * l).sqrt(),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Scales {
+    acc: f64,
+    rate: f64,
+    force: f64,
+    torque: f64,
+    impulse: f64,
+    ang: f64,
+}
+
+/// SplitMix64: a seeded generator of uniform numbers in `[lo, hi)`.
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// A random state of `mode`: the stance knee (and in the locked mode the swing knee) straight
+/// and still, the free swing knee flexed up to 0.6 rad, rates up to 1.5 `√(g/l)`.
+fn random_state(rng: &mut Rng, mode: usize, rate: f64) -> [f64; 8] {
+    let mut x = [0.0; 8];
+    x[0] = rng.uniform(-0.5, 0.5);
+    x[2] = rng.uniform(-1.0, 1.0);
+    x[4] = rate * rng.uniform(-1.5, 1.5);
+    x[6] = rate * rng.uniform(-1.5, 1.5);
+    if mode == FREE {
+        x[3] = rng.uniform(-0.6, 0.05);
+        x[7] = rate * rng.uniform(-1.5, 1.5);
+    }
+    x
+}
+
+/// The `seed5_walking` spec file.
+fn seed5_walking() -> ChainWalker {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/seed5_walking.toml");
+    ChainWalker::from_spec(WalkerSpec::from_file(&path).unwrap()).unwrap()
+}
+
+/// A kneed walker with inertia about each COM, COM offsets normal to both segments, a hip mass
+/// and round feet of radius 0.1 m (leg 0.95 m).
+const VARIANT: &str = r#"
+name = "round_foot_kneed_variant"
+description = "kneed walker with segment inertias, normal COM offsets and 0.1 m round feet"
+hip_mass = "hip_mass"
+foot_radius = "foot_radius"
+
+[parameters]
+slope = { value = 0.03, unit = "rad" }
+hip_mass = { value = 4.0, unit = "kg" }
+foot_radius = { value = 0.1, unit = "m" }
+
+[[segments]]
+name = "shank"
+length = 0.5
+mass = 1.5
+com = 0.2
+com_normal = -0.03
+inertia = 0.04
+
+[[segments]]
+name = "thigh"
+length = 0.45
+mass = 3.2
+com = 0.25
+com_normal = 0.05
+inertia = 0.07
+
+[[knees]]
+mode = "free-swing"
+"#;
+
+fn variant() -> ChainWalker {
+    ChainWalker::from_spec(WalkerSpec::from_toml(VARIANT, "variant").unwrap()).unwrap()
+}
+
+fn walkers() -> Vec<(&'static str, ChainWalker)> {
+    vec![("seed5_walking", seed5_walking()), ("variant", variant())]
+}
+
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+fn rk4(r: &Reference, mode: usize, x: &[f64; 8], h: f64) -> [f64; 8] {
+    let add = |x: &[f64; 8], k: &[f64; 8], s: f64| -> [f64; 8] {
+        let mut y = *x;
+        for i in 0..8 {
+            y[i] += s * k[i];
+        }
+        y
+    };
+    let k1 = r.flow(mode, x);
+    let k2 = r.flow(mode, &add(x, &k1, 0.5 * h));
+    let k3 = r.flow(mode, &add(x, &k2, 0.5 * h));
+    let k4 = r.flow(mode, &add(x, &k3, h));
+    let mut y = *x;
+    for i in 0..8 {
+        y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+    y
+}
+
+/// Self-check: `T = ½ θ̇ᵀ M θ̇` (the closed-form mass matrix against the point velocities) and
+/// `T + V` constant along the reference's own flow (RK4, 400 steps of 0.5 ms per mode).
+#[test]
+fn reference_conserves_energy_along_its_flow() {
+    for (name, w) in walkers() {
+        let r = Reference::new(&w);
+        let s = r.scales();
+        let mut rng = Rng(7);
+        let mut worst_t = 0.0f64;
+        let mut worst_drift = 0.0f64;
+        for mode in [FREE, LOCKED] {
+            for _ in 0..5 {
+                let x0 = random_state(&mut rng, mode, s.rate);
+                let (th, thd) = (angles(&x0[..4]), angles(&x0[4..8]));
+                let mm = r.mass_matrix(&th);
+                let mut t = 0.0;
+                for j in 0..4 {
+                    for k in 0..4 {
+                        t += 0.5 * thd[j] * mm[j * 4 + k] * thd[k];
+                    }
+                }
+                worst_t = worst_t.max((t - r.kinetic_energy(&x0)).abs() / s.torque);
+                let e0 = r.energy(&x0);
+                let mut x = x0;
+                for _ in 0..400 {
+                    x = rk4(&r, mode, &x, 5e-4);
+                    worst_drift = worst_drift.max((r.energy(&x) - e0).abs() / s.torque);
+                }
+            }
+        }
+        eprintln!("{name}: |T − ½θ̇ᵀMθ̇| ≤ {worst_t:.2e}, energy drift ≤ {worst_drift:.2e} m g l");
+        assert!(
+            worst_t < 1e-14,
+            "{name}: kinetic energy from M differs from the point velocities by {worst_t:e} m g l"
+        );
+        assert!(
+            worst_drift < 1e-11,
+            "{name}: energy drift {worst_drift:e} m g l along the reference flow (RK4, h = 0.5 ms)"
+        );
+    }
+}
+
+/// Self-check of the reference impacts: heel strike conserves the walker's angular momentum
+/// about the new contact point and the trailing leg's about the hip, brings the new contact
+/// point to rest and holds the knees; knee strike conserves the walker's angular momentum about
+/// the stance contact point and the swing leg's about the hip, keeps the contact point at rest
+/// (arc centre at `−r θ̇₀`) and stops the knees. All to 1e-12 of `m l √(g l)` (`√(g l)`).
+#[test]
+fn reference_impacts_conserve_angular_momenta() {
+    for (name, w) in walkers() {
+        let r = Reference::new(&w);
+        let s = r.scales();
+        let mut rng = Rng(11);
+        let (mut worst_h, mut worst_v) = (0.0f64, 0.0f64);
+        for _ in 0..20 {
+            // heel strike
+            let x = random_state(&mut rng, LOCKED, s.rate);
+            let hs = r.heel_strike(&x);
+            let th = angles(&x[..4]);
+            let (thd0, thd1) = (angles(&x[4..8]), angles(&hs.floating_post[2..6]));
+            let a = r.arc_centre(&th);
+            let (ad0, ad1) = (
+                [-r.radius * thd0[0], 0.0],
+                [hs.floating_post[0], hs.floating_post[1]],
+            );
+            let sa = r.position(&r.swing_arc, a, &th);
+            let contact = [sa[0], sa[1] - r.radius];
+            let all = [0, 1, 2, 3, 4];
+            let dh_all = r.angular_momentum(&all, contact, a, ad1, &th, &thd1)
+                - r.angular_momentum(&all, contact, a, ad0, &th, &thd0);
+            let hip = r.position(&r.hip, a, &th);
+            let dh_trail = r.angular_momentum(&STANCE_LEG, hip, a, ad1, &th, &thd1)
+                - r.angular_momentum(&STANCE_LEG, hip, a, ad0, &th, &thd0);
+            let sv = r.velocity(&r.swing_arc, ad1, &th, &thd1);
+            let contact_v = [sv[0] + r.radius * thd1[3], sv[1]];
+            worst_h = worst_h.max(dh_all.abs().max(dh_trail.abs()) / s.ang);
+            worst_v = worst_v.max(
+                contact_v[0]
+                    .abs()
+                    .max(contact_v[1].abs())
+                    .max((thd1[1] - thd1[0]).abs())
+                    .max((thd1[3] - thd1[2]).abs())
+                    / s.rate,
+            );
+            // knee strike
+            let x = random_state(&mut rng, FREE, s.rate);
+            let ks = r.knee_strike(&x);
+            let th = angles(&x[..4]);
+            let (thd0, thd1) = (angles(&x[4..8]), angles(&ks.rates_post));
+            let a = r.arc_centre(&th);
+            let (ad0, ad1) = ([-r.radius * thd0[0], 0.0], [-r.radius * thd1[0], 0.0]);
+            let contact = [a[0], a[1] - r.radius];
+            let dh_all = r.angular_momentum(&all, contact, a, ad1, &th, &thd1)
+                - r.angular_momentum(&all, contact, a, ad0, &th, &thd0);
+            let hip = r.position(&r.hip, a, &th);
+            let dh_swing = r.angular_momentum(&SWING_LEG, hip, a, ad1, &th, &thd1)
+                - r.angular_momentum(&SWING_LEG, hip, a, ad0, &th, &thd0);
+            worst_h = worst_h.max(dh_all.abs().max(dh_swing.abs()) / s.ang);
+            let post_knees = ks.rates_post[1].abs().max(ks.rates_post[3].abs());
+            worst_v = worst_v.max(post_knees / s.rate);
+        }
+        eprintln!(
+            "{name}: impacts |ΔH| ≤ {worst_h:.2e} m l √(gl), constraint rates ≤ {worst_v:.2e} √(g/l)"
+        );
+        assert!(
+            worst_h < 1e-12,
+            "{name}: angular momentum through the reference impacts changes by {worst_h:e} m l √(g l)"
+        );
+        assert!(
+            worst_v < 1e-12,
+            "{name}: constraint rates after the reference impacts {worst_v:e} √(g/l)"
+        );
+    }
+}
+
+/// The engine's flow (rolling-base recursion) equals the closed form to 1e-10 `g/l` at 20
+/// random states per mode; the engine's energy equals the reference's up to the constant
+/// `m g r cos γ` (the engine's potential is zero at the arc centre's height).
+#[test]
+fn flow_matches_reference_to_1e_10() {
+    for (name, w) in walkers() {
+        let r = Reference::new(&w);
+        let s = r.scales();
+        let mut rng = Rng(3);
+        let mut ws = Scratch::new();
+        let (mut worst, mut worst_e) = (0.0f64, 0.0f64);
+        let e_shift = r.total_mass * r.gravity * r.radius * r.slope.cos();
+        for mode in [FREE, LOCKED] {
+            for _ in 0..20 {
+                let x = random_state(&mut rng, mode, s.rate);
+                let mut dx = [0.0; 8];
+                w.flow(&mut ws, mode, &x, &mut dx);
+                let rf = r.flow(mode, &x);
+                worst = worst.max(max_abs_diff(&dx, &rf) / s.acc);
+                let ee = w.energy(&x).unwrap();
+                worst_e = worst_e.max((r.energy(&x) - e_shift - ee).abs() / s.torque);
+            }
+        }
+        eprintln!("{name}: flow |Δẋ| ≤ {worst:.2e} g/l, energy ≤ {worst_e:.2e} m g l");
+        assert!(
+            worst < 1e-10,
+            "{name}: engine flow differs from the reference by {worst:e} g/l"
+        );
+        assert!(
+            worst_e < 1e-10,
+            "{name}: engine energy differs from the reference by {worst_e:e} m g l"
+        );
+    }
+}
+
+/// The engine's constraint loads (ground normal and tangential force, stance knee lock torque,
+/// swing knee lock torque in the locked mode) equal the reference's Newton–Euler ground force
+/// and Lagrange multipliers to 1e-10 of `m g` and `m g l`.
+#[test]
+fn constraint_loads_match_reference_to_1e_10() {
+    for (name, w) in walkers() {
+        let r = Reference::new(&w);
+        let s = r.scales();
+        let mut rng = Rng(5);
+        let (mut worst_f, mut worst_t) = (0.0f64, 0.0f64);
+        for mode in [FREE, LOCKED] {
+            for _ in 0..20 {
+                let x = random_state(&mut rng, mode, s.rate);
+                let cf = w.constraint_forces(mode, &x).unwrap();
+                let rd = r.dynamics(mode, &x);
+                worst_f = worst_f
+                    .max((cf.normal - rd.ground[1]).abs() / s.force)
+                    .max((cf.tangential - rd.ground[0]).abs() / s.force);
+                // engine: positive towards flexion (stance q₁ > 0, swing q₃ < 0)
+                let stance = cf.knee_torque[0].expect("stance knee locked");
+                worst_t = worst_t.max((stance - rd.lock[0].unwrap()).abs() / s.torque);
+                match (mode, cf.knee_torque[1], rd.lock[1]) {
+                    (LOCKED, Some(e), Some(t)) => worst_t = worst_t.max((e + t).abs() / s.torque),
+                    (FREE, None, None) => {}
+                    other => panic!("{name}: swing knee lock mismatch in mode {mode}: {other:?}"),
+                }
+            }
+        }
+        eprintln!("{name}: ground force ≤ {worst_f:.2e} m g, knee torques ≤ {worst_t:.2e} m g l");
+        assert!(
+            worst_f < 1e-10,
+            "{name}: ground force differs from the reference by {worst_f:e} m g"
+        );
+        assert!(
+            worst_t < 1e-10,
+            "{name}: knee lock torques differ from the reference by {worst_t:e} m g l"
+        );
+    }
+}
+
+/// The engine's heel strike (impact + leg swap) equals the reference's to 1e-10 `√(g/l)` at
+/// 20 random locked states, and its ground impulse to 1e-10 `m √(g l)`.
+#[test]
+fn heel_strike_matches_reference_to_1e_10() {
+    for (name, w) in walkers() {
+        let r = Reference::new(&w);
+        let s = r.scales();
+        let mut rng = Rng(13);
+        let mut ws = Scratch::new();
+        let (mut worst_x, mut worst_i) = (0.0f64, 0.0f64);
+        for _ in 0..20 {
+            let x = random_state(&mut rng, LOCKED, s.rate);
+            let mut out = [0.0; 8];
+            let next = w.reset(&mut ws, LOCKED, 0, &x, &mut out);
+            assert_eq!(next, FREE, "{name}: heel strike leads to the free mode");
+            let hs = r.heel_strike(&x);
+            worst_x = worst_x
+                .max(max_abs_diff(&out[..4], &hs.x_post[..4]))
+                .max(max_abs_diff(&out[4..], &hs.x_post[4..]) / s.rate);
+            let mut fl = [0.0; 6];
+            let imp = w.heel_strike(&mut ws, &x, &mut fl);
+            worst_x = worst_x.max(max_abs_diff(&fl, &hs.floating_post) / s.rate);
+            worst_i = worst_i.max(max_abs_diff(&imp, &hs.contact_impulse) / s.impulse);
+        }
+        eprintln!("{name}: heel strike |Δx| ≤ {worst_x:.2e}, impulse ≤ {worst_i:.2e} m √(gl)");
+        assert!(
+            worst_x < 1e-10,
+            "{name}: heel strike differs from the reference by {worst_x:e} (rates in √(g/l))"
+        );
+        assert!(
+            worst_i < 1e-10,
+            "{name}: heel strike impulse differs from the reference by {worst_i:e} m √(g l)"
+        );
+    }
+}
+
+/// One RK4 step from `x` over `h` then steps of `h` until `guard` rises through 0 (after it
+/// has been negative); the crossing is located by bisection on the length of the last RK4 step
+/// (to rounding). Returns the state at the crossing, or `None` after `t_max`.
+fn integrate_to_event(
+    r: &Reference,
+    mode: usize,
+    x0: &[f64; 8],
+    guard: impl Fn(&[f64; 8]) -> Option<f64>,
+    h: f64,
+    t_max: f64,
+) -> Option<[f64; 8]> {
+    let mut x = *x0;
+    let mut armed = false;
+    let mut t = 0.0;
+    while t < t_max {
+        let y = rk4(r, mode, &x, h);
+        let gy = guard(&y);
+        if armed && gy.is_some_and(|g| g >= 0.0) {
+            let (mut lo, mut hi) = (0.0, h);
+            for _ in 0..80 {
+                let mid = 0.5 * (lo + hi);
+                if guard(&rk4(r, mode, &x, mid)).is_some_and(|g| g >= 0.0) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            return Some(rk4(r, mode, &x, hi));
+        }
+        armed = gy.is_some_and(|g| g < 0.0);
+        x = y;
+        t += h;
+    }
+    None
+}
+
+/// States of one stride of the reference from the section point `s = (q₀, q̇₀, q̇_m)` (every
+/// knee straight, `q_m = −2q₀`): before the knee strike, before the heel strike, and the next
+/// section point. The knee strike is the free knee rising through 0; the heel strike the swing
+/// foot's lowest point (r below its arc centre) falling through the slope with the swing foot
+/// ahead. RK4, 0.5 ms steps.
+fn reference_stride(r: &Reference, s: &[f64; 3]) -> Option<([f64; 8], [f64; 8], [f64; 3])> {
+    let x0 = [s[0], 0.0, -2.0 * s[0], 0.0, s[1], 0.0, s[2], 0.0];
+    let h = 5e-4;
+    let x_ks = integrate_to_event(r, FREE, &x0, |x| Some(x[3]), h, 10.0)?;
+    let x1 = r.knee_strike(&x_ks).x_post;
+    let foot = |x: &[f64; 8]| {
+        let th = angles(&x[..4]);
+        let a = r.arc_centre(&th);
+        let p = r.position(&r.swing_arc, a, &th);
+        // −height (falling through 0 is −height rising), only with the swing foot ahead
+        (p[0] > a[0]).then_some(-(p[1] - a[1]))
+    };
+    let x_hs = integrate_to_event(r, LOCKED, &x1, foot, h, 10.0)?;
+    let x2 = r.heel_strike(&x_hs).x_post;
+    Some((x_ks, x_hs, [x2[0], x2[4], x2[6]]))
+}
+
+/// The reference's fixed point of the stride map near `guess` (Newton, central differences)
+/// and the states just before its knee strike and heel strike.
+fn reference_gait(r: &Reference, guess: &[f64]) -> ([f64; 8], [f64; 8], [f64; 3], f64) {
+    let mut s = [guess[0], guess[1], guess[2]];
+    let f = |s: &[f64; 3]| -> [f64; 3] {
+        let p = reference_stride(r, s)
+            .expect("the reference stride completes")
+            .2;
+        [p[0] - s[0], p[1] - s[1], p[2] - s[2]]
+    };
+    let mut res = f64::INFINITY;
+    for _ in 0..12 {
+        let f0 = f(&s);
+        res = f0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if res < 1e-11 {
+            break;
+        }
+        let mut jac = [0.0; 9];
+        for j in 0..3 {
+            let dh = 1e-6;
+            let (mut sp, mut sm) = (s, s);
+            sp[j] += dh;
+            sm[j] -= dh;
+            let (fp, fm) = (f(&sp), f(&sm));
+            for i in 0..3 {
+                jac[i * 3 + j] = (fp[i] - fm[i]) / (2.0 * dh);
+            }
+        }
+        let mut step = f0;
+        solve(&mut jac, &mut step, 3);
+        for i in 0..3 {
+            s[i] -= step[i];
+        }
+    }
+    let (x_ks, x_hs, _) = reference_stride(r, &s).unwrap();
+    (x_ks, x_hs, s, res)
+}
+
+/// The seed5_walking gait of the reference (from the spec's gait guess): pre-impact states.
+fn gait_pre_impact_states(w: &ChainWalker) -> ([f64; 8], [f64; 8], [f64; 3]) {
+    let r = Reference::new(w);
+    let (x_ks, x_hs, s, res) = reference_gait(&r, &w.gait_guesses()[0].section);
+    assert!(res < 1e-10, "reference fixed point residual {res:e}");
+    (x_ks, x_hs, s)
+}
+
+/// At the seed5_walking gait: the engine's heel strike equals the reference's to 1e-10, the
+/// reference impacts conserve their angular momenta, the new contact's normal impulse pushes;
+/// the reference impulses are printed (`--nocapture`).
+#[test]
+fn impulses_at_the_seed5_walking_gait() {
+    let w = seed5_walking();
+    let r = Reference::new(&w);
+    let s = r.scales();
+    let (x_ks, x_hs, section) = gait_pre_impact_states(&w);
+    let ks = r.knee_strike(&x_ks);
+    let hs = r.heel_strike(&x_hs);
+    eprintln!("seed5_walking fixed point {section:?}");
+    eprintln!("knee strike pre {x_ks:?}");
+    eprintln!(
+        "knee strike: ground impulse normal {:.6e} N s, tangential {:.6e} N s, stance knee stop \
+         {:.6e} N m s, striking knee stop {:.6e} N m s",
+        ks.ground_impulse[1], ks.ground_impulse[0], ks.stance_knee_impulse, ks.swing_knee_impulse
+    );
+    eprintln!("heel strike pre {x_hs:?}");
+    eprintln!(
+        "heel strike: new contact normal {:.6e} N s, tangential {:.6e} N s, trailing knee stop \
+         {:.6e} N m s, new stance knee stop {:.6e} N m s, trailing foot separation {:.6e} m/s, \
+         slip {:.6e} m/s",
+        hs.contact_impulse[1],
+        hs.contact_impulse[0],
+        hs.trailing_knee_impulse,
+        hs.new_stance_knee_impulse,
+        hs.trailing_foot_velocity[1],
+        hs.trailing_foot_velocity[0]
+    );
+    let mut ws = Scratch::new();
+    let mut out = [0.0; 8];
+    w.reset(&mut ws, LOCKED, 0, &x_hs, &mut out);
+    let dx = max_abs_diff(&out[..4], &hs.x_post[..4])
+        .max(max_abs_diff(&out[4..], &hs.x_post[4..]) / s.rate);
+    let mut fl = [0.0; 6];
+    let imp = w.heel_strike(&mut ws, &x_hs, &mut fl);
+    let di = max_abs_diff(&imp, &hs.contact_impulse) / s.impulse;
+    eprintln!("gait heel strike vs engine: state {dx:.2e}, impulse {di:.2e} m √(gl)");
+    assert!(dx < 1e-10, "gait heel strike state differs by {dx:e}");
+    assert!(
+        di < 1e-10,
+        "gait heel strike impulse differs by {di:e} m √(g l)"
+    );
+    assert!(
+        hs.contact_impulse[1] > 0.0,
+        "the new stance foot's normal impulse must push: {:e} N s",
+        hs.contact_impulse[1]
+    );
+    assert!(
+        ks.swing_knee_impulse > 0.0,
+        "the striking knee's stop must push towards flexion: {:e} N m s",
+        ks.swing_knee_impulse
+    );
+    assert!(
+        ks.x_post.iter().chain(&hs.x_post).all(|v| v.is_finite()),
+        "finite post-impact states"
+    );
+}
