@@ -40,6 +40,16 @@ def fixed_point(
     modulus), stable, residual, iterations, validity (dict or None); for K > 1 also
     stride_periods, step_lengths and validity_per_stride.
 
+    A validity dict has the keys of `fixedpoint --json`'s `validity`, located on the dense
+    solution: valid, min_normal_force, max_friction_required, min_knee_torque,
+    normal_force_negative, knee_unlocks, swing_foot_scuffs, impact_violation, continuous, fell,
+    t_min_normal_force, t_max_friction_required, knee_torque {stance, swing}, clearance_rule
+    ("whole_swing" or "after_mid_stance"), min_clearance, scuff_depth, scuff_intervals,
+    t_mid_stance, impact_friction_required, impacts (event, t, checked, friction_required,
+    energy_lost, min_margin, entries), margins (name, raw, scale, scale_name, relative, t),
+    binding (the criterion with the smallest relative margin), min_relative_margin and
+    violations (criterion, t_start, t_end, worst).
+
     `slope` in rad; `params` are the model's parameters by name (see `models()`). `gait` is
     "stable", "unstable" or "all". Raises ValueError for invalid input (`period` outside
     1..=64), or when no orbit is found (the message lists every guess and why it failed)."""

@@ -151,6 +151,79 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
     d.set_item("normal_force_negative", v.normal_force_negative)?;
     d.set_item("knee_unlocks", v.knee_unlocks)?;
     d.set_item("swing_foot_scuffs", v.swing_foot_scuffs)?;
+    // located on the dense solution (pdw_limit::validity): margins, clearance, impacts
+    d.set_item("impact_violation", v.impact_violation)?;
+    d.set_item("continuous", v.continuous)?;
+    d.set_item("fell", v.fell.clone())?;
+    d.set_item("t_min_normal_force", v.t_min_normal_force)?;
+    d.set_item("t_max_friction_required", v.t_max_friction_required)?;
+    let knees = PyDict::new(py);
+    knees.set_item("stance", v.knee_torque[0])?;
+    knees.set_item("swing", v.knee_torque[1])?;
+    d.set_item("knee_torque", knees)?;
+    d.set_item(
+        "clearance_rule",
+        v.clearance_rule.map(|r| match r {
+            pdw_walkers::ClearanceRule::WholeSwing => "whole_swing",
+            pdw_walkers::ClearanceRule::AfterMidStance => "after_mid_stance",
+        }),
+    )?;
+    d.set_item("min_clearance", v.min_clearance)?;
+    d.set_item("scuff_depth", v.scuff_depth)?;
+    d.set_item("scuff_intervals", v.scuff_intervals.clone())?;
+    d.set_item("t_mid_stance", v.t_mid_stance)?;
+    d.set_item("impact_friction_required", v.impact_friction_required)?;
+    let impacts = PyList::empty(py);
+    for i in &v.impacts {
+        let e = PyDict::new(py);
+        e.set_item("event", &i.event)?;
+        e.set_item("t", i.t)?;
+        e.set_item("checked", i.report.is_some())?;
+        if let Some(r) = &i.report {
+            e.set_item("friction_required", r.friction_required)?;
+            e.set_item("energy_lost", r.energy_lost)?;
+            e.set_item("min_margin", r.min_margin().map(|m| m.0))?;
+            let entries = PyList::empty(py);
+            for en in &r.entries {
+                let x = PyDict::new(py);
+                x.set_item("name", &en.name)?;
+                x.set_item("kind", format!("{:?}", en.kind))?;
+                x.set_item("unilateral", en.unilateral)?;
+                x.set_item("active", en.active)?;
+                x.set_item("impulse", en.impulse)?;
+                x.set_item("rate_after", en.rate_after)?;
+                x.set_item("margin", en.margin())?;
+                entries.append(x)?;
+            }
+            e.set_item("entries", entries)?;
+        }
+        impacts.append(e)?;
+    }
+    d.set_item("impacts", impacts)?;
+    let margins = PyList::empty(py);
+    for m in &v.margins {
+        let x = PyDict::new(py);
+        x.set_item("name", &m.name)?;
+        x.set_item("raw", m.raw)?;
+        x.set_item("scale", m.scale)?;
+        x.set_item("scale_name", m.scale_name)?;
+        x.set_item("relative", m.relative)?;
+        x.set_item("t", m.t)?;
+        margins.append(x)?;
+    }
+    d.set_item("margins", margins)?;
+    d.set_item("binding", v.binding().map(|m| m.name.clone()))?;
+    d.set_item("min_relative_margin", v.min_relative_margin())?;
+    let violations = PyList::empty(py);
+    for x in &v.violations {
+        let y = PyDict::new(py);
+        y.set_item("criterion", &x.criterion)?;
+        y.set_item("t_start", x.t_start)?;
+        y.set_item("t_end", x.t_end)?;
+        y.set_item("worst", x.worst)?;
+        violations.append(y)?;
+    }
+    d.set_item("violations", violations)?;
     Ok(d)
 }
 

@@ -6,11 +6,14 @@
 //! [`evaluate_design`] takes a built walker (the design) and:
 //! 1. finds its period-one gaits by Newton from the given guesses ([`crate::gaits::search`]) and
 //!    keeps the one with the smallest largest multiplier modulus `ρ = max |λ|`;
-//! 2. walks one stride of it ([`crate::simulate`]) and reads the constraint forces and flags
-//!    along the whole stride ([`crate::Validity`]): the stance normal force must stay positive,
-//!    the friction needed `|f_t/f_n|` at most `mu`, every locked knee's lock torque at least
-//!    `knee_margin` (a passive hyper-extension stop can only push: the margin is the torque it
-//!    must have in hand), the swing foot clear of the ground after mid-stance, and — with a
+//! 2. walks one stride of it ([`crate::simulate`]) and locates the constraint loads, the
+//!    swing-foot clearance and the impacts on the dense solution ([`crate::Validity::along`],
+//!    [`crate::validity`]): the stance normal force must stay positive, the friction needed
+//!    `|f_t/f_n|` (along the flow and at every impact) at most `mu`, every locked knee's lock
+//!    torque at least `knee_margin` (a passive hyper-extension stop can only push: the margin
+//!    is the torque it must have in hand), the swing foot clear of the ground where the model's
+//!    clearance rule checks it, every impact physical (no pulling contact or stop), every
+//!    criterion's margin relative to its natural scale at least `min_margin`, and — with a
 //!    free-swing knee — a knee strike before the heel strike;
 //! 3. scores it. Feasible designs (stable and valid) get the objective: `margin` — `ρ` (smaller is
 //!    better); `basin` — minus the fraction of a fixed box of section states around the gait that
@@ -22,7 +25,9 @@
 //!    sums, over the failed constraints, the shortfall of the knee torque over a torque scale
 //!    (the upright walker's potential energy at rest, ≈ weight × half a leg), of the normal force
 //!    over a force scale (that torque over the step length), of the friction coefficient over 1,
-//!    plus 0.1 per failed force constraint and 0.5 for a scuff or a missing knee strike.
+//!    plus 0.1 per failed force constraint, 0.5 for a scuff, an unphysical impact, a fall or a
+//!    missing knee strike, and the shortfall of the binding relative margin below `min_margin`
+//!    (at most 1).
 //!
 //! # The search
 //! [`search`] evaluates the start (the model's own values of the free parameters, or the
@@ -73,6 +78,9 @@ pub struct DesignOptions {
     pub mu: f64,
     /// Smallest knee-lock torque a passive stop must be left with (N m, ≥ 0).
     pub knee_margin: f64,
+    /// Smallest relative margin every validity criterion must keep ([`Validity::margins`]:
+    /// each margin over its natural scale); 0 (the default) is the criteria's sign tests.
+    pub min_margin: f64,
     /// Designs evaluated (cached replays included).
     pub budget: usize,
     /// Seed of the initial random designs.
@@ -128,6 +136,9 @@ pub struct DesignEval {
     /// Period (s) and step length of the gait (NaN without).
     pub period: f64,
     pub step_length: f64,
+    /// The smallest relative margin of the validity criteria (the binding one's,
+    /// [`Validity::binding`]); NaN when not measured.
+    pub min_relative_margin: f64,
 }
 
 impl DesignEval {
@@ -145,6 +156,7 @@ impl DesignEval {
             min_knee_torque: f64::NAN,
             period: f64::NAN,
             step_length: f64::NAN,
+            min_relative_margin: f64::NAN,
         }
     }
 
@@ -214,7 +226,7 @@ pub fn evaluate_design(
     let tr = simulate(walker, &fp.state, &TrajectoryOptions::new(1));
     let (validity, knee_strike) = match &tr {
         Ok(t) => (
-            Validity::of(t),
+            Validity::along(walker, t, 0),
             t.events.iter().any(|e| e.kind == "knee_strike"),
         ),
         Err(_) => (None, false),
@@ -228,6 +240,7 @@ pub fn evaluate_design(
     ev.min_normal_force = v.min_normal_force;
     ev.max_friction = v.max_friction_required;
     ev.min_knee_torque = v.min_knee_torque.unwrap_or(f64::NAN);
+    ev.min_relative_margin = v.min_relative_margin().unwrap_or(f64::NAN);
     // violation scales: torque — the potential energy of the upright walker at rest (about
     // weight × half the leg length, N m); force — that over the step length (N)
     let mut up = vec![0.0; walker.dim()];
@@ -259,9 +272,43 @@ pub fn evaluate_design(
             ));
         }
     }
+    if v.impact_friction_required > opts.mu {
+        viol += (v.impact_friction_required - opts.mu).min(1.0);
+        why.push(format!(
+            "impact friction {:.3} > mu {}",
+            v.impact_friction_required, opts.mu
+        ));
+    }
     if v.swing_foot_scuffs {
         viol += 0.5;
-        why.push("swing foot scuffs after mid-stance".into());
+        why.push(format!(
+            "swing foot below the slope by {:.4} where its clearance rule checks it",
+            -v.min_clearance.unwrap_or(0.0)
+        ));
+    }
+    if v.impact_violation {
+        viol += 0.5;
+        let names: Vec<&str> = v
+            .violations
+            .iter()
+            .filter(|x| x.criterion.contains(':'))
+            .map(|x| x.criterion.as_str())
+            .collect();
+        why.push(format!(
+            "impact needs a pulling contact or stop: {}",
+            names.join(", ")
+        ));
+    }
+    if let Some(f) = &v.fell {
+        viol += 0.5;
+        why.push(format!("the stride falls: {f}"));
+    }
+    if let Some(b) = v.binding().filter(|b| b.relative < opts.min_margin) {
+        viol += (opts.min_margin - b.relative).clamp(0.0, 1.0);
+        why.push(format!(
+            "margin of {} {:.4} (relative to {}) < min margin {}",
+            b.name, b.relative, b.scale_name, opts.min_margin
+        ));
     }
     let free_knee = walker.guards(0).iter().any(|g| g.name == "knee_strike");
     if free_knee && !knee_strike {

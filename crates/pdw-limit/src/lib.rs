@@ -25,6 +25,7 @@ pub mod periodic;
 pub mod stride;
 pub mod sweep;
 pub mod trajectory;
+pub mod validity;
 pub mod variational;
 
 pub use attractors::{
@@ -61,4 +62,5 @@ pub use trajectory::{
     initial_state, model_energy, simulate, Trajectory, TrajectoryError, TrajectoryEvent,
     TrajectoryOptions, Validity,
 };
+pub use validity::{ImpactCheck, Margin, Violation};
 pub use variational::{ErrorControl, Variational};

@@ -110,6 +110,9 @@ pub struct TrajectoryEvent {
     pub ends_step: bool,
     /// True for a terminal guard (a fall).
     pub fall: bool,
+    /// Index of the guard in the guards of `mode_before` ([`pdw_hybrid::HybridSystem::guards`]),
+    /// for the model's impact report ([`Walker::impact_report`]).
+    pub guard: usize,
     /// Mode before the event.
     pub mode_before: usize,
     /// Mode after the event (`mode_before` for a fall).
@@ -418,6 +421,7 @@ pub fn simulate(
                                 kind: spec.name.to_string(),
                                 ends_step,
                                 fall: false,
+                                guard,
                                 mode_before: mode,
                                 mode_after: new_mode,
                                 pre: x.clone(),
@@ -451,6 +455,7 @@ pub fn simulate(
                                 kind: fall.name().to_string(),
                                 ends_step: false,
                                 fall: true,
+                                guard,
                                 mode_before: mode,
                                 mode_after: mode,
                                 pre: x.clone(),
@@ -476,57 +481,4 @@ pub fn simulate(
     Ok(rec.tr)
 }
 
-/// Constraint forces and validity flags along a trajectory: the gait is flagged, not silently
-/// accepted, if the stance foot would lift off, a locked knee would unlock, or the swing foot
-/// scuffs after mid-stance.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Validity {
-    pub min_normal_force: f64,
-    pub max_friction_required: f64,
-    /// Smallest knee-lock torque (negative: the knee would unlock); `None` without locked knees.
-    pub min_knee_torque: Option<f64>,
-    pub normal_force_negative: bool,
-    pub knee_unlocks: bool,
-    pub swing_foot_scuffs: bool,
-    /// Samples checked.
-    pub samples: usize,
-}
-
-impl Validity {
-    /// No flag raised.
-    pub fn valid(&self) -> bool {
-        !(self.normal_force_negative || self.knee_unlocks || self.swing_foot_scuffs)
-    }
-
-    /// Summary of a trajectory's forces and flags; `None` if the model computes neither or the
-    /// walk did not complete its steps.
-    pub fn of(tr: &Trajectory) -> Option<Self> {
-        let (f, flags) = (tr.forces.as_ref()?, tr.flags.as_ref()?);
-        if !tr.outcome.is_ok() || flags.is_empty() {
-            return None;
-        }
-        let or = |bit| flags.iter().any(|b| b & bit != 0);
-        let min_knee = f
-            .knee_torque
-            .iter()
-            .filter(|k| !k.is_nan())
-            .fold(None, |m: Option<f64>, &k| Some(m.map_or(k, |m| m.min(k))));
-        Some(Self {
-            min_normal_force: f.normal.iter().copied().fold(f64::INFINITY, f64::min),
-            max_friction_required: f.friction_required.iter().copied().fold(0.0, f64::max),
-            min_knee_torque: min_knee,
-            normal_force_negative: or(FLAG_NORMAL_NEGATIVE),
-            knee_unlocks: or(FLAG_KNEE_UNLOCKS),
-            swing_foot_scuffs: or(FLAG_SWING_FOOT_SCUFFS),
-            samples: flags.len(),
-        })
-    }
-
-    /// Validity along one step of the gait from the post-impact state `x0` (every accepted
-    /// DOP853 step at [`TRAJECTORY_TOL`] and both sides of every event).
-    pub fn along_step(w: &dyn Walker, x0: &[f64]) -> Option<Self> {
-        simulate(w, x0, &TrajectoryOptions::new(1))
-            .ok()
-            .and_then(|tr| Self::of(&tr))
-    }
-}
+pub use crate::validity::Validity;

@@ -19,6 +19,7 @@ fn opts(objective: Objective) -> DesignOptions {
         objective,
         mu: 0.6,
         knee_margin: 0.1,
+        min_margin: 0.0,
         budget: 1,
         seed: 0,
         start: None,

@@ -105,8 +105,8 @@ pub use stability::{
     read_stability, write_stability, StabilityAttractor, StabilityData, STABILITY_FORMAT,
 };
 pub use sweep::{
-    read_sweep, sweep_csv_columns, sweep_json, write_sweep, write_sweep_csv, Bifurcation, Branch,
-    OrbitDiagram, StrideValidity, SweepData,
+    binding_name, read_sweep, sweep_csv_columns, sweep_json, write_sweep, write_sweep_csv,
+    Bifurcation, Branch, OrbitDiagram, StrideValidity, SweepData, BINDING_CRITERIA,
 };
 pub use trajectory::{
     read_trajectory_h5, write_trajectory_csv, write_trajectory_h5, TrajColumn, TrajEvents,

@@ -16,8 +16,11 @@
 //!                    step_length f64 [n, K] (per stride, NaN if the model reports none),
 //!                    speed f64 [n] (K step lengths / period), and per stride [n, K]:
 //!                    validity_checked, valid, normal_force_negative, knee_unlocks,
-//!                    swing_foot_scuffs (u8, 1 = yes), min_normal_force, max_friction_required,
-//!                    min_knee_torque (f64, NaN where not defined)
+//!                    swing_foot_scuffs, impact_violation (u8, 1 = yes), min_normal_force,
+//!                    max_friction_required, min_knee_torque, min_clearance, scuff_depth,
+//!                    min_impact_margin, min_relative_margin (f64, NaN where not defined),
+//!                    binding_criterion (u8; attr legend: JSON code → name, see
+//!                    [`BINDING_CRITERIA`]); the last six are absent from older files
 //! /bifurcations/NNN  attrs kind ("period-doubling", "fold", "neimark-sacker", …), parameter,
 //!                    branch (index); section f64 [d]
 //! /orbit             optional brute-force orbit diagram: parameter f64 [n], points f64 [n, s]
@@ -60,7 +63,31 @@ pub struct StrideValidity {
     pub max_friction_required: f64,
     /// Smallest knee-lock torque; NaN without locked knees.
     pub min_knee_torque: f64,
+    /// An impact needs a pulling contact or stop (a negative impulse margin).
+    pub impact_violation: bool,
+    /// Smallest interior clearance of the swing foot where the model's clearance rule checks
+    /// it (length units); NaN where the foot only rises and falls, or without a swing foot.
+    pub min_clearance: f64,
+    /// Deepest point of the swing foot below the slope anywhere in the swing (0 if never).
+    pub scuff_depth: f64,
+    /// Smallest impact margin (model units of its entry); NaN without impact reports.
+    pub min_impact_margin: f64,
+    /// Smallest margin relative to its natural scale (the binding criterion's); NaN without.
+    pub min_relative_margin: f64,
+    /// The binding criterion, an index into [`BINDING_CRITERIA`].
+    pub binding: u8,
 }
+
+/// Names of [`StrideValidity::binding`] by code (the `legend` attribute of the
+/// `binding_criterion` dataset): `impact` is any entry of an impact report.
+pub const BINDING_CRITERIA: [&str; 6] = [
+    "none",
+    "normal_force",
+    "stance_knee_torque",
+    "swing_knee_torque",
+    "swing_clearance",
+    "impact",
+];
 
 impl StrideValidity {
     /// Not checked (the model computes no constraint forces).
@@ -69,6 +96,10 @@ impl StrideValidity {
             min_normal_force: f64::NAN,
             max_friction_required: f64::NAN,
             min_knee_torque: f64::NAN,
+            min_clearance: f64::NAN,
+            scuff_depth: f64::NAN,
+            min_impact_margin: f64::NAN,
+            min_relative_margin: f64::NAN,
             ..Self::default()
         }
     }
@@ -377,18 +408,56 @@ fn fill(p: &Path, f: &File, data: &SweepData) -> Result<()> {
 /// The per-stride validity fields, in file order: flags (u8) then forces (f64).
 type FlagOf = fn(&StrideValidity) -> bool;
 type ForceOf = fn(&StrideValidity) -> f64;
-const FLAGS: [(&str, FlagOf); 5] = [
+const FLAGS: [(&str, FlagOf); 6] = [
     ("validity_checked", |v| v.checked),
     ("valid", |v| v.valid),
     ("normal_force_negative", |v| v.normal_force_negative),
     ("knee_unlocks", |v| v.knee_unlocks),
     ("swing_foot_scuffs", |v| v.swing_foot_scuffs),
+    ("impact_violation", |v| v.impact_violation),
 ];
-const FORCES: [(&str, ForceOf); 3] = [
+const FORCES: [(&str, ForceOf); 7] = [
     ("min_normal_force", |v| v.min_normal_force),
     ("max_friction_required", |v| v.max_friction_required),
     ("min_knee_torque", |v| v.min_knee_torque),
+    ("min_clearance", |v| v.min_clearance),
+    ("scuff_depth", |v| v.scuff_depth),
+    ("min_impact_margin", |v| v.min_impact_margin),
+    ("min_relative_margin", |v| v.min_relative_margin),
 ];
+/// Fields added after the first files of this format: absent from older files, read as
+/// unchecked.
+const ADDED: [&str; 6] = [
+    "impact_violation",
+    "min_clearance",
+    "scuff_depth",
+    "min_impact_margin",
+    "min_relative_margin",
+    "binding_criterion",
+];
+
+fn flag_mut<'a>(e: &'a mut StrideValidity, name: &str) -> &'a mut bool {
+    match name {
+        "validity_checked" => &mut e.checked,
+        "valid" => &mut e.valid,
+        "normal_force_negative" => &mut e.normal_force_negative,
+        "knee_unlocks" => &mut e.knee_unlocks,
+        "impact_violation" => &mut e.impact_violation,
+        _ => &mut e.swing_foot_scuffs,
+    }
+}
+
+fn force_mut<'a>(e: &'a mut StrideValidity, name: &str) -> &'a mut f64 {
+    match name {
+        "min_normal_force" => &mut e.min_normal_force,
+        "max_friction_required" => &mut e.max_friction_required,
+        "min_clearance" => &mut e.min_clearance,
+        "scuff_depth" => &mut e.scuff_depth,
+        "min_impact_margin" => &mut e.min_impact_margin,
+        "min_relative_margin" => &mut e.min_relative_margin,
+        _ => &mut e.min_knee_torque,
+    }
+}
 
 fn write_measured(p: &Path, g: &Group, b: &Branch, d: usize) -> Result<()> {
     let n = b.parameter.len();
@@ -425,6 +494,24 @@ fn write_measured(p: &Path, g: &Group, b: &Branch, d: usize) -> Result<()> {
             .collect();
         put(p, g, name, &matrix(&rows, k))?;
     }
+    let codes: Vec<u8> = b.validity.iter().flatten().map(|v| v.binding).collect();
+    let a = Array2::from_shape_vec((n, k), codes).expect("shape validated");
+    let ds = g
+        .new_dataset_builder()
+        .with_data(&a)
+        .create("binding_criterion")
+        .at(p, "writing binding_criterion")?;
+    let legend: serde_json::Map<String, serde_json::Value> = BINDING_CRITERIA
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (i.to_string(), serde_json::Value::from(*n)))
+        .collect();
+    set_str(
+        p,
+        &ds,
+        "legend",
+        &serde_json::Value::Object(legend).to_string(),
+    )?;
     Ok(())
 }
 
@@ -446,34 +533,42 @@ fn read_measured(p: &Path, g: &Group, b: &mut Branch) -> Result<()> {
     b.speed = r1("speed")?;
     b.step_length = rows(r2("step_length")?);
     let (n, k) = (b.orbit.len(), b.period_strides as usize);
-    let mut v = vec![vec![StrideValidity::default(); k]; n];
+    let mut v = vec![vec![StrideValidity::unchecked(); k]; n];
+    let absent = |name: &str| ADDED.contains(&name) && !g.link_exists(name);
     for (name, _) in FLAGS {
+        if absent(name) {
+            continue;
+        }
         let a = g
             .dataset(name)
             .and_then(|d| d.read_2d::<u8>())
             .at(p, name)?;
         for ((i, j), &x) in a.indexed_iter() {
             if let Some(e) = v.get_mut(i).and_then(|r| r.get_mut(j)) {
-                let x = x != 0;
-                match name {
-                    "validity_checked" => e.checked = x,
-                    "valid" => e.valid = x,
-                    "normal_force_negative" => e.normal_force_negative = x,
-                    "knee_unlocks" => e.knee_unlocks = x,
-                    _ => e.swing_foot_scuffs = x,
-                }
+                *flag_mut(e, name) = x != 0;
             }
         }
     }
     for (name, _) in FORCES {
+        if absent(name) {
+            continue;
+        }
         let a = r2(name)?;
         for ((i, j), &x) in a.indexed_iter() {
             if let Some(e) = v.get_mut(i).and_then(|r| r.get_mut(j)) {
-                match name {
-                    "min_normal_force" => e.min_normal_force = x,
-                    "max_friction_required" => e.max_friction_required = x,
-                    _ => e.min_knee_torque = x,
-                }
+                *force_mut(e, name) = x;
+            }
+        }
+    }
+    if !absent("binding_criterion") {
+        let name = "binding_criterion";
+        let a = g
+            .dataset(name)
+            .and_then(|d| d.read_2d::<u8>())
+            .at(p, name)?;
+        for ((i, j), &x) in a.indexed_iter() {
+            if let Some(e) = v.get_mut(i).and_then(|r| r.get_mut(j)) {
+                e.binding = x;
             }
         }
     }
@@ -607,10 +702,20 @@ pub fn read_sweep(path: impl AsRef<Path>) -> Result<SweepData> {
     })
 }
 
+/// The name of a [`StrideValidity::binding`] code.
+pub fn binding_name(code: u8) -> &'static str {
+    BINDING_CRITERIA
+        .get(code as usize)
+        .copied()
+        .unwrap_or("none")
+}
+
 /// The columns of [`write_sweep_csv`]: `param, branch, branch_name, period_k, point`, the d
 /// section coordinates, `period, step_length, speed, stable`, the validity fields
 /// (`validity_checked, valid, normal_force_negative, knee_unlocks, swing_foot_scuffs,
-/// min_normal_force, max_friction_required, min_knee_torque`), then `lambda{i}_re, lambda{i}_im`
+/// impact_violation, min_normal_force, max_friction_required, min_knee_torque, min_clearance,
+/// scuff_depth, min_impact_margin, min_relative_margin, binding_criterion` — the binding
+/// criterion by name), then `lambda{i}_re, lambda{i}_im`
 /// for each of the m multipliers (i = 1..m, by decreasing modulus).
 pub fn sweep_csv_columns(data: &SweepData) -> Vec<String> {
     let m = data
@@ -626,6 +731,7 @@ pub fn sweep_csv_columns(data: &SweepData) -> Vec<String> {
     c.extend(["period", "step_length", "speed", "stable"].map(String::from));
     c.extend(FLAGS.iter().map(|(n, _)| n.to_string()));
     c.extend(FORCES.iter().map(|(n, _)| n.to_string()));
+    c.push("binding_criterion".into());
     for i in 1..=m {
         c.push(format!("lambda{i}_re"));
         c.push(format!("lambda{i}_im"));
@@ -691,6 +797,7 @@ pub fn write_sweep_csv(
                         .map_or(StrideValidity::unchecked(), |v| v[j]);
                     row.extend(FLAGS.iter().map(|(_, f)| flag(f(&v)).to_string()));
                     row.extend(FORCES.iter().map(|(_, f)| num(f(&v))));
+                    row.push(binding_name(v.binding).into());
                     for z in &b.multipliers[i] {
                         row.push(num(z.0));
                         row.push(num(z.1));
@@ -730,6 +837,7 @@ pub fn sweep_json(data: &SweepData) -> serde_json::Value {
         for (n, f) in FORCES {
             o.insert(n.into(), json!(f(v)));
         }
+        o.insert("binding_criterion".into(), json!(binding_name(v.binding)));
         serde_json::Value::Object(o)
     };
     let branches: Vec<serde_json::Value> = data

@@ -331,6 +331,10 @@ pub struct DesignArgs {
     /// Smallest knee-lock torque (N m) a passive knee stop must be left with along the stride.
     #[arg(long, default_value_t = 0.1)]
     pub knee_margin: f64,
+    /// Smallest margin every validity criterion must keep, relative to its natural scale
+    /// (forces / m g, torques / m g l, clearance / l, impulses / m sqrt(g l)); 0 = sign tests.
+    #[arg(long, default_value_t = 0.0)]
+    pub min_margin: f64,
     /// Basin cells per side (objective basin).
     #[arg(long, default_value_t = 15)]
     pub basin_grid: usize,

@@ -636,3 +636,61 @@ fn default_basin_labels_against_a_dop853_1e14_reference() {
     // At most 0.01 % of the cells.
     assert!(differ <= nx * ny / 10_000, "{differ} cells differ");
 }
+
+/// `fixedpoint --json`'s validity: the old keys kept, the dense-solution keys added and
+/// consistent — every relative margin is raw / scale, the binding one is the smallest, the
+/// simplest walker keeps the mid-stance convention with its scuff reported.
+#[test]
+fn fixedpoint_json_validity_margins_are_consistent() {
+    let o = run(&["fixedpoint", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = &j["fixed_points"][0]["validity"];
+    for k in [
+        "valid",
+        "min_normal_force",
+        "max_friction_required",
+        "min_knee_torque",
+        "normal_force_negative",
+        "knee_unlocks",
+        "swing_foot_scuffs",
+        "impact_violation",
+        "margins",
+        "binding",
+        "min_relative_margin",
+        "clearance_rule",
+        "scuff_depth",
+        "impacts",
+        "violations",
+    ] {
+        assert!(v.get(k).is_some(), "validity has no {k}: {v}");
+    }
+    assert_eq!(v["valid"], true);
+    assert_eq!(v["clearance_rule"], "after_mid_stance");
+    let scuff = v["scuff_depth"].as_f64().unwrap();
+    assert!(scuff > 1e-5 && scuff < 1e-3, "mid-stance scuff {scuff} l");
+    let margins = v["margins"].as_array().unwrap();
+    let mut smallest = (f64::INFINITY, String::new());
+    for m in margins {
+        let (raw, scale, rel) = (
+            m["raw"].as_f64().unwrap(),
+            m["scale"].as_f64().unwrap(),
+            m["relative"].as_f64().unwrap(),
+        );
+        assert_eq!(rel, raw / scale, "{m}");
+        // the simplest walker's own units: relative = raw
+        assert_eq!(scale, 1.0, "{m}");
+        if rel < smallest.0 {
+            smallest = (rel, m["name"].as_str().unwrap().to_string());
+        }
+    }
+    assert_eq!(v["binding"], smallest.1.as_str());
+    assert_eq!(v["min_relative_margin"].as_f64().unwrap(), smallest.0);
+    let nf = margins.iter().find(|m| m["name"] == "normal_force").unwrap();
+    assert_eq!(nf["raw"], v["min_normal_force"]);
+    // the heel strike's impulses: pushing, the trailing foot separating
+    let imp = &v["impacts"][0];
+    assert_eq!(imp["event"], "heel_strike");
+    assert_eq!(imp["checked"], true);
+    assert!(imp["min_margin"].as_f64().unwrap() > 0.0, "{imp}");
+}

@@ -135,3 +135,50 @@ fn bad_design_arguments_exit_2_naming_the_value() {
         assert!(!out.exists(), "{args:?}: nothing written on bad input");
     }
 }
+
+/// `--min-margin X` requires every validity criterion's relative margin to be at least X: the
+/// compass at its defaults is feasible with the default 0 and rejected with 0.9 (its normal
+/// force margin alone is 0.69 m g), the stored smallest relative margin below the requirement
+/// and the reason naming the binding criterion.
+#[test]
+fn min_margin_rejects_a_design_below_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "design",
+            "--model",
+            "compass",
+            "--free",
+            "hip_mass=9.5:10.5",
+            "--objective",
+            "margin",
+            "--budget",
+            "1",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        (run(&args), out)
+    };
+    let cols = ["min_relative_margin"];
+    let (o, out) = design("zero.h5", &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let d = pdw_store::read_design(&out, &cols).unwrap();
+    let m0 = d.column("min_relative_margin").unwrap()[0];
+    assert!(m0 > 0.0 && m0 < 0.9, "smallest relative margin {m0}");
+    assert_eq!(d.status[0], 0, "feasible");
+    let (o, out) = design("high.h5", &["--min-margin", "0.9"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let d = pdw_store::read_design(&out, &cols).unwrap();
+    assert_eq!(d.status[0], 1, "invalid");
+    assert_eq!(d.column("min_relative_margin").unwrap()[0], m0);
+    assert!(d.reasons[0].contains("min margin 0.9"), "{}", d.reasons[0]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("smallest relative margin"), "{stdout}");
+    // a negative requirement is refused
+    let (o, _) = design("neg.h5", &["--min-margin", "-0.1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--min-margin"), "{}", stderr(&o));
+}

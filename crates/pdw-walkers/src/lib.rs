@@ -25,4 +25,6 @@ pub use registry::{
     ParamSpec, Pose, StaticParam, Walker, PRESETS,
 };
 pub use spec::WalkerSpec;
-pub use validity::{ConstraintForces, StepFlags};
+pub use validity::{
+    ClearanceRule, ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
+};

@@ -9,7 +9,7 @@
 use crate::chain_walker::ChainWalker;
 use crate::error::WalkerError;
 use crate::spec::WalkerSpec;
-use crate::validity::{ConstraintForces, StepFlags};
+use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::Section;
 
 /// One user-settable model parameter.
@@ -80,6 +80,25 @@ pub trait Walker: Section {
     /// Unit of [`Walker::energy`], e.g. `"J"`, `"M g l"`.
     fn energy_unit(&self) -> &str {
         ""
+    }
+    /// The impulses of the reset of guard `guard` of `mode` at the pre-impact state `x_pre`
+    /// (contacts and knee stops from the impact's complementarity problem), if the model
+    /// computes them.
+    fn impact_report(&self, _mode: usize, _guard: usize, _x_pre: &[f64]) -> Option<ImpactReport> {
+        None
+    }
+    /// Natural scales (total mass, leg length, gravity) for relative margins, if defined.
+    fn scales(&self) -> Option<Scales> {
+        None
+    }
+    /// Height of the swing foot's lowest point above the slope at `(mode, x)` (model length
+    /// units), if the model has a swing foot.
+    fn swing_clearance(&self, _mode: usize, _x: &[f64]) -> Option<f64> {
+        None
+    }
+    /// Where the swing foot must clear the ground ([`ClearanceRule`]).
+    fn clearance_rule(&self) -> ClearanceRule {
+        ClearanceRule::AfterMidStance
     }
 }
 

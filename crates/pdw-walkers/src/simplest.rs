@@ -69,7 +69,9 @@
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
-use crate::validity::{ConstraintForces, StepFlags};
+use crate::validity::{
+    ClearanceRule, ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
+};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::FRAC_PI_2;
@@ -708,6 +710,92 @@ impl Walker for Simplest {
             links: vec![[[0.0, 0.0], hip], [hip, foot]],
             joints: vec![hip],
             swing_foot: Some(foot),
+        })
+    }
+    /// The model's own units: hip mass `M = 1`, leg length `l = 1`, `g = 1` (time in `√(l/g)`).
+    /// Its forces are per unit hip weight `M g` and the legs are massless (`m/M → 0`), so the
+    /// total mass is `M` and every relative margin is the raw number (forces already in `M g`,
+    /// torques in `M g l`, impulses in `M √(g l)`).
+    fn scales(&self) -> Option<Scales> {
+        Some(Scales {
+            mass: 1.0,
+            length: 1.0,
+            gravity: 1.0,
+        })
+    }
+    /// `h = cos θ − cos ψ = 2 sin(φ/2) sin((φ − 2θ)/2)`, `ψ = θ − φ` (module docs; leg length 1).
+    fn swing_clearance(&self, _mode: usize, x: &[f64]) -> Option<f64> {
+        let (th, ph) = (x[0], x[2]);
+        Some(2.0 * (0.5 * ph).sin() * (0.5 * (ph - 2.0 * th)).sin())
+    }
+    /// A straight massless swing leg must pass through the slope at mid-stance: the point-foot
+    /// convention of Garcia et al. 1998 (§2, "we ignore this scuffing").
+    fn clearance_rule(&self) -> ClearanceRule {
+        ClearanceRule::AfterMidStance
+    }
+    /// The heel strike's impulses per unit `M √(g l)`: the massless new stance leg carries only
+    /// an axial impulse, so the ground's impulse on the hip is along that leg and cancels the
+    /// hip velocity's component along it (the jump map's conservation of angular momentum
+    /// about the new contact; module docs, "Jump map"). With `θ = θ⁻` (the new stance leg at
+    /// `e = (sin θ, cos θ)` from its foot, slope frame of the module docs) and hip velocity
+    /// `θ̇ (−cos θ, −sin θ)`, `v·e = −θ̇ sin 2θ` and the impulse is `Λ = θ̇ sin 2θ · e`: normal
+    /// `Λ_n = θ̇ sin 2θ cos θ` (> 0 for a gait: θ⁻, θ̇⁻ < 0), tangential `Λ_t = θ̇ sin 2θ sin θ`,
+    /// friction needed `|tan θ|`, energy lost `½ θ̇² sin² 2θ`. The trailing foot releases; its
+    /// separation rate is the rate of the new swing foot's height after the jump map,
+    /// `ḣ⁺ = −sin θ⁺ θ̇⁺ + sin ψ⁺ ψ̇⁺` with `ψ = θ − φ`.
+    fn impact_report(&self, _mode: usize, guard: usize, x: &[f64]) -> Option<ImpactReport> {
+        if guard != HEEL_STRIKE {
+            return None;
+        }
+        let (th, thd) = (x[0], x[1]);
+        let a = thd * (2.0 * th).sin();
+        let (ln, lt) = (a * th.cos(), a * th.sin());
+        let mut post = [0.0; 4];
+        self.reset(&mut Scratch::new(), 0, guard, x, &mut post);
+        let (psi, psid) = (post[0] - post[2], post[1] - post[3]);
+        let rate = -post[0].sin() * post[1] + psi.sin() * psid;
+        let entry = |name: &str, kind, unilateral, active, impulse, rate_after| ImpulseEntry {
+            name: name.into(),
+            kind,
+            unilateral,
+            active,
+            impulse,
+            rate_after,
+        };
+        Some(ImpactReport {
+            event: GUARDS[HEEL_STRIKE].name.into(),
+            entries: vec![
+                entry(
+                    "new_stance_foot",
+                    ImpulseKind::ContactNormal,
+                    false,
+                    true,
+                    ln,
+                    0.0,
+                ),
+                entry(
+                    "new_stance_foot",
+                    ImpulseKind::ContactTangential,
+                    false,
+                    true,
+                    lt,
+                    0.0,
+                ),
+                entry(
+                    "trailing_foot",
+                    ImpulseKind::ContactNormal,
+                    true,
+                    false,
+                    0.0,
+                    rate,
+                ),
+            ],
+            friction_required: if ln > 0.0 {
+                (lt / ln).abs()
+            } else {
+                f64::INFINITY
+            },
+            energy_lost: 0.5 * a * a,
         })
     }
     /// Garcia's small-slope asymptotics for both gaits (only meaningful for 0 < γ ≲ 0.015).

@@ -95,3 +95,147 @@ impl StepFlags {
         self.normal_force_negative || self.knee_unlocks || self.swing_foot_scuffs
     }
 }
+
+/// Natural scales of a walker, for margins on a scale (issue: "margins relative to m·g·l"):
+/// forces relative to `m g`, torques to `m g l`, clearance to `l`, linear impulses to
+/// `m √(g l)`, angular impulses to `m l √(g l)` (`m` the total mass, `l` the leg length, `g`
+/// gravity, all in the model's units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scales {
+    /// Total mass `m`.
+    pub mass: f64,
+    /// Leg length `l`.
+    pub length: f64,
+    /// Gravitational acceleration `g`.
+    pub gravity: f64,
+}
+
+impl Scales {
+    /// `m g` (force).
+    pub fn force(&self) -> f64 {
+        self.mass * self.gravity
+    }
+    /// `m g l` (torque).
+    pub fn torque(&self) -> f64 {
+        self.mass * self.gravity * self.length
+    }
+    /// `m √(g l)` (linear impulse).
+    pub fn impulse(&self) -> f64 {
+        self.mass * (self.gravity * self.length).sqrt()
+    }
+    /// `m l √(g l)` (angular impulse).
+    pub fn angular_impulse(&self) -> f64 {
+        self.mass * self.length * (self.gravity * self.length).sqrt()
+    }
+    /// `√(g l)` (speed: a contact's separation velocity).
+    pub fn speed(&self) -> f64 {
+        (self.gravity * self.length).sqrt()
+    }
+    /// `√(g / l)` (angular rate: a knee's flexion rate).
+    pub fn rate(&self) -> f64 {
+        (self.gravity / self.length).sqrt()
+    }
+}
+
+/// What an impulsive constraint of an impact is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImpulseKind {
+    /// Normal impulse of a foot contact (N s in SI specs); positive: the ground pushes up.
+    ContactNormal,
+    /// Tangential impulse of a foot contact along `+y` (downhill); sticking, no sign.
+    ContactTangential,
+    /// Angular impulse of a knee's hyper-extension stop (N m s); positive: towards flexion
+    /// (the only way a stop can push).
+    KneeStop,
+}
+
+/// One impulsive constraint of an impact (a contact direction or a knee stop).
+///
+/// `active`, `impulse` and `rate_after` describe the impact map the model applies; `margin`
+/// says whether that is physically consistent: a unilateral constraint that holds must push
+/// (`impulse ≥ 0`), one that releases must separate (`rate_after ≥ 0`). The model decides which
+/// constraints release by the impact's linear complementarity problem (contacts and stops push
+/// only); where the model holds a constraint the complementarity problem would release (the
+/// trailing knee at heel strike, the trailing foot), the margin is negative and the gait is
+/// flagged, never silently accepted.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImpulseEntry {
+    /// Which contact or stop, e.g. `"new_stance_foot"`, `"trailing_foot"`, `"stance_knee"`,
+    /// `"trailing_knee"`, `"striking_knee"` (roles at the impact, before any leg swap).
+    pub name: String,
+    pub kind: ImpulseKind,
+    /// A constraint that may release (a unilateral contact or stop). `false` for those the
+    /// event itself closes (the striking foot, the striking knee): they hold by definition and
+    /// only the sign of their impulse is checked.
+    pub unilateral: bool,
+    /// Holds in the model's impact map (rate zero after the impact).
+    pub active: bool,
+    /// Impulse applied (0 where not active). Sign: positive pushes (module docs of
+    /// [`ImpulseKind`]); a tangential impulse has no sign condition.
+    pub impulse: f64,
+    /// Rate after the impact along the constraint's allowed direction (normal separation
+    /// velocity, knee flexion rate); 0 where active.
+    pub rate_after: f64,
+}
+
+impl ImpulseEntry {
+    /// The consistency margin: the impulse where the constraint holds, the separation rate
+    /// where it released; `None` for a tangential impulse (see
+    /// [`ImpactReport::friction_required`]). Negative: the impact map is not physical.
+    pub fn margin(&self) -> Option<f64> {
+        match (self.kind, self.active) {
+            (ImpulseKind::ContactTangential, _) => None,
+            (_, true) => Some(self.impulse),
+            (_, false) => Some(self.rate_after),
+        }
+    }
+}
+
+/// The impulses of one impact and what they mean for the gait.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImpactReport {
+    /// The event, e.g. `"heel_strike"`, `"knee_strike"`.
+    pub event: String,
+    /// Every constraint of the impact problem.
+    pub entries: Vec<ImpulseEntry>,
+    /// Friction coefficient the striking (or, at a knee strike, the stance) contact needs,
+    /// `|Λ_t / Λ_n|` (`+∞` if `Λ_n ≤ 0`).
+    pub friction_required: f64,
+    /// Kinetic energy lost in the impact (`≥ 0` up to roundoff).
+    pub energy_lost: f64,
+}
+
+impl ImpactReport {
+    /// The smallest impulse among the entries of `kind` that hold (active), or `None`.
+    pub fn min_active(&self, kind: ImpulseKind) -> Option<f64> {
+        self.entries
+            .iter()
+            .filter(|e| e.kind == kind && e.active)
+            .map(|e| e.impulse)
+            .reduce(f64::min)
+    }
+    /// The entry named `name`.
+    pub fn entry(&self, name: &str) -> Option<&ImpulseEntry> {
+        self.entries.iter().find(|e| e.name == name)
+    }
+    /// The smallest consistency margin over the entries ([`ImpulseEntry::margin`]) with the
+    /// entry's name, or `None` without entries that have one.
+    pub fn min_margin(&self) -> Option<(f64, &str)> {
+        self.entries
+            .iter()
+            .filter_map(|e| e.margin().map(|m| (m, e.name.as_str())))
+            .reduce(|a, b| if b.0 < a.0 { b } else { a })
+    }
+}
+
+/// Where the swing foot must clear the ground.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClearanceRule {
+    /// From lift-off to heel strike (walkers with knees: a foot below the slope is a violation).
+    WholeSwing,
+    /// Only after mid-stance (the swing foot ahead of the stance foot): the point-foot
+    /// literature's convention for walkers without knees (Garcia et al. 1998; McGeer 1990), whose
+    /// straight swing leg must dip through the slope at mid-stance; the depth of that scuff is
+    /// still reported.
+    AfterMidStance,
+}

@@ -164,7 +164,11 @@ pub fn flag_list(v: &pdw_limit::Validity) -> Vec<&'static str> {
         ),
         (
             v.swing_foot_scuffs,
-            "the swing foot scuffs after mid-stance",
+            "the swing foot goes below the slope where its clearance rule checks it",
+        ),
+        (
+            v.impact_violation,
+            "an impact needs a pulling contact or stop",
         ),
     ]
     .into_iter()

@@ -15,7 +15,7 @@ use std::io::IsTerminal;
 use std::process::ExitCode;
 
 /// Per-design measures stored as columns, in this order.
-const COLUMNS: [&str; 8] = [
+const COLUMNS: [&str; 9] = [
     "cost",
     "basin_fraction",
     "rho",
@@ -24,9 +24,10 @@ const COLUMNS: [&str; 8] = [
     "min_knee_torque",
     "period",
     "step_length",
+    "min_relative_margin",
 ];
 
-fn measures(e: &DesignEval) -> [f64; 8] {
+fn measures(e: &DesignEval) -> [f64; 9] {
     [
         e.cost,
         e.basin_fraction,
@@ -36,6 +37,7 @@ fn measures(e: &DesignEval) -> [f64; 8] {
         e.min_knee_torque,
         e.period,
         e.step_length,
+        e.min_relative_margin,
     ]
 }
 
@@ -73,6 +75,7 @@ fn from_data(d: &DesignData) -> Vec<DesignEval> {
                 min_knee_torque: c("min_knee_torque"),
                 period: c("period"),
                 step_length: c("step_length"),
+                min_relative_margin: c("min_relative_margin"),
             }
         })
         .collect()
@@ -100,6 +103,13 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         return Err(InputError(format!(
             "--knee-margin: {} N m is not allowed; give a finite torque >= 0",
             a.knee_margin
+        ))
+        .into());
+    }
+    if !(a.min_margin.is_finite() && a.min_margin >= 0.0) {
+        return Err(InputError(format!(
+            "--min-margin: {} is not allowed; give a finite relative margin >= 0 (e.g. 0.05)",
+            a.min_margin
         ))
         .into());
     }
@@ -216,6 +226,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         objective,
         mu: a.mu,
         knee_margin: a.knee_margin,
+        min_margin: a.min_margin,
         budget: a.budget,
         seed: a.seed,
         start: Some(
@@ -242,6 +253,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         "objective": objective.name(),
         "mu": a.mu,
         "knee_margin": a.knee_margin,
+        "min_margin": a.min_margin,
         "seed": a.seed,
         "init": a.init,
         "basin_grid": a.basin_grid,
@@ -433,6 +445,13 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         b.min_normal_force,
         b.max_friction
     );
+    if b.min_relative_margin.is_finite() {
+        crate::outln!(
+            "  smallest relative margin {:.4} (required {})",
+            b.min_relative_margin,
+            a.min_margin
+        );
+    }
     crate::outln!(
         "  reproduce: pdw-sweep fixedpoint --model {} {}",
         a.model.model,

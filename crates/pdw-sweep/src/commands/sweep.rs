@@ -45,7 +45,34 @@ fn store_validity(v: &Option<Validity>) -> StrideValidity {
             min_normal_force: v.min_normal_force,
             max_friction_required: v.max_friction_required,
             min_knee_torque: v.min_knee_torque.unwrap_or(f64::NAN),
+            impact_violation: v.impact_violation,
+            min_clearance: v.min_clearance.unwrap_or(f64::NAN),
+            scuff_depth: v.scuff_depth,
+            min_impact_margin: v
+                .impacts
+                .iter()
+                .filter_map(|i| i.report.as_ref()?.min_margin().map(|m| m.0))
+                .reduce(f64::min)
+                .unwrap_or(f64::NAN),
+            min_relative_margin: v.min_relative_margin().unwrap_or(f64::NAN),
+            binding: binding_code(v),
         })
+}
+
+/// The binding criterion of `v` as a [`pdw_store::BINDING_CRITERIA`] code (every impact entry
+/// is `impact`).
+pub fn binding_code(v: &Validity) -> u8 {
+    let name = v.binding().map_or("none", |m| {
+        if m.name.contains(':') {
+            "impact"
+        } else {
+            m.name.as_str()
+        }
+    });
+    pdw_store::BINDING_CRITERIA
+        .iter()
+        .position(|n| *n == name)
+        .unwrap_or(0) as u8
 }
 
 /// The branch in the file's form, from its measured points on the output grid.
@@ -424,6 +451,9 @@ fn csv_comments(m: &BuiltModel, parameter: &str) -> Vec<(String, String)> {
     units.push(format!("min_normal_force={}", u.force));
     units.push("max_friction_required=1".into());
     units.push(format!("min_knee_torque={}", u.torque));
+    units.push(format!("min_clearance={}", super::length_unit(m)));
+    units.push(format!("scuff_depth={}", super::length_unit(m)));
+    units.push("min_relative_margin=1".into());
     units.push("lambda*=1".into());
     vec![
         ("command".into(), super::command_line()),
@@ -538,12 +568,17 @@ fn annotate_sweep(
             "speed" => Some(format!("{lu}/{tu}")),
             "min_normal_force" => Some(mu.force.clone()),
             "min_knee_torque" => Some(mu.torque.clone()),
+            "min_clearance" | "scuff_depth" => Some(lu.clone()),
+            "min_impact_margin" => Some("model units of the binding impact entry".into()),
             "max_friction_required"
             | "validity_checked"
             | "valid"
             | "normal_force_negative"
             | "knee_unlocks"
-            | "swing_foot_scuffs" => Some("1".into()),
+            | "swing_foot_scuffs"
+            | "impact_violation"
+            | "min_relative_margin"
+            | "binding_criterion" => Some("1".into()),
             "multipliers_re" | "multipliers_im" | "stable" => Some("1".into()),
             "points" if p.starts_with("orbit") => Some(first.clone()),
             _ => None,
