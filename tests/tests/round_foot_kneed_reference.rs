@@ -1118,3 +1118,46 @@ fn impulses_at_the_seed5_walking_gait() {
         "finite post-impact states"
     );
 }
+
+/// The engine's knee strike (impact map of the free mode's guard 0) equals the reference's
+/// (rolling stance foot) to 1e-10 `√(g/l)` at 20 random free states with the knee at 0.
+#[test]
+fn knee_strike_matches_reference_to_1e_10() {
+    for (name, w) in walkers() {
+        let r = Reference::new(&w);
+        let s = r.scales();
+        let mut rng = Rng(17);
+        let mut ws = Scratch::new();
+        let mut worst = 0.0f64;
+        let mut worst_hip = 0.0f64;
+        for _ in 0..20 {
+            let mut x = random_state(&mut rng, FREE, s.rate);
+            x[3] = 0.0;
+            x[7] = x[7].abs();
+            let mut out = [0.0; 8];
+            let next = w.reset(&mut ws, FREE, 0, &x, &mut out);
+            assert_eq!(next, LOCKED, "{name}: knee strike leads to the locked mode");
+            let ks = r.knee_strike(&x);
+            worst = worst
+                .max(max_abs_diff(&out[..4], &ks.x_post[..4]))
+                .max(max_abs_diff(&out[4..], &ks.x_post[4..]) / s.rate);
+            worst_hip = worst_hip.max((out[6] - ks.x_post[6]).abs() / s.rate);
+        }
+        if name == "seed5_walking" {
+            let (x_ks, _, _) = gait_pre_impact_states(&w);
+            let mut out = [0.0; 8];
+            w.reset(&mut ws, FREE, 0, &x_ks, &mut out);
+            let ks = r.knee_strike(&x_ks);
+            eprintln!("gait knee strike: engine {out:?}");
+            eprintln!("gait knee strike: reference {:?}", ks.x_post);
+            let dg = max_abs_diff(&out[4..], &ks.x_post[4..]) / s.rate;
+            worst = worst.max(dg);
+            eprintln!("gait knee strike: |Δq̇| ≤ {dg:.2e} √(g/l)");
+        }
+        eprintln!("{name}: knee strike |Δx| ≤ {worst:.2e} (hip rate {worst_hip:.2e}) √(g/l)");
+        assert!(
+            worst < 1e-10,
+            "{name}: knee strike differs from the reference by {worst:e} √(g/l)"
+        );
+    }
+}

@@ -76,13 +76,16 @@ pub enum FallKind {
     KneeBent,
     /// A rimless wheel rolls back (does not reach the next spoke).
     RollsBack,
+    /// A knee of the stance leg buckles: at an impact its hyper-extension stop would have to
+    /// pull to hold it straight, so the knee flexes under the walker's weight.
+    KneeBuckled,
     /// Any other terminal event (test systems).
     Other,
 }
 
 impl FallKind {
     /// A small stable number for the kind (1 backward, 2 forward, 3 knee bent, 4 rolls back,
-    /// 0 other), for array outputs.
+    /// 5 knee buckled, 0 other), for array outputs.
     pub fn code(self) -> u8 {
         match self {
             FallKind::Other => 0,
@@ -90,6 +93,7 @@ impl FallKind {
             FallKind::Forward => 2,
             FallKind::KneeBent => 3,
             FallKind::RollsBack => 4,
+            FallKind::KneeBuckled => 5,
         }
     }
 
@@ -100,6 +104,7 @@ impl FallKind {
             FallKind::Forward => "fell forward",
             FallKind::KneeBent => "swing foot struck the ground before the knee locked",
             FallKind::RollsBack => "rolls back",
+            FallKind::KneeBuckled => "stance knee buckled",
             FallKind::Other => "fall",
         }
     }

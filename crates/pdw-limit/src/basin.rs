@@ -142,7 +142,9 @@ impl Outcome {
         match kind {
             FallKind::Forward => Outcome::FallForward,
             FallKind::Backward => Outcome::FallBackward,
-            FallKind::KneeBent | FallKind::RollsBack | FallKind::Other => Outcome::Fall,
+            FallKind::KneeBent | FallKind::RollsBack | FallKind::KneeBuckled | FallKind::Other => {
+                Outcome::Fall
+            }
         }
     }
 }

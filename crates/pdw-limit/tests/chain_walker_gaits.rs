@@ -3,7 +3,7 @@
 //! (dual-number) multipliers agree with Richardson-extrapolated finite differences of the stride
 //! map.
 
-use pdw_hybrid::Options;
+use pdw_hybrid::{HybridSystem, Options, Section};
 use pdw_limit::{
     dp_variational, find_fixed_point, multipliers, FixedPoint, NewtonOptions, StrideMap,
 };
@@ -179,20 +179,38 @@ fn round_foot_multipliers_agree_with_richardson_differences() {
     }
 }
 
-/// The shipped design `models/seed5_walking.toml` (the thesis walker's lengths and masses,
-/// found by `pdw-sweep design`): a stable gait, valid along the whole stride (normal force > 0,
-/// friction needed ≤ 0.6, every locked knee's stop pushing with ≥ 0.1 N m, no scuff), with a
-/// knee strike before the heel strike; its exact multipliers agree with Richardson differences.
+/// The design `models/seed5_walking.toml` (the thesis walker's lengths and masses, from an
+/// earlier `pdw-sweep design` search whose validity was sampled at accepted steps only): with
+/// hyper-extension stops that only push, its stance knee buckles at the knee strike (a hold
+/// would need −0.063 N m s, the independent reference model's number) — the stride is a fall.
+/// With the stance knee latched (both ways) the same design has a stable gait with a knee strike
+/// before the heel strike, whose round-foot knee strike (rolling contact, floating-chain impact)
+/// has an exact Jacobian: its multipliers agree with Richardson differences to 1e-9.
 #[test]
-fn shipped_seed5_design_walks_validly_and_stably() {
+fn seed5_walking_buckles_with_stops_and_its_latched_gait_has_exact_multipliers() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../models/seed5_walking.toml"
     );
-    let spec = pdw_walkers::WalkerSpec::from_file(std::path::Path::new(path)).unwrap();
-    let w = pdw_walkers::ChainWalker::from_spec(spec).unwrap();
+    let mut spec = pdw_walkers::WalkerSpec::from_file(std::path::Path::new(path)).unwrap();
+    let w = pdw_walkers::ChainWalker::from_spec(spec.clone()).unwrap();
     assert!(w.free_knee().is_some() && w.foot_radius() > 0.0);
     let g = w.gait_guesses().into_iter().next().unwrap();
+    let mut x0 = vec![0.0; w.dim()];
+    w.lift(&g.section, &mut x0);
+    let tr = pdw_limit::simulate(&w, &x0, &pdw_limit::TrajectoryOptions::new(1)).unwrap();
+    assert_eq!(
+        tr.outcome,
+        pdw_limit::StrideOutcome::Fall {
+            kind: pdw_hybrid::FallKind::KneeBuckled,
+            guard: 5
+        },
+        "{:?}",
+        tr.outcome
+    );
+    // the same design with its stance knee latched
+    spec.knees[0].hold = Some("latch".into());
+    let w = pdw_walkers::ChainWalker::from_spec(spec).unwrap();
     let fp = fixed_point(&w, &g.section);
     let rho = fp
         .multipliers
@@ -201,13 +219,6 @@ fn shipped_seed5_design_walks_validly_and_stably() {
         .fold(0.0, f64::max);
     assert!(fp.stable && rho < 0.6, "max |λ| = {rho}");
     let tr = pdw_limit::simulate(&w, &fp.state, &pdw_limit::TrajectoryOptions::new(1)).unwrap();
-    let v = pdw_limit::Validity::of(&tr).unwrap();
-    assert!(v.valid(), "{v:?}");
-    assert!(
-        v.min_normal_force > 0.0 && v.max_friction_required <= 0.6,
-        "{v:?}"
-    );
-    assert!(v.min_knee_torque.unwrap() >= 0.1, "{v:?}");
     let kinds: Vec<&str> = tr.events.iter().map(|e| e.kind.as_str()).collect();
     assert_eq!(
         kinds,

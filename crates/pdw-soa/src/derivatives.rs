@@ -63,8 +63,8 @@ use crate::spatial;
 /// Largest number of joints the derivative routines accept.
 pub const MAX_DOF: usize = 8;
 
-type Vec8<T> = [T; MAX_DOF];
-type Mat8<T> = [[T; MAX_DOF]; MAX_DOF];
+pub(crate) type Vec8<T> = [T; MAX_DOF];
+pub(crate) type Mat8<T> = [[T; MAX_DOF]; MAX_DOF];
 
 // ---------------------------------------------------------------------------------------------
 // Generic kinematics and RNEA over stack arrays (the passes of workspace::kin_pass and
@@ -73,25 +73,25 @@ type Mat8<T> = [[T; MAX_DOF]; MAX_DOF];
 
 /// Pass-1 quantities of every link (fields as in [`crate::Workspace`]).
 #[derive(Clone, Copy)]
-struct Kin<T> {
-    w: Vec8<T>,
-    dy: Vec8<T>,
-    dz: Vec8<T>,
-    hy: Vec8<T>,
-    hz: Vec8<T>,
-    cy: Vec8<T>,
-    cz: Vec8<T>,
-    ay: Vec8<T>,
-    az: Vec8<T>,
-    by: Vec8<T>,
-    bz: Vec8<T>,
-    tip_d: [T; 2],
+pub(crate) struct Kin<T> {
+    pub(crate) w: Vec8<T>,
+    pub(crate) dy: Vec8<T>,
+    pub(crate) dz: Vec8<T>,
+    pub(crate) hy: Vec8<T>,
+    pub(crate) hz: Vec8<T>,
+    pub(crate) cy: Vec8<T>,
+    pub(crate) cz: Vec8<T>,
+    pub(crate) ay: Vec8<T>,
+    pub(crate) az: Vec8<T>,
+    pub(crate) by: Vec8<T>,
+    pub(crate) bz: Vec8<T>,
+    pub(crate) tip_d: [T; 2],
 }
 
 /// Link angles, levers, world COM offsets, prismatic axes, rates and bias terms, base to tip,
 /// by the same step functions and in the same order as the kernel's first pass.
 /// `qd = None` means zero joint rates. `q` (and `qd`) have length `chain.dof() ≤ MAX_DOF`.
-fn kin<T: Scalar>(chain: &Chain, q: &[T], qd: Option<&[T]>) -> Kin<T> {
+pub(crate) fn kin<T: Scalar>(chain: &Chain, q: &[T], qd: Option<&[T]>) -> Kin<T> {
     let zero = T::cst(0.0);
     let mut out = Kin {
         w: [zero; MAX_DOF],
@@ -184,7 +184,7 @@ fn rnea_passes<T: Scalar>(chain: &Chain, kin: &Kin<T>, a0: [T; 3], qdd: &[T], ta
 }
 
 /// Joint points and the tip point (world) from the levers, as the kernel's positions pass.
-fn positions<T: Scalar>(n: usize, kin: &Kin<T>) -> (Vec8<[T; 2]>, [T; 2]) {
+pub(crate) fn positions<T: Scalar>(n: usize, kin: &Kin<T>) -> (Vec8<[T; 2]>, [T; 2]) {
     let (mut y, mut z) = (T::cst(0.0), T::cst(0.0));
     let mut p = [[T::cst(0.0); 2]; MAX_DOF];
     for k in 0..n {
@@ -253,7 +253,7 @@ fn aba_value(chain: &Chain, kin: &Kin<f64>, tau: &[f64], locked: &[bool], qdd: &
 /// In-place `A = L D Lᵀ` of the leading `n × n` block of the symmetric `a` (lower triangle
 /// read): strictly lower part ← `L`, diagonal ← `D`. Returns `(min Dᵢ, max Dᵢ)` of the values;
 /// `None` if a pivot is not positive (or NaN).
-fn ldl<T: Scalar>(a: &mut Mat8<T>, n: usize) -> Option<(f64, f64)> {
+pub(crate) fn ldl<T: Scalar>(a: &mut Mat8<T>, n: usize) -> Option<(f64, f64)> {
     let (mut dmin, mut dmax) = (f64::INFINITY, 0.0f64);
     for j in 0..n {
         let mut d = a[j][j];
@@ -278,7 +278,7 @@ fn ldl<T: Scalar>(a: &mut Mat8<T>, n: usize) -> Option<(f64, f64)> {
 }
 
 /// Solve `L D Lᵀ x = b` in place (`b` of length `n`) with a factor from [`ldl`].
-fn ldl_solve<T: Scalar>(f: &Mat8<T>, n: usize, b: &mut [T]) {
+pub(crate) fn ldl_solve<T: Scalar>(f: &Mat8<T>, n: usize, b: &mut [T]) {
     for i in 0..n {
         let mut s = b[i];
         for k in 0..i {
@@ -302,7 +302,7 @@ fn ldl_solve<T: Scalar>(f: &Mat8<T>, n: usize, b: &mut [T]) {
 // Argument checks and dispatch on the chain size.
 // ---------------------------------------------------------------------------------------------
 
-fn check_dof(n: usize) -> Result<(), SoaError> {
+pub(crate) fn check_dof(n: usize) -> Result<(), SoaError> {
     if n <= MAX_DOF {
         Ok(())
     } else {
@@ -329,6 +329,7 @@ macro_rules! by_dof {
         }
     };
 }
+pub(crate) use by_dof;
 
 // ---------------------------------------------------------------------------------------------
 // Forward dynamics.
@@ -621,7 +622,7 @@ fn impact_derivatives_w<const W: usize>(
 
 /// Mass matrix 𝓜 (both triangles) by the composite-rigid-body steps of the kernel
 /// (crate::crba), in the same order: for `f64` it is the kernel's 𝓜 bit for bit.
-fn mass_matrix<T: Scalar>(chain: &Chain, kin: &Kin<T>, mass: &mut Mat8<T>) {
+pub(crate) fn mass_matrix<T: Scalar>(chain: &Chain, kin: &Kin<T>, mass: &mut Mat8<T>) {
     let n = chain.dof();
     let zero = T::cst(0.0);
     let mut comp = [[zero; 6]; MAX_DOF];
@@ -816,7 +817,7 @@ fn impact_value(
 
 /// Checks a floating chain (joint 0 prismatic along the base `y`, joint 1 along `z`, then `n ≥ 1`
 /// joints) for the rolling routines; returns `n`.
-fn check_floating(chain: &Chain) -> Result<usize, SoaError> {
+pub(crate) fn check_floating(chain: &Chain) -> Result<usize, SoaError> {
     let nf = chain.dof();
     check_dof(nf)?;
     let ok = nf >= 3

@@ -26,6 +26,7 @@ pub mod naive;
 pub mod pseudo_joint;
 pub mod rnea;
 pub mod spatial;
+pub mod unilateral;
 pub mod workspace;
 
 pub use aba::aba;
@@ -52,4 +53,5 @@ pub use kinematics::{
 pub use naive::{naive_forward_dynamics, naive_mass_matrix, NaiveWorkspace};
 pub use pseudo_joint::pseudo_joint_dynamics;
 pub use rnea::{base_reaction, bias_forces, rnea};
+pub use unilateral::{unilateral_impact, ImpactItem, ImpactRow, ImpactSolution, ItemResult};
 pub use workspace::Workspace;

@@ -9,3 +9,4 @@ mod constraints;
 mod dynamics_agree;
 mod errors;
 mod kinematics_energy;
+mod unilateral;

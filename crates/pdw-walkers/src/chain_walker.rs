@@ -31,12 +31,40 @@
 //! `θ_s` the stance leg's absolute angle — with straight legs the swing-foot height is
 //! `2L sin(θ_s + q_m/2) sin(q_m/2)`). Both modes then: `stance_reverses` (`q̇₀` rising through 0
 //! while `q₀ > γ`, [`FallKind::Backward`]), `hip_on_ground_behind` (`q₀ − π/2` rising,
-//! backward), `hip_on_ground_ahead` (`q₀ + π/2` falling, [`FallKind::Forward`]).
+//! backward), `hip_on_ground_ahead` (`q₀ + π/2` falling, [`FallKind::Forward`]). Last, each
+//! mode's impact guard has a twin on the same surface, `knee_strike_buckles` /
+//! `heel_strike_buckles` (terminal [`FallKind::KneeBuckled`]): at the crossing the impact's
+//! complementarity problem (below) decides which of the two counts.
+//!
+//! # Impacts: one set of impulse equations, unilateral contacts and stops
+//! Every impact is solved on the floating chain `(y, z, q)` rooted at the stance arc centre
+//! (the stance foot for point feet) by [`pdw_soa::unilateral_impact`]:
+//! `𝓜(q̇⁺ − q̇⁻) = Aᵀλ`, `A_active q̇⁺ = 0`, with `q̇⁻_F = (−r q̇₀, 0, q̇)`. The rows are the
+//! contacts — the stance foot's contact point (rolling: `ẏ + r q̇₀ = 0`, `ż = 0`; after the
+//! impact the contact point, not the arc centre, is at rest) or the striking swing foot's — and
+//! the knees' hyper-extension stops (`±e_k`: a stop allows flexion only and pushes only).
+//! A knee whose spec says `hold = "latch"` (the published kneed walkers' and the seed's locked
+//! knees) is held both ways: its row is never released, so it never buckles; its impulse is
+//! still reported, and a negative one (a pull) makes the gait invalid as a walker with stops.
+//! - Knee strike: the stance contact and the striking knee hold by definition; every other
+//!   knee's stop is unilateral. If the complementarity problem (contacts and stops push only)
+//!   releases a stance knee, the stance leg buckles: the twin guard fires, a named fall.
+//! - Heel strike: the striking foot holds by definition; the trailing foot and every knee stop
+//!   are unilateral. A released knee of the new stance leg buckles it (the twin guard).
+//! The model's map holds every knee and releases the trailing foot. Where the complementarity
+//! problem would instead release a trailing knee (its stop would have to pull) or keep the
+//! trailing foot on the ground, the map is the walker with the knee latched; its impact report
+//! ([`ChainWalker::impact_report_at`], [`Walker::impact_report`]) shows the negative margin and
+//! the gait is invalid — never silently valid. (A trailing knee that starts the swing flexing is
+//! a walker whose section carries the swing knee's rate; this model does not follow it.)
 //!
 //! # Resets
-//! - Knee strike: plastic lock of the free knee with the stance foot pinned and the other knees
-//!   held (kernel [`pdw_soa::joint_lock_impact`]: `q̇⁺ = q̇⁻ − 𝓜⁻¹Eᵀ(E𝓜⁻¹Eᵀ)⁻¹E q̇⁻`); the
-//!   knee angle and locked rates are set to exactly 0.
+//! - Knee strike: plastic lock of the free knee with the stance foot's contact point at rest and
+//!   the other knees held. Point feet: the stance foot pinned, kernel
+//!   [`pdw_soa::joint_lock_impact`] (`q̇⁺ = q̇⁻ − 𝓜⁻¹Eᵀ(E𝓜⁻¹Eᵀ)⁻¹E q̇⁻`, the same map as the
+//!   floating chain's); round feet: the floating chain's impact problem above (the rolling
+//!   contact conserves the walker's angular momentum about the contact point and the swing
+//!   leg's about the hip). The knee angle and locked rates are set to exactly 0.
 //! - Heel strike: plastic impact at the swing foot with every knee held and the old stance foot
 //!   free (kernel [`pdw_soa::tip_impact`] on the floating chain `(P_y, P_z, q…)`), then the leg
 //!   swap (the seed's switch rule, eq. 3.29–3.32): `q₀' = Σq`, new stance knees `= −`old swing
@@ -71,7 +99,9 @@
 use crate::error::WalkerError;
 use crate::registry::{GaitGuess, Pose, Walker};
 use crate::spec::{ParamTable, Resolved, WalkerSpec};
-use crate::validity::{ConstraintForces, StepFlags};
+use crate::validity::{
+    ClearanceRule, ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
+};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
@@ -107,7 +137,7 @@ const FALLS: [GuardSpec; 3] = [
     },
 ];
 
-const GUARDS_FREE: [GuardSpec; 5] = [
+const GUARDS_FREE: [GuardSpec; 6] = [
     GuardSpec {
         name: "knee_strike",
         crossing: Crossing::Rising,
@@ -121,9 +151,14 @@ const GUARDS_FREE: [GuardSpec; 5] = [
     FALLS[0],
     FALLS[1],
     FALLS[2],
+    GuardSpec {
+        name: "knee_strike_buckles",
+        crossing: Crossing::Rising,
+        kind: GuardKind::Terminal(FallKind::KneeBuckled),
+    },
 ];
 
-const GUARDS_LOCKED: [GuardSpec; 4] = [
+const GUARDS_LOCKED: [GuardSpec; 5] = [
     GuardSpec {
         name: "heel_strike",
         crossing: Crossing::Falling,
@@ -132,7 +167,17 @@ const GUARDS_LOCKED: [GuardSpec; 4] = [
     FALLS[0],
     FALLS[1],
     FALLS[2],
+    GuardSpec {
+        name: "heel_strike_buckles",
+        crossing: Crossing::Falling,
+        kind: GuardKind::Terminal(FallKind::KneeBuckled),
+    },
 ];
+
+/// Index of the twin of guard 0 (the impact guard) in `mode`: the same function, a fall where the
+/// impact's complementarity problem releases a stance knee (see the module docs).
+const TWIN_FREE: usize = 5;
+const TWIN_LOCKED: usize = 4;
 
 /// The chain walker (immutable model, shared by threads). See the module docs.
 #[derive(Clone, Debug)]
@@ -159,6 +204,8 @@ pub struct ChainWalker {
     locked: Vec<Vec<usize>>,
     /// knee joints of the floating chain (offset by the two base joints)
     floating_knees: Vec<usize>,
+    /// per joint: a knee held by a latch (both ways) rather than a stop
+    latched: Vec<bool>,
     state_names: Vec<String>,
 }
 
@@ -275,6 +322,12 @@ impl ChainWalker {
         let leg_length = r.segments.iter().map(|s| s[0]).sum();
         let knees: Vec<usize> = (1..m).chain(m + 1..n).collect();
         let free_knee = r.free_swing.iter().position(|f| *f).map(|i| 2 * m - 1 - i);
+        // knee i (foot side first) is stance joint i + 1 and swing joint 2m − 1 − i
+        let mut latched = vec![false; n];
+        for (i, l) in r.latched.iter().enumerate() {
+            latched[i + 1] = *l;
+            latched[2 * m - 1 - i] = *l;
+        }
         let locked_mode = |free: Option<usize>| -> Vec<usize> {
             knees.iter().copied().filter(|k| Some(*k) != free).collect()
         };
@@ -315,6 +368,7 @@ impl ChainWalker {
             masks,
             locked,
             floating_knees,
+            latched,
             state_names: names,
         })
     }
@@ -704,7 +758,249 @@ const DMAX: usize = 4 * MAX_SEGMENTS;
 /// Largest joint count of the floating chain.
 const FMAX: usize = 2 * MAX_SEGMENTS + 2;
 
+/// What a constraint of an impact problem is, for the report's names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    /// Knee strike: the stance foot (rolling or pinned, held).
+    StanceFoot,
+    /// Heel strike: the swing foot that strikes (the new stance foot).
+    NewStanceFoot,
+    /// Heel strike: the old stance foot (must leave the ground).
+    TrailingFoot,
+    /// Knee strike: the knee that strikes its stop (joint index).
+    StrikingKnee(usize),
+    /// Knee strike: a stance knee (held by its stop; releasing it buckles the stance leg).
+    StanceKnee(usize),
+    /// Knee strike: another swing knee (three-segment legs).
+    SwingKnee(usize),
+    /// Heel strike: a knee of the old stance leg (the new swing leg).
+    TrailingKnee(usize),
+    /// Heel strike: a knee of the old swing leg (the new stance leg; releasing it buckles).
+    NewStanceKnee(usize),
+}
+
+/// The impact problem of a reset (module docs, "Impacts"): the floating chain's configuration
+/// and pre-impact rates, the constraints, the model's active set and which releases are a fall.
+struct ImpactProblem {
+    q: [f64; FMAX],
+    qd: [f64; FMAX],
+    items: [pdw_soa::ImpactItem; pdw_soa::unilateral::MAX_ITEMS],
+    roles: [Role; pdw_soa::unilateral::MAX_ITEMS],
+    hold: [bool; pdw_soa::unilateral::MAX_ITEMS],
+    len: usize,
+}
+
+impl ImpactProblem {
+    fn push(&mut self, row: pdw_soa::ImpactRow, unilateral: bool, hold: bool, role: Role) {
+        self.items[self.len] = pdw_soa::ImpactItem { row, unilateral };
+        self.roles[self.len] = role;
+        self.hold[self.len] = hold;
+        self.len += 1;
+    }
+}
+
 impl ChainWalker {
+    /// Index of the twin of the impact guard 0 in `mode` (a fall on the same surface).
+    fn twin_guard(&self, mode: usize) -> usize {
+        if self.free_knee.is_some() && mode == FREE {
+            TWIN_FREE
+        } else {
+            TWIN_LOCKED
+        }
+    }
+
+    /// The guard whose function guard `k` of `mode` evaluates (the twin evaluates guard 0).
+    fn base_guard(&self, mode: usize, k: usize) -> usize {
+        if k == self.twin_guard(mode) {
+            0
+        } else {
+            k
+        }
+    }
+
+    /// The impact of the reset of `mode` (the knee strike in the free mode, the heel strike in
+    /// the locked mode) at the pre-impact state `x`, on the floating chain (module docs).
+    fn impact_problem(&self, mode: usize, x: &[f64]) -> ImpactProblem {
+        use pdw_soa::ImpactRow::{BaseContact, Stop, TipContact};
+        let (n, m, r) = (self.n, self.m, self.radius);
+        let mut p = ImpactProblem {
+            q: [0.0; FMAX],
+            qd: [0.0; FMAX],
+            items: [pdw_soa::ImpactItem {
+                row: Stop {
+                    joint: 0,
+                    sign: 1.0,
+                },
+                unilateral: false,
+            }; pdw_soa::unilateral::MAX_ITEMS],
+            roles: [Role::StanceFoot; pdw_soa::unilateral::MAX_ITEMS],
+            hold: [false; pdw_soa::unilateral::MAX_ITEMS],
+            len: 0,
+        };
+        p.q[2..n + 2].copy_from_slice(&x[..n]);
+        p.qd[2..n + 2].copy_from_slice(&x[n..2 * n]);
+        // the stance arc centre rolls: ẏ = −r q̇₀ (0 for point feet)
+        p.qd[0] = -r * x[n];
+        // a stance knee flexes with q > 0, a swing knee with q < 0 (module docs)
+        let stop = |j: usize| Stop {
+            joint: j + 2,
+            sign: if j < m { 1.0 } else { -1.0 },
+        };
+        match (self.free_knee, mode) {
+            (Some(fk), FREE) => {
+                p.push(BaseContact { radius: r }, false, true, Role::StanceFoot);
+                p.push(stop(fk), false, true, Role::StrikingKnee(fk));
+                for &j in &self.locked[FREE] {
+                    let role = if j < m {
+                        Role::StanceKnee(j)
+                    } else {
+                        Role::SwingKnee(j)
+                    };
+                    p.push(stop(j), !self.latched[j], true, role);
+                }
+            }
+            _ => {
+                p.push(
+                    TipContact { offset: [0.0, -r] },
+                    false,
+                    true,
+                    Role::NewStanceFoot,
+                );
+                p.push(BaseContact { radius: r }, true, false, Role::TrailingFoot);
+                for &j in &self.locked[self.locked_mode()] {
+                    let role = if j < m {
+                        Role::TrailingKnee(j)
+                    } else {
+                        Role::NewStanceKnee(j)
+                    };
+                    p.push(stop(j), !self.latched[j], true, role);
+                }
+            }
+        }
+        p
+    }
+
+    /// Whether the impact of `mode` at `x` buckles a stance knee: the impact's complementarity
+    /// problem (contacts and stops push only, [`pdw_soa::unilateral_impact`]) releases a knee of
+    /// the leg that is the stance leg after the impact. `false` where the problem has no
+    /// solution (the reset then reports the failure).
+    pub fn stance_knee_buckles(&self, mode: usize, x: &[f64]) -> bool {
+        let p = self.impact_problem(mode, x);
+        let nf = self.n + 2;
+        let mut v = [0.0; FMAX];
+        match pdw_soa::unilateral_impact(
+            &self.floating,
+            &p.q[..nf],
+            &p.qd[..nf],
+            &p.items[..p.len],
+            None,
+            &mut v[..nf],
+            None,
+        ) {
+            Ok(sol) => (0..p.len).any(|i| {
+                matches!(p.roles[i], Role::StanceKnee(_) | Role::NewStanceKnee(_))
+                    && !sol.items[i].active
+            }),
+            Err(_) => false,
+        }
+    }
+
+    /// The model's impact map of `mode` at `x` on the floating chain (every knee held, the
+    /// trailing foot released at heel strike): floating-chain rates after the impact into
+    /// `v` (length `n + 2`) and, if given, the Jacobian `[∂q̇_F⁺/∂q_F | ∂q̇_F⁺/∂q̇_F⁻]`.
+    fn impact_map(
+        &self,
+        mode: usize,
+        x: &[f64],
+        v: &mut [f64],
+        jac: Option<&mut [f64]>,
+    ) -> Result<(ImpactProblem, pdw_soa::ImpactSolution), pdw_soa::SoaError> {
+        let p = self.impact_problem(mode, x);
+        let nf = self.n + 2;
+        let sol = pdw_soa::unilateral_impact(
+            &self.floating,
+            &p.q[..nf],
+            &p.qd[..nf],
+            &p.items[..p.len],
+            Some(&p.hold[..p.len]),
+            &mut v[..nf],
+            jac,
+        )?;
+        Ok((p, sol))
+    }
+
+    /// Name of a knee joint in a report: `prefix` and the knee's number for three-segment
+    /// legs (`"stance_knee2"` is the state's `stance_knee2`).
+    fn knee_name(&self, prefix: &str, j: usize) -> String {
+        let state = &self.state_names[j];
+        let digits = state.trim_start_matches(|c: char| !c.is_ascii_digit());
+        format!("{prefix}{digits}")
+    }
+
+    /// The impulses of the reset of `mode` at the pre-impact state `x` (see
+    /// [`Walker::impact_report`]).
+    pub fn impact_report_at(&self, mode: usize, x: &[f64]) -> Option<ImpactReport> {
+        let mut v = [0.0; FMAX];
+        let (p, sol) = self.impact_map(mode, x, &mut v, None).ok()?;
+        let mut entries = Vec::with_capacity(2 * p.len);
+        let mut friction = f64::INFINITY;
+        for i in 0..p.len {
+            let (it, res) = (&p.items[i], &sol.items[i]);
+            let (name, contact) = match p.roles[i] {
+                Role::StanceFoot => ("stance_foot".to_string(), true),
+                Role::NewStanceFoot => ("new_stance_foot".to_string(), true),
+                Role::TrailingFoot => ("trailing_foot".to_string(), true),
+                Role::StrikingKnee(j) => (self.knee_name("striking_knee", j), false),
+                Role::StanceKnee(j) => (self.knee_name("stance_knee", j), false),
+                Role::SwingKnee(j) => (self.knee_name("swing_knee", j), false),
+                Role::TrailingKnee(j) => (self.knee_name("trailing_knee", j), false),
+                Role::NewStanceKnee(j) => (self.knee_name("new_stance_knee", j), false),
+            };
+            if contact {
+                if !it.unilateral {
+                    friction = if res.impulse[1] > 0.0 {
+                        (res.impulse[0] / res.impulse[1]).abs()
+                    } else {
+                        f64::INFINITY
+                    };
+                }
+                for (kind, c) in [
+                    (ImpulseKind::ContactTangential, 0),
+                    (ImpulseKind::ContactNormal, 1),
+                ] {
+                    entries.push(ImpulseEntry {
+                        name: name.clone(),
+                        kind,
+                        unilateral: it.unilateral,
+                        active: res.active,
+                        impulse: res.impulse[c],
+                        rate_after: if res.active { 0.0 } else { res.rate[c] },
+                    });
+                }
+            } else {
+                entries.push(ImpulseEntry {
+                    name,
+                    kind: ImpulseKind::KneeStop,
+                    unilateral: it.unilateral,
+                    active: res.active,
+                    impulse: res.impulse[0],
+                    rate_after: if res.active { 0.0 } else { res.rate[0] },
+                });
+            }
+        }
+        let event = if self.free_knee.is_some() && mode == FREE {
+            "knee_strike"
+        } else {
+            "heel_strike"
+        };
+        Some(ImpactReport {
+            event: event.into(),
+            entries,
+            friction_required: friction,
+            energy_lost: sol.energy_lost,
+        })
+    }
+
     /// The leg swap as a matrix `S` (row-major `n × n`): `q' = S q`, `q̇' = S q̇`.
     fn swap_matrix(&self, out: &mut [f64]) {
         let n = self.n;
@@ -777,6 +1073,7 @@ impl HybridSystem for ChainWalker {
         x: MatRef<'_, f64>,
         out: &mut [f64],
     ) {
+        let k = self.base_guard(mode, k);
         let n = self.n;
         let lanes = x.nrows();
         let free = self.free_knee.is_some() && mode == FREE;
@@ -817,7 +1114,7 @@ impl HybridSystem for ChainWalker {
         let lead = if free { 2 } else { 1 };
         let ng = self.guards(mode).len();
         for k in 0..ng {
-            (g[k], rate[k]) = match (free, k) {
+            (g[k], rate[k]) = match (free, self.base_guard(mode, k)) {
                 (true, 0) => {
                     let j = self.free_knee.unwrap_or(0);
                     (x[j], f[j])
@@ -873,7 +1170,7 @@ impl HybridSystem for ChainWalker {
                     rk[l] = fc[j][l];
                 }
             };
-            match (free, k) {
+            match (free, self.base_guard(mode, k)) {
                 (true, 0) => copy(self.free_knee.unwrap_or(0), None),
                 (_, k) if k < lead => pdw_simd::dispatch(
                     #[inline(always)]
@@ -890,6 +1187,7 @@ impl HybridSystem for ChainWalker {
 
     /// Every guard but the swing-foot height is a state coordinate (plus a constant).
     fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        let k = self.base_guard(mode, k);
         let lead = if self.free_knee.is_some() && mode == FREE {
             2
         } else {
@@ -899,6 +1197,7 @@ impl HybridSystem for ChainWalker {
     }
 
     fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        let k = self.base_guard(mode, k);
         let n = self.n;
         let free = self.free_knee.is_some() && mode == FREE;
         let lead = if free { 2 } else { 1 };
@@ -913,10 +1212,14 @@ impl HybridSystem for ChainWalker {
         }
     }
 
+    /// The impact guard (0) counts where the impact's complementarity problem keeps every
+    /// stance knee locked, its twin (a fall) where it releases one
+    /// ([`ChainWalker::stance_knee_buckles`]); both need the impact guard's own conditions.
     fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
         let free = self.free_knee.is_some() && mode == FREE;
         let lead = if free { 2 } else { 1 };
-        match (free, k) {
+        let twin = k != 0 && k == self.twin_guard(mode);
+        let base = match (free, self.base_guard(mode, k)) {
             (true, 0) => true,
             (true, 1) => self.swing_foot(x)[0] > 0.0,
             (false, 0) => {
@@ -925,7 +1228,11 @@ impl HybridSystem for ChainWalker {
             }
             (_, k) if k == lead => x[0] > self.r.slope,
             _ => true,
+        };
+        if !base || self.base_guard(mode, k) != 0 {
+            return base;
         }
+        self.stance_knee_buckles(mode, x) == twin
     }
 
     fn reset(&self, ws: &mut Scratch, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
@@ -933,16 +1240,25 @@ impl HybridSystem for ChainWalker {
         if let (Some(knee), FREE) = (self.free_knee, mode) {
             let s = self.scratch(ws);
             let locked = &self.locked[LOCKED];
-            let ok = pdw_soa::joint_lock_impact(
-                &self.chain,
-                &mut s.ws,
-                &x[..n],
-                &x[n..2 * n],
-                locked,
-                &mut s.v[..n],
-                &mut s.imp[..locked.len()],
-            )
-            .is_ok();
+            let ok = if self.radius > 0.0 {
+                // the stance foot rolls: its contact point, not the arc centre, is at rest
+                // after the impact (the floating chain's impact problem, every knee held)
+                let mut v = [0.0; FMAX];
+                let ok = self.impact_map(FREE, x, &mut v, None).is_ok();
+                s.v[..n].copy_from_slice(&v[2..n + 2]);
+                ok
+            } else {
+                pdw_soa::joint_lock_impact(
+                    &self.chain,
+                    &mut s.ws,
+                    &x[..n],
+                    &x[n..2 * n],
+                    locked,
+                    &mut s.v[..n],
+                    &mut s.imp[..locked.len()],
+                )
+                .is_ok()
+            };
             out[..n].copy_from_slice(&x[..n]);
             out[knee] = 0.0;
             if ok {
@@ -1013,6 +1329,7 @@ impl HybridSystem for ChainWalker {
         x: &[f64],
         grad: &mut [f64],
     ) {
+        let k = self.base_guard(mode, k);
         let (n, d) = (self.n, 2 * self.n);
         grad[..d].fill(0.0);
         let free = self.free_knee.is_some() && mode == FREE;
@@ -1047,15 +1364,35 @@ impl HybridSystem for ChainWalker {
             let s = self.scratch(ws);
             let locked = &self.locked[LOCKED];
             let mut jl = [0.0; DMAX * DMAX / 2];
-            let ok = pdw_soa::joint_lock_impact_derivatives(
-                &self.chain,
-                &x[..n],
-                &x[n..d],
-                locked,
-                &mut s.v[..n],
-                &mut jl[..n * d],
-            )
-            .is_ok();
+            let ok = if self.radius > 0.0 {
+                // the floating chain's Jacobian, with q̇_F⁻ = (−r q̇₀, 0, q̇) by the chain rule
+                // (the map does not depend on the base position: translation invariance)
+                let f = n + 2;
+                let mut v = [0.0; FMAX];
+                let mut jf = [0.0; FMAX * 2 * FMAX];
+                let ok = self
+                    .impact_map(FREE, x, &mut v, Some(&mut jf[..f * 2 * f]))
+                    .is_ok();
+                for i in 0..n {
+                    let row = (2 + i) * 2 * f;
+                    for j in 0..n {
+                        jl[i * d + j] = jf[row + 2 + j];
+                        jl[i * d + n + j] = jf[row + f + 2 + j];
+                    }
+                    jl[i * d + n] += -self.radius * jf[row + f];
+                }
+                ok
+            } else {
+                pdw_soa::joint_lock_impact_derivatives(
+                    &self.chain,
+                    &x[..n],
+                    &x[n..d],
+                    locked,
+                    &mut s.v[..n],
+                    &mut jl[..n * d],
+                )
+                .is_ok()
+            };
             for i in 0..n {
                 if i != knee {
                     jac[i * d + i] = 1.0;
@@ -1255,5 +1592,34 @@ impl Walker for ChainWalker {
     /// The spec's energy unit: J for SI specs (mass × length² / time² in the spec's units).
     fn energy_unit(&self) -> &str {
         "J"
+    }
+    fn impact_report(&self, mode: usize, guard: usize, x_pre: &[f64]) -> Option<ImpactReport> {
+        (guard == 0)
+            .then(|| self.impact_report_at(mode, x_pre))
+            .flatten()
+    }
+    /// Total mass (both legs and the hip mass), leg length, gravity.
+    fn scales(&self) -> Option<Scales> {
+        let legs: f64 = self.r.segments.iter().map(|s| s[1]).sum();
+        Some(Scales {
+            mass: 2.0 * legs + self.r.hip_mass,
+            length: self.leg_length,
+            gravity: self.r.gravity,
+        })
+    }
+    /// Height of the swing foot's lowest point above the slope: with round feet both arc
+    /// centres are `r` above their feet's lowest points (the stance one on the slope), so it is
+    /// the height of the chain's tip over its root, as for point feet.
+    fn swing_clearance(&self, _mode: usize, x: &[f64]) -> Option<f64> {
+        Some(self.swing_foot(x)[1])
+    }
+    /// Walkers with knees must clear the ground over the whole swing; straight-legged ones
+    /// (the compass gait) keep the point-foot literature's mid-stance convention.
+    fn clearance_rule(&self) -> ClearanceRule {
+        if self.m > 1 {
+            ClearanceRule::WholeSwing
+        } else {
+            ClearanceRule::AfterMidStance
+        }
     }
 }

@@ -28,6 +28,7 @@
 //!
 //! [[knees]]                   # one per joint between consecutive segments (foot side first)
 //! mode = "free-swing"         # "locked" | "free-swing" | an expression: 0 locked, 1 free-swing
+//! hold = "stop"               # "stop" (pushes only; default) | "latch" (holds both ways)
 //!
 //! [[gaits]]                   # optional starting points of the fixed-point search
 //! name = "stable"
@@ -129,6 +130,13 @@ pub struct KneeSpec {
     /// until it straightens — the knee strike — and locked after; the stance knee is locked), or
     /// an expression over the parameters that evaluates to 0 (locked) or 1 (free-swing).
     pub mode: String,
+    /// What holds the knee straight while it is locked: `"stop"` (default) — a hyper-extension
+    /// stop that can only push; where it would have to pull (at an impact) the stance knee
+    /// buckles, a fall — or `"latch"` — a latch that holds both ways, the locked knee of the
+    /// published kneed walkers (McGeer 1990, Hsu Chen 2007) and of the seed's pseudo joints
+    /// (§3.4). Validity always judges a walker by stops: a latch that pulls is reported as such.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold: Option<String>,
 }
 
 /// A starting point for the fixed-point search on the section.
@@ -219,6 +227,8 @@ pub struct Resolved {
     pub segments: Vec<[f64; 5]>,
     /// Per knee (foot side first): free-swing?
     pub free_swing: Vec<bool>,
+    /// Per knee (foot side first): held by a latch (both ways) rather than a stop?
+    pub latched: Vec<bool>,
     /// Gait guesses `(name, section, source)` with their sections evaluated.
     pub gaits: Vec<(String, Vec<f64>, String)>,
 }
@@ -449,6 +459,7 @@ impl WalkerSpec {
             ));
         }
         let mut free_swing = Vec::with_capacity(self.knees.len());
+        let mut latched = Vec::with_capacity(self.knees.len());
         for (i, k) in self.knees.iter().enumerate() {
             let free = match k.mode.trim() {
                 "locked" => false,
@@ -473,6 +484,18 @@ impl WalkerSpec {
                 },
             };
             free_swing.push(free);
+            latched.push(match k.hold.as_deref().map(str::trim) {
+                None | Some("stop") => false,
+                Some("latch") => true,
+                Some(h) => {
+                    return Err(self.err(
+                        format!("knees[{i}].hold"),
+                        format!("\"{h}\""),
+                        "\"stop\" (a hyper-extension stop that only pushes) or \"latch\" (holds \
+                         both ways)",
+                    ))
+                }
+            });
         }
         if free_swing.iter().filter(|f| **f).count() > 1 {
             return Err(self.err(
@@ -507,6 +530,7 @@ impl WalkerSpec {
             foot_radius,
             segments,
             free_swing,
+            latched,
             gaits,
         })
     }

@@ -7,6 +7,7 @@ mod chain_common;
 mod chain_walker;
 mod common;
 mod compass;
+mod impacts;
 mod kneed;
 mod rimless_physics;
 mod round_feet;
