@@ -170,7 +170,12 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
     )?;
     d.set_item("min_clearance", v.min_clearance)?;
     d.set_item("scuff_depth", v.scuff_depth)?;
-    d.set_item("scuff_intervals", v.scuff_intervals.clone())?;
+    d.set_item(
+        "t_min_clearance",
+        v.min_clearance.map(|_| v.t_min_clearance),
+    )?;
+    let intervals: Vec<[f64; 2]> = v.scuff_intervals.iter().map(|&(a, b)| [a, b]).collect();
+    d.set_item("scuff_intervals", intervals)?;
     d.set_item("t_mid_stance", v.t_mid_stance)?;
     d.set_item("impact_friction_required", v.impact_friction_required)?;
     let impacts = PyList::empty(py);
@@ -179,6 +184,9 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
         e.set_item("event", &i.event)?;
         e.set_item("t", i.t)?;
         e.set_item("checked", i.report.is_some())?;
+        for k in ["friction_required", "energy_lost", "min_margin", "entries"] {
+            e.set_item(k, py.None())?;
+        }
         if let Some(r) = &i.report {
             e.set_item("friction_required", r.friction_required)?;
             e.set_item("energy_lost", r.energy_lost)?;
@@ -200,6 +208,18 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
         impacts.append(e)?;
     }
     d.set_item("impacts", impacts)?;
+    d.set_item(
+        "scales",
+        v.scales
+            .map(|s| {
+                let x = PyDict::new(py);
+                x.set_item("mass", s.mass)?;
+                x.set_item("length", s.length)?;
+                x.set_item("gravity", s.gravity)?;
+                Ok::<_, PyErr>(x)
+            })
+            .transpose()?,
+    )?;
     let margins = PyList::empty(py);
     for m in &v.margins {
         let x = PyDict::new(py);

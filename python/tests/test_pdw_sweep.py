@@ -275,3 +275,22 @@ def test_continuation_equals_the_cli_sweep_json():
             b["multipliers"], [[m["re"] + 1j * m["im"] for m in p["multipliers"]] for p in pts])
         bifs = [x for x in ref["bifurcations"] if x["branch"] == r["id"]]
         assert [x["parameter"] for x in b["bifurcations"]] == [x["parameter"] for x in bifs]
+
+
+def test_validity_is_located_on_the_dense_solution_with_relative_margins():
+    """The simplest walker at 0.009: valid under its mid-stance convention (Garcia et al. 1998)
+    with the scuff's depth reported; every relative margin is raw / scale (its own units: 1) and
+    the binding criterion is the smallest; the heel strike's impulses push."""
+    g = pdw.fixed_point("simplest", slope=0.009, gait="stable")[0]
+    v = g["validity"]
+    assert v["valid"] and v["continuous"] and v["fell"] is None
+    assert v["clearance_rule"] == "after_mid_stance" and not v["swing_foot_scuffs"]
+    assert abs(v["scuff_depth"] - 6.384e-5) < 1e-8
+    rel = {m["name"]: m["relative"] for m in v["margins"]}
+    for m in v["margins"]:
+        assert m["relative"] == m["raw"] / m["scale"] and m["scale"] == 1.0
+    assert v["binding"] == min(rel, key=rel.get)
+    assert v["min_relative_margin"] == min(rel.values())
+    imp = v["impacts"][0]
+    assert imp["event"] == "heel_strike" and imp["checked"] and imp["min_margin"] > 0
+    assert not v["impact_violation"] and v["violations"] == []

@@ -19,4 +19,5 @@ mod period_k;
 mod rimless_wheel;
 mod simplest_gaits;
 mod trajectory;
+mod validity_continuous;
 mod variational_engine;

@@ -109,6 +109,7 @@ pub fn validity_json(v: &Validity) -> serde_json::Value {
         "swing_foot_scuffs": v.swing_foot_scuffs,
         "impact_violation": v.impact_violation,
         "continuous": v.continuous,
+        "fell": v.fell,
         "t_min_normal_force": num(v.t_min_normal_force),
         "t_max_friction_required": num(v.t_max_friction_required),
         "knee_torque": {"stance": v.knee_torque[0], "swing": v.knee_torque[1]},
