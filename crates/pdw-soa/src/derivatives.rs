@@ -560,10 +560,32 @@ fn impact_derivatives_w<const W: usize>(
     mass_matrix(chain, &kd, &mut mm);
     ldl(&mut mm, n).ok_or(SoaError::MassMatrixNotPositiveDefinite)?;
     let arows = constraint_rows(chain, &kd, tip, locked, offset);
+    let (mut v, mut lam) = ([0.0; MAX_DOF], [0.0; MAX_DOF]);
+    impact_in_duals(n, m, &mm, &arows, qd, &mut v, &mut lam, jac)?;
+    Ok(())
+}
+
+/// The plastic impact with constraint rows `a` (the leading `m` of them) in duals of width `W`
+/// seeded on `q`, with `mm` the `LDLᵀ` factor of `𝓜(q)` ([`ldl`]): `X = 𝓜⁻¹Aᵀ`, `S = A X`,
+/// `Λ = S⁻¹ A q̇⁻`, `q̇⁺ = q̇⁻ − X Λ` (module docs). Writes the values of `q̇⁺` and `Λ`, and the
+/// Jacobian `[∂q̇⁺/∂q | ∂q̇⁺/∂q̇⁻]` (`n × 2n` row-major; `∂q̇⁺/∂q̇⁻ = I − X S⁻¹ A`). Returns the
+/// smallest and largest pivot of `S`'s factorisation (a caller rejects near-singular sets).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn impact_in_duals<const W: usize>(
+    n: usize,
+    m: usize,
+    mm: &Mat8<Dual<W>>,
+    arows: &Mat8<Dual<W>>,
+    qd: &[f64],
+    qd_post: &mut [f64],
+    lam_out: &mut [f64],
+    jac: &mut [f64],
+) -> Result<(f64, f64), SoaError> {
+    let zero = Dual::<W>::constant(0.0);
     // X = 𝓜⁻¹ Aᵀ (column i of X in xt[i])
-    let mut xt = arows;
+    let mut xt = *arows;
     for i in 0..m {
-        ldl_solve(&mm, n, &mut xt[i][..n]);
+        ldl_solve(mm, n, &mut xt[i][..n]);
     }
     // S = A X (m × m, lower triangle), y = A q̇⁻
     let mut s = [[zero; MAX_DOF]; MAX_DOF];
@@ -582,17 +604,21 @@ fn impact_derivatives_w<const W: usize>(
         }
         lam[i] = y;
     }
-    ldl(&mut s, m).ok_or(SoaError::SingularConstraint {
+    let pivots = ldl(&mut s, m).ok_or(SoaError::SingularConstraint {
         what: "A 𝓜⁻¹ Aᵀ (impact)",
     })?;
     // Λ = S⁻¹ y, q̇⁺ = q̇⁻ − X Λ
     ldl_solve(&s, m, &mut lam[..m]);
+    for i in 0..m {
+        lam_out[i] = lam[i].v;
+    }
     let w2 = 2 * n;
     for k in 0..n {
         let mut v = Dual::constant(qd[k]);
         for i in 0..m {
             v = v - xt[i][k] * lam[i];
         }
+        qd_post[k] = v.v;
         jac[k * w2..k * w2 + n].copy_from_slice(&v.d[..n]);
     }
 
@@ -617,7 +643,7 @@ fn impact_derivatives_w<const W: usize>(
             jac[k * w2 + n + c] = v;
         }
     }
-    Ok(())
+    Ok(pivots)
 }
 
 /// Mass matrix 𝓜 (both triangles) by the composite-rigid-body steps of the kernel

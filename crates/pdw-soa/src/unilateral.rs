@@ -55,8 +55,8 @@
 
 use crate::chain::Chain;
 use crate::derivatives::{
-    by_dof, check_dof, check_floating, kin, ldl, ldl_solve, mass_matrix, positions, Kin, Mat8,
-    MAX_DOF,
+    by_dof, check_dof, check_floating, impact_in_duals, kin, ldl, ldl_solve, mass_matrix,
+    positions, Kin, Mat8, MAX_DOF,
 };
 use crate::dual::{Dual, Scalar};
 use crate::error::{check_len, SoaError};
@@ -483,66 +483,15 @@ fn solve_w<const W: usize>(
         }
         return Ok(());
     }
-    // X = 𝓜⁻¹ Aᵀ, S = A X, λ = −S⁻¹ A q̇⁻
-    let mut xt = a;
-    for i in 0..m {
-        ldl_solve(&mm, n, &mut xt[i][..n]);
-    }
-    let mut s = [[zero; MAX_DOF]; MAX_DOF];
-    let mut lam = [zero; MAX_DOF];
-    for i in 0..m {
-        for j in 0..=i {
-            let mut acc = zero;
-            for k in 0..n {
-                acc = acc + a[i][k] * xt[j][k];
-            }
-            s[i][j] = acc;
-        }
-        let mut y = zero;
-        for k in 0..n {
-            y = y + a[i][k] * Dual::constant(qd[k]);
-        }
-        lam[i] = -y;
-    }
-    let singular = SoaError::SingularConstraint {
-        what: "A 𝓜⁻¹ Aᵀ (impact)",
-    };
-    let (dmin, dmax) = ldl(&mut s, m).ok_or(singular.clone())?;
+    // Λ = (A 𝓜⁻¹ Aᵀ)⁻¹ A q̇⁻, q̇⁺ = q̇⁻ − 𝓜⁻¹AᵀΛ: the impulse on the chain is λ = −Λ
+    let (dmin, dmax) = impact_in_duals(n, m, &mm, &a, qd, qd_post, lam_out, jac)?;
     if dmin <= 1e-10 * dmax {
-        return Err(singular);
+        return Err(SoaError::SingularConstraint {
+            what: "A 𝓜⁻¹ Aᵀ (impact)",
+        });
     }
-    ldl_solve(&s, m, &mut lam[..m]);
-    for i in 0..m {
-        lam_out[i] = lam[i].v;
-    }
-    for k in 0..n {
-        let mut v = Dual::constant(qd[k]);
-        for i in 0..m {
-            v = v + xt[i][k] * lam[i];
-        }
-        qd_post[k] = v.v;
-        jac[k * w2..k * w2 + n].copy_from_slice(&v.d[..n]);
-    }
-    // ∂q̇⁺/∂q̇⁻ = I − X S⁻¹ A on the values
-    let mut sv = [[0.0; MAX_DOF]; MAX_DOF];
-    for i in 0..m {
-        for j in 0..=i {
-            sv[i][j] = s[i][j].v;
-        }
-    }
-    let mut z = [0.0; MAX_DOF];
-    for c in 0..n {
-        for i in 0..m {
-            z[i] = a[i][c].v;
-        }
-        ldl_solve(&sv, m, &mut z[..m]);
-        for k in 0..n {
-            let mut v = if k == c { 1.0 } else { 0.0 };
-            for i in 0..m {
-                v -= xt[i][k].v * z[i];
-            }
-            jac[k * w2 + n + c] = v;
-        }
+    for l in lam_out[..m].iter_mut() {
+        *l = -*l;
     }
     Ok(())
 }

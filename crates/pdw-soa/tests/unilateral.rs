@@ -177,6 +177,7 @@ fn the_complementarity_solution_is_the_only_one() {
             unsolved += 1;
             continue;
         }
+        #[allow(clippy::needless_range_loop)] // item i, its sign row and its counter
         for i in 1..4 {
             let it = &sol.items[i];
             let sign_row = if i == 1 { 1 } else { 0 };

@@ -51,6 +51,7 @@
 //!   releases a stance knee, the stance leg buckles: the twin guard fires, a named fall.
 //! - Heel strike: the striking foot holds by definition; the trailing foot and every knee stop
 //!   are unilateral. A released knee of the new stance leg buckles it (the twin guard).
+//!
 //! The model's map holds every knee and releases the trailing foot. Where the complementarity
 //! problem would instead release a trailing knee (its stop would have to pull) or keep the
 //! trailing foot on the ground, the map is the walker with the knee latched; its impact report
