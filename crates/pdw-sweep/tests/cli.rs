@@ -686,7 +686,10 @@ fn fixedpoint_json_validity_margins_are_consistent() {
     }
     assert_eq!(v["binding"], smallest.1.as_str());
     assert_eq!(v["min_relative_margin"].as_f64().unwrap(), smallest.0);
-    let nf = margins.iter().find(|m| m["name"] == "normal_force").unwrap();
+    let nf = margins
+        .iter()
+        .find(|m| m["name"] == "normal_force")
+        .unwrap();
     assert_eq!(nf["raw"], v["min_normal_force"]);
     // the heel strike's impulses: pushing, the trailing foot separating
     let imp = &v["impacts"][0];
