@@ -82,6 +82,7 @@ fn build(model: &str, ov: &[(String, f64)]) -> PyResult<Model> {
     let refs: Vec<(&str, f64)> = ov.iter().map(|(n, v)| (n.as_str(), *v)).collect();
     let values = info.resolve(&refs).map_err(err)?;
     let walker = info.build_from(&values).map_err(err)?;
+    let info = info.with_walker(walker.as_ref());
     let params = info
         .params
         .iter()

@@ -563,6 +563,23 @@ impl Reference {
     /// walker `p = (A, θ)` with `Ȧ⁻ = (−r θ̇₀, 0)`, `G` the new contact point's two rows and the
     /// two knee rows; then the leg swap `θ' = (θ₃, θ₂, θ₁, θ₀)`.
     fn heel_strike(&self, x: &[f64]) -> HeelStrike {
+        self.heel_strike_rows(x, true)
+    }
+
+    /// The heel strike of a walker whose knees are held by stops that only push: as
+    /// [`Reference::heel_strike`], unless the trailing (old stance) knee's stop would have to
+    /// pull (`trailing_knee_impulse < 0`); then that knee is free through the impact — the same
+    /// impact without its row — and the new swing knee leaves it flexing.
+    fn heel_strike_unilateral(&self, x: &[f64]) -> HeelStrike {
+        let held = self.heel_strike_rows(x, true);
+        if held.trailing_knee_impulse >= 0.0 {
+            return held;
+        }
+        self.heel_strike_rows(x, false)
+    }
+
+    /// The heel strike with the trailing knee's row (`hold_trailing`) or without it.
+    fn heel_strike_rows(&self, x: &[f64], hold_trailing: bool) -> HeelStrike {
         let (th, thd) = (angles(&x[..4]), angles(&x[4..8]));
         let mm = self.floating_mass_matrix(&th);
         let mut pd = [0.0; 6];
@@ -576,11 +593,16 @@ impl Reference {
         for row in self.contact_rows(&th) {
             g.extend_from_slice(&row);
         }
-        for row in KNEE_ROWS {
+        let knees = if hold_trailing {
+            &KNEE_ROWS[..]
+        } else {
+            &KNEE_ROWS[1..]
+        };
+        for row in knees {
             g.extend_from_slice(&[0.0, 0.0]);
-            g.extend_from_slice(&row);
+            g.extend_from_slice(row);
         }
-        let (pd_post, lam) = kkt(&mm, &g, &f, 6, 4);
+        let (pd_post, lam) = kkt(&mm, &g, &f, 6, 2 + knees.len());
         let thd_post = [pd_post[2], pd_post[3], pd_post[4], pd_post[5]];
         let mut floating_post = [0.0; 6];
         floating_post[..2].copy_from_slice(&pd_post[..2]);
@@ -594,8 +616,8 @@ impl Reference {
             x_post,
             floating_post,
             contact_impulse: [lam[0], lam[1]],
-            trailing_knee_impulse: lam[2],
-            new_stance_knee_impulse: -lam[3],
+            trailing_knee_impulse: if hold_trailing { lam[2] } else { 0.0 },
+            new_stance_knee_impulse: -lam[1 + knees.len()],
             // the old stance foot's contact point, r below A on the shank: Ȧ + θ̇₀ (r, 0)
             trailing_foot_velocity: [pd_post[0] + self.radius * thd_post[0], pd_post[1]],
         }
@@ -773,7 +795,8 @@ fn reference_conserves_energy_along_its_flow() {
 
 /// Self-check of the reference impacts: heel strike conserves the walker's angular momentum
 /// about the new contact point and the trailing leg's about the hip, brings the new contact
-/// point to rest and holds the knees; knee strike conserves the walker's angular momentum about
+/// point to rest and holds the knees (with the trailing knee released where its stop would pull:
+/// the same, and the trailing shank's about the free knee); knee strike conserves the walker's angular momentum about
 /// the stance contact point and the swing leg's about the hip, keeps the contact point at rest
 /// (arc centre at `−r θ̇₀`) and stops the knees. All to 1e-12 of `m l √(g l)` (`√(g l)`).
 #[test]
@@ -783,6 +806,7 @@ fn reference_impacts_conserve_angular_momenta() {
         let s = r.scales();
         let mut rng = Rng(11);
         let (mut worst_h, mut worst_v) = (0.0f64, 0.0f64);
+        let mut released = 0;
         for _ in 0..20 {
             // heel strike
             let x = random_state(&mut rng, LOCKED, s.rate);
@@ -805,6 +829,26 @@ fn reference_impacts_conserve_angular_momenta() {
             let sv = r.velocity(&r.swing_arc, ad1, &th, &thd1);
             let contact_v = [sv[0] + r.radius * thd1[3], sv[1]];
             worst_h = worst_h.max(dh_all.abs().max(dh_trail.abs()) / s.ang);
+            // with the trailing knee released (where its stop would pull): the same momenta,
+            // and the trailing shank's about the free trailing knee
+            if hs.trailing_knee_impulse < 0.0 {
+                let hu = r.heel_strike_unilateral(&x);
+                let thd1 = angles(&hu.floating_post[2..6]);
+                let ad1 = [hu.floating_post[0], hu.floating_post[1]];
+                let mut knee = r.hip;
+                knee.alpha[1] = 0.0;
+                let knee = r.position(&knee, a, &th);
+                for (bodies, o) in [
+                    (&all[..], contact),
+                    (&STANCE_LEG[..], hip),
+                    (&[0usize][..], knee),
+                ] {
+                    let dh = r.angular_momentum(bodies, o, a, ad1, &th, &thd1)
+                        - r.angular_momentum(bodies, o, a, ad0, &th, &thd0);
+                    worst_h = worst_h.max(dh.abs() / s.ang);
+                }
+                released += 1;
+            }
             worst_v = worst_v.max(
                 contact_v[0]
                     .abs()
@@ -836,6 +880,10 @@ fn reference_impacts_conserve_angular_momenta() {
         assert!(
             worst_h < 1e-12,
             "{name}: angular momentum through the reference impacts changes by {worst_h:e} m l √(g l)"
+        );
+        assert!(
+            released > 0,
+            "{name}: no released heel strike among the states"
         );
         assert!(
             worst_v < 1e-12,
@@ -929,21 +977,46 @@ fn heel_strike_matches_reference_to_1e_10() {
         let mut rng = Rng(13);
         let mut ws = Scratch::new();
         let (mut worst_x, mut worst_i) = (0.0f64, 0.0f64);
-        for _ in 0..20 {
+        let mut released = 0;
+        for _ in 0..40 {
             let x = random_state(&mut rng, LOCKED, s.rate);
             let mut out = [0.0; 8];
             let next = w.reset(&mut ws, LOCKED, 0, &x, &mut out);
             assert_eq!(next, FREE, "{name}: heel strike leads to the free mode");
+            // the model's map: the trailing knee released where its stop would pull
+            let hu = r.heel_strike_unilateral(&x);
             let hs = r.heel_strike(&x);
+            let rel = hs.trailing_knee_impulse < 0.0;
+            released += usize::from(rel);
+            assert_eq!(
+                w.trailing_knee_releases_at(&x),
+                rel,
+                "{name}: the engine's release decision differs from the reference's at {x:?}"
+            );
             worst_x = worst_x
-                .max(max_abs_diff(&out[..4], &hs.x_post[..4]))
-                .max(max_abs_diff(&out[4..], &hs.x_post[4..]) / s.rate);
+                .max(max_abs_diff(&out[..4], &hu.x_post[..4]))
+                .max(max_abs_diff(&out[4..], &hu.x_post[4..]) / s.rate);
+            if rel {
+                // the new swing knee (joint 3) leaves flexing (q < 0 for a swing knee)
+                assert!(
+                    out[7] < 0.0,
+                    "{name}: released trailing knee must leave flexing, rate {}",
+                    out[7]
+                );
+            }
             let mut fl = [0.0; 6];
             let imp = w.heel_strike(&mut ws, &x, &mut fl);
             worst_x = worst_x.max(max_abs_diff(&fl, &hs.floating_post) / s.rate);
             worst_i = worst_i.max(max_abs_diff(&imp, &hs.contact_impulse) / s.impulse);
         }
-        eprintln!("{name}: heel strike |Δx| ≤ {worst_x:.2e}, impulse ≤ {worst_i:.2e} m √(gl)");
+        eprintln!(
+            "{name}: heel strike |Δx| ≤ {worst_x:.2e}, impulse ≤ {worst_i:.2e} m √(gl); {released} \
+             of 40 states release the trailing knee"
+        );
+        assert!(
+            released > 0 && released < 40,
+            "{name}: the random states must exercise both maps ({released} of 40 released)"
+        );
         assert!(
             worst_x < 1e-10,
             "{name}: heel strike differs from the reference by {worst_x:e} (rates in √(g/l))"
@@ -1070,6 +1143,7 @@ fn impulses_at_the_seed5_walking_gait() {
     let (x_ks, x_hs, section) = gait_pre_impact_states(&w);
     let ks = r.knee_strike(&x_ks);
     let hs = r.heel_strike(&x_hs);
+    let hu = r.heel_strike_unilateral(&x_hs);
     eprintln!("seed5_walking fixed point {section:?}");
     eprintln!("knee strike pre {x_ks:?}");
     eprintln!(
@@ -1092,8 +1166,19 @@ fn impulses_at_the_seed5_walking_gait() {
     let mut ws = Scratch::new();
     let mut out = [0.0; 8];
     w.reset(&mut ws, LOCKED, 0, &x_hs, &mut out);
-    let dx = max_abs_diff(&out[..4], &hs.x_post[..4])
-        .max(max_abs_diff(&out[4..], &hs.x_post[4..]) / s.rate);
+    // its stop would pull (the held impulse is negative): the model releases the trailing knee
+    assert!(
+        hs.trailing_knee_impulse < 0.0 && w.trailing_knee_releases_at(&x_hs),
+        "the seed5_walking gait's trailing knee must be released (held impulse {:e} N m s)",
+        hs.trailing_knee_impulse
+    );
+    eprintln!(
+        "heel strike with the trailing knee released: new swing knee rate {:.6} rad/s, new \
+         stance knee stop {:.6e} N m s, trailing foot separation {:.6e} m/s",
+        hu.x_post[7], hu.new_stance_knee_impulse, hu.trailing_foot_velocity[1]
+    );
+    let dx = max_abs_diff(&out[..4], &hu.x_post[..4])
+        .max(max_abs_diff(&out[4..], &hu.x_post[4..]) / s.rate);
     let mut fl = [0.0; 6];
     let imp = w.heel_strike(&mut ws, &x_hs, &mut fl);
     let di = max_abs_diff(&imp, &hs.contact_impulse) / s.impulse;

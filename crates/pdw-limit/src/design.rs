@@ -184,6 +184,18 @@ pub fn evaluate_design(
     opts: &DesignOptions,
     pool: &rayon::ThreadPool,
 ) -> DesignEval {
+    // stored designs keep (stance, stance_rate, hip_rate); a walker whose section carries the
+    // swing knee's rate starts from 0 there (the rate when its stop holds at heel strike)
+    let ds = walker.section_dim();
+    let padded: Vec<(String, Vec<f64>)> = guesses
+        .iter()
+        .map(|(name, s)| {
+            let mut s = s.clone();
+            s.resize(ds.max(s.len()), 0.0);
+            (name.clone(), s)
+        })
+        .collect();
+    let guesses = &padded[..];
     let found = match gait_search(walker, guesses, opts.newton_tol) {
         Ok((found, _)) => found,
         Err(e) => {

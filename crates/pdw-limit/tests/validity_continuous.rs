@@ -92,6 +92,15 @@ impl HybridSystem for ThroughBuckling<'_> {
     fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
         self.0.reset(ws, mode, k, x, out)
     }
+    fn flow_jacobian(&self, ws: &mut Scratch, mode: usize, x: &[f64], jac: &mut [f64]) {
+        self.0.flow_jacobian(ws, mode, x, jac)
+    }
+    fn guard_gradient(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], grad: &mut [f64]) {
+        self.0.guard_gradient(ws, mode, k, x, grad)
+    }
+    fn reset_jacobian(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], jac: &mut [f64]) {
+        self.0.reset_jacobian(ws, mode, k, x, jac)
+    }
 }
 
 impl Section for ThroughBuckling<'_> {
@@ -324,4 +333,45 @@ fn relative_margins_are_raw_over_their_scales() {
     let b = v.binding().unwrap();
     assert!(v.margins.iter().all(|m| m.relative >= b.relative));
     assert_eq!(v.min_relative_margin(), Some(b.relative));
+}
+
+/// The heel strike's mode change inside the stride map: seed5_walking with stops, followed
+/// through its knee-strike buckle ([`ThroughBuckling`]), releases its trailing knee at heel
+/// strike (its stop would pull) and the new swing knee starts flexing; the section's fourth
+/// coordinate `swing_knee_rate` carries that rate. The stride map's exact Jacobian (variational
+/// equations through the released impact's exact Jacobian) agrees with Richardson differences
+/// of the stride map to 1e-7 of its largest entry, and the released rate agrees with the one the
+/// independent reference model gives at the gait's heel strike (−1.80 rad/s) to 0.1 rad/s.
+#[test]
+fn released_trailing_knee_keeps_the_stride_map_jacobian_exact() {
+    let c = spec_walker("seed5_walking.toml");
+    let w = ThroughBuckling(&c);
+    assert_eq!(
+        w.section_names(),
+        &["stance", "stance_rate", "hip_rate", "swing_knee_rate"]
+    );
+    let map = StrideMap::new(&w as &dyn Walker, Options::dop853(1e-13)).unwrap();
+    let mut s = c.gait_guesses().into_iter().next().unwrap().section;
+    assert_eq!(s.len(), 4);
+    s = map.apply(&s).unwrap();
+    assert!(
+        (s[3] + 1.80).abs() < 0.1,
+        "one stride from the old gait: the trailing knee is released, swing_knee_rate {}",
+        s[3]
+    );
+    let (_, dp) = pdw_limit::dp_variational(&map, &s).unwrap();
+    let fd =
+        pdw_limit::richardson_jacobian(|a, b| b.copy_from_slice(&map.apply(a).unwrap()), &s, 4);
+    let scale = fd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let err = dp
+        .iter()
+        .zip(&fd)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    eprintln!("stride map with a released trailing knee at {s:?}: |DP − Richardson| = {err:.2e} (max |DP| {scale:.3})");
+    assert!(
+        err <= 1e-7 * scale,
+        "variational {dp:?} vs Richardson {fd:?}: {err:e}"
+    );
+    // the fourth column is alive: the knee's rate at the start changes the stride
+    assert!((0..4).any(|i| dp[i * 4 + 3].abs() > 1e-6), "{dp:?}");
 }

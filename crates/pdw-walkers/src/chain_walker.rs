@@ -52,12 +52,17 @@
 //! - Heel strike: the striking foot holds by definition; the trailing foot and every knee stop
 //!   are unilateral. A released knee of the new stance leg buckles it (the twin guard).
 //!
-//! The model's map holds every knee and releases the trailing foot. Where the complementarity
-//! problem would instead release a trailing knee (its stop would have to pull) or keep the
-//! trailing foot on the ground, the map is the walker with the knee latched; its impact report
-//! ([`ChainWalker::impact_report_at`], [`Walker::impact_report`]) shows the negative margin and
-//! the gait is invalid — never silently valid. (A trailing knee that starts the swing flexing is
-//! a walker whose section carries the swing knee's rate; this model does not follow it.)
+//! The model's heel-strike map releases the trailing foot and holds every knee but one: the
+//! trailing knee that becomes the free swing knee, when a stop (not a latch) holds it, is
+//! released where its stop would have to pull with the others held — the mode change of the
+//! model: the new swing knee starts flexing at the impact's rate, the section carries that rate
+//! (`swing_knee_rate`, below) and the stride map and its Jacobian stay exact (piecewise: the
+//! map is continuous across the switch, where the released rate and the held impulse both
+//! vanish). Where the complementarity problem would instead release another trailing knee
+//! (three-segment legs), a latched trailing knee, or keep the trailing foot on the ground, the
+//! map keeps the model's set; its impact report ([`ChainWalker::impact_report_at`],
+//! [`Walker::impact_report`]) shows the negative margin and the gait is invalid — never
+//! silently valid.
 //!
 //! # Resets
 //! - Knee strike: plastic lock of the free knee with the stance foot's contact point at rest and
@@ -95,7 +100,9 @@
 //! # Section
 //! Just after heel strike, every knee straight: `q = (s₀, 0…, −2s₀, 0…)`,
 //! `q̇ = (s₁, 0…, s₂, 0…)`; reduced coordinates `(q₀, q̇₀, q̇_m)` (`"stance"`, `"stance_rate"`,
-//! `"hip_rate"`).
+//! `"hip_rate"`). A walker whose free swing knee is held by a stop while in stance
+//! ([`section_names_of`]) has a fourth, `"swing_knee_rate"` `s₃` (the free knee's rate, ≤ 0
+//! when the knee left the heel strike flexing, 0 when its stop held).
 
 use crate::error::WalkerError;
 use crate::registry::{GaitGuess, Pose, Walker};
@@ -118,7 +125,24 @@ pub const FLOATING_BASE_MASS: f64 = 1e-30;
 /// Largest number of segments per leg.
 pub const MAX_SEGMENTS: usize = 3;
 
-const SECTION_NAMES: [&str; 3] = ["stance", "stance_rate", "hip_rate"];
+const SECTION_NAMES: [&str; 4] = ["stance", "stance_rate", "hip_rate", "swing_knee_rate"];
+
+/// The section coordinates of a chain walker resolved as `r`: `(stance, stance_rate,
+/// hip_rate)`, and `swing_knee_rate` when the swing knee is free and held by a stop (not a
+/// latch) while its leg is the stance leg — its stop may release at heel strike, and the new
+/// swing knee then starts flexing (module docs, "Section").
+pub fn section_names_of(r: &Resolved) -> &'static [&'static str] {
+    let releases = r
+        .free_swing
+        .iter()
+        .zip(&r.latched)
+        .any(|(free, latched)| *free && !*latched);
+    if releases {
+        &SECTION_NAMES
+    } else {
+        &SECTION_NAMES[..3]
+    }
+}
 
 const FALLS: [GuardSpec; 3] = [
     GuardSpec {
@@ -207,6 +231,9 @@ pub struct ChainWalker {
     floating_knees: Vec<usize>,
     /// per joint: a knee held by a latch (both ways) rather than a stop
     latched: Vec<bool>,
+    /// the stance joint of the trailing knee that becomes the free swing knee at heel strike,
+    /// when it is held by a stop (its release at heel strike is a mode change of the model)
+    trailing_free: Option<usize>,
     state_names: Vec<String>,
 }
 
@@ -341,6 +368,8 @@ impl ChainWalker {
             .map(|l| (0..n).map(|k| l.contains(&k)).collect())
             .collect();
         let floating_knees = knees.iter().map(|k| k + 2).collect();
+        // old stance joint i + 1 becomes new swing joint 2m − 1 − i at the leg swap
+        let trailing_free = free_knee.map(|fk| 2 * m - fk).filter(|j| !latched[*j]);
         let mut names = vec!["stance".to_string()];
         let knee_name = |side: &str, i: usize| {
             if m == 2 {
@@ -370,6 +399,7 @@ impl ChainWalker {
             locked,
             floating_knees,
             latched,
+            trailing_free,
             state_names: names,
         })
     }
@@ -906,9 +936,10 @@ impl ChainWalker {
         }
     }
 
-    /// The model's impact map of `mode` at `x` on the floating chain (every knee held, the
-    /// trailing foot released at heel strike): floating-chain rates after the impact into
-    /// `v` (length `n + 2`) and, if given, the Jacobian `[∂q̇_F⁺/∂q_F | ∂q̇_F⁺/∂q̇_F⁻]`.
+    /// The model's impact map of `mode` at `x` on the floating chain (every knee held but a
+    /// trailing free knee whose stop would pull, the trailing foot released at heel strike):
+    /// floating-chain rates after the impact into `v` (length `n + 2`) and, if given, the
+    /// Jacobian `[∂q̇_F⁺/∂q_F | ∂q̇_F⁺/∂q̇_F⁻]`.
     fn impact_map(
         &self,
         mode: usize,
@@ -916,8 +947,11 @@ impl ChainWalker {
         v: &mut [f64],
         jac: Option<&mut [f64]>,
     ) -> Result<(ImpactProblem, pdw_soa::ImpactSolution), pdw_soa::SoaError> {
-        let p = self.impact_problem(mode, x);
+        let mut p = self.impact_problem(mode, x);
         let nf = self.n + 2;
+        if let Some(i) = self.trailing_release_item(mode, &p) {
+            p.hold[i] = false;
+        }
         let sol = pdw_soa::unilateral_impact(
             &self.floating,
             &p.q[..nf],
@@ -928,6 +962,44 @@ impl ChainWalker {
             jac,
         )?;
         Ok((p, sol))
+    }
+
+    /// At a heel strike of a walker whose trailing free knee is held by a stop
+    /// (`trailing_free`): the index of that knee's item in `p` if its stop would have to pull
+    /// with every constraint of the model held (a negative impulse), i.e. if the model releases
+    /// it. The released problem is then consistent for that knee: with the others held, the
+    /// stop's impulse and the knee's flexion rate after release have opposite signs (the
+    /// Schur complement `e 𝓜⁻¹ eᵀ` restricted to the held rows is positive).
+    fn trailing_release_item(&self, mode: usize, p: &ImpactProblem) -> Option<usize> {
+        let tk = self.trailing_free?;
+        if self.free_knee.is_some() && mode == FREE {
+            return None;
+        }
+        let i = (0..p.len).find(|&i| p.roles[i] == Role::TrailingKnee(tk))?;
+        let nf = self.n + 2;
+        let mut v = [0.0; FMAX];
+        let sol = pdw_soa::unilateral_impact(
+            &self.floating,
+            &p.q[..nf],
+            &p.qd[..nf],
+            &p.items[..p.len],
+            Some(&p.hold[..p.len]),
+            &mut v[..nf],
+            None,
+        )
+        .ok()?;
+        (sol.items[i].impulse[0] < 0.0).then_some(i)
+    }
+
+    /// Whether the model releases the trailing free knee at the heel strike at the pre-impact
+    /// state `x` (its stop would have to pull; the new swing knee then starts flexing).
+    pub fn trailing_knee_releases_at(&self, x: &[f64]) -> bool {
+        if self.trailing_free.is_none() {
+            return false;
+        }
+        let mode = self.locked_mode();
+        let p = self.impact_problem(mode, x);
+        self.trailing_release_item(mode, &p).is_some()
     }
 
     /// Name of a knee joint in a report: `prefix` and the knee's number for three-segment
@@ -1000,6 +1072,31 @@ impl ChainWalker {
             friction_required: friction,
             energy_lost: sol.energy_lost,
         })
+    }
+
+    /// The spec's gaits as given, or the generic start.
+    fn gait_guesses3(&self) -> Vec<GaitGuess> {
+        if self.r.gaits.is_empty() {
+            // Goswami's compass gait at 3° scaled by √(g/L): a start that reaches the
+            // period-one gait of most straight-legged walkers on small slopes.
+            let w = (self.r.gravity / self.leg_length).sqrt();
+            return vec![GaitGuess {
+                gait: "stable".into(),
+                section: vec![0.27, -0.35 * w, 0.23 * w],
+                source: "generic start (the compass gait's at 3°, rates scaled by √(g/L)); the \
+                         spec gives no gait"
+                    .into(),
+            }];
+        }
+        self.r
+            .gaits
+            .iter()
+            .map(|(name, section, source)| GaitGuess {
+                gait: name.clone(),
+                section: section.clone(),
+                source: source.clone(),
+            })
+            .collect()
     }
 
     /// The leg swap as a matrix `S` (row-major `n × n`): `q' = S q`, `q̇' = S q̇`.
@@ -1272,9 +1369,30 @@ impl HybridSystem for ChainWalker {
             }
             return LOCKED;
         }
-        let mut v = [0.0; 2 * MAX_SEGMENTS + 2];
+        let mut v = [0.0; FMAX];
+        if self.trailing_knee_releases_at(x) {
+            // the mode change: the trailing free knee leaves the impact flexing, every other
+            // knee held (their rates exactly 0 in the new mode)
+            if self
+                .impact_map(self.locked_mode(), x, &mut v[..n + 2], None)
+                .is_err()
+            {
+                v.fill(f64::NAN);
+            }
+            self.swap(&x[..n], &v[2..n + 2], out);
+            for &j in &self.locked[self.section_mode()] {
+                out[n + j] = 0.0;
+            }
+            return self.section_mode();
+        }
         self.heel_strike(ws, x, &mut v[..n + 2]);
         self.swap(&x[..n], &v[2..n + 2], out);
+        if self.trailing_free.is_some() {
+            // every knee held: their rates exactly 0 (the section's swing_knee_rate is 0)
+            for k in (1..self.m).chain(self.m + 1..n) {
+                out[n + k] = 0.0;
+            }
+        }
         self.section_mode()
     }
 
@@ -1414,7 +1532,17 @@ impl HybridSystem for ChainWalker {
         s.q[2..f].copy_from_slice(&x[..n]);
         s.qd[2..f].copy_from_slice(&x[n..d]);
         let mut jf = [0.0; FMAX * 2 * FMAX];
-        let ok = if self.radius > 0.0 {
+        let released = self.trailing_knee_releases_at(x);
+        let ok = if released {
+            let mut v = [0.0; FMAX];
+            self.impact_map(
+                self.locked_mode(),
+                x,
+                &mut v[..f],
+                Some(&mut jf[..f * 2 * f]),
+            )
+            .is_ok()
+        } else if self.radius > 0.0 {
             s.qd[0] = -self.radius * x[n];
             pdw_soa::contact_impact(
                 &self.floating,
@@ -1459,15 +1587,25 @@ impl HybridSystem for ChainWalker {
                 jac[(n + i) * d + n + j] = if ok { b } else { f64::NAN };
             }
         }
+        // the held knees' rates are set to exactly 0 by the reset
+        if released {
+            for &j in &self.locked[self.section_mode()] {
+                jac[(n + j) * d..(n + j + 1) * d].fill(0.0);
+            }
+        } else if self.trailing_free.is_some() {
+            for k in (1..self.m).chain(self.m + 1..n) {
+                jac[(n + k) * d..(n + k + 1) * d].fill(0.0);
+            }
+        }
     }
 }
 
 impl Section for ChainWalker {
     fn section_dim(&self) -> usize {
-        3
+        section_names_of(&self.r).len()
     }
     fn section_names(&self) -> &[&'static str] {
-        &SECTION_NAMES
+        section_names_of(&self.r)
     }
     fn section_mode(&self) -> usize {
         0
@@ -1482,11 +1620,17 @@ impl Section for ChainWalker {
         x[m] = -2.0 * s[0];
         x[n] = s[1];
         x[n + m] = s[2];
+        if let (Some(fk), Some(_)) = (self.free_knee, self.trailing_free) {
+            x[n + fk] = s[3];
+        }
     }
     fn project(&self, x: &[f64], s: &mut [f64]) {
         s[0] = x[0];
         s[1] = x[self.n];
         s[2] = x[self.n + self.m];
+        if let (Some(fk), Some(_)) = (self.free_knee, self.trailing_free) {
+            s[3] = x[self.n + fk];
+        }
     }
     fn max_stride_time(&self) -> f64 {
         self.r.max_stride_time
@@ -1511,28 +1655,17 @@ impl Walker for ChainWalker {
     fn step_length(&self, x_pre: &[f64]) -> f64 {
         self.swing_foot(x_pre)[0]
     }
+    /// The spec's gaits (or a generic start); a section with the swing knee's rate starts it at
+    /// 0 where a gait gives only `(stance, stance_rate, hip_rate)`.
     fn gait_guesses(&self) -> Vec<GaitGuess> {
-        if self.r.gaits.is_empty() {
-            // Goswami's compass gait at 3° scaled by √(g/L): a start that reaches the
-            // period-one gait of most straight-legged walkers on small slopes.
-            let w = (self.r.gravity / self.leg_length).sqrt();
-            return vec![GaitGuess {
-                gait: "stable".into(),
-                section: vec![0.27, -0.35 * w, 0.23 * w],
-                source: "generic start (the compass gait's at 3°, rates scaled by √(g/L)); the \
-                         spec gives no gait"
-                    .into(),
-            }];
+        let ds = self.section_dim();
+        let mut v = self.gait_guesses3();
+        for g in &mut v {
+            if g.section.len() < ds {
+                g.section.resize(ds, 0.0);
+            }
         }
-        self.r
-            .gaits
-            .iter()
-            .map(|(name, section, source)| GaitGuess {
-                gait: name.clone(),
-                section: section.clone(),
-                source: source.clone(),
-            })
-            .collect()
+        v
     }
     /// The chain drawn from the stance contact point; with round feet the chain starts at the
     /// stance arc centre `r` above it, and each foot is drawn as its arc (±0.6 rad about the

@@ -216,8 +216,16 @@ pub fn chain_state_names(m: usize) -> Vec<String> {
 
 impl ModelInfo {
     /// The model of a walker spec.
+    ///
+    /// The section coordinates are those of the walker at the spec's default values
+    /// ([`crate::chain_walker::section_names_of`]); a parameter that changes them (a knee mode
+    /// expression) is accounted for by [`ModelInfo::with_walker`].
     pub fn from_spec(spec: WalkerSpec) -> Self {
         let t = spec.param_table();
+        let section_names: &[&str] = match spec.resolve(&t.values) {
+            Ok(r) => crate::chain_walker::section_names_of(&r),
+            Err(_) => &["stance", "stance_rate", "hip_rate"],
+        };
         Self {
             name: spec.name.clone(),
             description: spec.description.clone(),
@@ -230,12 +238,20 @@ impl ModelInfo {
                 })
                 .collect(),
             state_names: chain_state_names(spec.segments.len()),
-            section_names: ["stance", "stance_rate", "hip_rate"]
-                .iter()
-                .map(|s| s.to_string())
-                .collect(),
+            section_names: section_names.iter().map(|s| s.to_string()).collect(),
             builder: Builder::Spec(Box::new(spec)),
         }
+    }
+
+    /// This description with the section coordinates of `walker`, a model built from it at
+    /// some parameter values (a knee mode set by a parameter changes them).
+    pub fn with_walker(mut self, walker: &dyn Walker) -> Self {
+        self.section_names = walker
+            .section_names()
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        self
     }
 
     /// The walker spec, for chain walkers.

@@ -195,7 +195,11 @@ fn batched_flow_equals_scalar_flow_bit_for_bit_for_every_lane_count() {
 }
 
 /// Central differences of `f` at `x`, extrapolated (Richardson, steps h and h/2).
-fn richardson(f: &mut dyn FnMut(&[f64], &mut [f64]), x: &[f64], n_out: usize) -> Vec<f64> {
+pub(crate) fn richardson(
+    f: &mut dyn FnMut(&[f64], &mut [f64]),
+    x: &[f64],
+    n_out: usize,
+) -> Vec<f64> {
     let n = x.len();
     let mut jac = vec![0.0; n_out * n];
     let (mut fp, mut fm) = (vec![0.0; n_out], vec![0.0; n_out]);
@@ -219,7 +223,7 @@ fn richardson(f: &mut dyn FnMut(&[f64], &mut [f64]), x: &[f64], n_out: usize) ->
     jac
 }
 
-fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
+pub(crate) fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
     let scale = b.iter().fold(1.0f64, |m, v| m.max(v.abs()));
     for (i, (u, v)) in a.iter().zip(b).enumerate() {
         assert!(

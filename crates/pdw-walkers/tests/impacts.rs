@@ -10,7 +10,7 @@ use pdw_hybrid::{FallKind, HybridSystem, Integrator, Options, Scratch, Section, 
 use pdw_soa::{angular_momentum_about, crba, Workspace};
 use pdw_walkers::chain_walker::{FREE, LOCKED};
 use pdw_walkers::{ChainWalker, ImpulseKind, Walker, WalkerSpec};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn seed5_walking() -> ChainWalker {
@@ -206,7 +206,8 @@ fn run_to_event(w: &ChainWalker, mode: usize, x: &mut [f64]) -> StopReason {
 fn seed5_walkings_old_design_buckles_its_stance_knee_at_the_knee_strike() {
     let w = seed5_walking();
     let mut x = vec![0.0; w.dim()];
-    w.lift(&[0.25436, -0.51543, 0.32274], &mut x);
+    // its section carries the swing knee's rate (stop knees): 0, the old gait's
+    w.lift(&[0.25436, -0.51543, 0.32274, 0.0], &mut x);
     let stop = run_to_event(&w, FREE, &mut x);
     let StopReason::Guard { guard } = stop else {
         panic!("no event: {stop:?}")
@@ -259,4 +260,93 @@ fn compass_heel_strike_report_is_consistent() {
     assert!(!t.active && t.rate_after > 0.0, "{t:?}");
     assert!(rep.min_margin().unwrap().0 > 0.0);
     assert!(rep.friction_required.is_finite() && rep.friction_required < 1.0);
+}
+
+/// The mode change at heel strike (chain walker docs, "Impacts"): a trailing free knee held by
+/// a stop that would have to pull is released. At random pre-impact states of seed5_walking
+/// (stop knees) with point and round feet: the model releases exactly where the held impulse is
+/// negative; the released knee leaves flexing and every other knee straight and still (the
+/// momenta of the released impact are checked against the independent model in
+/// tests/tests/round_foot_kneed_reference.rs); the section carries the knee's rate
+/// (`swing_knee_rate`, lift and project inverse); the reset's exact Jacobian matches Richardson
+/// differences on both sides of the switch.
+#[test]
+fn a_trailing_knee_whose_stop_would_pull_is_released_at_heel_strike() {
+    let mut rng = ChaCha8Rng::seed_from_u64(34);
+    for r in [0.0, 0.05] {
+        let w = with_radius(&seed5_walking(), r);
+        assert_eq!(
+            w.section_names(),
+            &["stance", "stance_rate", "hip_rate", "swing_knee_rate"]
+        );
+        let (n, m, d) = (w.dim() / 2, w.segments(), w.dim());
+        let fk = w.free_knee().unwrap();
+        let mut sc = Scratch::new();
+        let (mut released, mut held) = (0, 0);
+        for _ in 0..30 {
+            // stance and hip rates over a wide range: both signs of the held impulse
+            let mut x = random_state(&w, &mut rng, LOCKED);
+            x[n] = rng.random_range(-2.0..2.0);
+            x[n + m] = rng.random_range(-2.0..2.0);
+            let rep = w.impact_report_at(LOCKED, &x).unwrap();
+            let trailing = rep
+                .entries
+                .iter()
+                .find(|e| e.name == "trailing_knee")
+                .unwrap();
+            let mut out = vec![0.0; d];
+            w.reset(&mut sc, LOCKED, 0, &x, &mut out);
+            let rel = w.trailing_knee_releases_at(&x);
+            assert_eq!(rel, !trailing.active, "r={r}: report and map agree");
+            if !rel {
+                held += 1;
+                assert!(trailing.impulse >= 0.0, "r={r}: a held stop pushes");
+                assert_eq!(out[n + fk], 0.0, "r={r}: a held knee leaves still");
+                continue;
+            }
+            released += 1;
+            assert!(
+                trailing.rate_after > 0.0 && out[n + fk] < 0.0,
+                "r={r}: the released knee flexes (stop rate {}, swing knee rate {})",
+                trailing.rate_after,
+                out[n + fk]
+            );
+            for k in (1..m).chain(m + 1..n).filter(|k| *k != fk) {
+                assert_eq!(out[k], 0.0);
+                assert_eq!(out[n + k], 0.0, "r={r}: held knee {k} still");
+            }
+            // the section carries the knee's rate
+            let mut s = vec![0.0; 4];
+            w.project(&out, &mut s);
+            assert_eq!(s[3], out[n + fk]);
+            let mut x2 = vec![0.0; d];
+            w.lift(&s, &mut x2);
+            assert_eq!(
+                x2[n + fk],
+                out[n + fk],
+                "r={r}: lift puts the knee's rate back"
+            );
+        }
+        for x in [
+            random_state(&w, &mut rng, LOCKED),
+            random_state(&w, &mut rng, LOCKED),
+        ] {
+            let mut jr = vec![0.0; d * d];
+            let mut ws2 = Scratch::new();
+            w.reset_jacobian(&mut sc, LOCKED, 0, &x, &mut jr);
+            let fd = crate::chain_walker::richardson(
+                &mut |x, out| {
+                    w.reset(&mut ws2, LOCKED, 0, x, out);
+                },
+                &x,
+                d,
+            );
+            crate::chain_walker::assert_close(&jr, &fd, 1e-8, &format!("r={r} reset jacobian"));
+        }
+        eprintln!("seed5_walking r={r}: {released} of 30 heel strikes release the trailing knee");
+        assert!(
+            released > 0 && held > 0,
+            "r={r}: both maps exercised ({released} released, {held} held)"
+        );
+    }
 }

@@ -147,7 +147,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let base = build_with(&a.model, &[])?;
-    if base.info.section_names.len() != 3 {
+    if base.info.spec().is_none() {
         return Err(InputError(format!(
             "--model: '{}' is not a chain walker (section of {} coordinates); design searches \
              run on walker specs (compass, kneed, seed5 or a .toml file)",

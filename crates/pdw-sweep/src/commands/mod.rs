@@ -103,6 +103,7 @@ pub fn build_with(opts: &ModelOpts, extra: &[(String, f64)]) -> Result<BuiltMode
     let walker = info
         .build_from(&values)
         .map_err(|e| InputError(e.to_string()))?;
+    let info = info.with_walker(walker.as_ref());
     let params = info
         .params
         .iter()

@@ -22,7 +22,10 @@ pub fn all_presets() -> Vec<(&'static str, ChainWalker)> {
 /// A state near the gait: section state lifted, perturbed, with a bent free knee in mode 0.
 pub fn random_state(w: &ChainWalker, r: &mut ChaCha8Rng, mode: usize) -> Vec<f64> {
     let mut x = vec![0.0; w.dim()];
-    w.lift(&[0.2, -1.0, 0.5], &mut x);
+    // a section with the swing knee's rate starts it at 0 (the knee's stop held)
+    let mut s = vec![0.0; w.section_dim()];
+    s[..3].copy_from_slice(&[0.2, -1.0, 0.5]);
+    w.lift(&s, &mut x);
     for v in x.iter_mut() {
         *v += r.random_range(-0.3..0.3);
     }
