@@ -2,6 +2,7 @@
 //! row blocks, with a PNG heatmap. See shared/DESIGN.md "Basins" and "HDF5 file".
 
 use super::fixedpoint::{report_failure, search};
+use super::output::{Format, Output};
 use super::{build_with, overrides, BuiltModel};
 use crate::args::{self, AxisRange, InputError};
 use crate::cli::BasinArgs;
@@ -223,20 +224,25 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
     // A shard writes no picture. With --resume an existing --out is expected, and an existing
     // picture is refused below unless the file turns out complete (then nothing is written).
-    let mut outputs = vec![args::Output {
+    let mut outputs = vec![Output {
         flag: "--out",
         path: &out,
+        format: Format::Hdf5,
         may_exist: a.resume,
     }];
     if shard.is_none() {
-        outputs.push(args::Output {
+        outputs.push(Output {
             flag: "--png",
             path: &png,
+            format: Format::Png,
             may_exist: a.resume,
         });
     }
-    args::check_outputs(&outputs, &[], a.force).map_err(|e| {
-        if e.0.contains("exists; pass --force") && e.0.starts_with("--out") {
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let mut claim = super::output::claim(&outputs, &inputs, a.force).map_err(|e| {
+        if e.0.contains("; pass --force to overwrite") && e.0.starts_with("--out") {
             InputError(format!("{}, or --resume to continue it", e.0))
         } else {
             e
@@ -386,6 +392,8 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         legend: set.legend(),
         shard,
     };
+    // the basin writer takes the output's lock itself, creating or continuing the file
+    claim.hand_over(&out);
     let mut writer = match BasinWriter::start(&out, &header, a.resume, a.force) {
         Ok(w) => w,
         Err(StoreError::AlreadyComplete { .. }) => {
@@ -399,7 +407,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         }
         Err(e) => return Err(e.into()),
     };
-    if shard.is_none() && a.resume && !a.force && png.exists() {
+    if shard.is_none() && a.resume && !a.force && claim.existed(&png) {
         writer.close()?;
         return Err(InputError(format!(
             "--png: '{}' exists; pass --force to overwrite it (with --resume, only a complete \

@@ -8,6 +8,7 @@ mod fixedpoint;
 mod follow;
 mod merge;
 mod models;
+mod output;
 mod simulate;
 mod sweep;
 
