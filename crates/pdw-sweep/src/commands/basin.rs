@@ -346,16 +346,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     // If that map moves the gait by more than a tenth of the gait tolerance, cells converge to
     // a point the classifier does not recognise: say so rather than label them `other`.
     if let Some(fp) = gait {
-        let map = pdw_limit::StrideMap::new(m.walker.as_ref(), opts.integrator)?;
-        let r = map
-            .apply(&fp.section)
-            .map(|p| {
-                p.iter()
-                    .zip(&fp.section)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max)
-            })
-            .unwrap_or(f64::INFINITY);
+        let r = super::stride_residual(&m, opts.integrator, &fp.section)?;
         let close_enough = r <= 0.1 * opts.tol_gait;
         if !close_enough {
             eprintln!(
