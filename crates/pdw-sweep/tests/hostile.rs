@@ -106,8 +106,12 @@ fn an_output_never_replaces_another_output_or_an_input() {
     for (i, name) in ["s0.h5", "s1.png"].iter().enumerate() {
         let p = d.join(name);
         let sh = format!("{i}/2");
-        let o = basin(&p, &["--shard", &sh]);
+        // written as HDF5 (the extension names the format), then renamed
+        let o = basin(&p.with_extension("h5"), &["--shard", &sh]);
         assert!(o.status.success(), "{}", err(&o));
+        if p.extension().is_some_and(|e| e == "png") {
+            std::fs::rename(p.with_extension("h5"), &p).unwrap();
+        }
         shards.push(p);
     }
     let before = std::fs::read(&shards[1]).unwrap();
@@ -369,4 +373,305 @@ fn full_disk_is_an_error_not_a_crash() {
         assert!(leftovers.is_empty(), "{leftovers:?}");
         let _ = Command::new("umount").args(["-l", s(&mnt)]).status();
     }
+}
+
+/// Runs the binary in directory `dir` (for relative and `./` paths).
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    bin()
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+#[test]
+fn no_writer_replaces_its_spec_file_by_any_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let spec = run(&["models", "--spec", "compass"]);
+    assert!(spec.status.success());
+    std::fs::write(d.join("my.toml"), &spec.stdout).unwrap();
+    std::fs::hard_link(d.join("my.toml"), d.join("hard.h5")).unwrap();
+    std::os::unix::fs::symlink("my.toml", d.join("sym.h5")).unwrap();
+    let sweep = ["--sweep", "slope=0.05:0.06:3"];
+    let cases: Vec<Vec<&str>> = vec![
+        // the same path, the same file through ./, a hard link and a symbolic link
+        vec!["basin", "--model", "my.toml", "--out", "my.toml", "--force"],
+        vec![
+            "basin",
+            "--model",
+            "./my.toml",
+            "--out",
+            "my.toml",
+            "--force",
+        ],
+        vec!["basin", "--model", "my.toml", "--out", "hard.h5", "--force"],
+        vec!["basin", "--model", "my.toml", "--out", "sym.h5", "--force"],
+        vec![
+            "basin", "--model", "my.toml", "--png", "./sym.h5", "--force",
+        ],
+        // every other writer
+        [
+            &["fixedpoint", "--model", "my.toml"][..],
+            &sweep,
+            &["--out", "sym.h5"],
+        ]
+        .concat(),
+        [
+            &["fixedpoint", "--model", "my.toml"][..],
+            &sweep,
+            &["--out", "b.h5", "--csv", "hard.h5", "--force"],
+        ]
+        .concat(),
+        vec![
+            "basin",
+            "--model",
+            "my.toml",
+            "--over",
+            "slope=0.05:0.06:2",
+            "--out",
+            "hard.h5",
+            "--force",
+        ],
+        vec![
+            "simulate", "--model", "my.toml", "--out", "sym.h5", "--force",
+        ],
+        vec![
+            "animate", "--model", "my.toml", "--out", "hard.h5", "--force",
+        ],
+        vec![
+            "design",
+            "--model",
+            "my.toml",
+            "--free",
+            "hip_mass=5:15",
+            "--out",
+            "sym.h5",
+            "--force",
+        ],
+    ];
+    for args in &cases {
+        let o = run_in(d, args);
+        let e = refused(&o);
+        assert!(e.contains("also an input"), "{args:?}: {e}");
+        assert_eq!(std::fs::read(d.join("my.toml")).unwrap(), spec.stdout);
+    }
+    assert!(std::fs::symlink_metadata(d.join("sym.h5"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+}
+
+#[test]
+fn outputs_are_checked_before_computing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // design's picture is not replaced without --force, and nothing is left behind
+    std::fs::write(d.join("p.png"), b"keep").unwrap();
+    let o = run(&[
+        "design",
+        "--model",
+        "kneed",
+        "--free",
+        "hip_mass=0.3:1.2",
+        "--quiet",
+        "--out",
+        s(&d.join("new.h5")),
+        "--png",
+        s(&d.join("p.png")),
+    ]);
+    let e = refused(&o);
+    assert!(e.contains("--png") && e.contains("--force"), "{e}");
+    assert_eq!(std::fs::read(d.join("p.png")).unwrap(), b"keep");
+    assert!(!d.join("new.h5").exists());
+    // the extension names the format written
+    let o = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.001:0.002:3",
+        "--out",
+        s(&d.join("a.csv")),
+    ]);
+    assert!(refused(&o).contains(".h5"), "{}", err(&o));
+    assert!(!d.join("a.csv").exists());
+    let o = run(&["animate", "--out", s(&d.join("x.h5"))]);
+    assert!(refused(&o).contains(".gif"), "{}", err(&o));
+    assert!(!d.join("x.h5").exists());
+    let o = basin(&d.join("b.h5"), &["--png", s(&d.join("q.txt"))]);
+    assert!(refused(&o).contains(".png"), "{}", err(&o));
+
+    // a directory that takes no new files is found before a long sweep, named with its cause
+    let ro = d.join("ro");
+    std::fs::create_dir(&ro).unwrap();
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| o.stdout == b"0\n");
+    let read_only = if root {
+        // permission bits do not stop root: a read-only file system does
+        Command::new("mount")
+            .args(["-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", s(&ro)])
+            .status()
+            .is_ok_and(|s| s.success())
+    } else {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).is_ok()
+    };
+    if !read_only {
+        eprintln!("read-only case skipped: cannot make a read-only directory here");
+        return;
+    }
+    let target = ro.join("b.h5");
+    let long = [
+        "fixedpoint",
+        "--sweep",
+        "slope=0.001:0.019:4000",
+        "--out",
+        s(&target),
+    ];
+    let o = run(&long);
+    let png = ro.join("p.png");
+    let o2 = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.001:0.019:4000",
+        "--out",
+        s(&d.join("ok.h5")),
+        "--png",
+        s(&png),
+    ]);
+    if root {
+        let _ = Command::new("umount").args(["-l", s(&ro)]).status();
+    }
+    for (o, p) in [(o, &target), (o2, &png)] {
+        let e = refused(&o);
+        assert!(e.contains(s(p)) && !e.contains("partial"), "{e}");
+        assert!(
+            e.contains("read-only") || e.contains("permission denied"),
+            "{e}"
+        );
+    }
+    assert!(!d.join("ok.h5").exists());
+}
+
+#[test]
+fn a_second_writer_of_any_command_is_refused_naming_the_path_and_the_holder() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let target = d.join("c.h5");
+    // a long basin run holds its --out from the start
+    let mut first = bin()
+        .args([
+            "basin",
+            "--grid",
+            "600x600",
+            "--max-strides",
+            "200",
+            "--threads",
+            "1",
+            "--quiet",
+            "--out",
+            s(&target),
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("the binary runs");
+    // past its gait search: the basin file has its header
+    while !std::fs::metadata(&target).is_ok_and(|m| m.len() > 0) {
+        assert!(first.try_wait().unwrap().is_none(), "the first run ended");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let c = s(&target);
+    let shard = d.join("s0.h5");
+    let seconds: Vec<Vec<&str>> = vec![
+        vec!["basin", "--grid", "4x4", "--out", c, "--force"],
+        vec!["basin", "--grid", "4x4", "--out", c, "--resume"],
+        vec!["merge", s(&shard), "--out", c, "--force"],
+        vec![
+            "fixedpoint",
+            "--sweep",
+            "slope=0.001:0.002:3",
+            "--out",
+            c,
+            "--force",
+        ],
+        vec!["simulate", "--out", c, "--force"],
+        vec![
+            "design",
+            "--model",
+            "kneed",
+            "--free",
+            "hip_mass=0.3:1.2",
+            "--out",
+            c,
+            "--force",
+        ],
+    ];
+    let holder = format!("process {}", first.id());
+    for args in &seconds {
+        let o = run(args);
+        let e = refused(&o);
+        assert!(
+            e.contains("another process") && e.contains(c) && e.contains(&holder),
+            "{args:?}: {e}"
+        );
+        assert!(
+            first.try_wait().unwrap().is_none(),
+            "{args:?} ended the first run"
+        );
+    }
+    first.kill().unwrap();
+    first.wait().unwrap();
+    // no second writer removed or replaced the first one's file
+    assert!(target.exists());
+}
+
+#[test]
+fn hostile_specs_are_refused_without_a_crash_or_unbounded_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let spec = String::from_utf8(run(&["models", "--spec", "compass"]).stdout).unwrap();
+    assert!(spec.contains("com = \"a\""));
+    // 30 000 nested parentheses, then 100 000 unary minuses: SIGABRT (stack overflow) before
+    for (i, deep) in [
+        format!("{}a{}", "(".repeat(30_000), ")".repeat(30_000)),
+        format!("{}a", "-".repeat(100_000)),
+        format!("{}a{}", "(".repeat(3_000), ")".repeat(3_000)),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let p = d.join(format!("deep{i}.toml"));
+        std::fs::write(
+            &p,
+            spec.replace("com = \"a\"", &format!("com = \"{deep}\"")),
+        )
+        .unwrap();
+        let o = run(&["fixedpoint", "--model", s(&p)]);
+        let e = refused(&o);
+        assert!(e.contains("characters") || e.contains("levels deep"), "{e}");
+        // the expression is echoed by its start and length only
+        assert!(e.len() < 1000, "{} bytes", e.len());
+    }
+    // a spec that is a device (through a link named .toml) is refused before it is read
+    let z = d.join("zero.toml");
+    std::os::unix::fs::symlink("/dev/zero", &z).unwrap();
+    let o = run(&["fixedpoint", "--model", s(&z)]);
+    assert!(refused(&o).contains("not a regular file"), "{}", err(&o));
+}
+
+#[test]
+fn fixedpoint_warns_when_the_integrator_cannot_support_the_newton_tolerance() {
+    // --rtol 1e-3 gave a "stable gait" with |λ| 0.768 (0.589 on an accurate map), silently
+    let o = run(&["fixedpoint", "--rtol", "1e-3"]);
+    let e = err(&o);
+    assert!(
+        e.contains("warning") && e.contains("accurate stride map") && e.contains("--rtol"),
+        "{e}"
+    );
+    // the default integrator's tolerance given explicitly: no warning
+    let o = run(&["fixedpoint", "--rtol", "1e-14"]);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(!err(&o).contains("warning"), "{}", err(&o));
 }

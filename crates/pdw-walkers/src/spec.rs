@@ -70,7 +70,7 @@ impl Num {
     fn shown(&self, v: f64) -> String {
         match self {
             Num::Value(_) => format!("{v}"),
-            Num::Expr(e) => format!("\"{e}\" = {v}"),
+            Num::Expr(e) => format!("{} = {v}", quoted(e)),
         }
     }
 }
@@ -248,13 +248,42 @@ impl WalkerSpec {
         })
     }
 
-    /// Reads and parses a spec file.
+    /// Reads and parses a spec file: a regular file (after following links) of at most
+    /// [`MAX_SPEC_BYTES`]; devices, FIFOs and directories are refused before reading.
     pub fn from_file(path: &std::path::Path) -> Result<Self, WalkerError> {
+        use std::io::Read;
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| WalkerError::SpecSyntax {
+        let fail = |message: String| WalkerError::SpecSyntax {
             source_name: name.clone(),
-            message: format!("cannot read the spec file: {e}"),
-        })?;
+            message,
+        };
+        let meta =
+            std::fs::metadata(path).map_err(|e| fail(format!("cannot read the spec file: {e}")))?;
+        if !meta.is_file() {
+            return Err(fail(
+                "not a regular file (a directory, device, FIFO or socket); a spec is a TOML file"
+                    .into(),
+            ));
+        }
+        let too_big = || {
+            fail(format!(
+                "the spec file is larger than {} KiB; a spec is a short TOML file",
+                MAX_SPEC_BYTES >> 10
+            ))
+        };
+        if meta.len() > MAX_SPEC_BYTES {
+            return Err(too_big());
+        }
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_SPEC_BYTES + 1).read_to_end(&mut bytes))
+            .map_err(|e| fail(format!("cannot read the spec file: {e}")))?;
+        // a file that grew while being read
+        if bytes.len() as u64 > MAX_SPEC_BYTES {
+            return Err(too_big());
+        }
+        let text = String::from_utf8(bytes)
+            .map_err(|_| fail("cannot read the spec file: it is not UTF-8 text".into()))?;
         Self::from_toml(&text, &name)
     }
 
@@ -341,7 +370,7 @@ impl WalkerSpec {
             let v = match n {
                 Num::Value(v) => *v,
                 Num::Expr(e) => {
-                    eval_expr(e, &env).map_err(|msg| self.err(field, format!("\"{e}\""), msg))?
+                    eval_expr(e, &env).map_err(|msg| self.err(field, quoted(e), msg))?
                 }
             };
             if v.is_finite() {
@@ -470,14 +499,14 @@ impl WalkerSpec {
                     Ok(v) => {
                         return Err(self.err(
                             format!("knees[{i}].mode"),
-                            format!("\"{e}\" = {v}"),
+                            format!("{} = {v}", quoted(e)),
                             "an expression for a knee mode must be 0 (locked) or 1 (free-swing)",
                         ))
                     }
                     Err(msg) => {
                         return Err(self.err(
                             format!("knees[{i}].mode"),
-                            format!("\"{e}\""),
+                            quoted(e),
                             format!("\"locked\", \"free-swing\" or an expression (0 or 1): {msg}"),
                         ))
                     }
@@ -542,14 +571,47 @@ fn is_identifier(s: &str) -> bool {
         && c.all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
 }
 
+/// Largest spec file read, in bytes (the presets are a few KiB).
+pub const MAX_SPEC_BYTES: u64 = 1 << 20;
+
+/// Longest expression evaluated, in characters.
+pub const MAX_EXPR_CHARS: usize = 10_000;
+
+/// Deepest nesting of parentheses and unary minus in an expression (the parser recurses once
+/// per level; the limit keeps a hostile spec from exhausting the stack).
+pub const MAX_EXPR_DEPTH: usize = 256;
+
+/// Characters of an expression echoed in a message.
+const SHOWN_EXPR_CHARS: usize = 80;
+
+/// An expression quoted for a message: whole up to 80 characters, else its start and its
+/// length.
+pub fn quoted(e: &str) -> String {
+    let n = e.chars().count();
+    if n <= SHOWN_EXPR_CHARS {
+        format!("\"{e}\"")
+    } else {
+        let head: String = e.chars().take(SHOWN_EXPR_CHARS).collect();
+        format!("\"{head}…\" ({n} characters)")
+    }
+}
+
 /// Evaluates an arithmetic expression (`+ − * /`, unary minus, parentheses, numbers, parameter
-/// names) over `env`. Errors name what is wrong.
+/// names) over `env`. Errors name what is wrong. Expressions longer than [`MAX_EXPR_CHARS`] or
+/// nested deeper than [`MAX_EXPR_DEPTH`] are refused.
 pub fn eval_expr(text: &str, env: &[(&str, f64)]) -> Result<f64, String> {
+    let n = text.chars().count();
+    if n > MAX_EXPR_CHARS {
+        return Err(format!(
+            "the expression has {n} characters, more than the {MAX_EXPR_CHARS} allowed"
+        ));
+    }
     let toks = tokenize(text)?;
     let mut p = Parser {
         toks: &toks,
         i: 0,
         env,
+        depth: 0,
     };
     let v = p.sum()?;
     if p.i != toks.len() {
@@ -623,9 +685,23 @@ struct Parser<'a> {
     toks: &'a [Tok],
     i: usize,
     env: &'a [(&'a str, f64)],
+    /// Open parentheses and unary minuses around the current token.
+    depth: usize,
 }
 
 impl Parser<'_> {
+    /// Enters one level of nesting, refusing more than [`MAX_EXPR_DEPTH`].
+    fn nest(&mut self) -> Result<(), String> {
+        self.depth += 1;
+        if self.depth > MAX_EXPR_DEPTH {
+            return Err(format!(
+                "the expression nests parentheses or unary minus more than {MAX_EXPR_DEPTH} \
+                 levels deep"
+            ));
+        }
+        Ok(())
+    }
+
     fn sum(&mut self) -> Result<f64, String> {
         let mut v = self.product()?;
         while let Some(Tok::Op(c @ ('+' | '-'))) = self.toks.get(self.i) {
@@ -647,7 +723,10 @@ impl Parser<'_> {
     fn unary(&mut self) -> Result<f64, String> {
         if let Some(Tok::Op('-')) = self.toks.get(self.i) {
             self.i += 1;
-            return Ok(-self.unary()?);
+            self.nest()?;
+            let v = -self.unary()?;
+            self.depth -= 1;
+            return Ok(v);
         }
         self.atom()
     }
@@ -668,7 +747,9 @@ impl Parser<'_> {
                     )
                 }),
             Some(Tok::Op('(')) => {
+                self.nest()?;
                 let v = self.sum()?;
+                self.depth -= 1;
                 match self.toks.get(self.i) {
                     Some(Tok::Op(')')) => {
                         self.i += 1;
@@ -680,5 +761,70 @@ impl Parser<'_> {
             Some(t) => Err(format!("unexpected `{t}` in the expression")),
             None => Err("the expression ends too early".into()),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deep_or_long_expressions_are_refused_not_a_stack_overflow() {
+        let env = [("a", 2.0)];
+        // within the limits
+        let ok = format!("{}a{}", "(".repeat(200), ")".repeat(200));
+        assert_eq!(eval_expr(&ok, &env), Ok(2.0));
+        assert_eq!(eval_expr(&format!("{}a", "-".repeat(200)), &env), Ok(2.0));
+        // 30 000 parentheses and 100 000 unary minuses overflowed the stack before the limit
+        let deep = format!("{}a{}", "(".repeat(30_000), ")".repeat(30_000));
+        let e = eval_expr(&deep, &env).unwrap_err();
+        assert!(e.contains("characters"), "{e}");
+        let deep = format!("{}a{}", "(".repeat(4_000), ")".repeat(4_000));
+        let e = eval_expr(&deep, &env).unwrap_err();
+        assert!(e.contains("256 levels"), "{e}");
+        let e = eval_expr(&format!("{}a", "-".repeat(9_000)), &env).unwrap_err();
+        assert!(e.contains("256 levels"), "{e}");
+        let e = eval_expr(&format!("{}a", "-".repeat(100_000)), &env).unwrap_err();
+        assert!(e.contains("more than the 10000"), "{e}");
+    }
+
+    #[test]
+    fn messages_echo_at_most_80_characters_of_an_expression() {
+        let long = format!("a{}", " + b".repeat(5_000));
+        let q = quoted(&long);
+        assert!(
+            q.chars().count() < 120 && q.contains("20001 characters"),
+            "{q}"
+        );
+        assert_eq!(quoted("a + 1"), "\"a + 1\"");
+        let text = format!(
+            "name = \"x\"\n[parameters]\nslope = {{ value = 0.01, unit = \"rad\" }}\n\
+             [[segments]]\nname = \"leg\"\nlength = \"{long}\"\nmass = 1.0\ncom = 0.5\n"
+        );
+        if let Ok(spec) = WalkerSpec::from_toml(&text, "t") {
+            let values = spec.param_table().values;
+            let e = spec.resolve(&values).unwrap_err().to_string();
+            assert!(e.len() < 600, "{} bytes: {e}", e.len());
+        }
+    }
+
+    #[test]
+    fn spec_files_are_regular_and_small() {
+        let e = WalkerSpec::from_file(std::path::Path::new("/dev/zero"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        let dir = std::env::temp_dir().join(format!("pdw-spec-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let big = dir.join("big.toml");
+        std::fs::write(&big, vec![b'#'; (MAX_SPEC_BYTES + 1) as usize]).unwrap();
+        let e = WalkerSpec::from_file(&big).unwrap_err().to_string();
+        assert!(e.contains("larger than 1024 KiB"), "{e}");
+        let link = dir.join("zero.toml");
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+        let e = WalkerSpec::from_file(&link).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

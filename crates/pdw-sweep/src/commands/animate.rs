@@ -18,13 +18,19 @@ const FRAMES_PER_STRIDE: usize = 40;
 const STRIDES: usize = 2;
 
 pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
-    if a.out.exists() && !a.force {
-        return Err(InputError(format!(
-            "{} exists; pass --force to overwrite it",
-            a.out.display()
-        ))
-        .into());
-    }
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let _claim = super::output::claim(
+        &[super::output::Output {
+            flag: "--out",
+            path: &a.out,
+            format: super::output::Format::Gif,
+            may_exist: false,
+        }],
+        &inputs,
+        a.force,
+    )?;
     let m = build_model(&a.model)?;
     let w = m.walker.as_ref();
     if w.pose(&vec![0.0; w.dim()]).is_none() {

@@ -2,6 +2,7 @@
 //! row blocks, with a PNG heatmap. See shared/DESIGN.md "Basins" and "HDF5 file".
 
 use super::fixedpoint::{report_failure, search};
+use super::output::{Format, Output};
 use super::{build_with, overrides, BuiltModel};
 use crate::args::{self, AxisRange, InputError};
 use crate::cli::BasinArgs;
@@ -223,20 +224,25 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
     // A shard writes no picture. With --resume an existing --out is expected, and an existing
     // picture is refused below unless the file turns out complete (then nothing is written).
-    let mut outputs = vec![args::Output {
+    let mut outputs = vec![Output {
         flag: "--out",
         path: &out,
+        format: Format::Hdf5,
         may_exist: a.resume,
     }];
     if shard.is_none() {
-        outputs.push(args::Output {
+        outputs.push(Output {
             flag: "--png",
             path: &png,
+            format: Format::Png,
             may_exist: a.resume,
         });
     }
-    args::check_outputs(&outputs, &[], a.force).map_err(|e| {
-        if e.0.contains("exists; pass --force") && e.0.starts_with("--out") {
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let mut claim = super::output::claim(&outputs, &inputs, a.force).map_err(|e| {
+        if e.0.contains("; pass --force to overwrite") && e.0.starts_with("--out") {
             InputError(format!("{}, or --resume to continue it", e.0))
         } else {
             e
@@ -340,16 +346,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     // If that map moves the gait by more than a tenth of the gait tolerance, cells converge to
     // a point the classifier does not recognise: say so rather than label them `other`.
     if let Some(fp) = gait {
-        let map = pdw_limit::StrideMap::new(m.walker.as_ref(), opts.integrator)?;
-        let r = map
-            .apply(&fp.section)
-            .map(|p| {
-                p.iter()
-                    .zip(&fp.section)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max)
-            })
-            .unwrap_or(f64::INFINITY);
+        let r = super::stride_residual(&m, opts.integrator, &fp.section)?;
         let close_enough = r <= 0.1 * opts.tol_gait;
         if !close_enough {
             eprintln!(
@@ -386,6 +383,8 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         legend: set.legend(),
         shard,
     };
+    // the basin writer takes the output's lock itself, creating or continuing the file
+    claim.hand_over(&out);
     let mut writer = match BasinWriter::start(&out, &header, a.resume, a.force) {
         Ok(w) => w,
         Err(StoreError::AlreadyComplete { .. }) => {
@@ -399,7 +398,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         }
         Err(e) => return Err(e.into()),
     };
-    if shard.is_none() && a.resume && !a.force && png.exists() {
+    if shard.is_none() && a.resume && !a.force && claim.existed(&png) {
         writer.close()?;
         return Err(InputError(format!(
             "--png: '{}' exists; pass --force to overwrite it (with --resume, only a complete \

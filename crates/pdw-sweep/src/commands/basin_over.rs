@@ -10,6 +10,7 @@
 
 use super::basin::{box_attractors, check_memory, default_axis, split_sets};
 use super::fixedpoint::search;
+use super::output::{Format, Output};
 use super::{build_with, BuiltModel};
 use crate::args::{self, AxisRange, InputError};
 use crate::cli::BasinArgs;
@@ -112,20 +113,25 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     let out = a.out_path();
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
-    args::check_outputs(
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let _claim = super::output::claim(
         &[
-            args::Output {
+            Output {
                 flag: "--out",
                 path: &out,
+                format: Format::Hdf5,
                 may_exist: false,
             },
-            args::Output {
+            Output {
                 flag: "--png",
                 path: &png,
+                format: Format::Png,
                 may_exist: false,
             },
         ],
-        &[],
+        &inputs,
         a.force,
     )?;
     let values = pdw_limit::basin::linspace(over.lo, over.hi, over.n);
@@ -409,7 +415,8 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         settings: vec![("options".into(), options.to_string())],
         elapsed_s: elapsed,
     };
-    pdw_store::write_stability(&out, a.force, &data)?;
+    // the claim refused an existing file without --force; its placeholder is replaced
+    pdw_store::write_stability(&out, true, &data)?;
     let prov = super::provenance(options);
     let pu = unit.clone();
     let units = move |p: &str| -> Option<String> {

@@ -3,6 +3,7 @@
 //! ([`pdw_limit::design`]); every evaluated design in an HDF5 file that a rerun continues.
 
 use super::build_with;
+use super::output::{Format, Output};
 use crate::args::{self, InputError};
 use crate::cli::DesignArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -204,20 +205,27 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         return Err(InputError("--free: give at least one NAME=LO:HI".into()).into());
     }
     let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
+    // An existing --out continues its search (unless --force); the picture beside it is that
+    // search's and is redrawn. A picture without its search is replaced only with --force.
+    let continuing = a.out.is_file() && !a.force;
     let outputs = [
-        args::Output {
+        Output {
             flag: "--out",
             path: &a.out,
+            format: Format::Hdf5,
             may_exist: true,
         },
-        args::Output {
+        Output {
             flag: "--png",
             path: &png,
-            may_exist: true,
+            format: Format::Png,
+            may_exist: continuing,
         },
     ];
-    args::check_outputs(&outputs, &[], a.force)?;
-
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let mut claim = super::output::claim(&outputs, &inputs, a.force)?;
     let basin = BasinOptions {
         max_strides: a.max_strides,
         ..BasinOptions::default()
@@ -298,7 +306,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
 
     // ---- a stored run with the same settings continues
     let mut history = Vec::new();
-    if a.out.exists() && !a.force {
+    if claim.existed(&a.out) && !a.force {
         let d = read_design(&a.out, &COLUMNS)?;
         if d.settings != settings {
             return Err(InputError(format!(
@@ -353,7 +361,10 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         };
         all.push(ev.clone());
         if write_err.is_none() {
+            // each write replaces the file: the lock moves to the new one
             if let Err(e) = write_design(&a.out, &to_data(&settings, &names, &all)) {
+                write_err = Some(e.into());
+            } else if let Err(e) = claim.renew(&a.out, "--out") {
                 write_err = Some(e.into());
             }
         }
@@ -369,6 +380,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
     }
     // a run that replayed everything still leaves a file (e.g. a budget already met)
     write_design(&a.out, &to_data(&settings, &names, &hist))?;
+    claim.renew(&a.out, "--out")?;
 
     // ---- the search's picture: the cost of every design and the best so far
     let mut run_best = f64::INFINITY;

@@ -207,6 +207,30 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         return run_period_k(a, &m, &guesses, which);
     }
     let (found, failed) = search_with(&m, &guesses, a.tol, &integrator)?;
+    // A gait found on a loose integrator is checked on the accurate stride map, as `basin`
+    // checks its cells' integrator: the Newton tolerance means nothing beyond the integrator's.
+    let o = &a.integrator;
+    if o.integrator.is_some() || o.rtol.is_some() || o.atol.is_some() || o.rk4_step.is_some() {
+        let accurate = pdw_limit::gaits::default_integrator(a.tol);
+        for f in &found {
+            let s = &f.fp.section;
+            let scale = s.iter().fold(0.0, |n: f64, x| n.max(x.abs())).min(1.0);
+            let r = super::stride_residual(&m, accurate, s)?;
+            if r.is_nan() || r > a.tol * scale {
+                eprintln!(
+                    "warning: with {} the {} gait (from {}) is a fixed point of the accurate \
+                     stride map ({}) only to {r:.2e}, more than --tol {:e} allows: its \
+                     multipliers and validity are those of the integrator's error, not of the \
+                     walker; use a tighter --rtol/--atol or a smaller --rk4-step",
+                    super::integrator_text(&integrator),
+                    if f.fp.stable { "stable" } else { "unstable" },
+                    f.label,
+                    super::integrator_text(&accurate),
+                    a.tol * scale
+                );
+            }
+        }
+    }
     let selected: Vec<&Found> = found
         .iter()
         .filter(|f| match which {

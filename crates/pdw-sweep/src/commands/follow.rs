@@ -10,6 +10,7 @@
 //! 3. The two-parameter curve through it over the N values A..B ([`follow_curve`]).
 //! 4. `--png`: a region map of the plane under the curve ([`region_map`]).
 
+use super::output::{Format, Output};
 use super::{build_model, build_with, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
@@ -226,19 +227,24 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let outputs = [
-        Some(args::Output {
+        Some(Output {
             flag: "--out",
             path: &out,
+            format: Format::Hdf5,
             may_exist: false,
         }),
-        a.png.as_deref().map(|p| args::Output {
+        a.png.as_deref().map(|p| Output {
             flag: "--png",
             path: p,
+            format: Format::Png,
             may_exist: false,
         }),
     ];
-    let outputs: Vec<args::Output<'_>> = outputs.into_iter().flatten().collect();
-    args::check_outputs(&outputs, &[], a.force)?;
+    let outputs: Vec<Output<'_>> = outputs.into_iter().flatten().collect();
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let _claim = super::output::claim(&outputs, &inputs, a.force)?;
     let at = |ps: f64, pf: f64| -> Result<BuiltModel, InputError> {
         build_with(&a.model, &[(sw.name.clone(), ps), (free.name.clone(), pf)])
     };
@@ -351,7 +357,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
 
     // Outputs.
     let data = curve_data(&m_a, &sw.name, &free.name, &curve, map);
-    pdw_store::write_curve(&out, a.force, &data)?;
+    // the claim refused an existing file without --force; its placeholder is replaced
+    pdw_store::write_curve(&out, true, &data)?;
     annotate(&out, &m_a, &sw.name, &free.name, &copts, &o2, &ropts)?;
     if let Some(png) = &a.png {
         let label = |n: &str| format!("{n} [{}]", super::param_unit(&m_a, n));

@@ -2,6 +2,7 @@
 //! `pdw_store::shard` for why not a virtual dataset), with whole-grid metrics and the PNG.
 
 use super::basin::store_metrics;
+use super::output::{Format, Input, Output};
 use crate::cli::MergeArgs;
 use pdw_limit::basin::{basin_metrics, DEFAULT_ENTROPY_BOX};
 use pdw_store::{merge, plot_basin_attractors, read_basin, BasinMetrics};
@@ -10,26 +11,36 @@ use std::process::ExitCode;
 pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
     let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
     let inputs: Vec<&std::path::Path> = a.shards.iter().map(|p| p.as_path()).collect();
-    crate::args::check_outputs(
+    let shard_inputs: Vec<Input> = inputs
+        .iter()
+        .map(|p| Input {
+            flag: "shard",
+            path: p,
+        })
+        .collect();
+    let _claim = super::output::claim(
         &[
-            crate::args::Output {
+            Output {
                 flag: "--out",
                 path: &a.out,
+                format: Format::Hdf5,
                 may_exist: false,
             },
-            crate::args::Output {
+            Output {
                 flag: "--png",
                 path: &png,
+                format: Format::Png,
                 may_exist: false,
             },
         ],
-        &inputs,
+        &shard_inputs,
         a.force,
     )?;
     check_same_numerics(&inputs, a.force)?;
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let mut failure: Option<String> = None;
-    let header = merge(&a.shards, &a.out, a.force, &command, |h, outcome| {
+    // the claim refused an existing --out without --force; its placeholder is replaced
+    let header = merge(&a.shards, &a.out, true, &command, |h, outcome| {
         let flat: Vec<u8> = outcome.iter().copied().collect();
         match basin_metrics(&flat, h.nx(), h.ny(), DEFAULT_ENTROPY_BOX) {
             Ok(m) => store_metrics(&m, &h.legend, h.nx(), h.ny()),

@@ -8,6 +8,7 @@ mod fixedpoint;
 mod follow;
 mod merge;
 mod models;
+mod output;
 mod simulate;
 mod sweep;
 
@@ -208,6 +209,21 @@ pub fn integrator(o: &IntegratorOpts, default: Options) -> Result<Options, Input
         other => InputError(other.to_string()),
     })?;
     Ok(opts)
+}
+
+/// `‖P(s) − s‖∞` of the stride map integrated by `integrator` at section state `s` (infinite
+/// when the stride fails): how far `s` is from a fixed point of that map.
+pub fn stride_residual(m: &BuiltModel, integrator: Options, s: &[f64]) -> anyhow::Result<f64> {
+    let map = pdw_limit::StrideMap::new(m.walker.as_ref(), integrator)?;
+    Ok(map
+        .apply(s)
+        .map(|p| {
+            p.iter()
+                .zip(s)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
+        })
+        .unwrap_or(f64::INFINITY))
 }
 
 /// The integrator as a JSON object for files and `--json` (method, tolerances or step).

@@ -40,13 +40,22 @@ fn format_of(path: &std::path::Path) -> Result<Format, InputError> {
 
 pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
     let format = format_of(&a.out)?;
-    if a.out.exists() && !a.force {
-        return Err(InputError(format!(
-            "--out: {} exists; pass --force to overwrite it",
-            a.out.display()
-        ))
-        .into());
-    }
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let _claim = super::output::claim(
+        &[super::output::Output {
+            flag: "--out",
+            path: &a.out,
+            format: match format {
+                Format::Hdf5 => super::output::Format::Hdf5,
+                Format::Csv => super::output::Format::Csv,
+            },
+            may_exist: false,
+        }],
+        &inputs,
+        a.force,
+    )?;
     if a.steps == 0 {
         return Err(InputError("--steps: 0 must be an integer >= 1".into()).into());
     }
@@ -118,7 +127,8 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
     let state_units = super::units_list(&tr.units.state);
     match format {
         Format::Hdf5 => {
-            pdw_store::write_trajectory_h5(&a.out, a.force, &data)?;
+            // the claim refused an existing file without --force; its placeholder is replaced
+            pdw_store::write_trajectory_h5(&a.out, true, &data)?;
             pdw_store::annotate(
                 &a.out,
                 &pdw_store::Annotations {
@@ -147,7 +157,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             ] {
                 data.attrs.push((k.to_string(), v.clone()));
             }
-            pdw_store::write_trajectory_csv(&a.out, a.force, &data)?
+            pdw_store::write_trajectory_csv(&a.out, true, &data)?
         }
     }
     crate::outln!(

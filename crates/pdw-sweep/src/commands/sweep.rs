@@ -9,6 +9,7 @@
 //! `--json` prints the same data, `--csv FILE` writes it as one row per orbit point.
 
 use super::fixedpoint::{report_failure, search};
+use super::output::{Format, Output};
 use super::{build_with, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
@@ -181,25 +182,31 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         return Err(InputError(format!("--threads: {threads} must be between 1 and 1024")).into());
     }
     let mut outputs = vec![
-        args::Output {
+        Output {
             flag: "--out",
             path: &out,
+            format: Format::Hdf5,
             may_exist: false,
         },
-        args::Output {
+        Output {
             flag: "--png",
             path: &png,
+            format: Format::Png,
             may_exist: false,
         },
     ];
     if let Some(c) = &a.csv {
-        outputs.push(args::Output {
+        outputs.push(Output {
             flag: "--csv",
             path: c,
+            format: Format::Csv,
             may_exist: false,
         });
     }
-    args::check_outputs(&outputs, &[], a.force)?;
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let _claim = super::output::claim(&outputs, &inputs, a.force)?;
     let at = |mu: f64| -> Result<BuiltModel, InputError> {
         build_with(&a.model, &[(sw.name.clone(), mu)])
     };
@@ -351,7 +358,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         settings,
         elapsed_s: elapsed,
     };
-    write_sweep(&out, a.force, &data)?;
+    // the claim refused existing files without --force; its placeholders are replaced
+    write_sweep(&out, true, &data)?;
     annotate_sweep(
         &out,
         &m0,
@@ -375,7 +383,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     plot_bifurcation(&png, &shown, 0)?;
     if let Some(c) = &a.csv {
         let comments = csv_comments(&m0, &sw.name);
-        pdw_store::write_sweep_csv(c, a.force, &data, &comments)?;
+        pdw_store::write_sweep_csv(c, true, &data, &comments)?;
     }
     if a.json {
         let mut j = pdw_store::sweep_json(&data);
