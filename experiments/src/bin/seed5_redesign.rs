@@ -63,6 +63,9 @@ const MAP_N: usize = 9;
 /// Strides walked by the stop model from the latched gait.
 const WALK: usize = 8;
 
+/// One map: verdict codes, its CSV, the x and y grids.
+type MapResult = (Array2<u8>, String, Vec<f64>, Vec<f64>);
+
 /// Verdict codes (map legend).
 const NAMES: [&str; 10] = [
     "valid, margins >= 1e-2",
@@ -264,7 +267,8 @@ fn judge(
     let (sf, name, rel) = shortfall(&v);
     j.binding = name.clone();
     j.relative = rel;
-    let friction_ok = v.max_friction_required <= MU && !(v.impact_friction_required > MU);
+    let friction_ok = v.max_friction_required <= MU
+        && (v.impact_friction_required.is_nan() || v.impact_friction_required <= MU);
     if let Some(f) = &v.fell {
         j.code = 9;
         j.binding = f.clone();
@@ -492,7 +496,7 @@ fn main() -> anyhow::Result<()> {
     ];
     let _ = writeln!(md, "\n## Maps through the best design\n");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
-    let results: Vec<(Array2<u8>, String, Vec<f64>, Vec<f64>)> = pool.install(|| {
+    let results: Vec<MapResult> = pool.install(|| {
         use rayon::prelude::*;
         maps.par_iter()
             .map(|&(xn, yn)| {
