@@ -1,19 +1,25 @@
-//! The seed's walker made to walk: the thesis design (its gait flagged: the knees would
-//! unlock) against the design found by `pdw-sweep design` (`models/seed5_walking.toml`): knee
-//! torques and ground reaction over one stride of each gait, and their basins on the same
-//! relative window. Writes `experiments/results/seed5_design/` (charts, `stride.md`).
-//! The search itself is `pdw-sweep design` (commands in that folder's README).
+//! The thesis design (its gait flagged: the knees would unlock) against the design an earlier
+//! `pdw-sweep design` search found (`models/seed5_walking.toml`), whose stance knee buckles at
+//! the knee strike under a hyper-extension stop: it is followed here with its knees latched
+//! (`hold = "latch"`, holding both ways), the model that search used, so that its stride can be
+//! compared at all. Knee torques and ground reaction over one stride of each gait. Writes
+//! `experiments/results/seed5_design/` (charts, `stride.md`). The redesign under stop knees is
+//! `seed5_redesign`.
 
 use pdw_experiments::{results_dir, write_text, Table};
 use pdw_hybrid::Options;
 use pdw_limit::{find_fixed_point, simulate, NewtonOptions, StrideMap, TrajectoryOptions};
 use pdw_walkers::{ChainWalker, Walker, WalkerSpec};
 
-fn walking() -> anyhow::Result<ChainWalker> {
+/// `models/seed5_walking.toml` with every knee latched (its stop model buckles at the knee
+/// strike and has no gait).
+fn walking_latched() -> anyhow::Result<ChainWalker> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/seed5_walking.toml");
-    Ok(ChainWalker::from_spec(WalkerSpec::from_file(
-        std::path::Path::new(path),
-    )?)?)
+    let mut spec = WalkerSpec::from_file(std::path::Path::new(path))?;
+    for k in &mut spec.knees {
+        k.hold = Some("latch".into());
+    }
+    Ok(ChainWalker::from_spec(spec)?)
 }
 
 /// One stride of the model's first gait, sampled every 5 ms: `(t/T, columns…)`.
@@ -31,7 +37,7 @@ fn stride(w: &dyn Walker) -> anyhow::Result<(Vec<f64>, pdw_limit::Trajectory, f6
 fn main() -> anyhow::Result<()> {
     let dir = results_dir("seed5_design")?;
     let thesis = pdw_walkers::build("seed5", &[])?;
-    let new = walking()?;
+    let new = walking_latched()?;
     let mut table = Table::new(&[
         "design",
         "period (s)",
@@ -44,7 +50,10 @@ fn main() -> anyhow::Result<()> {
     let mut grf = Vec::new();
     for (name, w) in [
         ("thesis (both knees locked, γ = 0.05)", thesis.as_ref()),
-        ("seed5_walking", &new as &dyn Walker),
+        (
+            "seed5_walking, knees latched (not valid: stops would pull at the impacts)",
+            &new as &dyn Walker,
+        ),
     ] {
         let (s, tr, period) = stride(w)?;
         let f = tr.forces.as_ref().expect("forces");

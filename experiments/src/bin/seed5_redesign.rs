@@ -55,11 +55,36 @@ const FREE: [(&str, f64, f64); 7] = [
     ("thigh_com", 0.0, 0.95),
     ("shank_com", 0.1, 0.95),
 ];
-/// Designs evaluated by the search, seeded random ones among them.
-const BUDGET: usize = 80;
-const INIT: usize = 30;
-/// Map grids (cells per side).
-const MAP_N: usize = 9;
+/// Designs evaluated by the search (`--budget`), seeded random ones among them (`--init`).
+const BUDGET: usize = 400;
+const INIT: usize = 150;
+/// Map grids, cells per side (`--map`).
+const MAP_N: usize = 13;
+
+/// `--budget N`, `--init N`, `--map N` from the command line (defaults above).
+fn sizes() -> anyhow::Result<(usize, usize, usize)> {
+    let (mut budget, mut init, mut map) = (BUDGET, INIT, MAP_N);
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        let slot = match a.as_str() {
+            "--budget" => &mut budget,
+            "--init" => &mut init,
+            "--map" => &mut map,
+            _ => anyhow::bail!("unknown argument {a:?} (expected --budget N, --init N, --map N)"),
+        };
+        let v = args
+            .next()
+            .ok_or_else(|| anyhow::anyhow!("{a} needs a value"))?;
+        *slot = v
+            .parse()
+            .map_err(|_| anyhow::anyhow!("{a} {v:?} is not a whole number"))?;
+    }
+    anyhow::ensure!(
+        init >= 1 && budget >= init && map >= 2,
+        "need 1 <= --init <= --budget and --map >= 2"
+    );
+    Ok((budget, init, map))
+}
 /// Strides walked by the stop model from the latched gait.
 const WALK: usize = 8;
 
@@ -296,6 +321,7 @@ fn judge(
 }
 
 fn main() -> anyhow::Result<()> {
+    let (budget, init, map_n) = sizes()?;
     let dir = results_dir("seed5_design")?;
     let path = dir.join("seed5_stage2.toml");
     let spec = WalkerSpec::from_file(&path).context("seed5_stage2.toml")?;
@@ -324,10 +350,10 @@ fn main() -> anyhow::Result<()> {
         mu: MU,
         knee_margin: 0.0,
         min_margin: MIN_MARGIN,
-        budget: BUDGET,
+        budget,
         seed: 7,
         start: Some(names.iter().map(|n| base[index(n)]).collect()),
-        init: INIT,
+        init,
         basin_grid: 3,
         basin_box: [0.02, 0.08],
         basin: BasinOptions::default(),
@@ -417,7 +443,7 @@ fn main() -> anyhow::Result<()> {
     );
     let _ = writeln!(
         md,
-        "## Search\n\n{BUDGET} designs ({INIT} seeded random, then Nelder–Mead), {:.0} s. \
+        "## Search\n\n{budget} designs ({init} seeded random, then Nelder–Mead), {:.0} s. \
          Free: {}.\n\n| verdict | designs |\n|---|---|",
         search_s,
         FREE.iter()
@@ -504,14 +530,14 @@ fn main() -> anyhow::Result<()> {
                     names.iter().position(|n| *n == xn).unwrap(),
                     names.iter().position(|n| *n == yn).unwrap(),
                 );
-                let xs = pdw_limit::linspace(FREE[kx].1, FREE[kx].2, MAP_N);
-                let ys = pdw_limit::linspace(FREE[ky].1, FREE[ky].2, MAP_N);
-                let mut code = Array2::<u8>::zeros((MAP_N, MAP_N));
-                let mut sections: Vec<Vec<Option<Vec<f64>>>> = vec![vec![None; MAP_N]; MAP_N];
+                let xs = pdw_limit::linspace(FREE[kx].1, FREE[kx].2, map_n);
+                let ys = pdw_limit::linspace(FREE[ky].1, FREE[ky].2, map_n);
+                let mut code = Array2::<u8>::zeros((map_n, map_n));
+                let mut sections: Vec<Vec<Option<Vec<f64>>>> = vec![vec![None; map_n]; map_n];
                 let mut mcsv =
                     format!("{xn},{yn},verdict,max_abs_lambda,binding,relative_margin\n");
-                for iy in 0..MAP_N {
-                    for ix in 0..MAP_N {
+                for iy in 0..map_n {
+                    for ix in 0..map_n {
                         let mut p = best.0.clone();
                         p[kx] = xs[ix];
                         p[ky] = ys[iy];
@@ -587,7 +613,7 @@ fn main() -> anyhow::Result<()> {
             .collect();
         let _ = writeln!(
             md,
-            "### {xn} × {yn}\n\n![{file}]({file}.png)\n\n{MAP_N}×{MAP_N} cells, the other \
+            "### {xn} × {yn}\n\n![{file}]({file}.png)\n\n{map_n}×{map_n} cells, the other \
              parameters at the best design's (⊗): {}. Per cell: [{file}.csv]({file}.csv).\n",
             c.join(", ")
         );
