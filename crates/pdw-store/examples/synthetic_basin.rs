@@ -30,6 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         model: "simplest".into(),
         slope: 0.009,
         params: r#"{"gamma":0.009}"#.into(),
+        model_resolved: String::new(),
         integrator: "dopri5".into(),
         tolerances: r#"{"atol":1e-12,"rtol":1e-10}"#.into(),
         max_strides: 100,

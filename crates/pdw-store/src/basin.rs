@@ -61,6 +61,11 @@ pub struct BasinHeader {
     pub slope: f64,
     /// Model parameters as a JSON object text.
     pub params: String,
+    /// The fully resolved model, one `key = value` line per quantity (the walker's
+    /// fingerprint): two files continue each other only if it is equal, so a spec whose
+    /// expressions changed under the same parameter values is a different run. Empty in files
+    /// written before it was stored.
+    pub model_resolved: String,
     /// Integrator name, e.g. `"dopri5"`.
     pub integrator: String,
     /// Integrator tolerances as a JSON object text, e.g. `{"rtol":1e-10,"atol":1e-12}`.
@@ -209,6 +214,18 @@ impl BasinHeader {
         }
         if found.params != self.params {
             return Err(mism("params", found.params.clone(), self.params.clone()));
+        }
+        if let Some((f, e)) =
+            crate::first_line_difference(&found.model_resolved, &self.model_resolved)
+        {
+            let absent = |s: String| {
+                if s.is_empty() {
+                    "(absent)".to_string()
+                } else {
+                    s
+                }
+            };
+            return Err(mism("resolved model", absent(f), absent(e)));
         }
         if found.integrator != self.integrator {
             return Err(mism(
@@ -467,6 +484,11 @@ fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
         model: get_str(path, KIND, f, "model")?,
         slope: get_attr(path, KIND, f, "slope")?,
         params: get_str(path, KIND, f, "params")?,
+        model_resolved: if has_attr(f, "model_resolved") {
+            get_str(path, KIND, f, "model_resolved")?
+        } else {
+            String::new()
+        },
         integrator: get_str(path, KIND, f, "integrator")?,
         tolerances: get_str(path, KIND, f, "tolerances")?,
         max_strides: get_attr(path, KIND, f, "max_strides")?,
@@ -540,6 +562,8 @@ struct Handles {
     strides: Dataset,
     final_state: Dataset,
     rows_done_ds: Dataset,
+    /// `/basin/block_digest`: per block, [`block_digest`] of the values written.
+    digest_ds: Dataset,
 }
 
 impl Handles {
@@ -551,8 +575,9 @@ impl Handles {
             strides,
             final_state,
             rows_done_ds,
+            digest_ds,
         } = self;
-        drop((outcome, strides, final_state, rows_done_ds));
+        drop((outcome, strides, final_state, rows_done_ds, digest_ds));
         file.close().at(path, "closing")
     }
 }
@@ -631,6 +656,7 @@ impl BasinWriter {
             ("created", &time::now_rfc3339()),
             ("model", &h.model),
             ("params", &h.params),
+            ("model_resolved", &h.model_resolved),
             ("integrator", &h.integrator),
             ("tolerances", &h.tolerances),
         ] {
@@ -703,6 +729,16 @@ impl BasinWriter {
         rows_done_ds
             .write_raw(&vec![0u8; ny])
             .at(path, "writing /basin/rows_done")?;
+        let digest_ds = basin
+            .new_dataset::<u64>()
+            .shape([ny.div_ceil(BLOCK_ROWS)])
+            .create("block_digest")
+            .at(path, "creating /basin/block_digest")?;
+        made.push((**digest_ds).clone());
+        digest_ds
+            .write_raw(&vec![0u64; ny.div_ceil(BLOCK_ROWS)])
+            .at(path, "writing /basin/block_digest")?;
+        set_str(path, &digest_ds, "description", DIGEST_DESCRIPTION)?;
         file.flush().at(path, "flushing")?;
         Ok(Handles {
             file,
@@ -710,6 +746,7 @@ impl BasinWriter {
             strides,
             final_state,
             rows_done_ds,
+            digest_ds,
         })
     }
 
@@ -746,7 +783,9 @@ impl BasinWriter {
         let damaged = damaged_blocks(&old, &found, &rows_done);
         let extras_ok = !complete
             || (read_metrics(path, &old, &found.legend).is_ok_and(|m| m.is_some())
-                && read_attractors(path, &old).is_ok());
+                && read_attractors(path, &old).is_ok()
+                && (!old.link_exists("provenance")
+                    || crate::provenance::read_provenance(path, &old).is_ok_and(|p| p.is_some())));
         if complete && damaged.is_empty() && extras_ok {
             return Err(StoreError::AlreadyComplete {
                 path: path.to_path_buf(),
@@ -1026,6 +1065,12 @@ impl BasinWriter {
         set_attr(p, &h.file, "elapsed_s", &self.elapsed())?;
         h.file.flush().at(p, "flushing")?;
         let ones = vec![1u8; k];
+        h.digest_ds
+            .write_slice(
+                &[block_digest(&pb.outcome, &pb.strides, &pb.final_state)],
+                s![b..b + 1],
+            )
+            .at(p, "writing /basin/block_digest")?;
         h.rows_done_ds
             .write_slice(&ones, s![r0..r1])
             .at(p, "writing /basin/rows_done")?;
@@ -1123,19 +1168,57 @@ fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
     let (Ok(o), Ok(st), Ok(fs)) = (o, st, fs) else {
         return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
     };
+    // Type and filter pipeline as written (a damaged datatype or filter message reads back
+    // different values without any error): otherwise every block is suspect. Files from
+    // before the checksums have the same pipeline without Fletcher-32.
+    let as_written = |ds: &hdf5::Dataset, t: hdf5::Result<hdf5::Datatype>, shuffle: bool| {
+        use hdf5::filters::Filter;
+        let mut want: Vec<Filter> = Vec::new();
+        if shuffle {
+            want.push(Filter::Shuffle);
+        }
+        want.push(Filter::Deflate(DEFLATE_LEVEL));
+        let f = ds.filters();
+        let filters_ok = f == want
+            || (f.len() == want.len() + 1
+                && f[..want.len()] == want[..]
+                && f[want.len()] == Filter::Fletcher32);
+        filters_ok && t.is_ok_and(|t| ds.dtype().is_ok_and(|d| d == t))
+    };
+    if !(as_written(&o, hdf5::Datatype::from_type::<u8>(), false)
+        && as_written(&st, hdf5::Datatype::from_type::<u16>(), true)
+        && as_written(&fs, hdf5::Datatype::from_type::<f64>(), true))
+    {
+        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+    }
+    // The digest of each block as written (files from before it have none: the checks below
+    // then rest on the checksums and the outcome codes).
+    let Some(digests) = read_digests(f, h.ny()) else {
+        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+    };
     let mut bad = Vec::new();
     for b in 0..h.ny().div_ceil(BLOCK_ROWS) {
         let r = block_range(b, h.ny());
         if !rows_done[r.clone()].iter().all(|d| *d) {
             continue;
         }
-        let ok = o
-            .read_slice_2d::<u8, _>(s![r.clone(), ..])
-            .is_ok_and(|v| v.iter().all(|c| h.legend.iter().any(|(l, _)| l == c)))
-            && st.read_slice_2d::<u16, _>(s![r.clone(), ..]).is_ok()
-            && fs
-                .read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..])
-                .is_ok();
+        let read = (
+            o.read_slice_2d::<u8, _>(s![r.clone(), ..]),
+            st.read_slice_2d::<u16, _>(s![r.clone(), ..]),
+            fs.read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..]),
+        );
+        let ok = match read {
+            (Ok(ob), Ok(sb), Ok(fb)) => {
+                let ov: Vec<u8> = ob.iter().copied().collect();
+                ov.iter().all(|c| h.legend.iter().any(|(l, _)| l == c))
+                    && digests.as_ref().is_none_or(|d| {
+                        let sv: Vec<u16> = sb.iter().copied().collect();
+                        let fv: Vec<f64> = fb.iter().copied().collect();
+                        d[b] == block_digest(&ov, &sv, &fv)
+                    })
+            }
+            _ => false,
+        };
         if !ok {
             bad.push(b);
         }
@@ -1181,8 +1264,58 @@ fn copy_done_blocks(
         h.final_state
             .write_slice(&fb, s![r.clone(), .., ..])
             .at(new_path, "writing /basin/final")?;
+        let ov: Vec<u8> = ob.iter().copied().collect();
+        let sv: Vec<u16> = sb.iter().copied().collect();
+        let fv: Vec<f64> = fb.iter().copied().collect();
+        h.digest_ds
+            .write_slice(&[block_digest(&ov, &sv, &fv)], s![b..b + 1])
+            .at(new_path, "writing /basin/block_digest")?;
     }
     Ok(())
+}
+
+/// What `/basin/block_digest` holds.
+const DIGEST_DESCRIPTION: &str = "per block of BLOCK_ROWS rows: 64-bit FNV-1a of the block's \
+     outcome bytes, strides (u16 little-endian) and final states (f64 bits little-endian), in \
+     row-major order; 0 for a block not written. Checked on resume and merge: a block whose \
+     values read back different from what was written is recomputed or refused";
+
+/// 64-bit FNV-1a (Fowler–Noll–Vo) over a block's outcome codes, stride counts and final states
+/// (little-endian bytes, row-major): end-to-end evidence that a block reads back as written,
+/// whatever part of the file (data, chunk index, object headers) was damaged.
+pub(crate) fn block_digest(outcome: &[u8], strides: &[u16], final_state: &[f64]) -> u64 {
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= b as u64;
+            h = h.wrapping_mul(PRIME);
+        }
+    };
+    eat(outcome);
+    for v in strides {
+        eat(&v.to_le_bytes());
+    }
+    for v in final_state {
+        eat(&v.to_bits().to_le_bytes());
+    }
+    h
+}
+
+/// `/basin/block_digest` of an open file: `Some(None)` for files written before it existed,
+/// `None` if it is there but cannot be read whole (damage).
+pub(crate) fn read_digests(f: &File, ny: usize) -> Option<Option<Vec<u64>>> {
+    let Ok(basin) = f.group("basin") else {
+        return None;
+    };
+    if !basin.link_exists("block_digest") {
+        return Some(None);
+    }
+    let v = basin
+        .dataset("block_digest")
+        .and_then(|d| d.read_raw::<u64>())
+        .ok()?;
+    (v.len() == ny.div_ceil(BLOCK_ROWS)).then_some(Some(v))
 }
 
 /// Rows `start .. end` of chunk block `b` of a grid of `ny` rows.

@@ -83,7 +83,16 @@ pub(crate) fn get_str(
     loc: &Location,
     name: &str,
 ) -> Result<String> {
-    get_attr::<VarLenUnicode>(path, expected, loc, name).map(|s| s.as_str().to_string())
+    // HDF5 does not check the bytes of a UTF-8 string attribute: a damaged file can hold
+    // invalid UTF-8, which must be an error here, not a `String` that breaks later formatting.
+    let s = get_attr::<VarLenUnicode>(path, expected, loc, name)?;
+    std::str::from_utf8(s.as_bytes())
+        .map(str::to_string)
+        .map_err(|e| crate::StoreError::Format {
+            path: path.to_path_buf(),
+            expected,
+            detail: format!("attribute {name} is not valid UTF-8 ({e})"),
+        })
 }
 
 /// Whether `loc` has an attribute `name`.

@@ -115,3 +115,16 @@ pub use trajectory::{
 
 /// Result type of this crate.
 pub type Result<T> = std::result::Result<T, StoreError>;
+
+/// The first line in which two multi-line texts differ (e.g. two resolved models), as
+/// `(found, expected)` with an empty string for a missing line; `None` if they are equal.
+pub fn first_line_difference(found: &str, expected: &str) -> Option<(String, String)> {
+    let (mut f, mut e) = (found.lines(), expected.lines());
+    loop {
+        match (f.next(), e.next()) {
+            (None, None) => return None,
+            (a, b) if a == b => continue,
+            (a, b) => return Some((a.unwrap_or("").to_string(), b.unwrap_or("").to_string())),
+        }
+    }
+}

@@ -231,6 +231,16 @@ pub fn merge<P: AsRef<Path>>(
             );
             let spec = s.header.shard.expect("checked above");
             let rows = shard_rows(header.ny(), spec.index, spec.count)?;
+            let damaged = |r0: usize, r1: usize| StoreError::Format {
+                path: p.to_path_buf(),
+                expected: "pdw-sweep basin",
+                detail: format!(
+                    "rows {r0}..{r1} do not read back as written (damaged); run that shard \
+                     again with --resume, which recomputes damaged blocks"
+                ),
+            };
+            let digests = crate::basin::read_digests(&f, header.ny())
+                .ok_or_else(|| damaged(rows[0], rows[rows.len() - 1] + 1))?;
             for block in rows.chunks(BLOCK_ROWS) {
                 // Blocks of a shard are runs of consecutive rows.
                 let (r0, r1) = (block[0], block[block.len() - 1] + 1);
@@ -248,6 +258,14 @@ pub fn merge<P: AsRef<Path>>(
                 let ov: Vec<u8> = ob.iter().copied().collect();
                 let sv: Vec<u16> = sb.iter().copied().collect();
                 let fv: Vec<f64> = fb.iter().copied().collect();
+                if let Some(dg) = &digests {
+                    let b = r0 / BLOCK_ROWS;
+                    if r0 % BLOCK_ROWS != 0
+                        || dg.get(b) != Some(&crate::basin::block_digest(&ov, &sv, &fv))
+                    {
+                        return Err(damaged(r0, r1));
+                    }
+                }
                 if ov.len() != k * nx || fv.len() != k * nx * d {
                     return Err(StoreError::Format {
                         path: p.to_path_buf(),

@@ -200,3 +200,29 @@ fn merge_rejects_incomplete_inconsistent_missing_or_duplicate_shards() {
     .unwrap();
     assert!(read_basin(&out).unwrap().complete);
 }
+
+/// A shard whose block reads back without error but not as written (here: values rewritten
+/// behind the writer's back, as a damaged chunk index or object header can make them read) is
+/// refused by merge, naming the rows, instead of being merged.
+#[test]
+fn merge_refuses_a_shard_whose_block_reads_back_different() {
+    let dir = scratch("merge-damaged");
+    let (nx, ny) = (6, 40);
+    let shards: Vec<PathBuf> = (0..2).map(|i| write_shard(&dir, nx, ny, i, 2)).collect();
+    let own = pdw_store::shard_rows(ny, 1, 2).unwrap();
+    {
+        let f = hdf5::File::open_rw(&shards[1]).unwrap();
+        let ds = f.dataset("basin/final").unwrap();
+        let r0 = own[0];
+        let v = ndarray::Array3::<f64>::from_elem((1, nx, 2), 0.25);
+        ds.write_slice(&v, ndarray::s![r0..r0 + 1, .., ..]).unwrap();
+    }
+    match merge_err(&shards, &dir.join("merged.h5")) {
+        StoreError::Format { path, detail, .. } => {
+            assert_eq!(path, shards[1]);
+            assert!(detail.contains("do not read back as written"), "{detail}");
+            assert!(detail.contains(&format!("rows {}..", own[0])), "{detail}");
+        }
+        e => panic!("expected a damaged-shard error, got {e}"),
+    }
+}

@@ -10,6 +10,7 @@ mod design;
 mod follow;
 mod hostile;
 mod lock;
+mod resume_model;
 mod self_describing;
 mod simulate;
 mod sweep_output;

@@ -1644,6 +1644,32 @@ impl Walker for ChainWalker {
     fn state_names(&self) -> Vec<String> {
         self.state_names.clone()
     }
+    /// The resolved geometry (every segment, knee and foot at the current
+    /// parameter values), not the expressions that gave it: two specs that resolve to the
+    /// same walker have the same fingerprint. Gait guesses are left out (they start Newton
+    /// and do not change the dynamics).
+    fn fingerprint(&self) -> String {
+        let r = &self.r;
+        let mut s = format!(
+            "model = {}\nkind = chain walker\nslope = {:?}\ngravity = {:?}\n\
+             max_stride_time = {:?}\nhip_mass = {:?}\nfoot_radius = {:?}\n",
+            self.spec.name, r.slope, r.gravity, r.max_stride_time, r.hip_mass, r.foot_radius
+        );
+        for (k, g) in r.segments.iter().enumerate() {
+            let [l, m, c, cn, i] = *g;
+            s.push_str(&format!(
+                "segments[{k}] = length {l:?}, mass {m:?}, com {c:?}, com_normal {cn:?}, \
+                 inertia {i:?}\n"
+            ));
+        }
+        for (k, (free, latch)) in r.free_swing.iter().zip(&r.latched).enumerate() {
+            s.push_str(&format!(
+                "knees[{k}] = free_swing {free}, hold {}\n",
+                if *latch { "latch" } else { "stop" }
+            ));
+        }
+        s
+    }
     fn param_values(&self) -> Vec<(String, f64)> {
         self.table
             .names

@@ -100,6 +100,18 @@ pub trait Walker: Section {
     fn clearance_rule(&self) -> ClearanceRule {
         ClearanceRule::AfterMidStance
     }
+    /// The fully resolved model, one `key = value` line per quantity that determines its
+    /// dynamics (floats in shortest round-trip form, so equal text means bit-equal values).
+    /// Files that can be continued store it and refuse to continue under a different model,
+    /// naming the first line that differs. The default, for models fully determined by their
+    /// name and parameter values, lists those.
+    fn fingerprint(&self) -> String {
+        let mut s = format!("model = {}\n", self.name());
+        for (n, v) in self.param_values() {
+            s.push_str(&format!("{n} = {v:?}\n"));
+        }
+        s
+    }
 }
 
 /// The pose of a planar serial chain rooted at the stance foot: link `k` has absolute angle

@@ -158,6 +158,7 @@ fn png(
         model: model.into(),
         slope: r.slope,
         params: "{}".into(),
+        model_resolved: String::new(),
         integrator: "dop853".into(),
         tolerances: "{\"rtol\":1e-9,\"atol\":1e-9}".into(),
         max_strides: u32::from(max_strides),

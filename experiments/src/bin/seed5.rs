@@ -556,6 +556,7 @@ fn main() -> anyhow::Result<()> {
             model: "seed5".into(),
             slope: G0,
             params: "{}".into(),
+            model_resolved: String::new(),
             integrator: "dop853".into(),
             tolerances: "{\"rtol\":1e-9,\"atol\":1e-9}".into(),
             max_strides: 60,

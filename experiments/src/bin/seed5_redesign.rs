@@ -56,10 +56,10 @@ const FREE: [(&str, f64, f64); 7] = [
     ("shank_com", 0.1, 0.95),
 ];
 /// Designs evaluated by the search (`--budget`), seeded random ones among them (`--init`).
-const BUDGET: usize = 400;
-const INIT: usize = 150;
+const BUDGET: usize = 80;
+const INIT: usize = 30;
 /// Map grids, cells per side (`--map`).
-const MAP_N: usize = 13;
+const MAP_N: usize = 9;
 
 /// `--budget N`, `--init N`, `--map N` from the command line (defaults above).
 fn sizes() -> anyhow::Result<(usize, usize, usize)> {
@@ -583,6 +583,7 @@ fn main() -> anyhow::Result<()> {
             model: "seed5_stage2 (stop knees)".into(),
             slope: values_of(&best.0)[index("slope")],
             params: String::new(),
+            model_resolved: String::new(),
             integrator: String::new(),
             tolerances: String::new(),
             max_strides: 1,

@@ -64,6 +64,7 @@ pub fn header(nx: usize, ny: usize) -> BasinHeader {
         model: "simplest".into(),
         slope: 0.009,
         params: r#"{"gamma":0.009}"#.into(),
+        model_resolved: String::new(),
         integrator: "dopri5".into(),
         tolerances: r#"{"atol":1e-12,"rtol":1e-10}"#.into(),
         max_strides: 100,

@@ -363,6 +363,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         model: info.name.to_string(),
         slope: m.slope(),
         params: m.params_json().to_string(),
+        model_resolved: m.walker.fingerprint(),
         integrator: super::integrator_text(&opts.integrator),
         tolerances: serde_json::json!({
             "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
@@ -694,7 +695,9 @@ fn basin_units(
         match p {
             "grid/x" => Some(ux.clone()),
             "grid/y" => Some(uy.clone()),
-            "basin/outcome" | "basin/strides" | "basin/rows_done" => Some("1".into()),
+            "basin/outcome" | "basin/strides" | "basin/rows_done" | "basin/block_digest" => {
+                Some("1".into())
+            }
             "basin/final" => Some(list.clone()),
             _ if p.starts_with("attractors/") && p.ends_with("/section") => Some(list.clone()),
             _ if p.starts_with("attractors/") && p.contains("/multipliers_") => Some("1".into()),

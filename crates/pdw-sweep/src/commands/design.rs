@@ -268,6 +268,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         "basin_box": bx,
         "max_strides": a.max_strides,
         "newton_tol": opts.newton_tol,
+        "model_resolved": base.walker.fingerprint(),
     })
     .to_string();
 
@@ -309,14 +310,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
     if claim.existed(&a.out) && !a.force {
         let d = read_design(&a.out, &COLUMNS)?;
         if d.settings != settings {
-            return Err(InputError(format!(
-                "--out: '{}' holds a design search with other settings (stored: {}; now: {}); \
-                 pass --force to start over or give another --out",
-                a.out.display(),
-                d.settings,
-                settings
-            ))
-            .into());
+            return Err(InputError(settings_differ(&a.out, &d.settings, &settings)).into());
         }
         history = from_data(&d);
         earlier_commands = read_design_commands(&a.out)?;
@@ -475,4 +469,43 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::from(1)
     })
+}
+
+/// Why a stored design search cannot be continued: the resolved model's first differing line
+/// (a spec edited under the same parameter values), else both settings without the model.
+fn settings_differ(out: &std::path::Path, stored: &str, now: &str) -> String {
+    let parse = |t: &str| serde_json::from_str::<serde_json::Value>(t).unwrap_or_default();
+    let (mut s, mut n) = (parse(stored), parse(now));
+    let model = |v: &serde_json::Value| {
+        v.get("model_resolved")
+            .and_then(|m| m.as_str())
+            .unwrap_or("")
+            .to_string()
+    };
+    if let Some((f, e)) = pdw_store::first_line_difference(&model(&s), &model(&n)) {
+        let shown = |t: String| {
+            if t.is_empty() {
+                "(absent)".to_string()
+            } else {
+                t
+            }
+        };
+        return format!(
+            "--out: '{}' holds a design search of a different model (stored: {}; now: {}); \
+             pass --force to start over or give another --out",
+            out.display(),
+            shown(f),
+            shown(e)
+        );
+    }
+    for v in [&mut s, &mut n] {
+        if let Some(o) = v.as_object_mut() {
+            o.remove("model_resolved");
+        }
+    }
+    format!(
+        "--out: '{}' holds a design search with other settings (stored: {s}; now: {n}); pass \
+         --force to start over or give another --out",
+        out.display()
+    )
 }
