@@ -30,6 +30,38 @@ fn err(msg: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(msg.to_string())
 }
 
+fn gib(b: u64) -> String {
+    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+}
+
+/// Most trajectory samples of a state of `dim` components that fit in half the memory
+/// available (the rest for the arrays handed to numpy).
+fn sample_budget(dim: usize) -> usize {
+    (pdw_limit::resources::memory_available() / 2 / pdw_limit::bytes_per_sample(dim) as u64)
+        .min(usize::MAX as u64) as usize
+}
+
+/// Refuses a basin grid held whole in memory (cells, results, the outcome array) that would
+/// need more than 80 % of the memory available, naming the estimate.
+fn check_basin_memory(nx: usize, ny: usize, d: usize) -> PyResult<()> {
+    // per cell: its start state and its result (two vectors of d values with their headers
+    // and allocations), the outcome byte twice (vector and numpy array)
+    let per_cell = 2 * (24 + 16 + 8 * d as u64) + 8 + 2;
+    let need = nx as u64 * ny as u64 * per_cell + (64 << 20);
+    let have = pdw_limit::resources::memory_available();
+    if need > have / 5 * 4 {
+        return Err(err(format!(
+            "grid: ({nx}, {ny}) needs about {} of memory, more than the {} available (80 % of \
+             {}); use a smaller grid, or the command line's `pdw-sweep basin`, which streams rows \
+             to a file and splits across machines with --shard",
+            gib(need),
+            gib(have / 5 * 4),
+            gib(have)
+        )));
+    }
+    Ok(())
+}
+
 /// A model built from Python arguments.
 struct Model {
     info: ModelInfo,
@@ -679,6 +711,7 @@ fn basin<'py>(
             m.info.section_names.join(", ")
         )));
     }
+    check_basin_memory(nx, ny, m.info.section_names.len())?;
     let xa = axis(&m, x, "x")?;
     let ya = axis(&m, y, "y")?;
     let (found, failed, n) = py.detach(|| find_gaits(&m, None, 1e-12))?;
@@ -1030,6 +1063,7 @@ fn simulate<'py>(
         };
         let opts = TrajectoryOptions {
             dt_out,
+            max_samples: sample_budget(w.dim()),
             ..TrajectoryOptions::new(steps)
         };
         trajectory::simulate(w, &x0, &opts).map_err(err)

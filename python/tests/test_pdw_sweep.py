@@ -294,3 +294,8 @@ def test_validity_is_located_on_the_dense_solution_with_relative_margins():
     imp = v["impacts"][0]
     assert imp["event"] == "heel_strike" and imp["checked"] and imp["min_margin"] > 0
     assert not v["impact_violation"] and v["violations"] == []
+
+
+def test_a_basin_grid_that_does_not_fit_in_memory_is_refused_before_computing():
+    with pytest.raises(ValueError, match="needs about .* of memory"):
+        pdw.basin(grid=(30000, 30000))

@@ -22,6 +22,7 @@ pub mod metrics;
 pub mod newton;
 pub mod orbit;
 pub mod periodic;
+pub mod resources;
 pub mod stride;
 pub mod sweep;
 pub mod trajectory;
@@ -59,8 +60,8 @@ pub use periodic::{find_periodic_orbit, PeriodKProblem, PeriodicOrbit};
 pub use stride::{EventDriver, Stride, StrideEnd, StrideMap, StrideOutcome, MAX_EVENTS_PER_STRIDE};
 pub use sweep::{grid_options, GridBranch, MeasuredPoint, Sweep, SweepProgress};
 pub use trajectory::{
-    initial_state, model_energy, simulate, Trajectory, TrajectoryError, TrajectoryEvent,
-    TrajectoryOptions, Validity,
+    bytes_per_sample, initial_state, model_energy, simulate, Trajectory, TrajectoryError,
+    TrajectoryEvent, TrajectoryOptions, Validity,
 };
 pub use validity::{ImpactCheck, Margin, Violation};
 pub use variational::{ErrorControl, Variational};

@@ -519,8 +519,10 @@ pub fn find_fixed_point<S: Section + ?Sized>(
     if let Some(l) = step.filter(|l| l.is_nan() || *l < opts.min_step_length) {
         return Err(LimitError::NoConvergence {
             reason: format!(
-                "degenerate gait: the iterate's step length is {l:.3e}, below {:e} (the walker \
-                 barely moves; on a level or near-level floor a passive walker has no gait)",
+                "degenerate gait: the iterate's step length is {l:.3e}, below {:e}; steps that \
+                 short are not resolved as a gait (on a level or near-level floor a passive \
+                 walker stops; a model can have steps that short, e.g. a rimless wheel with very \
+                 many spokes; or the integrator is too coarse to follow the stride)",
                 opts.min_step_length
             ),
             iterations,

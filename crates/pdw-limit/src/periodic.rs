@@ -331,8 +331,8 @@ pub fn find_periodic_orbit<S: Section + ?Sized>(
     {
         return Err(fail(
             format!(
-                "degenerate orbit: a stride's step length is {l:.3e}, below {:e} (the walker \
-                 barely moves)",
+                "degenerate orbit: a stride's step length is {l:.3e}, below {:e}; steps that \
+                 short are not resolved as an orbit",
                 opts.min_step_length
             ),
             last,

@@ -38,6 +38,24 @@ pub enum TrajectoryError {
     /// The initial state does not fit the model.
     #[error("initial state: {0}")]
     State(String),
+    /// The walk would record more than [`TrajectoryOptions::max_samples`] samples.
+    #[error(
+        "the trajectory would hold more than {max_samples} samples ({bytes_per_sample} bytes \
+         each) after {steps_done} of {steps} steps; give a larger output step, fewer steps or a \
+         larger integrator step"
+    )]
+    TooManySamples {
+        max_samples: usize,
+        bytes_per_sample: usize,
+        steps_done: usize,
+        steps: usize,
+    },
+}
+
+/// Bytes one trajectory sample takes for a state of `dim` components: time, state, mode, step,
+/// energy, ground reaction (normal, tangential, friction), two knee torques, flags.
+pub fn bytes_per_sample(dim: usize) -> usize {
+    8 * (dim + 1) + 4 + 4 + 8 + 3 * 8 + 2 * 8 + 1
 }
 
 /// Flag bit: the normal ground reaction on the stance foot is negative (the foot would lift off).
@@ -60,6 +78,10 @@ pub struct TrajectoryOptions {
     pub dt_out: Option<f64>,
     /// Integrator.
     pub integrator: Options,
+    /// Most samples to record (`usize::MAX`: no bound). A walk that would record more stops
+    /// with [`TrajectoryError::TooManySamples`] instead of growing without bound (a tiny
+    /// `dt_out` or fixed integrator step); front ends set it from the memory available.
+    pub max_samples: usize,
 }
 
 impl TrajectoryOptions {
@@ -69,6 +91,7 @@ impl TrajectoryOptions {
             steps,
             dt_out: None,
             integrator: Options::dop853(TRAJECTORY_TOL),
+            max_samples: usize::MAX,
         }
     }
 
@@ -277,10 +300,18 @@ struct Recorder<'a> {
     tr: Trajectory,
     forces_ok: bool,
     flags_ok: bool,
+    /// [`TrajectoryOptions::max_samples`]
+    max_samples: usize,
+    /// A sample was refused: the walk is over the bound.
+    full: bool,
 }
 
 impl Recorder<'_> {
     fn push(&mut self, t: f64, x: &[f64], mode: usize, step: usize) {
+        if self.tr.t.len() >= self.max_samples {
+            self.full = true;
+            return;
+        }
         let tr = &mut self.tr;
         tr.t.push(t);
         tr.x.extend_from_slice(x);
@@ -358,6 +389,8 @@ pub fn simulate(
         },
         forces_ok: true,
         flags_ok: true,
+        max_samples: opts.max_samples.max(1),
+        full: false,
     };
     let mut integ = Integrator::new(d, opts.integrator).map_err(LimitError::from)?;
     let (mut t, mut x, mut mode) = (0.0, x0.to_vec(), w.section_mode());
@@ -406,8 +439,19 @@ pub fn simulate(
                     }
                     rec.push(t, &x, mode, step);
                     k_out += 1;
+                    if rec.full {
+                        break stop;
+                    }
                 },
             };
+            if rec.full {
+                return Err(TrajectoryError::TooManySamples {
+                    max_samples: opts.max_samples,
+                    bytes_per_sample: bytes_per_sample(d),
+                    steps_done: step,
+                    steps: opts.steps,
+                });
+            }
             let outcome = match stop {
                 StopReason::Guard { guard } => {
                     let spec = w.guards(mode)[guard];
@@ -477,6 +521,14 @@ pub fn simulate(
             rec.tr.outcome = outcome;
             break 'steps;
         }
+    }
+    if rec.full {
+        return Err(TrajectoryError::TooManySamples {
+            max_samples: opts.max_samples,
+            bytes_per_sample: bytes_per_sample(d),
+            steps_done: rec.tr.steps_done,
+            steps: opts.steps,
+        });
     }
     Ok(rec.tr)
 }

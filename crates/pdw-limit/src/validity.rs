@@ -245,6 +245,7 @@ impl Validity {
             steps: 1,
             dt_out: None,
             integrator: opts.integrator,
+            max_samples: opts.max_samples,
         };
         let tr = simulate(w, x0, &opts).ok()?;
         Self::along(w, &tr, 0)

@@ -107,25 +107,30 @@ pub fn parse_axis(s: &str, flag: &str) -> Result<AxisRange, InputError> {
     })
 }
 
-/// A grid size `NXxNY`, each at least 1 and the product at most 10⁹.
-pub fn parse_grid(s: &str) -> Result<(usize, usize), InputError> {
+/// A grid size `NXxNY` given to `flag`, each at least 1 and the product at most 10⁹.
+pub fn parse_grid_for(flag: &str, s: &str) -> Result<(usize, usize), InputError> {
     let lower = s.trim().to_ascii_lowercase();
     let Some((a, b)) = lower.split_once('x') else {
         return err(format!(
-            "--grid: '{s}' is not of the form NXxNY (e.g. 401x401)"
+            "{flag}: '{s}' is not of the form NXxNY (e.g. 401x401)"
         ));
     };
     let parse = |t: &str| -> Result<usize, InputError> {
         match t.parse::<usize>() {
             Ok(n) if n >= 1 => Ok(n),
-            _ => err(format!("--grid: '{t}' in '{s}' is not a positive integer")),
+            _ => err(format!("{flag}: '{t}' in '{s}' is not a positive integer")),
         }
     };
     let (nx, ny) = (parse(a)?, parse(b)?);
     if nx.saturating_mul(ny) > 1_000_000_000 {
-        return err(format!("--grid: {nx}x{ny} has more than 10^9 cells"));
+        return err(format!("{flag}: {nx}x{ny} has more than 10^9 cells"));
     }
     Ok((nx, ny))
+}
+
+/// [`parse_grid_for`] of `--grid`.
+pub fn parse_grid(s: &str) -> Result<(usize, usize), InputError> {
+    parse_grid_for("--grid", s)
 }
 
 /// Most points of a `--sweep` (each is a continuation step and an orbit-diagram column of
@@ -231,6 +236,8 @@ mod tests {
         assert_eq!(parse_grid("401x201").unwrap(), (401, 201));
         assert!(parse_grid("0x5").is_err());
         assert!(parse_grid("12").is_err());
+        let e = parse_grid_for("--map-grid", "0x0").unwrap_err().0;
+        assert!(e.starts_with("--map-grid: '0'"), "{e}");
         assert_eq!(
             parse_axis("theta=0.15:0.25", "--x").unwrap(),
             AxisRange {

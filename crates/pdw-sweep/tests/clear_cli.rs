@@ -182,9 +182,25 @@ fn rimless_advice_asks_for_a_steeper_slope_at_the_right_threshold() {
         "--json",
     ]));
     assert_eq!(v["fixed_points"].as_array().unwrap().len(), 1, "{v}");
-    // The legged walkers' advice is the other way round.
+    // The legged walkers' advice names both directions; an uphill slope is named as such.
     let o = run(&["fixedpoint", "--guess", "0.5,0.5"]);
-    assert!(stderr(&o).contains("shallower --slope"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("another --slope (too steep"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(stderr(&o).contains("too shallow"), "{}", stderr(&o));
+    let o = run(&["fixedpoint", "--slope", "-0.01"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("a downhill --slope"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("uphill"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("shallower"), "{}", stderr(&o));
+    // A degenerate step is not blamed on the floor alone (a rimless wheel with 1e9 spokes
+    // rolls fast with steps of 6e-9).
+    let o = run(&["fixedpoint", "--model", "rimless", "--set", "n_spokes=1e9"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("very many spokes"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("barely moves"), "{}", stderr(&o));
 }
 
 /// Goswami et al. 1998: besides the stable long-period gait, the compass at 3° has an unstable
@@ -265,4 +281,72 @@ fn basin_warns_when_its_integrator_moves_the_gait() {
     let r = run(&["basin", "--grid", "6x6", "--quiet", "--force", "--out", o]);
     assert!(r.status.success(), "{}", stderr(&r));
     assert!(!stderr(&r).contains("warning"), "{}", stderr(&r));
+}
+
+/// Flags that one run would silently drop are refused, naming them; errors name the flag
+/// given; a file that cannot be resumed says what to do.
+#[test]
+fn conflicting_or_ignored_flags_are_refused_naming_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let o = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.01:0.02:3",
+        "--slope",
+        "0.01",
+        "--out",
+        &p("s.h5"),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--sweep slope: the parameter is also set"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(&["fixedpoint", "--png", &p("q.png")]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--png: only a --sweep"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.path().join("q.png").exists());
+    let o = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.01:0.02:3",
+        "--follow",
+        "pd",
+        "--free",
+        "hip_mass",
+        "--map-grid",
+        "0x0",
+        "--png",
+        &p("f.png"),
+        "--out",
+        &p("f.h5"),
+        "--model",
+        "compass",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--map-grid: '0'"), "{}", stderr(&o));
+    std::fs::write(dir.path().join("junk.h5"), vec![7u8; 5000]).unwrap();
+    let o = run(&[
+        "basin",
+        "--grid",
+        "8x8",
+        "--max-strides",
+        "10",
+        "--quiet",
+        "--out",
+        &p("junk.h5"),
+        "--resume",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("start it over with --force instead of --resume"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -98,3 +98,58 @@ fn bad_input_names_the_value() {
         assert!(!e.contains("panicked"));
     }
 }
+
+/// A walk whose samples would not fit in memory is refused up front from the gait's period (a
+/// tiny --dt-out or --rk4-step), not grown until the process is killed; the library's own bound
+/// stops a walk from any state at `max_samples`.
+#[test]
+fn walks_that_would_not_fit_in_memory_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.h5");
+    for args in [
+        &["--steps", "10", "--dt-out", "1e-12"][..],
+        &["--integrator", "rk4", "--rk4-step", "1e-12"][..],
+    ] {
+        let o = simulate(&[args, &["--out", out.to_str().unwrap()]].concat());
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(
+            e.contains("samples") && e.contains("memory"),
+            "{args:?}: {e}"
+        );
+        assert!(!out.exists(), "{args:?}: nothing written");
+    }
+    // the library's bound: a 3-step walk of every accepted step, at most 40 samples
+    let w = pdw_walkers::build("compass", &[]).unwrap();
+    let (found, _) = gaits::search(w.as_ref(), &gaits::model_guesses(w.as_ref()), 1e-12).unwrap();
+    let fp = &found.iter().find(|f| f.fp.stable).unwrap().fp;
+    let full = trajectory::simulate(w.as_ref(), &fp.state, &TrajectoryOptions::new(3)).unwrap();
+    assert!(full.len() > 40, "{} samples", full.len());
+    for dt_out in [None, Some(0.01)] {
+        let opts = TrajectoryOptions {
+            max_samples: 40,
+            dt_out,
+            ..TrajectoryOptions::new(3)
+        };
+        match trajectory::simulate(w.as_ref(), &fp.state, &opts) {
+            Err(trajectory::TrajectoryError::TooManySamples { max_samples, .. }) => {
+                assert_eq!(max_samples, 40)
+            }
+            other => panic!(
+                "{dt_out:?}: expected the sample bound, got {:?}",
+                other.map(|t| t.len())
+            ),
+        }
+    }
+    let opts = TrajectoryOptions {
+        max_samples: full.len(),
+        ..TrajectoryOptions::new(3)
+    };
+    assert_eq!(
+        trajectory::simulate(w.as_ref(), &fp.state, &opts)
+            .unwrap()
+            .len(),
+        full.len(),
+        "a walk exactly at the bound is whole"
+    );
+}

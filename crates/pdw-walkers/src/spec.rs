@@ -449,6 +449,17 @@ impl WalkerSpec {
             let com = eval(&f("com"), &s.com)?;
             let com_normal = eval(&f("com_normal"), &s.com_normal)?;
             let inertia = nonneg(&f("inertia"), &s.inertia)?;
+            if !(0.0..=length).contains(&com) {
+                return Err(self.err(
+                    f("com"),
+                    s.com.shown(com),
+                    format!(
+                        "the COM is measured along the segment from its lower end, so it lies \
+                         between 0 and the segment's length {length}; an offset off the segment \
+                         line goes in com_normal"
+                    ),
+                ));
+            }
             let upper = length - com;
             // the hip mass sits at the top segment's upper end: it gives that segment inertia
             // about its lower joint in the stance leg

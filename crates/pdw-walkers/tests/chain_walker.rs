@@ -134,6 +134,18 @@ fn every_bad_spec_is_refused_naming_the_field_the_value_and_the_rule() {
             &["segments[0].com", "singular"],
         ),
         (
+            format!("{head}[[segments]]\nlength = 1.0\nmass = 1.0\ncom = 5.0\n"),
+            &[
+                "segments[0].com",
+                "5",
+                "between 0 and the segment's length 1",
+            ],
+        ),
+        (
+            format!("{head}[[segments]]\nlength = 1.0\nmass = 1.0\ncom = -0.25\n"),
+            &["segments[0].com", "-0.25", "com_normal"],
+        ),
+        (
             "name = \"w\"\n[[segments]]\nlength = 1.0\nmass = 1.0\ncom = 0.5\n".to_string(),
             &["parameters.slope", "default"],
         ),

@@ -65,21 +65,13 @@ fn memory_estimate(nx: usize, ny: usize, d: usize, dim: usize) -> u64 {
         + (96 << 20)
 }
 
-/// Memory this process may use: `MemAvailable` of /proc/meminfo (8 GiB if unknown).
+/// Memory this process may use ([`pdw_limit::resources::memory_available`]: `MemAvailable`
+/// and the cgroup's limit).
 fn memory_available() -> u64 {
-    std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("MemAvailable:"))
-                .and_then(|l| l.split_whitespace().nth(1))
-                .and_then(|kb| kb.parse::<u64>().ok())
-        })
-        .map(|kb| kb * 1024)
-        .unwrap_or(8 << 30)
+    pdw_limit::resources::memory_available()
 }
 
-fn gib(b: u64) -> String {
+pub(super) fn gib(b: u64) -> String {
     format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
 }
 
@@ -396,6 +388,14 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
                 out.display()
             );
             return Ok(ExitCode::SUCCESS);
+        }
+        // A file that is not a readable basin file cannot be continued: say what to do.
+        Err(e @ (StoreError::Hdf5 { .. } | StoreError::Format { .. })) if a.resume => {
+            return Err(InputError(format!(
+                "{e}\n  --resume: it cannot be continued (truncated, damaged or not a basin \
+                 file); start it over with --force instead of --resume, or give another --out"
+            ))
+            .into())
         }
         Err(e) => return Err(e.into()),
     };

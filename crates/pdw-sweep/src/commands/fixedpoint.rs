@@ -175,6 +175,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     // Not silently ignored: these shape a sweep's output only.
     for (given, flag) in [
         (a.csv.is_some(), "--csv"),
+        (a.png.is_some(), "--png"),
         (a.threads.is_some(), "--threads"),
     ] {
         if given {
@@ -310,8 +311,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
 /// What to try when no gait is found, by model: the rimless wheel rolls only on a slope steep
 /// enough to make up the energy its spoke impacts lose (McGeer 1990: its fixed point exists for
 /// γ above a threshold that grows as the spoke angle does), so it needs a *steeper* slope; the
-/// legged walkers lose their gaits by period doubling and falls on steep slopes, so they need a
-/// shallower one (but not level ground).
+/// legged walkers lose their gaits by period doubling and falls on steep slopes and stop on
+/// shallow ones, so the advice names both directions; an uphill slope is named as such.
 pub fn advice(m: &BuiltModel) -> String {
     let coords = m.info.section_names.join(", ");
     if m.info.name == "rimless" {
@@ -335,10 +336,17 @@ pub fn advice(m: &BuiltModel) -> String {
             g_min.to_degrees(),
             m.slope()
         )
+    } else if m.slope() < 0.0 {
+        format!(
+            "a downhill --slope (positive: a passive walker walks down the slope; this run has \
+             {:.4} rad, uphill), or another --guess (section coordinates {coords})",
+            m.slope()
+        )
     } else {
         format!(
-            "another --guess (section coordinates {coords}), a shallower --slope (not 0: level \
-             ground has no passive gait), or continuation from a slope where a gait exists \
+            "another --guess (section coordinates {coords}), another --slope (too steep and the \
+             gait falls or period-doubles, too shallow and the walker stops: level ground has no \
+             passive gait), or continuation from a slope where a gait exists \
              (--sweep slope=A:B:N)"
         )
     }

@@ -179,7 +179,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         )
         .into());
     }
-    let (nx, ny) = args::parse_grid(a.map_grid.as_deref().unwrap_or(MAP_GRID))?;
+    let (nx, ny) = args::parse_grid_for("--map-grid", a.map_grid.as_deref().unwrap_or(MAP_GRID))?;
     if nx < 2 || ny < 2 || nx * ny > 250_000 {
         return Err(InputError(format!(
             "--map-grid: {nx}x{ny}: need at least 2 cells per side and at most 250000 cells \

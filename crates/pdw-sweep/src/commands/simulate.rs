@@ -71,7 +71,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
     }
     let m = build_model(&a.model)?;
     let w = m.walker.as_ref();
-    let (x0, start) = match &a.state {
+    let (x0, start, period) = match &a.state {
         Some(s) => {
             let v = s
                 .split(',')
@@ -79,7 +79,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
                 .collect::<Result<Vec<f64>, _>>()?;
             let x0 = trajectory::initial_state(w, &v)
                 .map_err(|e| InputError(format!("--state: {e}")))?;
-            (x0, format!("state {v:?}"))
+            (x0, format!("state {v:?}"), None)
         }
         None => {
             let which = a.gait.as_deref().unwrap_or("stable");
@@ -107,15 +107,46 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             (
                 g.fp.state.clone(),
                 format!("{which} gait {:?}", g.fp.section),
+                Some(g.fp.metrics.period),
             )
         }
     };
     let base = TrajectoryOptions::new(a.steps);
+    // Samples are bounded by the memory available (a tiny --dt-out or --rk4-step is refused
+    // when the walk reaches the bound, not an out-of-memory kill).
     let opts = TrajectoryOptions {
         dt_out: a.dt_out,
         integrator: super::integrator(&a.integrator, base.integrator)?,
+        max_samples: (pdw_limit::resources::memory_available()
+            / 2
+            / pdw_limit::bytes_per_sample(w.dim()) as u64)
+            .min(usize::MAX as u64) as usize,
         ..base
     };
+    // From a gait its period tells the samples ahead: refuse before computing.
+    let per_stride = match (opts.dt_out, opts.integrator.method) {
+        (Some(h), _) => period.map(|p| p / h),
+        (None, pdw_hybrid::Method::Rk4 { h }) => period.map(|p| p / h),
+        _ => None,
+    };
+    if let Some(n) = per_stride.map(|k| k * a.steps as f64) {
+        if n > opts.max_samples as f64 {
+            return Err(InputError(format!(
+                "{}: {} steps of this gait (period {:.4}) would record about {n:.2e} samples, \
+                 more than the {} that fit in half the memory available; give a larger step or \
+                 fewer --steps",
+                if opts.dt_out.is_some() {
+                    "--dt-out"
+                } else {
+                    "--rk4-step"
+                },
+                a.steps,
+                period.unwrap_or(f64::NAN),
+                opts.max_samples
+            ))
+            .into());
+        }
+    }
     let tr = trajectory::simulate(w, &x0, &opts).map_err(|e| InputError(e.to_string()))?;
     let data = to_store(&m, &tr, &opts, &start);
     let prov = super::provenance(serde_json::json!({

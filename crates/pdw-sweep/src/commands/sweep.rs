@@ -175,6 +175,17 @@ impl pdw_limit::SweepProgress for Progress {
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let sw = args::parse_sweep(a.sweep.as_deref().unwrap_or_default())?;
+    // The swept parameter given a value as well would be silently overridden.
+    if let Some((_, v)) = super::overrides(&a.model)?
+        .into_iter()
+        .find(|(n, _)| *n == sw.name)
+    {
+        return Err(InputError(format!(
+            "--sweep {}: the parameter is also set to {v} (--slope or --set); give it once",
+            sw.name
+        ))
+        .into());
+    }
     let out = a.out_path();
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
     let threads = a.threads.unwrap_or(2);
