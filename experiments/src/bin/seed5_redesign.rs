@@ -56,10 +56,10 @@ const FREE: [(&str, f64, f64); 7] = [
     ("shank_com", 0.1, 0.95),
 ];
 /// Designs evaluated by the search (`--budget`), seeded random ones among them (`--init`).
-const BUDGET: usize = 80;
-const INIT: usize = 30;
+const BUDGET: usize = 300;
+const INIT: usize = 100;
 /// Map grids, cells per side (`--map`).
-const MAP_N: usize = 9;
+const MAP_N: usize = 11;
 
 /// `--budget N`, `--init N`, `--map N` from the command line (defaults above).
 fn sizes() -> anyhow::Result<(usize, usize, usize)> {
