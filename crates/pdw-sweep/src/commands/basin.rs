@@ -65,12 +65,6 @@ fn memory_estimate(nx: usize, ny: usize, d: usize, dim: usize) -> u64 {
         + (96 << 20)
 }
 
-/// Memory this process may use ([`pdw_limit::resources::memory_available`]: `MemAvailable`
-/// and the cgroup's limit).
-fn memory_available() -> u64 {
-    pdw_limit::resources::memory_available()
-}
-
 pub(super) fn gib(b: u64) -> String {
     format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
 }
@@ -89,7 +83,8 @@ pub(super) fn check_memory(nx: usize, ny: usize, d: usize, dim: usize) -> Result
         )));
     }
     let need = memory_estimate(nx, ny, d, dim);
-    let have = memory_available();
+    // `MemAvailable` and the room under the cgroup's limit, whichever is smaller
+    let have = pdw_limit::resources::memory_available();
     if need > have * 4 / 5 {
         return Err(InputError(format!(
             "--grid {nx}x{ny}: needs about {} of memory, more than the {} available (80 % of \
