@@ -675,3 +675,70 @@ fn fixedpoint_warns_when_the_integrator_cannot_support_the_newton_tolerance() {
     assert!(o.status.success(), "{}", err(&o));
     assert!(!err(&o).contains("warning"), "{}", err(&o));
 }
+
+/// The `validity` of the first gait of `fixedpoint --model rimless --json` with `extra`.
+fn rimless_validity(extra: &[&str]) -> serde_json::Value {
+    let mut a = vec!["fixedpoint", "--model", "rimless", "--json"];
+    a.extend_from_slice(extra);
+    let o = run(&a);
+    assert!(o.status.success(), "{}", err(&o));
+    let j: serde_json::Value = serde_json::from_str(&out(&o)).unwrap();
+    j["fixed_points"][0]["validity"].clone()
+}
+
+/// The smallest normal ground reaction per unit mass along the rimless wheel's rolling gait
+/// (8 spokes, g = 9.81, l = 1), in closed form: the axial spoke force `g cos(θ + γ) − l θ̇²`
+/// times `cos θ` is smallest at one end of the step, just before (θ = α, θ̇ = ω*/cos 2α) or
+/// just after (θ = −α, θ̇ = ω*) a spoke impact, with `ω* = cot 2α √(4 (g/l) sin α sin γ)`.
+fn rimless_min_normal(gamma: f64) -> f64 {
+    let (g, a) = (9.81, std::f64::consts::PI / 8.0);
+    let w = (4.0 * g * a.sin() * gamma.sin()).sqrt() / (2.0 * a).tan();
+    let before = (g * (a + gamma).cos() - (w / (2.0 * a).cos()).powi(2)) * a.cos();
+    let after = (g * (gamma - a).cos() - w * w) * a.cos();
+    before.min(after)
+}
+
+#[test]
+fn a_rimless_wheel_whose_spoke_would_pull_the_ground_is_no_valid_gait() {
+    // γ = 0.3: the spoke would have to pull the ground before the next one lands
+    let v = rimless_validity(&["--slope", "0.3"]);
+    assert_eq!(v["valid"], false, "{v}");
+    assert_eq!(v["normal_force_negative"], true, "{v}");
+    let min = v["min_normal_force"].as_f64().unwrap();
+    let expect = rimless_min_normal(0.3);
+    assert!(
+        expect < -1.2 && (min - expect).abs() < 1e-8,
+        "{min} vs {expect}"
+    );
+    let viol = v["violations"].as_array().unwrap();
+    assert!(viol.iter().any(|x| x["criterion"] == "normal_force"), "{v}");
+    assert_eq!(v["binding"], "normal_force", "{v}");
+    // the preset γ = 0.08: valid, with positive margins on the scales g and √(g l)
+    let v = rimless_validity(&[]);
+    assert_eq!(v["valid"], true, "{v}");
+    assert_eq!(v["normal_force_negative"], false);
+    assert_eq!(v["impact_violation"], false);
+    let min = v["min_normal_force"].as_f64().unwrap();
+    let expect = rimless_min_normal(0.08);
+    assert!(
+        expect > 5.0 && (min - expect).abs() < 1e-8,
+        "{min} vs {expect}"
+    );
+    let margins = v["margins"].as_array().unwrap();
+    for name in [
+        "normal_force",
+        "spoke_impact:new_stance_foot",
+        "spoke_impact:trailing_foot",
+    ] {
+        let m = margins.iter().find(|m| m["name"] == name).unwrap();
+        assert!(m["relative"].as_f64().unwrap() > 0.0, "{m}");
+    }
+    assert_eq!(v["scales"]["gravity"], 9.81);
+    // the human-readable line says the same, in N/kg
+    let o = run(&["fixedpoint", "--model", "rimless", "--slope", "0.3"]);
+    let text = out(&o);
+    assert!(
+        text.contains("validity     FLAGGED") && text.contains("N/kg"),
+        "{text}"
+    );
+}
