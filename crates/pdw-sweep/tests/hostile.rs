@@ -742,3 +742,86 @@ fn a_rimless_wheel_whose_spoke_would_pull_the_ground_is_no_valid_gait() {
         "{text}"
     );
 }
+
+/// The outcome codes and strides of a basin file, row-major, and the file.
+fn basin_codes(p: &Path) -> (Vec<u8>, Vec<u16>, pdw_store::BasinData) {
+    let d = pdw_store::read_basin(p).unwrap();
+    let codes = d.outcome.iter().copied().collect();
+    let strides = d.strides.iter().copied().collect();
+    (codes, strides, d)
+}
+
+#[test]
+fn a_walk_dying_out_on_a_level_floor_is_no_attractor() {
+    let dir = tempfile::tempdir().unwrap();
+    let fall = 6u8; // `fall`: a fall of another kind, or a walk that came to a stand
+                    // the README's default box at slope 0 with 1000 strides: 10 of 441 cells were `chaotic`
+                    // (θ ≈ 0.0046 and shrinking as k^{-1/2}), the attractor a sample of that decay
+    let p = dir.path().join("level.h5");
+    let o = run(&[
+        "basin",
+        "--slope",
+        "0",
+        "--grid",
+        "21x21",
+        "--x",
+        "theta=0.15:0.25",
+        "--y",
+        "thetadot=-0.25:-0.15",
+        "--max-strides",
+        "1000",
+        "--quiet",
+        "--out",
+        s(&p),
+    ]);
+    assert!(o.status.success(), "{}", err(&o));
+    let (codes, strides, d) = basin_codes(&p);
+    let legend = &d.header.legend;
+    assert!(legend.iter().all(|(c, _)| *c < 10), "{legend:?}");
+    assert!(d.attractors.is_empty(), "{:?}", d.attractors);
+    assert!(
+        codes.iter().all(|&c| c != 1 && c != 7 && c < 10),
+        "{codes:?}"
+    );
+    let stood: Vec<usize> = (0..codes.len()).filter(|&i| codes[i] == fall).collect();
+    assert_eq!(stood.len(), 10, "{codes:?}");
+    for &i in &stood {
+        // decided at the budget, at a scale of about 0.0046 rad
+        assert_eq!(strides[i], 1000);
+        let th = d.final_state[[i / 21, i % 21, 0]];
+        assert!(th > 0.004 && th < 0.005, "{th}");
+    }
+    // with 100 strides, one cell of this box walked down to (9.4e-7, −9.8e-7), where a stride
+    // moved it by less than an absolute 1e-10: it was `other`
+    let p = dir.path().join("tiny.h5");
+    let o = run(&[
+        "basin",
+        "--slope",
+        "0",
+        "--grid",
+        "21x21",
+        "--x",
+        "theta=0.001:0.021",
+        "--y",
+        "thetadot=-0.021:-0.001",
+        "--max-strides",
+        "100",
+        "--quiet",
+        "--out",
+        s(&p),
+    ]);
+    assert!(o.status.success(), "{}", err(&o));
+    let (codes, strides, d) = basin_codes(&p);
+    let legend = &d.header.legend;
+    assert!(legend.iter().all(|(c, _)| *c < 10), "{legend:?}");
+    assert!(
+        codes.iter().all(|&c| c != 1 && c != 7 && c < 10),
+        "{codes:?}"
+    );
+    // the cell (θ, θ̇) = (0.001, −0.001): row 20, column 0
+    let i = 20 * 21;
+    assert_eq!(codes[i], fall);
+    assert_eq!(strides[i], 100);
+    let th = d.final_state[[20, 0, 0]];
+    assert!(th > 0.0 && th < 1e-6, "{th}");
+}
