@@ -6,19 +6,31 @@
 //! A fixed, ordered seed set — the selected period-one gait's neighbourhood and the other
 //! period-one orbits perturbed by 10⁻³, then an `n × n` lattice over the whole grid box — is
 //! run through the basin engine ([`classify_cells`]) for [`DiscoveryOptions::seed_strides`]
-//! strides, with recurrence detection (`‖s_k − s_{k−p}‖∞ < tol_recur` at `confirm` consecutive
-//! strides). The seeds' results are then read **in seed order**:
+//! strides, with recurrence detection (`‖s_k − s_{k−p}‖∞ < tol_recur·σ(s_k)` at `confirm`
+//! consecutive strides, `σ(s) = min(1, ‖s‖∞)` the state's scale,
+//! [`crate::basin::state_scale`]). A seed whose walk dies out towards standing still is labelled
+//! a fall there ([`crate::basin::stands_still`]) and seeds nothing. Every distance below is
+//! relative to the scale σ of the seed's last state `f` (absolute for states of size 1 and
+//! more), so that an attractor is told from a walker that merely moves slowly because it is
+//! small. The seeds' results are then read **in seed order**:
 //! - a recurrence of period p: Newton on `P^p − id` from the seed's last state
 //!   ([`find_periodic_orbit`], tight integrator) confirms the orbit and gives its exact points
 //!   and the multipliers of `DP^p`; a stable orbit not seen before is a new **periodic**
 //!   attractor;
-//! - still walking after the budget, not near a known attractor: Newton on `P^k − id` for
-//!   k = 1..=`max_period` from the last state; a stable orbit within 10⁻² of it is a slowly
+//! - still walking after the budget, not near a known attractor (a periodic one within
+//!   10⁻³·σ(f), a chaotic one within its radius): Newton on `P^k − id` for
+//!   k = 1..=`max_period` from the last state; a stable orbit within 10⁻²·σ(f) of it is a slowly
 //!   attracting periodic attractor; otherwise the map is iterated
-//!   [`DiscoveryOptions::cloud_points`] more strides from there: if all of them walk, the points
-//!   are a sample of a **chaotic** (non-periodic bounded) attractor, its membership radius
-//!   [`DiscoveryOptions::chaos_radius`] × the sample's extent (largest coordinate range); if
-//!   the walker falls, it was a chaotic transient and nothing is recorded.
+//!   [`DiscoveryOptions::cloud_points`] more strides from there: if all of them walk and the
+//!   sample's last strides are not a walk dying out ([`crate::basin::walk_dies_out`] on the
+//!   scales of its last [`crate::basin::STANDSTILL_WINDOW`] + 1 points), the points are a
+//!   sample of a **chaotic** (non-periodic bounded) attractor, its membership radius
+//!   [`DiscoveryOptions::chaos_radius`] × the sample's extent (largest coordinate range), at
+//!   least `tol_gait`·σ of the sample's last point; if the walker falls or dies out, it was a
+//!   transient and nothing is recorded.
+//!
+//! A recurrence seed within 10⁻⁶·σ(f) of a known periodic attractor of its period is that
+//! attractor (no Newton run).
 //!
 //! Because the seed set depends only on the grid's box (never on a shard's rows) and the engine
 //! is deterministic for any thread count, the attractors, their numbering, names and codes are
@@ -40,7 +52,8 @@
 //! the selected gait counts as the first period-1).
 
 use crate::basin::{
-    classify_cells, linspace, BasinOptions, BasinProblem, CellResult, Outcome, ATTRACTOR_CODE_BASE,
+    classify_cells, linspace, state_scale, walk_dies_out, BasinOptions, BasinProblem, CellResult,
+    Outcome, ATTRACTOR_CODE_BASE, STANDSTILL_WINDOW,
 };
 use crate::error::LimitError;
 use crate::floquet::Multiplier;
@@ -342,10 +355,11 @@ pub fn discover<S: Section + ?Sized>(
         match c.outcome() {
             Outcome::Other if c.period > 0 => {
                 let p = usize::from(c.period);
+                let sigma = state_scale(&c.final_state);
                 if found.iter().any(|a| {
                     a.kind == AttractorKind::Periodic
                         && a.period_k == p
-                        && a.distance(&c.final_state) < 1e-6
+                        && a.distance(&c.final_state) < 1e-6 * sigma
                 }) {
                     continue;
                 }
@@ -355,8 +369,9 @@ pub fn discover<S: Section + ?Sized>(
             }
             Outcome::Timeout => {
                 let f = &c.final_state;
+                let sigma = state_scale(f);
                 let near_known = found.iter().any(|a| match a.kind {
-                    AttractorKind::Periodic => a.distance(f) < 1e-3,
+                    AttractorKind::Periodic => a.distance(f) < 1e-3 * sigma,
                     AttractorKind::Chaotic => a.distance(f) <= a.radius,
                 });
                 if near_known {
@@ -366,7 +381,9 @@ pub fn discover<S: Section + ?Sized>(
                 let slow = (1..=usize::from(basin.max_period)).find_map(|k| {
                     find_periodic_orbit(newton_map, f, k, &newton)
                         .ok()
-                        .filter(|o| o.stable && o.orbit.iter().any(|p| dist_inf(p, f) < 1e-2))
+                        .filter(|o| {
+                            o.stable && o.orbit.iter().any(|p| dist_inf(p, f) < 1e-2 * sigma)
+                        })
                 });
                 if let Some(o) = slow {
                     push_periodic(&mut found, &o);
@@ -383,6 +400,9 @@ pub fn discover<S: Section + ?Sized>(
                             hi - lo
                         })
                         .fold(0.0, f64::max);
+                    let floor = cloud
+                        .last()
+                        .map_or(basin.tol_gait, |p| basin.tol_gait * state_scale(p));
                     found.push(Attractor {
                         name: String::new(),
                         code: 0,
@@ -391,7 +411,7 @@ pub fn discover<S: Section + ?Sized>(
                         points: cloud,
                         multipliers: Vec::new(),
                         period_time: f64::NAN,
-                        radius: (disc.chaos_radius * extent).max(basin.tol_gait),
+                        radius: (disc.chaos_radius * extent).max(floor),
                     });
                 }
             }
@@ -473,7 +493,8 @@ pub fn box_attractors(
 }
 
 /// `n` consecutive section states from `s` (strides of the basin integrator), or `None` if a
-/// stride does not reach the section (the walker falls: a transient, not an attractor).
+/// stride does not reach the section (the walker falls: a transient, not an attractor) or the
+/// last [`STANDSTILL_WINDOW`] strides are a walk dying out ([`walk_dies_out`]).
 fn sample_orbit<S: Section + ?Sized>(
     sys: &S,
     basin: &BasinOptions,
@@ -491,6 +512,15 @@ fn sample_orbit<S: Section + ?Sized>(
         }
         x = st.next;
         out.push(x.clone());
+    }
+    if out.len() > STANDSTILL_WINDOW {
+        let scales: Vec<f64> = out[out.len() - STANDSTILL_WINDOW - 1..]
+            .iter()
+            .map(|p| p.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+            .collect();
+        if walk_dies_out(&scales) {
+            return None;
+        }
     }
     Some(out)
 }

@@ -12,16 +12,33 @@
 //!   does not stay. For a stable `s*` with largest multiplier modulus ρ the price is
 //!   `confirm − 1` extra strides.
 //! - **other** — a known other attractor (an orbit given in [`BasinProblem::others`]) was reached
-//!   in the same sense as a gait, or a recurrence was detected: `‖s_k − s_{k−p}‖∞ < tol_recur`
-//!   for some `p ∈ 1..=max_period` at `confirm` consecutive strides while not at `s*` (a single
-//!   coincidental near-return of a transient is not enough). The recorded period is the
-//!   smallest divisor q of the smallest such p with `‖s_k − s_{k−q}‖∞ < tol_gait` (or the known
-//!   orbit's length). `tol_recur` must be much smaller than `tol_gait·|1 − λ^p|` so that a
-//!   slow approach to `s*` (multiplier λ near ±1) is not mistaken for a recurrence; the defaults
-//!   (1e-6 and 1e-10) leave four decades.
+//!   in the same sense as a gait, or a recurrence was detected: `‖s_k − s_{k−p}‖∞ <
+//!   tol_recur·σ(s_k)` for some `p ∈ 1..=max_period` at `confirm` consecutive strides while not
+//!   at `s*` (a single coincidental near-return of a transient is not enough), with the state's
+//!   scale `σ(s) = min(1, ‖s‖∞)` ([`state_scale`], the scale of Newton's acceptance test,
+//!   [`crate::newton::residual_scale`]): a state of scale 10⁻⁶ must return to 10⁻¹⁶, not to
+//!   10⁻¹⁰, its own size in ten thousandths. The recorded period is the smallest divisor q of
+//!   the smallest such p with `‖s_k − s_{k−q}‖∞ < tol_gait·σ(s_k)` (or the known orbit's
+//!   length). `tol_recur` must be much smaller than `tol_gait·|1 − λ^p|` so that a slow
+//!   approach to `s*` (multiplier λ near ±1) is not mistaken for a recurrence; the defaults
+//!   (1e-6 and 1e-10) leave four decades. A recurrence of a walker that stands still (below) is
+//!   not an attractor: it is labelled [`Outcome::Fall`].
 //! - **fall** with its kind — a terminal guard of the model fired (the kind comes from the
 //!   guard's code through [`BasinProblem::fall_outcome`]), or no section event occurred within
 //!   the stride time budget [`Section::max_stride_time`] ([`Outcome::FallNoHeelStrike`]).
+//! - **stands still** ([`Outcome::Fall`]) — where the cell would be labelled by a recurrence or
+//!   time out, the walk has died out ([`stands_still`]): its section state is within `tol_gait`
+//!   of the standing state `s = 0`, or its scale `a_k = ‖s_k‖∞` fell at each of the last
+//!   [`STANDSTILL_WINDOW`] strides in a decay towards zero, not towards a gait
+//!   ([`walk_dies_out`]). On a level floor a passive walker loses energy at every heel strike
+//!   and has no gait: its steps shrink for ever (as `k^{−1/2}` for the simplest walker, whose
+//!   heel strike keeps the fraction `cos² 2θ ≈ 1 − 4θ²` of its kinetic energy — Garcia et al.
+//!   1998's jump map `θ̇⁺ = cos 2θ · θ̇⁻` — so that `θ` falls by `∝ θ³` a stride; measured:
+//!   `θ ≈ 0.0139` after 100 strides, `0.0046` after 1000), which no stride budget outlasts and
+//!   which must be neither a chaotic attractor nor, once the state is too small for the
+//!   integrator to resolve its change, a periodic one. Checked only where the label would
+//!   otherwise be `other` or `timeout`, so a cell that converges to a gait or falls is labelled
+//!   as before.
 //! - **timeout** — `max_strides` strides without any of the above (e.g. a chaotic attractor).
 //! - **nonfinite** — the state became non-finite (including a non-finite cell).
 //! - **integrator_failure** — the step size collapsed, the step budget ran out, or a stride had
@@ -74,7 +91,9 @@ pub enum Outcome {
     FallHipBelowGround = 4,
     /// No heel strike within the stride time budget.
     FallNoHeelStrike = 5,
-    /// A fall of another kind (a terminal guard whose kind is none of the above).
+    /// A fall of another kind (a terminal guard whose kind is none of the above, e.g. a rimless
+    /// wheel rolling back to rest), or a walk that died out: the walker comes to a stand
+    /// ([`stands_still`]; module docs).
     Fall = 6,
     /// Not classified within `max_strides` strides.
     Timeout = 7,
@@ -175,7 +194,8 @@ pub struct BasinOptions {
     pub tol_gait: f64,
     /// Consecutive section states within `tol_gait` needed for `gait` (≥ 1).
     pub confirm: u8,
-    /// Recurrence tolerance: `‖s_k − s_{k−p}‖∞ < tol_recur` means an attractor of period p.
+    /// Recurrence tolerance relative to the state's scale: `‖s_k − s_{k−p}‖∞ <
+    /// tol_recur·σ(s_k)` ([`state_scale`]) means an attractor of period p.
     pub tol_recur: f64,
     /// Largest recurrence period tested (1..=16).
     pub max_period: u8,
@@ -271,6 +291,80 @@ impl BasinOptions {
         }
         Ok(())
     }
+}
+
+/// The scale `σ(s) = min(1, ‖s‖∞)` of the relative recurrence and attractor tests (the scale
+/// of Newton's acceptance test, [`crate::newton::residual_scale`]): absolute tolerances for
+/// states of size 1 and more, relative ones for smaller states.
+pub fn state_scale(s: &[f64]) -> f64 {
+    crate::newton::residual_scale(s)
+}
+
+/// Strides over which [`walk_dies_out`] reads a cell's decay (the last `STANDSTILL_WINDOW + 1`
+/// section states).
+pub const STANDSTILL_WINDOW: usize = 16;
+
+/// Largest local decay exponent of a walk that dies out ([`walk_dies_out`]).
+pub const DYING_MAX_EXPONENT: f64 = 4.0;
+
+/// The local decay exponent `m̂` of the scales `a` of consecutive section states (oldest
+/// first, at least 3, an odd number), or `None` unless every stride shrinks the walker
+/// (`0 ≤ a_{j+1} < a_j`, finite); `−∞` when the newest scale is 0.
+///
+/// A decay `a_{k+1} = a_k − c a_k^m` has the logarithmic rate `ln(a_k/a_{k+1}) ≈ c a_k^{m−1}`.
+/// With `ρ₁ = ln(a_0/a_h)` and `ρ₂ = ln(a_h/a_{2h})` the log-shrinks of the window's two halves
+/// (`h` strides each) and the halves' geometric-mean scales `√(a_0 a_h)`, `√(a_h a_{2h})`, whose
+/// ratio is `e^{−(ρ₁+ρ₂)/2}`, the exponent is `m̂ = 1 − 2 ln(ρ₂/ρ₁)/(ρ₁ + ρ₂)`: 1 for a
+/// geometric decay, 3 for the level-floor walker's `c a³` (module docs), below 1 for an
+/// accelerating collapse. A walker converging to an orbit of scale `L > 0` instead,
+/// `a_k − L ∝ λ^k` (0 < λ < 1), has `ρ₂/ρ₁ → λ^h` while its scale stops shrinking, so `m̂`
+/// grows without bound.
+pub fn decay_exponent(a: &[f64]) -> Option<f64> {
+    let n = a.len();
+    if n < 3 || n.is_multiple_of(2) || !a.iter().all(|v| v.is_finite() && *v >= 0.0) {
+        return None;
+    }
+    if !a.windows(2).all(|w| w[1] < w[0]) {
+        return None;
+    }
+    let (a0, ah, a2h) = (a[0], a[n / 2], a[n - 1]);
+    if a2h == 0.0 {
+        return Some(f64::NEG_INFINITY);
+    }
+    let (r1, r2) = ((a0 / ah).ln(), (ah / a2h).ln());
+    Some(1.0 - 2.0 * (r2 / r1).ln() / (r1 + r2))
+}
+
+/// Whether the scales `a` of consecutive section states (oldest first) decay towards zero: the
+/// walker shrinks at every stride and the decay's local exponent ([`decay_exponent`]) is at most
+/// [`DYING_MAX_EXPONENT`]. A walker converging to an orbit of scale `L` passes only while
+/// still far above it: with `a = L(1 + u)` at the window's newest state, `m̂ ≤ 4` needs
+/// `u > 0.33` at λ = 0.999, `u > 0.31` at 0.99, `u > 0.13` at 0.9 (window of 16 strides) — not
+/// a walker whose states recur to `tol_recur` or that creeps towards an orbit at the end of
+/// its budget.
+pub fn walk_dies_out(a: &[f64]) -> bool {
+    decay_exponent(a).is_some_and(|m| m <= DYING_MAX_EXPONENT)
+}
+
+/// Whether a walker with the section states `hist` (oldest first, the newest last) has come to
+/// a stand: the newest state is within `tol_gait` of the standing state `s = 0`, or the scales
+/// `‖s‖∞` of the last [`STANDSTILL_WINDOW`] + 1 states decay towards zero
+/// ([`walk_dies_out`]). See the module docs.
+pub fn stands_still(hist: &[Vec<f64>], tol_gait: f64) -> bool {
+    let Some(last) = hist.last() else {
+        return false;
+    };
+    if last.iter().all(|v| v.abs() < tol_gait) {
+        return true;
+    }
+    if hist.len() <= STANDSTILL_WINDOW {
+        return false;
+    }
+    let a: Vec<f64> = hist[hist.len() - STANDSTILL_WINDOW - 1..]
+        .iter()
+        .map(|s| s.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+        .collect();
+    walk_dies_out(&a)
 }
 
 /// What the cells are classified against.
@@ -431,6 +525,7 @@ impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
             }
         }
         let max_p = usize::from(self.opts.max_period).min(HIST - 1);
+        let sigma = state_scale(s);
         let mut found = None;
         for p in 1..=max_p {
             if p >= lane.count {
@@ -438,7 +533,7 @@ impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
                 continue;
             }
             let q = &lane.hist[Self::slot(lane.head, p) * ds..(Self::slot(lane.head, p) + 1) * ds];
-            if Self::near(s, q, self.opts.tol_recur) {
+            if Self::near(s, q, self.opts.tol_recur * sigma) {
                 lane.recur[p] = lane.recur[p].saturating_add(1);
                 if found.is_none() && lane.recur[p] >= confirm {
                     found = Some(p);
@@ -448,17 +543,35 @@ impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
             }
         }
         let p = found?;
-        // Minimal period: the smallest divisor q of p whose shift also returns within tol_gait
-        // (a period-p recurrence of a period-q orbit, q | p).
+        // A walker that stands still is not on an attractor.
+        if self.stands_still(lane) {
+            return Some((Outcome::Fall, 0, u8::MAX));
+        }
+        // Minimal period: the smallest divisor q of p whose shift also returns within
+        // tol_gait·σ (a period-p recurrence of a period-q orbit, q | p).
         let period = (1..p)
             .filter(|q| p % q == 0 && *q < lane.count)
             .find(|&q| {
                 let r =
                     &lane.hist[Self::slot(lane.head, q) * ds..(Self::slot(lane.head, q) + 1) * ds];
-                Self::near(s, r, self.opts.tol_gait)
+                Self::near(s, r, self.opts.tol_gait * sigma)
             })
             .unwrap_or(p);
         Some((Outcome::Other, period as u8, u8::MAX))
+    }
+
+    /// [`stands_still`] on the lane's history (at most [`HIST`] states, oldest first).
+    fn stands_still(&self, lane: &BasinLane) -> bool {
+        let ds = self.ds;
+        let n = lane.count.min(HIST);
+        let hist: Vec<Vec<f64>> = (0..n)
+            .rev()
+            .map(|p| {
+                let k = Self::slot(lane.head, p);
+                lane.hist[k * ds..(k + 1) * ds].to_vec()
+            })
+            .collect();
+        stands_still(&hist, self.opts.tol_gait)
     }
 
     /// Ring slot of the state `p` strides before the newest.
@@ -477,8 +590,8 @@ impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
     }
 }
 
-/// Ring size of the section-state history (periods up to 16).
-const HIST: usize = 17;
+/// Ring size of the section-state history (periods up to 16; the standing-still window).
+const HIST: usize = STANDSTILL_WINDOW + 1;
 /// Known other attractors tracked separately for `confirm` (more share the last slot).
 const MAX_KNOWN: usize = 8;
 
@@ -564,7 +677,12 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
                             return Control::Finish;
                         }
                         if lane.strides >= self.opts.max_strides {
-                            lane.decided = Some((Outcome::Timeout, 0, u8::MAX));
+                            let o = if self.stands_still(lane) {
+                                Outcome::Fall
+                            } else {
+                                Outcome::Timeout
+                            };
+                            lane.decided = Some((o, 0, u8::MAX));
                             return Control::Finish;
                         }
                         return Control::Continue {

@@ -233,7 +233,8 @@ pub fn model_energy(w: &dyn Walker) -> Option<String> {
 
 /// Units of the columns of a trajectory of `w`: time in the unit of the model's
 /// `max_stride_time` parameter, angles in rad, rates in rad per time unit; forces per unit hip
-/// weight `M g` for the simplest walker (its model is dimensionless), N and N m otherwise.
+/// weight `M g` for the simplest walker (its model is dimensionless), per unit hub mass (N/kg)
+/// for the rimless wheel (it has no mass parameter), N and N m otherwise.
 pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
     let time = pdw_walkers::model_info(w.name())
         .ok()
@@ -255,12 +256,16 @@ pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
             }
         })
         .collect();
-    let dimensionless = w.name() == "simplest";
+    let (force, torque) = match w.name() {
+        "simplest" => ("M g", "M g l"),
+        "rimless" => ("N/kg", "N m/kg"),
+        _ => ("N", "N m"),
+    };
     TrajectoryUnits {
         time,
         state,
-        force: if dimensionless { "M g" } else { "N" }.into(),
-        torque: if dimensionless { "M g l" } else { "N m" }.into(),
+        force: force.into(),
+        torque: torque.into(),
         energy: energy_unit.into(),
     }
 }

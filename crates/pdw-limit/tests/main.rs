@@ -18,6 +18,7 @@ mod orbit_garcia;
 mod period_k;
 mod rimless_wheel;
 mod simplest_gaits;
+mod standing_still;
 mod trajectory;
 mod validity_continuous;
 mod variational_engine;

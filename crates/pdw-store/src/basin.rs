@@ -405,9 +405,10 @@ pub(crate) fn file_legend_json(legend: &[(u8, String)]) -> String {
 
 /// The `description` attribute of `/basin/final`: what its states are, by outcome.
 pub const FINAL_DESCRIPTION: &str = "section coordinates of the last state of each cell: for \
-gait, every other attractor (codes 10 and up), other and timeout the section state after the \
-last completed stride; for a fall, nonfinite or integrator_failure the section coordinates of \
-the state where the stride stopped (projected, not on the section); NaN where not computed";
+gait, every other attractor (codes 10 and up), other and timeout, and for a walk that came to a \
+stand (fall, decided on the section), the section state after the last completed stride; for \
+any other fall, nonfinite or integrator_failure the section coordinates of the state where the \
+stride stopped (projected, not on the section); NaN where not computed";
 
 /// Name of the fill value [`NOT_COMPUTED`] in the file's legend.
 pub const NOT_COMPUTED_NAME: &str = "not_computed";

@@ -38,7 +38,8 @@
 //!                   value 255 = "not_computed"
 //! /basin/strides    u16 [ny, nx]; strides until classified
 //! /basin/final      f64 [ny, nx, d]; section coordinates of the last state (after the last
-//!                   completed stride; for a fall, of the state where it stopped); attrs
+//!                   completed stride; for a fall, of the state where it stopped, except for
+//!                   a walk that came to a stand, decided on the section); attrs
 //!                   `names` = JSON list of the d section coordinate names, `description`
 //! /basin/rows_done  u8  [ny]; 1 once a row is on disk (what `--resume` skips)
 //! /attractors/NAME  attrs period_strides, period_time; section f64 [k, d] (the k points of the

@@ -675,3 +675,153 @@ fn fixedpoint_warns_when_the_integrator_cannot_support_the_newton_tolerance() {
     assert!(o.status.success(), "{}", err(&o));
     assert!(!err(&o).contains("warning"), "{}", err(&o));
 }
+
+/// The `validity` of the first gait of `fixedpoint --model rimless --json` with `extra`.
+fn rimless_validity(extra: &[&str]) -> serde_json::Value {
+    let mut a = vec!["fixedpoint", "--model", "rimless", "--json"];
+    a.extend_from_slice(extra);
+    let o = run(&a);
+    assert!(o.status.success(), "{}", err(&o));
+    let j: serde_json::Value = serde_json::from_str(&out(&o)).unwrap();
+    j["fixed_points"][0]["validity"].clone()
+}
+
+/// The smallest normal ground reaction per unit mass along the rimless wheel's rolling gait
+/// (8 spokes, g = 9.81, l = 1), in closed form: the axial spoke force `g cos(θ + γ) − l θ̇²`
+/// times `cos θ` is smallest at one end of the step, just before (θ = α, θ̇ = ω*/cos 2α) or
+/// just after (θ = −α, θ̇ = ω*) a spoke impact, with `ω* = cot 2α √(4 (g/l) sin α sin γ)`.
+fn rimless_min_normal(gamma: f64) -> f64 {
+    let (g, a) = (9.81, std::f64::consts::PI / 8.0);
+    let w = (4.0 * g * a.sin() * gamma.sin()).sqrt() / (2.0 * a).tan();
+    let before = (g * (a + gamma).cos() - (w / (2.0 * a).cos()).powi(2)) * a.cos();
+    let after = (g * (gamma - a).cos() - w * w) * a.cos();
+    before.min(after)
+}
+
+#[test]
+fn a_rimless_wheel_whose_spoke_would_pull_the_ground_is_no_valid_gait() {
+    // γ = 0.3: the spoke would have to pull the ground before the next one lands
+    let v = rimless_validity(&["--slope", "0.3"]);
+    assert_eq!(v["valid"], false, "{v}");
+    assert_eq!(v["normal_force_negative"], true, "{v}");
+    let min = v["min_normal_force"].as_f64().unwrap();
+    let expect = rimless_min_normal(0.3);
+    assert!(
+        expect < -1.2 && (min - expect).abs() < 1e-8,
+        "{min} vs {expect}"
+    );
+    let viol = v["violations"].as_array().unwrap();
+    assert!(viol.iter().any(|x| x["criterion"] == "normal_force"), "{v}");
+    assert_eq!(v["binding"], "normal_force", "{v}");
+    // the preset γ = 0.08: valid, with positive margins on the scales g and √(g l)
+    let v = rimless_validity(&[]);
+    assert_eq!(v["valid"], true, "{v}");
+    assert_eq!(v["normal_force_negative"], false);
+    assert_eq!(v["impact_violation"], false);
+    let min = v["min_normal_force"].as_f64().unwrap();
+    let expect = rimless_min_normal(0.08);
+    assert!(
+        expect > 5.0 && (min - expect).abs() < 1e-8,
+        "{min} vs {expect}"
+    );
+    let margins = v["margins"].as_array().unwrap();
+    for name in [
+        "normal_force",
+        "spoke_impact:new_stance_foot",
+        "spoke_impact:trailing_foot",
+    ] {
+        let m = margins.iter().find(|m| m["name"] == name).unwrap();
+        assert!(m["relative"].as_f64().unwrap() > 0.0, "{m}");
+    }
+    assert_eq!(v["scales"]["gravity"], 9.81);
+    // the human-readable line says the same, in N/kg
+    let o = run(&["fixedpoint", "--model", "rimless", "--slope", "0.3"]);
+    let text = out(&o);
+    assert!(
+        text.contains("validity     FLAGGED") && text.contains("N/kg"),
+        "{text}"
+    );
+}
+
+/// The outcome codes and strides of a basin file, row-major, and the file.
+fn basin_codes(p: &Path) -> (Vec<u8>, Vec<u16>, pdw_store::BasinData) {
+    let d = pdw_store::read_basin(p).unwrap();
+    let codes = d.outcome.iter().copied().collect();
+    let strides = d.strides.iter().copied().collect();
+    (codes, strides, d)
+}
+
+#[test]
+fn a_walk_dying_out_on_a_level_floor_is_no_attractor() {
+    let dir = tempfile::tempdir().unwrap();
+    let fall = 6u8; // `fall`: a fall of another kind, or a walk that came to a stand
+                    // the README's default box at slope 0 with 1000 strides: 10 of 441 cells were `chaotic`
+                    // (θ ≈ 0.0046 and shrinking as k^{-1/2}), the attractor a sample of that decay
+    let p = dir.path().join("level.h5");
+    let o = run(&[
+        "basin",
+        "--slope",
+        "0",
+        "--grid",
+        "21x21",
+        "--x",
+        "theta=0.15:0.25",
+        "--y",
+        "thetadot=-0.25:-0.15",
+        "--max-strides",
+        "1000",
+        "--quiet",
+        "--out",
+        s(&p),
+    ]);
+    assert!(o.status.success(), "{}", err(&o));
+    let (codes, strides, d) = basin_codes(&p);
+    let legend = &d.header.legend;
+    assert!(legend.iter().all(|(c, _)| *c < 10), "{legend:?}");
+    assert!(d.attractors.is_empty(), "{:?}", d.attractors);
+    assert!(
+        codes.iter().all(|&c| c != 1 && c != 7 && c < 10),
+        "{codes:?}"
+    );
+    let stood: Vec<usize> = (0..codes.len()).filter(|&i| codes[i] == fall).collect();
+    assert_eq!(stood.len(), 10, "{codes:?}");
+    for &i in &stood {
+        // decided at the budget, at a scale of about 0.0046 rad
+        assert_eq!(strides[i], 1000);
+        let th = d.final_state[[i / 21, i % 21, 0]];
+        assert!(th > 0.004 && th < 0.005, "{th}");
+    }
+    // with 100 strides, one cell of this box walked down to (9.4e-7, −9.8e-7), where a stride
+    // moved it by less than an absolute 1e-10: it was `other`
+    let p = dir.path().join("tiny.h5");
+    let o = run(&[
+        "basin",
+        "--slope",
+        "0",
+        "--grid",
+        "21x21",
+        "--x",
+        "theta=0.001:0.021",
+        "--y",
+        "thetadot=-0.021:-0.001",
+        "--max-strides",
+        "100",
+        "--quiet",
+        "--out",
+        s(&p),
+    ]);
+    assert!(o.status.success(), "{}", err(&o));
+    let (codes, strides, d) = basin_codes(&p);
+    let legend = &d.header.legend;
+    assert!(legend.iter().all(|(c, _)| *c < 10), "{legend:?}");
+    assert!(
+        codes.iter().all(|&c| c != 1 && c != 7 && c < 10),
+        "{codes:?}"
+    );
+    // the cell (θ, θ̇) = (0.001, −0.001): row 20, column 0
+    let i = 20 * 21;
+    assert_eq!(codes[i], fall);
+    assert_eq!(strides[i], 100);
+    let th = d.final_state[[20, 0, 0]];
+    assert!(th > 0.0 && th < 1e-6, "{th}");
+}

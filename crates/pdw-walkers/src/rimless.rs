@@ -27,9 +27,38 @@
 //! the hub moves back past the previous spoke, `θ = −α` falling (guard 2, for a start with
 //! `θ̇ ≤ 0`). On a slope too shallow for the rolling gait (`ω* ≤ ω₁`), every stride ends this
 //! way: the caller sees the wheel come to rest (rocking between two spokes, then standing).
+//!
+//! # Ground reaction (per unit mass)
+//! The model has no mass parameter: forces are per unit hub mass (N/kg = m/s²), impulses per
+//! unit mass (m/s), energies in J/kg. In the slope frame of [`Walker::pose`] (`x` downhill along
+//! the slope, `y` along its normal, stance foot at the origin) the hub is at
+//! `l e` with `e = (sin θ, cos θ)`, and gravity is `g (sin γ, −cos γ)`. The wheel is rigid and
+//! massless, so the moments about the hub of the forces on it vanish: the ground's force on
+//! the stance foot acts along the stance spoke, `F = S e`, and reaches the hub unchanged.
+//! Newton's law for the hub along the spoke — its acceleration there is the centripetal
+//! `−l θ̇²` — gives `−l θ̇² = S − g cos(θ + γ)`, i.e. the axial spoke force
+//! `S = g cos(θ + γ) − l θ̇²` (per unit mass); across the spoke it gives the flow above.
+//! The ground reaction is then normal `S cos θ`, tangential (downhill) `S sin θ`, and the
+//! friction it needs `|tan θ|`. Because `|θ| ≤ α < π/2`, the normal force has the sign of `S`:
+//! fast wheels on steep slopes, where `l θ̇² > g cos(θ + γ)` before the next spoke lands, would
+//! need a spoke that pulls the ground (flagged, [`StepFlags::normal_force_negative`]).
+//!
+//! # Spoke-impact impulses
+//! With the old spoke at `θ⁻` and the new one at `θ' = θ⁻ − 2α`, the massless new spoke carries
+//! only an axial impulse, along `e' = (sin θ', cos θ')`; it removes the hub velocity
+//! `v⁻ = l θ̇⁻ (cos θ⁻, −sin θ⁻)`'s component along `e'`, `v⁻·e' = −l θ̇⁻ sin 2α`, so the
+//! impulse per unit mass is `Λ = l θ̇⁻ sin 2α · e'` (normal `Λ cos θ'`, pushing for a rolling
+//! wheel; tangential `Λ sin θ'`) and the energy lost is `½ l² θ̇⁻² sin² 2α` (the reset above).
+//! After the impact the wheel turns about the new contact at `θ̇⁺`, so the old contact point
+//! leaves the slope at `ḣ = l θ̇⁺ (sin θ⁻ − sin θ')` (`= 2 l sin α cos 2α θ̇⁻` on the guard):
+//! positive for `N > 4`; for `N = 3` the plastic impact about the new spoke alone would drive
+//! the trailing spoke into the ground (negative margin, flagged).
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
+use crate::validity::{
+    ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
+};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -345,6 +374,113 @@ impl Walker for Rimless {
             links,
             joints: vec![hub],
             swing_foot: Some([hub[0] - self.l * next.sin(), hub[1] - self.l * next.cos()]),
+        })
+    }
+    /// Ground reaction on the stance spoke's foot per unit hub mass (module docs, "Ground
+    /// reaction"): the axial spoke force `S = g cos(θ + γ) − l θ̇²` from Newton's law for the hub
+    /// along the spoke, normal `S cos θ`, tangential (downhill) `S sin θ`, friction needed
+    /// `|tan θ|` (`+∞` where the normal force is not positive). No knees.
+    fn constraint_forces(&self, _mode: usize, x: &[f64]) -> Option<ConstraintForces> {
+        let (th, thd) = (x[0], x[1]);
+        let axial = self.g * (th + self.gamma).cos() - self.l * thd * thd;
+        let (s, c) = th.sin_cos();
+        let (normal, tangential) = (axial * c, axial * s);
+        Some(ConstraintForces {
+            normal,
+            tangential,
+            friction_required: if normal > 0.0 {
+                (tangential / normal).abs()
+            } else {
+                f64::INFINITY
+            },
+            knee_torque: [None, None],
+        })
+    }
+    /// Only the normal-force flag applies: no knees, and no swing foot to scuff (see
+    /// [`Walker::swing_clearance`] below).
+    fn step_flags(&self, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        let cf = Walker::constraint_forces(self, mode, x)?;
+        Some(StepFlags {
+            normal_force_negative: cf.normal < 0.0,
+            ..StepFlags::default()
+        })
+    }
+    /// Per unit hub mass (mass 1 in the model's units), the spoke length `l` and gravity `g`:
+    /// forces relative to `g`, impulses to `√(g l)`.
+    fn scales(&self) -> Option<Scales> {
+        Some(Scales {
+            mass: 1.0,
+            length: self.l,
+            gravity: self.g,
+        })
+    }
+    /// A rimless wheel has no swing foot: its spokes are rigid at fixed angles `2α` apart, and
+    /// the lowest other tip, the next spoke's, is `l (cos θ − cos(θ − 2α)) = 2 l sin α sin(α − θ)`
+    /// above the slope, positive for every `θ < α` of a step and zero only at the spoke impact
+    /// (the trailing spoke's, `2 l sin α sin(α + θ)`, is zero only where it lifted off). No
+    /// clearance criterion applies; [`Walker::pose`]'s `swing_foot` (the next spoke's tip) is
+    /// for drawings only.
+    fn swing_clearance(&self, _mode: usize, _x: &[f64]) -> Option<f64> {
+        None
+    }
+    /// The spoke impact's impulses per unit hub mass (module docs, "Spoke-impact impulses"):
+    /// the new stance spoke's foot takes `Λ = l θ̇⁻ sin 2α` along the new spoke (normal
+    /// `Λ cos θ'`, tangential `Λ sin θ'`, `θ' = θ⁻ − 2α`; it must push), and the trailing
+    /// spoke's foot releases with separation rate `l θ̇⁺ (sin θ⁻ − sin θ')` (it must leave the
+    /// ground). Energy lost `½ Λ²`.
+    fn impact_report(&self, _mode: usize, guard: usize, x: &[f64]) -> Option<ImpactReport> {
+        if guard != SPOKE_IMPACT {
+            return None;
+        }
+        let (th, thd) = (x[0], x[1]);
+        let th_new = th - 2.0 * self.alpha;
+        let lam = self.l * thd * (2.0 * self.alpha).sin();
+        let (ln, lt) = (lam * th_new.cos(), lam * th_new.sin());
+        let mut post = [0.0; 2];
+        self.reset(&mut Scratch::new(), 0, guard, x, &mut post);
+        let rate = self.l * post[1] * (th.sin() - th_new.sin());
+        let entry = |name: &str, kind, unilateral, active, impulse, rate_after| ImpulseEntry {
+            name: name.into(),
+            kind,
+            unilateral,
+            active,
+            impulse,
+            rate_after,
+        };
+        Some(ImpactReport {
+            event: GUARDS[SPOKE_IMPACT].name.into(),
+            entries: vec![
+                entry(
+                    "new_stance_foot",
+                    ImpulseKind::ContactNormal,
+                    false,
+                    true,
+                    ln,
+                    0.0,
+                ),
+                entry(
+                    "new_stance_foot",
+                    ImpulseKind::ContactTangential,
+                    false,
+                    true,
+                    lt,
+                    0.0,
+                ),
+                entry(
+                    "trailing_foot",
+                    ImpulseKind::ContactNormal,
+                    true,
+                    false,
+                    0.0,
+                    rate,
+                ),
+            ],
+            friction_required: if ln > 0.0 {
+                (lt / ln).abs()
+            } else {
+                f64::INFINITY
+            },
+            energy_lost: 0.5 * lam * lam,
         })
     }
     /// The closed-form rolling fixed point, when it exists.
