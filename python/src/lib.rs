@@ -2,9 +2,11 @@
 //!
 //! Every function builds the model from the registry ([`pdw_walkers::model_info`]) with the
 //! same parameter names as the CLI's `--set`, calls the library crates (pdw-limit), and converts
-//! the result to Python objects. Computation runs with the interpreter released
-//! ([`Python::detach`]); batched work runs on a rayon pool of [`THREADS`] threads. Invalid input
-//! raises `ValueError` with the library's message (the one the CLI prints).
+//! the result to Python objects. Computation runs on a worker thread with the interpreter
+//! released ([`interruptible`]), while the calling thread watches for signals: Ctrl-C raises
+//! `KeyboardInterrupt` within milliseconds; batched work runs on a rayon pool of [`THREADS`]
+//! threads. Invalid input raises `ValueError` with the library's message (the one the CLI
+//! prints).
 
 use numpy::ndarray::Array2;
 use numpy::{AllowTypeChange, Complex64, IntoPyArray, PyArrayLike2};
@@ -25,6 +27,60 @@ use pdw_walkers::{ModelInfo, Walker};
 const THREADS: usize = 2;
 /// Integration tolerance (DOP853) of `stride_map`, the basin engine's default.
 const STRIDE_TOL: f64 = 1e-10;
+
+/// How often the calling thread looks for a pending signal while a computation runs.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(20);
+
+/// Runs `f` on a scoped worker thread with the interpreter released, and checks for signals
+/// ([`Python::check_signals`], which runs Python's handlers) every [`SIGNAL_POLL`]. When a
+/// handler raises (Ctrl-C's `KeyboardInterrupt`), the computation is asked to stop
+/// ([`pdw_hybrid::interrupt`]: every integration polls it), its partial result is dropped once
+/// the worker has returned (milliseconds later), the request is withdrawn and the handler's
+/// exception is raised. A computation that ends interrupted without a pending signal here
+/// (the request came from a call in another thread) raises `KeyboardInterrupt` as well, never
+/// a partial result.
+fn interruptible<T, F>(py: Python<'_>, f: F) -> PyResult<T>
+where
+    T: Send,
+    F: FnOnce() -> PyResult<T> + Send,
+{
+    let (tx, rx) = std::sync::mpsc::channel();
+    // A receiver is not Sync; the released-interpreter closure borrows it through a lock.
+    let rx = std::sync::Mutex::new(rx);
+    std::thread::scope(|scope| {
+        let worker = scope.spawn(move || {
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+            let _ = tx.send(());
+            r
+        });
+        loop {
+            let finished = py.detach(|| {
+                rx.lock()
+                    .map(|rx| rx.recv_timeout(SIGNAL_POLL).is_ok())
+                    .unwrap_or(true)
+            });
+            if finished || worker.is_finished() {
+                break;
+            }
+            if let Err(e) = py.check_signals() {
+                pdw_hybrid::interrupt::request();
+                let _ = worker.join();
+                pdw_hybrid::interrupt::clear();
+                return Err(e);
+            }
+        }
+        let r = worker.join().unwrap_or_else(Err);
+        if pdw_hybrid::interrupt::requested() {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
+                "interrupted: the computation was stopped by an interrupt",
+            ));
+        }
+        match r {
+            Ok(v) => v,
+            Err(p) => std::panic::resume_unwind(p),
+        }
+    })
+}
 
 fn err(msg: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(msg.to_string())
@@ -357,7 +413,7 @@ fn fixed_point<'py>(
     if period > 1 {
         return fixed_point_period_k(py, &m, period, gait, tol, guess);
     }
-    let (found, failed, n, validity) = py.detach(|| -> PyResult<_> {
+    let (found, failed, n, validity) = interruptible(py, || -> PyResult<_> {
         let (found, failed, n) = find_gaits(&m, guess, tol)?;
         let validity: Vec<Option<Validity>> = found
             .iter()
@@ -430,7 +486,7 @@ fn fixed_point_period_k<'py>(
         Some(g) => vec![("guess".to_string(), g)],
         None => gaits::model_guesses(w),
     };
-    let (found, failed, validity) = py.detach(|| -> PyResult<_> {
+    let (found, failed, validity) = interruptible(py, || -> PyResult<_> {
         let (found, failed) = gaits::search_periodic(w, &guesses, k, tol).map_err(err)?;
         let validity: Vec<Vec<Option<Validity>>> = found
             .iter()
@@ -591,7 +647,7 @@ fn stride_map<'py>(
             rows[r]
         )));
     }
-    let strides = py.detach(|| -> PyResult<_> {
+    let strides = interruptible(py, || -> PyResult<_> {
         let w = m.walker.as_ref();
         let map = StrideMap::new(w, pdw_hybrid::Options::dop853(STRIDE_TOL)).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()
@@ -714,7 +770,7 @@ fn basin<'py>(
     check_basin_memory(nx, ny, m.info.section_names.len())?;
     let xa = axis(&m, x, "x")?;
     let ya = axis(&m, y, "y")?;
-    let (found, failed, n) = py.detach(|| find_gaits(&m, None, 1e-12))?;
+    let (found, failed, n) = interruptible(py, || find_gaits(&m, None, 1e-12))?;
     let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
     let Some(centre) =
         pdw_limit::grid_centre(m.walker.as_ref(), &found, xa.is_some() && ya.is_some())
@@ -744,7 +800,7 @@ fn basin<'py>(
         max_strides: max_strides as u16,
         ..BasinOptions::default()
     };
-    let (outcome, metrics, set) = py.detach(|| -> PyResult<_> {
+    let (outcome, metrics, set) = interruptible(py, || -> PyResult<_> {
         let w = m.walker.as_ref();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -986,7 +1042,7 @@ fn continuation<'py>(
     let m0 = at(start)?;
     at(stop)?;
     let ds = m0.walker.section_dim();
-    let result = py.detach(|| -> PyResult<pdw_limit::Sweep> {
+    let result = interruptible(py, || -> PyResult<pdw_limit::Sweep> {
         let (found, failed, n) = find_gaits(&m0, None, 1e-12)?;
         // The CLI's choice: the first unstable gait, or the stable one (else the first found).
         let s = match gait {
@@ -1049,7 +1105,7 @@ fn simulate<'py>(
         )));
     }
     let m = build_kw(model, slope, params)?;
-    let tr = py.detach(|| -> PyResult<_> {
+    let tr = interruptible(py, || -> PyResult<_> {
         let w = m.walker.as_ref();
         let x0 = match state {
             Some(v) => trajectory::initial_state(w, &v).map_err(err)?,
@@ -1175,6 +1231,9 @@ fn simulate<'py>(
 /// Fixed points, stride maps, basins, continuation and trajectories of passive dynamic walkers.
 #[pymodule]
 fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // numpy's C API is imported here, once: imported lazily by the first array a function
+    // returns, an import interrupted by a pending KeyboardInterrupt would panic.
+    let _ = numpy::PyArray1::<f64>::zeros(m.py(), 0, false);
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(fixed_point, m)?)?;

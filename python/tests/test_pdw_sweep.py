@@ -299,3 +299,46 @@ def test_validity_is_located_on_the_dense_solution_with_relative_margins():
 def test_a_basin_grid_that_does_not_fit_in_memory_is_refused_before_computing():
     with pytest.raises(ValueError, match="needs about .* of memory"):
         pdw.basin(grid=(30000, 30000))
+
+
+INTERRUPT_SCRIPT = r"""
+import os, signal, sys, threading, time
+import pdw_sweep as pdw
+
+which = sys.argv[1]
+def long_call():
+    if which == "basin":
+        # ~160 000 cells of the kneed walker: about two minutes on two threads.
+        return pdw.basin(model="kneed", grid=(400, 400))
+    # Garcia's cascade over a slope range long enough to take minutes.
+    return pdw.continuation(model="simplest", parameter="slope", start=0.0005, stop=0.019, points=4000)
+
+threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+t0 = time.monotonic()
+try:
+    long_call()
+    print("FINISHED", time.monotonic() - t0)
+except KeyboardInterrupt:
+    print("INTERRUPTED", time.monotonic() - t0)
+# The next calls work and return arrays (numpy's API was imported with the module).
+nxt, codes, _ = pdw.stride_map("simplest", [[0.2003109, -0.1998325]], slope=0.009)
+fp = pdw.fixed_point(slope=0.009, gait="stable")[0]
+print("AFTER", int(codes[0]), float(fp["section"][0]))
+"""
+
+
+@pytest.mark.parametrize("which", ["basin", "continuation"])
+def test_ctrl_c_raises_keyboard_interrupt_at_once_and_the_next_call_works(which):
+    """Ctrl-C (SIGINT) during a long call raises KeyboardInterrupt within a second, not when the
+    call would have ended; the process goes on and the next calls return arrays (no panic)."""
+    r = subprocess.run([os.sys.executable, "-c", INTERRUPT_SCRIPT, which],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.split("\n")
+    first = lines[0].split()
+    assert first[0] == "INTERRUPTED", r.stdout
+    # The signal comes at 0.5 s; the uninterrupted call takes minutes.
+    assert float(first[1]) < 10.0, r.stdout
+    after = lines[1].split()
+    assert after[0] == "AFTER" and after[1] == "0", r.stdout
+    assert abs(float(after[2]) - GARCIA_THETA) < 1e-9, r.stdout

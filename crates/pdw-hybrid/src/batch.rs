@@ -164,11 +164,17 @@ where
     let mut resume = false;
     loop {
         check_mode(sys, mode)?;
+        if crate::interrupt::requested() {
+            return Err(HybridError::Interrupted);
+        }
         let stop = if resume {
             integ.resume(sys, mode, &mut t, &mut x, t_end)
         } else {
             integ.integrate(sys, mode, &mut t, &mut x, t_end)
         };
+        if crate::interrupt::requested() {
+            return Err(HybridError::Interrupted);
+        }
         resume = true;
         match driver.on_stop(sys, integ.scratch(), item, &mut lane, stop, mode, t, &mut x) {
             Control::Continue { mode: m, t_end: te } => {
@@ -431,6 +437,9 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
         let blk = self.st.blk();
         let n_stages = self.tab.n_stages;
         loop {
+            if crate::interrupt::requested() {
+                return Err(HybridError::Interrupted);
+            }
             // Next step size of every active lane; lanes that cannot step are stopped here.
             let n_active = self.range[self.n_modes];
             for l in 0..n_active {

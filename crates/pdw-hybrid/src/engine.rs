@@ -1045,7 +1045,11 @@ fn initial_step<S: HybridSystem + ?Sized>(
 /// step is stretched to land exactly on `t_end` when `t + 1.01·h ≥ t_end` (as in DOPRI5).
 #[inline]
 pub(crate) fn prepare(opts: &Options, ctl: &mut Ctl) -> Result<f64, StopReason> {
-    if ctl.attempts >= opts.max_steps {
+    // An interrupt ends the call as a spent budget, polled every 1024 attempts
+    // (see [`crate::interrupt`]; the callers turn it into `HybridError::Interrupted`).
+    if ctl.attempts >= opts.max_steps
+        || (ctl.attempts & 1023 == 1023 && crate::interrupt::requested())
+    {
         return Err(StopReason::MaxSteps);
     }
     let h = ctl.h;

@@ -26,4 +26,7 @@ pub enum HybridError {
     /// A driver asked for a mode the system does not have.
     #[error("mode {mode} out of range: the system has {n_modes} modes")]
     ModeOutOfRange { mode: usize, n_modes: usize },
+    /// A stop was requested ([`crate::interrupt::request`]: Ctrl-C, SIGTERM, KeyboardInterrupt).
+    #[error("interrupted")]
+    Interrupted,
 }

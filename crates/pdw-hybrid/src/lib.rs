@@ -49,6 +49,7 @@ mod engine;
 pub mod error;
 pub mod event;
 pub mod integrator;
+pub mod interrupt;
 pub mod options;
 pub mod phases;
 pub mod system;

@@ -47,3 +47,19 @@ pub enum LimitError {
         allowed: &'static str,
     },
 }
+
+impl LimitError {
+    /// The computation was stopped by [`pdw_hybrid::interrupt::request`] (Ctrl-C, SIGTERM,
+    /// KeyboardInterrupt); its partial results mean nothing.
+    pub fn is_interrupted(&self) -> bool {
+        matches!(
+            self,
+            LimitError::Hybrid(pdw_hybrid::HybridError::Interrupted)
+        )
+    }
+
+    /// The error to return once [`pdw_hybrid::interrupt::requested`] is seen.
+    pub fn interrupted() -> Self {
+        LimitError::Hybrid(pdw_hybrid::HybridError::Interrupted)
+    }
+}

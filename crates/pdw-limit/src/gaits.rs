@@ -67,6 +67,9 @@ pub fn search_with(
     let mut found: Vec<Found> = Vec::new();
     let mut failed = Vec::new();
     for (label, g) in guesses {
+        if pdw_hybrid::interrupt::requested() {
+            return Err(LimitError::interrupted());
+        }
         match find_fixed_point(&map, g, &opts) {
             Ok(fp) => {
                 let dup = found.iter().any(|f| {
@@ -82,6 +85,7 @@ pub fn search_with(
                     });
                 }
             }
+            Err(e) if e.is_interrupted() => return Err(e),
             Err(e) => failed.push((label.clone(), g.clone(), e)),
         }
     }
@@ -178,6 +182,9 @@ pub fn search_periodic(
     let mut found: Vec<FoundOrbit> = Vec::new();
     let mut failed = Vec::new();
     for (label, g) in starts {
+        if pdw_hybrid::interrupt::requested() {
+            return Err(LimitError::interrupted());
+        }
         match find_periodic_orbit(&map, &g, k, &opts) {
             Ok(mut orbit) => {
                 if !found
@@ -188,6 +195,7 @@ pub fn search_periodic(
                     found.push(FoundOrbit { label, orbit });
                 }
             }
+            Err(e) if e.is_interrupted() => return Err(e),
             Err(e) => failed.push((label, g, e)),
         }
     }

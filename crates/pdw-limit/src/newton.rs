@@ -316,6 +316,9 @@ where
         problem: &mut Problem<O>,
         mut state: NewtonState,
     ) -> Result<(NewtonState, Option<KV>), ArgminError> {
+        if pdw_hybrid::interrupt::requested() {
+            return Err(LimitError::interrupted().into());
+        }
         let x = state.take_param().expect("param set in init");
         let f = state.take_residuals().expect("residuals set in init");
         let n = x.len();
@@ -405,6 +408,9 @@ pub fn find_fixed_point<S: Section + ?Sized>(
         .configure(|s| s.param(guess_v).max_iters(opts.max_iters))
         .timer(false)
         .run();
+    if pdw_hybrid::interrupt::requested() {
+        return Err(LimitError::interrupted());
+    }
     let res = match run {
         Ok(r) => r,
         Err(e) => {

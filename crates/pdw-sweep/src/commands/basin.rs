@@ -17,8 +17,6 @@ use pdw_store::{
 };
 use std::io::IsTerminal;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 /// Most rows handed to the engine per call (written and flushed as soon as their block is
@@ -138,12 +136,16 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     let t0 = Instant::now();
     // ---- signals first: Ctrl-C or SIGTERM at any moment exits 130, leaving a resumable file
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second handler cannot be installed in tests that call run() twice; ignore that.
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
-    }
+    // The handler sets the process-wide stop flag (pdw_hybrid::interrupt), which every
+    // integration polls: the gait search, attractor discovery and a block of cells in progress
+    // end within milliseconds, and their partial results are thrown away below.
+    // A second handler cannot be installed in tests that call run() twice; ignore that.
+    let _ = ctrlc::set_handler(pdw_hybrid::interrupt::request);
+    let stopped = pdw_hybrid::interrupt::requested;
+    let nothing_written = || {
+        eprintln!("interrupted before the grid was started; nothing written");
+        Ok(ExitCode::from(130))
+    };
     // ---- validate everything before touching any file
     let (nx, ny) = args::parse_grid(a.grid.as_deref().unwrap_or("401x401"))?;
     if a.max_strides == 0 || a.max_strides > u32::from(u16::MAX) {
@@ -243,11 +245,17 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         .into_iter()
         .map(|g| (g.gait.to_string(), g.section))
         .collect();
-    let (found, failed) = search(&m, &guesses, 1e-12)?;
-    if stop.load(Ordering::SeqCst) {
-        eprintln!("interrupted before the grid was started; nothing written");
-        return Ok(ExitCode::from(130));
+    if !a.quiet {
+        eprintln!(
+            "finding the period-one gaits from {} guess(es) (Ctrl-C stops)",
+            guesses.len()
+        );
     }
+    let searched = search(&m, &guesses, 1e-12);
+    if stopped() {
+        return nothing_written();
+    }
+    let (found, failed) = searched?;
     let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
     // The default grid is centred on the stable gait, else on the first period-one orbit.
     let Some(centre) =
@@ -302,7 +310,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let fall = Outcome::of_fall;
     let disc = DiscoveryOptions::default();
     let t_disc = Instant::now();
-    let (set, seeds) = box_attractors(
+    let discovered = box_attractors(
         walker,
         &found,
         gait,
@@ -312,7 +320,11 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         (iy, &yr),
         &opts,
         &pool,
-    )?;
+    );
+    if stopped() {
+        return nothing_written();
+    }
+    let (set, seeds) = discovered?;
     if !a.quiet {
         eprintln!(
             "attractors from {} seeds in {:.2} s: {}",
@@ -372,6 +384,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         shard,
     };
     // the basin writer takes the output's lock itself, creating or continuing the file
+    if stopped() {
+        return nothing_written();
+    }
     claim.hand_over(&out);
     let mut writer = match BasinWriter::start(&out, &header, a.resume, a.force) {
         Ok(w) => w,
@@ -494,7 +509,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let mut interrupted = false;
     let mut secs_per_row: Option<f64> = None;
     while k < todo.len() {
-        if stop.load(Ordering::SeqCst) {
+        if stopped() {
             interrupted = true;
             break;
         }
@@ -509,9 +524,15 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         let row_ys: Vec<f64> = rows.iter().map(|&r| ys[r]).collect();
         let cells = grid_cells(&base, ix, &xs, iy, &row_ys);
         let done_before = pb.position();
-        let mut res = classify_cells(&problem, &cells, &opts, &pool, &|n| {
+        let res = classify_cells(&problem, &cells, &opts, &pool, &|n| {
             pb.set_position(done_before + n as u64)
-        })?;
+        });
+        // A block cut short by an interrupt is not written: its cells would be wrong.
+        if stopped() {
+            interrupted = true;
+            break;
+        }
+        let mut res = res?;
         set.relabel(&mut res);
         let outcome: Vec<u8> = res.iter().map(|c| c.outcome).collect();
         let strides: Vec<u16> = res.iter().map(|c| c.strides).collect();

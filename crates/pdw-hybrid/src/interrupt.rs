@@ -1,0 +1,36 @@
+//! A process-wide request to stop: Ctrl-C or SIGTERM in the CLI, `KeyboardInterrupt` in Python.
+//!
+//! Computation polls one flag instead of threading a token through every layer. Once
+//! [`request`] has been called:
+//! - [`run_scalar_with`](crate::run_scalar_with), [`run_batch`](crate::run_batch) and
+//!   [`run_batch_par`](crate::run_batch_par) return [`HybridError::Interrupted`] at their next
+//!   integration call or lockstep step (every lane of a batch steps at least once per loop);
+//! - an [`Integrator`](crate::Integrator) call in progress ends within 1024 step attempts as if
+//!   its step budget had run out ([`StopReason::MaxSteps`](crate::StopReason::MaxSteps)), so a
+//!   caller of the integrator itself must test [`requested`] before trusting that stop.
+//!
+//! Every later integration then stops at once, so gait searches, continuations and attractor
+//! discovery unwind within milliseconds even where they turn a failed stride into "try the next
+//! guess". Their results are meaningless after a request: a front end that polls the flag
+//! discards them ([`requested`] after the call) and reports the interrupt. The flag stays set until
+//! [`clear`] (the Python package clears it once its interrupted call has returned).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// Asks every computation in the process to stop (safe from a signal handler: one atomic store).
+pub fn request() {
+    REQUESTED.store(true, Ordering::SeqCst);
+}
+
+/// Withdraws the request (for the next call, after the interrupted one has returned).
+pub fn clear() {
+    REQUESTED.store(false, Ordering::SeqCst);
+}
+
+/// Whether a stop has been requested.
+#[inline]
+pub fn requested() -> bool {
+    REQUESTED.load(Ordering::Relaxed)
+}
