@@ -21,7 +21,9 @@ use crate::{HybridError, HybridSystem};
 const FAST_GUARDS: usize = 8;
 
 /// Callback receiving `(t, x)`.
-type Observer<'a> = &'a mut dyn FnMut(f64, &[f64]);
+/// Called at the start, after accepted steps and at the stop; `false` ends the call
+/// ([`Integrator::integrate_observed_while`]).
+type Observer<'a> = &'a mut dyn FnMut(f64, &[f64]) -> bool;
 
 /// Scalar integrator owning its workspace (sized for `dim` at construction; the guard scratch
 /// grows on first use with a system that has more guards, then never allocates again).
@@ -139,7 +141,43 @@ impl Integrator {
         t_end: f64,
         obs: &mut dyn FnMut(f64, &[f64]),
     ) -> StopReason {
+        let mut all = |t: f64, x: &[f64]| {
+            obs(t, x);
+            true
+        };
+        self.run(sys, mode, t, x, t_end, false, Some(&mut all))
+    }
+
+    /// [`integrate_observed`](Self::integrate_observed) with an observer that can end the
+    /// call: when `obs` returns `false` (at the start or after an accepted step) the
+    /// integration stops at that point with [`StopReason::MaxSteps`] — the observer's budget is
+    /// spent (a recorder that is full) — and `obs` is called once more at the stop point.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_observed_while<S: HybridSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        obs: &mut dyn FnMut(f64, &[f64]) -> bool,
+    ) -> StopReason {
         self.run(sys, mode, t, x, t_end, false, Some(obs))
+    }
+
+    /// [`resume`](Self::resume) with the observer of
+    /// [`integrate_observed_while`](Self::integrate_observed_while).
+    #[allow(clippy::too_many_arguments)]
+    pub fn resume_observed_while<S: HybridSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        obs: &mut dyn FnMut(f64, &[f64]) -> bool,
+    ) -> StopReason {
+        self.run(sys, mode, t, x, t_end, true, Some(obs))
     }
 
     /// [`integrate`](Self::integrate) for a segment that continues the trajectory of the
@@ -170,7 +208,11 @@ impl Integrator {
         t_end: f64,
         obs: &mut dyn FnMut(f64, &[f64]),
     ) -> StopReason {
-        self.run(sys, mode, t, x, t_end, true, Some(obs))
+        let mut all = |t: f64, x: &[f64]| {
+            obs(t, x);
+            true
+        };
+        self.run(sys, mode, t, x, t_end, true, Some(&mut all))
     }
 
     /// The general loop is compiled per instruction set (pdw-simd) with the step kernels
@@ -242,7 +284,9 @@ impl Integrator {
                 break 'outer r;
             }
             if let Some(o) = obs.as_mut() {
-                o(self.ctl.t, &self.st.x);
+                if !o(self.ctl.t, &self.st.x) {
+                    break 'outer StopReason::MaxSteps;
+                }
             }
             if REGISTERS {
                 // The shipped point-mass and two- and three-link models (rimless wheel, simplest
@@ -273,7 +317,9 @@ impl Integrator {
                     After::Rejected => {}
                     After::Accepted => {
                         if let Some(o) = obs.as_mut() {
-                            o(self.ctl.t, &self.st.x);
+                            if !o(self.ctl.t, &self.st.x) {
+                                break 'outer StopReason::MaxSteps;
+                            }
                         }
                     }
                     After::Stop(r) => break 'outer r,
@@ -373,7 +419,10 @@ impl Integrator {
                 ctl.t += h;
                 ctl.h_full = h;
                 if let Some(o) = obs.as_mut() {
-                    o(ctl.t, &x);
+                    if !o(ctl.t, &x) {
+                        st.x[..D].copy_from_slice(&x);
+                        return StopReason::MaxSteps;
+                    }
                 }
                 continue;
             }
@@ -393,7 +442,9 @@ impl Integrator {
                     g[..ng].copy_from_slice(&st.g[..ng]);
                     gr[..ng].copy_from_slice(&st.gr[..ng]);
                     if let Some(o) = obs.as_mut() {
-                        o(ctl.t, &x);
+                        if !o(ctl.t, &x) {
+                            return StopReason::MaxSteps;
+                        }
                     }
                 }
                 After::Stop(r) => return r,

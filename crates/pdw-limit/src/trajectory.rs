@@ -420,15 +420,18 @@ pub fn simulate(
                 None => {
                     let mut first = true;
                     let m0 = mode;
+                    // A full recorder ends the call (a walk over the sample bound stops
+                    // there instead of integrating on to the end of its stride).
                     let mut obs = |ts: f64, xs: &[f64]| {
                         if !std::mem::take(&mut first) {
                             rec.push(ts, xs, m0, step);
                         }
+                        !rec.full
                     };
                     if std::mem::replace(&mut resume, true) {
-                        integ.resume_observed(w, mode, &mut t, &mut x, t_budget, &mut obs)
+                        integ.resume_observed_while(w, mode, &mut t, &mut x, t_budget, &mut obs)
                     } else {
-                        integ.integrate_observed(w, mode, &mut t, &mut x, t_budget, &mut obs)
+                        integ.integrate_observed_while(w, mode, &mut t, &mut x, t_budget, &mut obs)
                     }
                 }
                 Some(h) => loop {

@@ -141,6 +141,23 @@ fn walks_that_would_not_fit_in_memory_are_refused() {
             ),
         }
     }
+    // RK4 at 1e-10 from the gait: one stride would be ~10^10 steps (hours). A full recorder
+    // ends the integration call, so the bound is reached after 40 steps and the walk stops
+    // there; before, the stride was integrated to its end with the samples dropped.
+    let opts = TrajectoryOptions {
+        max_samples: 40,
+        integrator: pdw_hybrid::Options::rk4(1e-10),
+        ..TrajectoryOptions::new(3)
+    };
+    match trajectory::simulate(w.as_ref(), &fp.state, &opts) {
+        Err(trajectory::TrajectoryError::TooManySamples { steps_done, .. }) => {
+            assert_eq!(steps_done, 0, "stopped inside the first stride")
+        }
+        other => panic!(
+            "expected the sample bound, got {:?}",
+            other.map(|t| t.len())
+        ),
+    }
     let opts = TrajectoryOptions {
         max_samples: full.len(),
         ..TrajectoryOptions::new(3)
