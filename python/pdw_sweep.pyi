@@ -1,4 +1,4 @@
-"""Type stubs of the `pdw_sweep` extension (see the docstrings in README.md, "Python")."""
+"""Type stubs of the `pdw_sweep` extension (functions and results: python/README.md)."""
 
 from typing import Any, Optional, Sequence, Tuple, TypedDict
 

@@ -18,7 +18,7 @@ pub fn results_dir(name: &str) -> anyhow::Result<PathBuf> {
     Ok(dir)
 }
 
-/// The command that reproduces experiment `name` (for the README).
+/// The command that reproduces experiment `name` (for its `README.md`).
 pub fn command(name: &str) -> String {
     format!("cargo run --release -p pdw-experiments --bin {name}")
 }

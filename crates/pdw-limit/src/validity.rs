@@ -5,7 +5,7 @@
 //! ground must supply the friction `|f_t / f_n|` the stance foot needs, every locked knee's
 //! hyper-extension stop must push (lock torque `τ ≥ 0`), and the swing foot must stay above the
 //! slope; at every impact the impulses of the impact map must be those of unilateral contacts
-//! and stops (DESIGN.md, "Models", last paragraph).
+//! and stops (docs/models.md, "Validity" and "Impacts").
 //!
 //! # Criteria located on the dense solution
 //! One stride is simulated ([`simulate`], DOP853 at [`TRAJECTORY_TOL`]); its samples (every

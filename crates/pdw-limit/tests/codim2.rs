@@ -132,7 +132,8 @@ where
 
 /// (a) + (b): the compass gait's period-doubling curve in (hip_mass, slope), started at
 /// hip_mass = 6 kg (μ = 1.2), passes through Goswami et al. 1998's γ ≈ 4.39° at μ = 2, β = 1
-/// (REFERENCES.md §3 quotes "near 4.4°"; the paper's figure gives 4.39°, two decimals), and at
+/// (Goswami, Thuilot & Espiau, IJRR 17(12), 1998: "near 4.4°"; the paper's figure gives 4.39°,
+/// two decimals), and at
 /// hip_mass = 8, 10, 14 kg agrees with the one-parameter route to 1e-8 rad.
 #[test]
 fn compass_period_doubling_curve_meets_goswami_and_the_one_parameter_route() {

@@ -1,4 +1,4 @@
-//! Continuation of the simplest walker's gait in the slope (Garcia et al. 1998, REFERENCES §1).
+//! Continuation of the simplest walker's gait in the slope (Garcia et al., J. Biomech. Eng. 1998).
 
 use pdw_hybrid::Options;
 use pdw_limit::{
@@ -43,7 +43,7 @@ fn first_period_doubling_located_by_continuation_agrees_with_direct_bisection_to
     let mut opts = ContinuationOptions::new(0.005, 0.017);
     opts.stop_at = Some(BifurcationKind::PeriodDoubling);
     let branch = continue_branch(&family, &[0.2003, -0.1998], 0.009, 1, &opts).unwrap();
-    // The start point is Garcia's stable gait (his own code's values, REFERENCES §1).
+    // The start point is Garcia's stable gait (his own code's values, J. Biomech. Eng. 1998).
     let p0 = &branch.points[0];
     assert!((p0.section[0] - 0.20031090049483).abs() < 1e-9);
     assert!((p0.section[1] + 0.19983247291764).abs() < 1e-9);

@@ -1,7 +1,8 @@
-//! Period-K orbits of Garcia et al. 1998's simplest walker past its first period doubling
-//! (γ ≈ 0.01509, shared/REFERENCES.md §1): found by Newton on P^K − id and checked against two
-//! other routes — iterating the map (the orbit attracts, at the rate its multipliers predict)
-//! and a finite-difference K-step Jacobian (the multipliers).
+//! Period-K orbits of the simplest walker past its first period doubling (γ ≈ 0.01509: Garcia,
+//! Chatterjee, Ruina & Coleman, "The simplest walking model: stability, complexity, and
+//! scaling", J. Biomech. Eng. 120 (1998) 281–288): found by Newton on P^K − id and checked
+//! against two other routes — iterating the map (the orbit attracts, at the rate its multipliers
+//! predict) and a finite-difference K-step Jacobian (the multipliers).
 
 use pdw_hybrid::Options;
 use pdw_limit::gaits::{model_guesses, search_periodic, FoundOrbit};

@@ -1,4 +1,4 @@
-//! The rimless wheel against its closed form (REFERENCES §2).
+//! The rimless wheel against its closed form (Coleman; Tedrake, Underactuated Robotics ch. 4).
 
 use pdw_hybrid::{FallKind, Options};
 use pdw_limit::*;

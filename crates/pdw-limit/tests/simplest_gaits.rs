@@ -1,4 +1,6 @@
-//! Acceptance tests on Garcia et al. 1998's simplest walker (shared/REFERENCES.md §1).
+//! Acceptance tests on the simplest walker of Garcia, Chatterjee, Ruina & Coleman, "The
+//! simplest walking model: stability, complexity, and scaling", J. Biomech. Eng. 120 (1998)
+//! 281–288.
 
 use pdw_hybrid::Options;
 use pdw_limit::*;
@@ -39,7 +41,7 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 
 #[test]
 fn garcia_fixed_points_at_gamma_0_009() {
-    // Garcia's own code (REFERENCES §1). Measured: stable gait off by (5.0e-11, 8.8e-11),
+    // Garcia's own code (J. Biomech. Eng. 1998). Measured: stable gait off by (5.0e-11, 8.8e-11),
     // unstable by (2.0e-10, 1.2e-10).
     let m = walker(0.009);
     let stable = solve(&m, GarciaGait::LongPeriod, 1e-13);
@@ -93,7 +95,7 @@ fn stable_gait_multipliers_are_exact_and_garcias_printout_is_1e_3_off() {
 
 #[test]
 fn unstable_gait_multipliers_match_garcia() {
-    // REFERENCES §1: ≈ 4.00 and 0.459. Measured: 4.003864, 0.459590.
+    // Garcia et al. 1998: ≈ 4.00 and 0.459. Measured: 4.003864, 0.459590.
     let fp = solve(&walker(0.009), GarciaGait::ShortPeriod, 1e-13);
     let l = &fp.multipliers;
     assert!(l.iter().all(|m| m.im == 0.0));

@@ -1,4 +1,4 @@
-//! Parsers for the CLI's compact value syntaxes (shared/DESIGN.md "CLI contract").
+//! Parsers for the CLI's compact value syntaxes (docs/cli.md).
 //!
 //! Every parser returns a message that names the bad value and says what is allowed; the binary
 //! prints it and exits with code 2.

@@ -1,4 +1,4 @@
-//! Command-line definitions (clap derive). The contract is shared/DESIGN.md "CLI contract".
+//! Command-line definitions (clap derive). The contract is docs/cli.md.
 
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -139,7 +139,7 @@ pub struct FixedpointArgs {
     pub force: bool,
     // ---- sweep output (with --sweep; --json then prints the sweep as one JSON object)
     /// With --sweep: also write the branches as CSV, one row per orbit point of every branch
-    /// point (columns: README "Sweep output").
+    /// point (columns: docs/cli.md, "Sweep output and basin stability").
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// With --sweep: worker threads (rayon pool) for the points on the output grid, their

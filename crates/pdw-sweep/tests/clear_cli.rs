@@ -21,7 +21,7 @@ fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).expect("JSON on stdout")
 }
 
-/// Garcia et al. 1998 (REFERENCES §1), from Garcia's own code.
+/// Garcia et al., J. Biomech. Eng. 120 (1998), from Garcia's own code.
 const STABLE: [f64; 2] = [0.20031090049483, -0.19983247291764];
 
 fn stable_section(v: &serde_json::Value) -> Vec<f64> {
@@ -215,7 +215,7 @@ fn compass_unstable_gait_is_the_short_period_one() {
             .as_f64()
             .unwrap()
     };
-    // REFERENCES §3: the stable gait's step period at 3° is ≈ 0.73 s.
+    // Goswami, Thuilot & Espiau 1998: the stable gait's step period at 3° is ≈ 0.73 s.
     assert!((period(true) - 0.73).abs() < 0.01, "{v}");
     assert!(period(false) < 0.85 * period(true), "{v}");
     let v = json(&run(&[

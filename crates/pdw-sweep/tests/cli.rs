@@ -27,7 +27,7 @@ fn s(path: &Path) -> &str {
     path.to_str().unwrap()
 }
 
-/// Garcia et al. 1998 (REFERENCES §1), from Garcia's own code.
+/// Garcia et al., J. Biomech. Eng. 120 (1998), from Garcia's own code.
 const STABLE: [f64; 2] = [0.20031090049483, -0.19983247291764];
 const UNSTABLE: [f64; 2] = [0.19393736960624, -0.20386692731962];
 
@@ -142,7 +142,8 @@ fn fixedpoint_gait_filter_and_rimless_closed_form() {
     let fps = v["fixed_points"].as_array().unwrap();
     assert_eq!(fps.len(), 1);
     assert_eq!(fps[0]["stable"], false);
-    // Rimless wheel (REFERENCES §2): ω* = cot 2α √(4 (g/l) sin α sin γ), multiplier cos² 2α.
+    // Rimless wheel (Coleman; Tedrake ch. 4): ω* = cot 2α √(4 (g/l) sin α sin γ), multiplier
+    // cos² 2α.
     let o = run(&[
         "fixedpoint",
         "--model",

@@ -29,7 +29,7 @@ fn exits_2_naming(args: &[&str], words: &[&str]) {
 
 /// The compass period-doubling curve over hip_mass 8, 10, 12 kg (m = 5 kg): `--json` prints
 /// `{"curve": {"kind": "pd", "params": ["hip_mass", "slope"], "points": [[p1, p2], …]}}`; at
-/// μ = 2 the slope is Goswami et al. 1998's 4.39° (REFERENCES.md §3, "near 4.4°"); the file
+/// μ = 2 the slope is Goswami et al. 1998's 4.39° (IJRR 17(12), "near 4.4°"); the file
 /// holds the same points with units and provenance, and is not overwritten without --force.
 #[test]
 fn follow_pd_prints_the_curve_and_writes_the_file() {

@@ -754,9 +754,10 @@ fn basin_codes(p: &Path) -> (Vec<u8>, Vec<u16>, pdw_store::BasinData) {
 #[test]
 fn a_walk_dying_out_on_a_level_floor_is_no_attractor() {
     let dir = tempfile::tempdir().unwrap();
-    let fall = 6u8; // `fall`: a fall of another kind, or a walk that came to a stand
-                    // the README's default box at slope 0 with 1000 strides: 10 of 441 cells were `chaotic`
-                    // (θ ≈ 0.0046 and shrinking as k^{-1/2}), the attractor a sample of that decay
+    // `fall`: a fall of another kind, or a walk that came to a stand. `basin`'s default box
+    // (docs/cli.md) at slope 0 with 1000 strides: 10 of 441 cells were `chaotic`
+    // (θ ≈ 0.0046 and shrinking as k^{-1/2}), the attractor a sample of that decay
+    let fall = 6u8;
     let p = dir.path().join("level.h5");
     let o = run(&[
         "basin",

@@ -20,7 +20,7 @@
 //!
 //! # Section
 //! Just after a spoke impact, reduced coordinate `θ̇` (the lift sets `θ = −α`). Return map
-//! (REFERENCES §2): `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)`.
+//! (Coleman; Tedrake ch. 4): `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)`.
 //!
 //! # Stopping (terminal guards)
 //! [`FallKind::RollsBack`]: the wheel does not reach the next spoke — `θ̇` falls through zero (guard 1), or
@@ -222,7 +222,7 @@ impl Rimless {
         0.5 * self.l * self.l * x[1] * x[1] + self.g * self.l * (x[0] + self.gamma).cos()
     }
 
-    /// Closed-form rolling fixed point `ω* = cot 2α · √(4 (g/l) sin α sin γ)` (REFERENCES §2),
+    /// Closed-form rolling fixed point `ω* = cot 2α · √(4 (g/l) sin α sin γ)` (Coleman; Tedrake),
     /// or `None` when the rolling gait does not exist (`γ ≤ 0`, `N = 4` (cot 2α = 0 is the
     /// standing limit) or `ω* ≤ ω₁ = √(2 (g/l)(1 − cos(γ − α)))`).
     pub fn rolling_fixed_point(&self) -> Option<f64> {

@@ -1,8 +1,8 @@
 //! The seed thesis' walker with the thesis' own constraint handling (seed ch. 3.4–3.5 and
 //! ch. 4): a PI-controlled knee latch and a compliant (PI) ground during a finite double
 //! support. **Opt-in, for comparison only**: a stiff model whose failures are part of the point
-//! (see the README's "Model economy"). The exact model — pseudo-joint knees, impulsive heel
-//! strike, the switch rule — is the `seed5` preset of the chain walker
+//! (see "Model economy" in experiments/README.md). The exact model — pseudo-joint knees,
+//! impulsive heel strike, the switch rule — is the `seed5` preset of the chain walker
 //! ([`crate::presets::seed5`], `models/seed5.toml`).
 
 use crate::chain_walker::ChainWalker;

@@ -281,7 +281,9 @@ pub struct GarciaAsymptotics {
 }
 
 impl GarciaGait {
-    /// The published coefficients (shared/REFERENCES.md §1).
+    /// The published coefficients (their Appendix A.2: Garcia, Chatterjee, Ruina & Coleman,
+    /// "The simplest walking model: stability, complexity, and scaling", J. Biomech. Eng. 120
+    /// (1998) 281–288).
     pub fn asymptotics(self) -> GarciaAsymptotics {
         match self {
             GarciaGait::LongPeriod => GarciaAsymptotics {

@@ -20,7 +20,8 @@ const KNEE_STRIKE: usize = 0;
 /// Guard (locked mode) of the heel strike.
 const HEEL_STRIKE: usize = 0;
 
-/// Hsu Chen 2007's parameters (shared REFERENCES §4), held by the test.
+/// Hsu Chen 2007's parameters ("Passive dynamic walking with knees: a point foot model", MIT
+/// thesis), held by the test.
 struct Kp {
     a1: f64,
     b1: f64,

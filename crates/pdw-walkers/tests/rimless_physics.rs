@@ -54,7 +54,7 @@ fn spoke_impact_loses_exactly_the_predicted_kinetic_energy() {
 #[test]
 fn energy_gain_over_a_spoke_equals_the_drop_in_hub_height() {
     // E = ½ l² θ̇² + g l cos(θ + γ) is constant along the flow (checked through dE/dt = 0)
-    // and the drop of cos(θ + γ) from θ = −α to α is 2 sin α sin γ (REFERENCES §2).
+    // and the drop of cos(θ + γ) from θ = −α to α is 2 sin α sin γ (Coleman; Tedrake ch. 4).
     let w = wheel(8.0, 0.08);
     let a = w.alpha();
     let mut rng = ChaCha8Rng::seed_from_u64(2);

@@ -4,7 +4,7 @@ use pdw_hybrid::Section;
 use pdw_hybrid::{HybridSystem, Integrator, Options, Scratch, StopReason};
 use pdw_walkers::simplest::{Simplest, SimplestParams, HEEL_STRIKE};
 
-// Garcia's stable gait at γ = 0.009 (REFERENCES §1).
+// Garcia's stable gait at γ = 0.009 (Garcia et al., J. Biomech. Eng. 120, 1998; his own code).
 const S_STABLE: [f64; 2] = [0.20031090049483, -0.19983247291764];
 
 fn model() -> Simplest {

@@ -1,5 +1,5 @@
 //! `pdw-sweep basin`: a basin of attraction over a grid of section states, streamed to HDF5 in
-//! row blocks, with a PNG heatmap. See shared/DESIGN.md "Basins" and "HDF5 file".
+//! row blocks, with a PNG heatmap. See docs/cli.md and docs/hdf5.md.
 
 use super::fixedpoint::{report_failure, search};
 use super::output::{Format, Output};

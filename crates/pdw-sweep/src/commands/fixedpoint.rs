@@ -353,7 +353,7 @@ pub fn advice(m: &BuiltModel) -> String {
 }
 
 /// The smallest slope on which the rimless wheel with `n` spokes has a rolling gait. Its return
-/// map `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)` (α = π/n; REFERENCES §2, Tedrake ch. 4) has the
+/// map `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)` (α = π/n; Coleman; Tedrake ch. 4) has the
 /// fixed point `ω*² = 4 (g/l) cos² 2α sin α sin γ / sin² 2α`; the wheel vaults over the next
 /// spoke only if `½ ω*² > (g/l) (1 − cos(α − γ))` (the hub must pass the top, θ = −γ). The
 /// threshold is the root of the difference in (0, α), found by bisection (independent of g/l).
