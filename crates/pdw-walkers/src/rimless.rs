@@ -489,7 +489,7 @@ impl Walker for Rimless {
             .map(|w| GaitGuess {
                 gait: "stable".into(),
                 section: vec![w],
-                source: "closed form (Coleman; Tedrake), REFERENCES §2".into(),
+                source: "closed form (Coleman; Tedrake, Underactuated Robotics)".into(),
             })
             .into_iter()
             .collect()
