@@ -512,36 +512,3 @@ fn warm_restarts_reach_the_same_events_cheaper_only_on_one_time_scale() {
         }
     }
 }
-
-/// The phase counters (`pdw_hybrid::phases`) count a batched run when the crate is built with
-/// `phase-timing`, and cost nothing and report zeros otherwise. Every reset is an event the
-/// locator found on a step whose dense output it built, so each counted event is at least one
-/// located step and one dense output (other tests running beside this one only add to the
-/// totals).
-#[test]
-fn phase_counters_count_a_batched_run_when_enabled() {
-    use pdw_hybrid::phases;
-    let sys = Ball { g: 9.81, e: 0.8 };
-    let drv = Bouncer {
-        max_events: 3,
-        start_mode: 0,
-    };
-    let its: Vec<Item> = (0..64)
-        .map(|i| (0.5 + 0.02 * i as f64, 0.0, 20.0))
-        .collect();
-    let bo = BatchOptions {
-        lanes: 16,
-        integrator: Options::dop853(1e-10),
-    };
-    phases::reset();
-    let out = run_batch(&sys, &drv, &its, &bo).unwrap();
-    let p = phases::take();
-    let events: u64 = out.iter().map(|o| u64::from(o.events)).sum();
-    assert_eq!(events, 3 * 64);
-    if phases::ENABLED {
-        assert!(p.ticks.iter().all(|&t| t > 0), "{p:?}");
-        assert!(p.located >= events && p.dense >= events, "{p:?}");
-    } else {
-        assert_eq!(p, phases::PhaseTimes::default());
-    }
-}
