@@ -3,47 +3,15 @@
 //! phase-timing --test phases`), which recompiles only this crate and this small file.
 
 use pdw_hybrid::{
-    phases, run_batch, BatchOptions, Control, Crossing, GuardKind, GuardSpec, HybridSystem,
-    LaneDriver, Options, Scratch, StopReason,
+    phases, run_batch, BatchOptions, Control, HybridSystem, LaneDriver, Options, Scratch,
+    StopReason,
 };
 
-/// Bouncing ball, state (height, velocity): flight under gravity, the ground reverses the
-/// velocity with restitution 0.8.
-struct Ball;
+// The bouncing ball of the other test files (`common::Ball`; the module allows dead code).
+mod common;
+use common::Ball;
 
-const GROUND: [GuardSpec; 1] = [GuardSpec {
-    name: "ground",
-    crossing: Crossing::Falling,
-    kind: GuardKind::Reset,
-}];
-
-impl HybridSystem for Ball {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn guards(&self, _mode: usize) -> &[GuardSpec] {
-        &GROUND
-    }
-    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
-        dx[0] = x[1];
-        dx[1] = -9.81;
-    }
-    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, x: &[f64]) -> f64 {
-        x[0]
-    }
-    fn reset(
-        &self,
-        _ws: &mut Scratch,
-        mode: usize,
-        _k: usize,
-        x: &[f64],
-        out: &mut [f64],
-    ) -> usize {
-        out[0] = x[0];
-        out[1] = -0.8 * x[1];
-        mode
-    }
-}
+const BALL: Ball = Ball { g: 9.81, e: 0.8 };
 
 /// Bounces three times from the height given as the item, then finishes; outputs the bounces.
 struct ThreeBounces;
@@ -106,7 +74,7 @@ fn phase_counters_count_a_batched_run_when_enabled() {
         integrator: Options::dop853(1e-10),
     };
     phases::reset();
-    let out = run_batch(&Ball, &ThreeBounces, &items, &bo).unwrap();
+    let out = run_batch(&BALL, &ThreeBounces, &items, &bo).unwrap();
     let p = phases::take();
     let events: u64 = out.iter().map(|&o| u64::from(o)).sum();
     assert_eq!(events, 3 * 64, "every item bounced three times");
