@@ -56,9 +56,7 @@
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
-use crate::validity::{
-    ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
-};
+use crate::validity::{ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -439,49 +437,13 @@ impl Walker for Rimless {
         let mut post = [0.0; 2];
         self.reset(&mut Scratch::new(), 0, guard, x, &mut post);
         let rate = self.l * post[1] * (th.sin() - th_new.sin());
-        let entry = |name: &str, kind, unilateral, active, impulse, rate_after| ImpulseEntry {
-            name: name.into(),
-            kind,
-            unilateral,
-            active,
-            impulse,
-            rate_after,
-        };
-        Some(ImpactReport {
-            event: GUARDS[SPOKE_IMPACT].name.into(),
-            entries: vec![
-                entry(
-                    "new_stance_foot",
-                    ImpulseKind::ContactNormal,
-                    false,
-                    true,
-                    ln,
-                    0.0,
-                ),
-                entry(
-                    "new_stance_foot",
-                    ImpulseKind::ContactTangential,
-                    false,
-                    true,
-                    lt,
-                    0.0,
-                ),
-                entry(
-                    "trailing_foot",
-                    ImpulseKind::ContactNormal,
-                    true,
-                    false,
-                    0.0,
-                    rate,
-                ),
-            ],
-            friction_required: if ln > 0.0 {
-                (lt / ln).abs()
-            } else {
-                f64::INFINITY
-            },
-            energy_lost: 0.5 * lam * lam,
-        })
+        Some(ImpactReport::point_contact(
+            GUARDS[SPOKE_IMPACT].name,
+            ln,
+            lt,
+            rate,
+            0.5 * lam * lam,
+        ))
     }
     /// The closed-form rolling fixed point, when it exists.
     fn gait_guesses(&self) -> Vec<GaitGuess> {

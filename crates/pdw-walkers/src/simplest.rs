@@ -69,9 +69,7 @@
 
 use crate::error::{check_open, WalkerError};
 use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
-use crate::validity::{
-    ClearanceRule, ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
-};
+use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use std::f64::consts::FRAC_PI_2;
@@ -756,49 +754,13 @@ impl Walker for Simplest {
         self.reset(&mut Scratch::new(), 0, guard, x, &mut post);
         let (psi, psid) = (post[0] - post[2], post[1] - post[3]);
         let rate = -post[0].sin() * post[1] + psi.sin() * psid;
-        let entry = |name: &str, kind, unilateral, active, impulse, rate_after| ImpulseEntry {
-            name: name.into(),
-            kind,
-            unilateral,
-            active,
-            impulse,
-            rate_after,
-        };
-        Some(ImpactReport {
-            event: GUARDS[HEEL_STRIKE].name.into(),
-            entries: vec![
-                entry(
-                    "new_stance_foot",
-                    ImpulseKind::ContactNormal,
-                    false,
-                    true,
-                    ln,
-                    0.0,
-                ),
-                entry(
-                    "new_stance_foot",
-                    ImpulseKind::ContactTangential,
-                    false,
-                    true,
-                    lt,
-                    0.0,
-                ),
-                entry(
-                    "trailing_foot",
-                    ImpulseKind::ContactNormal,
-                    true,
-                    false,
-                    0.0,
-                    rate,
-                ),
-            ],
-            friction_required: if ln > 0.0 {
-                (lt / ln).abs()
-            } else {
-                f64::INFINITY
-            },
-            energy_lost: 0.5 * a * a,
-        })
+        Some(ImpactReport::point_contact(
+            GUARDS[HEEL_STRIKE].name,
+            ln,
+            lt,
+            rate,
+            0.5 * a * a,
+        ))
     }
     /// Garcia's small-slope asymptotics for both gaits (only meaningful for 0 < γ ≲ 0.015).
     fn gait_guesses(&self) -> Vec<GaitGuess> {

@@ -206,6 +206,41 @@ pub struct ImpactReport {
 }
 
 impl ImpactReport {
+    /// The report of a point contact striking the ground while the trailing point leaves it
+    /// (the simplest walker's heel strike, the rimless wheel's spoke impact): the new contact's
+    /// normal and tangential impulses `ln`, `lt` (bilateral in the impulse problem, both
+    /// holding), the trailing contact's release with its normal separation rate `rate` after
+    /// the impact, the friction needed `|lt/ln|` (`+∞` if `ln ≤ 0`) and the energy lost.
+    pub fn point_contact(event: &str, ln: f64, lt: f64, rate: f64, energy_lost: f64) -> Self {
+        let entry = |kind, unilateral, active, impulse, rate_after| ImpulseEntry {
+            name: if active {
+                "new_stance_foot"
+            } else {
+                "trailing_foot"
+            }
+            .into(),
+            kind,
+            unilateral,
+            active,
+            impulse,
+            rate_after,
+        };
+        ImpactReport {
+            event: event.into(),
+            entries: vec![
+                entry(ImpulseKind::ContactNormal, false, true, ln, 0.0),
+                entry(ImpulseKind::ContactTangential, false, true, lt, 0.0),
+                entry(ImpulseKind::ContactNormal, true, false, 0.0, rate),
+            ],
+            friction_required: if ln > 0.0 {
+                (lt / ln).abs()
+            } else {
+                f64::INFINITY
+            },
+            energy_lost,
+        }
+    }
+
     /// The smallest impulse among the entries of `kind` that hold (active), or `None`.
     pub fn min_active(&self, kind: ImpulseKind) -> Option<f64> {
         self.entries
