@@ -6,9 +6,10 @@
 //! - `basin_simplest_200x200`: the 200 × 200 grid on a 2-thread pool, reported per cell
 //!   (`Throughput::Elements(cells)`); the lane-strides per iteration (sum of
 //!   [`CellResult::strides`](pdw_limit::CellResult)) are printed at setup, so that
-//!   lane-strides/s = printed strides / time. `lanes64`: the concrete model type;
+//!   lane-strides/s = printed strides / time. `lanes64`: the model built as its own type;
 //!   `lanes64_dyn_walker`: the same model behind `Box<dyn Walker>` from the registry, as the
-//!   CLI runs it;
+//!   CLI runs it (the basin holds either as `dyn Section`, so the two run the same compiled
+//!   code; the pair checks that the registry's model costs nothing more);
 //! - `basin_simplest_100x100`: the 100 × 100 grid on 1 and 2 threads and with 16, 64 and 256
 //!   lanes (2 threads), to show the thread scaling and the lane-width sensitivity.
 //!

@@ -77,7 +77,13 @@ fn a_stop_request_ends_every_layer_with_interrupted_and_clear_restores_the_same_
     opts.max_steps = 1_000_000;
     let mut integ = Integrator::new(3, opts).expect("integrator");
     let (mut t, mut x) = (0.0, vec![1.0, 2.0, 3.0]);
-    let stop = integ.integrate(&sys, 0, &mut t, &mut x, 1e4);
+    let stop = integ.integrate(
+        &sys as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        1e4,
+    );
     assert!(interrupt::requested());
     assert_eq!(
         stop,

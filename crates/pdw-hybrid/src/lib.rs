@@ -63,6 +63,6 @@ pub use error::HybridError;
 pub use integrator::Integrator;
 pub use options::{Controller, Method, Options, Stats, StopReason};
 pub use system::{
-    guards_with_rates_by_lane, Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch,
-    Section,
+    guards_with_rates_by_lane, AsSection, Crossing, FallKind, GuardKind, GuardSpec, HybridSystem,
+    Scratch, Section,
 };

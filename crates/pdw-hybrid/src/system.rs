@@ -372,10 +372,25 @@ pub trait HybridSystem: Send + Sync {
     }
 }
 
+/// A section model seen as `&dyn Section`, whatever its type (a concrete model or a trait object
+/// such as `dyn Walker` built on [`Section`]). Implemented for every [`Section`]; the analysis
+/// layer takes models through it so that its algorithms are compiled once, for `dyn Section`,
+/// and not again for every model type in every crate that calls them.
+pub trait AsSection {
+    /// `self` as a section trait object.
+    fn as_section(&self) -> &dyn Section;
+}
+
+impl<T: Section> AsSection for T {
+    fn as_section(&self) -> &dyn Section {
+        self
+    }
+}
+
 /// A hybrid system with a Poincaré section: the state just after one designated reset (the
 /// heel strike). A *stride* runs from the section to the next firing of that reset, through
 /// any intermediate resets (e.g. the kneed walker's knee strike).
-pub trait Section: HybridSystem {
+pub trait Section: HybridSystem + AsSection {
     /// Dimension of the reduced section coordinates.
     fn section_dim(&self) -> usize;
 

@@ -316,7 +316,13 @@ fn soft_ball_contact_conserves_energy_across_mode_switches() {
     let (mut t, mut x, mut mode) = (0.0, [1.0, 0.0], 0usize);
     let e0 = energy(0, &x);
     for _ in 0..10 {
-        let r = integ.integrate(&sys, mode, &mut t, &mut x, 50.0);
+        let r = integ.integrate(
+            &sys as &dyn pdw_hybrid::HybridSystem,
+            mode,
+            &mut t,
+            &mut x,
+            50.0,
+        );
         assert_eq!(r, StopReason::Guard { guard: 0 });
         let mut xp = [0.0; 2];
         mode = sys.reset(&mut Scratch::new(), mode, 0, &x, &mut xp);
@@ -422,9 +428,14 @@ fn register_loop_case<S: HybridSystem>(sys: &S, rated: bool) {
             integ.set_register_loop(on);
             // In contact (the free flight is a parabola, a step or two).
             let (mut t, mut x) = (0.0, [-1e-3, -2.0]);
-            let stop = integ.integrate_observed(sys, 1, &mut t, &mut x, 5.0, &mut |t, x| {
-                log.push((t.to_bits(), x[0].to_bits(), x[1].to_bits()))
-            });
+            let stop = integ.integrate_observed(
+                sys as &dyn pdw_hybrid::HybridSystem,
+                1,
+                &mut t,
+                &mut x,
+                5.0,
+                &mut |t, x| log.push((t.to_bits(), x[0].to_bits(), x[1].to_bits())),
+            );
             assert_eq!(stop, StopReason::Guard { guard: 0 }, "{:?}", base.method);
         }
         assert!(

@@ -16,7 +16,7 @@ fn run(
 ) -> (StopReason, f64) {
     let mut integ = Integrator::new(sys.dim(), opts).unwrap();
     let mut t = t0;
-    let r = integ.integrate(sys, 0, &mut t, x, t_end);
+    let r = integ.integrate(sys as &dyn pdw_hybrid::HybridSystem, 0, &mut t, x, t_end);
     (r, t)
 }
 
@@ -88,7 +88,13 @@ fn bouncing_ball_impact_times_match_closed_form() {
     let mut expected = (2.0 * h0 / g).sqrt();
     let mut v = v1;
     for bounce in 0..8 {
-        let r = integ.integrate(&ball, 0, &mut t, &mut x, 100.0);
+        let r = integ.integrate(
+            &ball as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            100.0,
+        );
         assert_eq!(r, StopReason::Guard { guard: 0 }, "bounce {bounce}");
         assert!(
             (t - expected).abs() < 1e-12,
@@ -198,12 +204,24 @@ fn restarting_at_an_event_does_not_retrigger_it() {
         let mut integ = Integrator::new(2, opts).unwrap();
         let (mut t, mut x) = (0.0, [1.0, 0.0]);
         assert_eq!(
-            integ.integrate(&osc, 0, &mut t, &mut x, 20.0),
+            integ.integrate(
+                &osc as &dyn pdw_hybrid::HybridSystem,
+                0,
+                &mut t,
+                &mut x,
+                20.0
+            ),
             StopReason::Guard { guard: 0 }
         );
         let t_first = t;
         assert_eq!(
-            integ.integrate(&osc, 0, &mut t, &mut x, 20.0),
+            integ.integrate(
+                &osc as &dyn pdw_hybrid::HybridSystem,
+                0,
+                &mut t,
+                &mut x,
+                20.0
+            ),
             StopReason::Guard { guard: 0 }
         );
         let tol = if let pdw_hybrid::Method::Rk4 { .. } = opts.method {
@@ -260,9 +278,16 @@ fn observer_sees_start_steps_and_stop_point() {
     let mut integ = Integrator::new(2, Options::dopri5(1e-8)).unwrap();
     let (mut t, mut x) = (0.0, [1.0, 0.0]);
     let mut seen = Vec::new();
-    let r = integ.integrate_observed(&osc, 0, &mut t, &mut x, 10.0, &mut |tt, xs| {
-        seen.push((tt, xs[0]));
-    });
+    let r = integ.integrate_observed(
+        &osc as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        10.0,
+        &mut |tt, xs| {
+            seen.push((tt, xs[0]));
+        },
+    );
     assert_eq!(r, StopReason::Guard { guard: 0 });
     assert_eq!(seen.first().unwrap().0, 0.0);
     assert_eq!(*seen.last().unwrap(), (t, x[0]));
@@ -280,9 +305,21 @@ fn end_time_on_a_guard_surface_is_not_a_missed_event() {
     for opts in [Options::dop853(1e-12), Options::dopri5(1e-12)] {
         let mut integ = Integrator::new(2, opts).unwrap();
         let (mut t, mut x) = (0.0, [-1.0, 0.0]);
-        let r = integ.integrate(&osc, 0, &mut t, &mut x, PI / 2.0);
+        let r = integ.integrate(
+            &osc as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            PI / 2.0,
+        );
         let r = if r == StopReason::EndTime {
-            integ.integrate(&osc, 0, &mut t, &mut x, 10.0)
+            integ.integrate(
+                &osc as &dyn pdw_hybrid::HybridSystem,
+                0,
+                &mut t,
+                &mut x,
+                10.0,
+            )
         } else {
             r
         };

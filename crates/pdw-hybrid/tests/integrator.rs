@@ -25,7 +25,13 @@ fn fixed_step_error(method: Method, n: usize, t_end: f64) -> (f64, u64) {
     let mut integ = Integrator::new(3, opts).unwrap();
     let mut t = 0.0;
     let mut x = [1.0, 0.0, 1.0];
-    let r = integ.integrate(&OscGrowth, 0, &mut t, &mut x, t_end);
+    let r = integ.integrate(
+        &OscGrowth as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        t_end,
+    );
     assert_eq!(r, StopReason::EndTime);
     assert_eq!(t, t_end);
     let ex = OscGrowth::exact(t_end);
@@ -101,7 +107,13 @@ fn adaptive_error_is_proportional_to_tolerance() {
             let mut integ = Integrator::new(3, opts).unwrap();
             let (mut t, mut x) = (0.0, [1.0, 0.0, 1.0]);
             assert_eq!(
-                integ.integrate(&OscGrowth, 0, &mut t, &mut x, 10.0),
+                integ.integrate(
+                    &OscGrowth as &dyn pdw_hybrid::HybridSystem,
+                    0,
+                    &mut t,
+                    &mut x,
+                    10.0
+                ),
                 StopReason::EndTime
             );
             let ex = OscGrowth::exact(10.0);
@@ -148,9 +160,16 @@ fn dop853_conserves_pendulum_energy_at_tight_tolerance() {
     let (mut t, mut x) = (0.0, x0);
     // No guard stop: the bottom guard fires every half swing; continue after each.
     while t < 80.0 {
-        let r = integ.integrate_observed(&Pendulum, 0, &mut t, &mut x, 80.0, &mut |_, xs| {
-            worst = worst.max(((Pendulum::energy(xs) - e0) / e0).abs());
-        });
+        let r = integ.integrate_observed(
+            &Pendulum as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            80.0,
+            &mut |_, xs| {
+                worst = worst.max(((Pendulum::energy(xs) - e0) / e0).abs());
+            },
+        );
         assert!(
             matches!(r, StopReason::Guard { guard: 0 } | StopReason::EndTime),
             "{r:?}"
@@ -165,7 +184,13 @@ fn rk4_blow_up_reports_non_finite() {
     // ẋ = x², x(0) = 1 blows up at t = 1; a fixed step of 0.1 overflows shortly after.
     let mut integ = Integrator::new(1, Options::rk4(0.1)).unwrap();
     let (mut t, mut x) = (0.0, [1.0]);
-    let r = integ.integrate(&BlowUp, 0, &mut t, &mut x, 2.0);
+    let r = integ.integrate(
+        &BlowUp as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        2.0,
+    );
     assert_eq!(r, StopReason::NonFinite);
     assert!(
         x[0].is_finite(),
@@ -179,7 +204,13 @@ fn adaptive_blow_up_reports_step_too_small_near_the_singularity() {
     for opts in [Options::dopri5(1e-8), Options::dop853(1e-8)] {
         let mut integ = Integrator::new(1, opts).unwrap();
         let (mut t, mut x) = (0.0, [1.0]);
-        let r = integ.integrate(&BlowUp, 0, &mut t, &mut x, 2.0);
+        let r = integ.integrate(
+            &BlowUp as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            2.0,
+        );
         assert_eq!(r, StopReason::StepTooSmall, "{:?}", opts.method);
         // The numerical solution's own blow-up time differs from t = 1 by O(tol).
         assert!((t - 1.0).abs() < 1e-6, "{:?}: t = {t}", opts.method);
@@ -196,7 +227,13 @@ fn adaptive_min_step_reports_step_too_small() {
     let mut integ = Integrator::new(1, opts).unwrap();
     let (mut t, mut x) = (0.0, [1.0]);
     assert_eq!(
-        integ.integrate(&BlowUp, 0, &mut t, &mut x, 2.0),
+        integ.integrate(
+            &BlowUp as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            2.0
+        ),
         StopReason::StepTooSmall
     );
     assert!(t < 1.0 && t > 0.9, "t = {t}");
@@ -207,7 +244,13 @@ fn flow_leaving_its_domain_reports_non_finite() {
     for opts in [Options::dopri5(1e-8), Options::dop853(1e-8)] {
         let mut integ = Integrator::new(1, opts).unwrap();
         let (mut t, mut x) = (0.0, [0.0]);
-        let r = integ.integrate(&Cliff, 0, &mut t, &mut x, 3.0);
+        let r = integ.integrate(
+            &Cliff as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            3.0,
+        );
         assert_eq!(r, StopReason::NonFinite, "{:?}", opts.method);
         assert!(x[0] <= 1.5 && x[0] > 1.5 - 1e-9, "x = {}", x[0]);
         assert!((t - x[0]).abs() < 1e-12);
@@ -219,7 +262,13 @@ fn non_finite_initial_state_is_reported_without_stepping() {
     let mut integ = Integrator::new(2, Options::dopri5(1e-8)).unwrap();
     let (mut t, mut x) = (0.0, [f64::NAN, 0.0]);
     assert_eq!(
-        integ.integrate(&Pendulum, 0, &mut t, &mut x, 1.0),
+        integ.integrate(
+            &Pendulum as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            1.0
+        ),
         StopReason::NonFinite
     );
     assert_eq!(t, 0.0);
@@ -235,7 +284,13 @@ fn max_steps_is_reported() {
     let mut integ = Integrator::new(3, opts).unwrap();
     let (mut t, mut x) = (0.0, [1.0, 0.0, 1.0]);
     assert_eq!(
-        integ.integrate(&OscGrowth, 0, &mut t, &mut x, 10.0),
+        integ.integrate(
+            &OscGrowth as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            10.0
+        ),
         StopReason::MaxSteps
     );
     let s = integ.stats();
@@ -248,7 +303,13 @@ fn end_time_at_or_before_start_returns_immediately() {
     let mut integ = Integrator::new(2, Options::dop853(1e-8)).unwrap();
     let (mut t, mut x) = (1.0, [0.3, 0.1]);
     assert_eq!(
-        integ.integrate(&Pendulum, 0, &mut t, &mut x, 1.0),
+        integ.integrate(
+            &Pendulum as &dyn pdw_hybrid::HybridSystem,
+            0,
+            &mut t,
+            &mut x,
+            1.0
+        ),
         StopReason::EndTime
     );
     assert_eq!((t, x), (1.0, [0.3, 0.1]));
@@ -264,10 +325,17 @@ fn h_max_bounds_every_step() {
     let (mut t, mut x) = (0.0, [1.0, 0.0, 1.0]);
     let mut last = 0.0;
     let mut worst = 0.0f64;
-    integ.integrate_observed(&OscGrowth, 0, &mut t, &mut x, 1.0, &mut |tt, _| {
-        worst = worst.max(tt - last);
-        last = tt;
-    });
+    integ.integrate_observed(
+        &OscGrowth as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        1.0,
+        &mut |tt, _| {
+            worst = worst.max(tt - last);
+            last = tt;
+        },
+    );
     assert!(worst <= 0.01 * (1.0 + 1e-12), "largest step {worst}");
     assert!(integ.stats().accepted >= 100);
 }

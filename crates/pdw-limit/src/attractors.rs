@@ -200,7 +200,7 @@ impl AttractorSet {
         &self,
         sys: &'a S,
         fall_outcome: &'a (dyn Fn(FallKind) -> Outcome + Sync),
-    ) -> BasinProblem<'a, S> {
+    ) -> BasinProblem<'a> {
         let mut p = BasinProblem::new(
             sys,
             self.gait().map(|g| g.points[0].clone()).unwrap_or_default(),
@@ -292,9 +292,9 @@ pub fn seed_set(
 /// `basin` are the options of the basin pass (integrator, tolerances, lanes), whose
 /// `max_strides` is replaced by `disc.seed_strides`.
 #[allow(clippy::too_many_arguments)]
-pub fn discover<S: Section + ?Sized>(
-    sys: &S,
-    newton_map: &StrideMap<'_, S>,
+pub fn discover(
+    sys: &dyn Section,
+    newton_map: &StrideMap<'_>,
     gait: Option<Attractor>,
     seeds: &[Vec<f64>],
     basin: &BasinOptions,
@@ -495,8 +495,8 @@ pub fn box_attractors(
 /// `n` consecutive section states from `s` (strides of the basin integrator), or `None` if a
 /// stride does not reach the section (the walker falls: a transient, not an attractor) or the
 /// last [`STANDSTILL_WINDOW`] strides are a walk dying out ([`walk_dies_out`]).
-fn sample_orbit<S: Section + ?Sized>(
-    sys: &S,
+fn sample_orbit(
+    sys: &dyn Section,
     basin: &BasinOptions,
     s: &[f64],
     n: usize,
@@ -526,7 +526,8 @@ fn sample_orbit<S: Section + ?Sized>(
 }
 
 /// Names (`period-k`, `chaotic`, suffixes b, c, …) and codes in discovery order.
-fn name_and_code(found: &mut [Attractor]) {
+#[doc(hidden)]
+pub fn name_and_code(found: &mut [Attractor]) {
     let mut next_code = ATTRACTOR_CODE_BASE;
     let mut seen: Vec<String> = Vec::new();
     for a in found.iter_mut() {
@@ -551,82 +552,5 @@ fn name_and_code(found: &mut [Attractor]) {
         };
         a.code = next_code;
         next_code += 1;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn att(kind: AttractorKind, k: usize, name: &str) -> Attractor {
-        Attractor {
-            name: name.into(),
-            code: 0,
-            kind,
-            period_k: k,
-            points: vec![vec![0.0, 0.0]],
-            multipliers: Vec::new(),
-            period_time: 1.0,
-            radius: 0.1,
-        }
-    }
-
-    #[test]
-    fn names_and_codes_follow_discovery_order() {
-        let mut v = vec![
-            att(AttractorKind::Periodic, 1, "gait"),
-            att(AttractorKind::Periodic, 2, ""),
-            att(AttractorKind::Chaotic, 0, ""),
-            att(AttractorKind::Periodic, 2, ""),
-            att(AttractorKind::Periodic, 1, ""),
-            att(AttractorKind::Chaotic, 0, ""),
-        ];
-        name_and_code(&mut v);
-        let got: Vec<(&str, u8)> = v.iter().map(|a| (a.name.as_str(), a.code)).collect();
-        assert_eq!(
-            got,
-            vec![
-                ("gait", 0),
-                ("period-2", 10),
-                ("chaotic", 11),
-                ("period-2b", 12),
-                ("period-1b", 13),
-                ("chaotic-b", 14)
-            ]
-        );
-        let set = AttractorSet { attractors: v };
-        let legend = set.legend();
-        assert_eq!(legend.len(), 10 + 5);
-        assert_eq!(legend[0], (0, "gait".to_string()));
-        assert_eq!(legend[10], (10, "period-2".to_string()));
-    }
-
-    #[test]
-    fn relabel_maps_known_orbits_and_walking_cells_near_a_chaotic_sample() {
-        let mut v = vec![
-            att(AttractorKind::Periodic, 2, ""),
-            att(AttractorKind::Chaotic, 0, ""),
-        ];
-        v[1].points = vec![vec![1.0, 1.0]];
-        name_and_code(&mut v);
-        let set = AttractorSet { attractors: v };
-        let cell = |o: Outcome, a: u8, f: [f64; 2]| CellResult {
-            outcome: o.code(),
-            strides: 1,
-            period: 2,
-            attractor: a,
-            final_state: f.to_vec(),
-        };
-        let mut cells = vec![
-            cell(Outcome::Other, 0, [0.0, 0.0]),
-            cell(Outcome::Other, u8::MAX, [0.0, 0.0]),
-            cell(Outcome::Timeout, u8::MAX, [1.05, 1.0]),
-            cell(Outcome::Timeout, u8::MAX, [1.5, 1.0]),
-            cell(Outcome::FallForward, u8::MAX, [1.0, 1.0]),
-        ];
-        set.relabel(&mut cells);
-        let codes: Vec<u8> = cells.iter().map(|c| c.outcome).collect();
-        assert_eq!(codes, vec![10, 1, 11, 7, 2]);
-        assert_eq!(cells[2].outcome(), Outcome::Other);
     }
 }

@@ -368,9 +368,9 @@ pub fn stands_still(hist: &[Vec<f64>], tol_gait: f64) -> bool {
 }
 
 /// What the cells are classified against.
-pub struct BasinProblem<'a, S: Section + ?Sized> {
+pub struct BasinProblem<'a> {
     /// The model.
-    pub sys: &'a S,
+    pub sys: &'a dyn Section,
     /// The selected fixed point `s*` (section coordinates); empty when there is none (no cell
     /// is then labelled `gait`, e.g. past the first period doubling).
     pub gait: Vec<f64>,
@@ -380,15 +380,15 @@ pub struct BasinProblem<'a, S: Section + ?Sized> {
     pub fall_outcome: &'a (dyn Fn(FallKind) -> Outcome + Sync),
 }
 
-impl<'a, S: Section + ?Sized> BasinProblem<'a, S> {
+impl<'a> BasinProblem<'a> {
     /// Problem with only the selected fixed point.
-    pub fn new(
+    pub fn new<S: Section + ?Sized>(
         sys: &'a S,
         gait: Vec<f64>,
         fall_outcome: &'a (dyn Fn(FallKind) -> Outcome + Sync),
     ) -> Self {
         Self {
-            sys,
+            sys: sys.as_section(),
             gait,
             others: Vec::new(),
             fall_outcome,
@@ -466,8 +466,8 @@ impl CellResult {
 /// The basin [`LaneDriver`]: one item per cell (a section state), all strides of the cell in one
 /// lane. Exposed so that other front ends can run it through [`pdw_hybrid::run_batch`] or
 /// [`pdw_hybrid::run_scalar`] directly.
-pub struct BasinDriver<'p, 'a, S: Section + ?Sized> {
-    problem: &'p BasinProblem<'a, S>,
+pub struct BasinDriver<'p, 'a> {
+    problem: &'p BasinProblem<'a>,
     opts: BasinOptions,
     section_guard: (usize, usize),
     start_mode: usize,
@@ -475,9 +475,9 @@ pub struct BasinDriver<'p, 'a, S: Section + ?Sized> {
     ds: usize,
 }
 
-impl<'p, 'a, S: Section + ?Sized> BasinDriver<'p, 'a, S> {
+impl<'p, 'a> BasinDriver<'p, 'a> {
     /// Driver for `problem` (validated with `opts`).
-    pub fn new(problem: &'p BasinProblem<'a, S>, opts: &BasinOptions) -> Result<Self, LimitError> {
+    pub fn new(problem: &'p BasinProblem<'a>, opts: &BasinOptions) -> Result<Self, LimitError> {
         opts.validate()?;
         problem.validate()?;
         let sys = problem.sys;
@@ -618,12 +618,18 @@ pub struct BasinLane {
     decided: Option<(Outcome, u8, u8)>,
 }
 
-impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
+impl<'a> LaneDriver<dyn Section + 'a> for BasinDriver<'_, 'a> {
     type Item = Vec<f64>;
     type Output = CellResult;
     type Lane = BasinLane;
 
-    fn start(&self, sys: &S, item: &Vec<f64>, lane: &mut BasinLane, x: &mut [f64]) -> (usize, f64) {
+    fn start(
+        &self,
+        sys: &(dyn Section + 'a),
+        item: &Vec<f64>,
+        lane: &mut BasinLane,
+        x: &mut [f64],
+    ) -> (usize, f64) {
         let ds = self.ds;
         lane.hist.resize(HIST * ds, 0.0);
         lane.buf.resize(sys.dim(), 0.0);
@@ -649,7 +655,7 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
 
     fn on_stop(
         &self,
-        sys: &S,
+        sys: &(dyn Section + 'a),
         ws: &mut Scratch,
         _item: &Vec<f64>,
         lane: &mut BasinLane,
@@ -714,7 +720,7 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
 
     fn finish(
         &self,
-        _sys: &S,
+        _sys: &(dyn Section + 'a),
         _item: &Vec<f64>,
         lane: BasinLane,
         _t: f64,
@@ -741,8 +747,8 @@ impl<S: Section + ?Sized> LaneDriver<S> for BasinDriver<'_, '_, S> {
 /// Classify every cell (section states of the model's section dimension), batched on `pool`
 /// (see the module docs); `progress(n_done)` is called as blocks of `chunk` cells finish. Results in cell order,
 /// identical for any thread count, lane count, chunk size and split of `cells`.
-pub fn classify_cells<S: Section + ?Sized>(
-    problem: &BasinProblem<'_, S>,
+pub fn classify_cells(
+    problem: &BasinProblem<'_>,
     cells: &[Vec<f64>],
     opts: &BasinOptions,
     pool: &rayon::ThreadPool,
@@ -766,8 +772,8 @@ pub fn classify_cells<S: Section + ?Sized>(
 
 /// The slow reference path: one cell at a time through the scalar integrator
 /// ([`pdw_hybrid::run_scalar_with`]), serial.
-pub fn classify_cells_scalar<S: Section + ?Sized>(
-    problem: &BasinProblem<'_, S>,
+pub fn classify_cells_scalar(
+    problem: &BasinProblem<'_>,
     cells: &[Vec<f64>],
     opts: &BasinOptions,
 ) -> Result<Vec<CellResult>, LimitError> {

@@ -63,10 +63,11 @@
 
 use crate::continuation::{real_eigenvector, Bifurcation};
 use crate::error::LimitError;
+use crate::family::{Built, ModelFamily, ModelFamily2};
 use crate::floquet::{multipliers, Multiplier};
 use crate::jacobian::dp_variational;
 use crate::newton::{find_fixed_point, residual_scale, Newton, NewtonOptions, NewtonState};
-use crate::orbit::{orbit_diagram, OrbitOptions, OrbitStart};
+use crate::orbit::{OrbitOptions, OrbitStart};
 use crate::stride::{StrideMap, StrideOutcome};
 use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, TerminationReason};
 use faer::prelude::*;
@@ -289,15 +290,14 @@ pub struct Curve {
 }
 
 /// A model of the two-parameter family `family(p_step, p_free)`.
-fn build2<S, E, F>(family: &F, p_step: f64, p_free: f64) -> Result<Box<S>, LostReason>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64, f64) -> Result<Box<S>, E>,
-{
-    family(p_step, p_free).map_err(|e| LostReason::Model {
-        message: e.to_string(),
-    })
+fn build2<'m>(
+    family: &dyn ModelFamily2<'m>,
+    p_step: f64,
+    p_free: f64,
+) -> Result<Box<dyn Built + 'm>, LostReason> {
+    family
+        .build(p_step, p_free)
+        .map_err(|message| LostReason::Model { message })
 }
 
 fn from_limit(e: LimitError, p_free: f64) -> LostReason {
@@ -346,8 +346,8 @@ pub struct Evaluation {
 
 /// The minimally augmented system at one value of `p_step` with fixed borders (see the module
 /// docs); the argmin problem of the corrector.
-pub struct Codim2System<'f, 'r, F> {
-    family: &'f F,
+pub struct Codim2System<'f, 'r, 'm> {
+    family: &'f (dyn ModelFamily2<'m> + 'f),
     kind: Codim2Kind,
     p_step: f64,
     b: Vec<f64>,
@@ -358,15 +358,11 @@ pub struct Codim2System<'f, 'r, F> {
     failure: &'r RefCell<Option<LostReason>>,
 }
 
-impl<'f, 'r, S, E, F> Codim2System<'f, 'r, F>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64, f64) -> Result<Box<S>, E>,
-{
-    /// The system at `p_step` with borders `b` (column) and `c` (row), both of length `n`.
+impl<'f, 'r, 'm> Codim2System<'f, 'r, 'm> {
+    /// The system at `p_step` with borders `b` (column) and `c` (row), both of length `n`;
+    /// `family` is any closure `(p_step, p_free) ↦ Result<Box<model>, error>`.
     pub fn new(
-        family: &'f F,
+        family: &'f (dyn ModelFamily2<'m> + 'f),
         kind: Codim2Kind,
         p_step: f64,
         b: Vec<f64>,
@@ -404,7 +400,8 @@ where
             });
         }
         let model = build2(self.family, self.p_step, p)?;
-        let map = StrideMap::new(&*model, self.opts.integrator).map_err(|e| from_limit(e, p))?;
+        let map =
+            StrideMap::new(model.section(), self.opts.integrator).map_err(|e| from_limit(e, p))?;
         let (stride, dp) = dp_variational(&map, x).map_err(|e| from_limit(e, p))?;
         // M = [[A, b], [cᵀ, 0]], A = DP − λ_c I.
         let m = n + 1;
@@ -472,12 +469,7 @@ where
     }
 }
 
-impl<S, E, F> Operator for Codim2System<'_, '_, F>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64, f64) -> Result<Box<S>, E>,
-{
+impl Operator for Codim2System<'_, '_, '_> {
     type Param = Vec<f64>;
     type Output = Vec<f64>;
 
@@ -486,12 +478,7 @@ where
     }
 }
 
-impl<S, E, F> Jacobian for Codim2System<'_, '_, F>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64, f64) -> Result<Box<S>, E>,
-{
+impl Jacobian for Codim2System<'_, '_, '_> {
     type Param = Vec<f64>;
     type Jacobian = Mat<f64>;
 
@@ -512,20 +499,15 @@ struct Solved {
 
 /// Newton at `p_step` from `y0` with borders `b`, `c`, then the independent checks.
 #[allow(clippy::too_many_arguments)]
-fn solve_point<S, E, F>(
-    family: &F,
+fn solve_point(
+    family: &dyn ModelFamily2<'_>,
     kind: Codim2Kind,
     p_step: f64,
     y0: &[f64],
     b: &[f64],
     c: &[f64],
     opts: &Codim2Options,
-) -> Result<Solved, LostReason>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64, f64) -> Result<Box<S>, E>,
-{
+) -> Result<Solved, LostReason> {
     let n = b.len();
     let failure = RefCell::new(None);
     let sys = Codim2System::new(
@@ -600,7 +582,7 @@ where
     let ev = sys.evaluate(&y)?;
     let p = y[n];
     let model = build2(family, p_step, p)?;
-    let map = StrideMap::new(&*model, opts.integrator).map_err(|e| from_limit(e, p))?;
+    let map = StrideMap::new(model.section(), opts.integrator).map_err(|e| from_limit(e, p))?;
     let next = map.apply(&y[..n]).map_err(|e| from_limit(e, p))?;
     let residual = norm_inf(
         &next
@@ -669,6 +651,17 @@ where
     E: Display,
     F: Fn(f64, f64) -> Result<Box<S>, E>,
 {
+    follow_erased(family, kind, start, step_values, opts)
+}
+
+/// [`follow_curve`] on the family as a trait object.
+fn follow_erased(
+    family: &dyn ModelFamily2<'_>,
+    kind: Codim2Kind,
+    start: &CurveStart,
+    step_values: &[f64],
+    opts: &Codim2Options,
+) -> Result<Curve, LimitError> {
     opts.validate()?;
     let n = start.section.len();
     if n == 0 || start.dp.len() != n * n {
@@ -878,18 +871,13 @@ impl Default for RegionOptions {
 /// out from the index nearest `hint.1` with `hint.0` as the first guess, each solve starting
 /// from the previous cell's gait. Returns per cell the start state of the iteration and whether
 /// the gait there is stable.
-fn column_gaits<S, E, F>(
-    family: &F,
+fn column_gaits(
+    family: &dyn ModelFamily2<'_>,
     p_step: f64,
     free_values: &[f64],
     hint: &(Vec<f64>, f64),
     opts: &RegionOptions,
-) -> Vec<(Vec<f64>, bool)>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64, f64) -> Result<Box<S>, E>,
-{
+) -> Vec<(Vec<f64>, bool)> {
     let k0 = free_values
         .iter()
         .enumerate()
@@ -901,7 +889,7 @@ where
         let mut guess = hint.0.clone();
         for k in ks {
             let found = build2(family, p_step, free_values[k]).ok().and_then(|m| {
-                let map = StrideMap::new(&*m, opts.integrator).ok()?;
+                let map = StrideMap::new(m.section(), opts.integrator).ok()?;
                 find_fixed_point(&map, &guess, &opts.newton).ok()
             });
             match found {
@@ -921,7 +909,7 @@ where
 /// stable period-one gait (continued cell to cell from `hints[i] = (section, p_free)`, a gait
 /// near column `i`); elsewhere the stride map is iterated from the unstable gait nudged by
 /// `opts.nudge` (or from the nearest gait found, where none exists) and the cell is labelled by
-/// the period detected after the transient ([`orbit_diagram`]) or the fall. `progress(1)` is
+/// the period detected after the transient ([`orbit_diagram`](crate::orbit_diagram)) or the fall. `progress(1)` is
 /// called once per column and phase (`2 × step_values.len()` calls in all, from any thread).
 /// Identical results for any thread count (every cell's computation is independent of the
 /// scheduling).
@@ -939,6 +927,39 @@ where
     E: Display,
     F: Fn(f64, f64) -> Result<Box<S>, E> + Sync,
 {
+    region_erased(
+        family,
+        step_values,
+        free_values,
+        hints,
+        opts,
+        pool,
+        progress,
+    )
+}
+
+/// The one-parameter family `p_free ↦ family(p_step, p_free)`.
+struct AtStep<'a, 'm> {
+    family: &'a (dyn ModelFamily2<'m> + Sync + 'a),
+    p_step: f64,
+}
+
+impl<'m> ModelFamily<'m> for AtStep<'_, 'm> {
+    fn build(&self, mu: f64) -> Result<Box<dyn Built + 'm>, String> {
+        self.family.build(self.p_step, mu)
+    }
+}
+
+/// [`region_map`] on the family as a trait object.
+fn region_erased(
+    family: &(dyn ModelFamily2<'_> + Sync),
+    step_values: &[f64],
+    free_values: &[f64],
+    hints: &[(Vec<f64>, f64)],
+    opts: &RegionOptions,
+    pool: &rayon::ThreadPool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<Vec<Region>>, LimitError> {
     if hints.len() != step_values.len() {
         return Err(LimitError::InvalidOption {
             name: "hints",
@@ -971,8 +992,8 @@ where
                 v
             })
             .collect();
-        let fam1 = |pf: f64| family(ps, pf);
-        let cols = orbit_diagram(
+        let fam1 = AtStep { family, p_step: ps };
+        let cols = crate::orbit::diagram_erased(
             &fam1,
             free_values,
             &OrbitStart::PerParam(starts),

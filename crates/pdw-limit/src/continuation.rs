@@ -50,6 +50,7 @@
 //! the result is not a period-k point, and continues the new branch by pseudo-arclength.
 
 use crate::error::LimitError;
+use crate::family::{Built, ModelFamily};
 use crate::floquet::{is_stable, multipliers, Multiplier};
 use crate::jacobian::dp_variational_with;
 use crate::stride::StrideMap;
@@ -390,30 +391,27 @@ struct Solved {
     iters: usize,
 }
 
-struct Ctx<'f, F> {
-    family: &'f F,
+struct Ctx<'f, M: ?Sized> {
+    family: &'f M,
     opts: ContinuationOptions,
     k: usize,
     n: usize,
 }
 
-impl<'f, S, E, F> Ctx<'f, F>
+impl<'f, 'm, M> Ctx<'f, M>
 where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64) -> Result<Box<S>, E>,
+    M: ModelFamily<'m> + ?Sized,
 {
-    fn build(&self, mu: f64) -> Result<Box<S>, LimitError> {
-        (self.family)(mu).map_err(|e| LimitError::Model {
-            param: mu,
-            message: e.to_string(),
-        })
+    fn build(&self, mu: f64) -> Result<Box<dyn Built + 'm>, LimitError> {
+        self.family
+            .build(mu)
+            .map_err(|message| LimitError::Model { param: mu, message })
     }
 
     /// `P^k(s; μ)` (scalar strides).
     fn iterate(&self, s: &[f64], mu: f64) -> Result<Vec<f64>, LimitError> {
         let model = self.build(mu)?;
-        let map = StrideMap::new(&*model, self.opts.integrator)?;
+        let map = StrideMap::new(model.section(), self.opts.integrator)?;
         let mut s = s.to_vec();
         for _ in 0..self.k {
             s = map.apply(&s)?;
@@ -426,7 +424,7 @@ where
         let n = self.n;
         let (s0, mu) = (&y[..n], y[n]);
         let model = self.build(mu)?;
-        let map = StrideMap::new(&*model, self.opts.integrator)?;
+        let map = StrideMap::new(model.section(), self.opts.integrator)?;
         let mut dp = vec![0.0; n * n];
         for i in 0..n {
             dp[i * n + i] = 1.0;
@@ -616,7 +614,7 @@ where
     }
 }
 
-fn check_start<S: Section + ?Sized>(s: &[f64], model: &S) -> Result<(), LimitError> {
+fn check_start(s: &[f64], model: &dyn Section) -> Result<(), LimitError> {
     if s.len() != model.section_dim() {
         return Err(LimitError::SectionDim {
             expected: model.section_dim(),
@@ -644,6 +642,17 @@ where
     E: Display,
     F: Fn(f64) -> Result<Box<S>, E>,
 {
+    continue_erased(family, s0, mu0, period_strides, opts)
+}
+
+/// [`continue_branch`] on the erased family.
+fn continue_erased<'m>(
+    family: &dyn ModelFamily<'m>,
+    s0: &[f64],
+    mu0: f64,
+    period_strides: usize,
+    opts: &ContinuationOptions,
+) -> Result<Branch, LimitError> {
     opts.validate()?;
     if period_strides == 0 {
         return Err(LimitError::InvalidOption {
@@ -658,7 +667,7 @@ where
         k: period_strides,
         n: s0.len(),
     };
-    check_start(s0, &*ctx.build(mu0)?)?;
+    check_start(s0, ctx.build(mu0)?.section())?;
     let n = ctx.n;
     let mut y0 = s0.to_vec();
     y0.push(mu0);
@@ -683,17 +692,12 @@ where
 }
 
 /// The continuation loop from a corrected point `first` with tangent `t0`.
-fn run_branch<S, E, F>(
-    ctx: &Ctx<'_, F>,
+fn run_branch<'m>(
+    ctx: &Ctx<'_, dyn ModelFamily<'m> + '_>,
     first: Solved,
     t0: Vec<f64>,
     prefix: Option<BranchPoint>,
-) -> Result<Branch, LimitError>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64) -> Result<Box<S>, E>,
-{
+) -> Result<Branch, LimitError> {
     let opts = ctx.opts;
     let n = ctx.n;
     let natural = opts.method == ContinuationMethod::Natural;
@@ -883,6 +887,15 @@ where
     E: Display,
     F: Fn(f64) -> Result<Box<S>, E>,
 {
+    switch_erased(family, bif, opts)
+}
+
+/// [`switch_period_doubling`] on the erased family.
+fn switch_erased<'m>(
+    family: &dyn ModelFamily<'m>,
+    bif: &Bifurcation,
+    opts: &ContinuationOptions,
+) -> Result<Branch, LimitError> {
     opts.validate()?;
     if bif.kind != BifurcationKind::PeriodDoubling {
         return Err(LimitError::InvalidOption {
@@ -975,7 +988,7 @@ where
     let mut o = *opts;
     o.stop_at = Some(BifurcationKind::PeriodDoubling);
     let opts = &o;
-    let mut branch = continue_branch(family, s0, mu0, 1, opts)?;
+    let mut branch = continue_erased(family, s0, mu0, 1, opts)?;
     for level in 0..levels {
         let Some(pd) = branch
             .bifurcations
@@ -991,7 +1004,7 @@ where
         if level + 1 == levels {
             break;
         }
-        branch = switch_period_doubling(family, &pd, opts)?;
+        branch = switch_erased(family, &pd, opts)?;
     }
     Ok((pds, branches))
 }
@@ -1034,6 +1047,17 @@ where
     E: Display,
     F: Fn(f64) -> Result<Box<S>, E> + Sync,
 {
+    sample_erased(family, branch, params, opts, pool)
+}
+
+/// [`branch_at_params`] on the erased family.
+fn sample_erased<'m>(
+    family: &(dyn ModelFamily<'m> + Sync),
+    branch: &Branch,
+    params: &[f64],
+    opts: &ContinuationOptions,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<SampledPoint>, LimitError> {
     use rayon::prelude::*;
     opts.validate()?;
     let Some(first) = branch.points.first() else {

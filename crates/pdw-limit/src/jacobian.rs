@@ -16,7 +16,7 @@
 use crate::error::LimitError;
 use crate::stride::{Stride, StrideEnd, StrideMap};
 use crate::variational::{ErrorControl, Variational};
-use pdw_hybrid::{run_scalar, Section};
+use pdw_hybrid::run_scalar;
 
 /// Finite-difference scheme of [`dp_finite_difference`]. The step for coordinate `j` is
 /// `h_j = rel_step · max(|s_j|, 1e-3)`.
@@ -73,18 +73,15 @@ pub fn richardson_jacobian(f: impl Fn(&[f64], &mut [f64]), x: &[f64], n_out: usi
 /// augmented integration; its `next` agrees with [`StrideMap::stride`] to the tolerance).
 /// Fails with [`LimitError::StrideFailed`] when the stride does not reach the section.
 /// The step-size control sees the whole augmented state ([`ErrorControl::Full`]).
-pub fn dp_variational<S: Section + ?Sized>(
-    map: &StrideMap<'_, S>,
-    s: &[f64],
-) -> Result<(Stride, Vec<f64>), LimitError> {
+pub fn dp_variational(map: &StrideMap<'_>, s: &[f64]) -> Result<(Stride, Vec<f64>), LimitError> {
     dp_variational_with(map, s, ErrorControl::Full)
 }
 
 /// [`dp_variational`] with a choice of [`ErrorControl`]. With [`ErrorControl::State`] the
 /// returned stride is [`StrideMap::stride`]'s bit for bit (the same steps, events and resets
 /// on the state components) and `DP` rides on those steps.
-pub fn dp_variational_with<S: Section + ?Sized>(
-    map: &StrideMap<'_, S>,
+pub fn dp_variational_with(
+    map: &StrideMap<'_>,
     s: &[f64],
     control: ErrorControl,
 ) -> Result<(Stride, Vec<f64>), LimitError> {
@@ -127,8 +124,8 @@ pub fn dp_variational_with<S: Section + ?Sized>(
 
 /// `DP(s)` by finite differences; all perturbed strides are lanes of one batched run
 /// (`lanes` lanes). Fails if any perturbed stride does not reach the section.
-pub fn dp_finite_difference<S: Section + ?Sized>(
-    map: &StrideMap<'_, S>,
+pub fn dp_finite_difference(
+    map: &StrideMap<'_>,
     s: &[f64],
     scheme: FdScheme,
     lanes: usize,

@@ -1,7 +1,8 @@
 //! Limit cycles of hybrid walkers: the stride map on the post-heel-strike Poincaré section, its
 //! Jacobian two ways (variational equations with saltation matrices; batched finite
 //! differences), fixed points by a Newton solver run through argmin, Floquet multipliers and
-//! gait metrics. Generic over any [`pdw_hybrid::Section`].
+//! gait metrics, for any [`pdw_hybrid::Section`] (held as `dyn Section`: the analysis is compiled
+//! once for every model; see the crate README).
 //!
 //! ```text
 //! StrideMap::new(&model, Options::dop853(1e-13))?     P: s ↦ s'
@@ -15,6 +16,7 @@ pub mod codim2;
 pub mod continuation;
 pub mod design;
 pub mod error;
+pub mod family;
 pub mod floquet;
 pub mod gaits;
 pub mod jacobian;

@@ -57,7 +57,6 @@ use argmin::core::{
 };
 use faer::prelude::*;
 use faer::Mat;
-use pdw_hybrid::Section;
 
 /// How the Newton matrix `DP − I` is obtained.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -178,16 +177,16 @@ impl Default for NewtonOptions {
 /// the tangent block) and `DP(s)`, which is kept for the Jacobian at that same `s` (the Newton
 /// step from an accepted point, and the multipliers of the converged point, cost no extra
 /// integration). The plain stride map `P` decides acceptance in [`find_fixed_point`].
-pub struct FixedPointProblem<'m, 'a, S: Section + ?Sized> {
-    pub map: &'m StrideMap<'a, S>,
+pub struct FixedPointProblem<'m, 'a> {
+    pub map: &'m StrideMap<'a>,
     pub dp: DpMethod,
     /// `DP(s)` of the last variational evaluation of `F`.
     kept: KeptJacobian,
 }
 
-impl<'m, 'a, S: Section + ?Sized> FixedPointProblem<'m, 'a, S> {
+impl<'m, 'a> FixedPointProblem<'m, 'a> {
     /// The problem on `map` with the Jacobian from `dp`.
-    pub fn new(map: &'m StrideMap<'a, S>, dp: DpMethod) -> Self {
+    pub fn new(map: &'m StrideMap<'a>, dp: DpMethod) -> Self {
         Self {
             map,
             dp,
@@ -216,7 +215,7 @@ impl<'m, 'a, S: Section + ?Sized> FixedPointProblem<'m, 'a, S> {
     }
 }
 
-impl<S: Section + ?Sized> Operator for FixedPointProblem<'_, '_, S> {
+impl Operator for FixedPointProblem<'_, '_> {
     type Param = Vec<f64>;
     type Output = Vec<f64>;
 
@@ -233,7 +232,7 @@ impl<S: Section + ?Sized> Operator for FixedPointProblem<'_, '_, S> {
     }
 }
 
-impl<S: Section + ?Sized> Jacobian for FixedPointProblem<'_, '_, S> {
+impl Jacobian for FixedPointProblem<'_, '_> {
     type Param = Vec<f64>;
     type Jacobian = Mat<f64>;
 
@@ -395,8 +394,8 @@ pub struct FixedPoint {
 
 /// Finds a fixed point of `map` from `guess`, verifies it, and measures it (multipliers,
 /// period, step length, speed).
-pub fn find_fixed_point<S: Section + ?Sized>(
-    map: &StrideMap<'_, S>,
+pub fn find_fixed_point(
+    map: &StrideMap<'_>,
     guess: &[f64],
     opts: &NewtonOptions,
 ) -> Result<FixedPoint, LimitError> {
@@ -580,54 +579,4 @@ pub fn find_fixed_point<S: Section + ?Sized>(
         termination,
         residual_history: history,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use pdw_hybrid::Options;
-    use pdw_walkers::simplest::{Simplest, SimplestParams};
-    use pdw_walkers::Walker;
-
-    fn solve(slope: f64, guess: &[f64]) -> Result<FixedPoint, LimitError> {
-        let m = Simplest::new(SimplestParams {
-            slope,
-            ..Default::default()
-        })
-        .unwrap();
-        let sl = |x: &[f64]| m.step_length(x);
-        let map = StrideMap::new(&m, Options::dop853(1e-14))
-            .unwrap()
-            .with_step_length(&sl);
-        find_fixed_point(&map, guess, &NewtonOptions::default())
-    }
-
-    /// On a level floor the simplest walker loses energy at every heel strike: there is no
-    /// gait. The absolute test accepted a residual of 1e-12 on states of 6e-5 as a "stable
-    /// gait"; the relative test and the step-length check reject it, and say why.
-    #[test]
-    fn level_floor_has_no_gait_and_the_failure_says_degenerate() {
-        for slope in [0.0, -0.0, 1e-320] {
-            for guess in [[0.2, -0.2], [9.7e-5, -1.01e-4]] {
-                let e = solve(slope, &guess).unwrap_err();
-                let LimitError::NoConvergence { reason, last, .. } = &e else {
-                    panic!("slope {slope}, guess {guess:?}: {e}");
-                };
-                assert!(
-                    reason.contains("degenerate") || reason.contains("standing still"),
-                    "slope {slope}, guess {guess:?}: {reason} (last {last:?})"
-                );
-            }
-        }
-    }
-
-    /// The relative test does not loosen order-one gaits: Garcia's stable gait at 0.009 is
-    /// found to the same 1e-12 absolute residual.
-    #[test]
-    fn order_one_gait_keeps_the_absolute_tolerance() {
-        let fp = solve(0.009, &[0.2, -0.2]).unwrap();
-        assert!(fp.residual <= 1e-12 * residual_scale(&fp.section));
-        assert!((fp.section[0] - 0.200_310_900_494_83).abs() < 1e-9);
-        assert!(fp.metrics.step_length.unwrap() > 0.3);
-    }
 }

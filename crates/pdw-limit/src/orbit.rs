@@ -24,6 +24,7 @@
 //! not yet converged).
 
 use crate::error::LimitError;
+use crate::family::ModelFamily;
 use crate::stride::{StrideMap, StrideOutcome};
 use pdw_hybrid::{Integrator, Options, Section};
 use rayon::prelude::*;
@@ -109,6 +110,17 @@ where
     E: Display,
     F: Fn(f64) -> Result<Box<S>, E> + Sync,
 {
+    diagram_erased(family, params, start, opts, pool)
+}
+
+/// [`orbit_diagram`] on the erased family.
+pub(crate) fn diagram_erased<'m>(
+    family: &(dyn ModelFamily<'m> + Sync),
+    params: &[f64],
+    start: &OrbitStart,
+    opts: &OrbitOptions,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<OrbitColumn>, LimitError> {
     opts.integrator.validate()?;
     if opts.chunk == 0 {
         return Err(LimitError::InvalidOption {
@@ -160,22 +172,17 @@ where
     Ok(all)
 }
 
-fn column<S, E, F>(
-    family: &F,
+fn column(
+    family: &dyn ModelFamily<'_>,
     mu: f64,
     s0: &[f64],
     opts: &OrbitOptions,
-) -> Result<OrbitColumn, LimitError>
-where
-    S: Section + ?Sized,
-    E: Display,
-    F: Fn(f64) -> Result<Box<S>, E>,
-{
-    let model = family(mu).map_err(|e| LimitError::Model {
-        param: mu,
-        message: e.to_string(),
-    })?;
-    let map = StrideMap::new(&*model, opts.integrator)?;
+) -> Result<OrbitColumn, LimitError> {
+    let built = family
+        .build(mu)
+        .map_err(|message| LimitError::Model { param: mu, message })?;
+    let model = built.section();
+    let map = StrideMap::new(model, opts.integrator)?;
     let mut integ = Integrator::new(model.dim(), opts.integrator)?;
     let mut s = s0.to_vec();
     let mut points = Vec::with_capacity(opts.record);

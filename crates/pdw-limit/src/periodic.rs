@@ -26,15 +26,14 @@ use crate::stride::StrideMap;
 use crate::variational::ErrorControl;
 use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, TerminationReason};
 use faer::Mat;
-use pdw_hybrid::Section;
 
 /// The argmin problem `F(s) = P^K(s) − s` with Jacobian `DP^K(s) − I`.
 ///
 /// As for period one ([`crate::FixedPointProblem`]): with [`DpMethod::Variational`] an
 /// evaluation of `F` integrates the variational equations along the K strides once, giving
 /// `P^K(s)` and `DP^K(s)` together; the Jacobian at that `s` is kept.
-pub struct PeriodKProblem<'m, 'a, S: Section + ?Sized> {
-    pub map: &'m StrideMap<'a, S>,
+pub struct PeriodKProblem<'m, 'a> {
+    pub map: &'m StrideMap<'a>,
     /// K ≥ 1.
     pub k: usize,
     pub dp: DpMethod,
@@ -43,7 +42,8 @@ pub struct PeriodKProblem<'m, 'a, S: Section + ?Sized> {
 }
 
 /// `C = A · B` for row-major `n × n` matrices.
-fn matmul(a: &[f64], b: &[f64], n: usize) -> Vec<f64> {
+#[doc(hidden)]
+pub fn matmul(a: &[f64], b: &[f64], n: usize) -> Vec<f64> {
     let mut c = vec![0.0; n * n];
     for i in 0..n {
         for l in 0..n {
@@ -62,7 +62,7 @@ fn dist_inf(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
 }
 
-impl<S: Section + ?Sized> PeriodKProblem<'_, '_, S> {
+impl PeriodKProblem<'_, '_> {
     /// `P^K(s)`, or [`LimitError::StrideFailed`] if a stride does not reach the section.
     pub fn iterate(&self, s: &[f64]) -> Result<Vec<f64>, LimitError> {
         let mut x = s.to_vec();
@@ -113,9 +113,9 @@ impl<S: Section + ?Sized> PeriodKProblem<'_, '_, S> {
     }
 }
 
-impl<'m, 'a, S: Section + ?Sized> PeriodKProblem<'m, 'a, S> {
+impl<'m, 'a> PeriodKProblem<'m, 'a> {
     /// The K-step problem on `map` with the Jacobian from `dp`.
-    pub fn new(map: &'m StrideMap<'a, S>, k: usize, dp: DpMethod) -> Self {
+    pub fn new(map: &'m StrideMap<'a>, k: usize, dp: DpMethod) -> Self {
         Self {
             map,
             k,
@@ -125,7 +125,7 @@ impl<'m, 'a, S: Section + ?Sized> PeriodKProblem<'m, 'a, S> {
     }
 }
 
-impl<S: Section + ?Sized> Operator for PeriodKProblem<'_, '_, S> {
+impl Operator for PeriodKProblem<'_, '_> {
     type Param = Vec<f64>;
     type Output = Vec<f64>;
 
@@ -142,7 +142,7 @@ impl<S: Section + ?Sized> Operator for PeriodKProblem<'_, '_, S> {
     }
 }
 
-impl<S: Section + ?Sized> Jacobian for PeriodKProblem<'_, '_, S> {
+impl Jacobian for PeriodKProblem<'_, '_> {
     type Param = Vec<f64>;
     type Jacobian = Mat<f64>;
 
@@ -212,8 +212,8 @@ fn same_point_tol(tol: f64, s: &[f64]) -> f64 {
 
 /// The orbit of `s` under K strides with a fresh integrator: the K + 1 section states and the
 /// K strides' metrics, or the failing stride's error.
-fn integrate_orbit<S: Section + ?Sized>(
-    map: &StrideMap<'_, S>,
+fn integrate_orbit(
+    map: &StrideMap<'_>,
     s: &[f64],
     k: usize,
 ) -> Result<(Vec<Vec<f64>>, Vec<GaitMetrics>), LimitError> {
@@ -237,8 +237,8 @@ fn integrate_orbit<S: Section + ?Sized>(
 /// Finds a period-`k` orbit of `map` by Newton on `P^k − id` from `guess`, verifies it (see the
 /// module docs) and measures it (multipliers of `DP^k`, per-stride metrics). `k = 1` solves the
 /// same equation as [`crate::find_fixed_point`].
-pub fn find_periodic_orbit<S: Section + ?Sized>(
-    map: &StrideMap<'_, S>,
+pub fn find_periodic_orbit(
+    map: &StrideMap<'_>,
     guess: &[f64],
     k: usize,
     opts: &NewtonOptions,
@@ -407,11 +407,7 @@ pub fn canonical_start(orbit: &[Vec<f64>]) -> Vec<Vec<f64>> {
 }
 
 /// `s` after `n` strides of `map`, or `None` if a stride fails on the way.
-pub fn iterate_map<S: Section + ?Sized>(
-    map: &StrideMap<'_, S>,
-    s: &[f64],
-    n: usize,
-) -> Option<Vec<f64>> {
+pub fn iterate_map(map: &StrideMap<'_>, s: &[f64], n: usize) -> Option<Vec<f64>> {
     let mut integ = pdw_hybrid::Integrator::new(map.system().dim(), *map.options()).ok()?;
     let mut x = s.to_vec();
     for _ in 0..n {
@@ -422,28 +418,4 @@ pub fn iterate_map<S: Section + ?Sized>(
         x = st.next;
     }
     Some(x)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn canonical_start_rotates_to_the_smallest_point() {
-        let o = vec![vec![0.3, 1.0], vec![0.1, 2.0], vec![0.2, 0.0]];
-        let c = canonical_start(&o);
-        assert_eq!(c, vec![vec![0.1, 2.0], vec![0.2, 0.0], vec![0.3, 1.0]]);
-        assert!(same_orbit(&o, &c));
-        assert!(!same_orbit(
-            &o,
-            &[vec![0.1, 2.1], vec![0.2, 0.0], vec![0.3, 1.0]]
-        ));
-    }
-
-    #[test]
-    fn matmul_is_row_major_product() {
-        let a = [1.0, 2.0, 3.0, 4.0];
-        let b = [0.0, 1.0, 1.0, 0.0];
-        assert_eq!(matmul(&a, &b, 2), vec![2.0, 1.0, 4.0, 3.0]);
-    }
 }

@@ -194,19 +194,23 @@ pub struct Stride {
 /// Model-provided step length from the pre-impact state.
 pub type StepLengthFn<'a> = &'a (dyn Fn(&[f64]) -> f64 + Sync);
 
-/// The stride map of a model with a section.
-pub struct StrideMap<'a, S: Section + ?Sized> {
-    sys: &'a S,
+/// The stride map of a model with a section. The model is held as `&dyn Section`, so the
+/// analysis built on the map (Newton, continuation, basins, …) is compiled once for every model
+/// type; the integrator calls the model's flow through its vtable, once per batched stage
+/// evaluation of all lanes (measured cost in the crate's README).
+pub struct StrideMap<'a> {
+    sys: &'a dyn Section,
     opts: Options,
     step_length: Option<StepLengthFn<'a>>,
 }
 
-impl<'a, S: Section + ?Sized> StrideMap<'a, S> {
-    /// Stride map of `sys` integrated with `opts` (validated here).
-    pub fn new(sys: &'a S, opts: Options) -> Result<Self, LimitError> {
+impl<'a> StrideMap<'a> {
+    /// Stride map of `sys` (any section model: a concrete type or a trait object) integrated
+    /// with `opts` (validated here).
+    pub fn new<S: Section + ?Sized>(sys: &'a S, opts: Options) -> Result<Self, LimitError> {
         opts.validate()?;
         Ok(Self {
-            sys,
+            sys: sys.as_section(),
             opts,
             step_length: None,
         })
@@ -220,7 +224,7 @@ impl<'a, S: Section + ?Sized> StrideMap<'a, S> {
     }
 
     /// The model.
-    pub fn system(&self) -> &'a S {
+    pub fn system(&self) -> &'a dyn Section {
         self.sys
     }
 
@@ -344,7 +348,7 @@ impl<'a, S: Section + ?Sized> StrideMap<'a, S> {
     }
 
     /// The batched strides' driver: section states lifted in the lane, strides finished there.
-    fn section_driver(&self) -> SectionDriver<'_, 'a, S> {
+    fn section_driver(&self) -> SectionDriver<'_, 'a> {
         SectionDriver {
             map: self,
             inner: self.driver(),
@@ -360,17 +364,23 @@ impl<'a, S: Section + ?Sized> StrideMap<'a, S> {
 /// in the lane when it starts (no lifted copy of the whole input), and a lane's result is the
 /// finished [`Stride`], projected by the thread that ran it. Resets and stops are those of the
 /// [`EventDriver`], so a batched stride has the bits of a scalar one.
-struct SectionDriver<'m, 'a, S: Section + ?Sized> {
-    map: &'m StrideMap<'a, S>,
+struct SectionDriver<'m, 'a> {
+    map: &'m StrideMap<'a>,
     inner: EventDriver,
 }
 
-impl<S: Section + ?Sized> LaneDriver<S> for SectionDriver<'_, '_, S> {
+impl<'a> LaneDriver<dyn Section + 'a> for SectionDriver<'_, 'a> {
     type Item = Vec<f64>;
     type Output = Stride;
     type Lane = EventLane;
 
-    fn start(&self, sys: &S, item: &Vec<f64>, lane: &mut EventLane, x: &mut [f64]) -> (usize, f64) {
+    fn start(
+        &self,
+        sys: &(dyn Section + 'a),
+        item: &Vec<f64>,
+        lane: &mut EventLane,
+        x: &mut [f64],
+    ) -> (usize, f64) {
         // As `StrideMap::lift`: L(s) written over zeros.
         x.fill(0.0);
         sys.lift(item, x);
@@ -380,7 +390,7 @@ impl<S: Section + ?Sized> LaneDriver<S> for SectionDriver<'_, '_, S> {
 
     fn on_stop(
         &self,
-        sys: &S,
+        sys: &(dyn Section + 'a),
         ws: &mut Scratch,
         item: &Vec<f64>,
         lane: &mut EventLane,
@@ -389,11 +399,35 @@ impl<S: Section + ?Sized> LaneDriver<S> for SectionDriver<'_, '_, S> {
         t: f64,
         x: &mut [f64],
     ) -> Control {
-        <EventDriver as LaneDriver<S>>::on_stop(&self.inner, sys, ws, item, lane, stop, mode, t, x)
+        <EventDriver as LaneDriver<dyn Section + 'a>>::on_stop(
+            &self.inner,
+            sys,
+            ws,
+            item,
+            lane,
+            stop,
+            mode,
+            t,
+            x,
+        )
     }
 
-    fn finish(&self, sys: &S, item: &Vec<f64>, lane: EventLane, t: f64, x: &[f64]) -> Stride {
-        let end = <EventDriver as LaneDriver<S>>::finish(&self.inner, sys, item, lane, t, x);
+    fn finish(
+        &self,
+        sys: &(dyn Section + 'a),
+        item: &Vec<f64>,
+        lane: EventLane,
+        t: f64,
+        x: &[f64],
+    ) -> Stride {
+        let end = <EventDriver as LaneDriver<dyn Section + 'a>>::finish(
+            &self.inner,
+            sys,
+            item,
+            lane,
+            t,
+            x,
+        );
         self.map.to_stride(end)
     }
 }

@@ -738,7 +738,8 @@ impl Dense<'_> {
 /// Brent's minimisation of `f` on `[a, b]` from the interior point `x` with `f(x) = fx`
 /// (golden-section steps with parabolic interpolation, Brent 1973 ch. 5); returns the best
 /// `(t, f(t))` seen, to a relative time tolerance [`TIME_TOL`].
-fn brent_min(f: &mut dyn FnMut(f64) -> f64, a: f64, x: f64, b: f64, fx: f64) -> (f64, f64) {
+#[doc(hidden)]
+pub fn brent_min(f: &mut dyn FnMut(f64) -> f64, a: f64, x: f64, b: f64, fx: f64) -> (f64, f64) {
     const CGOLD: f64 = 0.381_966_011_250_105_1; // (3 − √5) / 2
     let (mut a, mut b) = (a, b);
     let (mut x, mut w, mut v) = (x, x, x);
@@ -824,7 +825,8 @@ fn brent_min(f: &mut dyn FnMut(f64) -> f64, a: f64, x: f64, b: f64, fx: f64) -> 
 
 /// The root of `f` in `[a, b]` (`f(a) = fa`, `f(b) = fb` of opposite signs) by the Illinois
 /// variant of regula falsi (Dowell & Jarratt 1971), to [`TIME_TOL`] in time.
-fn illinois(f: &mut dyn FnMut(f64) -> f64, a: f64, fa: f64, b: f64, fb: f64) -> f64 {
+#[doc(hidden)]
+pub fn illinois(f: &mut dyn FnMut(f64) -> f64, a: f64, fa: f64, b: f64, fb: f64) -> f64 {
     let (mut a, mut fa, mut b, mut fb) = (a, fa, b, fb);
     let mut side = 0i8;
     for _ in 0..200 {
@@ -860,30 +862,5 @@ fn illinois(f: &mut dyn FnMut(f64) -> f64, a: f64, fa: f64, b: f64, fb: f64) -> 
         a
     } else {
         b
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn brent_finds_a_parabola_minimum() {
-        let mut f = |t: f64| (t - 0.3).powi(2) - 1.0;
-        let f5 = f(0.5);
-        let (t, v) = brent_min(&mut f, 0.0, 0.5, 1.0, f5);
-        assert!((t - 0.3).abs() < 1e-7, "{t}");
-        assert!((v + 1.0).abs() < 1e-14);
-        // minimum at the end of the bracket
-        let mut g = |t: f64| t;
-        let (t, v) = brent_min(&mut g, 0.0, 0.0, 1.0, 0.0);
-        assert_eq!((t, v), (0.0, 0.0));
-    }
-
-    #[test]
-    fn illinois_finds_a_root() {
-        let mut f = |t: f64| t.cos() - t;
-        let r = illinois(&mut f, 0.0, 1.0, 1.0, 1f64.cos() - 1.0);
-        assert!((r - 0.739_085_133_215_160_6).abs() < 1e-12, "{r}");
     }
 }

@@ -136,7 +136,7 @@ fn the_basin_at_gamma_0_016_holds_the_period_two_gait() {
 
 /// Largest Lyapunov exponent of the stride map along `n` strides from `s` (per stride), from
 /// the exact Jacobians: ln of the growth of a renormalised tangent vector, averaged.
-fn lyapunov(map: &StrideMap<'_, Simplest>, s: &[f64], n: usize) -> f64 {
+fn lyapunov(map: &StrideMap<'_>, s: &[f64], n: usize) -> f64 {
     let mut x = s.to_vec();
     let mut v = [1.0, 0.0];
     let mut sum = 0.0;

@@ -200,7 +200,7 @@ fn warm_restarts_label_the_basin_as_cold_ones_with_fewer_attempts() {
             lanes: opts.lanes,
             integrator: opts.integrator,
         };
-        pdw_hybrid::run_batch_counted(&m, &driver, &cells, &bo).unwrap()
+        pdw_hybrid::run_batch_counted(prob.sys, &driver, &cells, &bo).unwrap()
     };
     let ((warm, sw), (cold, sc)) = (run(true), run(false));
     let gait = Outcome::Gait.code();

@@ -92,7 +92,7 @@ fn presets_reproduce_the_hand_written_models_gaits_to_1e_11() {
 
 /// `DP(s)` by central differences of the stride map with steps `h`, `h/2`, `h/4`
 /// (`h = 1e-3·max(1, |s_j|)`), extrapolated twice (Richardson: error `O(h⁶)`).
-fn dp_richardson3(map: &StrideMap<'_, dyn Walker>, s: &[f64]) -> Vec<f64> {
+fn dp_richardson3(map: &StrideMap<'_>, s: &[f64]) -> Vec<f64> {
     let n = s.len();
     let mut dp = vec![0.0; n * n];
     for j in 0..n {
@@ -122,8 +122,7 @@ fn exact_multipliers_agree_with_richardson_differences_to_nine_digits() {
     for (name, ov, gait, section, _) in BEFORE {
         let w = pdw_walkers::build(name, ov).unwrap();
         let fp = fixed_point(w.as_ref(), &section);
-        let map: StrideMap<'_, dyn Walker> =
-            StrideMap::new(w.as_ref(), Options::dop853(1e-14)).unwrap();
+        let map: StrideMap<'_> = StrideMap::new(w.as_ref(), Options::dop853(1e-14)).unwrap();
         let (_, dp_var) = dp_variational(&map, &fp.section).unwrap();
         let dp_fd = dp_richardson3(&map, &fp.section);
         let mf = multipliers(&dp_fd, 3).unwrap();
@@ -164,8 +163,7 @@ fn round_foot_multipliers_agree_with_richardson_differences() {
     let fp = fixed_point(&w, &[0.3383, -1.2859, 0.8596]);
     // a different gait from the point foot's (s₀ = 0.2710): longer steps on round feet
     assert!((fp.section[0] - 0.3383).abs() < 1e-3, "{:?}", fp.section);
-    let map: StrideMap<'_, dyn Walker> =
-        StrideMap::new(&w as &dyn Walker, Options::dop853(1e-14)).unwrap();
+    let map: StrideMap<'_> = StrideMap::new(&w as &dyn Walker, Options::dop853(1e-14)).unwrap();
     let (_, dp_var) = dp_variational(&map, &fp.section).unwrap();
     let dp_fd = dp_richardson3(&map, &fp.section);
     let (mv, mf) = (
@@ -229,8 +227,7 @@ fn seed5_walking_buckles_with_stops_and_its_latched_gait_has_exact_multipliers()
     );
     // the stance knee is locked all step, the swing knee free until the knee strike
     assert_eq!(w.locked_joints(pdw_walkers::chain_walker::FREE), &[1]);
-    let map: StrideMap<'_, dyn Walker> =
-        StrideMap::new(&w as &dyn Walker, Options::dop853(1e-14)).unwrap();
+    let map: StrideMap<'_> = StrideMap::new(&w as &dyn Walker, Options::dop853(1e-14)).unwrap();
     let (_, dp_var) = dp_variational(&map, &fp.section).unwrap();
     let dp_fd = dp_richardson3(&map, &fp.section);
     let (mv, mf) = (

@@ -14,6 +14,7 @@ mod continuation_garcia;
 mod continuation_maps;
 mod continuation_measure;
 mod design;
+mod internals;
 mod orbit_garcia;
 mod period_k;
 mod rimless_wheel;

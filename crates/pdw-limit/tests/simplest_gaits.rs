@@ -327,10 +327,7 @@ fn variational_newton_converges_on_the_plain_map_itself() {
 /// Newton from Garcia's long-period guess at γ = 0.009 with the variational Jacobian (checked
 /// here: its residual is the plain map's, recomputed independently, and ≤ tol) and with
 /// finite-difference Jacobians.
-fn variational_and_fd_newton<S: pdw_hybrid::Section + ?Sized>(
-    map: &StrideMap<'_, S>,
-    tol: f64,
-) -> (FixedPoint, FixedPoint) {
+fn variational_and_fd_newton(map: &StrideMap<'_>, tol: f64) -> (FixedPoint, FixedPoint) {
     let guess = GarciaGait::LongPeriod.section_guess(0.009);
     let var = find_fixed_point(
         map,
@@ -351,11 +348,7 @@ fn variational_and_fd_newton<S: pdw_hybrid::Section + ?Sized>(
     (var, fd_fixed_point(map, &guess, tol))
 }
 
-fn fd_fixed_point<S: pdw_hybrid::Section + ?Sized>(
-    map: &StrideMap<'_, S>,
-    guess: &[f64],
-    tol: f64,
-) -> FixedPoint {
+fn fd_fixed_point(map: &StrideMap<'_>, guess: &[f64], tol: f64) -> FixedPoint {
     find_fixed_point(
         map,
         guess,

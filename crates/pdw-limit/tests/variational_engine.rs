@@ -141,7 +141,6 @@ fn gait_walkers() -> Vec<(String, Box<dyn pdw_walkers::Walker>, Vec<f64>)> {
 #[test]
 fn state_controlled_variational_stride_is_the_plain_stride_bit_for_bit() {
     use pdw_limit::{dp_variational_with, ErrorControl};
-    use pdw_walkers::Walker;
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     let walkers = gait_walkers();
     let mut full_differs = 0;
@@ -151,7 +150,7 @@ fn state_controlled_variational_stride_is_the_plain_stride_bit_for_bit() {
             Options::dop853(1e-9),
             Options::dopri5(1e-10),
         ] {
-            let map: StrideMap<'_, dyn Walker> = StrideMap::new(w.as_ref(), opts).unwrap();
+            let map: StrideMap<'_> = StrideMap::new(w.as_ref(), opts).unwrap();
             let plain = map.stride(s).unwrap();
             assert!(
                 plain.outcome.is_ok(),
@@ -192,7 +191,6 @@ fn state_controlled_variational_stride_is_the_plain_stride_bit_for_bit() {
 #[test]
 fn register_loop_stride_is_the_general_loop_stride_bit_for_bit() {
     use pdw_hybrid::Integrator;
-    use pdw_walkers::Walker;
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     let walkers = gait_walkers();
     for (name, w, s) in &walkers {
@@ -202,7 +200,7 @@ fn register_loop_stride_is_the_general_loop_stride_bit_for_bit() {
             Options::dopri5(1e-10),
             Options::dopri5(1e-6),
         ] {
-            let map: StrideMap<'_, dyn Walker> = StrideMap::new(w.as_ref(), opts).unwrap();
+            let map: StrideMap<'_> = StrideMap::new(w.as_ref(), opts).unwrap();
             let d = w.dim();
             let (mut fast, mut general) = (
                 Integrator::new(d, opts).unwrap(),

@@ -340,9 +340,16 @@ fn one_step(w: &ChainWalker, s: &[f64], tol: f64) -> (StopReason, f64, [f64; 4],
     let mut integ = Integrator::new(4, Options::dop853(tol)).unwrap();
     let mut t = 0.0;
     let mut drift: f64 = 0.0;
-    let stop = integ.integrate_observed(w, 0, &mut t, &mut x, 5.0, &mut |_, y| {
-        drift = drift.max((w.energy(y).unwrap() - e0).abs());
-    });
+    let stop = integ.integrate_observed(
+        w as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        5.0,
+        &mut |_, y| {
+            drift = drift.max((w.energy(y).unwrap() - e0).abs());
+        },
+    );
     (stop, t, x, drift / e0.abs().max(1.0))
 }
 
@@ -601,16 +608,26 @@ fn falling_scuff_crossing_is_skipped_and_flagged() {
     let mut saw_falling_scuff = false;
     let mut prev: Option<[f64; 4]> = None;
     let mut flags = StepFlags::default();
-    let stop = integ.integrate_observed(&w, 0, &mut t, &mut x, 3.0, &mut |_, y| {
-        if let Some(p) = prev {
-            if w.swing_foot(&p)[1] > 0.0 && w.swing_foot(y)[1] <= 0.0 && p[1] < 0.0 && y[1] > -0.01
-            {
-                saw_falling_scuff = true;
+    let stop = integ.integrate_observed(
+        &w as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        3.0,
+        &mut |_, y| {
+            if let Some(p) = prev {
+                if w.swing_foot(&p)[1] > 0.0
+                    && w.swing_foot(y)[1] <= 0.0
+                    && p[1] < 0.0
+                    && y[1] > -0.01
+                {
+                    saw_falling_scuff = true;
+                }
             }
-        }
-        prev = Some([y[0], y[1], y[2], y[3]]);
-        flags = flags.merge(w.check_state_ws(&mut ws, 0, y));
-    });
+            prev = Some([y[0], y[1], y[2], y[3]]);
+            flags = flags.merge(w.check_state_ws(&mut ws, 0, y));
+        },
+    );
     assert!(
         saw_falling_scuff,
         "the scenario did not produce a falling scuff crossing"

@@ -196,7 +196,7 @@ fn a_vanishing_foot_radius_tends_to_the_point_foot_knee_strike() {
 fn run_to_event(w: &ChainWalker, mode: usize, x: &mut [f64]) -> StopReason {
     let mut integ = Integrator::new(w.dim(), Options::dop853(1e-12)).unwrap();
     let mut t = 0.0;
-    integ.integrate(w, mode, &mut t, x, 10.0)
+    integ.integrate(w as &dyn pdw_hybrid::HybridSystem, mode, &mut t, x, 10.0)
 }
 
 /// The design that was reported "stable and valid along the whole stride" needs its stance

@@ -266,9 +266,16 @@ fn stride(w: &ChainWalker, s: &[f64], tol: f64) -> (f64, Vec<StopReason>, [f64; 
     let mut stops = vec![];
     for _ in 0..2 {
         let e0 = w.energy(&x).unwrap();
-        let stop = integ.integrate_observed(w, mode, &mut t, &mut x, 5.0, &mut |_, y| {
-            drift = drift.max(((w.energy(y).unwrap() - e0) / e0).abs());
-        });
+        let stop = integ.integrate_observed(
+            w as &dyn pdw_hybrid::HybridSystem,
+            mode,
+            &mut t,
+            &mut x,
+            5.0,
+            &mut |_, y| {
+                drift = drift.max(((w.energy(y).unwrap() - e0) / e0).abs());
+            },
+        );
         stops.push(stop);
         let StopReason::Guard { guard } = stop else {
             break;

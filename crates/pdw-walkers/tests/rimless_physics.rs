@@ -118,7 +118,7 @@ fn gait_stride(w: &Rimless) -> ([f64; 2], f64) {
     w.lift(&[w.rolling_fixed_point().unwrap()], &mut x0);
     let mut integ = Integrator::new(2, Options::dop853(1e-13)).unwrap();
     let (mut t, mut x) = (0.0, x0);
-    let stop = integ.integrate(w, 0, &mut t, &mut x, 10.0);
+    let stop = integ.integrate(w as &dyn pdw_hybrid::HybridSystem, 0, &mut t, &mut x, 10.0);
     assert_eq!(
         stop,
         StopReason::Guard {
@@ -167,7 +167,13 @@ fn ground_reaction_is_the_hub_acceleration_minus_gravity_along_a_stride() {
             let mut p = Vec::new();
             let mut xc = [0.0; 2];
             for k in [-1.0, -0.5, 0.0, 0.5, 1.0] {
-                let stop = integ.integrate(&w, 0, &mut t, &mut x, tc + k * h);
+                let stop = integ.integrate(
+                    &w as &dyn pdw_hybrid::HybridSystem,
+                    0,
+                    &mut t,
+                    &mut x,
+                    tc + k * h,
+                );
                 assert_eq!(stop, StopReason::EndTime);
                 p.push(hub(&w, &x));
                 if k == 0.0 {
@@ -246,7 +252,13 @@ fn normal_force_sign_along_the_rolling_gait_follows_the_closed_form() {
         let (mut t, mut x) = (0.0, x0);
         let mut negative = false;
         for i in 1..=100 {
-            let stop = integ.integrate(&w, 0, &mut t, &mut x, t_end * (i as f64 / 100.0));
+            let stop = integ.integrate(
+                &w as &dyn pdw_hybrid::HybridSystem,
+                0,
+                &mut t,
+                &mut x,
+                t_end * (i as f64 / 100.0),
+            );
             assert!(i == 100 || stop == StopReason::EndTime, "{stop:?}");
             let (axial, thd) = closed(&w, slope, x[0]);
             assert!((thd - x[1]).abs() < 1e-10, "θ̇ {} vs energy {thd}", x[1]);

@@ -269,9 +269,16 @@ fn energy_drift(w: &ChainWalker, mode: usize, x0: [f64; 8]) -> (f64, StopReason,
     let mut integ = Integrator::new(8, Options::dop853(1e-13)).unwrap();
     let mut t = 0.0;
     let mut drift: f64 = 0.0;
-    let stop = integ.integrate_observed(w, mode, &mut t, &mut x, 3.0, &mut |_, y| {
-        drift = drift.max(((w.energy(y).unwrap() - e0) / e0).abs());
-    });
+    let stop = integ.integrate_observed(
+        w as &dyn pdw_hybrid::HybridSystem,
+        mode,
+        &mut t,
+        &mut x,
+        3.0,
+        &mut |_, y| {
+            drift = drift.max(((w.energy(y).unwrap() - e0) / e0).abs());
+        },
+    );
     (drift, stop, t)
 }
 

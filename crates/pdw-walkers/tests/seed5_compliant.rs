@@ -54,7 +54,13 @@ fn exact_model_repeats_the_gait() {
     w.lift(&GAIT, &mut x);
     let mut integ = Integrator::new(8, Options::dop853(1e-12)).unwrap();
     let mut t = 0.0;
-    let stop = integ.integrate(&w, KNEES_LOCKED, &mut t, &mut x, 5.0);
+    let stop = integ.integrate(
+        &w as &dyn pdw_hybrid::HybridSystem,
+        KNEES_LOCKED,
+        &mut t,
+        &mut x,
+        5.0,
+    );
     assert_eq!(stop, StopReason::Guard { guard: 0 });
     let mut y = [0.0; 8];
     w.reset(&mut Scratch::new(), KNEES_LOCKED, 0, &x, &mut y);
@@ -74,15 +80,28 @@ fn pi_knee_latch_makes_the_flow_stiff() {
     exact.lift(&GAIT, &mut x);
     let mut ie = Integrator::new(8, Options::dop853(1e-9)).unwrap();
     let mut t = 0.0;
-    ie.integrate(&exact, KNEES_LOCKED, &mut t, &mut x, 5.0);
+    ie.integrate(
+        &exact as &dyn pdw_hybrid::HybridSystem,
+        KNEES_LOCKED,
+        &mut t,
+        &mut x,
+        5.0,
+    );
     let (w, mut y) = compliant_section(0.0);
     y[1] = 1e-4; // a small latch error, as a real latch has
     let mut ic = Integrator::new(13, Options::dop853(1e-9)).unwrap();
     let mut tc = 0.0;
     let mut max_knee: f64 = 0.0;
-    let stop = ic.integrate_observed(&w, COMPLIANT_SINGLE, &mut tc, &mut y, 5.0, &mut |_, z| {
-        max_knee = max_knee.max(z[1].abs()).max(z[3].abs());
-    });
+    let stop = ic.integrate_observed(
+        &w as &dyn pdw_hybrid::HybridSystem,
+        COMPLIANT_SINGLE,
+        &mut tc,
+        &mut y,
+        5.0,
+        &mut |_, z| {
+            max_knee = max_knee.max(z[1].abs()).max(z[3].abs());
+        },
+    );
     assert_eq!(stop, StopReason::Guard { guard: 0 }, "touchdown expected");
     let (ne, nc) = (ie.stats().accepted, ic.stats().accepted);
     assert!(nc > 10 * ne, "steps: exact {ne}, PI latch {nc}");
@@ -104,7 +123,13 @@ fn acceleration_level_switch_does_not_repeat_the_exact_gait() {
         let mut mode = COMPLIANT_SINGLE;
         let mut outcome = None;
         for _ in 0..8 {
-            let stop = integ.integrate(&w, mode, &mut t, &mut x, 6.0);
+            let stop = integ.integrate(
+                &w as &dyn pdw_hybrid::HybridSystem,
+                mode,
+                &mut t,
+                &mut x,
+                6.0,
+            );
             match stop {
                 StopReason::Guard { guard } if w.guards(mode)[guard].kind == GuardKind::Reset => {
                     let mut y = [0.0; 13];

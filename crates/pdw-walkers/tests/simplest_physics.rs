@@ -455,8 +455,14 @@ fn end_point_test_changes_no_event() {
             let (mut ta, mut tb) = (0.0, 0.0);
             for _ in 0..5 {
                 let (ea, eb) = (ta + 12.0, tb + 12.0);
-                let ra = a.integrate(&w, 0, &mut ta, &mut xa, ea);
-                let rb = b.integrate(&plain, 0, &mut tb, &mut xb, eb);
+                let ra = a.integrate(&w as &dyn pdw_hybrid::HybridSystem, 0, &mut ta, &mut xa, ea);
+                let rb = b.integrate(
+                    &plain as &dyn pdw_hybrid::HybridSystem,
+                    0,
+                    &mut tb,
+                    &mut xb,
+                    eb,
+                );
                 assert_eq!(ra, rb, "{opts:?}");
                 assert_eq!(ta.to_bits(), tb.to_bits(), "{opts:?}");
                 for j in 0..4 {

@@ -20,9 +20,16 @@ fn energy_conserved_between_impacts() {
     let mut worst = 0.0f64;
     let mut integ = Integrator::new(4, Options::dop853(1e-13)).unwrap();
     let mut t = 0.0;
-    let stop = integ.integrate_observed(&m, 0, &mut t, &mut x, 12.0, &mut |_, xs| {
-        worst = worst.max(((m.energy(xs) - e0) / e0).abs());
-    });
+    let stop = integ.integrate_observed(
+        &m as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        12.0,
+        &mut |_, xs| {
+            worst = worst.max(((m.energy(xs) - e0) / e0).abs());
+        },
+    );
     assert_eq!(stop, StopReason::Guard { guard: HEEL_STRIKE });
     assert!(worst < 1e-10, "relative energy drift {worst:e}");
     // the impact then removes kinetic energy ½θ̇⁻²(1 − cos²2θ⁻) (the potential is measured
@@ -45,9 +52,16 @@ fn scuffing_crossing_is_never_taken_as_heel_strike() {
     let mut integ = Integrator::new(4, Options::dop853(1e-12)).unwrap();
     let mut t = 0.0;
     let mut samples: Vec<(f64, f64, f64)> = Vec::new();
-    let stop = integ.integrate_observed(&m, 0, &mut t, &mut x, 12.0, &mut |t, xs| {
-        samples.push((t, m.guard(&mut Scratch::new(), 0, HEEL_STRIKE, xs), xs[0]));
-    });
+    let stop = integ.integrate_observed(
+        &m as &dyn pdw_hybrid::HybridSystem,
+        0,
+        &mut t,
+        &mut x,
+        12.0,
+        &mut |t, xs| {
+            samples.push((t, m.guard(&mut Scratch::new(), 0, HEEL_STRIKE, xs), xs[0]));
+        },
+    );
     assert_eq!(stop, StopReason::Guard { guard: HEEL_STRIKE });
     let mid_crossings: Vec<_> = samples
         .windows(2)
@@ -79,6 +93,6 @@ fn a_start_on_the_heel_strike_surface_does_not_retrigger() {
     assert_eq!(m.guard(&mut Scratch::new(), 0, HEEL_STRIKE, &x), 0.0);
     let mut integ = Integrator::new(4, Options::dop853(1e-10)).unwrap();
     let mut t = 0.0;
-    integ.integrate(&m, 0, &mut t, &mut x, 12.0);
+    integ.integrate(&m as &dyn pdw_hybrid::HybridSystem, 0, &mut t, &mut x, 12.0);
     assert!(t > 3.0, "stopped at t = {t}");
 }

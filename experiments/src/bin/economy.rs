@@ -58,7 +58,7 @@ fn match_multipliers(small: &[Multiplier], big: &[Multiplier]) -> (f64, Vec<Mult
 }
 
 /// Wall time and work of one stride from `s` with `opts`.
-fn stride_cost(map: &StrideMap<'_, dyn pdw_walkers::Walker>, s: &[f64]) -> (f64, Stats) {
+fn stride_cost(map: &StrideMap<'_>, s: &[f64]) -> (f64, Stats) {
     let dim = map.system().dim();
     let mut integ = Integrator::new(dim, *map.options()).expect("valid options");
     let (_, t) = time_mean(0.3, || map.stride_with(&mut integ, s));

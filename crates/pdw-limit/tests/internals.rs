@@ -1,0 +1,219 @@
+//! Tests of pdw-limit's internal helpers (attractor naming and relabelling, Newton's
+//! degenerate-gait test, orbit rotation, row-major products, cgroup memory limits, Brent's
+//! minimiser and the Illinois root finder), run here rather than as unit tests so that the
+//! library is not compiled a second time with `cfg(test)`. The helpers they reach are public but
+//! hidden from the documentation.
+
+mod attractors {
+    use pdw_limit::attractors::*;
+    use pdw_limit::basin::{CellResult, Outcome};
+    fn att(kind: AttractorKind, k: usize, name: &str) -> Attractor {
+        Attractor {
+            name: name.into(),
+            code: 0,
+            kind,
+            period_k: k,
+            points: vec![vec![0.0, 0.0]],
+            multipliers: Vec::new(),
+            period_time: 1.0,
+            radius: 0.1,
+        }
+    }
+
+    #[test]
+    fn names_and_codes_follow_discovery_order() {
+        let mut v = vec![
+            att(AttractorKind::Periodic, 1, "gait"),
+            att(AttractorKind::Periodic, 2, ""),
+            att(AttractorKind::Chaotic, 0, ""),
+            att(AttractorKind::Periodic, 2, ""),
+            att(AttractorKind::Periodic, 1, ""),
+            att(AttractorKind::Chaotic, 0, ""),
+        ];
+        name_and_code(&mut v);
+        let got: Vec<(&str, u8)> = v.iter().map(|a| (a.name.as_str(), a.code)).collect();
+        assert_eq!(
+            got,
+            vec![
+                ("gait", 0),
+                ("period-2", 10),
+                ("chaotic", 11),
+                ("period-2b", 12),
+                ("period-1b", 13),
+                ("chaotic-b", 14)
+            ]
+        );
+        let set = AttractorSet { attractors: v };
+        let legend = set.legend();
+        assert_eq!(legend.len(), 10 + 5);
+        assert_eq!(legend[0], (0, "gait".to_string()));
+        assert_eq!(legend[10], (10, "period-2".to_string()));
+    }
+
+    #[test]
+    fn relabel_maps_known_orbits_and_walking_cells_near_a_chaotic_sample() {
+        let mut v = vec![
+            att(AttractorKind::Periodic, 2, ""),
+            att(AttractorKind::Chaotic, 0, ""),
+        ];
+        v[1].points = vec![vec![1.0, 1.0]];
+        name_and_code(&mut v);
+        let set = AttractorSet { attractors: v };
+        let cell = |o: Outcome, a: u8, f: [f64; 2]| CellResult {
+            outcome: o.code(),
+            strides: 1,
+            period: 2,
+            attractor: a,
+            final_state: f.to_vec(),
+        };
+        let mut cells = vec![
+            cell(Outcome::Other, 0, [0.0, 0.0]),
+            cell(Outcome::Other, u8::MAX, [0.0, 0.0]),
+            cell(Outcome::Timeout, u8::MAX, [1.05, 1.0]),
+            cell(Outcome::Timeout, u8::MAX, [1.5, 1.0]),
+            cell(Outcome::FallForward, u8::MAX, [1.0, 1.0]),
+        ];
+        set.relabel(&mut cells);
+        let codes: Vec<u8> = cells.iter().map(|c| c.outcome).collect();
+        assert_eq!(codes, vec![10, 1, 11, 7, 2]);
+        assert_eq!(cells[2].outcome(), Outcome::Other);
+    }
+}
+
+mod newton {
+    use pdw_hybrid::Options;
+    use pdw_limit::newton::{find_fixed_point, residual_scale, FixedPoint, NewtonOptions};
+    use pdw_limit::{LimitError, StrideMap};
+    use pdw_walkers::simplest::{Simplest, SimplestParams};
+    use pdw_walkers::Walker;
+
+    fn solve(slope: f64, guess: &[f64]) -> Result<FixedPoint, LimitError> {
+        let m = Simplest::new(SimplestParams {
+            slope,
+            ..Default::default()
+        })
+        .unwrap();
+        let sl = |x: &[f64]| m.step_length(x);
+        let map = StrideMap::new(&m, Options::dop853(1e-14))
+            .unwrap()
+            .with_step_length(&sl);
+        find_fixed_point(&map, guess, &NewtonOptions::default())
+    }
+
+    /// On a level floor the simplest walker loses energy at every heel strike: there is no
+    /// gait. The absolute test accepted a residual of 1e-12 on states of 6e-5 as a "stable
+    /// gait"; the relative test and the step-length check reject it, and say why.
+    #[test]
+    fn level_floor_has_no_gait_and_the_failure_says_degenerate() {
+        for slope in [0.0, -0.0, 1e-320] {
+            for guess in [[0.2, -0.2], [9.7e-5, -1.01e-4]] {
+                let e = solve(slope, &guess).unwrap_err();
+                let LimitError::NoConvergence { reason, last, .. } = &e else {
+                    panic!("slope {slope}, guess {guess:?}: {e}");
+                };
+                assert!(
+                    reason.contains("degenerate") || reason.contains("standing still"),
+                    "slope {slope}, guess {guess:?}: {reason} (last {last:?})"
+                );
+            }
+        }
+    }
+
+    /// The relative test does not loosen order-one gaits: Garcia's stable gait at 0.009 is
+    /// found to the same 1e-12 absolute residual.
+    #[test]
+    fn order_one_gait_keeps_the_absolute_tolerance() {
+        let fp = solve(0.009, &[0.2, -0.2]).unwrap();
+        assert!(fp.residual <= 1e-12 * residual_scale(&fp.section));
+        assert!((fp.section[0] - 0.200_310_900_494_83).abs() < 1e-9);
+        assert!(fp.metrics.step_length.unwrap() > 0.3);
+    }
+}
+
+mod periodic {
+    use pdw_limit::periodic::{canonical_start, matmul, same_orbit};
+    #[test]
+    fn canonical_start_rotates_to_the_smallest_point() {
+        let o = vec![vec![0.3, 1.0], vec![0.1, 2.0], vec![0.2, 0.0]];
+        let c = canonical_start(&o);
+        assert_eq!(c, vec![vec![0.1, 2.0], vec![0.2, 0.0], vec![0.3, 1.0]]);
+        assert!(same_orbit(&o, &c));
+        assert!(!same_orbit(
+            &o,
+            &[vec![0.1, 2.1], vec![0.2, 0.0], vec![0.3, 1.0]]
+        ));
+    }
+
+    #[test]
+    fn matmul_is_row_major_product() {
+        let a = [1.0, 2.0, 3.0, 4.0];
+        let b = [0.0, 1.0, 1.0, 0.0];
+        assert_eq!(matmul(&a, &b, 2), vec![2.0, 1.0, 4.0, 3.0]);
+    }
+}
+
+mod resources {
+    use pdw_limit::resources::{cgroup_room, memory_available};
+    use std::path::Path;
+    fn write(p: &Path, text: &str) {
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+
+    #[test]
+    fn cgroup_limits_v1_and_v2_are_read_and_no_limit_is_none() {
+        let dir = std::env::temp_dir().join(format!("pdw-cgroup-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        // v1: a 400 MiB limit with 100 MiB used in the process's group
+        write(
+            &dir.join("memory/job/memory.limit_in_bytes"),
+            &format!("{}\n", 400u64 << 20),
+        );
+        write(
+            &dir.join("memory/job/memory.usage_in_bytes"),
+            &format!("{}\n", 100u64 << 20),
+        );
+        assert_eq!(
+            cgroup_room("4:memory:/job\n1:cpu:/\n", &dir),
+            Some(300 << 20)
+        );
+        // v2 under the unified mount; "max" is no limit
+        write(&dir.join("unified/u/memory.max"), "max\n");
+        write(&dir.join("unified/u/memory.current"), "5\n");
+        assert_eq!(cgroup_room("0::/u\n", &dir), None);
+        write(&dir.join("unified/u/memory.max"), "1000\n");
+        assert_eq!(cgroup_room("0::/u\n", &dir), Some(995));
+        // the smaller of the two, and a v1 root without a limit
+        assert_eq!(cgroup_room("4:memory:/job\n0::/u\n", &dir), Some(995));
+        write(
+            &dir.join("memory/memory.limit_in_bytes"),
+            "9223372036854771712\n",
+        );
+        assert_eq!(cgroup_room("4:memory:/elsewhere\n", &dir), None);
+        let _ = std::fs::remove_dir_all(&dir);
+        assert!(memory_available() > 0);
+    }
+}
+
+mod validity {
+    use pdw_limit::validity::{brent_min, illinois};
+    #[test]
+    fn brent_finds_a_parabola_minimum() {
+        let mut f = |t: f64| (t - 0.3).powi(2) - 1.0;
+        let f5 = f(0.5);
+        let (t, v) = brent_min(&mut f, 0.0, 0.5, 1.0, f5);
+        assert!((t - 0.3).abs() < 1e-7, "{t}");
+        assert!((v + 1.0).abs() < 1e-14);
+        // minimum at the end of the bracket
+        let mut g = |t: f64| t;
+        let (t, v) = brent_min(&mut g, 0.0, 0.0, 1.0, 0.0);
+        assert_eq!((t, v), (0.0, 0.0));
+    }
+
+    #[test]
+    fn illinois_finds_a_root() {
+        let mut f = |t: f64| t.cos() - t;
+        let r = illinois(&mut f, 0.0, 1.0, 1.0, 1f64.cos() - 1.0);
+        assert!((r - 0.739_085_133_215_160_6).abs() < 1e-12, "{r}");
+    }
+}
