@@ -1,5 +1,7 @@
-//! A writer process killed with SIGKILL at arbitrary moments leaves a file that resumes to the
-//! same datasets as an uninterrupted run.
+//! A writer process killed without a flush (abort, like SIGKILL) after a chosen number of rows
+//! and a chosen delay — inside a write or between two — leaves a file that resumes to the same
+//! datasets as an uninterrupted run. Every child is killed (it never exits by itself), and the
+//! test asserts that it was.
 
 use crate::common;
 
@@ -12,16 +14,35 @@ use pdw_store::{read_basin, BasinWriter, BLOCK_ROWS};
 const NX: usize = 300;
 const NY: usize = 3200;
 
-/// Child process body: resume the file named by `PDW_STORE_CHILD` and write its remaining rows
-/// one at a time (run by `killed_writer_resumes_to_uninterrupted_result`, not on its own).
+/// Child process body (run by `killed_writer_resumes_to_uninterrupted_result`, not on its own):
+/// resume the file named by `PDW_STORE_CHILD`, write `PDW_STORE_CHILD_ROWS` of its remaining rows
+/// one at a time, then start a thread that aborts the process (`abort`: no destructor, no flush,
+/// like SIGKILL) after `PDW_STORE_CHILD_ABORT_US` microseconds while this thread goes on
+/// writing rows, so the abort lands inside a write as often as between two. The process never
+/// ends by itself: every child is killed, at a row and moment the parent chose.
 #[test]
 #[ignore = "child process of killed_writer_resumes_to_uninterrupted_result"]
 fn child_writer_process() {
-    let path = std::env::var("PDW_STORE_CHILD").expect("run by the parent test");
+    let var = |name: &str| std::env::var(name).expect("run by the parent test");
+    let path = var("PDW_STORE_CHILD");
+    let rows: usize = var("PDW_STORE_CHILD_ROWS").parse().unwrap();
+    let abort_us: u64 = var("PDW_STORE_CHILD_ABORT_US").parse().unwrap();
     let h = header(NX, NY);
     let mut w = BasinWriter::resume(&path, &h).unwrap();
-    for r in w.rows_todo() {
+    let todo = w.rows_todo();
+    let (before, after) = todo.split_at(rows.min(todo.len()));
+    for &r in before {
         write_block(&mut w, r, 1);
+    }
+    std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_micros(abort_us));
+        std::process::abort();
+    });
+    for &r in after {
+        write_block(&mut w, r, 1);
+    }
+    loop {
+        std::thread::park();
     }
 }
 
@@ -45,17 +66,29 @@ fn killed_writer_resumes_to_uninterrupted_result() {
         Some((_, m)) => format!("{m}::child_writer_process"),
         None => "child_writer_process".to_string(),
     };
-    let mut kills = 0;
-    // `PDW_KILL_TRIALS=N` runs N kills at spread delays instead (a stress run).
-    let mut delays = vec![40u64, 75, 20, 110, 55, 90, 30, 140, 65, 25, 85, 45];
+    // (rows written before the abort thread starts, its delay in µs) per kill; a row write takes
+    // tens of µs to a few ms, so the delays land the abort inside and between writes.
+    // `PDW_KILL_TRIALS=N` runs N kills instead (a stress run).
+    let mut trials: Vec<(usize, u64)> = vec![
+        (0, 0),
+        (1, 40),
+        (5, 900),
+        (0, 2500),
+        (12, 150),
+        (3, 7000),
+        (30, 60),
+        (2, 400),
+    ];
     if let Some(n) = std::env::var("PDW_KILL_TRIALS")
         .ok()
         .and_then(|v| v.parse::<u64>().ok())
     {
-        delays = (0..n).map(|i| 15 + (i * 37) % 130).collect();
+        trials = (0..n)
+            .map(|i| ((i * 7 % 40) as usize, (i * 997) % 9000))
+            .collect();
     }
-    for delay_ms in delays {
-        let mut child = Command::new(&exe)
+    for &(rows, abort_us) in &trials {
+        let status = Command::new(&exe)
             .args([
                 "--exact",
                 &child_test,
@@ -64,21 +97,21 @@ fn killed_writer_resumes_to_uninterrupted_result() {
                 "--test-threads=1",
             ])
             .env("PDW_STORE_CHILD", &p)
+            .env("PDW_STORE_CHILD_ROWS", rows.to_string())
+            .env("PDW_STORE_CHILD_ABORT_US", abort_us.to_string())
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::null())
-            .spawn()
+            .status()
             .unwrap();
-        std::thread::sleep(Duration::from_millis(delay_ms));
-        let killed = child.try_wait().unwrap().is_none();
-        if killed {
-            child.kill().unwrap(); // SIGKILL: no destructor, no flush
-            kills += 1;
-        }
-        let status = child.wait().unwrap();
         assert!(
-            killed || status.success(),
-            "a writer that was not killed failed: {status}"
+            !status.success(),
+            "the writer ({rows} rows, abort at {abort_us} µs) was not killed: {status}"
         );
+        #[cfg(unix)]
+        {
+            use std::os::unix::process::ExitStatusExt;
+            assert_eq!(status.signal(), Some(6), "ended by SIGABRT: {status}");
+        }
         // Whatever the moment, the file must reopen and read (a block the kill interrupted may
         // have its chunk index past the end of the file: it reads as not computed), and every
         // row marked done must be right.
@@ -104,10 +137,6 @@ fn killed_writer_resumes_to_uninterrupted_result() {
         }
         w.close().unwrap();
     }
-    assert!(
-        kills >= 4,
-        "the writer always finished before being killed: grid too small"
-    );
     let mut w = BasinWriter::resume(&p, &h).unwrap();
     for r in w.rows_todo() {
         write_block(&mut w, r, 1);
@@ -123,7 +152,8 @@ fn killed_writer_resumes_to_uninterrupted_result() {
     );
     assert_eq!(a.metrics, b.metrics);
     eprintln!(
-        "killed {kills} times; file size {} bytes",
+        "killed {} times; file size {} bytes",
+        trials.len(),
         std::fs::metadata(&p).unwrap().len()
     );
 }

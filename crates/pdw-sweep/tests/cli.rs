@@ -348,30 +348,36 @@ fn shards_merged_equal_a_single_run() {
 }
 
 /// SIGTERM during a basin exits 130 leaving a resumable file; `--resume` finishes it with the
-/// cells of an uninterrupted run, and its provenance keeps both command lines. The grid (60 000
-/// cells on one thread, about a second) is large enough that the signal, sent 50 ms after the
-/// file appears, always lands before the end: the resume path is exercised on every run.
+/// cells of an uninterrupted run, and its provenance keeps both command lines. The run signals
+/// itself right after writing its third row (`PDW_SWEEP_SIGNAL_AFTER_ROWS`, a hook in the basin
+/// command that raises a real SIGTERM and waits for the handler), so the cut is mid-grid, at
+/// the same row, on every run.
 #[test]
 fn interrupted_basin_resumes_to_the_same_file() {
-    const GRID: &str = "200x300";
+    const GRID: &str = "40x30";
+    const CUT: usize = 3;
     let dir = tempfile::tempdir().unwrap();
     let (o, reference) = basin_grid(dir.path(), "ref.h5", GRID, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = p(dir.path(), "cut.h5");
-    let mut child = basin_cmd(&out, GRID, &["--threads", "1"]).spawn().unwrap();
-    // wait until the file is created, then SIGTERM
-    let t0 = std::time::Instant::now();
-    while !out.exists() && t0.elapsed().as_secs() < 60 {
-        std::thread::sleep(std::time::Duration::from_millis(2));
-    }
-    std::thread::sleep(std::time::Duration::from_millis(50));
-    let _ = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status();
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(130), "SIGTERM exits with 130");
+    let child = basin_cmd(&out, GRID, &["--threads", "1"])
+        .env("PDW_SWEEP_SIGNAL_AFTER_ROWS", CUT.to_string())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let status = child.wait_with_output().unwrap();
+    assert_eq!(status.status.code(), Some(130), "SIGTERM exits with 130");
+    assert!(stderr(&status).contains("continue with --resume"));
     let part = read(&out);
     assert!(!part.complete);
+    let done: Vec<usize> = (0..part.rows_done.len())
+        .filter(|&r| part.rows_done[r])
+        .collect();
+    assert_eq!(
+        done,
+        (0..CUT).collect::<Vec<_>>(),
+        "exactly the rows before the signal"
+    );
     let o = basin_cmd(&out, GRID, &["--resume"]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     // The provenance lists both command lines: the interrupted run and its resume.

@@ -17,7 +17,7 @@ use pdw_store::{
 };
 use std::io::IsTerminal;
 use std::process::ExitCode;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// Most rows handed to the engine per call (written and flushed as soon as their block is
 /// complete).
@@ -508,13 +508,18 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let mut k = 0;
     let mut interrupted = false;
     let mut secs_per_row: Option<f64> = None;
+    let signal_after = signal_after_rows();
+    let mut rows_written = 0;
     while k < todo.len() {
         if stopped() {
             interrupted = true;
             break;
         }
         // Consecutive rows only, as many as fit the call's time and memory budget.
-        let max_rows = rows_for_next_call(secs_per_row, nx);
+        let max_rows = match signal_after {
+            Some(_) => 1,
+            None => rows_for_next_call(secs_per_row, nx),
+        };
         let mut end = k + 1;
         while end < todo.len() && end - k < max_rows && todo[end] == todo[end - 1] + 1 {
             end += 1;
@@ -545,6 +550,10 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         // Slowest recent row cost, decaying: a costly band keeps calls short.
         secs_per_row = Some(secs_per_row.map_or(t_row, |t| t_row.max(0.7 * t)));
         k = end;
+        rows_written += rows.len();
+        if signal_after == Some(rows_written) {
+            terminate_self_and_wait(stopped);
+        }
     }
     pb.finish_and_clear();
     if interrupted {
@@ -820,4 +829,31 @@ fn print_summary(
         png.map(|p| format!(" and {}", p.display()))
             .unwrap_or_default()
     );
+}
+
+/// Test hook: with `PDW_SWEEP_SIGNAL_AFTER_ROWS=N` the grid is computed one row per call and the
+/// run sends itself SIGTERM right after writing its N-th row, then waits for the signal handler's
+/// stop request; the next row is then never started. A test thereby interrupts a run at an exact
+/// row through the real signal path, on every run. Unset in normal use.
+fn signal_after_rows() -> Option<usize> {
+    std::env::var("PDW_SWEEP_SIGNAL_AFTER_ROWS")
+        .ok()?
+        .parse()
+        .ok()
+}
+
+/// Raises SIGTERM in this process and waits (at most 30 s) until `stopped()` says the handler
+/// has requested the stop.
+fn terminate_self_and_wait(stopped: fn() -> bool) {
+    #[cfg(unix)]
+    // SAFETY: raise(3) with a valid signal number; the installed handler only sets a flag.
+    unsafe {
+        libc::raise(libc::SIGTERM);
+    }
+    #[cfg(not(unix))]
+    pdw_hybrid::interrupt::request();
+    let t0 = Instant::now();
+    while !stopped() && t0.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
 }
