@@ -1,6 +1,7 @@
 //! The phase counters (`pdw_hybrid::phases`), in a test binary of their own: CI builds it a
-//! second time with the `phase-timing` feature (`cargo test -p pdw-hybrid --features
-//! phase-timing --test phases`), which recompiles only this crate and this small file.
+//! second time with the `phase-timing` feature (`cargo test --release --workspace --features
+//! pdw-hybrid/phase-timing --test phases`), which recompiles only this crate and this small file
+//! (`--workspace` keeps every dependency's features those of the test build).
 
 use pdw_hybrid::{
     phases, run_batch, BatchOptions, Control, HybridSystem, LaneDriver, Options, Scratch,
