@@ -62,7 +62,7 @@ use crate::newton::{FixedPoint, NewtonOptions};
 use crate::periodic::{canonical_start, find_periodic_orbit, same_orbit, PeriodicOrbit};
 use crate::stride::StrideMap;
 use pdw_hybrid::{FallKind, Integrator, Section};
-use pdw_walkers::Walker;
+use pdw_model::Walker;
 
 /// Periodic or chaotic.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

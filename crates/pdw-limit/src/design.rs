@@ -48,7 +48,7 @@ use crate::gaits::search as gait_search;
 use crate::trajectory::{simulate, TrajectoryOptions, Validity};
 use argmin::core::{CostFunction, Error as ArgminError, Executor};
 use argmin::solver::neldermead::NelderMead;
-use pdw_walkers::Walker;
+use pdw_model::Walker;
 use std::cell::RefCell;
 
 /// What a feasible design is scored by.

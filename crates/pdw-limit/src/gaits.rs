@@ -11,7 +11,7 @@ use crate::periodic::{
 };
 use crate::stride::StrideMap;
 use pdw_hybrid::Options;
-use pdw_walkers::Walker;
+use pdw_model::Walker;
 
 /// Integration tolerance of the stride map used for fixed points: two orders below the default
 /// residual tolerance 1e-12, so that the residual measures the Newton error, not the integrator's.

@@ -15,7 +15,7 @@ use crate::continuation::{
 use crate::error::LimitError;
 use crate::stride::StrideMap;
 use crate::trajectory::Validity;
-use pdw_walkers::Walker;
+use pdw_model::Walker;
 use std::fmt::Display;
 
 /// The continuation settings of a sweep over `lo..hi` with `n` output values: steps of at most

@@ -27,7 +27,7 @@
 use crate::error::LimitError;
 use crate::stride::{StrideOutcome, MAX_EVENTS_PER_STRIDE};
 use pdw_hybrid::{GuardKind, Integrator, Options, StopReason};
-use pdw_walkers::Walker;
+use pdw_model::Walker;
 
 /// Why a trajectory could not be started.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -231,20 +231,11 @@ pub fn model_energy(w: &dyn Walker) -> Option<String> {
     w.energy(&x).map(|_| w.energy_unit().to_string())
 }
 
-/// Units of the columns of a trajectory of `w`: time in the unit of the model's
-/// `max_stride_time` parameter, angles in rad, rates in rad per time unit; forces per unit hip
-/// weight `M g` for the simplest walker (its model is dimensionless), per unit hub mass (N/kg)
-/// for the rimless wheel (it has no mass parameter), N and N m otherwise.
+/// Units of the columns of a trajectory of `w`, from the model's own [`Walker::units`]: time in
+/// its time unit, angles in rad, rates in rad per time unit, forces and torques in its units.
 pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
-    let time = pdw_walkers::model_info(w.name())
-        .ok()
-        .and_then(|i| {
-            i.params
-                .iter()
-                .find(|p| p.name == "max_stride_time")
-                .map(|p| p.unit.clone())
-        })
-        .unwrap_or_else(|| "s".to_string());
+    let mu = w.units();
+    let time = mu.time.to_string();
     let state = w
         .state_names()
         .iter()
@@ -256,11 +247,7 @@ pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
             }
         })
         .collect();
-    let (force, torque) = match w.name() {
-        "simplest" => ("M g", "M g l"),
-        "rimless" => ("N/kg", "N m/kg"),
-        _ => ("N", "N m"),
-    };
+    let (force, torque) = (mu.force, mu.torque);
     TrajectoryUnits {
         time,
         state,

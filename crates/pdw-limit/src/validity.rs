@@ -41,7 +41,7 @@
 //! # Impacts
 //! At every reset along the stride the model's [`ImpactReport`] at the pre-impact state is
 //! taken ([`Walker::impact_report`]); every entry's consistency margin
-//! ([`pdw_walkers::ImpulseEntry::margin`]: the impulse of a constraint that holds, the
+//! ([`pdw_model::ImpulseEntry::margin`]: the impulse of a constraint that holds, the
 //! separation rate of one that releases) is a criterion named `"<event>:<entry>"`, scaled by
 //! `m √(g l)` (contact impulse), `m l √(g l)` (knee-stop angular impulse), `√(g l)` (contact
 //! separation velocity) or `√(g / l)` (knee flexion rate); a negative one is a violation. The
@@ -55,7 +55,7 @@
 
 use crate::trajectory::{simulate, Trajectory, TrajectoryOptions, TRAJECTORY_TOL};
 use pdw_hybrid::{Integrator, Options, StopReason};
-use pdw_walkers::{ClearanceRule, ImpactReport, ImpulseKind, Scales, Walker};
+use pdw_model::{ClearanceRule, ImpactReport, ImpulseKind, Scales, Walker};
 
 /// Tolerance (DOP853, `rtol = atol`) of the re-integration between samples: a hundredth of
 /// the trajectory's, so that the dense solution is the trajectory to [`TRAJECTORY_TOL`].

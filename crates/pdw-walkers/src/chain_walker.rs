@@ -105,7 +105,6 @@
 //! when the knee left the heel strike flexing, 0 when its stop held).
 
 use crate::error::WalkerError;
-use crate::registry::{GaitGuess, Pose, Walker};
 use crate::spec::{ParamTable, Resolved, WalkerSpec};
 use crate::validity::{
     ClearanceRule, ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
@@ -113,6 +112,7 @@ use crate::validity::{
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+use pdw_model::{GaitGuess, Pose, Walker};
 use pdw_soa::{BatchWorkspace, Chain, ChainBuilder, Link, Workspace};
 use std::f64::consts::FRAC_PI_2;
 

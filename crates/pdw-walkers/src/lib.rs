@@ -6,8 +6,8 @@
 //! — is one [`chain_walker::ChainWalker`] built from a [`spec::WalkerSpec`] (TOML; the presets
 //! are the files in `models/`). Every model documents its coordinates, sign conventions,
 //! guards, reset maps and section in its module docs, validates its parameters at
-//! construction ([`WalkerError`]) and implements [`Walker`], the model-level extras the stride
-//! map and the CLI need. [`registry::model_info`] finds a model by name or spec file.
+//! construction ([`WalkerError`]) and implements [`Walker`] (crate `pdw-model`), the model-level
+//! extras the stride map and the CLI need. [`registry::model_info`] finds a model by name or spec file.
 
 pub mod chain_walker;
 pub mod error;
@@ -16,13 +16,15 @@ pub mod rimless;
 pub mod seed5;
 pub mod simplest;
 pub mod spec;
-pub mod validity;
+/// The validity types every model reports in ([`pdw_model::validity`]).
+pub use pdw_model::validity;
 
 pub use chain_walker::ChainWalker;
 pub use error::WalkerError;
+pub use pdw_model::{GaitGuess, ModelUnits, Pose, Walker};
 pub use registry::{
-    build, chain_pose, model_info, models, preset_text, presets, ClosedInfo, GaitGuess, ModelInfo,
-    ParamSpec, Pose, StaticParam, Walker, PRESETS,
+    build, chain_pose, model_info, models, preset_text, presets, ClosedInfo, ModelInfo, ParamSpec,
+    StaticParam, PRESETS,
 };
 pub use spec::WalkerSpec;
 pub use validity::{

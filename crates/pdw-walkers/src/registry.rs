@@ -9,8 +9,7 @@
 use crate::chain_walker::ChainWalker;
 use crate::error::WalkerError;
 use crate::spec::WalkerSpec;
-use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
-use pdw_hybrid::Section;
+use pdw_model::{Pose, Walker};
 
 /// One user-settable model parameter.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,86 +33,6 @@ pub struct StaticParam {
     pub description: &'static str,
 }
 
-/// A starting point for a fixed-point search on the section.
-#[derive(Clone, Debug, PartialEq)]
-pub struct GaitGuess {
-    /// Which gait this is meant to find, e.g. `"stable"`, `"unstable"`.
-    pub gait: String,
-    /// Reduced section coordinates (in [`Section::section_names`] order).
-    pub section: Vec<f64>,
-    /// Where the guess comes from (e.g. "Garcia 1998 App. A.2 small-slope asymptotics").
-    pub source: String,
-}
-
-/// Model-level extras on top of the hybrid system and its section.
-pub trait Walker: Section {
-    /// Registry name, e.g. `"simplest"`, or the spec's name.
-    fn name(&self) -> &str;
-    /// Names of the full state components, in state order.
-    fn state_names(&self) -> Vec<String>;
-    /// Current parameter values, in [`ModelInfo::params`] order.
-    fn param_values(&self) -> Vec<(String, f64)>;
-    /// Step length (distance between the feet along the slope, model length units) at the
-    /// stride-ending event, from the *pre-reset* state `x_pre` on the section guard.
-    fn step_length(&self, x_pre: &[f64]) -> f64;
-    /// Initial guesses for the gaits the model is known to have at its current parameters.
-    fn gait_guesses(&self) -> Vec<GaitGuess>;
-    /// The walker's drawing at full state `x`, for animations; `None` if the model has none.
-    fn pose(&self, _x: &[f64]) -> Option<Pose> {
-        None
-    }
-    /// Stance-foot ground reaction and knee-lock torques at `(mode, x)`, if the model
-    /// computes them.
-    fn constraint_forces(&self, _mode: usize, _x: &[f64]) -> Option<ConstraintForces> {
-        None
-    }
-    /// Validity flags at `(mode, x)` (negative normal force, a knee that would unlock, a swing
-    /// foot below ground after mid-stance), if the model computes them.
-    fn step_flags(&self, _mode: usize, _x: &[f64]) -> Option<StepFlags> {
-        None
-    }
-    /// Total mechanical energy at the full state `x` (potential zero at the stance foot), if
-    /// the model defines it; conserved between impacts.
-    fn energy(&self, _x: &[f64]) -> Option<f64> {
-        None
-    }
-    /// Unit of [`Walker::energy`], e.g. `"J"`, `"M g l"`.
-    fn energy_unit(&self) -> &str {
-        ""
-    }
-    /// The impulses of the reset of guard `guard` of `mode` at the pre-impact state `x_pre`
-    /// (contacts and knee stops from the impact's complementarity problem), if the model
-    /// computes them.
-    fn impact_report(&self, _mode: usize, _guard: usize, _x_pre: &[f64]) -> Option<ImpactReport> {
-        None
-    }
-    /// Natural scales (total mass, leg length, gravity) for relative margins, if defined.
-    fn scales(&self) -> Option<Scales> {
-        None
-    }
-    /// Height of the swing foot's lowest point above the slope at `(mode, x)` (model length
-    /// units), if the model has a swing foot.
-    fn swing_clearance(&self, _mode: usize, _x: &[f64]) -> Option<f64> {
-        None
-    }
-    /// Where the swing foot must clear the ground ([`ClearanceRule`]).
-    fn clearance_rule(&self) -> ClearanceRule {
-        ClearanceRule::AfterMidStance
-    }
-    /// The fully resolved model, one `key = value` line per quantity that determines its
-    /// dynamics (floats in shortest round-trip form, so equal text means bit-equal values).
-    /// Files that can be continued store it and refuse to continue under a different model,
-    /// naming the first line that differs. The default, for models fully determined by their
-    /// name and parameter values, lists those.
-    fn fingerprint(&self) -> String {
-        let mut s = format!("model = {}\n", self.name());
-        for (n, v) in self.param_values() {
-            s.push_str(&format!("{n} = {v:?}\n"));
-        }
-        s
-    }
-}
-
 /// The pose of a planar serial chain rooted at the stance foot: link `k` has absolute angle
 /// `θ_k = q₀ + … + q_k` from the slope normal and signed length `len[k]`, and runs from `P_k` to
 /// `P_{k+1} = P_k + len[k] (−sin θ_k, cos θ_k)` (the convention of the chain walkers).
@@ -132,18 +51,6 @@ pub fn chain_pose(q: &[f64], len: &[f64]) -> Pose {
         joints: pts[1..pts.len() - 1].to_vec(),
         swing_foot: pts.last().copied(),
     }
-}
-
-/// A drawing of the walker in the slope frame: `x` along the slope (downhill positive), `y`
-/// along the slope normal, stance foot at the origin (model length units).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Pose {
-    /// Rigid links as segments.
-    pub links: Vec<[[f64; 2]; 2]>,
-    /// Joint and point-mass positions.
-    pub joints: Vec<[f64; 2]>,
-    /// The swing foot (traced in animations).
-    pub swing_foot: Option<[f64; 2]>,
 }
 
 /// Constructor of a closed-form model from parameter values in [`ClosedInfo::params`] order.

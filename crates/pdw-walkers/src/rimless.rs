@@ -55,9 +55,10 @@
 //! the trailing spoke into the ground (negative margin, flagged).
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
+use crate::registry::{ClosedInfo, StaticParam};
 use crate::validity::{ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+use pdw_model::{GaitGuess, ModelUnits, Pose, Walker};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Guard index of the spoke impact.
@@ -332,6 +333,14 @@ impl Walker for Rimless {
     }
     fn energy_unit(&self) -> &str {
         "J/kg"
+    }
+    /// SI per unit hub mass: the wheel has no mass parameter, so forces are in N/kg.
+    fn units(&self) -> ModelUnits {
+        ModelUnits {
+            force: "N/kg",
+            torque: "N m/kg",
+            ..ModelUnits::SI
+        }
     }
     fn name(&self) -> &str {
         "rimless"

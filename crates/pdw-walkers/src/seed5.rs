@@ -6,8 +6,8 @@
 //! ([`crate::presets::seed5`], `models/seed5.toml`).
 
 use crate::chain_walker::ChainWalker;
+use crate::error::check_closed_open;
 use crate::error::WalkerError;
-use crate::validity::check_closed_open;
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_soa::Workspace;
 

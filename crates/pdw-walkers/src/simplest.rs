@@ -68,10 +68,11 @@
 //! bit-identical.
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{ClosedInfo, GaitGuess, Pose, StaticParam, Walker};
+use crate::registry::{ClosedInfo, StaticParam};
 use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
+use pdw_model::{GaitGuess, ModelUnits, Pose, Walker};
 use std::f64::consts::FRAC_PI_2;
 
 /// Guard index of the heel strike.
@@ -653,6 +654,16 @@ impl Walker for Simplest {
     }
     fn energy_unit(&self) -> &str {
         "M g l"
+    }
+    /// Dimensionless (Garcia 1998 §2): time in √(l/g), lengths in leg lengths l, forces per
+    /// hip weight M g.
+    fn units(&self) -> ModelUnits {
+        ModelUnits {
+            time: "sqrt(l/g)",
+            length: "l",
+            force: "M g",
+            torque: "M g l",
+        }
     }
     fn name(&self) -> &str {
         "simplest"

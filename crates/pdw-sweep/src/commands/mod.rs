@@ -284,11 +284,7 @@ pub fn time_unit(m: &BuiltModel) -> String {
 
 /// The length unit of the model (`l`, the leg, for the simplest walker; `m` otherwise).
 pub fn length_unit(m: &BuiltModel) -> String {
-    if model_units(m).time == "s" {
-        "m".into()
-    } else {
-        "l".into()
-    }
+    m.walker.units().length.into()
 }
 
 /// The unit of each section coordinate, in section order (by the state component of the same

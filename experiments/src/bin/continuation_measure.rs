@@ -1,5 +1,7 @@
-//! Measurements (printed, not asserted): run with
-//! `cargo test --release -p pdw-limit --test limit continuation_measure:: -- --ignored --nocapture`.
+//! Measurements of continuation on the simplest walker (printed, not asserted): the period-one
+//! branch with its bifurcations, the period-doubling cascade, a 400-point branch and an orbit
+//! diagram, each timed. Run with
+//! `cargo run --release -p pdw-experiments --bin continuation_measure`.
 
 use pdw_limit::{continue_branch, period_doubling_cascade, ContinuationOptions};
 use pdw_walkers::simplest::{Simplest, SimplestParams};
@@ -13,8 +15,6 @@ fn family(g: f64) -> Result<Box<Simplest>, pdw_walkers::WalkerError> {
     .map(Box::new)
 }
 
-#[test]
-#[ignore]
 fn measure_simplest_branch_and_cascade() {
     let opts = ContinuationOptions::new(0.001, 0.0195);
     let t = Instant::now();
@@ -75,8 +75,6 @@ fn measure_simplest_branch_and_cascade() {
     }
 }
 
-#[test]
-#[ignore]
 fn measure_400_point_continuation_and_orbit_diagram() {
     use pdw_limit::{orbit_diagram, ContinuationMethod, OrbitOptions, OrbitStart};
     let mut o = ContinuationOptions::new(0.001, 0.019);
@@ -123,4 +121,9 @@ fn measure_400_point_continuation_and_orbit_diagram() {
         t.elapsed().as_secs_f64(),
         cols.iter().filter(|c| c.fall.is_some()).count()
     );
+}
+
+fn main() {
+    measure_simplest_branch_and_cascade();
+    measure_400_point_continuation_and_orbit_diagram();
 }

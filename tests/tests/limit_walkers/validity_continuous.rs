@@ -19,7 +19,7 @@ fn fixed_point(w: &dyn Walker, guess: &[f64]) -> Option<FixedPoint> {
 }
 
 fn spec_walker(file: &str) -> ChainWalker {
-    let path = format!("{}/../../models/{file}", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/../models/{file}", env!("CARGO_MANIFEST_DIR"));
     ChainWalker::from_spec(WalkerSpec::from_file(std::path::Path::new(&path)).unwrap()).unwrap()
 }
 

@@ -1,27 +1,6 @@
 //! Physical validity along a gait: constraint forces (stance-foot ground reaction, knee-lock
-//! torques) and the flags a gait raises when a passive walker could not realise it; parameter
-//! checks shared by the models.
-
-use crate::error::WalkerError;
-
-/// Checks that `value` is finite and in the half-open interval `[lo, hi)`.
-pub(crate) fn check_closed_open(
-    name: &'static str,
-    value: f64,
-    lo: f64,
-    hi: f64,
-    allowed: &'static str,
-) -> Result<f64, WalkerError> {
-    if value.is_finite() && value >= lo && value < hi {
-        Ok(value)
-    } else {
-        Err(WalkerError::InvalidParam {
-            name,
-            value,
-            allowed,
-        })
-    }
-}
+//! torques) and the flags a gait raises when a passive walker could not realise it, the impulses
+//! of an impact, and the scales that make margins relative.
 
 /// Constraint forces at one state along the flow.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,7 +19,10 @@ pub struct ConstraintForces {
 }
 
 impl ConstraintForces {
-    pub(crate) fn from_ground(f: [f64; 3], knee_torque: [Option<f64>; 2]) -> Self {
+    /// From the stance foot's planar spatial ground force `f = (moment, tangential, normal)`
+    /// and the knee-lock torques; the friction coefficient required is
+    /// |tangential / normal| (∞ without a pushing normal force).
+    pub fn from_ground(f: [f64; 3], knee_torque: [Option<f64>; 2]) -> Self {
         let (ft, fnrm) = (f[1], f[2]);
         let friction_required = if fnrm > 0.0 {
             (ft / fnrm).abs()

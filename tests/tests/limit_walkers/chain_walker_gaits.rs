@@ -186,10 +186,7 @@ fn round_foot_multipliers_agree_with_richardson_differences() {
 /// has an exact Jacobian: its multipliers agree with Richardson differences to 1e-9.
 #[test]
 fn seed5_walking_buckles_with_stops_and_its_latched_gait_has_exact_multipliers() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../models/seed5_walking.toml"
-    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/seed5_walking.toml");
     let mut spec = pdw_walkers::WalkerSpec::from_file(std::path::Path::new(path)).unwrap();
     let w = pdw_walkers::ChainWalker::from_spec(spec.clone()).unwrap();
     assert!(w.free_knee().is_some() && w.foot_radius() > 0.0);

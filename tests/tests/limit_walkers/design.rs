@@ -15,10 +15,7 @@ fn walker() -> Box<dyn Walker> {
 
 /// seed5_walking with its stance knee latched (both ways), as `hold = "latch"` in its spec.
 fn seed5_walking_latched() -> ChainWalker {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../models/seed5_walking.toml"
-    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/seed5_walking.toml");
     let mut spec = WalkerSpec::from_file(std::path::Path::new(path)).unwrap();
     spec.knees[0].hold = Some("latch".into());
     ChainWalker::from_spec(spec).unwrap()

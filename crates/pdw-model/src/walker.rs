@@ -1,0 +1,130 @@
+//! The walker-facing trait: what the analysis asks of a model beyond its hybrid system and
+//! section — names, parameters, step length, gait guesses, a drawing, constraint forces and
+//! impact impulses for validity, energy, natural scales and units.
+
+use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
+use pdw_hybrid::Section;
+
+/// A starting point for a fixed-point search on the section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GaitGuess {
+    /// Which gait this is meant to find, e.g. `"stable"`, `"unstable"`.
+    pub gait: String,
+    /// Reduced section coordinates (in [`Section::section_names`] order).
+    pub section: Vec<f64>,
+    /// Where the guess comes from (e.g. "Garcia 1998 App. A.2 small-slope asymptotics").
+    pub source: String,
+}
+
+/// Model-level extras on top of the hybrid system and its section.
+pub trait Walker: Section {
+    /// Registry name, e.g. `"simplest"`, or the spec's name.
+    fn name(&self) -> &str;
+    /// Names of the full state components, in state order.
+    fn state_names(&self) -> Vec<String>;
+    /// Current parameter values, in the order of the model's parameter table (its registry
+    /// entry).
+    fn param_values(&self) -> Vec<(String, f64)>;
+    /// Step length (distance between the feet along the slope, model length units) at the
+    /// stride-ending event, from the *pre-reset* state `x_pre` on the section guard.
+    fn step_length(&self, x_pre: &[f64]) -> f64;
+    /// Initial guesses for the gaits the model is known to have at its current parameters.
+    fn gait_guesses(&self) -> Vec<GaitGuess>;
+    /// The walker's drawing at full state `x`, for animations; `None` if the model has none.
+    fn pose(&self, _x: &[f64]) -> Option<Pose> {
+        None
+    }
+    /// Stance-foot ground reaction and knee-lock torques at `(mode, x)`, if the model
+    /// computes them.
+    fn constraint_forces(&self, _mode: usize, _x: &[f64]) -> Option<ConstraintForces> {
+        None
+    }
+    /// Validity flags at `(mode, x)` (negative normal force, a knee that would unlock, a swing
+    /// foot below ground after mid-stance), if the model computes them.
+    fn step_flags(&self, _mode: usize, _x: &[f64]) -> Option<StepFlags> {
+        None
+    }
+    /// Total mechanical energy at the full state `x` (potential zero at the stance foot), if
+    /// the model defines it; conserved between impacts.
+    fn energy(&self, _x: &[f64]) -> Option<f64> {
+        None
+    }
+    /// Unit of [`Walker::energy`], e.g. `"J"`, `"M g l"`.
+    fn energy_unit(&self) -> &str {
+        ""
+    }
+    /// Units of the model's time, lengths, forces and torques; SI ([`ModelUnits::SI`]) unless
+    /// the model says otherwise.
+    fn units(&self) -> ModelUnits {
+        ModelUnits::SI
+    }
+    /// The impulses of the reset of guard `guard` of `mode` at the pre-impact state `x_pre`
+    /// (contacts and knee stops from the impact's complementarity problem), if the model
+    /// computes them.
+    fn impact_report(&self, _mode: usize, _guard: usize, _x_pre: &[f64]) -> Option<ImpactReport> {
+        None
+    }
+    /// Natural scales (total mass, leg length, gravity) for relative margins, if defined.
+    fn scales(&self) -> Option<Scales> {
+        None
+    }
+    /// Height of the swing foot's lowest point above the slope at `(mode, x)` (model length
+    /// units), if the model has a swing foot.
+    fn swing_clearance(&self, _mode: usize, _x: &[f64]) -> Option<f64> {
+        None
+    }
+    /// Where the swing foot must clear the ground ([`ClearanceRule`]).
+    fn clearance_rule(&self) -> ClearanceRule {
+        ClearanceRule::AfterMidStance
+    }
+    /// The fully resolved model, one `key = value` line per quantity that determines its
+    /// dynamics (floats in shortest round-trip form, so equal text means bit-equal values).
+    /// Files that can be continued store it and refuse to continue under a different model,
+    /// naming the first line that differs. The default, for models fully determined by their
+    /// name and parameter values, lists those.
+    fn fingerprint(&self) -> String {
+        let mut s = format!("model = {}\n", self.name());
+        for (n, v) in self.param_values() {
+            s.push_str(&format!("{n} = {v:?}\n"));
+        }
+        s
+    }
+}
+
+/// A drawing of the walker in the slope frame: `x` along the slope (downhill positive), `y`
+/// along the slope normal, stance foot at the origin (model length units).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Pose {
+    /// Rigid links as segments.
+    pub links: Vec<[[f64; 2]; 2]>,
+    /// Joint and point-mass positions.
+    pub joints: Vec<[f64; 2]>,
+    /// The swing foot (traced in animations).
+    pub swing_foot: Option<[f64; 2]>,
+}
+
+/// Units of a model's quantities, as the model defines them: a dimensionless model (the
+/// simplest walker: time in √(l/g), lengths in leg lengths, forces per hip weight) or a model
+/// per unit mass (the rimless wheel's forces in N/kg) says so here, and every output labels
+/// its columns from this, never from the model's name. Angles are always radians.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ModelUnits {
+    /// Unit of time, e.g. `"s"`, `"sqrt(l/g)"`.
+    pub time: &'static str,
+    /// Unit of length, e.g. `"m"`, `"l"` (leg lengths).
+    pub length: &'static str,
+    /// Unit of force, e.g. `"N"`, `"M g"`.
+    pub force: &'static str,
+    /// Unit of torque, e.g. `"N m"`, `"M g l"`.
+    pub torque: &'static str,
+}
+
+impl ModelUnits {
+    /// Seconds, metres, newtons, newton metres.
+    pub const SI: ModelUnits = ModelUnits {
+        time: "s",
+        length: "m",
+        force: "N",
+        torque: "N m",
+    };
+}
