@@ -18,10 +18,7 @@ use pdw_limit::basin::{self as lbasin, BasinOptions, Outcome};
 use pdw_limit::gaits::{self, Found};
 use pdw_limit::trajectory::{self, TrajectoryOptions, Validity};
 use pdw_limit::{Attractor, AttractorKind};
-use pdw_limit::{
-    Bifurcation, BifurcationKind, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome,
-};
-use pdw_walkers::{ModelInfo, Walker};
+use pdw_limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome};
 
 /// Threads of the pool that runs batched strides and basins.
 const THREADS: usize = 2;
@@ -118,29 +115,16 @@ fn check_basin_memory(nx: usize, ny: usize, d: usize) -> PyResult<()> {
     Ok(())
 }
 
-/// A model built from Python arguments.
-struct Model {
-    info: ModelInfo,
-    walker: Box<dyn Walker>,
-    /// `(name, value)` in the model's parameter order.
-    params: Vec<(String, f64)>,
-}
+/// A model built by the library ([`pdw::build`]).
+type Model = pdw::BuiltModel;
 
-impl Model {
-    fn slope(&self) -> f64 {
-        self.params
-            .iter()
-            .find(|(n, _)| *n == "slope")
-            .map_or(f64::NAN, |p| p.1)
-    }
-}
-
-/// Parameter overrides from `slope` and the keyword arguments.
+/// Parameter overrides from `slope` and the keyword arguments (checked by
+/// [`pdw::model::overrides_from_values`]).
 fn overrides(
     slope: Option<f64>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Vec<(String, f64)>> {
-    let mut ov = Vec::new();
+    let mut values = Vec::new();
     if let Some(p) = params {
         for (k, v) in p.iter() {
             let name: String = k.extract()?;
@@ -150,38 +134,14 @@ fn overrides(
                     v.repr().map_or_else(|_| "?".into(), |r| r.to_string())
                 ))
             })?;
-            if !value.is_finite() {
-                return Err(err(format!("{name}: {value} is not a finite number")));
-            }
-            ov.push((name, value));
+            values.push((name, value));
         }
     }
-    if let Some(s) = slope {
-        if !(s.is_finite() && s.abs() < std::f64::consts::FRAC_PI_2) {
-            return Err(err(format!("slope: {s} is outside (-pi/2, pi/2) rad")));
-        }
-        ov.push(("slope".to_string(), s));
-    }
-    Ok(ov)
+    pdw::model::overrides_from_values(values, slope).map_err(err)
 }
 
 fn build(model: &str, ov: &[(String, f64)]) -> PyResult<Model> {
-    let info = pdw_walkers::model_info(model).map_err(err)?;
-    let refs: Vec<(&str, f64)> = ov.iter().map(|(n, v)| (n.as_str(), *v)).collect();
-    let values = info.resolve(&refs).map_err(err)?;
-    let walker = info.build_from(&values).map_err(err)?;
-    let info = info.with_walker(walker.as_ref());
-    let params = info
-        .params
-        .iter()
-        .map(|p| p.name.clone())
-        .zip(values)
-        .collect();
-    Ok(Model {
-        info,
-        walker,
-        params,
-    })
+    pdw::build(model, ov).map_err(err)
 }
 
 fn build_kw(
@@ -336,50 +296,21 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
-/// Gaits found from `guess` (section coordinates) or the model's own guesses.
+/// Gaits found from `guess` (section coordinates) or the model's own guesses
+/// ([`pdw::gaits`]), with the number of guesses tried.
 fn find_gaits(
     m: &Model,
     guess: Option<Vec<f64>>,
     tol: f64,
 ) -> PyResult<(Vec<Found>, Vec<gaits::Failed>, usize)> {
-    let w = m.walker.as_ref();
-    let guesses = match guess {
-        Some(g) => {
-            let ds = w.section_dim();
-            if g.len() != ds {
-                return Err(err(format!(
-                    "guess: {} values given, model '{}' has {} section coordinates ({})",
-                    g.len(),
-                    m.info.name,
-                    ds,
-                    m.info.section_names.join(", ")
-                )));
-            }
-            vec![("guess".to_string(), g)]
-        }
-        None => gaits::model_guesses(w),
-    };
+    let guesses = pdw::gaits::guesses(m, guess, "guess").map_err(err)?;
     let n = guesses.len();
-    let (found, failed) = gaits::search(w, &guesses, tol).map_err(err)?;
+    let (found, failed) = pdw::gaits::search(m, &guesses, tol).map_err(err)?;
     Ok((found, failed, n))
 }
 
 fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> PyErr {
-    let mut msg = format!(
-        "no {}period-one gait found for model '{}' at slope {} from {} guess(es)",
-        if which == "all" {
-            String::new()
-        } else {
-            format!("{which} ")
-        },
-        m.info.name,
-        m.slope(),
-        n
-    );
-    for (label, g, e) in failed {
-        msg.push_str(&format!("\n  guess '{label}' {g:?}: {e}"));
-    }
-    err(msg)
+    err(pdw::gaits::no_gait_message(m, which, n, failed))
 }
 
 /// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None, **params)`.
@@ -754,11 +685,7 @@ fn basin<'py>(
             u16::MAX
         )));
     }
-    if !(1..=1024).contains(&threads) {
-        return Err(err(format!(
-            "threads: {threads} must be between 1 and 1024"
-        )));
-    }
+    pdw::input::check_threads(threads, "threads").map_err(err)?;
     let m = build_kw(model, slope, params)?;
     if m.info.section_names.len() < 2 {
         return Err(err(format!(
@@ -863,18 +790,9 @@ fn basin<'py>(
     Ok((arr.into_pyarray(py).into_any(), legend, md))
 }
 
-fn kind_name(k: BifurcationKind) -> &'static str {
-    match k {
-        BifurcationKind::PeriodDoubling => "period_doubling",
-        BifurcationKind::Fold => "fold",
-        BifurcationKind::BranchPoint => "branch_point",
-        BifurcationKind::NeimarkSacker => "neimark_sacker",
-    }
-}
-
 fn bifurcation_dict<'py>(py: Python<'py>, bf: &Bifurcation) -> PyResult<Bound<'py, PyDict>> {
     let bd = PyDict::new(py);
-    bd.set_item("kind", kind_name(bf.kind))?;
+    bd.set_item("kind", bf.kind.name())?;
     bd.set_item("parameter", bf.param)?;
     bd.set_item("section", bf.section.clone().into_pyarray(py))?;
     bd.set_item("multipliers", complex_array(py, &bf.multipliers))?;
@@ -1027,11 +945,7 @@ fn continuation<'py>(
             "gait: '{gait}' is not one of stable, unstable"
         )));
     }
-    if !(1..=1024).contains(&threads) {
-        return Err(err(format!(
-            "threads: {threads} must be between 1 and 1024"
-        )));
-    }
+    pdw::input::check_threads(threads, "threads").map_err(err)?;
     let mut base = overrides(None, params)?;
     base.retain(|(n, _)| n != parameter);
     let at = |mu: f64| -> PyResult<Model> {

@@ -217,6 +217,19 @@ pub enum BifurcationKind {
     NeimarkSacker,
 }
 
+impl BifurcationKind {
+    /// The kind's name in files, JSON and Python: `period_doubling`, `fold`, `branch_point`,
+    /// `neimark_sacker`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BifurcationKind::PeriodDoubling => "period_doubling",
+            BifurcationKind::Fold => "fold",
+            BifurcationKind::BranchPoint => "branch_point",
+            BifurcationKind::NeimarkSacker => "neimark_sacker",
+        }
+    }
+}
+
 /// A located bifurcation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bifurcation {

@@ -145,7 +145,7 @@ pub struct FixedpointArgs {
     /// With --sweep: worker threads (rayon pool) for the points on the output grid, their
     /// measurements and the orbit diagram (with --follow: the region map); results are
     /// identical for any count. Default 2.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::parse_threads)]
     pub threads: Option<usize>,
     /// With --sweep (or --follow): no progress bar.
     #[arg(long)]
@@ -205,7 +205,7 @@ pub struct BasinArgs {
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Worker threads (rayon pool).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = crate::args::parse_threads)]
     pub threads: usize,
     /// Continue an interrupted run in --out (blocks damaged on disk are recomputed; a
     /// complete file is left as it is, exit 0).
@@ -351,7 +351,7 @@ pub struct DesignArgs {
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Worker threads of the basin engine.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = crate::args::parse_threads)]
     pub threads: usize,
     /// Start over: replace an existing --out.
     #[arg(long)]

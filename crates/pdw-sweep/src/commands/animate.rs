@@ -36,13 +36,9 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
     if w.pose(&vec![0.0; w.dim()]).is_none() {
         return Err(InputError(format!("model '{}' has no drawing", m.info.name)).into());
     }
-    let guesses: Vec<(String, Vec<f64>)> = w
-        .gait_guesses()
-        .into_iter()
-        .map(|g| (g.gait.to_string(), g.section))
-        .collect();
+    let guesses = pdw::gaits::model_guesses(w);
     let (found, failed) = search(&m, &guesses, 1e-10)?;
-    let Some(gait) = found.iter().find(|f| f.fp.stable).or_else(|| found.first()) else {
+    let Some(gait) = pdw::gaits::selected(&found) else {
         eprintln!("no period-one gait found for model '{}'", m.info.name);
         for (label, g, e) in &failed {
             report_failure(label, g, e);

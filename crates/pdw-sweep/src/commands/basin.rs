@@ -156,13 +156,6 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    if a.threads == 0 || a.threads > 1024 {
-        return Err(InputError(format!(
-            "--threads: {} must be between 1 and 1024",
-            a.threads
-        ))
-        .into());
-    }
     let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
     let shard = match &a.shard {
         Some(s) => {
@@ -239,12 +232,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     })?;
 
     // ---- the period-one gaits: the stable one (if any) is the selected gait, code 0
-    let guesses: Vec<(String, Vec<f64>)> = m
-        .walker
-        .gait_guesses()
-        .into_iter()
-        .map(|g| (g.gait.to_string(), g.section))
-        .collect();
+    let guesses = pdw::gaits::model_guesses(m.walker.as_ref());
     if !a.quiet {
         eprintln!(
             "finding the period-one gaits from {} guess(es) (Ctrl-C stops)",

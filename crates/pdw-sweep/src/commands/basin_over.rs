@@ -69,13 +69,6 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    if a.threads == 0 || a.threads > 1024 {
-        return Err(InputError(format!(
-            "--threads: {} must be between 1 and 1024",
-            a.threads
-        ))
-        .into());
-    }
     let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
     let info = pdw_walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
     let names_owned = info.section_names.clone();
@@ -165,20 +158,10 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         };
     let xa = axis(&a.x, "--x")?;
     let ya = axis(&a.y, "--y")?;
-    let guesses = |m: &BuiltModel| -> Vec<(String, Vec<f64>)> {
-        m.walker
-            .gait_guesses()
-            .into_iter()
-            .map(|g| (g.gait.to_string(), g.section))
-            .collect()
-    };
+    let guesses = |m: &BuiltModel| pdw::gaits::model_guesses(m.walker.as_ref());
     // ---- the box: --x/--y, else basin's default box around the gait at A, for every value
     let (found_a, _) = search(&models[0], &guesses(&models[0]), 1e-12)?;
-    let centre_a: Option<Vec<f64>> = found_a
-        .iter()
-        .find(|f| f.fp.stable)
-        .or_else(|| found_a.first())
-        .map(|f| f.fp.section.clone());
+    let centre_a: Option<Vec<f64>> = pdw::gaits::selected(&found_a).map(|f| f.fp.section.clone());
     let box_source = match (&xa, &ya) {
         (Some(_), Some(_)) => "--x and --y".to_string(),
         _ => match &centre_a {

@@ -121,9 +121,6 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    if a.threads == 0 || a.threads > 1024 {
-        return Err(InputError(format!("--threads: {} is outside 1..=1024", a.threads)).into());
-    }
     if !(1..=200).contains(&a.basin_grid) {
         return Err(InputError(format!(
             "--basin-grid: {} cells per side is outside 1..=200",

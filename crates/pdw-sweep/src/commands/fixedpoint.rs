@@ -7,7 +7,7 @@ use crate::cli::FixedpointArgs;
 use pdw_limit::{FixedPoint, LimitError};
 use std::process::ExitCode;
 
-pub use pdw_limit::gaits::{Failed, Found, FoundOrbit};
+pub use pdw_limit::gaits::{Found, FoundOrbit};
 use pdw_limit::Validity;
 
 /// Smallest `--tol`: below it the residual is integrator round-off.
@@ -16,24 +16,7 @@ pub const MIN_TOL: f64 = 1e-15;
 /// iterations (the presets are within ~1e-2 of the gaits).
 pub const MAX_TOL: f64 = 1e-3;
 
-/// Newton from every guess (the user's, or the model's presets); see [`pdw_limit::gaits::search`].
-pub fn search(
-    m: &BuiltModel,
-    guesses: &[(String, Vec<f64>)],
-    tol: f64,
-) -> Result<(Vec<Found>, Vec<Failed>), LimitError> {
-    pdw_limit::gaits::search(m.walker.as_ref(), guesses, tol)
-}
-
-/// [`search`] with the stride map integrated by `integrator` (`--integrator`, `--rtol`, `--atol`).
-pub fn search_with(
-    m: &BuiltModel,
-    guesses: &[(String, Vec<f64>)],
-    tol: f64,
-    integrator: &pdw_hybrid::Options,
-) -> Result<(Vec<Found>, Vec<Failed>), LimitError> {
-    pdw_limit::gaits::search_with(m.walker.as_ref(), guesses, tol, integrator)
-}
+pub use pdw::gaits::{search, search_with};
 
 /// Constraint loads, swing-foot clearance and impacts along one step of a gait, located on
 /// the dense solution ([`Validity::along_step`], module docs of [`pdw_limit::validity`]).
@@ -186,24 +169,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         }
     }
     let m = build_model(&a.model)?;
-    let ds = m.info.section_names.len();
-    let guesses: Vec<(String, Vec<f64>)> = match &a.guess {
-        Some(g) => {
-            let v = args::parse_guess(g)?;
-            if v.len() != ds {
-                return Err(InputError(format!(
-                    "--guess: {} values given, model '{}' has {} section coordinates ({})",
-                    v.len(),
-                    m.info.name,
-                    ds,
-                    m.info.section_names.join(", ")
-                ))
-                .into());
-            }
-            vec![("guess".to_string(), v)]
-        }
-        None => pdw_limit::gaits::model_guesses(m.walker.as_ref()),
-    };
+    let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
+    let guesses = pdw::gaits::guesses(&m, user, "--guess")?;
     if a.period > 1 {
         return run_period_k(a, &m, &guesses, which);
     }

@@ -120,9 +120,6 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let threads = a.threads.unwrap_or(2);
-    if !(1..=1024).contains(&threads) {
-        return Err(InputError(format!("--threads: {threads} must be between 1 and 1024")).into());
-    }
     let Some(sweep) = a.sweep.as_deref() else {
         return Err(InputError(
             "--follow needs --sweep NAME=A:B:N: the stepped parameter and the N points of the \

@@ -15,8 +15,8 @@ use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw_limit::{
-    orbit_diagram, BifurcationKind, ContinuationOptions, GridBranch, MeasuredPoint, OrbitOptions,
-    OrbitStart, Validity,
+    orbit_diagram, ContinuationOptions, GridBranch, MeasuredPoint, OrbitOptions, OrbitStart,
+    Validity,
 };
 use pdw_store::{
     plot_bifurcation, write_sweep, Bifurcation, OrbitDiagram, StrideValidity, SweepData,
@@ -24,15 +24,6 @@ use pdw_store::{
 use std::io::IsTerminal;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
-
-fn kind_name(k: BifurcationKind) -> &'static str {
-    match k {
-        BifurcationKind::PeriodDoubling => "period_doubling",
-        BifurcationKind::Fold => "fold",
-        BifurcationKind::BranchPoint => "branch_point",
-        BifurcationKind::NeimarkSacker => "neimark_sacker",
-    }
-}
 
 /// A stride's validity in the file's form (unchecked where the model reports no forces).
 fn store_validity(v: &Option<Validity>) -> StrideValidity {
@@ -189,9 +180,6 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let out = a.out_path();
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
     let threads = a.threads.unwrap_or(2);
-    if !(1..=1024).contains(&threads) {
-        return Err(InputError(format!("--threads: {threads} must be between 1 and 1024")).into());
-    }
     let mut outputs = vec![
         Output {
             flag: "--out",
@@ -230,15 +218,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     };
 
     // the gait to continue, at the start of the range
-    let guesses: Vec<(String, Vec<f64>)> = match &a.guess {
-        Some(g) => vec![("guess".into(), args::parse_guess(g)?)],
-        None => m0
-            .walker
-            .gait_guesses()
-            .into_iter()
-            .map(|g| (g.gait.to_string(), g.section))
-            .collect(),
-    };
+    let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
+    let guesses = pdw::gaits::guesses(&m0, user, "--guess")?;
     // --integrator/--rtol/--atol, when given, integrate every stride of the sweep (the gait
     // search, the continuation and the orbit diagram); otherwise each keeps its default.
     let user_integrator = (a.integrator.integrator.is_some()
@@ -293,7 +274,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     for (i, (_, b)) in result.continued.iter().enumerate() {
         for bf in &b.bifurcations {
             bifs.push(Bifurcation {
-                kind: kind_name(bf.kind).into(),
+                kind: bf.kind.name().into(),
                 parameter: bf.param,
                 branch: i,
                 section: bf.section.clone(),
@@ -433,7 +414,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     for (period, kind, mu) in printed {
         crate::outln!(
             "  {:<16} on the period-{period} branch at {} = {mu:.12} {}",
-            kind_name(kind),
+            kind.name(),
             sw.name,
             super::param_unit(&m0, &sw.name)
         );

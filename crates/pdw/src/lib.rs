@@ -1,0 +1,15 @@
+//! The library under both front ends (the `pdw-sweep` CLI and the Python package): what a run
+//! needs before and around the analysis — building a model by name or spec file with its
+//! parameter overrides ([`model`]), reading the values people type ([`input`]), choosing the
+//! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]). A front end
+//! parses its own syntax into these types and prints or returns the results; it builds no model,
+//! checks no range and names nothing on its own.
+
+pub mod gaits;
+pub mod input;
+pub mod integrator;
+pub mod model;
+
+pub use input::InputError;
+pub use integrator::{integrator, integrator_json, integrator_text, IntegratorChoice};
+pub use model::{build, build_model, build_with, BuiltModel, ModelChoice};

@@ -1,0 +1,210 @@
+//! Models by name or spec file with parameter overrides: the one place both front ends build
+//! a model, check its overrides and read its units.
+
+use crate::input::{self, InputError};
+use pdw_hybrid::Options;
+use pdw_walkers::{ModelInfo, Walker};
+
+/// Which model, in the front ends' terms: a registry name or a spec file (`.toml`), the slope
+/// as text (radians, or degrees with `deg`), and `NAME=VALUE` overrides.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ModelChoice {
+    /// Model name (`pdw-sweep models`) or a walker spec file.
+    pub model: String,
+    /// The slope as given (`0.009`, `3deg`); `None`: the model's preset.
+    pub slope: Option<String>,
+    /// `NAME=VALUE` overrides, each parameter at most once.
+    pub set: Vec<String>,
+}
+
+/// A model built by name (or spec file) with its parameter overrides, with the resolved
+/// parameter values.
+pub struct BuiltModel {
+    pub info: ModelInfo,
+    pub walker: Box<dyn Walker>,
+    /// `(name, value)` in the model's parameter order.
+    pub params: Vec<(String, f64)>,
+}
+
+impl BuiltModel {
+    pub fn slope(&self) -> f64 {
+        self.params
+            .iter()
+            .find(|(n, _)| *n == "slope")
+            .map(|p| p.1)
+            .unwrap_or(f64::NAN)
+    }
+
+    /// Parameters as a JSON object.
+    pub fn params_json(&self) -> serde_json::Value {
+        serde_json::Value::Object(
+            self.params
+                .iter()
+                .map(|(n, v)| (n.to_string(), serde_json::json!(v)))
+                .collect(),
+        )
+    }
+}
+
+/// Parses `--model`, `--slope`, `--set` into overrides (without building).
+///
+/// The slope given twice (`--slope` and `--set slope=…`) is refused: one of the two would be
+/// silently ignored.
+pub fn overrides(opts: &ModelChoice) -> Result<Vec<(String, f64)>, InputError> {
+    let mut ov: Vec<(String, f64)> = Vec::new();
+    for s in &opts.set {
+        let (name, v) = input::parse_assignment(s)?;
+        if let Some((_, prev)) = ov.iter().find(|(n, _)| *n == name) {
+            return Err(InputError(format!(
+                "--set {name}: given twice ({prev} and {v}); give each parameter once"
+            )));
+        }
+        ov.push((name, v));
+    }
+    if let Some(s) = &opts.slope {
+        if let Some(set) = opts
+            .set
+            .iter()
+            .find(|a| a.split_once('=').is_some_and(|(n, _)| n.trim() == "slope"))
+        {
+            return Err(InputError(format!(
+                "--slope {s} and --set {set} both set the slope; give it once (--slope accepts \
+                 3deg as well)"
+            )));
+        }
+        ov.push(("slope".to_string(), input::parse_slope(s)?));
+    }
+    Ok(ov)
+}
+
+/// Overrides given as numbers (keyword arguments in Python): each value finite, the slope (if
+/// given) in (−π/2, π/2) rad. The slope comes last, as in [`overrides`].
+pub fn overrides_from_values(
+    values: Vec<(String, f64)>,
+    slope: Option<f64>,
+) -> Result<Vec<(String, f64)>, InputError> {
+    let mut ov = Vec::with_capacity(values.len() + 1);
+    for (name, value) in values {
+        if !value.is_finite() {
+            return Err(InputError(format!(
+                "{name}: {value} is not a finite number"
+            )));
+        }
+        ov.push((name, value));
+    }
+    if let Some(s) = slope {
+        if !(s.is_finite() && s.abs() < std::f64::consts::FRAC_PI_2) {
+            return Err(InputError(format!(
+                "slope: {s} is outside (-pi/2, pi/2) rad"
+            )));
+        }
+        ov.push(("slope".to_string(), s));
+    }
+    Ok(ov)
+}
+
+/// Builds the model of `choice` with its overrides.
+pub fn build_model(choice: &ModelChoice) -> Result<BuiltModel, InputError> {
+    build_with(choice, &[])
+}
+
+/// Builds the model of `choice` with its overrides and then `extra` overrides on top.
+pub fn build_with(choice: &ModelChoice, extra: &[(String, f64)]) -> Result<BuiltModel, InputError> {
+    let mut ov = overrides(choice)?;
+    ov.extend_from_slice(extra);
+    build(&choice.model, &ov)
+}
+
+/// Builds model `name` (a registry name or a spec file) with `overrides` (`(name, value)`,
+/// checked against the model's parameters).
+pub fn build(name: &str, overrides: &[(String, f64)]) -> Result<BuiltModel, InputError> {
+    let info = pdw_walkers::model_info(name).map_err(|e| InputError(e.to_string()))?;
+    let refs: Vec<(&str, f64)> = overrides.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    let values = info.resolve(&refs).map_err(|e| InputError(e.to_string()))?;
+    let walker = info
+        .build_from(&values)
+        .map_err(|e| InputError(e.to_string()))?;
+    let info = info.with_walker(walker.as_ref());
+    let params = info
+        .params
+        .iter()
+        .map(|p| p.name.clone())
+        .zip(values)
+        .collect();
+    Ok(BuiltModel {
+        info,
+        walker,
+        params,
+    })
+}
+
+/// `‖P(s) − s‖∞` of the stride map integrated by `integrator` at section state `s` (infinite
+/// when the stride fails): how far `s` is from a fixed point of that map.
+pub fn stride_residual(
+    m: &BuiltModel,
+    integrator: Options,
+    s: &[f64],
+) -> Result<f64, pdw_limit::LimitError> {
+    let map = pdw_limit::StrideMap::new(m.walker.as_ref(), integrator)?;
+    Ok(map
+        .apply(s)
+        .map(|p| {
+            p.iter()
+                .zip(s)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
+        })
+        .unwrap_or(f64::INFINITY))
+}
+
+/// Units of the model's quantities (time, every state component, forces, energy): the
+/// simplest walker's are dimensionless (time in √(l/g), lengths in l), the rimless wheel's and
+/// the chain walkers' SI (see [`pdw_limit::trajectory::units`]).
+pub fn model_units(m: &BuiltModel) -> pdw_limit::trajectory::TrajectoryUnits {
+    let w = m.walker.as_ref();
+    let e = pdw_limit::trajectory::model_energy(w).unwrap_or_default();
+    pdw_limit::trajectory::units(w, &e)
+}
+
+/// The time unit of the model (`s`, or `sqrt(l/g)` for the simplest walker).
+pub fn time_unit(m: &BuiltModel) -> String {
+    model_units(m).time
+}
+
+/// The length unit of the model (`l`, the leg, for the simplest walker; `m` otherwise).
+pub fn length_unit(m: &BuiltModel) -> String {
+    m.walker.units().length.into()
+}
+
+/// The unit of each section coordinate, in section order (by the state component of the same
+/// name).
+pub fn section_units(m: &BuiltModel) -> Vec<String> {
+    let u = model_units(m);
+    m.info
+        .section_names
+        .iter()
+        .map(|n| {
+            m.info
+                .state_names
+                .iter()
+                .position(|s| s == n)
+                .map_or_else(|| "rad".to_string(), |j| u.state[j].clone())
+        })
+        .collect()
+}
+
+/// The unit of the model parameter `name` (`""` if unknown).
+pub fn param_unit(m: &BuiltModel, name: &str) -> String {
+    m.info
+        .params
+        .iter()
+        .find(|p| p.name == name)
+        .map(|p| p.unit.clone())
+        .unwrap_or_default()
+}
+
+/// A JSON list of units, the form of a `units` attribute on a dataset whose last axis runs
+/// over components of different units.
+pub fn units_list(u: &[String]) -> String {
+    serde_json::to_string(u).unwrap_or_default()
+}
