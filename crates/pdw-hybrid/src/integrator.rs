@@ -219,7 +219,26 @@ impl Integrator {
     /// inlined; the register loop once, for the baseline (its vectors are one state, a few
     /// elements wide). Same bits on every path.
     #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)]
     fn run<S: HybridSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        resume: bool,
+        obs: Option<Observer<'_>>,
+    ) -> StopReason {
+        sys.integrate_concrete(self, mode, t, x, t_end, resume, obs)
+    }
+
+    /// The integration loop itself, compiled for the system's concrete type: reached through
+    /// [`IntegrateConcrete`](crate::IntegrateConcrete), so that a system held as a trait object
+    /// pays one virtual call per segment and its flow is inlined into the steps.
+    #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_concrete<S: HybridSystem + ?Sized>(
         &mut self,
         sys: &S,
         mode: usize,

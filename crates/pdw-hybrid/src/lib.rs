@@ -64,5 +64,5 @@ pub use integrator::Integrator;
 pub use options::{Controller, Method, Options, Stats, StopReason};
 pub use system::{
     guards_with_rates_by_lane, AsSection, Crossing, FallKind, GuardKind, GuardSpec, HybridSystem,
-    Scratch, Section,
+    IntegrateConcrete, Scratch, Section,
 };

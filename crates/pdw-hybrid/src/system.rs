@@ -133,7 +133,7 @@ pub struct GuardSpec {
 /// State vectors are plain slices of length [`dim`](HybridSystem::dim). Batched state is a faer
 /// matrix of shape `(lanes × dim)`, one column per state component, lanes contiguous in each
 /// column (use `col_as_slice`; faer pads the column stride).
-pub trait HybridSystem: Send + Sync {
+pub trait HybridSystem: Send + Sync + IntegrateConcrete {
     /// State dimension d.
     fn dim(&self) -> usize;
 
@@ -369,6 +369,45 @@ pub trait HybridSystem: Send + Sync {
                 jac[i * d + j] = (rp[i] - rm[i]) / (2.0 * h);
             }
         }
+    }
+}
+
+/// The scalar integrator's loop compiled for a system's concrete type, implemented for every
+/// [`HybridSystem`]. The analysis holds its model as `&dyn Section` (one compiled analysis for
+/// every model); without this, every call of the model's flow from the scalar integrator would
+/// go through the vtable and could not be inlined into the Runge–Kutta stages, which costs a
+/// model with a cheap flow (the simplest walker: a few dozen flops) a third of a stride. Through
+/// this trait a trait object pays one virtual call per integrated segment instead, and
+/// [`Integrator`](crate::Integrator)'s loop runs on the concrete type.
+pub trait IntegrateConcrete {
+    /// Runs [`Integrator`](crate::Integrator)'s loop on `self` (see
+    /// [`Integrator::integrate`](crate::Integrator::integrate) for the arguments).
+    #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
+    fn integrate_concrete(
+        &self,
+        integ: &mut crate::Integrator,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        resume: bool,
+        obs: Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+    ) -> crate::StopReason;
+}
+
+impl<T: HybridSystem> IntegrateConcrete for T {
+    fn integrate_concrete(
+        &self,
+        integ: &mut crate::Integrator,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        resume: bool,
+        obs: Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+    ) -> crate::StopReason {
+        integ.run_concrete(self, mode, t, x, t_end, resume, obs)
     }
 }
 
