@@ -46,15 +46,19 @@
 //!
 //! Checked here: the reference's own energy conservation and impact momenta; the engine's flow,
 //! energy, constraint loads and heel strike (impact, ground impulse, leg swap) against it at
-//! random states; the reference's stride map (its own RK4 with event location and Newton) at
+//! random states; the engine's batched flow against it in every lane and every mode of every
+//! preset, with point feet and with round feet (a one-segment leg is a leg with a massless
+//! thigh of zero length); the reference's stride map (its own RK4 with event location and Newton) at
 //! the `seed5_walking` gait, where its impacts' impulses are printed and the engine's heel
 //! strike is compared again. The reference knee strike ([`Reference::knee_strike`]: rolling
 //! stance foot, the contact point at rest, angular momenta about the contact point and, for the
 //! swing leg, about the hip conserved) is the map an engine knee strike with round feet must
 //! equal.
 
+use faer::Mat;
 use pdw_hybrid::{HybridSystem, Scratch};
-use pdw_walkers::{ChainWalker, Walker, WalkerSpec};
+use pdw_walkers::spec::Num;
+use pdw_walkers::{presets, ChainWalker, Walker, WalkerSpec};
 
 /// Mode with the swing knee free (the stance knee locked).
 const FREE: usize = 0;
@@ -248,12 +252,19 @@ pub(crate) struct Reference {
 
 impl Reference {
     /// The reference with the spec's evaluated geometry (`[L, m, c, c⊥, I]` per segment from
-    /// the foot up, hip mass, foot radius, gravity, slope).
+    /// the foot up, hip mass, foot radius, gravity, slope). A one-segment leg (the compass) is
+    /// the two-segment leg whose thigh has zero length, mass and inertia: with both knees held
+    /// (the locked mode) it moves as the rigid leg — the thigh angles' rows of `M` vanish, but
+    /// `M` stays positive definite on the knee constraints' null space, so the KKT system of
+    /// [`Reference::dynamics`] stays regular.
     fn new(w: &ChainWalker) -> Self {
         let rs = w.resolved();
-        assert_eq!(rs.segments.len(), 2, "two segments per leg");
+        assert!(
+            matches!(rs.segments.len(), 1 | 2),
+            "one or two segments per leg"
+        );
         let [l0, m0, c0, cn0, i0] = rs.segments[0];
-        let [l1, m1, c1, cn1, i1] = rs.segments[1];
+        let [l1, m1, c1, cn1, i1] = rs.segments.get(1).copied().unwrap_or([0.0; 5]);
         let r = rs.foot_radius;
         let pt = |alpha: [f64; 4], beta: [f64; 4]| Point { alpha, beta };
         let bodies = [
@@ -925,6 +936,143 @@ fn flow_matches_reference_to_1e_10() {
             "{name}: engine energy differs from the reference by {worst_e:e} m g l"
         );
     }
+}
+
+/// Every preset (compass, kneed, seed5 with locked knees, seed5 with a free swing knee) with
+/// point feet and with round feet of radius 0.15 leg lengths, and the two round-foot walkers of
+/// [`walkers`].
+fn presets_flat_and_round() -> Vec<(String, ChainWalker)> {
+    let mut out = Vec::new();
+    for (name, w) in [
+        ("compass", presets::compass(&[]).unwrap()),
+        ("kneed", presets::kneed(&[]).unwrap()),
+        ("seed5", presets::seed5(&[]).unwrap()),
+        (
+            "seed5 free knee",
+            presets::seed5(&[("free_swing_knee", 1.0)]).unwrap(),
+        ),
+    ] {
+        let mut spec = w.spec().clone();
+        spec.foot_radius = Num::Value(0.15 * w.leg_length());
+        let values: Vec<f64> = w.param_values().into_iter().map(|(_, v)| v).collect();
+        let round = ChainWalker::new(spec, &values).unwrap();
+        assert!(w.resolved().foot_radius == 0.0 && round.resolved().foot_radius > 0.0);
+        out.push((format!("{name} (round feet)"), round));
+        out.push((name.to_string(), w));
+    }
+    out.extend(walkers().into_iter().map(|(n, w)| (n.to_string(), w)));
+    out
+}
+
+/// The reference mode of the chain walker's `mode`, once the mode is checked to mean it: with
+/// a free swing knee (joint 3), mode 0 frees it and holds the stance knee (joint 1) and mode 1
+/// holds both; without one there is a single mode holding every knee (none for the compass).
+fn reference_mode(w: &ChainWalker, mode: usize) -> usize {
+    let knees: &[usize] = if w.dim() == 8 { &[1, 3] } else { &[] };
+    match (w.free_knee(), mode) {
+        (Some(3), 0) => {
+            assert_eq!(w.n_modes(), 2);
+            assert_eq!(w.locked_joints(mode), &[1]);
+            FREE
+        }
+        (Some(3), 1) | (None, 0) => {
+            assert_eq!(w.n_modes(), 1 + usize::from(w.free_knee().is_some()));
+            assert_eq!(w.locked_joints(mode), knees);
+            LOCKED
+        }
+        other => panic!("unexpected (free knee, mode) {other:?}"),
+    }
+}
+
+/// The chain walker's state of the reference state `x` (the compass drops the held knees).
+fn chain_state(w: &ChainWalker, x: &[f64; 8]) -> Vec<f64> {
+    match w.dim() {
+        8 => x.to_vec(),
+        _ => vec![x[0], x[2], x[4], x[6]],
+    }
+}
+
+/// The chain walker's `flow_batch` over `xs`, one lane per state: the rows of `ẋ`.
+fn flow_batch_rows(
+    w: &ChainWalker,
+    ws: &mut Scratch,
+    mode: usize,
+    xs: &[Vec<f64>],
+) -> Vec<Vec<f64>> {
+    let d = w.dim();
+    let x = Mat::from_fn(xs.len(), d, |l, j| xs[l][j]);
+    let mut dx = Mat::<f64>::zeros(xs.len(), d);
+    w.flow_batch(ws, mode, x.as_ref(), dx.as_mut());
+    (0..xs.len())
+        .map(|l| (0..d).map(|j| dx[(l, j)]).collect())
+        .collect()
+}
+
+/// The chain walker's batched flow (`flow_batch`: the articulated-body recursion over SIMD
+/// blocks of 64 lanes for point feet, the rolling-base dynamics lane by lane for round feet)
+/// against the reference's Lagrange/KKT vector field ([`Reference::flow`]), lane by lane, in
+/// every mode of every preset with point feet and with round feet, and of the two round-foot
+/// walkers: 300 seeded states per mode (the reference's [`random_state`]).
+///
+/// Modes covered: the free-knee mode (swing knee free, stance knee held) and the locked mode of
+/// kneed, seed5 free knee, seed5_walking and the variant; the single locked mode of seed5 and of
+/// the compass (a leg with a massless thigh of zero length, [`Reference::new`]). The compass'
+/// one mode with point feet is also covered by `compass_closed_form.rs` (Goswami's M/C/G).
+///
+/// Each lane's largest difference, relative to the lane's largest component of `ẋ`, stays below
+/// 1e-12 (measured: 1.9e-14 worst, seed5_walking; 1.5e-15 to 1.3e-14 for the others). Lane
+/// counts 1, 7 and 300: the batches are windows of the same states (300 = four blocks of 64 and
+/// a remainder of 44; the 7 lanes are lanes 61–67 of the big batch, across its first block
+/// boundary; the single lane is its last), and each lane has the same bits in every batch it is
+/// part of (no lane reads another's data).
+#[test]
+fn batched_flow_matches_reference_in_every_mode_and_lane_for_every_lane_count() {
+    let mut ws = Scratch::new();
+    let mut report = Vec::new();
+    for (name, w) in presets_flat_and_round() {
+        let r = Reference::new(&w);
+        let s = r.scales();
+        let mut rng = Rng(19);
+        let mut worst = 0.0f64;
+        for mode in 0..w.n_modes() {
+            let rm = reference_mode(&w, mode);
+            let ref_states: Vec<[f64; 8]> = (0..300)
+                .map(|_| random_state(&mut rng, rm, s.rate))
+                .collect();
+            let xs: Vec<Vec<f64>> = ref_states.iter().map(|x| chain_state(&w, x)).collect();
+            let all = flow_batch_rows(&w, &mut ws, mode, &xs);
+            for window in [0..300, 61..68, 299..300] {
+                let part = flow_batch_rows(&w, &mut ws, mode, &xs[window.clone()]);
+                for (l, f) in part.iter().enumerate() {
+                    let same = f
+                        .iter()
+                        .zip(&all[window.start + l])
+                        .all(|(a, b)| a.to_bits() == b.to_bits());
+                    assert!(
+                        same,
+                        "{name} mode {mode}, {} lanes: lane {l} differs from lane {} of the \
+                         300-lane batch",
+                        window.len(),
+                        window.start + l
+                    );
+                }
+            }
+            for (l, (x, f)) in ref_states.iter().zip(&all).enumerate() {
+                let rf = chain_state(&w, &r.flow(rm, x));
+                let rel = max_abs_diff(f, &rf) / rf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(
+                    rel < 1e-12,
+                    "{name} mode {mode} lane {l} at {x:?}: chain walker {f:?} vs reference {rf:?}"
+                );
+                worst = worst.max(rel);
+            }
+        }
+        report.push(format!("{name} {worst:.1e}"));
+    }
+    eprintln!(
+        "batched flow vs reference, worst relative difference: {}",
+        report.join(", ")
+    );
 }
 
 /// The engine's constraint loads (ground normal and tangential force, stance knee lock torque,

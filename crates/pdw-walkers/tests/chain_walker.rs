@@ -1,6 +1,8 @@
 //! The chain walker built from specs: round trip of spec files, clear errors for bad specs,
-//! batched flows equal to the scalar flow bit for bit, exact Jacobians against Richardson
-//! differences (allocation: `chain_walker_alloc.rs`).
+//! batched guards equal to the scalar guards bit for bit, exact Jacobians against Richardson
+//! differences (allocation: `chain_walker_alloc.rs`; the batched flow in every lane against
+//! independent models: the tests crate's `compass_closed_form.rs` and
+//! `round_foot_kneed_reference.rs`).
 
 use crate::chain_common;
 use faer::Mat;
@@ -174,36 +176,6 @@ fn every_bad_spec_is_refused_naming_the_field_the_value_and_the_rule() {
     assert!(e.contains("segments[0].mass") && e.contains("-1"), "{e}");
     let e = presets::compass(&[("b", -0.5)]).unwrap_err().to_string();
     assert!(e.contains("segments[0].length"), "{e}");
-}
-
-#[test]
-fn batched_flow_equals_scalar_flow_bit_for_bit_for_every_lane_count() {
-    let mut r = ChaCha8Rng::seed_from_u64(2);
-    for (name, w) in all_presets() {
-        let d = w.dim();
-        for mode in 0..w.n_modes() {
-            for lanes in [1usize, 7, 300] {
-                let states: Vec<Vec<f64>> =
-                    (0..lanes).map(|_| random_state(&w, &mut r, mode)).collect();
-                let x = Mat::from_fn(lanes, d, |l, j| states[l][j]);
-                let mut dx = Mat::<f64>::zeros(lanes, d);
-                let mut ws = Scratch::new();
-                w.flow_batch(&mut ws, mode, x.as_ref(), dx.as_mut());
-                let mut f = vec![0.0; d];
-                let mut ws1 = Scratch::new();
-                for (l, s) in states.iter().enumerate() {
-                    w.flow(&mut ws1, mode, s, &mut f);
-                    for j in 0..d {
-                        assert_eq!(
-                            dx[(l, j)].to_bits(),
-                            f[j].to_bits(),
-                            "{name} mode {mode} lanes {lanes} lane {l} comp {j}"
-                        );
-                    }
-                }
-            }
-        }
-    }
 }
 
 /// Central differences of `f` at `x`, extrapolated (Richardson, steps h and h/2).
