@@ -6,21 +6,28 @@
 //! Rows are produced in any order by the engine and handed to [`BasinWriter::write_rows`] in
 //! any grouping. The writer buffers them until a whole chunk block ([`BLOCK_ROWS`] rows) is
 //! present, then writes that block once, flushes, marks its rows in `/basin/rows_done` and
-//! flushes again: a row is marked done only after its data is on disk. Each compressed chunk is
-//! written exactly once (rewriting a partly filled deflated chunk reallocates it, and a kill in
-//! between can leave the chunk index pointing at overwritten bytes — observed in testing), and
-//! the file is created with HDF5's file-space strategy `NONE` (no reuse of freed space), so
-//! nothing the last flushed state refers to is overwritten before the next flush. A run killed
-//! at any moment (SIGKILL included, tested) therefore leaves a file whose marked rows are valid;
-//! rows of blocks not yet complete are lost and recomputed. The chunks of a block interrupted
-//! before it was marked can be unreadable (their index entry flushed before the file's end of
-//! allocation); readers treat such a block as not computed, and an unreadable block that *is*
-//! marked done as an error. [`BasinWriter::resume`] checks every
-//! marked block, copies the good ones into a fresh file beside the old one and renames it over
+//! flushes again: a row is marked done only after its data is on disk. When the writer stops
+//! early ([`BasinWriter::close`], or dropped after an error or an interrupt), the blocks still
+//! incomplete are written the same way with the rows they have (the others keep the fill
+//! values) and only those rows are marked, so every row handed over is in the file. Each
+//! compressed chunk is written at most once per file (rewriting a partly filled deflated chunk
+//! reallocates it, and a kill in between can leave the chunk index pointing at overwritten
+//! bytes — observed in testing), and the file is created with HDF5's
+//! file-space strategy `NONE` (no reuse of freed space), so nothing the last flushed state
+//! refers to is overwritten before the next flush. A run killed at any moment (SIGKILL
+//! included, tested) therefore leaves a file whose marked rows are valid; rows held in memory
+//! at the kill are lost and recomputed. The chunks of a block interrupted before it was marked
+//! can be unreadable (their index entry flushed before the file's end of allocation); readers
+//! treat such a block as not computed, and an unreadable block with rows marked done as an
+//! error. [`BasinWriter::resume`] checks every block with marked rows against its checksums and
+//! digest, copies the whole good ones into a fresh file beside the old one and renames it over
 //! the old (a killed file is never written in place: its last flush may have been cut between
-//! the chunk index and the superblock, and HDF5 would then allocate over live metadata), and
-//! reports the rows still to compute; a kill during that copy leaves the old file as it was. Since the engine's labels do not depend on batch
-//! size, thread count or order, a resumed run yields the same datasets as an uninterrupted one.
+//! the chunk index and the superblock, and HDF5 would then allocate over live metadata), takes
+//! the marked rows of partly written blocks back into memory (written with the rest of their
+//! block, or again when the resumed run stops; a SIGKILL before that loses them to
+//! recomputation), and reports the rows still to compute; a kill during that copy leaves the
+//! old file as it was. Since the engine's labels do not depend on batch size, thread count or
+//! order, a resumed run yields the same datasets as an uninterrupted one.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -532,7 +539,8 @@ fn read_rows_done(path: &Path, f: &File) -> Result<Vec<bool>> {
 
 /// Streams a basin grid into an HDF5 file, row block by row block.
 ///
-/// Dropping the writer without [`finish`](Self::finish) leaves a valid, resumable file with
+/// Dropping the writer without [`finish`](Self::finish) writes the rows held in incomplete
+/// blocks (as [`close`](Self::close) does) and leaves a valid, resumable file with
 /// `complete = false`.
 pub struct BasinWriter {
     path: PathBuf,
@@ -585,6 +593,10 @@ impl Handles {
 
 impl Drop for BasinWriter {
     fn drop(&mut self) {
+        if self.h.is_some() && !self.poisoned {
+            // As `close`, without a way to report a failure (which poisons the writer).
+            let _ = self.write_held_rows();
+        }
         if let Some(h) = self.h.take() {
             if self.poisoned {
                 std::mem::forget(h);
@@ -773,12 +785,15 @@ impl BasinWriter {
         expected.check_matches(&found, path)?;
         let complete = get_attr::<bool>(path, KIND, &old, "complete")?;
         let mut rows_done = read_rows_done(path, &old)?;
-        // Only whole blocks are ever written; a partly marked block (not made by this writer)
-        // is redone whole.
-        for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
-            let r = block_range(b, found.ny());
-            if !rows_done[r.clone()].iter().all(|d| *d) {
-                rows_done[r].iter_mut().for_each(|d| *d = false);
+        // A partly marked block is one a stopped run wrote with the rows it had; it is checked
+        // against its digest like a whole one. Files without digests were written by versions
+        // that wrote whole blocks only: a partly marked block there is redone whole.
+        if !matches!(read_digests(&old, found.ny()), Some(Some(_))) {
+            for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
+                let r = block_range(b, found.ny());
+                if !rows_done[r.clone()].iter().all(|d| *d) {
+                    rows_done[r].iter_mut().for_each(|d| *d = false);
+                }
             }
         }
         let damaged = damaged_blocks(&old, &found, &rows_done);
@@ -795,6 +810,18 @@ impl BasinWriter {
         for &b in &damaged {
             let r = block_range(b, expected.ny());
             rows_done[r].iter_mut().for_each(|d| *d = false);
+        }
+        // The rows of partly marked blocks go back into memory, to be written with the rest of
+        // their block (or again when this run stops): completing the chunk in place would
+        // write it a second time (see the module's notes on crash safety).
+        let mut pending = BTreeMap::new();
+        for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
+            let r = block_range(b, found.ny());
+            let marked = rows_done[r.clone()].to_vec();
+            if marked.iter().any(|d| *d) && !marked.iter().all(|d| *d) {
+                pending.insert(b, read_partial_block(path, &old, &found, b, &marked)?);
+                rows_done[r].iter_mut().for_each(|d| *d = false);
+            }
         }
         let elapsed_before = get_attr::<f64>(path, KIND, &old, "elapsed_s")?;
         let created = get_str(path, KIND, &old, "created").ok();
@@ -850,7 +877,7 @@ impl BasinWriter {
             header: found,
             rows_done,
             own,
-            pending: BTreeMap::new(),
+            pending,
             elapsed_before,
             started: Instant::now(),
         })
@@ -884,12 +911,13 @@ impl BasinWriter {
         }
     }
 
-    /// Flushes and closes the file without finishing it (`complete` stays false; rows of
-    /// incomplete blocks are dropped). Dropping the writer does the same but cannot report
-    /// errors.
+    /// Writes the rows of incomplete blocks (marked done, so that every row handed over is on
+    /// disk), flushes and closes the file without finishing it (`complete` stays false).
+    /// Dropping the writer does the same but cannot report errors.
     pub fn close(mut self) -> Result<()> {
         let p = self.path.clone();
         let r = (|| {
+            self.write_held_rows()?;
             set_attr(&p, &self.h().file, "elapsed_s", &self.elapsed())?;
             self.h().file.flush().at(&p, "flushing")
         })();
@@ -930,12 +958,20 @@ impl BasinWriter {
         &self.rows_done
     }
 
-    /// Rows of this file (its shard's, or all) not yet on disk, ascending (rows waiting in an
-    /// incomplete block count as not on disk).
+    /// Rows of this file (its shard's, or all) still to compute, ascending: neither on disk nor
+    /// held in memory in an incomplete block (handed to [`write_rows`](Self::write_rows), or
+    /// taken back by [`resume`](Self::resume) from a block written before it was complete).
     pub fn rows_todo(&self) -> Vec<usize> {
         (0..self.header.ny())
-            .filter(|&i| self.own[i] && !self.rows_done[i])
+            .filter(|&i| self.own[i] && !self.rows_done[i] && !self.held(i))
             .collect()
+    }
+
+    /// Whether row `r` is held in memory in an incomplete block.
+    fn held(&self, r: usize) -> bool {
+        self.pending
+            .get(&(r / BLOCK_ROWS))
+            .is_some_and(|pb| pb.have[r % BLOCK_ROWS])
     }
 
     /// Hands over rows `row0 .. row0 + k`; every chunk block they complete is written and
@@ -945,7 +981,8 @@ impl BasinWriter {
     /// `outcome` and `strides` are (k × nx) row-major, `final_state` (k × nx × d) row-major.
     /// Every row must belong to this file (its shard) and not be on disk already; outcome codes
     /// must be in the legend. Rows of incomplete blocks wait in memory (at most
-    /// [`BLOCK_ROWS`]` − 1` rows per block); they are lost if the writer is dropped, and
+    /// [`BLOCK_ROWS`]` − 1` rows per block) and are written when the writer is closed or
+    /// dropped; a process killed outright (SIGKILL) loses them, and
     /// [`rows_todo`](Self::rows_todo) lists them again after [`resume`](Self::resume).
     pub fn write_rows(
         &mut self,
@@ -1012,12 +1049,10 @@ impl BasinWriter {
             let b = r / BLOCK_ROWS;
             let range = block_range(b, ny);
             let kb = range.len();
-            let pb = self.pending.entry(b).or_insert_with(|| PendingBlock {
-                outcome: vec![0; kb * nx],
-                strides: vec![0; kb * nx],
-                final_state: vec![0.0; kb * nx * d],
-                have: vec![false; kb],
-            });
+            let pb = self
+                .pending
+                .entry(b)
+                .or_insert_with(|| PendingBlock::empty(kb, nx, d));
             let (i, src) = (r - range.start, r - row0);
             pb.outcome[i * nx..(i + 1) * nx].copy_from_slice(&outcome[src * nx..(src + 1) * nx]);
             pb.strides[i * nx..(i + 1) * nx].copy_from_slice(&strides[src * nx..(src + 1) * nx]);
@@ -1030,21 +1065,40 @@ impl BasinWriter {
         }
         let mut written = 0;
         for b in complete {
-            let pb = self.pending.remove(&b).expect("block is pending");
-            // Uncompressed size: compression only shrinks it.
-            ensure_space(&self.path, (pb.outcome.len() * (3 + 8 * d)) as u64)?;
-            match self.write_block(b, &pb) {
-                Ok(k) => written += k,
-                Err(e) => {
-                    self.poisoned = true;
-                    return Err(e);
-                }
-            }
+            written += self.write_pending(b)?;
         }
         Ok(written)
     }
 
-    /// Writes one whole chunk block, flushes, marks it done, flushes.
+    /// Writes the held block `b` ([`write_block`](Self::write_block)) and drops it from the
+    /// held rows; a failed write poisons the writer. Returns the rows written.
+    fn write_pending(&mut self, b: usize) -> Result<usize> {
+        let pb = &self.pending[&b];
+        // Uncompressed size: compression only shrinks it.
+        ensure_space(
+            &self.path,
+            (pb.outcome.len() * (3 + 8 * self.header.d())) as u64,
+        )?;
+        let pb = self.pending.remove(&b).expect("block is held");
+        self.write_block(b, &pb)
+            .inspect_err(|_| self.poisoned = true)
+    }
+
+    /// Writes every block with rows held in memory, each as it is (the rows not received keep
+    /// the fill values), and marks the rows received: what `close` and `Drop` do so that every
+    /// finished row of a stopped run is on disk. Each such chunk is still written once in this
+    /// file; [`resume`](Self::resume) takes the rows back into memory instead of completing the
+    /// chunk in place.
+    fn write_held_rows(&mut self) -> Result<()> {
+        let blocks: Vec<usize> = self.pending.keys().copied().collect();
+        for b in blocks {
+            self.write_pending(b)?;
+        }
+        Ok(())
+    }
+
+    /// Writes one chunk block, flushes, marks its received rows done (`pb.have`; all of them for
+    /// a complete block), flushes. Returns the rows marked.
     fn write_block(&mut self, b: usize, pb: &PendingBlock) -> Result<usize> {
         let (nx, d) = (self.header.nx(), self.header.d());
         let range = block_range(b, self.header.ny());
@@ -1065,7 +1119,7 @@ impl BasinWriter {
             .at(p, "writing /basin/final")?;
         set_attr(p, &h.file, "elapsed_s", &self.elapsed())?;
         h.file.flush().at(p, "flushing")?;
-        let ones = vec![1u8; k];
+        let marks: Vec<u8> = pb.have.iter().map(|&h| u8::from(h)).collect();
         h.digest_ds
             .write_slice(
                 &[block_digest(&pb.outcome, &pb.strides, &pb.final_state)],
@@ -1073,11 +1127,13 @@ impl BasinWriter {
             )
             .at(p, "writing /basin/block_digest")?;
         h.rows_done_ds
-            .write_slice(&ones, s![r0..r1])
+            .write_slice(&marks, s![r0..r1])
             .at(p, "writing /basin/rows_done")?;
         h.file.flush().at(p, "flushing")?;
-        self.rows_done[r0..r1].iter_mut().for_each(|b| *b = true);
-        Ok(k)
+        for (done, &have) in self.rows_done[r0..r1].iter_mut().zip(&pb.have) {
+            *done |= have;
+        }
+        Ok(pb.have.iter().filter(|&&h| h).count())
     }
 
     /// Reads back the (ny × nx) outcome codes written so far ([`NOT_COMPUTED`] elsewhere), e.g.
@@ -1117,12 +1173,14 @@ impl BasinWriter {
     ///
     /// Every row of the file (or shard) must be on disk ([`StoreError::Incomplete`] otherwise).
     pub fn finish(mut self, metrics: &BasinMetrics, attractors: &[Attractor]) -> Result<()> {
-        let todo = self.rows_todo().len();
-        if todo > 0 {
-            let expected = self.own.iter().filter(|b| **b).count();
+        let expected = self.own.iter().filter(|b| **b).count();
+        let done = (0..self.header.ny())
+            .filter(|&i| self.own[i] && self.rows_done[i])
+            .count();
+        if done < expected {
             return Err(StoreError::Incomplete {
                 path: self.path.clone(),
-                done: expected - todo,
+                done,
                 expected,
             });
         }
@@ -1142,7 +1200,8 @@ impl BasinWriter {
     }
 }
 
-/// Rows of one chunk block received so far.
+/// Rows of one chunk block received so far (or, after [`BasinWriter::resume`], found on disk in
+/// a block written before it was complete).
 struct PendingBlock {
     /// (k × nx) outcome codes, k = rows in the block.
     outcome: Vec<u8>,
@@ -1154,9 +1213,22 @@ struct PendingBlock {
     have: Vec<bool>,
 }
 
-/// Blocks whose rows are all marked done in `rows_done` but that do not read back intact: a
-/// chunk fails its checksum or cannot be read, or an outcome code is outside the legend (e.g.
-/// the fill value of a chunk never written).
+impl PendingBlock {
+    /// A block of `k` rows of `nx` cells with no row received: every cell holds the fill value
+    /// of its dataset (what reading a never-written row gives).
+    fn empty(k: usize, nx: usize, d: usize) -> Self {
+        PendingBlock {
+            outcome: vec![NOT_COMPUTED; k * nx],
+            strides: vec![0; k * nx],
+            final_state: vec![f64::NAN; k * nx * d],
+            have: vec![false; k],
+        }
+    }
+}
+
+/// Blocks with rows marked done in `rows_done` that do not read back intact: a chunk fails its
+/// checksum or cannot be read, the block's digest differs, or an outcome code of a marked row is
+/// outside the legend (e.g. the fill value of a chunk never written).
 fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
     let Ok(basin) = f.group("basin") else {
         return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
@@ -1200,7 +1272,8 @@ fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
     let mut bad = Vec::new();
     for b in 0..h.ny().div_ceil(BLOCK_ROWS) {
         let r = block_range(b, h.ny());
-        if !rows_done[r.clone()].iter().all(|d| *d) {
+        let marked = &rows_done[r.clone()];
+        if !marked.iter().any(|d| *d) {
             continue;
         }
         let read = (
@@ -1211,7 +1284,10 @@ fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
         let ok = match read {
             (Ok(ob), Ok(sb), Ok(fb)) => {
                 let ov: Vec<u8> = ob.iter().copied().collect();
-                ov.iter().all(|c| h.legend.iter().any(|(l, _)| l == c))
+                ov.chunks(h.nx())
+                    .zip(marked)
+                    .filter(|(_, m)| **m)
+                    .all(|(row, _)| row.iter().all(|c| h.legend.iter().any(|(l, _)| l == c)))
                     && digests.as_ref().is_none_or(|d| {
                         let sv: Vec<u16> = sb.iter().copied().collect();
                         let fv: Vec<f64> = fb.iter().copied().collect();
@@ -1225,6 +1301,48 @@ fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
         }
     }
     bad
+}
+
+/// The marked rows (`marked`, one flag per row of the block) of block `b` of the open file
+/// `old`, as a block held in memory; the other rows hold the fill values.
+fn read_partial_block(
+    path: &Path,
+    old: &File,
+    h: &BasinHeader,
+    b: usize,
+    marked: &[bool],
+) -> Result<PendingBlock> {
+    let (nx, d) = (h.nx(), h.d());
+    let r = block_range(b, h.ny());
+    let basin = old.group("basin").at(path, "opening /basin")?;
+    let open = |n: &str| basin.dataset(n).at(path, "opening the basin datasets");
+    let ov: Vec<u8> = open("outcome")?
+        .read_slice_2d::<u8, _>(s![r.clone(), ..])
+        .at(path, "reading /basin/outcome")?
+        .iter()
+        .copied()
+        .collect();
+    let sv: Vec<u16> = open("strides")?
+        .read_slice_2d::<u16, _>(s![r.clone(), ..])
+        .at(path, "reading /basin/strides")?
+        .iter()
+        .copied()
+        .collect();
+    let fv: Vec<f64> = open("final")?
+        .read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..])
+        .at(path, "reading /basin/final")?
+        .iter()
+        .copied()
+        .collect();
+    let mut pb = PendingBlock::empty(r.len(), nx, d);
+    for i in (0..r.len()).filter(|&i| marked[i]) {
+        let (c, f) = (i * nx..(i + 1) * nx, i * nx * d..(i + 1) * nx * d);
+        pb.outcome[c.clone()].copy_from_slice(&ov[c.clone()]);
+        pb.strides[c.clone()].copy_from_slice(&sv[c]);
+        pb.final_state[f.clone()].copy_from_slice(&fv[f]);
+        pb.have[i] = true;
+    }
+    Ok(pb)
 }
 
 /// Copies every block whose rows are all marked in `rows_done` from the open file `old` into
@@ -1499,10 +1617,10 @@ pub fn read_basin_outcome(path: impl AsRef<Path>) -> Result<(BasinHeader, Array2
     Ok((h, o))
 }
 
-/// Reads a (ny × nx) dataset block by block ([`BLOCK_ROWS`] rows). A block not wholly marked in
-/// `rows_done` that cannot be read (a writer killed mid-block can leave its chunk index pointing
-/// past the end of the file) reads as `fill`, the value of cells not computed; a block marked
-/// done that cannot be read is an error.
+/// Reads a (ny × nx) dataset block by block ([`BLOCK_ROWS`] rows). A block with no row marked
+/// in `rows_done` that cannot be read (a writer killed mid-block can leave its chunk index
+/// pointing past the end of the file) reads as `fill`, the value of cells not computed; a block
+/// with rows marked done that cannot be read is an error.
 fn read_blocks_2d<T: hdf5::H5Type + Copy>(
     path: &Path,
     ds: &Dataset,
@@ -1517,7 +1635,7 @@ fn read_blocks_2d<T: hdf5::H5Type + Copy>(
         let r = block_range(b, ny);
         match ds.read_slice_2d::<T, _>(s![r.clone(), ..]) {
             Ok(v) => out.slice_mut(s![r, ..]).assign(&v),
-            Err(e) if rows_done[r.clone()].iter().all(|d| *d) => {
+            Err(e) if rows_done[r.clone()].iter().any(|d| *d) => {
                 return Err(e).at(path, &format!("reading /basin/{name}"))
             }
             Err(_) => {}
@@ -1540,7 +1658,7 @@ fn read_blocks_3d(
         let r = block_range(b, ny);
         match ds.read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..]) {
             Ok(v) => out.slice_mut(s![r, .., ..]).assign(&v),
-            Err(e) if rows_done[r.clone()].iter().all(|d| *d) => {
+            Err(e) if rows_done[r.clone()].iter().any(|d| *d) => {
                 return Err(e).at(path, "reading /basin/final")
             }
             Err(_) => {}

@@ -23,15 +23,14 @@
 
 use std::path::Path;
 
-use hdf5::{File, Group};
+use hdf5::File;
 use ndarray::Array2;
 use plotters::prelude::*;
 
 use crate::h5util::{
-    check_target, create_file, get_str, open_file, rename_into_place, set_attr, set_str,
-    temp_sibling, At,
+    get_str, matrix, open_file, put, set_attr, set_str, write_h5_atomically, At, Staged,
 };
-use crate::plot::{cell_extent, nearest, pe, register_fonts, rgb, tick, TempPicture, FONT};
+use crate::plot::{cell_extent, nearest, pe, register_fonts, rgb, tick, FONT};
 use crate::{time, Result, StoreError};
 
 /// Value of the root attribute `format` of a curve file.
@@ -122,51 +121,11 @@ impl CurveData {
     }
 }
 
-fn matrix(rows: &[Vec<f64>], ncols: usize) -> Array2<f64> {
-    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
-    Array2::from_shape_vec((rows.len(), ncols), flat).expect("shape validated")
-}
-
-fn put2<T: hdf5::H5Type>(path: &Path, g: &Group, name: &str, a: &Array2<T>) -> Result<()> {
-    g.new_dataset_builder()
-        .with_data(a)
-        .create(name)
-        .map(|_| ())
-        .at(path, &format!("writing {}/{name}", g.name()))
-}
-
-fn put1<T: hdf5::H5Type>(path: &Path, g: &Group, name: &str, v: &[T]) -> Result<()> {
-    g.new_dataset_builder()
-        .with_data(v)
-        .create(name)
-        .map(|_| ())
-        .at(path, &format!("writing {}/{name}", g.name()))
-}
-
 /// Writes `data` to `path` (refused if it exists, unless `force`).
 pub fn write_curve(path: impl AsRef<Path>, force: bool, data: &CurveData) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
-    check_target(path, force)?;
-    let tmp = temp_sibling(path);
-    let res = (|| -> Result<()> {
-        let (f, _lock) = create_file(&tmp, true, false, 0)?;
-        match fill(&tmp, &f, data).and_then(|()| f.flush().at(&tmp, "flushing")) {
-            Ok(()) => f.close().at(&tmp, "closing"),
-            Err(e) => {
-                // As in the sweep writer: no close after a failed write.
-                std::mem::forget(f);
-                Err(e)
-            }
-        }
-    })();
-    match res {
-        Ok(()) => rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+    write_h5_atomically(path, force, |tmp, f| fill(tmp, f, data))
 }
 
 fn fill(p: &Path, f: &File, data: &CurveData) -> Result<()> {
@@ -190,28 +149,28 @@ fn fill(p: &Path, f: &File, data: &CurveData) -> Result<()> {
     set_attr(p, f, "complete", &u8::from(data.complete))?;
     let d = data.section_names.len();
     let g = f.create_group("curve").at(p, "creating /curve")?;
-    put1(p, &g, "p_step", &data.p_step)?;
-    put1(p, &g, "p_free", &data.p_free)?;
-    put2(p, &g, "section", &matrix(&data.section, d))?;
-    put2(p, &g, "state", &matrix(&data.state, data.state_names.len()))?;
+    put(p, &g, "p_step", &data.p_step)?;
+    put(p, &g, "p_free", &data.p_free)?;
+    put(p, &g, "section", &matrix(&data.section, d))?;
+    put(p, &g, "state", &matrix(&data.state, data.state_names.len()))?;
     let part = |k: usize| -> Vec<Vec<f64>> {
         data.multipliers
             .iter()
             .map(|v| v.iter().map(|z| if k == 0 { z.0 } else { z.1 }).collect())
             .collect()
     };
-    put2(p, &g, "multipliers_re", &matrix(&part(0), d))?;
-    put2(p, &g, "multipliers_im", &matrix(&part(1), d))?;
-    put1(p, &g, "critical", &data.critical)?;
-    put1(p, &g, "period", &data.period)?;
-    put1(p, &g, "residual", &data.residual)?;
+    put(p, &g, "multipliers_re", &matrix(&part(0), d))?;
+    put(p, &g, "multipliers_im", &matrix(&part(1), d))?;
+    put(p, &g, "critical", &data.critical)?;
+    put(p, &g, "period", &data.period)?;
+    put(p, &g, "residual", &data.residual)?;
     if let Some(m) = &data.map {
         let g = f.create_group("map").at(p, "creating /map")?;
-        put1(p, &g, "step", &m.step)?;
-        put1(p, &g, "free", &m.free)?;
+        put(p, &g, "step", &m.step)?;
+        put(p, &g, "free", &m.free)?;
         let flat: Vec<u8> = m.region.iter().flatten().copied().collect();
         let a = Array2::from_shape_vec((m.free.len(), m.step.len()), flat).expect("validated");
-        put2(p, &g, "region", &a)?;
+        put(p, &g, "region", &a)?;
         let legend: serde_json::Map<String, serde_json::Value> = m
             .legend
             .iter()
@@ -294,8 +253,8 @@ pub fn plot_curve(
     let path = path.as_ref();
     data.validate()?;
     register_fonts();
-    let pic = TempPicture::new(path)?;
-    let tmp = pic.tmp.clone();
+    let pic = Staged::picture(path)?;
+    let tmp = pic.path().to_path_buf();
     let root = BitMapBackend::new(&tmp, CURVE_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let (left, right) = root.split_horizontally(CURVE_PNG_SIZE.0 - 300);

@@ -17,9 +17,7 @@ use std::path::Path;
 use hdf5::File;
 use ndarray::Array2;
 
-use crate::h5util::{
-    create_file, get_str, has_attr, open_file, rename_into_place, set_str, temp_sibling, At,
-};
+use crate::h5util::{get_str, has_attr, open_file, put, set_str, write_h5_atomically, At};
 use crate::provenance::{annotate_file, Annotations};
 use crate::{time, Result, StoreError};
 
@@ -89,38 +87,21 @@ pub fn write_design_annotated(
 ) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
-    let tmp = temp_sibling(path);
-    let res = (|| -> Result<()> {
-        let (f, _lock) = create_file(&tmp, true, false, 0)?;
-        let write = || -> Result<()> {
-            fill(&tmp, &f, data)?;
-            if let Some(a) = ann {
-                if a.provenance.is_some() && !earlier_commands.is_empty() {
-                    let g = f
-                        .create_group("provenance")
-                        .at(&tmp, "creating /provenance")?;
-                    let c = serde_json::to_string(earlier_commands).unwrap_or_default();
-                    set_str(&tmp, &g, "commands", &c)?;
-                }
-                annotate_file(&tmp, &f, a)?;
+    // Always replaces an existing file: a search rewrites its own output as it goes.
+    write_h5_atomically(path, true, |tmp, f| {
+        fill(tmp, f, data)?;
+        if let Some(a) = ann {
+            if a.provenance.is_some() && !earlier_commands.is_empty() {
+                let g = f
+                    .create_group("provenance")
+                    .at(tmp, "creating /provenance")?;
+                let c = serde_json::to_string(earlier_commands).unwrap_or_default();
+                set_str(tmp, &g, "commands", &c)?;
             }
-            f.flush().at(&tmp, "flushing")
-        };
-        match write() {
-            Ok(()) => f.close().at(&tmp, "closing"),
-            Err(e) => {
-                std::mem::forget(f);
-                Err(e)
-            }
+            annotate_file(tmp, f, a)?;
         }
-    })();
-    match res {
-        Ok(()) => rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+        Ok(())
+    })
 }
 
 fn fill(p: &Path, f: &File, d: &DesignData) -> Result<()> {
@@ -142,32 +123,13 @@ fn fill(p: &Path, f: &File, d: &DesignData) -> Result<()> {
     let params = Array2::from_shape_vec((n, k), flat).expect("validated");
     let sec: Vec<f64> = d.section.iter().flatten().copied().collect();
     let section = Array2::from_shape_vec((n, 3), sec).expect("validated");
-    let put2 = |name: &str, a: &Array2<f64>| {
-        f.new_dataset_builder()
-            .with_data(a)
-            .create(name)
-            .map(|_| ())
-            .at(p, &format!("writing /{name}"))
-    };
-    put2("params", &params)?;
-    put2("section", &section)?;
-    f.new_dataset_builder()
-        .with_data(&d.status)
-        .create("status")
-        .map(|_| ())
-        .at(p, "writing /status")?;
+    put(p, f, "params", &params)?;
+    put(p, f, "section", &section)?;
+    put(p, f, "status", &d.status)?;
     let reasons = serde_json::to_string(&d.reasons).unwrap_or_default();
-    f.new_dataset_builder()
-        .with_data(reasons.as_bytes())
-        .create("reasons")
-        .map(|_| ())
-        .at(p, "writing /reasons")?;
+    put(p, f, "reasons", reasons.as_bytes())?;
     for (name, v) in &d.columns {
-        f.new_dataset_builder()
-            .with_data(v)
-            .create(name.as_str())
-            .map(|_| ())
-            .at(p, &format!("writing /{name}"))?;
+        put(p, f, name, v)?;
     }
     Ok(())
 }

@@ -1,10 +1,12 @@
-//! Small helpers over hdf5-metno: path context on errors, scalar attributes, creating a new file
-//! without clobbering an existing one.
+//! Small helpers over hdf5-metno: path context on errors, scalar attributes and datasets,
+//! creating a new file without clobbering an existing one, and the one atomic writer
+//! ([`write_atomically`]) every whole-file output goes through.
 
 use std::path::{Path, PathBuf};
 
 use hdf5::types::{H5Type, VarLenUnicode};
-use hdf5::Location;
+use hdf5::{Dataset, Group, Location};
+use ndarray::{Array2, ArrayView};
 
 use crate::{Result, StoreError};
 
@@ -370,4 +372,149 @@ pub(crate) fn check_target(path: &Path, force: bool) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// A temporary sibling of an output path that becomes the output only when
+/// [`commit`](Self::commit)ted: the one write-then-rename path of every file this crate writes
+/// whole (HDF5, CSV, pictures). A reader never sees a half-written file, and a failed write
+/// (full disk, an error while filling) leaves an existing file untouched. Dropped without
+/// `commit`, it removes the temporary file.
+pub(crate) struct Staged {
+    tmp: PathBuf,
+    done: bool,
+}
+
+impl Staged {
+    /// A temporary sibling of `path` ([`temp_sibling`]); nothing is checked or created.
+    pub(crate) fn beside(path: &Path) -> Self {
+        Staged {
+            tmp: temp_sibling(path),
+            done: false,
+        }
+    }
+
+    /// A picture's temporary file: [`check_target`] with `force` (an existing picture is
+    /// replaced; whether it may be is the caller's decision), and `path`'s extension appended
+    /// to the temporary name, by which the bitmap backend chooses the encoder. The picture is
+    /// drawn into [`path`](Self::path), then [`commit`](Self::commit)ted.
+    pub(crate) fn picture(path: &Path) -> Result<Self> {
+        check_target(path, true)?;
+        let mut s = Self::beside(path);
+        if let Some(ext) = path.extension() {
+            let mut name = s.tmp.file_name().unwrap_or_default().to_os_string();
+            name.push(".");
+            name.push(ext);
+            s.tmp = s.tmp.with_file_name(name);
+        }
+        Ok(s)
+    }
+
+    /// The temporary path to write.
+    pub(crate) fn path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Renames the finished temporary file onto `path` ([`rename_into_place`]).
+    pub(crate) fn commit(mut self, path: &Path) -> Result<()> {
+        self.done = true;
+        rename_into_place(&self.tmp, path)
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Writes a whole file atomically: refuses an existing `path` unless `force`
+/// ([`check_target`]), lets `write` fill a temporary sibling, then renames it into place. On an
+/// error from `write` the temporary file is removed and `path` is left as it was.
+pub(crate) fn write_atomically<T>(
+    path: &Path,
+    force: bool,
+    write: impl FnOnce(&Path) -> Result<T>,
+) -> Result<T> {
+    check_target(path, force)?;
+    let staged = Staged::beside(path);
+    let v = write(staged.path())?;
+    staged.commit(path)?;
+    Ok(v)
+}
+
+/// [`write_atomically`] for an HDF5 file: `fill` writes into the new temporary file (created
+/// and locked by [`create_file`]), which is then flushed and closed before the rename. After a
+/// failed write the file handle is leaked, not closed (HDF5's close after a failed write can
+/// crash; see [`ensure_space`]); the temporary file is removed.
+pub(crate) fn write_h5_atomically(
+    path: &Path,
+    force: bool,
+    fill: impl FnOnce(&Path, &hdf5::File) -> Result<()>,
+) -> Result<()> {
+    write_atomically(path, force, |tmp| {
+        let (f, _lock) = create_file(tmp, true, false, 0)?;
+        match fill(tmp, &f).and_then(|()| f.flush().at(tmp, "flushing")) {
+            Ok(()) => f.close().at(tmp, "closing"),
+            Err(e) => {
+                std::mem::forget(f);
+                Err(e)
+            }
+        }
+    })
+}
+
+/// [`write_atomically`] for a text file written through a buffered writer (CSV): any I/O
+/// error, creating the temporary file included, is reported as [`StoreError::Io`] "write" on
+/// `path`.
+pub(crate) fn write_text_atomically(
+    path: &Path,
+    force: bool,
+    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> Result<()> {
+    use std::io::Write;
+    write_atomically(path, force, |tmp| {
+        let res = std::fs::File::create(tmp).and_then(|f| {
+            let mut w = std::io::BufWriter::new(f);
+            write(&mut w)?;
+            w.flush()
+        });
+        res.map_err(|source| StoreError::Io {
+            path: path.to_path_buf(),
+            action: "write",
+            source,
+        })
+    })
+}
+
+/// Creates the dataset `name` in `g` holding `data` (a slice, an array or an array view of
+/// any rank), contiguous and unfiltered. An HDF5 failure names the dataset's full path
+/// ("writing /curve/p_step").
+pub(crate) fn put<'d, T, D>(
+    path: &Path,
+    g: &Group,
+    name: &str,
+    data: impl Into<ArrayView<'d, T, D>>,
+) -> Result<Dataset>
+where
+    T: H5Type + 'd,
+    D: ndarray::Dimension,
+{
+    let parent = g.name();
+    let full = if parent == "/" {
+        format!("/{name}")
+    } else {
+        format!("{parent}/{name}")
+    };
+    g.new_dataset_builder()
+        .with_data(data.into())
+        .create(name)
+        .at(path, &format!("writing {full}"))
+}
+
+/// A list of equally long rows as an (n × `ncols`) array; the caller has checked the lengths.
+pub(crate) fn matrix(rows: &[Vec<f64>], ncols: usize) -> Array2<f64> {
+    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+    Array2::from_shape_vec((rows.len(), ncols), flat).expect("shape validated")
 }

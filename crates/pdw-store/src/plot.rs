@@ -14,6 +14,7 @@ use plotters::prelude::*;
 use plotters::style::FontStyle;
 
 use crate::basin::{Attractor, BasinHeader, NOT_COMPUTED};
+use crate::h5util::Staged;
 use crate::sweep::SweepData;
 use crate::{Result, StoreError};
 
@@ -59,44 +60,6 @@ pub(crate) fn pe<E: std::fmt::Display>(path: &Path, e: E) -> StoreError {
     StoreError::Plot {
         path: path.to_path_buf(),
         detail,
-    }
-}
-
-/// A picture is drawn into a temporary sibling and renamed onto its path only once complete:
-/// a failed drawing (full disk, …) leaves no truncated picture and does not touch an existing
-/// one. Dropped without [`commit`](Self::commit), it removes the temporary file.
-pub(crate) struct TempPicture {
-    pub(crate) tmp: std::path::PathBuf,
-    done: bool,
-}
-
-impl TempPicture {
-    pub(crate) fn new(path: &Path) -> Result<Self> {
-        crate::h5util::check_regular(path)?;
-        // The encoder is chosen by the extension, so the temporary name keeps it.
-        let tmp = crate::h5util::temp_sibling(path);
-        let tmp = match path.extension() {
-            Some(ext) => {
-                let mut name = tmp.file_name().unwrap_or_default().to_os_string();
-                name.push(".");
-                name.push(ext);
-                tmp.with_file_name(name)
-            }
-            None => tmp,
-        };
-        Ok(TempPicture { tmp, done: false })
-    }
-    pub(crate) fn commit(mut self, path: &Path) -> Result<()> {
-        self.done = true;
-        crate::h5util::rename_into_place(&self.tmp, path)
-    }
-}
-
-impl Drop for TempPicture {
-    fn drop(&mut self) {
-        if !self.done {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
     }
 }
 
@@ -329,8 +292,8 @@ fn plot_basin_marked(
         ));
     }
     register_fonts();
-    let pic = TempPicture::new(path)?;
-    let tmp = pic.tmp.clone();
+    let pic = Staged::picture(path)?;
+    let tmp = pic.path().to_path_buf();
     let root = BitMapBackend::new(&tmp, BASIN_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let (left, right) = root.split_horizontally(BASIN_PNG_SIZE.0 - 220);
@@ -554,8 +517,8 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         ));
     }
     register_fonts();
-    let pic = TempPicture::new(path)?;
-    let tmp = pic.tmp.clone();
+    let pic = Staged::picture(path)?;
+    let tmp = pic.path().to_path_buf();
     let root = BitMapBackend::new(&tmp, BIFURCATION_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let panels = root.split_evenly((3, 1));
@@ -845,8 +808,8 @@ pub fn plot_basin_stability(
     let path = path.as_ref();
     data.validate()?;
     register_fonts();
-    let pic = TempPicture::new(path)?;
-    let tmp = pic.tmp.clone();
+    let pic = Staged::picture(path)?;
+    let tmp = pic.path().to_path_buf();
     let root = BitMapBackend::new(&tmp, STABILITY_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let panels = root.split_evenly((2, 1));
@@ -1123,8 +1086,8 @@ pub fn plot_lines(
     };
     let (xr, yr) = (widen(xr, log_x), widen(yr, log_y));
     register_fonts();
-    let pic = TempPicture::new(path)?;
-    let tmp = pic.tmp.clone();
+    let pic = Staged::picture(path)?;
+    let tmp = pic.path().to_path_buf();
     let root = BitMapBackend::new(&tmp, LINES_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let labels = Labels {
@@ -1274,8 +1237,8 @@ pub fn animate_gif(
     let (x0, x1) = (cx - s * w / 2.0, cx + s * w / 2.0);
     let (y0, y1) = (cy - s * h / 2.0, cy + s * h / 2.0);
     register_fonts();
-    let pic = TempPicture::new(path)?;
-    let tmp = pic.tmp.clone();
+    let pic = Staged::picture(path)?;
+    let tmp = pic.path().to_path_buf();
     let root = BitMapBackend::gif(&tmp, size, delay_ms)
         .map_err(|x| pe(path, x))?
         .into_drawing_area();

@@ -27,7 +27,7 @@ use ndarray::{s, ArrayView2};
 use crate::basin::{
     read_attractors, Attractor, BasinHeader, BasinMetrics, BasinWriter, BLOCK_ROWS,
 };
-use crate::h5util::{check_target, get_attr, open_file, rename_into_place, temp_sibling, At};
+use crate::h5util::{check_target, get_attr, open_file, At, Staged};
 use crate::{Result, StoreError};
 
 /// Shard `index` of `count` (0-based: `index` in `0..count`); written and parsed as `"I/N"`.
@@ -215,9 +215,11 @@ pub fn merge<P: AsRef<Path>>(
     let mut header = list[0].header.clone();
     header.shard = None;
     header.command = command.to_string();
-    let tmp = temp_sibling(out);
+    // The target was checked above, before the shards were read.
+    let staged = Staged::beside(out);
+    let tmp = staged.path();
     let result = (|| -> Result<BasinHeader> {
-        let mut w = BasinWriter::create(&tmp, &header, true)?;
+        let mut w = BasinWriter::create(tmp, &header, true)?;
         w.set_elapsed_before(list.iter().map(|s| s.elapsed).sum());
         let (nx, d) = (header.nx(), header.d());
         for (s, p) in list.iter().zip(shards) {
@@ -281,14 +283,7 @@ pub fn merge<P: AsRef<Path>>(
         w.finish(&m, attractors.as_deref().unwrap_or(&[]))?;
         Ok(header.clone())
     })();
-    match result {
-        Ok(h) => {
-            rename_into_place(&tmp, out)?;
-            Ok(h)
-        }
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+    let h = result?;
+    staged.commit(out)?;
+    Ok(h)
 }

@@ -29,8 +29,7 @@ use hdf5::File;
 use ndarray::Array2;
 
 use crate::h5util::{
-    check_target, create_file, get_attr, get_str, open_file, rename_into_place, set_attr, set_str,
-    temp_sibling, At,
+    get_attr, get_str, matrix, open_file, put, set_attr, set_str, write_h5_atomically, At,
 };
 use crate::{time, Result, StoreError};
 
@@ -131,34 +130,11 @@ impl StabilityData {
     }
 }
 
-fn matrix(rows: &[Vec<f64>], ncols: usize) -> Array2<f64> {
-    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
-    Array2::from_shape_vec((rows.len(), ncols), flat).expect("shape validated")
-}
-
 /// Writes `data` to `path` (refused if it exists, unless `force`).
 pub fn write_stability(path: impl AsRef<Path>, force: bool, data: &StabilityData) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
-    check_target(path, force)?;
-    let tmp = temp_sibling(path);
-    let res = (|| -> Result<()> {
-        let (f, _lock) = create_file(&tmp, true, false, 0)?;
-        match fill(&tmp, &f, data).and_then(|()| f.flush().at(&tmp, "flushing")) {
-            Ok(()) => f.close().at(&tmp, "closing"),
-            Err(e) => {
-                std::mem::forget(f);
-                Err(e)
-            }
-        }
-    })();
-    match res {
-        Ok(()) => rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+    write_h5_atomically(path, force, |tmp, f| fill(tmp, f, data))
 }
 
 fn json_list(v: &[String]) -> String {
@@ -183,22 +159,16 @@ fn fill(p: &Path, f: &File, d: &StabilityData) -> Result<()> {
     for (k, v) in &d.settings {
         set_str(p, f, &format!("setting_{k}"), v)?;
     }
-    f.new_dataset_builder()
-        .with_data(&d.values)
-        .create("parameter")
-        .at(p, "writing /parameter")?;
-    let fr = f
-        .new_dataset_builder()
-        .with_data(&matrix(&d.fractions, d.columns.len()))
-        .create("fractions")
-        .at(p, "writing /fractions")?;
+    put(p, f, "parameter", &d.values)?;
+    let fr = put(p, f, "fractions", &matrix(&d.fractions, d.columns.len()))?;
     set_str(p, &fr, "columns", &json_list(&d.columns))?;
     set_str(p, &fr, "kinds", &json_list(&d.kinds))?;
-    let of = f
-        .new_dataset_builder()
-        .with_data(&matrix(&d.outcome_fractions, d.outcome_columns.len()))
-        .create("outcome_fractions")
-        .at(p, "writing /outcome_fractions")?;
+    let of = put(
+        p,
+        f,
+        "outcome_fractions",
+        &matrix(&d.outcome_fractions, d.outcome_columns.len()),
+    )?;
     set_str(p, &of, "columns", &json_list(&d.outcome_columns))?;
     let gv = f.create_group("values").at(p, "creating /values")?;
     for (i, (mu, ats)) in d.values.iter().zip(&d.attractors).enumerate() {

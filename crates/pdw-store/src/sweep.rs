@@ -37,8 +37,8 @@ use hdf5::{File, Group};
 use ndarray::{Array2, Array3};
 
 use crate::h5util::{
-    check_target, create_file, get_attr, get_str, open_file, rename_into_place, set_attr, set_str,
-    temp_sibling, At,
+    get_attr, get_str, matrix, open_file, put, set_attr, set_str, write_h5_atomically,
+    write_text_atomically, At,
 };
 use crate::{time, Result, StoreError};
 
@@ -288,52 +288,11 @@ impl SweepData {
     }
 }
 
-fn matrix(rows: &[Vec<f64>], ncols: usize) -> Array2<f64> {
-    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
-    Array2::from_shape_vec((rows.len(), ncols), flat).expect("shape validated")
-}
-
-fn put(path: &Path, g: &Group, name: &str, a: &Array2<f64>) -> Result<()> {
-    g.new_dataset_builder()
-        .with_data(a)
-        .create(name)
-        .map(|_| ())
-        .at(path, &format!("writing {}/{name}", g.name()))
-}
-
-fn put1<T: hdf5::H5Type>(path: &Path, g: &Group, name: &str, v: &[T]) -> Result<()> {
-    g.new_dataset_builder()
-        .with_data(v)
-        .create(name)
-        .map(|_| ())
-        .at(path, &format!("writing {}/{name}", g.name()))
-}
-
 /// Writes `data` to `path` (refused if it exists, unless `force`).
 pub fn write_sweep(path: impl AsRef<Path>, force: bool, data: &SweepData) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
-    check_target(path, force)?;
-    let tmp = temp_sibling(path);
-    let res = (|| -> Result<()> {
-        let (f, _lock) = create_file(&tmp, true, false, 0)?;
-        match fill(&tmp, &f, data).and_then(|()| f.flush().at(&tmp, "flushing")) {
-            Ok(()) => f.close().at(&tmp, "closing"),
-            Err(e) => {
-                // Closing after a failed write can crash HDF5: leave the handle unclosed (the
-                // temporary file is removed below).
-                std::mem::forget(f);
-                Err(e)
-            }
-        }
-    })();
-    match res {
-        Ok(()) => rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+    write_h5_atomically(path, force, |tmp, f| fill(tmp, f, data))
 }
 
 fn fill(p: &Path, f: &File, data: &SweepData) -> Result<()> {
@@ -363,7 +322,7 @@ fn fill(p: &Path, f: &File, data: &SweepData) -> Result<()> {
         set_str(p, &g, "name", &b.name)?;
         set_attr(p, &g, "period_strides", &b.period_strides)?;
         let m = b.multipliers.first().map_or(0, |v| v.len());
-        put1(p, &g, "parameter", &b.parameter)?;
+        put(p, &g, "parameter", &b.parameter)?;
         put(p, &g, "section", &matrix(&b.section, d))?;
         let re: Vec<Vec<f64>> = b
             .multipliers
@@ -378,7 +337,7 @@ fn fill(p: &Path, f: &File, data: &SweepData) -> Result<()> {
         put(p, &g, "multipliers_re", &matrix(&re, m))?;
         put(p, &g, "multipliers_im", &matrix(&im, m))?;
         let st: Vec<u8> = b.stable.iter().map(|&s| u8::from(s)).collect();
-        put1(p, &g, "stable", &st)?;
+        put(p, &g, "stable", &st)?;
         if b.measured() {
             write_measured(p, &g, b, d)?;
         }
@@ -393,12 +352,12 @@ fn fill(p: &Path, f: &File, data: &SweepData) -> Result<()> {
         set_str(p, &g, "kind", &z.kind)?;
         set_attr(p, &g, "parameter", &z.parameter)?;
         set_attr(p, &g, "branch", &(z.branch as u64))?;
-        put1(p, &g, "section", &z.section)?;
+        put(p, &g, "section", &z.section)?;
     }
     if let Some(o) = &data.orbit {
         let g = f.create_group("orbit").at(p, "creating /orbit")?;
         set_str(p, &g, "coordinate", &o.coordinate)?;
-        put1(p, &g, "parameter", &o.parameter)?;
+        put(p, &g, "parameter", &o.parameter)?;
         let s = o.points.first().map_or(0, |r| r.len());
         put(p, &g, "points", &matrix(&o.points, s))?;
     }
@@ -464,14 +423,10 @@ fn write_measured(p: &Path, g: &Group, b: &Branch, d: usize) -> Result<()> {
     let k = b.period_strides as usize;
     let flat: Vec<f64> = b.orbit.iter().flatten().flatten().copied().collect();
     let orbit = Array3::from_shape_vec((n, k, d), flat).expect("shape validated");
-    g.new_dataset_builder()
-        .with_data(&orbit)
-        .create("orbit")
-        .map(|_| ())
-        .at(p, "writing orbit")?;
-    put1(p, g, "period", &b.period)?;
+    put(p, g, "orbit", &orbit)?;
+    put(p, g, "period", &b.period)?;
     put(p, g, "step_length", &matrix(&b.step_length, k))?;
-    put1(p, g, "speed", &b.speed)?;
+    put(p, g, "speed", &b.speed)?;
     for (name, f) in FLAGS {
         let flat: Vec<u8> = b
             .validity
@@ -480,11 +435,7 @@ fn write_measured(p: &Path, g: &Group, b: &Branch, d: usize) -> Result<()> {
             .map(|v| u8::from(f(v)))
             .collect();
         let a = Array2::from_shape_vec((n, k), flat).expect("shape validated");
-        g.new_dataset_builder()
-            .with_data(&a)
-            .create(name)
-            .map(|_| ())
-            .at(p, &format!("writing {name}"))?;
+        put(p, g, name, &a)?;
     }
     for (name, f) in FORCES {
         let rows: Vec<Vec<f64>> = b
@@ -496,11 +447,7 @@ fn write_measured(p: &Path, g: &Group, b: &Branch, d: usize) -> Result<()> {
     }
     let codes: Vec<u8> = b.validity.iter().flatten().map(|v| v.binding).collect();
     let a = Array2::from_shape_vec((n, k), codes).expect("shape validated");
-    let ds = g
-        .new_dataset_builder()
-        .with_data(&a)
-        .create("binding_criterion")
-        .at(p, "writing binding_criterion")?;
+    let ds = put(p, g, "binding_criterion", &a)?;
     let legend: serde_json::Map<String, serde_json::Value> = BINDING_CRITERIA
         .iter()
         .enumerate()
@@ -755,10 +702,7 @@ pub fn write_sweep_csv(
     use std::io::Write;
     let path = path.as_ref();
     data.validate()?;
-    check_target(path, force)?;
-    let tmp = temp_sibling(path);
-    let res = (|| -> std::io::Result<()> {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+    write_text_atomically(path, force, |w| {
         writeln!(w, "# format: {SWEEP_FORMAT} (csv)")?;
         writeln!(w, "# version: {}", env!("CARGO_PKG_VERSION"))?;
         writeln!(w, "# model: {}", data.model)?;
@@ -806,19 +750,8 @@ pub fn write_sweep_csv(
                 }
             }
         }
-        w.flush()
-    })();
-    match res {
-        Ok(()) => rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(StoreError::Io {
-                path: path.to_path_buf(),
-                action: "write",
-                source: e,
-            })
-        }
-    }
+        Ok(())
+    })
 }
 
 /// The sweep as one JSON object: `model`, `parameter`, `params`, `section_names`, `elapsed_s`,

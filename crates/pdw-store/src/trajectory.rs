@@ -22,7 +22,7 @@
 //! `pandas.read_csv(path, comment="#")` read it.
 
 use crate::h5util::{
-    check_target, create_file, get_str, open_file, rename_into_place, set_str, temp_sibling, At,
+    get_str, open_file, put, set_str, write_h5_atomically, write_text_atomically, At,
 };
 use crate::{time, Result, StoreError};
 use hdf5::{File, Group};
@@ -154,40 +154,18 @@ pub fn write_trajectory_h5(
 ) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
-    check_target(path, force)?;
-    let tmp = temp_sibling(path);
-    let res = (|| -> Result<()> {
-        let (f, _lock) = create_file(&tmp, true, false, 0)?;
-        fill(&tmp, &f, data)?;
-        f.close().at(&tmp, "closing")
-    })();
-    match res {
-        Ok(()) => rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+    write_h5_atomically(path, force, |tmp, f| fill(tmp, f, data))
 }
 
-fn put2(p: &Path, g: &Group, name: &str, v: &[f64], cols: usize) -> Result<hdf5::Dataset> {
+/// `v` (rows of `cols` values, row-major) as the 2-D dataset `name` of `g`.
+fn put_rows(p: &Path, g: &Group, name: &str, v: &[f64], cols: usize) -> Result<hdf5::Dataset> {
     let rows = v.len().checked_div(cols).unwrap_or(0);
     let a = Array2::from_shape_vec((rows, cols), v.to_vec()).map_err(|e| StoreError::Format {
         path: p.to_path_buf(),
         expected: KIND,
         detail: format!("{name}: {e}"),
     })?;
-    g.new_dataset_builder()
-        .with_data(&a)
-        .create(name)
-        .at(p, &format!("writing {name}"))
-}
-
-fn put1<T: hdf5::H5Type>(p: &Path, g: &Group, name: &str, v: &[T]) -> Result<hdf5::Dataset> {
-    g.new_dataset_builder()
-        .with_data(v)
-        .create(name)
-        .at(p, &format!("writing {name}"))
+    put(p, g, name, &a)
 }
 
 fn fill(p: &Path, f: &File, data: &TrajectoryData) -> Result<()> {
@@ -201,11 +179,11 @@ fn fill(p: &Path, f: &File, data: &TrajectoryData) -> Result<()> {
         let ds = match (c.integer, c.width) {
             (true, 1) => {
                 let v: Vec<u32> = c.values.iter().map(|&x| x as u32).collect();
-                put1(p, f, &c.name, &v)?
+                put(p, f, &c.name, &v)?
             }
-            (false, 1) => put1(p, f, &c.name, &c.values)?,
+            (false, 1) => put(p, f, &c.name, &c.values)?,
             _ => {
-                let ds = put2(p, f, &c.name, &c.values, c.width)?;
+                let ds = put_rows(p, f, &c.name, &c.values, c.width)?;
                 let names = serde_json::to_string(&c.components).unwrap_or_default();
                 set_str(p, &ds, "components", &names)?;
                 ds
@@ -233,20 +211,20 @@ fn fill(p: &Path, f: &File, data: &TrajectoryData) -> Result<()> {
         .map(|(i, n)| (i.to_string(), serde_json::json!(n)))
         .collect();
     let time_units = data.column("t").map_or("", |c| c.units.as_str());
-    let ds = put1(p, &g, "t", &e.t)?;
+    let ds = put(p, &g, "t", &e.t)?;
     set_str(p, &ds, "units", time_units)?;
-    let ds = put1(p, &g, "kind", &codes)?;
+    let ds = put(p, &g, "kind", &codes)?;
     set_str(
         p,
         &ds,
         "legend",
         &serde_json::Value::Object(legend).to_string(),
     )?;
-    put1(p, &g, "step", &e.step)?;
-    put1(p, &g, "mode_before", &e.mode_before)?;
-    put1(p, &g, "mode_after", &e.mode_after)?;
-    put2(p, &g, "pre", &e.pre, data.dim)?;
-    put2(p, &g, "post", &e.post, data.dim)?;
+    put(p, &g, "step", &e.step)?;
+    put(p, &g, "mode_before", &e.mode_before)?;
+    put(p, &g, "mode_after", &e.mode_after)?;
+    put_rows(p, &g, "pre", &e.pre, data.dim)?;
+    put_rows(p, &g, "post", &e.post, data.dim)?;
     Ok(())
 }
 
@@ -363,15 +341,7 @@ pub fn write_trajectory_csv(
 ) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
-    check_target(path, force)?;
-    let tmp = temp_sibling(path);
-    let io = |source| StoreError::Io {
-        path: path.to_path_buf(),
-        action: "write",
-        source,
-    };
-    let res = (|| -> std::io::Result<()> {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+    write_text_atomically(path, force, |w| {
         writeln!(w, "# format: {TRAJECTORY_FORMAT}")?;
         writeln!(w, "# version: {}", env!("CARGO_PKG_VERSION"))?;
         for (k, v) in &data.attrs {
@@ -418,13 +388,6 @@ pub fn write_trajectory_csv(
             }
             writeln!(w, "{line}")?;
         }
-        w.flush()
-    })();
-    match res {
-        Ok(()) => rename_into_place(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(io(e))
-        }
-    }
+        Ok(())
+    })
 }

@@ -129,20 +129,44 @@ fn resume_after_drop_matches_uninterrupted_write() {
     w.finish(&fractions(&h, &o), &attractors()).unwrap();
 
     // Interrupted twice: some rows, dropped without finish (the process stops), resumed.
-    // Rows of a block not complete when the writer stops are not on disk and are redone.
+    // Rows of a block not complete when the writer stops are written as they are and marked
+    // done; the resumed writer holds them until their block is complete.
     let b = dir.join("b.h5");
     let mut w = BasinWriter::create(&b, &h, false).unwrap();
     write_block(&mut w, 48, 16);
     write_block(&mut w, 3, 5);
-    assert_eq!(w.rows_todo().len(), ny - 16);
+    assert_eq!(w.rows_todo().len(), ny - 21, "held rows are not to do");
     drop(w);
+    let part = read_basin(&b).unwrap();
+    let marked: Vec<usize> = (0..ny).filter(|&r| part.rows_done[r]).collect();
+    assert_eq!(marked, (3..8).chain(48..64).collect::<Vec<_>>());
+    let (o3, _, _) = block(&h, 3, 5);
+    assert_eq!(
+        part.outcome
+            .slice(ndarray::s![3..8, ..])
+            .iter()
+            .copied()
+            .collect::<Vec<_>>(),
+        o3
+    );
+    assert!(part
+        .outcome
+        .row(2)
+        .iter()
+        .all(|&c| c == pdw_store::NOT_COMPUTED));
     let mut w = BasinWriter::resume(&b, &h).unwrap();
     let todo = w.rows_todo();
-    assert_eq!(todo.len(), ny - 16);
-    assert!(!todo.contains(&50) && todo.contains(&3) && todo.contains(&47) && todo.contains(&64));
+    assert_eq!(todo.len(), ny - 21);
+    assert!(!todo.contains(&50) && !todo.contains(&3) && !todo.contains(&7));
+    assert!(todo.contains(&2) && todo.contains(&8) && todo.contains(&47) && todo.contains(&64));
     write_block(&mut w, 0, 3);
     write_block(&mut w, 64, 6);
     drop(w);
+    let marked: Vec<usize> = {
+        let d = read_basin(&b).unwrap();
+        (0..ny).filter(|&r| d.rows_done[r]).collect()
+    };
+    assert_eq!(marked, (0..8).chain(48..70).collect::<Vec<_>>());
     let mut w = BasinWriter::resume(&b, &h).unwrap();
     // Rewrite whatever is left, one row at a time in reverse order.
     for r in w.rows_todo().into_iter().rev() {

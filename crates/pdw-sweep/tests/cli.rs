@@ -349,15 +349,18 @@ fn shards_merged_equal_a_single_run() {
 
 /// SIGTERM during a basin exits 130 leaving a resumable file; `--resume` finishes it with the
 /// cells of an uninterrupted run, and its provenance keeps both command lines. The run signals
-/// itself right after handing its 32nd row to the writer (`PDW_SWEEP_SIGNAL_AFTER_ROWS`, a hook
+/// itself right after handing its 37th row to the writer (`PDW_SWEEP_SIGNAL_AFTER_ROWS`, a hook
 /// in the basin command that raises a real SIGTERM and waits for the handler), so the cut is
-/// mid-grid, at the same row, on every run. The writer keeps rows until a whole block of
-/// [`pdw_store::BLOCK_ROWS`] is complete, so the cut after two blocks leaves exactly those rows
-/// done.
+/// mid-grid, at the same row, on every run. The cut is inside a block of
+/// [`pdw_store::BLOCK_ROWS`] rows: the writer writes the rows of that incomplete block when the
+/// run stops, so exactly the rows before the signal are done, and the resume completes the
+/// block.
 #[test]
 fn interrupted_basin_resumes_to_the_same_file() {
     const GRID: &str = "50x50";
-    const CUT: usize = 2 * pdw_store::BLOCK_ROWS;
+    // Not a multiple of the writer's row block: the rows of the incomplete block are kept too.
+    const CUT: usize = 37;
+    assert_ne!(CUT % pdw_store::BLOCK_ROWS, 0);
     let dir = tempfile::tempdir().unwrap();
     let (o, reference) = basin_grid(dir.path(), "ref.h5", GRID, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
