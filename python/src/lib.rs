@@ -14,10 +14,11 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use pdw::basin::{BasinPlan, BasinRequest};
 use pdw_limit::basin::{self as lbasin, BasinOptions, Outcome};
 use pdw_limit::gaits::{self, Found};
 use pdw_limit::trajectory::{self, TrajectoryOptions, Validity};
-use pdw_limit::{Attractor, AttractorKind};
+use pdw_limit::{Attractor, AttractorKind, AttractorSet};
 use pdw_limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome};
 
 /// Threads of the pool that runs batched strides and basins.
@@ -604,39 +605,6 @@ fn stride_map<'py>(
     ))
 }
 
-/// An axis `(name, lo, hi)` of a basin grid: the index of the section coordinate and its range
-/// (`None` if not given).
-fn axis(
-    m: &Model,
-    a: Option<(String, f64, f64)>,
-    which: &str,
-) -> PyResult<Option<(usize, f64, f64)>> {
-    let names = &m.info.section_names;
-    let Some((name, lo, hi)) = a else {
-        return Ok(None);
-    };
-    let i = names.iter().position(|n| *n == name).ok_or_else(|| {
-        err(format!(
-            "{which}: model '{}' has no section coordinate '{name}'; its coordinates are {}",
-            m.info.name,
-            names.join(", ")
-        ))
-    })?;
-    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(err(format!(
-            "{which}: range {lo}:{hi} is empty or inverted; the first bound must be below the second"
-        )));
-    }
-    Ok(Some((i, lo, hi)))
-}
-
-/// The CLI's default axis: 25 % of the coordinate around the grid's centre, at least 0.05.
-fn default_axis(i: usize, centre: &[f64]) -> (usize, f64, f64) {
-    let c = centre[i];
-    let half = (0.25 * c.abs()).max(0.05);
-    (i, c - half, c + half)
-}
-
 fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", &a.name)?;
@@ -658,7 +626,8 @@ fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, Py
 }
 
 /// `basin(model="simplest", slope=None, grid=(nx, ny), x=None, y=None, max_strides=100,
-/// threads=2, **params)`: every cell labelled by the attractor it reaches, as `pdw-sweep basin`.
+/// threads=2, **params)`: every cell labelled by the attractor it reaches, as `pdw-sweep basin`
+/// (the same setup, [`pdw::basin`]).
 #[pyfunction]
 #[pyo3(signature = (model="simplest", slope=None, grid=(101, 101), x=None, y=None, max_strides=100, threads=THREADS, **params))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
@@ -673,90 +642,112 @@ fn basin<'py>(
     threads: usize,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
+    let (m, req) = basin_request(model, slope, grid, (x, y), max_strides, threads, params)?;
+    let gaits = interruptible(py, || pdw::basin::find_gaits(&m).map_err(err))?;
+    let plan = basin_plan(&m, &req, gaits)?;
+    let (outcome, metrics, set) = interruptible(py, || classify_basin(&m, &plan, threads))?;
+    basin_result(py, &m, &plan, outcome, &metrics, &set)
+}
+
+/// A basin axis as given in Python, `(name, lo, hi)`.
+type GivenAxis = Option<(String, f64, f64)>;
+
+/// The keyword arguments of `basin` as the library's request, with the model: the grid, stride
+/// budget and thread count checked, the memory the grid needs, the axes resolved against the
+/// model's section.
+fn basin_request(
+    model: &str,
+    slope: Option<f64>,
+    grid: (usize, usize),
+    (x, y): (GivenAxis, GivenAxis),
+    max_strides: u32,
+    threads: usize,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<(Model, BasinRequest)> {
     let (nx, ny) = grid;
     if nx == 0 || ny == 0 || nx.saturating_mul(ny) > 1_000_000_000 {
         return Err(err(format!(
             "grid: ({nx}, {ny}) must have positive sizes and at most 10^9 cells"
         )));
     }
-    if max_strides == 0 || max_strides > u32::from(u16::MAX) {
-        return Err(err(format!(
-            "max_strides: {max_strides} must be between 1 and {}",
-            u16::MAX
-        )));
-    }
+    let max_strides = pdw::basin::check_max_strides(max_strides, "max_strides").map_err(err)?;
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let m = build_kw(model, slope, params)?;
-    if m.info.section_names.len() < 2 {
-        return Err(err(format!(
-            "model '{}' has one section coordinate ({}); a basin grid needs two",
-            m.info.name,
-            m.info.section_names.join(", ")
-        )));
-    }
+    pdw::basin::check_section(&m.info, "grid").map_err(err)?;
     check_basin_memory(nx, ny, m.info.section_names.len())?;
-    let xa = axis(&m, x, "x")?;
-    let ya = axis(&m, y, "y")?;
-    let (found, failed, n) = interruptible(py, || find_gaits(&m, None, 1e-12))?;
-    let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
-    let Some(centre) =
-        pdw_limit::grid_centre(m.walker.as_ref(), &found, xa.is_some() && ya.is_some())
-    else {
+    let axis = |given: GivenAxis, which: &str| {
+        let range = given.map(|(name, lo, hi)| pdw::input::AxisRange { name, lo, hi });
+        pdw::basin::resolve_axis(&m.info, range, which).map_err(err)
+    };
+    let req = BasinRequest {
+        grid,
+        x: axis(x, "x")?,
+        y: axis(y, "y")?,
+        fixed: Vec::new(),
+        max_strides,
+        integrator: BasinOptions::default_integrator(),
+    };
+    Ok((m, req))
+}
+
+/// The grid of `req` around the gait (the stable one, else the first found; with both axes
+/// given and no gait, the model's first guess), or why there is none.
+fn basin_plan(m: &Model, req: &BasinRequest, gaits: pdw::basin::Gaits) -> PyResult<BasinPlan> {
+    let Some(centre) = pdw::basin::grid_centre(m, &gaits, req.axes_given()) else {
         let mut e = format!(
-            "no period-one orbit found for model '{}' at slope {} from {n} guess(es) to centre \
+            "no period-one orbit found for model '{}' at slope {} from {} guess(es) to centre \
              the default grid on; give both x and y",
             m.info.name,
-            m.slope()
+            m.slope(),
+            gaits.tried
         );
-        for (label, g, le) in &failed {
+        for (label, g, le) in &gaits.failed {
             e.push_str(&format!("\n  guess '{label}' {g:?}: {le}"));
         }
         return Err(err(e));
     };
-    let (ix, xlo, xhi) = xa.unwrap_or_else(|| default_axis(0, &centre));
-    let (iy, ylo, yhi) = ya.unwrap_or_else(|| default_axis(1, &centre));
-    if ix == iy {
-        return Err(err(format!(
-            "x and y both name '{}'; choose two different coordinates",
-            m.info.section_names[ix]
-        )));
-    }
-    let xs = lbasin::linspace(xlo, xhi, nx);
-    let ys = lbasin::linspace(ylo, yhi, ny);
-    let opts = BasinOptions {
-        max_strides: max_strides as u16,
-        ..BasinOptions::default()
-    };
-    let (outcome, metrics, set) = interruptible(py, || -> PyResult<_> {
-        let w = m.walker.as_ref();
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(err)?;
-        let (set, _) = pdw_limit::box_attractors(
-            w,
-            &found,
-            gait,
-            &[],
-            &centre,
-            (ix, (xlo, xhi)),
-            (iy, (ylo, yhi)),
-            &opts,
-            &pool,
-        )
+    let flags = pdw::basin::AxisFlags { x: "x", y: "y" };
+    let bx =
+        pdw::basin::choose_box(req, &m.info.section_names, &centre, flags, "grid").map_err(err)?;
+    Ok(BasinPlan::new(req, bx, gaits, centre))
+}
+
+/// Every cell of the plan labelled by the attractor it reaches (found first over the box), with
+/// the basin's metrics and the attractors.
+fn classify_basin(
+    m: &Model,
+    plan: &BasinPlan,
+    threads: usize,
+) -> PyResult<(Vec<u8>, lbasin::BasinMetrics, AttractorSet)> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
         .map_err(err)?;
-        let fall = Outcome::of_fall;
-        let problem = set.problem(w, &fall);
-        let cells = lbasin::grid_cells(&centre, ix, &xs, iy, &ys);
-        let mut res =
-            lbasin::classify_cells(&problem, &cells, &opts, &pool, &|_| {}).map_err(err)?;
-        set.relabel(&mut res);
-        let outcome: Vec<u8> = res.iter().map(|c| c.outcome).collect();
-        let metrics =
-            lbasin::basin_metrics(&outcome, nx, ny, lbasin::DEFAULT_ENTROPY_BOX).map_err(err)?;
-        Ok((outcome, metrics, set))
-    })?;
-    let arr = Array2::from_shape_vec((ny, nx), outcome).map_err(err)?;
+    let (set, _) = plan.attractors(m, &pool).map_err(err)?;
+    let fall = Outcome::of_fall;
+    let problem = set.problem(m.walker.as_ref(), &fall);
+    let cells = plan.cells(&plan.ys);
+    let mut res =
+        lbasin::classify_cells(&problem, &cells, &plan.opts, &pool, &|_| {}).map_err(err)?;
+    set.relabel(&mut res);
+    let outcome: Vec<u8> = res.iter().map(|c| c.outcome).collect();
+    let (nx, ny) = (plan.bx.nx, plan.bx.ny);
+    let metrics =
+        lbasin::basin_metrics(&outcome, nx, ny, lbasin::DEFAULT_ENTROPY_BOX).map_err(err)?;
+    Ok((outcome, metrics, set))
+}
+
+/// `basin`'s result: the outcome array (ny × nx), the legend (code → name) and a dict of the
+/// metrics, axes, attractors and gait.
+fn basin_result<'py>(
+    py: Python<'py>,
+    m: &Model,
+    plan: &BasinPlan,
+    outcome: Vec<u8>,
+    metrics: &lbasin::BasinMetrics,
+    set: &AttractorSet,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
+    let arr = Array2::from_shape_vec((plan.bx.ny, plan.bx.nx), outcome).map_err(err)?;
     let legend = PyDict::new(py);
     let fr = PyDict::new(py);
     for (c, name) in set.legend() {
@@ -773,15 +764,16 @@ fn basin<'py>(
     md.set_item("basin_entropy", metrics.basin_entropy)?;
     md.set_item("boundary_entropy", metrics.boundary_entropy)?;
     md.set_item("box_size", metrics.box_size)?;
-    md.set_item("x_name", &m.info.section_names[ix])?;
-    md.set_item("y_name", &m.info.section_names[iy])?;
-    md.set_item("x", xs.into_pyarray(py))?;
-    md.set_item("y", ys.into_pyarray(py))?;
+    md.set_item("x_name", &m.info.section_names[plan.bx.x.index])?;
+    md.set_item("y_name", &m.info.section_names[plan.bx.y.index])?;
+    md.set_item("x", plan.xs.clone().into_pyarray(py))?;
+    md.set_item("y", plan.ys.clone().into_pyarray(py))?;
     let atts = PyList::empty(py);
     for a in &set.attractors {
         atts.append(attractor_dict(py, a)?)?;
     }
     md.set_item("attractors", atts)?;
+    let gait = plan.gait();
     md.set_item("gait", gait.map(|fp| fp.section.clone().into_pyarray(py)))?;
     md.set_item(
         "gait_multipliers",

@@ -194,10 +194,10 @@ pub struct BasinArgs {
     /// Vertical axis: NAME=A:B (inclusive).
     #[arg(long)]
     pub y: Option<String>,
-    /// Stride budget per cell. A stride here is one step: heel strike to the next heel strike
-    /// (one application of the stride map), not biomechanics' two steps.
-    #[arg(long, default_value_t = 100)]
-    pub max_strides: u32,
+    /// Stride budget per cell, 1 to 65535. A stride here is one step: heel strike to the next
+    /// heel strike (one application of the stride map), not biomechanics' two steps.
+    #[arg(long, default_value_t = 100, value_parser = pdw::basin::parse_max_strides)]
+    pub max_strides: u16,
     /// HDF5 output file. Default: basin.h5; basin_stability.h5 with --over.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -225,11 +225,12 @@ pub struct BasinArgs {
     /// of the N evenly spaced values, the same box of section states (--x/--y, else the
     /// default box around the gait at A) is classified by attractor, and the fraction reaching
     /// each attractor (Menck et al. 2013), falling, or neither is written to --out (HDF5) and
-    /// drawn as a stacked chart (--png).
-    #[arg(long, value_name = "NAME=A:B:N")]
+    /// drawn as a stacked chart (--png). One small file written whole: no --resume or --shard.
+    #[arg(long, value_name = "NAME=A:B:N", conflicts_with_all = ["resume", "shard"])]
     pub over: Option<String>,
-    /// With --over: print the fractions as one JSON object.
-    #[arg(long)]
+    /// With --over: print the fractions as one JSON object (a plain basin writes its grid to
+    /// --out and --png only).
+    #[arg(long, requires = "over")]
     pub json: bool,
 }
 

@@ -1,10 +1,12 @@
 //! The library under both front ends (the `pdw-sweep` CLI and the Python package): what a run
 //! needs before and around the analysis — building a model by name or spec file with its
 //! parameter overrides ([`model`]), reading the values people type ([`input`]), choosing the
-//! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]). A front end
+//! integrator ([`integrator`]), finding the gaits to start from ([`gaits`]) and setting up a basin
+//! of attraction ([`basin`]). A front end
 //! parses its own syntax into these types and prints or returns the results; it builds no model,
 //! checks no range and names nothing on its own.
 
+pub mod basin;
 pub mod gaits;
 pub mod input;
 pub mod integrator;

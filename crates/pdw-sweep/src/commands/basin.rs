@@ -1,23 +1,37 @@
 //! `pdw-sweep basin`: a basin of attraction over a grid of section states, streamed to HDF5 in
 //! row blocks, with a PNG heatmap. See docs/cli.md and docs/hdf5.md.
+//!
+//! [`run`] reads as the command runs: [`parse`] the flags into the library's basin request
+//! ([`pdw::basin`]), claim the outputs, [`plan`] the grid (the gait search and the box, shared
+//! with `basin --over` and Python's `basin`), [`discover`] the attractors, open the file
+//! ([`open_writer`], [`describe`]), [`compute_rows`], and [`write_results`] (metrics, picture,
+//! summary).
 
-use super::fixedpoint::{report_failure, search};
-use super::output::{Format, Output};
-use super::{build_with, overrides, BuiltModel};
-use crate::args::{self, AxisRange, InputError};
+use super::fixedpoint::report_failure;
+use super::output::{Claim, Format, Output};
+use super::{overrides, BuiltModel};
+use crate::args::{self, InputError};
 use crate::cli::BasinArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pdw::basin::{AxisFlags, BasinPlan, BasinRequest};
 use pdw_limit::attractors::{Attractor as LimitAttractor, DiscoveryOptions};
-use pdw_limit::basin::{
-    basin_metrics, classify_cells, grid_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX,
-};
+use pdw_limit::basin::{basin_metrics, classify_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX};
+use pdw_limit::AttractorSet;
 use pdw_store::{
     plot_basin_attractors, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter,
     ShardSpec, StoreError, BLOCK_ROWS,
 };
+use pdw_walkers::ModelInfo;
 use std::io::IsTerminal;
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
+
+/// Default grid of a basin.
+const DEFAULT_GRID: &str = "401x401";
+
+/// How the axes are named in messages.
+pub(super) const AXIS_FLAGS: AxisFlags = AxisFlags { x: "--x", y: "--y" };
 
 /// Most rows handed to the engine per call (written and flushed as soon as their block is
 /// complete).
@@ -95,67 +109,104 @@ pub(super) fn check_memory(nx: usize, ny: usize, d: usize, dim: usize) -> Result
     Ok(())
 }
 
-/// Default half-width of an axis around the fixed point: 25 % of the coordinate, at least 0.05.
-/// For the simplest walker at γ = 0.009 this gives θ ∈ [0.150, 0.250], θ̇ ∈ [−0.250, −0.150].
-pub(super) fn default_axis(name: &str, centre: f64) -> AxisRange {
-    let half = (0.25 * centre.abs()).max(0.05);
-    AxisRange {
-        name: name.to_string(),
-        lo: centre - half,
-        hi: centre + half,
-    }
+/// `--x` or `--y` (`flag`), parsed and resolved against the model's section coordinates.
+pub(super) fn axis(
+    info: &ModelInfo,
+    given: &Option<String>,
+    flag: &str,
+) -> Result<Option<pdw::basin::Axis>, InputError> {
+    let range = given
+        .as_deref()
+        .map(|s| args::parse_axis(s, flag))
+        .transpose()?;
+    pdw::basin::resolve_axis(info, range, flag)
 }
 
-/// `--set` values: model parameters by name, and fixed section coordinates by index.
-pub(super) type SplitSets = (Vec<(String, f64)>, Vec<(usize, f64)>);
+/// A step's outcome: go on with its value, or end the run with an exit code (its message
+/// printed).
+enum Step<T> {
+    Go(T),
+    Exit(ExitCode),
+}
 
-/// Splits `--set` into model parameters and fixed section coordinates.
-pub(super) fn split_sets(a: &BasinArgs, section_names: &[&str]) -> Result<SplitSets, InputError> {
-    let mut fixed = Vec::new();
-    let mut rest = Vec::new();
-    for (n, v) in overrides(&a.model)? {
-        match section_names.iter().position(|s| *s == n) {
-            Some(i) => fixed.push((i, v)),
-            None => rest.push((n, v)),
+/// Ends a step with the exit code `$step` carries, or yields its value.
+macro_rules! go {
+    ($step:expr) => {
+        match $step {
+            Step::Go(v) => v,
+            Step::Exit(code) => return Ok(code),
         }
+    };
+}
+
+/// The command line, parsed and checked.
+struct Parsed {
+    req: BasinRequest,
+    /// The model as named (its section coordinates name the grid's axes).
+    info: ModelInfo,
+    m: BuiltModel,
+    shard: Option<ShardSpec>,
+    out: PathBuf,
+    png: PathBuf,
+}
+
+impl Parsed {
+    fn names(&self) -> &[String] {
+        &self.info.section_names
     }
-    Ok((rest, fixed))
 }
 
 pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     if a.over.is_some() {
         return super::basin_over::run(a);
     }
-    if a.json {
-        return Err(InputError(
-            "--json: a basin writes its grid to --out (HDF5) and --png; only `basin --over` \
-             prints JSON (add --over NAME=A:B:N, or drop --json)"
-                .into(),
-        )
-        .into());
-    }
     let t0 = Instant::now();
-    // ---- signals first: Ctrl-C or SIGTERM at any moment exits 130, leaving a resumable file
-    // The handler sets the process-wide stop flag (pdw_hybrid::interrupt), which every
-    // integration polls: the gait search, attractor discovery and a block of cells in progress
-    // end within milliseconds, and their partial results are thrown away below.
-    // A second handler cannot be installed in tests that call run() twice; ignore that.
+    // Signals first: Ctrl-C or SIGTERM at any moment exits 130, leaving a resumable file. The
+    // handler sets the process-wide stop flag (pdw_hybrid::interrupt), which every integration
+    // polls: the gait search, attractor discovery and a block of cells in progress end within
+    // milliseconds, and their partial results are thrown away. A second handler cannot be
+    // installed in tests that call run() twice; ignore that.
     let _ = ctrlc::set_handler(pdw_hybrid::interrupt::request);
-    let stopped = pdw_hybrid::interrupt::requested;
-    let nothing_written = || {
-        eprintln!("interrupted before the grid was started; nothing written");
-        Ok(ExitCode::from(130))
-    };
-    // ---- validate everything before touching any file
-    let (nx, ny) = args::parse_grid(a.grid.as_deref().unwrap_or("401x401"))?;
-    if a.max_strides == 0 || a.max_strides > u32::from(u16::MAX) {
-        return Err(InputError(format!(
-            "--max-strides: {} must be between 1 and {}",
-            a.max_strides,
-            u16::MAX
-        ))
-        .into());
+    let p = parse(a)?;
+    let mut claim = claim_outputs(a, &p)?;
+    let plan = go!(plan(a, &p)?);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads)
+        .build()?;
+    let (set, seeds) = go!(discover(a, &p, &plan, &pool)?);
+    warn_gait_drift(&p, &plan)?;
+    let header = header(a, &p, &plan, &set, seeds);
+    let mut writer = go!(open_writer(a, &p, &header, &mut claim)?);
+    let described = describe(a, &p, &plan, &set, &mut writer)?;
+    let todo = rows_to_do(&writer, &p);
+    warn_slow_attractors(a, &set);
+    if compute_rows(a, &p, &plan, &set, &pool, &mut writer, &todo)? {
+        writer.close()?;
+        eprintln!(
+            "interrupted: finished rows are in {}; continue with --resume",
+            p.out.display()
+        );
+        return Ok(ExitCode::from(130));
     }
+    write_results(a, &p, &set, writer, &described, todo.len(), t0)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The stop request of an interrupt (see [`run`]).
+fn stopped() -> bool {
+    pdw_hybrid::interrupt::requested()
+}
+
+/// An interrupt before the file was opened: nothing written, exit 130.
+fn nothing_written<T>() -> Step<T> {
+    eprintln!("interrupted before the grid was started; nothing written");
+    Step::Exit(ExitCode::from(130))
+}
+
+/// Everything checked before any file is touched: the grid, integrator, shard, model (with
+/// `--set` split into parameters and fixed section coordinates), memory and axes.
+fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
+    let grid = args::parse_grid(a.grid.as_deref().unwrap_or(DEFAULT_GRID))?;
     let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
     let shard = match &a.shard {
         Some(s) => {
@@ -165,57 +216,49 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let info = pdw_walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
-    let names_owned = info.section_names.clone();
-    let names: Vec<&str> = names_owned.iter().map(|s| s.as_str()).collect();
-    let names = &names[..];
-    if names.len() < 2 {
-        return Err(InputError(format!(
-            "model '{}' has one section coordinate ({}); a basin grid needs two",
-            info.name,
-            names.join(", ")
-        ))
-        .into());
-    }
-    check_memory(nx, ny, names.len(), info.state_names.len())?;
-    let (param_sets, fixed) = split_sets(a, names)?;
-    let m: BuiltModel = build_with(
-        &crate::cli::ModelOpts {
-            model: a.model.model.clone(),
-            slope: None,
-            set: Vec::new(),
-        },
-        &param_sets,
+    pdw::basin::check_section(&info, "grid")?;
+    check_memory(
+        grid.0,
+        grid.1,
+        info.section_names.len(),
+        info.state_names.len(),
     )?;
-    let axis =
-        |opt: &Option<String>, flag: &str| -> Result<Option<(usize, AxisRange)>, InputError> {
-            let Some(s) = opt else { return Ok(None) };
-            let r = args::parse_axis(s, flag)?;
-            let i = names.iter().position(|n| *n == r.name).ok_or_else(|| {
-                InputError(format!(
-                    "{flag}: model '{}' has no section coordinate '{}'; its coordinates are {}",
-                    info.name,
-                    r.name,
-                    names.join(", ")
-                ))
-            })?;
-            Ok(Some((i, r)))
-        };
-    let xa = axis(&a.x, "--x")?;
-    let ya = axis(&a.y, "--y")?;
+    let (params, fixed) = pdw::basin::split_overrides(overrides(&a.model)?, &info.section_names);
+    let m = pdw::build(&a.model.model, &params)?;
+    let req = BasinRequest {
+        grid,
+        x: axis(&info, &a.x, "--x")?,
+        y: axis(&info, &a.y, "--y")?,
+        fixed,
+        max_strides: a.max_strides,
+        integrator,
+    };
     let out = a.out_path();
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
-    // A shard writes no picture. With --resume an existing --out is expected, and an existing
-    // picture is refused below unless the file turns out complete (then nothing is written).
+    Ok(Parsed {
+        req,
+        info,
+        m,
+        shard,
+        out,
+        png,
+    })
+}
+
+/// Claims `--out` and (unless a shard, which writes no picture) `--png`. With --resume an
+/// existing --out is expected, and an existing picture is refused in [`open_writer`] unless
+/// the file turns out complete (then nothing is written).
+fn claim_outputs(a: &BasinArgs, p: &Parsed) -> Result<Claim, InputError> {
     let mut outputs = vec![Output {
         flag: "--out",
-        path: &out,
+        path: &p.out,
         format: Format::Hdf5,
         may_exist: a.resume,
     }];
-    if shard.is_none() {
+    if p.shard.is_none() {
         outputs.push(Output {
             flag: "--png",
-            path: &png,
+            path: &p.png,
             format: Format::Png,
             may_exist: a.resume,
         });
@@ -223,94 +266,58 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let inputs: Vec<_> = super::output::model_input(&a.model.model)
         .into_iter()
         .collect();
-    let mut claim = super::output::claim(&outputs, &inputs, a.force).map_err(|e| {
+    super::output::claim(&outputs, &inputs, a.force).map_err(|e| {
         if e.0.contains("; pass --force to overwrite") && e.0.starts_with("--out") {
             InputError(format!("{}, or --resume to continue it", e.0))
         } else {
             e
         }
-    })?;
+    })
+}
 
-    // ---- the period-one gaits: the stable one (if any) is the selected gait, code 0
-    let guesses = pdw::gaits::model_guesses(m.walker.as_ref());
+/// The period-one gaits (the stable one, if any, is the selected gait, code 0) and the grid:
+/// centred on the stable gait, else on the first period-one orbit ([`pdw::basin`]).
+fn plan(a: &BasinArgs, p: &Parsed) -> anyhow::Result<Step<BasinPlan>> {
     if !a.quiet {
         eprintln!(
             "finding the period-one gaits from {} guess(es) (Ctrl-C stops)",
-            guesses.len()
+            pdw::gaits::model_guesses(p.m.walker.as_ref()).len()
         );
     }
-    let searched = search(&m, &guesses, 1e-12);
+    let searched = pdw::basin::find_gaits(&p.m);
     if stopped() {
-        return nothing_written();
+        return Ok(nothing_written());
     }
-    let (found, failed) = searched?;
-    let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
-    // The default grid is centred on the stable gait, else on the first period-one orbit.
-    let Some(centre) =
-        pdw_limit::grid_centre(m.walker.as_ref(), &found, xa.is_some() && ya.is_some())
-    else {
+    let gaits = searched?;
+    let Some(centre) = pdw::basin::grid_centre(&p.m, &gaits, p.req.axes_given()) else {
         eprintln!(
             "error: no period-one orbit found for model '{}' at slope {} to centre the \
              default grid on; give both --x and --y",
-            info.name,
-            m.slope()
+            p.info.name,
+            p.m.slope()
         );
-        for (label, g, e) in &failed {
+        for (label, g, e) in &gaits.failed {
             report_failure(label, g, e);
         }
-        return Ok(ExitCode::from(2));
+        return Ok(Step::Exit(ExitCode::from(2)));
     };
-    let (ix, xr) = xa.unwrap_or_else(|| (0, default_axis(names[0], centre[0])));
-    let (iy, yr) = ya.unwrap_or_else(|| (1, default_axis(names[1], centre[1])));
-    if ix == iy {
-        return Err(InputError(format!(
-            "--x and --y both name '{}'; choose two different coordinates",
-            names[ix]
-        ))
-        .into());
-    }
-    let mut base = centre.clone();
-    for (i, v) in &fixed {
-        if *i == ix || *i == iy {
-            return Err(InputError(format!(
-                "--set {}: that coordinate is an axis of the grid",
-                names[*i]
-            ))
-            .into());
-        }
-        base[*i] = *v;
-    }
-    let xs = pdw_limit::basin::linspace(xr.lo, xr.hi, nx);
-    let ys = pdw_limit::basin::linspace(yr.lo, yr.hi, ny);
+    let bx = pdw::basin::choose_box(&p.req, p.names(), &centre, AXIS_FLAGS, "grid")?;
+    Ok(Step::Go(BasinPlan::new(&p.req, bx, gaits, centre)))
+}
 
-    let opts = BasinOptions {
-        max_strides: a.max_strides as u16,
-        integrator,
-        ..BasinOptions::default()
-    };
-
-    // ---- every attractor reached from the grid's box, found up front from a fixed seed set
-    // (identical for every shard and thread count; see pdw_limit::attractors)
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads)
-        .build()?;
-    let walker = m.walker.as_ref();
-    let fall = Outcome::of_fall;
-    let disc = DiscoveryOptions::default();
+/// Every attractor reached from the grid's box, found up front from a fixed seed set
+/// (identical for every shard and thread count; see [`pdw_limit::attractors`]), with the
+/// number of seeds.
+fn discover(
+    a: &BasinArgs,
+    p: &Parsed,
+    plan: &BasinPlan,
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<Step<(AttractorSet, usize)>> {
     let t_disc = Instant::now();
-    let discovered = box_attractors(
-        walker,
-        &found,
-        gait,
-        &fixed,
-        &base,
-        (ix, &xr),
-        (iy, &yr),
-        &opts,
-        &pool,
-    );
+    let discovered = plan.attractors(&p.m, pool);
     if stopped() {
-        return nothing_written();
+        return Ok(nothing_written());
     }
     let (set, seeds) = discovered?;
     if !a.quiet {
@@ -329,63 +336,94 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             }
         );
     }
-    // The gait was found on an accurate stride map; the cells run on the basin's integrator.
-    // If that map moves the gait by more than a tenth of the gait tolerance, cells converge to
-    // a point the classifier does not recognise: say so rather than label them `other`.
-    if let Some(fp) = gait {
-        let r = super::stride_residual(&m, opts.integrator, &fp.section)?;
-        let close_enough = r <= 0.1 * opts.tol_gait;
-        if !close_enough {
-            eprintln!(
-                "warning: with {} the gait is a fixed point only to {r:.2e} (the cells' gait \
-                 tolerance is {:e}): cells may come out `other` or `timeout`; use a tighter \
-                 --rtol/--atol or a smaller --rk4-step",
-                super::integrator_text(&opts.integrator),
-                opts.tol_gait
-            );
-        }
+    Ok(Step::Go((set, seeds)))
+}
+
+/// Warns when the cells' integrator moves the gait too far for the classifier to recognise it
+/// ([`BasinPlan::gait_drift`]): cells would come out `other` or `timeout`.
+fn warn_gait_drift(p: &Parsed, plan: &BasinPlan) -> anyhow::Result<()> {
+    if let Some(r) = plan.gait_drift(&p.m)? {
+        eprintln!(
+            "warning: with {} the gait is a fixed point only to {r:.2e} (the cells' gait \
+             tolerance is {:e}): cells may come out `other` or `timeout`; use a tighter \
+             --rtol/--atol or a smaller --rk4-step",
+            super::integrator_text(&plan.opts.integrator),
+            plan.opts.tol_gait
+        );
     }
-    let header = BasinHeader {
-        command: std::env::args().collect::<Vec<_>>().join(" "),
-        model: info.name.to_string(),
-        slope: m.slope(),
-        params: m.params_json().to_string(),
-        model_resolved: m.walker.fingerprint(),
+    Ok(())
+}
+
+/// The file's header: the run (command, model, integrator and tolerances), the grid and the
+/// legend of the attractors.
+fn header(
+    a: &BasinArgs,
+    p: &Parsed,
+    plan: &BasinPlan,
+    set: &AttractorSet,
+    seeds: usize,
+) -> BasinHeader {
+    let (opts, names) = (&plan.opts, p.names());
+    let disc = DiscoveryOptions::default();
+    BasinHeader {
+        command: super::command_line(),
+        model: p.info.name.to_string(),
+        slope: p.m.slope(),
+        params: p.m.params_json().to_string(),
+        model_resolved: p.m.walker.fingerprint(),
         integrator: super::integrator_text(&opts.integrator),
         tolerances: serde_json::json!({
             "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
             "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
             "confirm": opts.confirm, "max_period": opts.max_period,
-            "fixed_point_residual": gait.map(|fp| fp.residual),
+            "fixed_point_residual": plan.gait().map(|fp| fp.residual),
             "attractor_seeds": seeds, "seed_strides": disc.seed_strides,
             "chaos_radius": disc.chaos_radius, "chaos_sample": disc.cloud_points,
-            "fixed": fixed.iter().map(|(i, v)| (names[*i].to_string(), *v)).collect::<std::collections::BTreeMap<_, _>>(),
+            "fixed": fixed_json(names, &plan.fixed),
         })
         .to_string(),
-        max_strides: a.max_strides,
-        x_name: names[ix].to_string(),
-        x: xs.clone(),
-        y_name: names[iy].to_string(),
-        y: ys.clone(),
-        state_names: names.iter().map(|s| s.to_string()).collect(),
+        max_strides: u32::from(a.max_strides),
+        x_name: plan.bx.x.range.name.clone(),
+        x: plan.xs.clone(),
+        y_name: plan.bx.y.range.name.clone(),
+        y: plan.ys.clone(),
+        state_names: names.to_vec(),
         legend: set.legend(),
-        shard,
-    };
-    // the basin writer takes the output's lock itself, creating or continuing the file
-    if stopped() {
-        return nothing_written();
+        shard: p.shard,
     }
-    claim.hand_over(&out);
-    let mut writer = match BasinWriter::start(&out, &header, a.resume, a.force) {
+}
+
+/// The fixed section coordinates by name.
+pub(super) fn fixed_json(
+    names: &[String],
+    fixed: &[(usize, f64)],
+) -> std::collections::BTreeMap<String, f64> {
+    fixed.iter().map(|(i, v)| (names[*i].clone(), *v)).collect()
+}
+
+/// Opens `--out` (the basin writer takes the output's lock itself, creating or continuing the
+/// file). A file already complete for this command ends the run with success; an existing
+/// picture is refused when resuming an unfinished file without --force.
+fn open_writer(
+    a: &BasinArgs,
+    p: &Parsed,
+    header: &BasinHeader,
+    claim: &mut Claim,
+) -> anyhow::Result<Step<BasinWriter>> {
+    if stopped() {
+        return Ok(nothing_written());
+    }
+    claim.hand_over(&p.out);
+    let writer = match BasinWriter::start(&p.out, header, a.resume, a.force) {
         Ok(w) => w,
         Err(StoreError::AlreadyComplete { .. }) => {
             // A requeued cluster task that had finished: success, nothing to do.
             crate::outln!(
                 "{} is already complete for this command (checked: same run, every block's \
                  checksum); nothing to do",
-                out.display()
+                p.out.display()
             );
-            return Ok(ExitCode::SUCCESS);
+            return Ok(Step::Exit(ExitCode::SUCCESS));
         }
         // A file that is not a readable basin file cannot be continued: say what to do.
         Err(e @ (StoreError::Hdf5 { .. } | StoreError::Format { .. })) if a.resume => {
@@ -397,25 +435,43 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         }
         Err(e) => return Err(e.into()),
     };
-    if shard.is_none() && a.resume && !a.force && claim.existed(&png) {
+    if p.shard.is_none() && a.resume && !a.force && claim.existed(&p.png) {
         writer.close()?;
         return Err(InputError(format!(
             "--png: '{}' exists; pass --force to overwrite it (with --resume, only a complete \
              file leaves the picture untouched)",
-            png.display()
+            p.png.display()
         ))
         .into());
     }
-    // ---- self-description: provenance, units, the slice, dimension scales
-    let sec_units = super::section_units(&m);
+    Ok(Step::Go(writer))
+}
+
+/// What the file says about itself, kept for the picture and the attractors' units.
+struct Described {
+    /// Unit of every section coordinate.
+    sec_units: Vec<String>,
+    /// The section coordinates along x and y.
+    axes: (usize, usize),
+    slice: pdw_store::Slice,
+}
+
+/// Self-description: provenance (every numerical option), units, the slice, dimension scales.
+fn describe(
+    a: &BasinArgs,
+    p: &Parsed,
+    plan: &BasinPlan,
+    set: &AttractorSet,
+    writer: &mut BasinWriter,
+) -> anyhow::Result<Described> {
+    let (opts, bx) = (&plan.opts, &plan.bx);
+    let sec_units = super::section_units(&p.m);
+    let gait = plan.gait();
     let slice = basin_slice(
-        names,
+        p.names(),
         &sec_units,
-        ix,
-        iy,
-        &base,
-        gait.map_or(&centre[..], |fp| &fp.section[..]),
-        &fixed,
+        plan,
+        gait.map_or(&plan.centre[..], |fp| &fp.section[..]),
     );
     let options = serde_json::json!({
         "integrator": super::integrator_json(&opts.integrator),
@@ -426,12 +482,12 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         "max_period": opts.max_period,
         "lanes": opts.lanes,
         "chunk": opts.chunk,
-        "grid": [nx, ny],
-        "x": {"name": names[ix], "lo": xr.lo, "hi": xr.hi},
-        "y": {"name": names[iy], "lo": yr.lo, "hi": yr.hi},
+        "grid": [bx.nx, bx.ny],
+        "x": {"name": bx.x.range.name, "lo": bx.x.range.lo, "hi": bx.x.range.hi},
+        "y": {"name": bx.y.range.name, "lo": bx.y.range.lo, "hi": bx.y.range.hi},
         "fixed_point": gait.map(|fp| serde_json::json!({
-            "integrator": super::integrator_json(&pdw_limit::gaits::default_integrator(1e-12)),
-            "newton_tol": 1e-12,
+            "integrator": super::integrator_json(&pdw_limit::gaits::default_integrator(pdw::basin::GAIT_NEWTON_TOL)),
+            "newton_tol": pdw::basin::GAIT_NEWTON_TOL,
             "residual": fp.residual,
             "section": fp.section,
         })),
@@ -441,7 +497,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         "shard": a.shard,
     });
     let prov = super::provenance(options);
-    let units = basin_units(names, &sec_units, ix, iy);
+    let units = basin_units(&sec_units, bx.x.index, bx.y.index);
     let scales = pdw_store::provenance::basin_scales();
     writer.annotate(&pdw_store::Annotations {
         provenance: Some(&prov),
@@ -449,78 +505,93 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         slice: Some(&slice),
         scales: &scales,
     })?;
+    Ok(Described {
+        sec_units,
+        axes: (bx.x.index, bx.y.index),
+        slice,
+    })
+}
+
+/// The rows still to compute, warning about rows found damaged on disk (recomputed).
+fn rows_to_do(writer: &BasinWriter, p: &Parsed) -> Vec<usize> {
     let damaged = writer.damaged_rows();
     if !damaged.is_empty() {
         eprintln!(
             "warning: {} row(s) of {} were damaged on disk (checksum or content); recomputing them",
             damaged.len(),
-            out.display()
+            p.out.display()
         );
     }
-    let todo = writer.rows_todo();
+    writer.rows_todo()
+}
 
-    // Strides a perturbation of 1e-2 needs to shrink below the 1e-6 tolerance at an attractor's
-    // slowest multiplier (per K strides): near a bifurcation (|λ| → 1) the default budget
-    // labels converging cells `timeout`.
-    for at in set
-        .attractors
-        .iter()
-        .filter(|at| at.kind == pdw_limit::AttractorKind::Periodic)
-    {
-        if let Some(lmax) = at.multipliers.first().map(|l| l.modulus()) {
-            let needed = (at.period_k as f64 * (1e-4f64).ln() / lmax.ln()).ceil();
-            if lmax < 1.0 && needed > f64::from(a.max_strides) {
-                eprintln!(
-                    "warning: attractor `{}`: its slowest multiplier has |λ| = {lmax:.4} per {} \
-                     stride(s); cells converge in about {needed} strides, more than --max-strides \
-                     {}: expect `timeout` where `{}` is slow",
-                    at.name, at.period_k, a.max_strides, at.name
-                );
-            }
-        }
+/// Warns about attractors whose cells need more strides than --max-strides
+/// ([`pdw::basin::slow_attractors`]): near a bifurcation (|λ| → 1) the default budget labels
+/// converging cells `timeout`.
+fn warn_slow_attractors(a: &BasinArgs, set: &AttractorSet) {
+    for s in pdw::basin::slow_attractors(set, a.max_strides) {
+        let at = s.attractor;
+        eprintln!(
+            "warning: attractor `{}`: its slowest multiplier has |λ| = {:.4} per {} \
+             stride(s); cells converge in about {} strides, more than --max-strides \
+             {}: expect `timeout` where `{}` is slow",
+            at.name, s.modulus, at.period_k, s.strides, a.max_strides, at.name
+        );
     }
-    let problem = set.problem(walker, &fall);
+}
 
-    let total_cells = (todo.len() * nx) as u64;
-    let pb = if a.quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::with_draw_target(Some(total_cells), ProgressDrawTarget::hidden())
+/// A progress bar over `total` cells on stderr (hidden with --quiet or off a terminal).
+pub(super) fn progress_bar(quiet: bool, total: u64, template: &str) -> ProgressBar {
+    let pb = if quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden())
     } else {
-        ProgressBar::new(total_cells)
+        ProgressBar::new(total)
     };
-    pb.set_style(
-        ProgressStyle::with_template(
-            "{elapsed_precise} [{wide_bar}] {pos}/{len} cells  {per_sec}  ETA {eta}",
-        )
-        .expect("valid template"),
+    pb.set_style(ProgressStyle::with_template(template).expect("valid template"));
+    pb
+}
+
+/// The rows `todo`, classified and written block by block: consecutive rows per engine call,
+/// as many as fit the call's time and memory budget. Returns whether an interrupt stopped it
+/// (a block cut short is not written: its cells would be wrong).
+fn compute_rows(
+    a: &BasinArgs,
+    p: &Parsed,
+    plan: &BasinPlan,
+    set: &AttractorSet,
+    pool: &rayon::ThreadPool,
+    writer: &mut BasinWriter,
+    todo: &[usize],
+) -> anyhow::Result<bool> {
+    let nx = plan.bx.nx;
+    let fall = Outcome::of_fall;
+    let problem = set.problem(p.m.walker.as_ref(), &fall);
+    let pb = progress_bar(
+        a.quiet,
+        (todo.len() * nx) as u64,
+        "{elapsed_precise} [{wide_bar}] {pos}/{len} cells  {per_sec}  ETA {eta}",
     );
-    let mut k = 0;
+    let (mut k, mut rows_written) = (0, 0);
     let mut interrupted = false;
     let mut secs_per_row: Option<f64> = None;
     let signal_after = signal_after_rows();
-    let mut rows_written = 0;
     while k < todo.len() {
         if stopped() {
             interrupted = true;
             break;
         }
-        // Consecutive rows only, as many as fit the call's time and memory budget.
         let max_rows = match signal_after {
             Some(_) => 1,
             None => rows_for_next_call(secs_per_row, nx),
         };
-        let mut end = k + 1;
-        while end < todo.len() && end - k < max_rows && todo[end] == todo[end - 1] + 1 {
-            end += 1;
-        }
+        let end = consecutive_end(todo, k, max_rows);
         let call_start = Instant::now();
         let rows = &todo[k..end];
-        let row_ys: Vec<f64> = rows.iter().map(|&r| ys[r]).collect();
-        let cells = grid_cells(&base, ix, &xs, iy, &row_ys);
+        let row_ys: Vec<f64> = rows.iter().map(|&r| plan.ys[r]).collect();
         let done_before = pb.position();
-        let res = classify_cells(&problem, &cells, &opts, &pool, &|n| {
+        let res = classify_cells(&problem, &plan.cells(&row_ys), &plan.opts, pool, &|n| {
             pb.set_position(done_before + n as u64)
         });
-        // A block cut short by an interrupt is not written: its cells would be wrong.
         if stopped() {
             interrupted = true;
             break;
@@ -544,26 +615,37 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         }
     }
     pb.finish_and_clear();
-    if interrupted {
-        writer.close()?;
-        eprintln!(
-            "interrupted: finished rows are in {}; continue with --resume",
-            out.display()
-        );
-        return Ok(ExitCode::from(130));
-    }
+    Ok(interrupted)
+}
 
-    // ---- metrics, attractors, plot
+/// End of the run of consecutive rows of `todo` that starts at `k`, at most `max_rows` long.
+fn consecutive_end(todo: &[usize], k: usize, max_rows: usize) -> usize {
+    let mut end = k + 1;
+    while end < todo.len() && end - k < max_rows && todo[end] == todo[end - 1] + 1 {
+        end += 1;
+    }
+    end
+}
+
+/// Metrics (whole grids only), the attractors and their units, the picture and the summary;
+/// a shard says how to join it.
+fn write_results(
+    a: &BasinArgs,
+    p: &Parsed,
+    set: &AttractorSet,
+    writer: BasinWriter,
+    described: &Described,
+    rows: usize,
+    t0: Instant,
+) -> anyhow::Result<()> {
+    let (nx, ny) = p.req.grid;
     let attractors: Vec<Attractor> = set.attractors.iter().map(store_attractor).collect();
-    let out_metrics = if shard.is_none() {
+    let legend = set.legend();
+    let out_metrics = if p.shard.is_none() {
         let outcome = writer.read_outcome()?;
         let flat: Vec<u8> = outcome.iter().copied().collect();
-        Some(store_metrics(
-            &basin_metrics(&flat, nx, ny, DEFAULT_ENTROPY_BOX)?,
-            &header.legend,
-            nx,
-            ny,
-        ))
+        let m = basin_metrics(&flat, nx, ny, DEFAULT_ENTROPY_BOX)?;
+        Some(store_metrics(&m, &legend, nx, ny))
     } else {
         None
     };
@@ -575,73 +657,60 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     });
     writer.finish(&metrics, &attractors)?;
     // The attractors exist now: their datasets get units too.
+    let (ix, iy) = described.axes;
     pdw_store::annotate(
-        &out,
+        &p.out,
         &pdw_store::Annotations {
             provenance: None,
-            units: &units,
+            units: &basin_units(&described.sec_units, ix, iy),
             slice: None,
             scales: &[],
         },
     )?;
     let elapsed = t0.elapsed().as_secs_f64();
-    if let Some(mt) = &out_metrics {
-        let (h, outcome) = read_basin_outcome(&out)?;
-        // Orbit points are drawn only where the slice passes through the gait: off the slice
-        // their projection would mislead.
-        let shown: &[Attractor] = if slice.on_fixed_point {
-            &attractors
-        } else {
-            &[]
-        };
-        let title = basin_title(&info.name, m.slope(), a.max_strides, &slice);
-        plot_basin_attractors(
-            &png,
-            &labelled(&h, &sec_units[ix], &sec_units[iy]),
-            outcome.view(),
-            shown,
-            &title,
-        )?;
-        print_summary(&m, a, mt, nx, ny, elapsed, &out, Some(&png));
-    } else {
-        crate::outln!(
+    match &out_metrics {
+        Some(mt) => {
+            plot(a, p, described, &attractors)?;
+            print_summary(a, p, mt, elapsed);
+        }
+        None => crate::outln!(
             "shard {} of {}: {} rows written to {} in {:.2} s; join the shards with `pdw-sweep merge`",
-            shard.map(|s| s.index).unwrap_or(0),
-            shard.map(|s| s.count).unwrap_or(1),
-            todo.len(),
-            out.display(),
+            p.shard.map(|s| s.index).unwrap_or(0),
+            p.shard.map(|s| s.count).unwrap_or(1),
+            rows,
+            p.out.display(),
             elapsed
-        );
+        ),
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(())
 }
 
-/// Every attractor reached from the box of a basin grid: [`pdw_limit::box_attractors`] with
-/// the axes as given on the command line. Shared by `basin` and `basin --over` (and, through
-/// the library, Python's `basin`), so all label the same box identically.
-#[allow(clippy::too_many_arguments)]
-pub fn box_attractors(
-    walker: &dyn pdw_walkers::Walker,
-    found: &[super::fixedpoint::Found],
-    gait: Option<&pdw_limit::FixedPoint>,
-    fixed: &[(usize, f64)],
-    base: &[f64],
-    (ix, xr): (usize, &AxisRange),
-    (iy, yr): (usize, &AxisRange),
-    opts: &BasinOptions,
-    pool: &rayon::ThreadPool,
-) -> anyhow::Result<(pdw_limit::AttractorSet, usize)> {
-    Ok(pdw_limit::box_attractors(
-        walker,
-        found,
-        gait,
-        fixed,
-        base,
-        (ix, (xr.lo, xr.hi)),
-        (iy, (yr.lo, yr.hi)),
-        opts,
-        pool,
-    )?)
+/// The PNG heatmap of the finished file. Orbit points are drawn only where the slice passes
+/// through the gait: off the slice their projection would mislead.
+fn plot(
+    a: &BasinArgs,
+    p: &Parsed,
+    described: &Described,
+    attractors: &[Attractor],
+) -> anyhow::Result<()> {
+    let (h, outcome) = read_basin_outcome(&p.out)?;
+    let slice = &described.slice;
+    let shown: &[Attractor] = if slice.on_fixed_point {
+        attractors
+    } else {
+        &[]
+    };
+    let title = basin_title(&p.info.name, p.m.slope(), u32::from(a.max_strides), slice);
+    let (ix, iy) = described.axes;
+    let u = &described.sec_units;
+    plot_basin_attractors(
+        &p.png,
+        &labelled(&h, &u[ix], &u[iy]),
+        outcome.view(),
+        shown,
+        &title,
+    )?;
+    Ok(())
 }
 
 /// An attractor in the file's plain form (`period_strides` 0 and no multipliers for a chaotic
@@ -657,53 +726,43 @@ pub fn store_attractor(a: &LimitAttractor) -> Attractor {
 }
 
 /// The slice of the section the grid lies on: every coordinate but the two axes, at its
-/// `--set` value or the gait's.
+/// `--set` value or the gait's (`gait`: the gait's section state, else the grid's centre).
 fn basin_slice(
-    names: &[&str],
+    names: &[String],
     units: &[String],
-    ix: usize,
-    iy: usize,
-    base: &[f64],
+    plan: &BasinPlan,
     gait: &[f64],
-    set: &[(usize, f64)],
 ) -> pdw_store::Slice {
-    let fixed: Vec<(String, f64, String, String)> = (0..names.len())
-        .filter(|&i| i != ix && i != iy)
+    let (ix, iy, base) = (plan.bx.x.index, plan.bx.y.index, &plan.base);
+    let off_axes = || (0..names.len()).filter(|&i| i != ix && i != iy);
+    let fixed: Vec<(String, f64, String, String)> = off_axes()
         .map(|i| {
-            let source = if set.iter().any(|(j, _)| *j == i) {
+            let source = if plan.fixed.iter().any(|(j, _)| *j == i) {
                 "--set"
             } else {
                 "fixed point"
             };
             (
-                names[i].to_string(),
+                names[i].clone(),
                 base[i],
                 units[i].clone(),
                 source.to_string(),
             )
         })
         .collect();
-    let on = (0..names.len())
-        .filter(|&i| i != ix && i != iy)
-        .all(|i| (base[i] - gait[i]).abs() <= 1e-12 * (1.0 + gait[i].abs()));
+    let on = off_axes().all(|i| (base[i] - gait[i]).abs() <= 1e-12 * (1.0 + gait[i].abs()));
     pdw_store::Slice {
-        x: names[ix].to_string(),
-        y: names[iy].to_string(),
+        x: names[ix].clone(),
+        y: names[iy].clone(),
         fixed,
         on_fixed_point: on,
     }
 }
 
 /// The unit of every dataset of a basin file, by path.
-fn basin_units(
-    names: &[&str],
-    units: &[String],
-    ix: usize,
-    iy: usize,
-) -> impl Fn(&str) -> Option<String> {
+fn basin_units(units: &[String], ix: usize, iy: usize) -> impl Fn(&str) -> Option<String> {
     let (ux, uy) = (units[ix].clone(), units[iy].clone());
     let list = super::units_list(units);
-    let _ = names;
     move |p: &str| -> Option<String> {
         match p {
             "grid/x" => Some(ux.clone()),
@@ -771,17 +830,10 @@ pub fn store_metrics(
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn print_summary(
-    m: &BuiltModel,
-    a: &BasinArgs,
-    mt: &BasinMetrics,
-    nx: usize,
-    ny: usize,
-    elapsed: f64,
-    out: &std::path::Path,
-    png: Option<&std::path::Path>,
-) {
+/// The summary on stdout: the grid, the fraction of each outcome, the basin entropies and the
+/// files written.
+fn print_summary(a: &BasinArgs, p: &Parsed, mt: &BasinMetrics, elapsed: f64) {
+    let (m, (nx, ny)) = (&p.m, p.req.grid);
     crate::outln!(
         "basin of the {} walker at slope {} rad: {}x{} cells, up to {} strides, {} thread(s)",
         m.info.name,
@@ -810,12 +862,11 @@ fn print_summary(
         );
     }
     crate::outln!(
-        "  {:.2} s, {:.0} cells/s; wrote {}{}",
+        "  {:.2} s, {:.0} cells/s; wrote {} and {}",
         elapsed,
         (nx * ny) as f64 / elapsed,
-        out.display(),
-        png.map(|p| format!(" and {}", p.display()))
-            .unwrap_or_default()
+        p.out.display(),
+        p.png.display()
     );
 }
 

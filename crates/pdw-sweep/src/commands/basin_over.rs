@@ -4,21 +4,25 @@
 //! one fixed box of section states that reaches each attractor, falls, or neither.
 //!
 //! Every value is classified exactly as a plain `basin` run on the same box classifies it (the
-//! same attractor discovery, [`super::basin::box_attractors`], the same engine and options), so
-//! the fractions at a value equal that run's. The box is the same at every value: `--x`/`--y`,
-//! else the default box of `basin` around the gait at A (stated in the output).
+//! same setup, [`pdw::basin`]: the gait search, the attractor discovery, the engine and its
+//! options), so the fractions at a value equal that run's. The box is the same at every value:
+//! `--x`/`--y`, else the default box of `basin` around the gait at A (stated in the output).
+//!
+//! [`run`] reads as the command runs: [`parse`], claim the outputs, [`plan`] (a model per value
+//! and the box), [`at_value`] for every value, [`write`] the file and the chart, and print.
 
-use super::basin::{box_attractors, check_memory, default_axis, split_sets};
-use super::fixedpoint::search;
-use super::output::{Format, Output};
-use super::{build_with, BuiltModel};
-use crate::args::{self, AxisRange, InputError};
+use super::basin::{axis, check_memory, fixed_json, progress_bar, AXIS_FLAGS};
+use super::output::{Claim, Format, Output};
+use super::{overrides, BuiltModel};
+use crate::args::{self, InputError, Sweep};
 use crate::cli::BasinArgs;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use pdw_limit::basin::{classify_cells, grid_cells, BasinOptions, Outcome};
-use pdw_limit::{AttractorKind, AttractorSet};
+use indicatif::ProgressBar;
+use pdw::basin::{BasinBox, BasinPlan, BasinRequest};
+use pdw_limit::basin::{classify_cells, BasinOptions, CellResult, Outcome};
+use pdw_limit::{Attractor, AttractorKind, AttractorSet};
 use pdw_store::{StabilityAttractor, StabilityData};
-use std::io::IsTerminal;
+use pdw_walkers::ModelInfo;
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -48,43 +52,87 @@ struct AtValue {
     attractors: Vec<StabilityAttractor>,
 }
 
+/// The command line, parsed and checked before any file is touched.
+struct Parsed {
+    over: Sweep,
+    grid: (usize, usize),
+    integrator: pdw_hybrid::Options,
+    /// The model as named (its section coordinates name the box's axes).
+    info: ModelInfo,
+    /// Model parameters set on the command line (not the one varied).
+    params: Vec<(String, f64)>,
+    /// Section coordinates held fixed off the box's axes, by index.
+    fixed: Vec<(usize, f64)>,
+    out: PathBuf,
+    png: PathBuf,
+}
+
+/// The models and the box every value is classified on.
+struct Plan {
+    values: Vec<f64>,
+    /// The model at each value.
+    models: Vec<BuiltModel>,
+    req: BasinRequest,
+    bx: BasinBox,
+    /// The box's centre (the gait at A): the state off the axes at a value without a gait.
+    centre_a: Vec<f64>,
+    /// Where the box comes from, for the output.
+    box_source: String,
+}
+
+/// The file's contents and what the output prints besides.
+struct Written {
+    data: StabilityData,
+    box_json: serde_json::Value,
+    params: serde_json::Value,
+    unit: String,
+}
+
 pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let t0 = Instant::now();
+    let p = parse(a)?;
+    let _claim = claim_outputs(a, &p)?;
+    let plan = plan(a, &p)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads)
+        .build()?;
+    let total = (plan.values.len() * p.grid.0 * p.grid.1) as u64;
+    let pb = progress_bar(
+        a.quiet,
+        total,
+        "{elapsed_precise} [{wide_bar}] {pos}/{len} cells  {msg}  ETA {eta}",
+    );
+    let mut results: Vec<AtValue> = Vec::with_capacity(plan.values.len());
+    for (&mu, m) in plan.values.iter().zip(&plan.models) {
+        pb.set_message(format!("{} = {mu}", p.over.name));
+        results.push(at_value(a, &p, &plan, mu, m, &pool, &pb)?);
+    }
+    pb.finish_and_clear();
+    let w = write(a, &p, &plan, &results, t0)?;
+    if a.json {
+        print_json(a, &p, &plan, &w)?;
+    } else {
+        print_table(a, &p, &plan, &w);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--over`, the grid, integrator and model (`--set` split into parameters and fixed section
+/// coordinates); the parameter varied must be one of the model's and set nowhere else.
+fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
     let over = args::parse_range_count(a.over.as_deref().unwrap_or_default(), "--over")?;
-    for (given, flag) in [(a.resume, "--resume"), (a.shard.is_some(), "--shard")] {
-        if given {
-            return Err(InputError(format!(
-                "{flag}: `basin --over` writes one small file whole; it has no shards or \
-                 resumable blocks (drop {flag})"
-            ))
-            .into());
-        }
-    }
-    let (nx, ny) = args::parse_grid(a.grid.as_deref().unwrap_or(DEFAULT_OVER_GRID))?;
-    if a.max_strides == 0 || a.max_strides > u32::from(u16::MAX) {
-        return Err(InputError(format!(
-            "--max-strides: {} must be between 1 and {}",
-            a.max_strides,
-            u16::MAX
-        ))
-        .into());
-    }
+    let grid = args::parse_grid(a.grid.as_deref().unwrap_or(DEFAULT_OVER_GRID))?;
     let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
     let info = pdw_walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
-    let names_owned = info.section_names.clone();
-    let names: Vec<&str> = names_owned.iter().map(|s| s.as_str()).collect();
-    let names = &names[..];
-    if names.len() < 2 {
-        return Err(InputError(format!(
-            "model '{}' has one section coordinate ({}); a basin box needs two",
-            info.name,
-            names.join(", ")
-        ))
-        .into());
-    }
-    check_memory(nx, ny, names.len(), info.state_names.len())?;
-    let (param_sets, fixed) = split_sets(a, names)?;
-    if let Some((_, v)) = param_sets.iter().find(|(n, _)| *n == over.name) {
+    pdw::basin::check_section(&info, "box")?;
+    check_memory(
+        grid.0,
+        grid.1,
+        info.section_names.len(),
+        info.state_names.len(),
+    )?;
+    let (params, fixed) = pdw::basin::split_overrides(overrides(&a.model)?, &info.section_names);
+    if let Some((_, v)) = params.iter().find(|(n, _)| *n == over.name) {
         return Err(InputError(format!(
             "--over {}: the parameter is also set to {v} (--slope or --set); give it once",
             over.name
@@ -106,233 +154,190 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     let out = a.out_path();
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
+    Ok(Parsed {
+        over,
+        grid,
+        integrator,
+        info,
+        params,
+        fixed,
+        out,
+        png,
+    })
+}
+
+/// Claims `--out` and `--png` (one small file written whole: neither may exist without
+/// --force).
+fn claim_outputs(a: &BasinArgs, p: &Parsed) -> Result<Claim, InputError> {
     let inputs: Vec<_> = super::output::model_input(&a.model.model)
         .into_iter()
         .collect();
-    let _claim = super::output::claim(
+    super::output::claim(
         &[
             Output {
                 flag: "--out",
-                path: &out,
+                path: &p.out,
                 format: Format::Hdf5,
                 may_exist: false,
             },
             Output {
                 flag: "--png",
-                path: &png,
+                path: &p.png,
                 format: Format::Png,
                 may_exist: false,
             },
         ],
         &inputs,
         a.force,
-    )?;
+    )
+}
+
+/// The model at every value (a bad value is refused before anything is computed) and the box:
+/// `--x`/`--y`, else `basin`'s default box around the gait at A, for every value.
+fn plan(a: &BasinArgs, p: &Parsed) -> anyhow::Result<Plan> {
+    let over = &p.over;
     let values = pdw_limit::basin::linspace(over.lo, over.hi, over.n);
-    let plain = crate::cli::ModelOpts {
-        model: a.model.model.clone(),
-        slope: None,
-        set: Vec::new(),
-    };
-    // Every value must build (a bad value is refused before anything is computed).
     let models: Vec<BuiltModel> = values
         .iter()
         .map(|&mu| {
-            let mut sets = param_sets.clone();
+            let mut sets = p.params.clone();
             sets.push((over.name.clone(), mu));
-            build_with(&plain, &sets)
+            pdw::build(&a.model.model, &sets)
         })
         .collect::<Result<_, _>>()?;
-    let axis =
-        |opt: &Option<String>, flag: &str| -> Result<Option<(usize, AxisRange)>, InputError> {
-            let Some(s) = opt else { return Ok(None) };
-            let r = args::parse_axis(s, flag)?;
-            let i = names.iter().position(|n| *n == r.name).ok_or_else(|| {
-                InputError(format!(
-                    "{flag}: model '{}' has no section coordinate '{}'; its coordinates are {}",
-                    info.name,
-                    r.name,
-                    names.join(", ")
-                ))
-            })?;
-            Ok(Some((i, r)))
-        };
-    let xa = axis(&a.x, "--x")?;
-    let ya = axis(&a.y, "--y")?;
-    let guesses = |m: &BuiltModel| pdw::gaits::model_guesses(m.walker.as_ref());
-    // ---- the box: --x/--y, else basin's default box around the gait at A, for every value
-    let (found_a, _) = search(&models[0], &guesses(&models[0]), 1e-12)?;
-    let centre_a: Option<Vec<f64>> = pdw::gaits::selected(&found_a).map(|f| f.fp.section.clone());
-    let box_source = match (&xa, &ya) {
-        (Some(_), Some(_)) => "--x and --y".to_string(),
-        _ => match &centre_a {
-            Some(_) => format!(
-                "the default basin box around the period-one gait at {} = {} (fixed for every \
-                 value)",
-                over.name, over.lo
-            ),
-            None => {
-                return Err(InputError(format!(
-                    "--over: no period-one gait of model '{}' at {} = {} to centre the default \
-                     box on; give both --x and --y",
-                    info.name, over.name, over.lo
-                ))
-                .into())
-            }
-        },
+    let req = BasinRequest {
+        grid: p.grid,
+        x: axis(&p.info, &a.x, "--x")?,
+        y: axis(&p.info, &a.y, "--y")?,
+        fixed: p.fixed.clone(),
+        max_strides: a.max_strides,
+        integrator: p.integrator,
     };
-    let centre_a = centre_a.unwrap_or_else(|| {
-        guesses(&models[0])
-            .first()
-            .map(|g| g.1.clone())
-            .unwrap_or_else(|| vec![0.0; names.len()])
-    });
-    let (ix, xr) = xa.unwrap_or_else(|| (0, default_axis(names[0], centre_a[0])));
-    let (iy, yr) = ya.unwrap_or_else(|| (1, default_axis(names[1], centre_a[1])));
-    if ix == iy {
+    let gaits_a = pdw::basin::find_gaits(&models[0])?;
+    let Some(centre_a) = pdw::basin::grid_centre(&models[0], &gaits_a, req.axes_given()) else {
         return Err(InputError(format!(
-            "--x and --y both name '{}'; choose two different coordinates",
-            names[ix]
+            "--over: no period-one gait of model '{}' at {} = {} to centre the default \
+             box on; give both --x and --y",
+            p.info.name, over.name, over.lo
         ))
         .into());
-    }
-    for (i, _) in &fixed {
-        if *i == ix || *i == iy {
-            return Err(InputError(format!(
-                "--set {}: that coordinate is an axis of the box",
-                names[*i]
-            ))
-            .into());
-        }
-    }
-    let xs = pdw_limit::basin::linspace(xr.lo, xr.hi, nx);
-    let ys = pdw_limit::basin::linspace(yr.lo, yr.hi, ny);
-    let opts = BasinOptions {
-        max_strides: a.max_strides as u16,
-        integrator,
-        ..BasinOptions::default()
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads)
-        .build()?;
-    let total = (values.len() * nx * ny) as u64;
-    let pb = if a.quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden())
+    let box_source = if req.axes_given() {
+        "--x and --y".to_string()
     } else {
-        ProgressBar::new(total)
-    };
-    pb.set_style(
-        ProgressStyle::with_template(
-            "{elapsed_precise} [{wide_bar}] {pos}/{len} cells  {msg}  ETA {eta}",
+        format!(
+            "the default basin box around the period-one gait at {} = {} (fixed for every \
+             value)",
+            over.name, over.lo
         )
-        .expect("valid template"),
-    );
-    let fall = Outcome::of_fall;
-    let mut results: Vec<AtValue> = Vec::with_capacity(values.len());
-    for (mu, m) in values.iter().zip(&models) {
-        pb.set_message(format!("{} = {mu}", over.name));
-        let walker = m.walker.as_ref();
-        let (found, _) = search(m, &guesses(m), 1e-12)?;
-        let gait = found.iter().find(|f| f.fp.stable).map(|f| &f.fp);
-        // The coordinates off the box's axes: at this value's gait, as `basin` takes them.
-        let mut base = gait
-            .map(|fp| fp.section.clone())
-            .or_else(|| found.first().map(|f| f.fp.section.clone()))
-            .unwrap_or_else(|| centre_a.clone());
-        for (i, v) in &fixed {
-            base[*i] = *v;
-        }
-        let (set, _) = box_attractors(
-            walker,
-            &found,
-            gait,
-            &fixed,
-            &base,
-            (ix, &xr),
-            (iy, &yr),
-            &opts,
-            &pool,
-        )?;
-        // As `basin` warns: cells near a slowly attracting orbit need more strides than given.
-        for at in set
-            .attractors
-            .iter()
-            .filter(|at| at.kind == AttractorKind::Periodic)
-        {
-            if let Some(lmax) = at.multipliers.first().map(|l| l.modulus()) {
-                let needed = (at.period_k as f64 * (1e-4f64).ln() / lmax.ln()).ceil();
-                if lmax < 1.0 && needed > f64::from(a.max_strides) {
-                    pb.suspend(|| {
-                        eprintln!(
-                            "warning: {} = {mu}: attractor `{}` has |λ| = {lmax:.4} per {} \
-                             stride(s); cells converge in about {needed} strides, more than \
-                             --max-strides {}: expect `timeout` there",
-                            over.name, at.name, at.period_k, a.max_strides
-                        )
-                    });
-                }
-            }
-        }
-        let problem = set.problem(walker, &fall);
-        let cells = grid_cells(&base, ix, &xs, iy, &ys);
-        let done = pb.position();
-        let mut res = classify_cells(&problem, &cells, &opts, &pool, &|k| {
-            pb.set_position(done + k as u64)
-        })?;
-        let n = res.len() as f64;
-        // Counts, then fractions (count / n, as `basin`'s metrics compute them).
-        let mut counts = [0usize; 256];
-        for c in &res {
-            counts[c.outcome as usize] += 1;
-        }
-        let outcomes: Vec<f64> = Outcome::ALL
-            .iter()
-            .map(|o| counts[o.code() as usize] as f64 / n)
-            .collect();
-        set.relabel(&mut res);
-        let mut counts = [0usize; 256];
-        for c in &res {
-            counts[c.outcome as usize] += 1;
-        }
-        let mut fractions: Vec<(String, &'static str, usize)> = set
-            .attractors
-            .iter()
-            .map(|at| (at.name.clone(), "attractor", 0))
-            .collect();
-        for (code, &k) in counts.iter().enumerate().filter(|(_, k)| **k > 0) {
-            let (name, kind) = column_of(code as u8, &set);
-            match fractions.iter_mut().find(|(n, _, _)| *n == name) {
-                Some(e) => e.2 += k,
-                None => fractions.push((name, kind, k)),
-            }
-        }
-        results.push(AtValue {
-            fractions: fractions
-                .into_iter()
-                .map(|(name, kind, k)| (name, kind, k as f64 / n))
-                .collect(),
-            outcomes,
-            attractors: set
-                .attractors
-                .iter()
-                .map(|at| StabilityAttractor {
-                    name: at.name.clone(),
-                    period_strides: if at.kind == AttractorKind::Chaotic {
-                        0
-                    } else {
-                        at.period_k as u32
-                    },
-                    period_time: at.period_time.is_finite().then_some(at.period_time),
-                    points: at.points.clone(),
-                    multipliers: at.multipliers.iter().map(|l| [l.re, l.im]).collect(),
-                })
-                .collect(),
+    };
+    let bx = pdw::basin::choose_box(&req, &p.info.section_names, &centre_a, AXIS_FLAGS, "box")?;
+    Ok(Plan {
+        values,
+        models,
+        req,
+        bx,
+        centre_a,
+        box_source,
+    })
+}
+
+/// The box classified at one value `mu` of the parameter (model `m`): the coordinates off the
+/// box's axes at this value's gait, as `basin` takes them, and its own attractors.
+fn at_value(
+    a: &BasinArgs,
+    p: &Parsed,
+    plan: &Plan,
+    mu: f64,
+    m: &BuiltModel,
+    pool: &rayon::ThreadPool,
+    pb: &ProgressBar,
+) -> anyhow::Result<AtValue> {
+    let gaits = pdw::basin::find_gaits(m)?;
+    let centre = gaits
+        .centre()
+        .map_or_else(|| plan.centre_a.clone(), <[f64]>::to_vec);
+    let vp = BasinPlan::new(&plan.req, plan.bx.clone(), gaits, centre);
+    let (set, _) = vp.attractors(m, pool)?;
+    // As `basin` warns: cells near a slowly attracting orbit need more strides than given.
+    for s in pdw::basin::slow_attractors(&set, a.max_strides) {
+        let at = s.attractor;
+        pb.suspend(|| {
+            eprintln!(
+                "warning: {} = {mu}: attractor `{}` has |λ| = {:.4} per {} \
+                 stride(s); cells converge in about {} strides, more than \
+                 --max-strides {}: expect `timeout` there",
+                p.over.name, at.name, s.modulus, at.period_k, s.strides, a.max_strides
+            )
         });
     }
-    pb.finish_and_clear();
+    let fall = Outcome::of_fall;
+    let problem = set.problem(m.walker.as_ref(), &fall);
+    let done = pb.position();
+    let res = classify_cells(&problem, &vp.cells(&vp.ys), &vp.opts, pool, &|k| {
+        pb.set_position(done + k as u64)
+    })?;
+    Ok(tally(res, &set))
+}
 
-    // ---- columns: every attractor met (in order met), then fall, timeout, other
+/// The fractions of the cells `res` by outcome code, then by column (count / n, as `basin`'s
+/// metrics compute them), and the attractors of `set`.
+fn tally(mut res: Vec<CellResult>, set: &AttractorSet) -> AtValue {
+    let n = res.len() as f64;
+    let counts = |res: &[CellResult]| {
+        let mut counts = [0usize; 256];
+        for c in res {
+            counts[c.outcome as usize] += 1;
+        }
+        counts
+    };
+    let by_code = counts(&res);
+    let outcomes: Vec<f64> = Outcome::ALL
+        .iter()
+        .map(|o| by_code[o.code() as usize] as f64 / n)
+        .collect();
+    set.relabel(&mut res);
+    let mut fractions: Vec<(String, &'static str, usize)> = set
+        .attractors
+        .iter()
+        .map(|at| (at.name.clone(), "attractor", 0))
+        .collect();
+    for (code, &k) in counts(&res).iter().enumerate().filter(|(_, k)| **k > 0) {
+        let (name, kind) = column_of(code as u8, set);
+        match fractions.iter_mut().find(|(n, _, _)| *n == name) {
+            Some(e) => e.2 += k,
+            None => fractions.push((name, kind, k)),
+        }
+    }
+    AtValue {
+        fractions: fractions
+            .into_iter()
+            .map(|(name, kind, k)| (name, kind, k as f64 / n))
+            .collect(),
+        outcomes,
+        attractors: set.attractors.iter().map(stability_attractor).collect(),
+    }
+}
+
+/// An attractor in the file's form (period 0 for a chaotic one).
+fn stability_attractor(at: &Attractor) -> StabilityAttractor {
+    StabilityAttractor {
+        name: at.name.clone(),
+        period_strides: if at.kind == AttractorKind::Chaotic {
+            0
+        } else {
+            at.period_k as u32
+        },
+        period_time: at.period_time.is_finite().then_some(at.period_time),
+        points: at.points.clone(),
+        multipliers: at.multipliers.iter().map(|l| [l.re, l.im]).collect(),
+    }
+}
+
+/// The columns: every attractor met (in order met), then fall, timeout, other.
+fn columns(results: &[AtValue]) -> Vec<(String, &'static str)> {
     let mut columns: Vec<(String, &'static str)> = Vec::new();
-    for r in &results {
+    for r in results {
         for (name, kind, _) in r.fractions.iter().filter(|c| c.1 == "attractor") {
             if !columns.iter().any(|(n, _)| n == name) {
                 columns.push((name.clone(), kind));
@@ -342,7 +347,12 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     for (n, k) in [("fall", "fall"), ("timeout", "timeout"), ("other", "other")] {
         columns.push((n.into(), k));
     }
-    let fractions: Vec<Vec<f64>> = results
+    columns
+}
+
+/// Every value's fraction in every column (0 where a column was not met).
+fn fraction_table(results: &[AtValue], columns: &[(String, &'static str)]) -> Vec<Vec<f64>> {
+    results
         .iter()
         .map(|r| {
             columns
@@ -355,16 +365,30 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
                 })
                 .collect()
         })
-        .collect();
-    let unit = super::param_unit(&models[0], &over.name);
-    let sec_units = super::section_units(&models[0]);
+        .collect()
+}
+
+/// The file (HDF5, with provenance and units) and the stacked chart.
+fn write(
+    a: &BasinArgs,
+    p: &Parsed,
+    plan: &Plan,
+    results: &[AtValue],
+    t0: Instant,
+) -> anyhow::Result<Written> {
+    let (over, bx, names) = (&p.over, &plan.bx, &p.info.section_names);
+    let (x, y) = (&bx.x.range, &bx.y.range);
+    let columns = columns(results);
+    let unit = super::param_unit(&plan.models[0], &over.name);
+    let sec_units = super::section_units(&plan.models[0]);
     let box_json = serde_json::json!({
-        "x": {"name": names[ix], "lo": xr.lo, "hi": xr.hi, "n": nx, "unit": sec_units[ix]},
-        "y": {"name": names[iy], "lo": yr.lo, "hi": yr.hi, "n": ny, "unit": sec_units[iy]},
-        "fixed": fixed.iter().map(|(i, v)| (names[*i].to_string(), *v)).collect::<std::collections::BTreeMap<_, _>>(),
+        "x": {"name": x.name, "lo": x.lo, "hi": x.hi, "n": bx.nx, "unit": sec_units[bx.x.index]},
+        "y": {"name": y.name, "lo": y.lo, "hi": y.hi, "n": bx.ny, "unit": sec_units[bx.y.index]},
+        "fixed": fixed_json(names, &plan.req.fixed),
         "off_axis": "other section coordinates at each value's period-one gait (else --set)",
-        "source": box_source,
+        "source": plan.box_source,
     });
+    let opts = plan.req.options();
     let options = serde_json::json!({
         "integrator": super::integrator_json(&opts.integrator),
         "max_strides": opts.max_strides,
@@ -372,36 +396,51 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         "confirm": opts.confirm,
         "tol_recur": opts.tol_recur,
         "max_period": opts.max_period,
-        "grid": [nx, ny],
+        "grid": [bx.nx, bx.ny],
         "over": {"name": over.name, "from": over.lo, "to": over.hi, "n": over.n, "unit": unit},
         "threads": a.threads,
     });
-    let mut params = models[0].params_json();
+    let mut params = plan.models[0].params_json();
     if let Some(o) = params.as_object_mut() {
         o.remove(&over.name);
     }
-    let elapsed = t0.elapsed().as_secs_f64();
     let data = StabilityData {
         command: super::command_line(),
-        model: info.name.to_string(),
+        model: p.info.name.to_string(),
         parameter: over.name.clone(),
         params: params.to_string(),
         box_json: box_json.to_string(),
-        max_strides: a.max_strides,
-        values: values.clone(),
+        max_strides: u32::from(a.max_strides),
+        values: plan.values.clone(),
         columns: columns.iter().map(|c| c.0.clone()).collect(),
         kinds: columns.iter().map(|c| c.1.to_string()).collect(),
-        fractions,
+        fractions: fraction_table(results, &columns),
         outcome_columns: Outcome::ALL.iter().map(|o| o.name().to_string()).collect(),
         outcome_fractions: results.iter().map(|r| r.outcomes.clone()).collect(),
         attractors: results.iter().map(|r| r.attractors.clone()).collect(),
         settings: vec![("options".into(), options.to_string())],
-        elapsed_s: elapsed,
+        elapsed_s: t0.elapsed().as_secs_f64(),
     };
     // the claim refused an existing file without --force; its placeholder is replaced
-    pdw_store::write_stability(&out, true, &data)?;
+    pdw_store::write_stability(&p.out, true, &data)?;
+    annotate(&p.out, options, &unit)?;
+    let title = format!(
+        "{} walker: basin stability, {}x{} box {} x {}",
+        p.info.name, bx.nx, bx.ny, x.name, y.name
+    );
+    pdw_store::plot_basin_stability(&p.png, &data, &format!("{} [{unit}]", over.name), &title)?;
+    Ok(Written {
+        data,
+        box_json,
+        params,
+        unit,
+    })
+}
+
+/// Provenance (every numerical option) and units on the file.
+fn annotate(out: &std::path::Path, options: serde_json::Value, unit: &str) -> anyhow::Result<()> {
     let prov = super::provenance(options);
-    let pu = unit.clone();
+    let pu = unit.to_string();
     let units = move |p: &str| -> Option<String> {
         match p {
             "parameter" => Some(pu.clone()),
@@ -410,7 +449,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         }
     };
     pdw_store::annotate(
-        &out,
+        out,
         &pdw_store::Annotations {
             provenance: Some(&prov),
             units: &units,
@@ -418,48 +457,56 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             scales: &[],
         },
     )?;
-    let title = format!(
-        "{} walker: basin stability, {nx}x{ny} box {} x {}",
-        info.name, names[ix], names[iy]
-    );
-    pdw_store::plot_basin_stability(&png, &data, &format!("{} [{unit}]", over.name), &title)?;
-    if a.json {
-        let j = serde_json::json!({
-            "model": data.model,
-            "parameter": data.parameter,
-            "parameter_unit": unit,
-            "params": params,
-            "box": box_json,
-            "max_strides": a.max_strides,
-            "columns": data.columns,
-            "kinds": data.kinds,
-            "values": values.iter().zip(&data.fractions).zip(&data.attractors).map(|((mu, f), ats)| serde_json::json!({
-                "param": mu,
-                "fractions": data.columns.iter().cloned().zip(f.iter().map(|x| serde_json::json!(x))).collect::<serde_json::Map<String, serde_json::Value>>(),
-                "attractors": ats,
-            })).collect::<Vec<_>>(),
-            "outcome_columns": data.outcome_columns,
-            "outcome_fractions": data.outcome_fractions,
-            "elapsed_s": elapsed,
-            "files": {"hdf5": out.display().to_string(), "png": png.display().to_string()},
-        });
-        crate::outln!("{}", serde_json::to_string_pretty(&j)?);
-        return Ok(ExitCode::SUCCESS);
-    }
+    Ok(())
+}
+
+/// `--json`: the fractions at every value as one JSON object.
+fn print_json(a: &BasinArgs, p: &Parsed, plan: &Plan, w: &Written) -> anyhow::Result<()> {
+    let data = &w.data;
+    let j = serde_json::json!({
+        "model": data.model,
+        "parameter": data.parameter,
+        "parameter_unit": w.unit,
+        "params": w.params,
+        "box": w.box_json,
+        "max_strides": a.max_strides,
+        "columns": data.columns,
+        "kinds": data.kinds,
+        "values": plan.values.iter().zip(&data.fractions).zip(&data.attractors).map(|((mu, f), ats)| serde_json::json!({
+            "param": mu,
+            "fractions": data.columns.iter().cloned().zip(f.iter().map(|x| serde_json::json!(x))).collect::<serde_json::Map<String, serde_json::Value>>(),
+            "attractors": ats,
+        })).collect::<Vec<_>>(),
+        "outcome_columns": data.outcome_columns,
+        "outcome_fractions": data.outcome_fractions,
+        "elapsed_s": data.elapsed_s,
+        "files": {"hdf5": p.out.display().to_string(), "png": p.png.display().to_string()},
+    });
+    crate::outln!("{}", serde_json::to_string_pretty(&j)?);
+    Ok(())
+}
+
+/// The fractions at every value as a table.
+fn print_table(a: &BasinArgs, p: &Parsed, plan: &Plan, w: &Written) {
+    let (over, bx, data, unit) = (&p.over, &plan.bx, &w.data, &w.unit);
+    let (x, y) = (&bx.x.range, &bx.y.range);
     crate::outln!(
         "basin stability of the {} walker over {} = {} .. {} {unit} ({} values), box {} = \
-         {}..{} x {} = {}..{} ({nx}x{ny} cells; {box_source}), up to {} strides:",
-        info.name,
+         {}..{} x {} = {}..{} ({}x{} cells; {}), up to {} strides:",
+        p.info.name,
         over.name,
         over.lo,
         over.hi,
         over.n,
-        names[ix],
-        xr.lo,
-        xr.hi,
-        names[iy],
-        yr.lo,
-        yr.hi,
+        x.name,
+        x.lo,
+        x.hi,
+        y.name,
+        y.lo,
+        y.hi,
+        bx.nx,
+        bx.ny,
+        plan.box_source,
         a.max_strides
     );
     crate::outln!(
@@ -470,7 +517,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
             .map(|c| format!("{c:>12}"))
             .collect::<String>()
     );
-    for (mu, f) in values.iter().zip(&data.fractions) {
+    for (mu, f) in plan.values.iter().zip(&data.fractions) {
         crate::outln!(
             "  {mu:>14.6}{}",
             f.iter().map(|x| format!("{x:>12.4}")).collect::<String>()
@@ -478,10 +525,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     crate::outln!(
         "  wrote {} and {} in {:.2} s ({} thread(s))",
-        out.display(),
-        png.display(),
-        elapsed,
+        p.out.display(),
+        p.png.display(),
+        data.elapsed_s,
         a.threads
     );
-    Ok(ExitCode::SUCCESS)
 }

@@ -1,0 +1,381 @@
+//! The setup of a basin of attraction, written once for `pdw-sweep basin`, `pdw-sweep basin
+//! --over` and Python's `basin`: the grid's axes resolved against the model's section (as given,
+//! or the default box around the gait), the period-one gait search, the engine's options and
+//! the attractor discovery over the box.
+//!
+//! A front end parses its syntax into a [`BasinRequest`], finds the gaits ([`find_gaits`]),
+//! chooses the centre of the grid ([`grid_centre`]) and the box ([`choose_box`]), and gets a
+//! [`BasinPlan`]: the grid's cells, the section state off its axes and the options, from which
+//! it discovers the attractors ([`BasinPlan::attractors`]) and classifies the cells
+//! ([`pdw_limit::basin::classify_cells`]). Files, progress and messages are the front end's.
+//! Every basin labels a box through this plan, so the three agree cell for cell.
+
+use crate::gaits::{model_guesses, Failed, Found};
+use crate::input::{AxisRange, InputError};
+use crate::model::BuiltModel;
+use pdw_hybrid::Options;
+use pdw_limit::basin::{grid_cells, linspace, BasinOptions};
+use pdw_limit::{Attractor, AttractorKind, AttractorSet, FixedPoint, LimitError};
+use pdw_walkers::ModelInfo;
+
+/// Residual tolerance of the Newton search for the period-one gaits a basin starts from (on
+/// the fixed-point search's integrator, [`pdw_limit::gaits::default_integrator`]).
+pub const GAIT_NEWTON_TOL: f64 = 1e-12;
+
+/// The names a front end gives the two axes in its messages (`--x`/`--y`, or `x`/`y`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisFlags {
+    pub x: &'static str,
+    pub y: &'static str,
+}
+
+/// An axis of the grid: a section coordinate (by index) over an inclusive range.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    /// Index of the coordinate in the model's section.
+    pub index: usize,
+    /// Its name and bounds.
+    pub range: AxisRange,
+}
+
+/// The stride budget `n` as the engine's count, if it is one: 1 to 65535 (strides are counted
+/// in 16 bits).
+fn stride_budget(n: u32) -> Option<u16> {
+    u16::try_from(n).ok().filter(|&k| k >= 1)
+}
+
+/// The stride budget per cell, checked: 1 to 65535; the message names `what` (`max_strides`).
+pub fn check_max_strides(n: u32, what: &str) -> Result<u16, InputError> {
+    stride_budget(n)
+        .ok_or_else(|| InputError(format!("{what}: {n} must be between 1 and {}", u16::MAX)))
+}
+
+/// `--max-strides N` as clap's value parser: a whole number from 1 to 65535.
+pub fn parse_max_strides(s: &str) -> Result<u16, InputError> {
+    let n: u32 = s.trim().parse().map_err(|_| {
+        InputError(format!(
+            "'{s}' is not a whole number of strides (1 to {})",
+            u16::MAX
+        ))
+    })?;
+    stride_budget(n).ok_or_else(|| InputError(format!("{n} must be between 1 and {}", u16::MAX)))
+}
+
+/// Refuses a model whose section has fewer than two coordinates: a basin `what` (`grid`,
+/// `box`) spans two.
+pub fn check_section(info: &ModelInfo, what: &str) -> Result<(), InputError> {
+    if info.section_names.len() < 2 {
+        return Err(InputError(format!(
+            "model '{}' has one section coordinate ({}); a basin {what} needs two",
+            info.name,
+            info.section_names.join(", ")
+        )));
+    }
+    Ok(())
+}
+
+/// The axis `given` (if any) resolved against the model's section coordinates; its range must
+/// be finite and increasing. Messages name `flag`.
+pub fn resolve_axis(
+    info: &ModelInfo,
+    given: Option<AxisRange>,
+    flag: &str,
+) -> Result<Option<Axis>, InputError> {
+    let Some(range) = given else { return Ok(None) };
+    let names = &info.section_names;
+    let index = names.iter().position(|n| *n == range.name).ok_or_else(|| {
+        InputError(format!(
+            "{flag}: model '{}' has no section coordinate '{}'; its coordinates are {}",
+            info.name,
+            range.name,
+            names.join(", ")
+        ))
+    })?;
+    let (lo, hi) = (range.lo, range.hi);
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(InputError(format!(
+            "{flag}: range {lo}:{hi} is empty or inverted; the first bound must be below the second"
+        )));
+    }
+    Ok(Some(Axis { index, range }))
+}
+
+/// Parameter overrides split into model parameters and section coordinates held fixed off the
+/// grid's axes (an override named like a section coordinate, by index).
+pub type SplitOverrides = (Vec<(String, f64)>, Vec<(usize, f64)>);
+
+/// Splits `overrides` into model parameters and fixed section coordinates (see
+/// [`SplitOverrides`]), each in the order given.
+pub fn split_overrides(overrides: Vec<(String, f64)>, section_names: &[String]) -> SplitOverrides {
+    let mut params = Vec::new();
+    let mut fixed = Vec::new();
+    for (n, v) in overrides {
+        match section_names.iter().position(|s| *s == n) {
+            Some(i) => fixed.push((i, v)),
+            None => params.push((n, v)),
+        }
+    }
+    (params, fixed)
+}
+
+/// What a basin is asked for, parsed and checked by the front end.
+#[derive(Clone, Debug)]
+pub struct BasinRequest {
+    /// Cells along x and y.
+    pub grid: (usize, usize),
+    /// The axes given; the default box fills the others ([`default_axis`]).
+    pub x: Option<Axis>,
+    pub y: Option<Axis>,
+    /// Section coordinates held fixed off the axes, by index.
+    pub fixed: Vec<(usize, f64)>,
+    /// Stride budget per cell.
+    pub max_strides: u16,
+    /// The cells' integrator.
+    pub integrator: Options,
+}
+
+impl BasinRequest {
+    /// Both axes given: the box does not depend on the gait.
+    pub fn axes_given(&self) -> bool {
+        self.x.is_some() && self.y.is_some()
+    }
+
+    /// The engine's options: the defaults of [`BasinOptions`] with this stride budget and
+    /// integrator.
+    pub fn options(&self) -> BasinOptions {
+        BasinOptions {
+            max_strides: self.max_strides,
+            integrator: self.integrator,
+            ..BasinOptions::default()
+        }
+    }
+}
+
+/// The period-one gaits found from the model's own guesses.
+pub struct Gaits {
+    pub found: Vec<Found>,
+    pub failed: Vec<Failed>,
+    /// Guesses tried.
+    pub tried: usize,
+}
+
+impl Gaits {
+    /// The selected gait (outcome code 0 of the grid): the first stable one found.
+    pub fn stable(&self) -> Option<&FixedPoint> {
+        self.found.iter().find(|f| f.fp.stable).map(|f| &f.fp)
+    }
+
+    /// The section state a grid centres on: the stable gait, else the first found.
+    pub fn centre(&self) -> Option<&[f64]> {
+        crate::gaits::selected(&self.found).map(|f| &f.fp.section[..])
+    }
+}
+
+/// The period-one gaits of `m` by Newton from the model's guesses, to [`GAIT_NEWTON_TOL`].
+pub fn find_gaits(m: &BuiltModel) -> Result<Gaits, LimitError> {
+    let guesses = model_guesses(m.walker.as_ref());
+    let (found, failed) = crate::gaits::search(m, &guesses, GAIT_NEWTON_TOL)?;
+    Ok(Gaits {
+        found,
+        failed,
+        tried: guesses.len(),
+    })
+}
+
+/// The centre of a grid ([`pdw_limit::grid_centre`]): the gait of [`Gaits::centre`], else —
+/// when both axes are given — the model's first guess; `None` when the default box needs a
+/// gait and none was found.
+pub fn grid_centre(m: &BuiltModel, gaits: &Gaits, axes_given: bool) -> Option<Vec<f64>> {
+    pdw_limit::grid_centre(m.walker.as_ref(), &gaits.found, axes_given)
+}
+
+/// The default axis of coordinate `index` around `centre`: a half-width of 25 % of the
+/// coordinate, at least 0.05. For the simplest walker at γ = 0.009 this gives
+/// θ ∈ [0.150, 0.250], θ̇ ∈ [−0.250, −0.150].
+pub fn default_axis(names: &[String], index: usize, centre: &[f64]) -> Axis {
+    let c = centre[index];
+    let half = (0.25 * c.abs()).max(0.05);
+    Axis {
+        index,
+        range: AxisRange {
+            name: names[index].clone(),
+            lo: c - half,
+            hi: c + half,
+        },
+    }
+}
+
+/// The box of section states a basin covers: two axes and the cells along each.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BasinBox {
+    pub x: Axis,
+    pub y: Axis,
+    pub nx: usize,
+    pub ny: usize,
+}
+
+impl BasinBox {
+    /// The x values of the grid's columns (both bounds included).
+    pub fn xs(&self) -> Vec<f64> {
+        linspace(self.x.range.lo, self.x.range.hi, self.nx)
+    }
+
+    /// The y values of the grid's rows (both bounds included).
+    pub fn ys(&self) -> Vec<f64> {
+        linspace(self.y.range.lo, self.y.range.hi, self.ny)
+    }
+}
+
+/// The box of `req`: its axes, and the first two section coordinates around `centre` for those
+/// not given ([`default_axis`]). Two axes on one coordinate are refused, as is a fixed
+/// coordinate that is an axis (`what`: `grid` or `box`, for the message).
+pub fn choose_box(
+    req: &BasinRequest,
+    names: &[String],
+    centre: &[f64],
+    flags: AxisFlags,
+    what: &str,
+) -> Result<BasinBox, InputError> {
+    let x = req
+        .x
+        .clone()
+        .unwrap_or_else(|| default_axis(names, 0, centre));
+    let y = req
+        .y
+        .clone()
+        .unwrap_or_else(|| default_axis(names, 1, centre));
+    if x.index == y.index {
+        return Err(InputError(format!(
+            "{} and {} both name '{}'; choose two different coordinates",
+            flags.x, flags.y, names[x.index]
+        )));
+    }
+    if let Some((i, _)) = req
+        .fixed
+        .iter()
+        .find(|(i, _)| *i == x.index || *i == y.index)
+    {
+        return Err(InputError(format!(
+            "--set {}: that coordinate is an axis of the {what}",
+            names[*i]
+        )));
+    }
+    let (nx, ny) = req.grid;
+    Ok(BasinBox { x, y, nx, ny })
+}
+
+/// Everything a basin run computes from: the box and its grid values, the section state off
+/// the axes, the gaits and the engine's options.
+pub struct BasinPlan {
+    pub bx: BasinBox,
+    /// Column and row values ([`BasinBox::xs`], [`BasinBox::ys`]).
+    pub xs: Vec<f64>,
+    pub ys: Vec<f64>,
+    /// The grid's centre ([`grid_centre`]).
+    pub centre: Vec<f64>,
+    /// Every cell's state off the two axes: the centre with the fixed coordinates applied.
+    pub base: Vec<f64>,
+    /// Section coordinates held fixed off the axes, by index.
+    pub fixed: Vec<(usize, f64)>,
+    pub gaits: Gaits,
+    pub opts: BasinOptions,
+}
+
+impl BasinPlan {
+    /// The plan of `req` on box `bx`, centred on `centre`, with the `gaits` found.
+    pub fn new(req: &BasinRequest, bx: BasinBox, gaits: Gaits, centre: Vec<f64>) -> Self {
+        let mut base = centre.clone();
+        for (i, v) in &req.fixed {
+            base[*i] = *v;
+        }
+        BasinPlan {
+            xs: bx.xs(),
+            ys: bx.ys(),
+            bx,
+            centre,
+            base,
+            fixed: req.fixed.clone(),
+            gaits,
+            opts: req.options(),
+        }
+    }
+
+    /// The selected gait ([`Gaits::stable`]).
+    pub fn gait(&self) -> Option<&FixedPoint> {
+        self.gaits.stable()
+    }
+
+    /// Every attractor reached from the box ([`pdw_limit::box_attractors`]) and the number of
+    /// seeds tried.
+    pub fn attractors(
+        &self,
+        m: &BuiltModel,
+        pool: &rayon::ThreadPool,
+    ) -> Result<(AttractorSet, usize), LimitError> {
+        let (x, y) = (&self.bx.x, &self.bx.y);
+        pdw_limit::box_attractors(
+            m.walker.as_ref(),
+            &self.gaits.found,
+            self.gait(),
+            &self.fixed,
+            &self.base,
+            (x.index, (x.range.lo, x.range.hi)),
+            (y.index, (y.range.lo, y.range.hi)),
+            &self.opts,
+            pool,
+        )
+    }
+
+    /// The start states of the cells of the rows at `row_ys`, row by row.
+    pub fn cells(&self, row_ys: &[f64]) -> Vec<Vec<f64>> {
+        grid_cells(
+            &self.base,
+            self.bx.x.index,
+            &self.xs,
+            self.bx.y.index,
+            row_ys,
+        )
+    }
+
+    /// How far the gait is from a fixed point of the cells' stride map, when more than a tenth
+    /// of the gait tolerance: the gait was found on an accurate map, and cells that converge to
+    /// a point the classifier does not recognise come out `other` or `timeout`.
+    pub fn gait_drift(&self, m: &BuiltModel) -> Result<Option<f64>, LimitError> {
+        let Some(fp) = self.gait() else {
+            return Ok(None);
+        };
+        let r = crate::model::stride_residual(m, self.opts.integrator, &fp.section)?;
+        let close_enough = r <= 0.1 * self.opts.tol_gait;
+        Ok((!close_enough).then_some(r))
+    }
+}
+
+/// A periodic attractor that converges too slowly for the stride budget.
+#[derive(Clone, Copy, Debug)]
+pub struct SlowAttractor<'a> {
+    pub attractor: &'a Attractor,
+    /// |λ| of its slowest multiplier (per `period_k` strides).
+    pub modulus: f64,
+    /// Strides a cell near it needs.
+    pub strides: f64,
+}
+
+/// The periodic attractors of `set` whose cells need more than `max_strides` strides: a
+/// perturbation of 1e-2 shrinks below the engine's 1e-6 gait tolerance after
+/// K·ln(1e-4)/ln|λ| strides at the slowest multiplier λ of the K-stride map. Near a
+/// bifurcation (|λ| → 1) cells that do converge are labelled `timeout`.
+pub fn slow_attractors(set: &AttractorSet, max_strides: u16) -> Vec<SlowAttractor<'_>> {
+    set.attractors
+        .iter()
+        .filter(|at| at.kind == AttractorKind::Periodic)
+        .filter_map(|at| {
+            let modulus = at.multipliers.first()?.modulus();
+            let strides = (at.period_k as f64 * (1e-4f64).ln() / modulus.ln()).ceil();
+            (modulus < 1.0 && strides > f64::from(max_strides)).then_some(SlowAttractor {
+                attractor: at,
+                modulus,
+                strides,
+            })
+        })
+        .collect()
+}
