@@ -1,5 +1,6 @@
 //! Shared helpers of the experiment binaries (`src/bin/<name>.rs`): output folders, timing,
-//! CSV and Markdown tables.
+//! CSV and Markdown tables; and [`seed5_pi`], the seed thesis' own constraint handling (PI
+//! knee latch, compliant ground), a comparison model of the `economy` experiment.
 //!
 //! Every experiment writes into `experiments/results/<name>/`: PNG charts (drawn with
 //! `pdw-store`'s plots), the data as CSV (or HDF5 where `pdw-store` has a schema), and a
@@ -8,6 +9,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+pub mod seed5_pi;
 
 /// `experiments/results/<name>/`, created if missing.
 pub fn results_dir(name: &str) -> anyhow::Result<PathBuf> {

@@ -58,22 +58,3 @@ pub(crate) fn check_open(
         })
     }
 }
-
-/// Checks that `value` is finite and in the half-open interval `[lo, hi)`.
-pub(crate) fn check_closed_open(
-    name: &'static str,
-    value: f64,
-    lo: f64,
-    hi: f64,
-    allowed: &'static str,
-) -> Result<f64, WalkerError> {
-    if value.is_finite() && value >= lo && value < hi {
-        Ok(value)
-    } else {
-        Err(WalkerError::InvalidParam {
-            name,
-            value,
-            allowed,
-        })
-    }
-}

@@ -13,7 +13,6 @@ pub mod chain_walker;
 pub mod error;
 pub mod registry;
 pub mod rimless;
-pub mod seed5;
 pub mod simplest;
 pub mod spec;
 /// The validity types every model reports in ([`pdw_model::validity`]).

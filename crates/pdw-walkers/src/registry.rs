@@ -3,8 +3,9 @@
 //! or from a walker spec file (`.toml`, see [`crate::spec`]).
 //!
 //! Closed-form models (rimless, simplest) are Rust modules with a `pub static INFO:
-//! ClosedInfo`; every chain walker is a spec: the presets `compass`, `kneed`, `seed5` are the
-//! spec files in the repository's `models/` folder, compiled in.
+//! ClosedInfo`, their parameters declared once (`closed_params!`); every chain walker is a
+//! spec: the presets `compass`, `kneed`, `seed5` are the spec files in the repository's
+//! `models/` folder, compiled in.
 
 use crate::chain_walker::ChainWalker;
 use crate::error::WalkerError;
@@ -32,6 +33,98 @@ pub struct StaticParam {
     pub default: f64,
     pub description: &'static str,
 }
+
+/// The parameters of a closed-form model, each written once — field name (the `--set` name),
+/// unit, default, one-line meaning with the default's source — and everything that lists
+/// them generated from that one list, in its order:
+///
+/// - the public parameter struct, one `pub f64` field per parameter, documented with its
+///   meaning, unit and default (plus the doc comment written above the entry, e.g. the
+///   allowed range), deriving `Clone, Copy, Debug, PartialEq`;
+/// - its `Default` (the defaults of the list);
+/// - the registry's table, a private `const TABLE: &[StaticParam]` for
+///   [`ClosedInfo::params`] (what `pdw-sweep models` lists);
+/// - `from_values(&[f64])`, the struct from values in table order (for
+///   [`ClosedInfo::build_from`]; panics when a value is missing);
+/// - `named_values()`, `(name, value)` in table order (for `Walker::param_values`, hence the
+///   model's fingerprint and the parameters stored with results).
+///
+/// ```ignore
+/// closed_params! {
+///     /// User-facing parameters of [`Model`].
+///     pub struct ModelParams in PARAMS {
+///         /// In (−π/2, π/2).
+///         slope: "rad" = 0.009 => "slope angle γ (Garcia et al. 1998 use 0.009)",
+///     }
+/// }
+/// ```
+///
+/// The model validates the values in its constructor (with its own error messages).
+macro_rules! closed_params {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident in $table:ident {
+            $(
+                $(#[doc = $doc:literal])*
+                $field:ident: $unit:literal = $default:expr => $desc:literal,
+            )+
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub struct $name {
+            $(
+                #[doc = concat!(
+                    $desc, "; unit `", $unit, "`, default `", stringify!($default), "`."
+                )]
+                #[doc = ""]
+                $(#[doc = $doc])*
+                pub $field: f64,
+            )+
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                Self {
+                    $($field: $default,)+
+                }
+            }
+        }
+
+        /// The registry's parameter table ([`ClosedInfo::params`](crate::ClosedInfo)).
+        const $table: &[$crate::registry::StaticParam] = &[
+            $(
+                $crate::registry::StaticParam {
+                    name: stringify!($field),
+                    unit: $unit,
+                    default: $default,
+                    description: $desc,
+                },
+            )+
+        ];
+
+        impl $name {
+            /// The parameters from values in table order; panics when a value is missing.
+            pub(crate) fn from_values(values: &[f64]) -> Self {
+                let mut values = values.iter().copied();
+                let mut next = || {
+                    values
+                        .next()
+                        .expect("one value per parameter, in table order")
+                };
+                Self {
+                    $($field: next(),)+
+                }
+            }
+
+            /// `(name, value)` of every parameter, in table order.
+            pub(crate) fn named_values(&self) -> Vec<(String, f64)> {
+                vec![$((stringify!($field).to_string(), self.$field),)+]
+            }
+        }
+    };
+}
+pub(crate) use closed_params;
 
 /// The pose of a planar serial chain rooted at the stance foot: link `k` has absolute angle
 /// `θ_k = q₀ + … + q_k` from the slope normal and signed length `len[k]`, and runs from `P_k` to

@@ -55,7 +55,7 @@
 //! the trailing spoke into the ground (negative margin, flagged).
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{ClosedInfo, StaticParam};
+use crate::registry::{closed_params, ClosedInfo};
 use crate::validity::{ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_model::{GaitGuess, ModelUnits, Pose, Walker};
@@ -85,93 +85,40 @@ const GUARDS: [GuardSpec; 3] = [
 const STATE_NAMES: [&str; 2] = ["theta", "thetadot"];
 const SECTION_NAMES: [&str; 1] = ["thetadot"];
 
-static PARAMS: [StaticParam; 5] = [
-    StaticParam {
-        name: "slope",
-        unit: "rad",
-        default: 0.08,
-        description: "slope angle γ",
-    },
-    StaticParam {
-        name: "n_spokes",
-        unit: "1",
-        default: 8.0,
-        description: "number of spokes N (integer ≥ 3); α = π/N (Tedrake's example uses 8)",
-    },
-    StaticParam {
-        name: "g",
-        unit: "m/s^2",
-        default: 9.81,
-        description: "gravitational acceleration",
-    },
-    StaticParam {
-        name: "l",
-        unit: "m",
-        default: 1.0,
-        description: "spoke length",
-    },
-    StaticParam {
-        name: "max_stride_time",
-        unit: "s",
-        default: 10.0,
-        description: "stride time budget; a longer stride counts as a timeout",
-    },
-];
+closed_params! {
+    /// User-facing parameters of [`Rimless`].
+    pub struct RimlessParams in PARAMS {
+        /// In (−π/2, π/2).
+        slope: "rad" = 0.08 => "slope angle γ",
+        /// An integer ≥ 3 (a float so that it can come from `--set`).
+        n_spokes: "1" = 8.0
+            => "number of spokes N (integer ≥ 3); α = π/N (Tedrake's example uses 8)",
+        /// Finite and > 0.
+        g: "m/s^2" = 9.81 => "gravitational acceleration",
+        /// Finite and > 0.
+        l: "m" = 1.0 => "spoke length",
+        /// Finite and > 0.
+        max_stride_time: "s" = 10.0 => "stride time budget; a longer stride counts as a timeout",
+    }
+}
 
 /// Registry entry.
 pub static INFO: ClosedInfo = ClosedInfo {
     name: "rimless",
     description: "rimless wheel: point mass on N massless spokes (closed-form fixed point)",
-    params: &PARAMS,
+    params: PARAMS,
     state_names: &STATE_NAMES,
     section_names: &SECTION_NAMES,
-    build_from: |v| {
-        Ok(Box::new(Rimless::new(RimlessParams {
-            slope: v[0],
-            n_spokes: v[1],
-            g: v[2],
-            l: v[3],
-            max_stride_time: v[4],
-        })?))
-    },
+    build_from: |v| Ok(Box::new(Rimless::new(RimlessParams::from_values(v))?)),
 };
-
-/// User-facing parameters of [`Rimless`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RimlessParams {
-    /// Slope γ (rad), in (−π/2, π/2).
-    pub slope: f64,
-    /// Number of spokes N, an integer ≥ 3 (a float so that it can come from `--set`).
-    pub n_spokes: f64,
-    /// Gravitational acceleration (m/s²), > 0.
-    pub g: f64,
-    /// Spoke length (m), > 0.
-    pub l: f64,
-    /// Stride time budget (s), > 0.
-    pub max_stride_time: f64,
-}
-
-impl Default for RimlessParams {
-    fn default() -> Self {
-        Self {
-            slope: 0.08,
-            n_spokes: 8.0,
-            g: 9.81,
-            l: 1.0,
-            max_stride_time: 10.0,
-        }
-    }
-}
 
 /// The rimless wheel (immutable model).
 #[derive(Clone, Debug)]
 pub struct Rimless {
-    gamma: f64,
-    n: f64,
+    /// The validated parameters (γ is `params.slope`, N is `params.n_spokes`).
+    params: RimlessParams,
+    /// Half inter-spoke angle α = π/N.
     alpha: f64,
-    g: f64,
-    l: f64,
-    max_stride_time: f64,
 }
 
 impl Rimless {
@@ -202,12 +149,14 @@ impl Rimless {
             "finite and > 0",
         )?;
         Ok(Self {
-            gamma,
-            n: p.n_spokes,
+            params: RimlessParams {
+                slope: gamma,
+                n_spokes: p.n_spokes,
+                g,
+                l,
+                max_stride_time,
+            },
             alpha: PI / p.n_spokes,
-            g,
-            l,
-            max_stride_time,
         })
     }
 
@@ -218,7 +167,8 @@ impl Rimless {
 
     /// Energy per unit mass, `½ l² θ̇² + g l cos(θ + γ)`.
     pub fn energy(&self, x: &[f64]) -> f64 {
-        0.5 * self.l * self.l * x[1] * x[1] + self.g * self.l * (x[0] + self.gamma).cos()
+        let RimlessParams { slope, g, l, .. } = self.params;
+        0.5 * l * l * x[1] * x[1] + g * l * (x[0] + slope).cos()
     }
 
     /// Closed-form rolling fixed point `ω* = cot 2α · √(4 (g/l) sin α sin γ)` (Coleman; Tedrake),
@@ -226,11 +176,12 @@ impl Rimless {
     /// standing limit) or `ω* ≤ ω₁ = √(2 (g/l)(1 − cos(γ − α)))`).
     pub fn rolling_fixed_point(&self) -> Option<f64> {
         let a = self.alpha;
-        if self.gamma <= 0.0 {
+        let RimlessParams { slope, g, l, .. } = self.params;
+        if slope <= 0.0 {
             return None;
         }
-        let w = (4.0 * self.g / self.l * a.sin() * self.gamma.sin()).sqrt() / (2.0 * a).tan();
-        let w1 = (2.0 * self.g / self.l * (1.0 - (self.gamma - a).cos())).sqrt();
+        let w = (4.0 * g / l * a.sin() * slope.sin()).sqrt() / (2.0 * a).tan();
+        let w1 = (2.0 * g / l * (1.0 - (slope - a).cos())).sqrt();
         (w.is_finite() && w > w1).then_some(w)
     }
 }
@@ -244,7 +195,8 @@ impl HybridSystem for Rimless {
     }
     fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
-        dx[1] = self.g / self.l * (x[0] + self.gamma).sin();
+        let RimlessParams { slope, g, l, .. } = self.params;
+        dx[1] = g / l * (x[0] + slope).sin();
     }
     fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
         match k {
@@ -268,7 +220,8 @@ impl HybridSystem for Rimless {
     fn flow_jacobian(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], jac: &mut [f64]) {
         jac[0] = 0.0;
         jac[1] = 1.0;
-        jac[2] = self.g / self.l * (x[0] + self.gamma).cos();
+        let RimlessParams { slope, g, l, .. } = self.params;
+        jac[2] = g / l * (x[0] + slope).cos();
         jac[3] = 0.0;
     }
     fn guard_gradient(
@@ -323,7 +276,7 @@ impl Section for Rimless {
         s[0] = x[1];
     }
     fn max_stride_time(&self) -> f64 {
-        self.max_stride_time
+        self.params.max_stride_time
     }
 }
 
@@ -349,38 +302,30 @@ impl Walker for Rimless {
         STATE_NAMES.iter().map(|s| s.to_string()).collect()
     }
     fn param_values(&self) -> Vec<(String, f64)> {
-        [
-            ("slope", self.gamma),
-            ("n_spokes", self.n),
-            ("g", self.g),
-            ("l", self.l),
-            ("max_stride_time", self.max_stride_time),
-        ]
-        .into_iter()
-        .map(|(n, v)| (n.to_string(), v))
-        .collect()
+        self.params.named_values()
     }
     /// Distance between consecutive contact points, `2 l sin α`.
     fn step_length(&self, _x_pre: &[f64]) -> f64 {
-        2.0 * self.l * self.alpha.sin()
+        2.0 * self.params.l * self.alpha.sin()
     }
     /// Hub at `l (sin θ, cos θ)` above the contact point; spoke `k` points from the hub at angle
     /// `θ + 2kα` from the downward normal (module docs).
     fn pose(&self, x: &[f64]) -> Option<Pose> {
         let th = x[0];
-        let hub = [self.l * th.sin(), self.l * th.cos()];
+        let l = self.params.l;
+        let hub = [l * th.sin(), l * th.cos()];
         let n = (PI / self.alpha).round() as usize;
         let links = (0..n)
             .map(|k| {
                 let a = th + 2.0 * self.alpha * k as f64;
-                [hub, [hub[0] - self.l * a.sin(), hub[1] - self.l * a.cos()]]
+                [hub, [hub[0] - l * a.sin(), hub[1] - l * a.cos()]]
             })
             .collect();
         let next = th - 2.0 * self.alpha;
         Some(Pose {
             links,
             joints: vec![hub],
-            swing_foot: Some([hub[0] - self.l * next.sin(), hub[1] - self.l * next.cos()]),
+            swing_foot: Some([hub[0] - l * next.sin(), hub[1] - l * next.cos()]),
         })
     }
     /// Ground reaction on the stance spoke's foot per unit hub mass (module docs, "Ground
@@ -389,7 +334,8 @@ impl Walker for Rimless {
     /// `|tan θ|` (`+∞` where the normal force is not positive). No knees.
     fn constraint_forces(&self, _mode: usize, x: &[f64]) -> Option<ConstraintForces> {
         let (th, thd) = (x[0], x[1]);
-        let axial = self.g * (th + self.gamma).cos() - self.l * thd * thd;
+        let RimlessParams { slope, g, l, .. } = self.params;
+        let axial = g * (th + slope).cos() - l * thd * thd;
         let (s, c) = th.sin_cos();
         let (normal, tangential) = (axial * c, axial * s);
         Some(ConstraintForces {
@@ -417,8 +363,8 @@ impl Walker for Rimless {
     fn scales(&self) -> Option<Scales> {
         Some(Scales {
             mass: 1.0,
-            length: self.l,
-            gravity: self.g,
+            length: self.params.l,
+            gravity: self.params.g,
         })
     }
     /// A rimless wheel has no swing foot: its spokes are rigid at fixed angles `2α` apart, and
@@ -441,11 +387,11 @@ impl Walker for Rimless {
         }
         let (th, thd) = (x[0], x[1]);
         let th_new = th - 2.0 * self.alpha;
-        let lam = self.l * thd * (2.0 * self.alpha).sin();
+        let lam = self.params.l * thd * (2.0 * self.alpha).sin();
         let (ln, lt) = (lam * th_new.cos(), lam * th_new.sin());
         let mut post = [0.0; 2];
         self.reset(&mut Scratch::new(), 0, guard, x, &mut post);
-        let rate = self.l * post[1] * (th.sin() - th_new.sin());
+        let rate = self.params.l * post[1] * (th.sin() - th_new.sin());
         Some(ImpactReport::point_contact(
             GUARDS[SPOKE_IMPACT].name,
             ln,

@@ -68,7 +68,7 @@
 //! bit-identical.
 
 use crate::error::{check_open, WalkerError};
-use crate::registry::{ClosedInfo, StaticParam};
+use crate::registry::{closed_params, ClosedInfo};
 use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
@@ -104,60 +104,33 @@ const GUARDS: [GuardSpec; 4] = [
 const STATE_NAMES: [&str; 4] = ["theta", "thetadot", "phi", "phidot"];
 const SECTION_NAMES: [&str; 2] = ["theta", "thetadot"];
 
-static PARAMS: [StaticParam; 2] = [
-    StaticParam {
-        name: "slope",
-        unit: "rad",
-        default: 0.009,
-        description: "slope angle γ (Garcia et al. 1998 use 0.009)",
-    },
-    StaticParam {
-        name: "max_stride_time",
-        unit: "sqrt(l/g)",
-        default: 12.0,
-        description: "stride time budget; a longer stride counts as a fall (gait period ≈ 3.9)",
-    },
-];
+closed_params! {
+    /// User-facing parameters of [`Simplest`].
+    pub struct SimplestParams in PARAMS {
+        /// In (−π/2, π/2).
+        slope: "rad" = 0.009 => "slope angle γ (Garcia et al. 1998 use 0.009)",
+        /// Finite and > 0; the gaits take ≈ 3.1–3.9.
+        max_stride_time: "sqrt(l/g)" = 12.0
+            => "stride time budget; a longer stride counts as a fall (gait period ≈ 3.9)",
+    }
+}
 
 /// Registry entry.
 pub static INFO: ClosedInfo = ClosedInfo {
     name: "simplest",
     description: "Garcia et al. 1998 simplest walker: point-mass hip, massless legs, \
                   infinitesimal feet; time in sqrt(l/g)",
-    params: &PARAMS,
+    params: PARAMS,
     state_names: &STATE_NAMES,
     section_names: &SECTION_NAMES,
-    build_from: |v| {
-        Ok(Box::new(Simplest::new(SimplestParams {
-            slope: v[0],
-            max_stride_time: v[1],
-        })?))
-    },
+    build_from: |v| Ok(Box::new(Simplest::new(SimplestParams::from_values(v))?)),
 };
-
-/// User-facing parameters of [`Simplest`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SimplestParams {
-    /// Slope γ (rad), in (−π/2, π/2). Garcia's reference value: 0.009.
-    pub slope: f64,
-    /// Stride time budget in units of √(l/g) (the gaits take ≈ 3.1–3.9).
-    pub max_stride_time: f64,
-}
-
-impl Default for SimplestParams {
-    fn default() -> Self {
-        Self {
-            slope: 0.009,
-            max_stride_time: 12.0,
-        }
-    }
-}
 
 /// The simplest walker (immutable model).
 #[derive(Clone, Debug)]
 pub struct Simplest {
-    gamma: f64,
-    max_stride_time: f64,
+    /// The validated parameters (γ is `params.slope`).
+    params: SimplestParams,
 }
 
 /// `φ̈ = sin(θ − γ) + (θ̇² − cos(θ − γ))·sin φ` (Garcia 1998 eq. 4, swing leg) from
@@ -343,20 +316,22 @@ impl Simplest {
             "finite and > 0",
         )?;
         Ok(Self {
-            gamma,
-            max_stride_time,
+            params: SimplestParams {
+                slope: gamma,
+                max_stride_time,
+            },
         })
     }
 
     /// Slope γ (rad).
     pub fn slope(&self) -> f64 {
-        self.gamma
+        self.params.slope
     }
 
     /// Mechanical energy per unit hip mass, `½ θ̇² + cos(θ − γ)` (units `M g l`); the swing
     /// foot is massless and does not contribute.
     pub fn energy(&self, x: &[f64]) -> f64 {
-        0.5 * x[1] * x[1] + (x[0] - self.gamma).cos()
+        0.5 * x[1] * x[1] + (x[0] - self.params.slope).cos()
     }
 }
 
@@ -385,7 +360,7 @@ impl HybridSystem for Simplest {
 
     #[inline(always)]
     fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
-        let (f, _) = rhs1(self.gamma, x);
+        let (f, _) = rhs1(self.params.slope, x);
         dx[..4].copy_from_slice(&f);
     }
 
@@ -400,7 +375,7 @@ impl HybridSystem for Simplest {
                 for j in 0..4 {
                     xi[j] = x[(l, j)];
                 }
-                let (f, _) = rhs1(self.gamma, &xi);
+                let (f, _) = rhs1(self.params.slope, &xi);
                 for j in 0..4 {
                     dx[(l, j)] = f[j];
                 }
@@ -433,7 +408,7 @@ impl HybridSystem for Simplest {
             &mut o2[..lanes],
             &mut o3[..lanes],
         );
-        let gamma = self.gamma;
+        let gamma = self.params.slope;
         // Column loops over lanes, compiled per instruction set (pdw-simd) and vectorised at
         // its full width, in blocks of RHS_BLOCK lanes with one trigonometric choice each
         // (`rhs_block`); every value has the bits of `rhs1` on that lane's state. (Measured
@@ -560,7 +535,7 @@ impl HybridSystem for Simplest {
     /// Closed form: rows `(0,1,0,0)`, `(c,0,0,0)`, `(0,0,0,1)`,
     /// `(c + s sin φ, 2θ̇ sin φ, (θ̇² − c) cos φ, 0)` with `s, c = sin, cos(θ − γ)`.
     fn flow_jacobian(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], jac: &mut [f64]) {
-        let (f, trig) = rhs1(self.gamma, x);
+        let (f, trig) = rhs1(self.params.slope, x);
         jacobian_from(x, &f, trig, jac);
     }
 
@@ -573,7 +548,7 @@ impl HybridSystem for Simplest {
         dx: &mut [f64],
         jac: &mut [f64],
     ) {
-        let (f, trig) = rhs1(self.gamma, x);
+        let (f, trig) = rhs1(self.params.slope, x);
         dx[..4].copy_from_slice(&f);
         jacobian_from(x, &f, trig, jac);
     }
@@ -644,7 +619,7 @@ impl Section for Simplest {
         s[1] = x[1];
     }
     fn max_stride_time(&self) -> f64 {
-        self.max_stride_time
+        self.params.max_stride_time
     }
 }
 
@@ -672,13 +647,7 @@ impl Walker for Simplest {
         STATE_NAMES.iter().map(|s| s.to_string()).collect()
     }
     fn param_values(&self) -> Vec<(String, f64)> {
-        [
-            ("slope", self.gamma),
-            ("max_stride_time", self.max_stride_time),
-        ]
-        .into_iter()
-        .map(|(n, v)| (n.to_string(), v))
-        .collect()
+        self.params.named_values()
     }
     /// Distance between the feet at heel strike, `2 |sin θ⁻|` (leg length 1).
     fn step_length(&self, x_pre: &[f64]) -> f64 {
@@ -690,10 +659,11 @@ impl Walker for Simplest {
     /// `g = (sin γ, −cos γ)` in the slope frame (module docs). No knees.
     fn constraint_forces(&self, _mode: usize, x: &[f64]) -> Option<ConstraintForces> {
         let (th, thd) = (x[0], x[1]);
-        let thdd = (th - self.gamma).sin();
+        let gamma = self.params.slope;
+        let thdd = (th - gamma).sin();
         let (s, c) = th.sin_cos();
         let a = [-thdd * c + thd * thd * s, -thdd * s - thd * thd * c];
-        let r = [a[0] - self.gamma.sin(), a[1] + self.gamma.cos()];
+        let r = [a[0] - gamma.sin(), a[1] + gamma.cos()];
         Some(ConstraintForces {
             normal: r[1],
             tangential: r[0],
@@ -775,7 +745,7 @@ impl Walker for Simplest {
     }
     /// Garcia's small-slope asymptotics for both gaits (only meaningful for 0 < γ ≲ 0.015).
     fn gait_guesses(&self) -> Vec<GaitGuess> {
-        let g = self.gamma.max(1e-12);
+        let g = self.params.slope.max(1e-12);
         vec![
             GaitGuess {
                 gait: "stable".into(),

@@ -12,6 +12,5 @@ mod kneed;
 mod rimless_physics;
 mod round_feet;
 mod seed5;
-mod seed5_compliant;
 mod simplest_physics;
 mod simplest_trajectory;

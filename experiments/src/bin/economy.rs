@@ -8,7 +8,7 @@
 //! wall time and right-hand-side evaluations (`Integrator::stats`).
 //!
 //! (b) The seed walker's exact knee lock (pseudo joints, seed §3.4; impulsive heel strike)
-//! against the thesis' PI latch and compliant ground (`Seed5Compliant`, seed ch. 4) at
+//! against the thesis' PI latch and compliant ground (`PiLatchWalker`, seed ch. 4) at
 //! increasing gains, over one step of the exact model's locked-knee gait at γ = 0.05: work of
 //! DOP853 (accepted / rejected steps, wall time), the largest RK4 step that still completes the
 //! step, and the error of the knee angles and the swing foot against the exact model. A latch
@@ -16,6 +16,7 @@
 //! for `h ω ≲ c` (HNW II, stability regions), so its step count grows like `√K`.
 
 use anyhow::Context;
+use pdw_experiments::seed5_pi::{PiGains, PiLatchWalker, COMPLIANT_DOUBLE, COMPLIANT_SINGLE};
 use pdw_experiments::{
     command, fmt_multipliers, results_dir, sci, time_mean, time_once, write_text, Table,
 };
@@ -23,7 +24,6 @@ use pdw_hybrid::{
     GuardKind, HybridSystem, Integrator, Options, Scratch, Section, Stats, StopReason,
 };
 use pdw_limit::{find_fixed_point, Multiplier, NewtonOptions, StrideMap};
-use pdw_walkers::seed5::{PiGains, Seed5Compliant, COMPLIANT_DOUBLE, COMPLIANT_SINGLE};
 use pdw_walkers::simplest::GarciaGait;
 use std::fmt::Write as _;
 
@@ -251,7 +251,7 @@ struct CompliantStep {
 }
 
 fn compliant_step(
-    w: &Seed5Compliant,
+    w: &PiLatchWalker,
     opts: Options,
     x0: &[f64; 13],
     ds_budget: f64,
@@ -319,7 +319,7 @@ fn compliant_step(
 }
 
 /// Does RK4 with step `h` complete the step close to the DOP853 result `reference`?
-fn rk4_ok(w: &Seed5Compliant, h: f64, x0: &[f64; 13], reference: &CompliantStep) -> bool {
+fn rk4_ok(w: &PiLatchWalker, h: f64, x0: &[f64; 13], reference: &CompliantStep) -> bool {
     let r = compliant_step(w, Options::rk4(h), x0, reference.t_double.max(1e-3));
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-3 + 0.1 * b;
     r.ok && close(r.max_knee_single, reference.max_knee_single)
@@ -455,7 +455,7 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
             ground_ki: kp / 10.0,
             ground_kd: 0.0,
         };
-        let w = Seed5Compliant::new(exact.clone(), gains)?;
+        let w = PiLatchWalker::new(exact.clone(), gains)?;
         w.lift(&s10, &mut x0);
         let ((r, wall), _) =
             time_once(|| time_once(|| compliant_step(&w, Options::dop853(tol), &x0, 0.5)));
@@ -580,7 +580,7 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
          Seed walker (Table 3.1, both knees locked, γ = 0.05), one step from the exact model's \
          period-one gait s* = ({:.9}, {:.9}, {:.9}) (Newton to 1e-12 on DOP853 1e-14). Exact \
          model: pseudo-joint knees, single support to heel strike (t = {t_ref:.9} s, swing foot \
-         at y = {:.9} m), impulsive double support. PI model (`Seed5Compliant`): latch torque \
+         at y = {:.9} m), impulsive double support. PI model (`PiLatchWalker`): latch torque \
          `τ_lock − K_p q − K_i ∫q` on both knees (K_i = K_p/100, no derivative term, as in the \
          thesis), single support to touchdown, then compliant ground `R = −K_p,g e − K_i,g ∫e` \
          (K_p,g = 10 K_p, K_i,g = K_p/10) until the old stance foot unloads (switch) or 0.5 s. \

@@ -1,10 +1,11 @@
-//! The thesis' own constraint handling (PI knee latch, compliant ground; seed ch. 4) as an
-//! opt-in comparison model: claims about how it differs from the exact (pseudo-joint,
-//! impulsive) model, each measured against that model.
+//! The thesis' own constraint handling (PI knee latch, compliant ground; seed ch. 4), the
+//! comparison model of the `economy` experiment (`pdw_experiments::seed5_pi`): claims about how
+//! it differs from the exact (pseudo-joint, impulsive) model, the `seed5` preset, each measured
+//! against that model.
 
+use pdw_experiments::seed5_pi::{PiGains, PiLatchWalker, COMPLIANT_DOUBLE, COMPLIANT_SINGLE};
 use pdw_hybrid::{GuardKind, HybridSystem, Integrator, Options, Scratch, Section, StopReason};
 use pdw_walkers::presets;
-use pdw_walkers::seed5::{PiGains, Seed5Compliant, COMPLIANT_DOUBLE, COMPLIANT_SINGLE};
 use pdw_walkers::Walker;
 
 /// The exact model's single mode (every knee locked: the `seed5` preset without a free knee).
@@ -14,8 +15,8 @@ const KNEES_LOCKED: usize = 0;
 /// its residual is re-checked in `exact_model_repeats_the_gait`; the preset's `stable` guess).
 const GAIT: [f64; 3] = [0.215124650, -0.570787311, 0.277583131];
 
-fn compliant_section(kd: f64) -> (Seed5Compliant, [f64; 13]) {
-    let w = Seed5Compliant::new(
+fn compliant_section(kd: f64) -> (PiLatchWalker, [f64; 13]) {
+    let w = PiLatchWalker::new(
         presets::seed5(&[]).unwrap(),
         PiGains {
             knee_kd: kd,

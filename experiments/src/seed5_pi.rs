@@ -1,15 +1,15 @@
 //! The seed thesis' walker with the thesis' own constraint handling (seed ch. 3.4–3.5 and
 //! ch. 4): a PI-controlled knee latch and a compliant (PI) ground during a finite double
-//! support. **Opt-in, for comparison only**: a stiff model whose failures are part of the point
-//! (see "Model economy" in experiments/README.md). The exact model — pseudo-joint knees,
-//! impulsive heel strike, the switch rule — is the `seed5` preset of the chain walker
-//! ([`crate::presets::seed5`], `models/seed5.toml`).
+//! support, kept for comparison with the exact model. It is not one of the models
+//! (`pdw-sweep models`): a stiff model whose failures are part of the point, used by the
+//! `economy` experiment ("Model economy" in experiments/README.md) and checked by the tests
+//! crate (`tests/tests/seed5_pi.rs`). The exact model — pseudo-joint knees, impulsive heel
+//! strike, the switch rule — is the `seed5` preset of the chain walker
+//! ([`pdw_walkers::presets::seed5`], `models/seed5.toml`).
 
-use crate::chain_walker::ChainWalker;
-use crate::error::check_closed_open;
-use crate::error::WalkerError;
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
 use pdw_soa::Workspace;
+use pdw_walkers::{ChainWalker, WalkerError};
 
 /// Gains of the thesis' PI controllers (seed ch. 4, Fig. 4.1–4.2). The thesis gives no values;
 /// the defaults are ours ("high P compared to I"). The derivative gains are not in the thesis
@@ -40,9 +40,9 @@ impl Default for PiGains {
     }
 }
 
-/// Mode of [`Seed5Compliant`]: single support.
+/// Mode of [`PiLatchWalker`]: single support.
 pub const COMPLIANT_SINGLE: usize = 0;
-/// Mode of [`Seed5Compliant`]: double support (swing foot held by the compliant ground).
+/// Mode of [`PiLatchWalker`]: double support (swing foot held by the compliant ground).
 pub const COMPLIANT_DOUBLE: usize = 1;
 
 const COMPLIANT_GUARDS_SINGLE: [GuardSpec; 2] = [
@@ -92,18 +92,18 @@ const COMPLIANT_GUARDS_DOUBLE: [GuardSpec; 2] = [
 /// State (dimension 13): `(q₁…q₄, q̇₁…q̇₄, ∫q₂, ∫q₄, ∫e_y, ∫e_z, y_touchdown)`.
 /// Section (after a switch, mode 0): all but the last three components (which are 0 there).
 #[derive(Clone, Debug)]
-pub struct Seed5Compliant {
+pub struct PiLatchWalker {
     model: ChainWalker,
     gains: PiGains,
 }
 
-/// Scratch of [`Seed5Compliant`]: the kernel workspace and the exact model's scratch.
+/// Scratch of [`PiLatchWalker`]: the kernel workspace and the exact model's scratch.
 struct CompliantScratch {
     ws: Workspace,
     inner: Scratch,
 }
 
-impl Seed5Compliant {
+impl PiLatchWalker {
     /// Builds the model on a two-segment chain walker (the `seed5` preset or a variant of it);
     /// gains must be finite and ≥ 0.
     pub fn new(model: ChainWalker, gains: PiGains) -> Result<Self, WalkerError> {
@@ -115,7 +115,17 @@ impl Seed5Compliant {
                 rule: "the PI-latch model needs legs of two segments (shank, thigh)".into(),
             });
         }
-        let nn = |n, v| check_closed_open(n, v, 0.0, f64::INFINITY, "finite and >= 0");
+        let nn = |name, value: f64| {
+            if value.is_finite() && value >= 0.0 {
+                Ok(value)
+            } else {
+                Err(WalkerError::InvalidParam {
+                    name,
+                    value,
+                    allowed: "finite and >= 0",
+                })
+            }
+        };
         nn("knee_kp", gains.knee_kp)?;
         nn("knee_ki", gains.knee_ki)?;
         nn("knee_kd", gains.knee_kd)?;
@@ -203,7 +213,7 @@ impl Seed5Compliant {
     }
 }
 
-impl HybridSystem for Seed5Compliant {
+impl HybridSystem for PiLatchWalker {
     fn dim(&self) -> usize {
         13
     }
@@ -276,7 +286,7 @@ impl HybridSystem for Seed5Compliant {
     }
 }
 
-impl Section for Seed5Compliant {
+impl Section for PiLatchWalker {
     fn section_dim(&self) -> usize {
         10
     }
