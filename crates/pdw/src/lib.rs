@@ -9,6 +9,7 @@ pub mod gaits;
 pub mod input;
 pub mod integrator;
 pub mod model;
+pub mod sweep;
 
 pub use input::InputError;
 pub use integrator::{integrator, integrator_json, integrator_text, IntegratorChoice};
