@@ -102,14 +102,14 @@ pub struct FixedpointArgs {
     #[command(flatten)]
     pub integrator: IntegratorOpts,
     /// Which gaits to report: stable, unstable or all.
-    #[arg(long, default_value = "all")]
+    #[arg(long, default_value = "all", value_parser = parse_gait)]
     pub gait: String,
     /// Initial guess in section coordinates, comma separated.
     #[arg(long, allow_hyphen_values = true)]
     pub guess: Option<String>,
     /// Tolerance on the fixed-point residual ‖P(x) − x‖, relative to the gait's scale
     /// (max |x|, at most 1); between 1e-15 and 1e-3.
-    #[arg(long, default_value_t = 1e-12)]
+    #[arg(long, default_value_t = 1e-12, value_parser = parse_tol)]
     pub tol: f64,
     /// Print one JSON object instead of a table.
     #[arg(long)]
@@ -117,7 +117,7 @@ pub struct FixedpointArgs {
     /// Period K of the orbits sought, in strides (1..=64): fixed points of the K-stride map
     /// P^K, found by Newton from the guesses, from where the map takes them after a few hundred
     /// strides, and from the period-doubling predictor at the period-one gaits.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = parse_period)]
     pub period: usize,
     /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400). The output
     /// holds exactly N points per branch, at the N evenly spaced values A, A + (B−A)/(N−1), …, B
@@ -140,12 +140,12 @@ pub struct FixedpointArgs {
     // ---- sweep output (with --sweep; --json then prints the sweep as one JSON object)
     /// With --sweep: also write the branches as CSV, one row per orbit point of every branch
     /// point (columns: docs/cli.md, "Sweep output and basin stability").
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", requires = "sweep")]
     pub csv: Option<PathBuf>,
     /// With --sweep: worker threads (rayon pool) for the points on the output grid, their
     /// measurements and the orbit diagram (with --follow: the region map); results are
     /// identical for any count. Default 2.
-    #[arg(long, value_parser = crate::args::parse_threads)]
+    #[arg(long, value_parser = crate::args::parse_threads, requires = "sweep")]
     pub threads: Option<usize>,
     /// With --sweep (or --follow): no progress bar.
     #[arg(long)]
@@ -163,7 +163,7 @@ pub struct FixedpointArgs {
     pub free: Option<String>,
     /// Cells of the --follow region map drawn under the curve in --png, NXxNY (columns along
     /// the --sweep parameter, rows along --free).
-    #[arg(long, value_name = "NXxNY")]
+    #[arg(long, value_name = "NXxNY", requires = "png")]
     pub map_grid: Option<String>,
 }
 
@@ -359,4 +359,49 @@ pub struct DesignArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+// ---- value checks clap runs while parsing (a bad value exits with code 2 before anything runs;
+// clap's message wraps the text here, which names the flag and the value)
+
+/// Smallest `fixedpoint --tol`: below it the residual is integrator round-off.
+pub const MIN_TOL: f64 = 1e-15;
+/// Largest `fixedpoint --tol`: a looser relative tolerance accepts a preset guess as the gait
+/// after zero iterations (the presets are within ~1e-2 of the gaits).
+pub const MAX_TOL: f64 = 1e-3;
+
+fn number(s: &str) -> Result<f64, String> {
+    s.parse::<f64>().map_err(|e| e.to_string())
+}
+
+/// `fixedpoint --tol`: within [`MIN_TOL`, `MAX_TOL`].
+fn parse_tol(s: &str) -> Result<f64, String> {
+    let t = number(s)?;
+    if (MIN_TOL..=MAX_TOL).contains(&t) {
+        Ok(t)
+    } else {
+        Err(format!(
+            "--tol: {t} is outside [{MIN_TOL:e}, {MAX_TOL:e}]; the residual tolerance is relative \
+             to the gait's scale, and a looser one would accept the initial guess as a gait"
+        ))
+    }
+}
+
+/// `fixedpoint --gait`: stable, unstable or all.
+fn parse_gait(s: &str) -> Result<String, String> {
+    if matches!(s, "stable" | "unstable" | "all") {
+        Ok(s.to_string())
+    } else {
+        Err(format!("--gait: '{s}' is not one of stable, unstable, all"))
+    }
+}
+
+/// `fixedpoint --period`: 1 to 64 strides.
+fn parse_period(s: &str) -> Result<usize, String> {
+    let k = s.parse::<usize>().map_err(|e| e.to_string())?;
+    if (1..=64).contains(&k) {
+        Ok(k)
+    } else {
+        Err(format!("--period: {k} must be between 1 and 64 strides"))
+    }
 }
