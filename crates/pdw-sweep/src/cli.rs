@@ -1,6 +1,7 @@
 //! Command-line definitions (clap derive). The contract is docs/cli.md.
 
 use clap::{Args, Parser, Subcommand};
+use pdw_limit::design::Objective;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -313,10 +314,10 @@ pub struct DesignArgs {
     pub free: Vec<String>,
     /// What a feasible design is scored by: basin (fraction of a box of section states around
     /// the gait that reaches it; larger is better) or margin (largest |multiplier|; smaller).
-    #[arg(long, default_value = "basin")]
-    pub objective: String,
+    #[arg(long, default_value = "basin", value_parser = parse_objective)]
+    pub objective: Objective,
     /// Designs evaluated in all (a rerun on the same --out counts the stored ones).
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = parse_budget)]
     pub budget: usize,
     /// Seed of the initial random designs (--init).
     #[arg(long, default_value_t = 0)]
@@ -326,23 +327,23 @@ pub struct DesignArgs {
     #[arg(long, default_value_t = 0)]
     pub init: usize,
     /// Largest friction coefficient the ground supplies.
-    #[arg(long, default_value_t = 0.6)]
+    #[arg(long, default_value_t = 0.6, value_parser = parse_mu)]
     pub mu: f64,
     /// Smallest knee-lock torque (N m) a passive knee stop must be left with along the stride.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = parse_knee_margin)]
     pub knee_margin: f64,
     /// Smallest margin every validity criterion must keep, relative to its natural scale
     /// (forces / m g, torques / m g l, clearance / l, impulses / m sqrt(g l)); 0 = sign tests.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = parse_min_margin)]
     pub min_margin: f64,
     /// Basin cells per side (objective basin).
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, default_value_t = 15, value_parser = parse_basin_grid)]
     pub basin_grid: usize,
     /// Half widths of the basin box around the gait: DSTANCE,DSTANCE_RATE (rad, rad/s).
-    #[arg(long, default_value = "0.02,0.08")]
-    pub basin_box: String,
+    #[arg(long, default_value = "0.02,0.08", value_parser = parse_basin_box)]
+    pub basin_box: [f64; 2],
     /// Stride budget per basin cell.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 40, value_parser = parse_max_strides)]
     pub max_strides: u16,
     /// HDF5 file of every evaluated design (a rerun with the same settings continues it).
     #[arg(long, default_value = "design.h5")]
@@ -374,6 +375,16 @@ fn number(s: &str) -> Result<f64, String> {
     s.parse::<f64>().map_err(|e| e.to_string())
 }
 
+/// An integer in `lo..=hi`; `what` follows the value in the message (e.g. `designs`).
+fn integer_in(s: &str, flag: &str, what: &str, (lo, hi): (i64, i64)) -> Result<i64, String> {
+    let n = s.parse::<i64>().map_err(|e| e.to_string())?;
+    if (lo..=hi).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("{flag}: {n}{what} is outside {lo}..={hi}"))
+    }
+}
+
 /// `fixedpoint --tol`: within [`MIN_TOL`, `MAX_TOL`].
 fn parse_tol(s: &str) -> Result<f64, String> {
     let t = number(s)?;
@@ -403,5 +414,77 @@ fn parse_period(s: &str) -> Result<usize, String> {
         Ok(k)
     } else {
         Err(format!("--period: {k} must be between 1 and 64 strides"))
+    }
+}
+
+/// `design --objective`: basin or margin.
+fn parse_objective(s: &str) -> Result<Objective, String> {
+    match s {
+        "basin" => Ok(Objective::Basin),
+        "margin" => Ok(Objective::Margin),
+        o => Err(format!("--objective: '{o}' is not one of basin, margin")),
+    }
+}
+
+/// `design --mu`: a finite friction coefficient > 0.
+fn parse_mu(s: &str) -> Result<f64, String> {
+    let mu = number(s)?;
+    if mu.is_finite() && mu > 0.0 {
+        Ok(mu)
+    } else {
+        Err(format!(
+            "--mu: {mu} is not a friction coefficient; give a finite value > 0 (e.g. 0.6)"
+        ))
+    }
+}
+
+/// `design --knee-margin`: a finite torque ≥ 0.
+fn parse_knee_margin(s: &str) -> Result<f64, String> {
+    let k = number(s)?;
+    if k.is_finite() && k >= 0.0 {
+        Ok(k)
+    } else {
+        Err(format!(
+            "--knee-margin: {k} N m is not allowed; give a finite torque >= 0"
+        ))
+    }
+}
+
+/// `design --min-margin`: a finite relative margin ≥ 0.
+fn parse_min_margin(s: &str) -> Result<f64, String> {
+    let m = number(s)?;
+    if m.is_finite() && m >= 0.0 {
+        Ok(m)
+    } else {
+        Err(format!(
+            "--min-margin: {m} is not allowed; give a finite relative margin >= 0 (e.g. 0.05)"
+        ))
+    }
+}
+
+/// `design --budget`: 1 to 100000 designs.
+fn parse_budget(s: &str) -> Result<usize, String> {
+    integer_in(s, "--budget", " designs", (1, 100_000)).map(|n| n as usize)
+}
+
+/// `design --basin-grid`: 1 to 200 cells per side.
+fn parse_basin_grid(s: &str) -> Result<usize, String> {
+    integer_in(s, "--basin-grid", " cells per side", (1, 200)).map(|n| n as usize)
+}
+
+/// `design --max-strides`: 1 to 10000 strides per basin cell.
+fn parse_max_strides(s: &str) -> Result<u16, String> {
+    integer_in(s, "--max-strides", "", (1, 10_000)).map(|n| n as u16)
+}
+
+/// `design --basin-box`: two positive half widths `DSTANCE,DSTANCE_RATE`.
+fn parse_basin_box(s: &str) -> Result<[f64; 2], String> {
+    let v = crate::args::parse_guess(s).map_err(|e| e.to_string())?;
+    match v[..] {
+        [a, b] if [a, b].iter().all(|x| x.is_finite() && *x > 0.0) => Ok([a, b]),
+        _ => Err(format!(
+            "--basin-box: '{s}' must be two positive half widths DSTANCE,DSTANCE_RATE (e.g. \
+             0.05,0.2)"
+        )),
     }
 }

@@ -5,6 +5,7 @@
 //! parses its own syntax into these types and prints or returns the results; it builds no model,
 //! checks no range and names nothing on its own.
 
+pub mod design;
 pub mod follow;
 pub mod gaits;
 pub mod input;
