@@ -1,9 +1,11 @@
 //! The library under both front ends (the `pdw-sweep` CLI and the Python package): what a run
 //! needs before and around the analysis — building a model by name or spec file with its
 //! parameter overrides ([`model`]), reading the values people type ([`input`]), choosing the
-//! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]). A front end
-//! parses its own syntax into these types and prints or returns the results; it builds no model,
-//! checks no range and names nothing on its own.
+//! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]) — and the
+//! computations of the runs themselves, as typed plans and their steps: a continuation over a
+//! parameter grid ([`sweep`]), a bifurcation curve in two parameters ([`follow`]), a design
+//! search ([`design`]). A front end parses its own syntax into these types and prints, writes or
+//! returns the results; it builds no model, checks no range and names nothing on its own.
 
 pub mod design;
 pub mod follow;
