@@ -2,10 +2,10 @@
 //! period doublings or folds of the period-one gait in two parameters
 //! ([`pdw_limit::codim2`]; the steps are the library's, [`pdw::follow`]).
 //!
-//! [`run`] reads as the command does: the flags checked ([`parse`]), the outputs claimed, the
-//! model's values checked and the plan made ([`plan`]), the gait, its bifurcation, the curve and
-//! the region map computed ([`compute`]), the file and the picture written ([`write`]), the
-//! curve printed ([`report`]).
+//! [`run`] reads as the command does: the flags checked ([`parse`]), the plan made from the
+//! model's own values ([`plan`]), the outputs claimed, the corners, integrator and guess checked
+//! ([`prepare`]), the gait, its bifurcation, the curve and the region map computed
+//! ([`compute`]), the file and the picture written ([`write`]), the curve printed ([`report`]).
 
 use super::output::{Format, Output};
 use super::{build_model, BuiltModel};
@@ -114,9 +114,10 @@ struct Computed {
 
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let parsed = parse(a)?;
+    let (plan, m_own) = plan(a, &parsed)?;
     let out = a.out_path();
     let _claim = claim(a, &out)?;
-    let planned = plan(a, parsed)?;
+    let planned = prepare(a, plan, m_own, parsed.grid)?;
     let t0 = std::time::Instant::now();
     let Some(computed) = compute(a, &planned)? else {
         return Ok(ExitCode::from(2));
@@ -226,21 +227,21 @@ fn claim(a: &FixedpointArgs, out: &Path) -> Result<super::output::Claim, InputEr
     super::output::claim(&outputs, &inputs, a.force)
 }
 
-/// The checks that need the model (both parameters exist, the free domain holds the model's
-/// value, every corner is a model, the guess fits the section) and the plan.
-fn plan(a: &FixedpointArgs, p: Parsed) -> anyhow::Result<Planned> {
+/// The plan, from the model at its own values (returned too): both parameters exist and the
+/// free domain holds the model's value.
+fn plan(a: &FixedpointArgs, p: &Parsed) -> Result<(FollowPlan, BuiltModel), InputError> {
     let m_own = build_model(&a.model)?;
-    let (sw, free) = (p.sweep, p.free);
+    let (sw, free) = (&p.sweep, &p.free);
     let step_own =
         value_of(&m_own, &sw.name).ok_or_else(|| unknown(&m_own, "--sweep", &sw.name))?;
     let free_own =
         value_of(&m_own, &free.name).ok_or_else(|| unknown(&m_own, "--free", &free.name))?;
-    let (lo, hi) = free_domain(&free, free_own)?;
-    let mut plan = FollowPlan {
+    let (lo, hi) = free_domain(free, free_own)?;
+    let plan = FollowPlan {
         model: super::choice(&a.model),
         kind: p.kind,
-        step: sw,
-        free: free.name,
+        step: sw.clone(),
+        free: free.name.clone(),
         free_range: (lo, hi),
         free_given: free.range,
         free_own,
@@ -250,9 +251,20 @@ fn plan(a: &FixedpointArgs, p: Parsed) -> anyhow::Result<Planned> {
         tol: a.tol,
         integrator: Options::dop853(1e-13),
     };
+    Ok((plan, m_own))
+}
+
+/// The checks made once the outputs are claimed: every corner of the plane is a model, the
+/// integrator choice holds, the guess fits the section at the start; the model there.
+fn prepare(
+    a: &FixedpointArgs,
+    mut plan: FollowPlan,
+    m_own: BuiltModel,
+    grid: (usize, usize),
+) -> Result<Planned, InputError> {
     plan.check_corners()?;
     plan.integrator = super::integrator(&a.integrator, Options::dop853(1e-13))?;
-    let m_a = plan.model_at(plan.step.lo, free_own)?;
+    let m_a = plan.model_at(plan.step.lo, plan.free_own)?;
     let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
     if user.is_some() {
         let g = pdw::gaits::guesses(&m_a, user, "--guess")?;
@@ -262,7 +274,7 @@ fn plan(a: &FixedpointArgs, p: Parsed) -> anyhow::Result<Planned> {
         plan,
         m_own,
         m_a,
-        grid: p.grid,
+        grid,
     })
 }
 
