@@ -141,14 +141,25 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     if a.period > 1 {
         return run_period_k(a, &m, &guesses);
     }
-    let (found, failed) = search_with(&m, &guesses, a.tol, &integrator)?;
-    warn_inaccurate(a, &m, &found, &integrator)?;
+    run_period_one(a, &m, &guesses, &integrator)
+}
+
+/// Period-one gaits: Newton from every guess, the ones `--gait` asks for printed (a table or
+/// JSON); none found is exit 2 with every failed guess and advice.
+fn run_period_one(
+    a: &FixedpointArgs,
+    m: &BuiltModel,
+    guesses: &[(String, Vec<f64>)],
+    integrator: &pdw_hybrid::Options,
+) -> anyhow::Result<ExitCode> {
+    let (found, failed) = search_with(m, guesses, a.tol, integrator)?;
+    warn_inaccurate(a, m, &found, integrator)?;
     let selected: Vec<&Found> = found
         .iter()
         .filter(|f| wanted(&a.gait, f.fp.stable))
         .collect();
     if a.json {
-        let j = gaits_json(&m, &selected, &integrator);
+        let j = gaits_json(m, &selected, integrator);
         crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     } else {
         crate::outln!(
@@ -156,10 +167,10 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             m.info.name,
             m.slope(),
             m.slope().to_degrees(),
-            super::integrator_text(&integrator)
+            super::integrator_text(integrator)
         );
         for f in &selected {
-            print_fixed_point(&m, f);
+            print_fixed_point(m, f);
         }
     }
     if selected.is_empty() {
@@ -172,7 +183,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         for (label, g, e) in &failed {
             report_failure(label, g, e);
         }
-        eprintln!("try: {}", advice(&m));
+        eprintln!("try: {}", advice(m));
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)
