@@ -938,42 +938,37 @@ fn continuation<'py>(
         )));
     }
     pdw::input::check_threads(threads, "threads").map_err(err)?;
-    let mut base = overrides(None, params)?;
-    base.retain(|(n, _)| n != parameter);
-    let at = |mu: f64| -> PyResult<Model> {
-        let mut ov = base.clone();
-        ov.push((parameter.to_string(), mu));
-        build(model, &ov)
+    let mut fixed = overrides(None, params)?;
+    fixed.retain(|(n, _)| n != parameter);
+    let plan = pdw::sweep::SweepPlan {
+        model: model.to_string(),
+        fixed,
+        grid: pdw::input::Sweep {
+            name: parameter.to_string(),
+            lo: start,
+            hi: stop,
+            n: points,
+        },
+        start: match gait {
+            "unstable" => pdw::sweep::StartChoice::Unstable,
+            _ => pdw::sweep::StartChoice::Stable,
+        },
+        tol: 1e-12,
+        integrator: None,
     };
-    let m0 = at(start)?;
-    at(stop)?;
+    let m0 = plan.start_model().map_err(err)?;
     let ds = m0.walker.section_dim();
     let result = interruptible(py, || -> PyResult<pdw_limit::Sweep> {
-        let (found, failed, n) = find_gaits(&m0, None, 1e-12)?;
-        // The CLI's choice: the first unstable gait, or the stable one (else the first found).
-        let s = match gait {
-            "unstable" => found.iter().find(|f| !f.fp.stable),
-            _ => found.iter().find(|f| f.fp.stable).or(found.first()),
-        };
+        let guesses = pdw::gaits::guesses(&m0, None, "guess").map_err(err)?;
+        let (s, failed) = pdw::sweep::start_gait(&plan, &m0, &guesses).map_err(err)?;
         let Some(s) = s else {
-            return Err(no_gait_error(&m0, gait, n, &failed));
+            return Err(no_gait_error(&m0, gait, guesses.len(), &failed));
         };
-        let family = |mu: f64| at(mu).map(|m| m.walker);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(err)?;
-        let opts = pdw_limit::grid_options(start, stop, points);
-        pdw_limit::sweep::sweep(
-            &family,
-            parameter,
-            &s.fp.section,
-            (start, stop, points),
-            &opts,
-            &pool,
-            &pdw_limit::sweep::Silent,
-        )
-        .map_err(err)
+        pdw::sweep::continuation(&plan, &s, &pool, &pdw_limit::sweep::Silent).map_err(err)
     })?;
     for w in &result.warnings {
         let msg = std::ffi::CString::new(w.as_str()).map_err(err)?;

@@ -1,6 +1,7 @@
 //! Command-line definitions (clap derive). The contract is docs/cli.md.
 
 use clap::{Args, Parser, Subcommand};
+use pdw_limit::design::Objective;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -102,14 +103,14 @@ pub struct FixedpointArgs {
     #[command(flatten)]
     pub integrator: IntegratorOpts,
     /// Which gaits to report: stable, unstable or all.
-    #[arg(long, default_value = "all")]
+    #[arg(long, default_value = "all", value_parser = parse_gait)]
     pub gait: String,
     /// Initial guess in section coordinates, comma separated.
     #[arg(long, allow_hyphen_values = true)]
     pub guess: Option<String>,
     /// Tolerance on the fixed-point residual ‖P(x) − x‖, relative to the gait's scale
     /// (max |x|, at most 1); between 1e-15 and 1e-3.
-    #[arg(long, default_value_t = 1e-12)]
+    #[arg(long, default_value_t = 1e-12, value_parser = parse_tol)]
     pub tol: f64,
     /// Print one JSON object instead of a table.
     #[arg(long)]
@@ -117,7 +118,7 @@ pub struct FixedpointArgs {
     /// Period K of the orbits sought, in strides (1..=64): fixed points of the K-stride map
     /// P^K, found by Newton from the guesses, from where the map takes them after a few hundred
     /// strides, and from the period-doubling predictor at the period-one gaits.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = parse_period)]
     pub period: usize,
     /// Continue the gait in a parameter: NAME=A:B:N (e.g. slope=0.001:0.019:400). The output
     /// holds exactly N points per branch, at the N evenly spaced values A, A + (B−A)/(N−1), …, B
@@ -140,12 +141,12 @@ pub struct FixedpointArgs {
     // ---- sweep output (with --sweep; --json then prints the sweep as one JSON object)
     /// With --sweep: also write the branches as CSV, one row per orbit point of every branch
     /// point (columns: docs/cli.md, "Sweep output and basin stability").
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", requires = "sweep")]
     pub csv: Option<PathBuf>,
     /// With --sweep: worker threads (rayon pool) for the points on the output grid, their
     /// measurements and the orbit diagram (with --follow: the region map); results are
     /// identical for any count. Default 2.
-    #[arg(long, value_parser = crate::args::parse_threads)]
+    #[arg(long, value_parser = crate::args::parse_threads, requires = "sweep")]
     pub threads: Option<usize>,
     /// With --sweep (or --follow): no progress bar.
     #[arg(long)]
@@ -163,7 +164,7 @@ pub struct FixedpointArgs {
     pub free: Option<String>,
     /// Cells of the --follow region map drawn under the curve in --png, NXxNY (columns along
     /// the --sweep parameter, rows along --free).
-    #[arg(long, value_name = "NXxNY")]
+    #[arg(long, value_name = "NXxNY", requires = "png")]
     pub map_grid: Option<String>,
 }
 
@@ -314,10 +315,10 @@ pub struct DesignArgs {
     pub free: Vec<String>,
     /// What a feasible design is scored by: basin (fraction of a box of section states around
     /// the gait that reaches it; larger is better) or margin (largest |multiplier|; smaller).
-    #[arg(long, default_value = "basin")]
-    pub objective: String,
+    #[arg(long, default_value = "basin", value_parser = parse_objective)]
+    pub objective: Objective,
     /// Designs evaluated in all (a rerun on the same --out counts the stored ones).
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = parse_budget)]
     pub budget: usize,
     /// Seed of the initial random designs (--init).
     #[arg(long, default_value_t = 0)]
@@ -327,23 +328,23 @@ pub struct DesignArgs {
     #[arg(long, default_value_t = 0)]
     pub init: usize,
     /// Largest friction coefficient the ground supplies.
-    #[arg(long, default_value_t = 0.6)]
+    #[arg(long, default_value_t = 0.6, value_parser = parse_mu)]
     pub mu: f64,
     /// Smallest knee-lock torque (N m) a passive knee stop must be left with along the stride.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = parse_knee_margin)]
     pub knee_margin: f64,
     /// Smallest margin every validity criterion must keep, relative to its natural scale
     /// (forces / m g, torques / m g l, clearance / l, impulses / m sqrt(g l)); 0 = sign tests.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = parse_min_margin)]
     pub min_margin: f64,
     /// Basin cells per side (objective basin).
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, default_value_t = 15, value_parser = parse_basin_grid)]
     pub basin_grid: usize,
     /// Half widths of the basin box around the gait: DSTANCE,DSTANCE_RATE (rad, rad/s).
-    #[arg(long, default_value = "0.02,0.08")]
-    pub basin_box: String,
+    #[arg(long, default_value = "0.02,0.08", value_parser = parse_basin_box)]
+    pub basin_box: [f64; 2],
     /// Stride budget per basin cell.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 40, value_parser = parse_max_strides)]
     pub max_strides: u16,
     /// HDF5 file of every evaluated design (a rerun with the same settings continues it).
     #[arg(long, default_value = "design.h5")]
@@ -360,4 +361,131 @@ pub struct DesignArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+// ---- value checks clap runs while parsing (a bad value exits with code 2 before anything runs;
+// clap's message wraps the text here, which names the flag and the value)
+
+/// Smallest `fixedpoint --tol`: below it the residual is integrator round-off.
+pub const MIN_TOL: f64 = 1e-15;
+/// Largest `fixedpoint --tol`: a looser relative tolerance accepts a preset guess as the gait
+/// after zero iterations (the presets are within ~1e-2 of the gaits).
+pub const MAX_TOL: f64 = 1e-3;
+
+fn number(s: &str) -> Result<f64, String> {
+    s.parse::<f64>().map_err(|e| e.to_string())
+}
+
+/// An integer in `lo..=hi`; `what` follows the value in the message (e.g. `designs`).
+fn integer_in(s: &str, flag: &str, what: &str, (lo, hi): (i64, i64)) -> Result<i64, String> {
+    let n = s.parse::<i64>().map_err(|e| e.to_string())?;
+    if (lo..=hi).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("{flag}: {n}{what} is outside {lo}..={hi}"))
+    }
+}
+
+/// `fixedpoint --tol`: within [`MIN_TOL`, `MAX_TOL`].
+fn parse_tol(s: &str) -> Result<f64, String> {
+    let t = number(s)?;
+    if (MIN_TOL..=MAX_TOL).contains(&t) {
+        Ok(t)
+    } else {
+        Err(format!(
+            "--tol: {t} is outside [{MIN_TOL:e}, {MAX_TOL:e}]; the residual tolerance is relative \
+             to the gait's scale, and a looser one would accept the initial guess as a gait"
+        ))
+    }
+}
+
+/// `fixedpoint --gait`: stable, unstable or all.
+fn parse_gait(s: &str) -> Result<String, String> {
+    if matches!(s, "stable" | "unstable" | "all") {
+        Ok(s.to_string())
+    } else {
+        Err(format!("--gait: '{s}' is not one of stable, unstable, all"))
+    }
+}
+
+/// `fixedpoint --period`: 1 to 64 strides.
+fn parse_period(s: &str) -> Result<usize, String> {
+    let k = s.parse::<usize>().map_err(|e| e.to_string())?;
+    if (1..=64).contains(&k) {
+        Ok(k)
+    } else {
+        Err(format!("--period: {k} must be between 1 and 64 strides"))
+    }
+}
+
+/// `design --objective`: basin or margin.
+fn parse_objective(s: &str) -> Result<Objective, String> {
+    match s {
+        "basin" => Ok(Objective::Basin),
+        "margin" => Ok(Objective::Margin),
+        o => Err(format!("--objective: '{o}' is not one of basin, margin")),
+    }
+}
+
+/// `design --mu`: a finite friction coefficient > 0.
+fn parse_mu(s: &str) -> Result<f64, String> {
+    let mu = number(s)?;
+    if mu.is_finite() && mu > 0.0 {
+        Ok(mu)
+    } else {
+        Err(format!(
+            "--mu: {mu} is not a friction coefficient; give a finite value > 0 (e.g. 0.6)"
+        ))
+    }
+}
+
+/// `design --knee-margin`: a finite torque ≥ 0.
+fn parse_knee_margin(s: &str) -> Result<f64, String> {
+    let k = number(s)?;
+    if k.is_finite() && k >= 0.0 {
+        Ok(k)
+    } else {
+        Err(format!(
+            "--knee-margin: {k} N m is not allowed; give a finite torque >= 0"
+        ))
+    }
+}
+
+/// `design --min-margin`: a finite relative margin ≥ 0.
+fn parse_min_margin(s: &str) -> Result<f64, String> {
+    let m = number(s)?;
+    if m.is_finite() && m >= 0.0 {
+        Ok(m)
+    } else {
+        Err(format!(
+            "--min-margin: {m} is not allowed; give a finite relative margin >= 0 (e.g. 0.05)"
+        ))
+    }
+}
+
+/// `design --budget`: 1 to 100000 designs.
+fn parse_budget(s: &str) -> Result<usize, String> {
+    integer_in(s, "--budget", " designs", (1, 100_000)).map(|n| n as usize)
+}
+
+/// `design --basin-grid`: 1 to 200 cells per side.
+fn parse_basin_grid(s: &str) -> Result<usize, String> {
+    integer_in(s, "--basin-grid", " cells per side", (1, 200)).map(|n| n as usize)
+}
+
+/// `design --max-strides`: 1 to 10000 strides per basin cell.
+fn parse_max_strides(s: &str) -> Result<u16, String> {
+    integer_in(s, "--max-strides", "", (1, 10_000)).map(|n| n as u16)
+}
+
+/// `design --basin-box`: two positive half widths `DSTANCE,DSTANCE_RATE`.
+fn parse_basin_box(s: &str) -> Result<[f64; 2], String> {
+    let v = crate::args::parse_guess(s).map_err(|e| e.to_string())?;
+    match v[..] {
+        [a, b] if [a, b].iter().all(|x| x.is_finite() && *x > 0.0) => Ok([a, b]),
+        _ => Err(format!(
+            "--basin-box: '{s}' must be two positive half widths DSTANCE,DSTANCE_RATE (e.g. \
+             0.05,0.2)"
+        )),
+    }
 }

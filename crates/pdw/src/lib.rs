@@ -1,16 +1,21 @@
 //! The library under both front ends (the `pdw-sweep` CLI and the Python package): what a run
 //! needs before and around the analysis — building a model by name or spec file with its
 //! parameter overrides ([`model`]), reading the values people type ([`input`]), choosing the
-//! integrator ([`integrator`]), finding the gaits to start from ([`gaits`]) and setting up a basin
-//! of attraction ([`basin`]). A front end
-//! parses its own syntax into these types and prints or returns the results; it builds no model,
-//! checks no range and names nothing on its own.
+//! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]) — and the
+//! computations of the runs themselves, as typed plans and their steps: a basin of attraction
+//! ([`basin`]), a continuation over a parameter grid ([`sweep`]), a bifurcation curve in two
+//! parameters ([`follow`]), a design search ([`design`]). A front end parses its own syntax into
+//! these types and prints, writes or returns the results; it builds no model, checks no range and
+//! names nothing on its own.
 
 pub mod basin;
+pub mod design;
+pub mod follow;
 pub mod gaits;
 pub mod input;
 pub mod integrator;
 pub mod model;
+pub mod sweep;
 
 pub use input::InputError;
 pub use integrator::{integrator, integrator_json, integrator_text, IntegratorChoice};

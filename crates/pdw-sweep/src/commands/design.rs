@@ -1,18 +1,24 @@
 //! `pdw-sweep design`: search free design parameters of a walker for the most robust (or most
 //! stable) passive gait that is physically valid along the whole stride
 //! ([`pdw_limit::design`]); every evaluated design in an HDF5 file that a rerun continues.
+//!
+//! [`run`] reads as the command does: the free parameters checked against the model
+//! ([`parse`]; the other values are checked by clap), the outputs claimed, the plan made
+//! ([`plan`]), a stored search with the same settings read back ([`stored`]), the search run
+//! with every design written as it comes ([`search`], the library's [`pdw::design`]), the
+//! picture drawn ([`plot`]) and the best design printed ([`report`]).
 
-use super::build_with;
-use super::output::{Format, Output};
+use super::output::{Claim, Format, Output};
+use super::{build_with, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::DesignArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pdw::design::DesignPlan;
 use pdw_limit::basin::BasinOptions;
-use pdw_limit::design::{
-    evaluate_design, search, status, DesignEval, DesignOptions, DesignSpace, Objective,
-};
+use pdw_limit::design::{status, DesignEval, DesignOptions, DesignSpace};
 use pdw_store::{read_design, read_design_commands, write_design_annotated, DesignData};
 use std::io::IsTerminal;
+use std::path::Path;
 use std::process::ExitCode;
 
 /// Per-design measures stored as columns, in this order.
@@ -82,68 +88,27 @@ fn from_data(d: &DesignData) -> Vec<DesignEval> {
         .collect()
 }
 
+/// A stored search continued: its designs and the command lines that made them.
+struct Stored {
+    history: Vec<DesignEval>,
+    commands: Vec<String>,
+}
+
 pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
-    // ---- arguments, checked before anything is computed
-    let objective = match a.objective.as_str() {
-        "basin" => Objective::Basin,
-        "margin" => Objective::Margin,
-        o => {
-            return Err(
-                InputError(format!("--objective: '{o}' is not one of basin, margin")).into(),
-            )
-        }
-    };
-    if !(a.mu.is_finite() && a.mu > 0.0) {
-        return Err(InputError(format!(
-            "--mu: {} is not a friction coefficient; give a finite value > 0 (e.g. 0.6)",
-            a.mu
-        ))
-        .into());
-    }
-    if !(a.knee_margin.is_finite() && a.knee_margin >= 0.0) {
-        return Err(InputError(format!(
-            "--knee-margin: {} N m is not allowed; give a finite torque >= 0",
-            a.knee_margin
-        ))
-        .into());
-    }
-    if !(a.min_margin.is_finite() && a.min_margin >= 0.0) {
-        return Err(InputError(format!(
-            "--min-margin: {} is not allowed; give a finite relative margin >= 0 (e.g. 0.05)",
-            a.min_margin
-        ))
-        .into());
-    }
-    if !(1..=100_000).contains(&a.budget) {
-        return Err(InputError(format!(
-            "--budget: {} designs is outside 1..=100000",
-            a.budget
-        ))
-        .into());
-    }
-    if !(1..=200).contains(&a.basin_grid) {
-        return Err(InputError(format!(
-            "--basin-grid: {} cells per side is outside 1..=200",
-            a.basin_grid
-        ))
-        .into());
-    }
-    let bx = args::parse_guess(&a.basin_box)?;
-    if bx.len() != 2 || bx.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-        return Err(InputError(format!(
-            "--basin-box: '{}' must be two positive half widths DSTANCE,DSTANCE_RATE (e.g. \
-             0.05,0.2)",
-            a.basin_box
-        ))
-        .into());
-    }
-    if a.max_strides == 0 || a.max_strides > 10_000 {
-        return Err(InputError(format!(
-            "--max-strides: {} is outside 1..=10000",
-            a.max_strides
-        ))
-        .into());
-    }
+    let (base, space) = parse(a)?;
+    let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
+    let mut claim = claim(a, &png)?;
+    let plan = plan(a, &base, space)?;
+    let settings = pdw::design::settings(&plan, &base);
+    let stored = stored(a, &claim, &settings)?;
+    let hist = search(a, &plan, &base, &settings, stored, &mut claim)?;
+    plot(&png, &base, &plan, &hist)?;
+    report(a, &png, &plan, &hist.designs, hist.stored)
+}
+
+/// The model (a chain walker) and the free parameters: each a parameter of the model, given
+/// once, not also set, both bounds making a model.
+fn parse(a: &DesignArgs) -> anyhow::Result<(BuiltModel, DesignSpace)> {
     let base = build_with(&a.model, &[])?;
     if base.info.spec().is_none() {
         return Err(InputError(format!(
@@ -154,56 +119,73 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    let mut names = Vec::new();
-    let (mut lo, mut hi) = (Vec::new(), Vec::new());
     let set_names: Vec<String> = super::overrides(&a.model)?
         .into_iter()
         .map(|p| p.0)
         .collect();
+    let mut space = DesignSpace {
+        names: Vec::new(),
+        lo: Vec::new(),
+        hi: Vec::new(),
+    };
     for f in &a.free {
-        let r = args::parse_axis(f, "--free")?;
-        if !base.params.iter().any(|p| p.0 == r.name) {
-            return Err(InputError(format!(
-                "--free: '{}' is not a parameter of model '{}' (parameters: {})",
-                r.name,
-                base.info.name,
-                base.params
-                    .iter()
-                    .map(|p| p.0.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-            .into());
-        }
-        if names.contains(&r.name) {
-            return Err(InputError(format!("--free: '{}' is given twice", r.name)).into());
-        }
-        if set_names.contains(&r.name) {
-            return Err(InputError(format!(
-                "--free: '{}' is also fixed by --set/--slope; a parameter is either free or set",
-                r.name
-            ))
-            .into());
-        }
-        // both bounds must make a model (checked once, here)
-        for v in [r.lo, r.hi] {
-            build_with(&a.model, &[(r.name.clone(), v)]).map_err(|e| {
-                InputError(format!(
-                    "--free {}: the bound {v} does not make a model: {e}",
-                    f
-                ))
-            })?;
-        }
-        names.push(r.name);
-        lo.push(r.lo);
-        hi.push(r.hi);
+        let r = free_parameter(a, &base, &space.names, &set_names, f)?;
+        space.names.push(r.name);
+        space.lo.push(r.lo);
+        space.hi.push(r.hi);
     }
-    if names.is_empty() {
+    if space.names.is_empty() {
         return Err(InputError("--free: give at least one NAME=LO:HI".into()).into());
     }
-    let png = a.png.clone().unwrap_or_else(|| a.out.with_extension("png"));
-    // An existing --out continues its search (unless --force); the picture beside it is that
-    // search's and is redrawn. A picture without its search is replaced only with --force.
+    Ok((base, space))
+}
+
+/// One `--free NAME=LO:HI`, checked against the model and the parameters before it.
+fn free_parameter(
+    a: &DesignArgs,
+    base: &BuiltModel,
+    names: &[String],
+    set_names: &[String],
+    f: &str,
+) -> Result<args::AxisRange, InputError> {
+    let r = args::parse_axis(f, "--free")?;
+    if !base.params.iter().any(|p| p.0 == r.name) {
+        return Err(InputError(format!(
+            "--free: '{}' is not a parameter of model '{}' (parameters: {})",
+            r.name,
+            base.info.name,
+            base.params
+                .iter()
+                .map(|p| p.0.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    if names.contains(&r.name) {
+        return Err(InputError(format!("--free: '{}' is given twice", r.name)));
+    }
+    if set_names.contains(&r.name) {
+        return Err(InputError(format!(
+            "--free: '{}' is also fixed by --set/--slope; a parameter is either free or set",
+            r.name
+        )));
+    }
+    // both bounds must make a model (checked once, here)
+    for v in [r.lo, r.hi] {
+        build_with(&a.model, &[(r.name.clone(), v)]).map_err(|e| {
+            InputError(format!(
+                "--free {}: the bound {v} does not make a model: {e}",
+                f
+            ))
+        })?;
+    }
+    Ok(r)
+}
+
+/// Claims `--out` (an existing one continues its search unless `--force`) and the picture
+/// beside it (that search's, redrawn; a picture without its search is replaced only with
+/// `--force`).
+fn claim(a: &DesignArgs, png: &Path) -> Result<Claim, InputError> {
     let continuing = a.out.is_file() && !a.force;
     let outputs = [
         Output {
@@ -214,7 +196,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         },
         Output {
             flag: "--png",
-            path: &png,
+            path: png,
             format: Format::Png,
             may_exist: continuing,
         },
@@ -222,67 +204,76 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
     let inputs: Vec<_> = super::output::model_input(&a.model.model)
         .into_iter()
         .collect();
-    let mut claim = super::output::claim(&outputs, &inputs, a.force)?;
-    let basin = BasinOptions {
-        max_strides: a.max_strides,
-        ..BasinOptions::default()
-    };
-    let opts = DesignOptions {
-        objective,
+    super::output::claim(&outputs, &inputs, a.force)
+}
+
+/// The plan: the model, the free parameters (starting from the model's own values) and the
+/// search's options from the flags.
+fn plan(a: &DesignArgs, base: &BuiltModel, space: DesignSpace) -> anyhow::Result<DesignPlan> {
+    let start = space
+        .names
+        .iter()
+        .map(|n| {
+            base.params
+                .iter()
+                .find(|p| p.0 == *n)
+                .map_or(f64::NAN, |p| p.1)
+        })
+        .collect();
+    let options = DesignOptions {
+        objective: a.objective,
         mu: a.mu,
         knee_margin: a.knee_margin,
         min_margin: a.min_margin,
         budget: a.budget,
         seed: a.seed,
-        start: Some(
-            names
-                .iter()
-                .map(|n| {
-                    base.params
-                        .iter()
-                        .find(|p| p.0 == *n)
-                        .map_or(f64::NAN, |p| p.1)
-                })
-                .collect(),
-        ),
+        start: Some(start),
         init: a.init,
         basin_grid: a.basin_grid,
-        basin_box: [bx[0], bx[1]],
-        basin,
+        basin_box: a.basin_box,
+        basin: BasinOptions {
+            max_strides: a.max_strides,
+            ..BasinOptions::default()
+        },
         newton_tol: 1e-10,
     };
-    let settings = serde_json::json!({
-        "model": a.model.model,
-        "fixed": base.params_json(),
-        "free": names.iter().zip(&lo).zip(&hi).map(|((n, l), h)| serde_json::json!([n, l, h])).collect::<Vec<_>>(),
-        "objective": objective.name(),
-        "mu": a.mu,
-        "knee_margin": a.knee_margin,
-        "min_margin": a.min_margin,
-        "seed": a.seed,
-        "init": a.init,
-        "basin_grid": a.basin_grid,
-        "basin_box": bx,
-        "max_strides": a.max_strides,
-        "newton_tol": opts.newton_tol,
-        "model_resolved": base.walker.fingerprint(),
+    Ok(DesignPlan {
+        model: super::choice(&a.model),
+        space,
+        options,
     })
-    .to_string();
+}
 
-    // ---- what the file says besides the designs: units of every dataset, provenance
-    let mut options: serde_json::Value = serde_json::from_str(&settings)?;
-    options["threads"] = serde_json::json!(a.threads);
-    let prov = super::provenance(options);
+/// The designs of an existing `--out` (unless `--force`), refused when its settings differ.
+fn stored(a: &DesignArgs, claim: &Claim, settings: &str) -> anyhow::Result<Stored> {
+    if !claim.existed(&a.out) || a.force {
+        return Ok(Stored {
+            history: Vec::new(),
+            commands: Vec::new(),
+        });
+    }
+    let d = read_design(&a.out, &COLUMNS)?;
+    if d.settings != settings {
+        return Err(InputError(settings_differ(&a.out, &d.settings, settings)).into());
+    }
+    Ok(Stored {
+        history: from_data(&d),
+        commands: read_design_commands(&a.out)?,
+    })
+}
+
+/// The units of the design file's datasets, by name.
+fn design_units(base: &BuiltModel, names: &[String]) -> impl Fn(&str) -> Option<String> {
     let param_units = super::units_list(
         &names
             .iter()
-            .map(|n| super::param_unit(&base, n))
+            .map(|n| super::param_unit(base, n))
             .collect::<Vec<_>>(),
     );
-    let section_units = super::units_list(&super::section_units(&base));
-    let mu = super::model_units(&base);
-    let (tu, lu) = (super::time_unit(&base), super::length_unit(&base));
-    let units = move |ds: &str| -> Option<String> {
+    let section_units = super::units_list(&super::section_units(base));
+    let mu = super::model_units(base);
+    let (tu, lu) = (super::time_unit(base), super::length_unit(base));
+    move |ds: &str| -> Option<String> {
         Some(match ds {
             "params" => param_units.clone(),
             "section" => section_units.clone(),
@@ -293,38 +284,79 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
             // codes, fractions, multiplier moduli, friction coefficients, costs, the reasons' text
             _ => "1".into(),
         })
-    };
+    }
+}
+
+/// Every design of a search and how many of them were stored before this run.
+struct Searched {
+    designs: Vec<DesignEval>,
+    stored: usize,
+}
+
+/// Runs the search ([`pdw::design::search`]) with a progress bar, writing the whole file
+/// (units, provenance, the earlier runs' commands) after every design, and once more at the
+/// end (a run that replayed everything, e.g. a budget already met, still leaves a file).
+fn search(
+    a: &DesignArgs,
+    plan: &DesignPlan,
+    base: &BuiltModel,
+    settings: &str,
+    stored: Stored,
+    claim: &mut Claim,
+) -> anyhow::Result<Searched> {
+    let mut options: serde_json::Value = serde_json::from_str(settings)?;
+    options["threads"] = serde_json::json!(a.threads);
+    let prov = super::provenance(options);
+    let units = design_units(base, &plan.space.names);
     let ann = pdw_store::Annotations {
         provenance: Some(&prov),
         units: &units,
         slice: None,
         scales: &[],
     };
-    let mut earlier_commands = Vec::new();
-
-    // ---- a stored run with the same settings continues
-    let mut history = Vec::new();
-    if claim.existed(&a.out) && !a.force {
-        let d = read_design(&a.out, &COLUMNS)?;
-        if d.settings != settings {
-            return Err(InputError(settings_differ(&a.out, &d.settings, &settings)).into());
-        }
-        history = from_data(&d);
-        earlier_commands = read_design_commands(&a.out)?;
-    }
-    let write_design = |path: &std::path::Path, d: &DesignData| {
-        write_design_annotated(path, d, Some(&ann), &earlier_commands)
+    let names = &plan.space.names;
+    let write_design = |hist: &[DesignEval]| {
+        let d = to_data(settings, names, hist);
+        write_design_annotated(&a.out, &d, Some(&ann), &stored.commands)
     };
-    let stored = history.len();
-    let space = DesignSpace {
-        names: names.clone(),
-        lo,
-        hi,
-    };
+    let n_stored = stored.history.len();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads)
         .build()?;
-    let guesses = pdw_limit::gaits::model_guesses(base.walker.as_ref());
+    let pb = progress_bar(a, n_stored);
+    let mut all = stored.history.clone();
+    let mut best = all.iter().map(|e| e.cost).fold(f64::INFINITY, f64::min);
+    let mut write_err: Option<anyhow::Error> = None;
+    let mut on_eval = |ev: &DesignEval| {
+        all.push(ev.clone());
+        if write_err.is_none() {
+            // each write replaces the file: the lock moves to the new one
+            if let Err(e) = write_design(&all) {
+                write_err = Some(e.into());
+            } else if let Err(e) = claim.renew(&a.out, "--out") {
+                write_err = Some(e.into());
+            }
+        }
+        best = best.min(ev.cost);
+        pb.set_message(format!("best cost {best:.4}"));
+        pb.inc(1);
+    };
+    let hist = pdw::design::search(plan, base, stored.history.clone(), &pool, &mut on_eval)?;
+    pb.finish_and_clear();
+    if let Some(e) = write_err {
+        return Err(e);
+    }
+    write_design(&hist)?;
+    claim.renew(&a.out, "--out")?;
+    Ok(Searched {
+        designs: hist,
+        stored: n_stored,
+    })
+}
+
+/// The search's progress bar (hidden with `--quiet` or when stderr is not a terminal), at the
+/// stored designs; a continued search says so.
+fn progress_bar(a: &DesignArgs, stored: usize) -> ProgressBar {
     let pb = if a.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::with_draw_target(Some(a.budget as u64), ProgressDrawTarget::hidden())
     } else {
@@ -341,39 +373,12 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
             a.out.display()
         ));
     }
-    let mut all = history.clone();
-    let mut best = all.iter().map(|e| e.cost).fold(f64::INFINITY, f64::min);
-    let mut write_err: Option<anyhow::Error> = None;
-    let mut eval = |p: &[f64], g: &[(String, Vec<f64>)]| -> DesignEval {
-        let set: Vec<(String, f64)> = names.iter().cloned().zip(p.iter().copied()).collect();
-        let ev = match build_with(&a.model, &set) {
-            Ok(m) => evaluate_design(p, m.walker.as_ref(), g, &opts, &pool),
-            Err(e) => DesignEval::bad_model(p, e.0),
-        };
-        all.push(ev.clone());
-        if write_err.is_none() {
-            // each write replaces the file: the lock moves to the new one
-            if let Err(e) = write_design(&a.out, &to_data(&settings, &names, &all)) {
-                write_err = Some(e.into());
-            } else if let Err(e) = claim.renew(&a.out, "--out") {
-                write_err = Some(e.into());
-            }
-        }
-        best = best.min(ev.cost);
-        pb.set_message(format!("best cost {best:.4}"));
-        pb.inc(1);
-        ev
-    };
-    let hist = search(&space, &opts, &guesses, history, &mut eval)?;
-    pb.finish_and_clear();
-    if let Some(e) = write_err {
-        return Err(e);
-    }
-    // a run that replayed everything still leaves a file (e.g. a budget already met)
-    write_design(&a.out, &to_data(&settings, &names, &hist))?;
-    claim.renew(&a.out, "--out")?;
+    pb
+}
 
-    // ---- the search's picture: the cost of every design and the best so far
+/// The search's picture: the cost of every design and the best so far.
+fn plot(png: &Path, base: &BuiltModel, plan: &DesignPlan, s: &Searched) -> anyhow::Result<()> {
+    let hist = &s.designs;
     let mut run_best = f64::INFINITY;
     let each: Vec<(f64, f64)> = hist
         .iter()
@@ -389,11 +394,11 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         })
         .collect();
     pdw_store::plot_lines(
-        &png,
+        png,
         &format!(
             "design search, {} ({}): cost < 1 feasible; 1-5 invalid; 5-9 unstable; 10 no gait",
             base.info.name,
-            objective.name()
+            plan.options.objective.name()
         ),
         "design evaluated",
         "cost",
@@ -404,8 +409,18 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
         false,
         false,
     )?;
+    Ok(())
+}
 
-    // ---- report
+/// The designs by status and the best one, with the command line that reproduces its gait;
+/// exit 1 when the best design is not feasible.
+fn report(
+    a: &DesignArgs,
+    png: &Path,
+    plan: &DesignPlan,
+    hist: &[DesignEval],
+    stored: usize,
+) -> anyhow::Result<ExitCode> {
     let count = |s: u8| hist.iter().filter(|e| e.status == s).count();
     crate::outln!(
         "{} designs ({} new): {} feasible, {} invalid, {} unstable, {} without a gait, {} not a model",
@@ -420,7 +435,9 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
     let Some(b) = hist.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)) else {
         return Ok(ExitCode::SUCCESS);
     };
-    let sets: Vec<String> = names
+    let sets: Vec<String> = plan
+        .space
+        .names
         .iter()
         .zip(&b.params)
         .map(|(n, v)| format!("--set {n}={v}"))
@@ -470,7 +487,7 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
 
 /// Why a stored design search cannot be continued: the resolved model's first differing line
 /// (a spec edited under the same parameter values), else both settings without the model.
-fn settings_differ(out: &std::path::Path, stored: &str, now: &str) -> String {
+fn settings_differ(out: &Path, stored: &str, now: &str) -> String {
     let parse = |t: &str| serde_json::from_str::<serde_json::Value>(t).unwrap_or_default();
     let (mut s, mut n) = (parse(stored), parse(now));
     let model = |v: &serde_json::Value| {

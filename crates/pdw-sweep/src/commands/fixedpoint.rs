@@ -10,12 +10,6 @@ use std::process::ExitCode;
 pub use pdw_limit::gaits::{Found, FoundOrbit};
 use pdw_limit::Validity;
 
-/// Smallest `--tol`: below it the residual is integrator round-off.
-pub const MIN_TOL: f64 = 1e-15;
-/// Largest `--tol`: a looser relative tolerance accepts a preset guess as the gait after zero
-/// iterations (the presets are within ~1e-2 of the gaits).
-pub const MAX_TOL: f64 = 1e-3;
-
 pub use pdw::gaits::{search, search_with};
 
 /// Constraint loads, swing-foot clearance and impacts along one step of a gait, located on
@@ -121,28 +115,6 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     if a.follow.is_some() || a.free.is_some() || a.map_grid.is_some() {
         return super::follow::run(a);
     }
-    if !(MIN_TOL..=MAX_TOL).contains(&a.tol) {
-        return Err(InputError(format!(
-            "--tol: {} is outside [{MIN_TOL:e}, {MAX_TOL:e}]; the residual tolerance is relative \
-             to the gait's scale, and a looser one would accept the initial guess as a gait",
-            a.tol
-        ))
-        .into());
-    }
-    let which = a.gait.as_str();
-    if !matches!(which, "stable" | "unstable" | "all") {
-        return Err(InputError(format!(
-            "--gait: '{which}' is not one of stable, unstable, all"
-        ))
-        .into());
-    }
-    if !(1..=64).contains(&a.period) {
-        return Err(InputError(format!(
-            "--period: {} must be between 1 and 64 strides",
-            a.period
-        ))
-        .into());
-    }
     let integrator = super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol))?;
     if a.sweep.is_some() {
         if a.period != 1 {
@@ -155,124 +127,160 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         }
         return super::sweep::run(a);
     }
-    // Not silently ignored: these shape a sweep's output only.
-    for (given, flag) in [
-        (a.csv.is_some(), "--csv"),
-        (a.png.is_some(), "--png"),
-        (a.threads.is_some(), "--threads"),
-    ] {
-        if given {
-            return Err(InputError(format!(
-                "{flag}: only a --sweep NAME=A:B:N uses it (add --sweep, or drop {flag})"
-            ))
-            .into());
-        }
+    // Not silently ignored: it draws a sweep or a curve only (--csv and --threads are refused
+    // by clap without --sweep).
+    if a.png.is_some() {
+        return Err(InputError(
+            "--png: only a --sweep NAME=A:B:N uses it (add --sweep, or drop --png)".into(),
+        )
+        .into());
     }
     let m = build_model(&a.model)?;
     let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
     let guesses = pdw::gaits::guesses(&m, user, "--guess")?;
     if a.period > 1 {
-        return run_period_k(a, &m, &guesses, which);
+        return run_period_k(a, &m, &guesses);
     }
-    let (found, failed) = search_with(&m, &guesses, a.tol, &integrator)?;
-    // A gait found on a loose integrator is checked on the accurate stride map, as `basin`
-    // checks its cells' integrator: the Newton tolerance means nothing beyond the integrator's.
-    let o = &a.integrator;
-    if o.integrator.is_some() || o.rtol.is_some() || o.atol.is_some() || o.rk4_step.is_some() {
-        let accurate = pdw_limit::gaits::default_integrator(a.tol);
-        for f in &found {
-            let s = &f.fp.section;
-            let scale = s.iter().fold(0.0, |n: f64, x| n.max(x.abs())).min(1.0);
-            let r = super::stride_residual(&m, accurate, s)?;
-            if r.is_nan() || r > a.tol * scale {
-                eprintln!(
-                    "warning: with {} the {} gait (from {}) is a fixed point of the accurate \
-                     stride map ({}) only to {r:.2e}, more than --tol {:e} allows: its \
-                     multipliers and validity are those of the integrator's error, not of the \
-                     walker; use a tighter --rtol/--atol or a smaller --rk4-step",
-                    super::integrator_text(&integrator),
-                    if f.fp.stable { "stable" } else { "unstable" },
-                    f.label,
-                    super::integrator_text(&accurate),
-                    a.tol * scale
-                );
-            }
-        }
-    }
+    run_period_one(a, &m, &guesses, &integrator)
+}
+
+/// Period-one gaits: Newton from every guess, the ones `--gait` asks for printed (a table or
+/// JSON); none found is exit 2 with every failed guess and advice.
+fn run_period_one(
+    a: &FixedpointArgs,
+    m: &BuiltModel,
+    guesses: &[(String, Vec<f64>)],
+    integrator: &pdw_hybrid::Options,
+) -> anyhow::Result<ExitCode> {
+    let (found, failed) = search_with(m, guesses, a.tol, integrator)?;
+    warn_inaccurate(a, m, &found, integrator)?;
     let selected: Vec<&Found> = found
         .iter()
-        .filter(|f| match which {
-            "stable" => f.fp.stable,
-            "unstable" => !f.fp.stable,
-            _ => true,
-        })
+        .filter(|f| wanted(&a.gait, f.fp.stable))
         .collect();
-
     if a.json {
-        let fps: Vec<serde_json::Value> = selected
-            .iter()
-            .map(|f| {
-                let fp = &f.fp;
-                serde_json::json!({
-                    "gait": if fp.stable { "stable" } else { "unstable" },
-                    "guess": f.label,
-                    "section": fp.section,
-                    "state_names": m.info.state_names,
-                    "state": fp.state,
-                    "period": fp.metrics.period,
-                    "step_length": fp.metrics.step_length,
-                    "speed": fp.metrics.speed,
-                    "multipliers": fp.multipliers.iter().map(|l| serde_json::json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
-                    "stable": fp.stable,
-                    "residual": fp.residual,
-                    "iterations": fp.iterations,
-                    "validity": validity(&m, fp).map(|v| validity_json(&v)),
-                    "period_k": 1,
-                    "orbit": [&fp.section],
-                })
-            })
-            .collect();
-        let out = serde_json::json!({
-            "model": m.info.name,
-            "slope": m.slope(),
-            "params": m.params_json(),
-            "section_names": m.info.section_names,
-            "section_units": super::section_units(&m),
-            "time_unit": super::time_unit(&m),
-            "integrator": super::integrator_json(&integrator),
-            "fixed_points": fps,
-        });
-        crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+        let j = gaits_json(m, &selected, integrator);
+        crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     } else {
         crate::outln!(
             "model {}  slope {} rad ({:.4} deg)  integrator {}",
             m.info.name,
             m.slope(),
             m.slope().to_degrees(),
-            super::integrator_text(&integrator)
+            super::integrator_text(integrator)
         );
         for f in &selected {
-            print_fixed_point(&m, f);
+            print_fixed_point(m, f);
         }
     }
     if selected.is_empty() {
         eprintln!(
             "no {}period-one gait found for model '{}' from {} guess(es)",
-            if which == "all" {
-                String::new()
-            } else {
-                format!("{which} ")
-            },
+            gait_adjective(&a.gait),
             m.info.name,
             guesses.len()
         );
         for (label, g, e) in &failed {
             report_failure(label, g, e);
         }
-        eprintln!("try: {}", advice(&m));
+        eprintln!("try: {}", advice(m));
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Whether `--gait` (stable, unstable or all) reports a gait of this stability.
+fn wanted(which: &str, stable: bool) -> bool {
+    match which {
+        "stable" => stable,
+        "unstable" => !stable,
+        _ => true,
+    }
+}
+
+/// `--gait` as it qualifies "gait" in a message: empty for all, else the word and a space.
+fn gait_adjective(which: &str) -> String {
+    if which == "all" {
+        String::new()
+    } else {
+        format!("{which} ")
+    }
+}
+
+/// A gait found on a loose integrator is checked on the accurate stride map, as `basin`
+/// checks its cells' integrator: the Newton tolerance means nothing beyond the integrator's.
+fn warn_inaccurate(
+    a: &FixedpointArgs,
+    m: &BuiltModel,
+    found: &[Found],
+    integrator: &pdw_hybrid::Options,
+) -> anyhow::Result<()> {
+    let o = &a.integrator;
+    if !(o.integrator.is_some() || o.rtol.is_some() || o.atol.is_some() || o.rk4_step.is_some()) {
+        return Ok(());
+    }
+    let accurate = pdw_limit::gaits::default_integrator(a.tol);
+    for f in found {
+        let s = &f.fp.section;
+        let scale = s.iter().fold(0.0, |n: f64, x| n.max(x.abs())).min(1.0);
+        let r = super::stride_residual(m, accurate, s)?;
+        if r.is_nan() || r > a.tol * scale {
+            eprintln!(
+                "warning: with {} the {} gait (from {}) is a fixed point of the accurate stride \
+                 map ({}) only to {r:.2e}, more than --tol {:e} allows: its multipliers and \
+                 validity are those of the integrator's error, not of the walker; use a tighter \
+                 --rtol/--atol or a smaller --rk4-step",
+                super::integrator_text(integrator),
+                if f.fp.stable { "stable" } else { "unstable" },
+                f.label,
+                super::integrator_text(&accurate),
+                a.tol * scale
+            );
+        }
+    }
+    Ok(())
+}
+
+/// `--json`: the model, its units and integrator, and every gait reported with its metrics,
+/// multipliers and validity.
+fn gaits_json(
+    m: &BuiltModel,
+    selected: &[&Found],
+    integrator: &pdw_hybrid::Options,
+) -> serde_json::Value {
+    let fps: Vec<serde_json::Value> = selected
+        .iter()
+        .map(|f| {
+            let fp = &f.fp;
+            serde_json::json!({
+                "gait": if fp.stable { "stable" } else { "unstable" },
+                "guess": f.label,
+                "section": fp.section,
+                "state_names": m.info.state_names,
+                "state": fp.state,
+                "period": fp.metrics.period,
+                "step_length": fp.metrics.step_length,
+                "speed": fp.metrics.speed,
+                "multipliers": fp.multipliers.iter().map(|l| serde_json::json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
+                "stable": fp.stable,
+                "residual": fp.residual,
+                "iterations": fp.iterations,
+                "validity": validity(m, fp).map(|v| validity_json(&v)),
+                "period_k": 1,
+                "orbit": [&fp.section],
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "model": m.info.name,
+        "slope": m.slope(),
+        "params": m.params_json(),
+        "section_names": m.info.section_names,
+        "section_units": super::section_units(m),
+        "time_unit": super::time_unit(m),
+        "integrator": super::integrator_json(integrator),
+        "fixed_points": fps,
+    })
 }
 
 /// What to try when no gait is found, by model: the rimless wheel rolls only on a slope steep
@@ -375,81 +383,86 @@ fn print_fixed_point(m: &BuiltModel, f: &Found) {
         );
     }
     if let Some(v) = validity(m, fp) {
-        let units = super::model_units(m);
-        crate::outln!(
-            "  validity     {}: normal force ≥ {:.4} {}, friction needed ≤ {:.4}{}",
-            if v.valid() { "ok" } else { "FLAGGED" },
-            v.min_normal_force,
-            units.force,
-            v.max_friction_required,
-            v.min_knee_torque
-                .map(|k| format!(", knee-lock torque ≥ {k:.4} {}", units.torque))
-                .unwrap_or_default()
-        );
-        for (flag, what) in [
-            (
-                v.normal_force_negative,
-                "the stance foot would lift off (normal force < 0)",
-            ),
-            (
-                v.knee_unlocks,
-                "a locked knee would unlock (lock torque < 0)",
-            ),
-            (
-                v.swing_foot_scuffs,
-                "the swing foot goes below the slope where its clearance rule checks it",
-            ),
-            (
-                v.impact_violation,
-                "an impact needs a pulling contact or stop (negative impulse margin)",
-            ),
-        ] {
-            if flag {
-                crate::outln!("    flag: {what}");
-            }
-        }
-        for x in &v.violations {
-            crate::outln!(
-                "    violated: {} < 0 from t = {:.4} to {:.4} {} (worst {:.6})",
-                x.criterion,
-                x.t_start,
-                x.t_end,
-                units.time,
-                x.worst
-            );
-        }
-        if let Some(b) = v.binding() {
-            crate::outln!(
-                "  binding      {} (relative margin {:.4} of {}; raw {:.6})",
-                b.name,
-                b.relative,
-                b.scale_name,
-                b.raw
-            );
-        }
-        if let Some(rule) = v.clearance_rule {
-            let lu = super::length_unit(m);
-            let mut line = format!("  clearance    rule {}", clearance_rule_name(rule));
-            if let Some(c) = v.min_clearance {
-                line += &format!(", min {c:.6} {lu}");
-            }
-            if v.scuff_depth > 0.0 {
-                let name = match rule {
-                    pdw_walkers::ClearanceRule::AfterMidStance => {
-                        "mid-stance scuff (ignored by the convention, Garcia et al. 1998)"
-                    }
-                    pdw_walkers::ClearanceRule::WholeSwing => "below the slope",
-                };
-                line += &format!(", {name}: depth {:.6} {lu}", v.scuff_depth);
-            }
-            crate::outln!("{line}");
-        }
+        print_validity(m, &v);
     }
     crate::outln!(
         "  residual ‖P(x) − x‖∞ = {:.3e} after {} Newton iterations",
         fp.residual,
         fp.iterations
     );
+}
+
+/// The validity block of a gait: flags, violations, the binding criterion, the clearance.
+fn print_validity(m: &BuiltModel, v: &Validity) {
+    let units = super::model_units(m);
+    crate::outln!(
+        "  validity     {}: normal force ≥ {:.4} {}, friction needed ≤ {:.4}{}",
+        if v.valid() { "ok" } else { "FLAGGED" },
+        v.min_normal_force,
+        units.force,
+        v.max_friction_required,
+        v.min_knee_torque
+            .map(|k| format!(", knee-lock torque ≥ {k:.4} {}", units.torque))
+            .unwrap_or_default()
+    );
+    for (flag, what) in [
+        (
+            v.normal_force_negative,
+            "the stance foot would lift off (normal force < 0)",
+        ),
+        (
+            v.knee_unlocks,
+            "a locked knee would unlock (lock torque < 0)",
+        ),
+        (
+            v.swing_foot_scuffs,
+            "the swing foot goes below the slope where its clearance rule checks it",
+        ),
+        (
+            v.impact_violation,
+            "an impact needs a pulling contact or stop (negative impulse margin)",
+        ),
+    ] {
+        if flag {
+            crate::outln!("    flag: {what}");
+        }
+    }
+    for x in &v.violations {
+        crate::outln!(
+            "    violated: {} < 0 from t = {:.4} to {:.4} {} (worst {:.6})",
+            x.criterion,
+            x.t_start,
+            x.t_end,
+            units.time,
+            x.worst
+        );
+    }
+    if let Some(b) = v.binding() {
+        crate::outln!(
+            "  binding      {} (relative margin {:.4} of {}; raw {:.6})",
+            b.name,
+            b.relative,
+            b.scale_name,
+            b.raw
+        );
+    }
+    if let Some(rule) = v.clearance_rule {
+        let lu = super::length_unit(m);
+        let mut line = format!("  clearance    rule {}", clearance_rule_name(rule));
+        if let Some(c) = v.min_clearance {
+            line += &format!(", min {c:.6} {lu}");
+        }
+        if v.scuff_depth > 0.0 {
+            let name = match rule {
+                pdw_walkers::ClearanceRule::AfterMidStance => {
+                    "mid-stance scuff (ignored by the convention, Garcia et al. 1998)"
+                }
+                pdw_walkers::ClearanceRule::WholeSwing => "below the slope",
+            };
+            line += &format!(", {name}: depth {:.6} {lu}", v.scuff_depth);
+        }
+        crate::outln!("{line}");
+    }
 }
 
 /// Prints why a Newton run failed (the error carries its residual history and last iterate).
@@ -465,59 +478,16 @@ fn run_period_k(
     a: &FixedpointArgs,
     m: &BuiltModel,
     guesses: &[(String, Vec<f64>)],
-    which: &str,
 ) -> anyhow::Result<ExitCode> {
     let k = a.period;
     let (found, failed) = pdw_limit::gaits::search_periodic(m.walker.as_ref(), guesses, k, a.tol)?;
     let selected: Vec<&FoundOrbit> = found
         .iter()
-        .filter(|f| match which {
-            "stable" => f.orbit.stable,
-            "unstable" => !f.orbit.stable,
-            _ => true,
-        })
+        .filter(|f| wanted(&a.gait, f.orbit.stable))
         .collect();
     if a.json {
-        let fps: Vec<serde_json::Value> = selected
-            .iter()
-            .map(|f| {
-                let o = &f.orbit;
-                let valid: Vec<Option<Validity>> = o
-                    .states
-                    .iter()
-                    .map(|x| Validity::along_step(m.walker.as_ref(), x))
-                    .collect();
-                serde_json::json!({
-                    "gait": if o.stable { "stable" } else { "unstable" },
-                    "guess": f.label,
-                    "period_k": k,
-                    "section": o.orbit[0],
-                    "orbit": o.orbit,
-                    "state_names": m.info.state_names,
-                    "state": o.states[0],
-                    "period": o.period,
-                    "stride_periods": o.strides.iter().map(|s| s.period).collect::<Vec<_>>(),
-                    "step_length": o.total_step_length().map(|l| l / k as f64),
-                    "step_lengths": o.strides.iter().map(|s| s.step_length).collect::<Vec<_>>(),
-                    "speed": o.speed(),
-                    "multipliers": o.multipliers.iter().map(|l| serde_json::json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
-                    "stable": o.stable,
-                    "residual": o.residual,
-                    "iterations": o.iterations,
-                    "validity": valid[0].as_ref().map(validity_json),
-                    "validity_per_stride": valid.iter().map(|v| v.as_ref().map(validity_json)).collect::<Vec<_>>(),
-                })
-            })
-            .collect();
-        let out = serde_json::json!({
-            "model": m.info.name,
-            "slope": m.slope(),
-            "params": m.params_json(),
-            "section_names": m.info.section_names,
-            "period_k": k,
-            "fixed_points": fps,
-        });
-        crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+        let j = orbits_json(m, k, &selected);
+        crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     } else {
         crate::outln!(
             "model {}  slope {} rad ({:.4} deg)  period-{k} orbits",
@@ -533,11 +503,7 @@ fn run_period_k(
         eprintln!(
             "no {}period-{k} orbit found for model '{}' from {} guess(es), their iterates and \
              the period-doubling predictors",
-            if which == "all" {
-                String::new()
-            } else {
-                format!("{which} ")
-            },
+            gait_adjective(&a.gait),
             m.info.name,
             guesses.len()
         );
@@ -552,6 +518,50 @@ fn run_period_k(
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `--json` of `--period K`: every orbit reported with all K points, per-stride times, step
+/// lengths and validity, and the multipliers of the K-stride map.
+fn orbits_json(m: &BuiltModel, k: usize, selected: &[&FoundOrbit]) -> serde_json::Value {
+    let fps: Vec<serde_json::Value> = selected
+        .iter()
+        .map(|f| {
+            let o = &f.orbit;
+            let valid: Vec<Option<Validity>> = o
+                .states
+                .iter()
+                .map(|x| Validity::along_step(m.walker.as_ref(), x))
+                .collect();
+            serde_json::json!({
+                "gait": if o.stable { "stable" } else { "unstable" },
+                "guess": f.label,
+                "period_k": k,
+                "section": o.orbit[0],
+                "orbit": o.orbit,
+                "state_names": m.info.state_names,
+                "state": o.states[0],
+                "period": o.period,
+                "stride_periods": o.strides.iter().map(|s| s.period).collect::<Vec<_>>(),
+                "step_length": o.total_step_length().map(|l| l / k as f64),
+                "step_lengths": o.strides.iter().map(|s| s.step_length).collect::<Vec<_>>(),
+                "speed": o.speed(),
+                "multipliers": o.multipliers.iter().map(|l| serde_json::json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
+                "stable": o.stable,
+                "residual": o.residual,
+                "iterations": o.iterations,
+                "validity": valid[0].as_ref().map(validity_json),
+                "validity_per_stride": valid.iter().map(|v| v.as_ref().map(validity_json)).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "model": m.info.name,
+        "slope": m.slope(),
+        "params": m.params_json(),
+        "section_names": m.info.section_names,
+        "period_k": k,
+        "fixed_points": fps,
+    })
 }
 
 fn print_orbit(m: &BuiltModel, f: &FoundOrbit) {

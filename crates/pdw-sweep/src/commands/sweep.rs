@@ -7,21 +7,25 @@
 //! corrects the branch at each), every point measured (all K orbit points, the K-stride
 //! period, step lengths, speed, validity along each stride, signed complex multipliers);
 //! `--json` prints the same data, `--csv FILE` writes it as one row per orbit point.
+//!
+//! [`run`] reads as the command does: the sweep parsed ([`parse`]), the outputs claimed, the
+//! plan made ([`plan`]), the gait, the branches and the orbit diagram computed by the library
+//! ([`pdw::sweep`], [`compute`]), the file, picture and CSV written ([`write`]), the result
+//! printed ([`report`]).
 
-use super::fixedpoint::{report_failure, search};
+use super::fixedpoint::report_failure;
 use super::output::{Format, Output};
-use super::{build_with, BuiltModel};
-use crate::args::{self, InputError};
+use super::BuiltModel;
+use crate::args::{self, InputError, Sweep};
 use crate::cli::FixedpointArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use pdw_limit::{
-    orbit_diagram, ContinuationOptions, GridBranch, MeasuredPoint, OrbitOptions, OrbitStart,
-    Validity,
-};
+use pdw::sweep::{StartChoice, SweepPlan};
+use pdw_limit::{ContinuationOptions, GridBranch, MeasuredPoint, OrbitColumn, Validity};
 use pdw_store::{
     plot_bifurcation, write_sweep, Bifurcation, OrbitDiagram, StrideValidity, SweepData,
 };
 use std::io::IsTerminal;
+use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -164,9 +168,55 @@ impl pdw_limit::SweepProgress for Progress {
     }
 }
 
+impl pdw::sweep::Progress for Progress {
+    fn at(&self, mu: f64) {
+        Progress::at(self, mu);
+    }
+}
+
+/// What the run computed: the branches on the grid and the orbit diagram's columns.
+struct Computed {
+    sweep: pdw_limit::Sweep,
+    columns: Vec<OrbitColumn>,
+}
+
+/// The files of a sweep: the HDF5 file, the picture and the CSV (with `--csv`).
+struct Files<'a> {
+    out: &'a Path,
+    png: &'a Path,
+    csv: Option<&'a Path>,
+}
+
 pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
+    let sw = parse(a)?;
+    let out = a.out_path();
+    let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
+    let files = Files {
+        out: &out,
+        png: &png,
+        csv: a.csv.as_deref(),
+    };
+    let _claim = claim(&files, a)?;
+    let (plan, m0, guesses) = plan(a, sw)?;
+    let threads = a.threads.unwrap_or(2);
+    let progress = Progress::new(a.quiet);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    let t0 = std::time::Instant::now();
+    let Some(computed) = compute(&plan, &m0, &guesses, &pool, &progress)? else {
+        return Ok(ExitCode::from(2));
+    };
+    let data = sweep_data(&plan, &m0, &computed, threads, t0.elapsed().as_secs_f64());
+    write(&files, &plan, &m0, &data, threads)?;
+    report(a, &files, &plan, &m0, &computed, &data)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--sweep NAME=A:B:N`, the swept parameter not also given a value (it would be silently
+/// overridden).
+fn parse(a: &FixedpointArgs) -> Result<Sweep, InputError> {
     let sw = args::parse_sweep(a.sweep.as_deref().unwrap_or_default())?;
-    // The swept parameter given a value as well would be silently overridden.
     if let Some((_, v)) = super::overrides(&a.model)?
         .into_iter()
         .find(|(n, _)| *n == sw.name)
@@ -174,27 +224,28 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         return Err(InputError(format!(
             "--sweep {}: the parameter is also set to {v} (--slope or --set); give it once",
             sw.name
-        ))
-        .into());
+        )));
     }
-    let out = a.out_path();
-    let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
-    let threads = a.threads.unwrap_or(2);
+    Ok(sw)
+}
+
+/// Claims the sweep's files (refusing existing ones without `--force`, and the model file).
+fn claim(f: &Files<'_>, a: &FixedpointArgs) -> Result<super::output::Claim, InputError> {
     let mut outputs = vec![
         Output {
             flag: "--out",
-            path: &out,
+            path: f.out,
             format: Format::Hdf5,
             may_exist: false,
         },
         Output {
             flag: "--png",
-            path: &png,
+            path: f.png,
             format: Format::Png,
             may_exist: false,
         },
     ];
-    if let Some(c) = &a.csv {
+    if let Some(c) = f.csv {
         outputs.push(Output {
             flag: "--csv",
             path: c,
@@ -205,138 +256,110 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     let inputs: Vec<_> = super::output::model_input(&a.model.model)
         .into_iter()
         .collect();
-    let _claim = super::output::claim(&outputs, &inputs, a.force)?;
-    let at = |mu: f64| -> Result<BuiltModel, InputError> {
-        build_with(&a.model, &[(sw.name.clone(), mu)])
-    };
-    let m0 = at(sw.lo)?;
-    at(sw.hi)?; // both ends must be valid parameter values
-    let progress = Progress::new(a.quiet);
-    let family = |mu: f64| {
-        progress.at(mu);
-        at(mu).map(|m| m.walker)
-    };
+    super::output::claim(&outputs, &inputs, a.force)
+}
 
-    // the gait to continue, at the start of the range
+/// The plan, the model at A (both ends of the range checked) and the guesses there.
+/// `--integrator`, `--rtol`, `--atol`, `--rk4-step` or `--controller`, when given, integrate
+/// every stride of the sweep (the gait search, the continuation and the orbit diagram);
+/// otherwise each stage keeps its default.
+#[allow(clippy::type_complexity)]
+fn plan(
+    a: &FixedpointArgs,
+    grid: Sweep,
+) -> anyhow::Result<(SweepPlan, BuiltModel, Vec<(String, Vec<f64>)>)> {
+    let mut plan = SweepPlan {
+        model: a.model.model.clone(),
+        fixed: super::overrides(&a.model)?,
+        grid,
+        start: match a.gait.as_str() {
+            "unstable" => StartChoice::Unstable,
+            _ => StartChoice::Stable,
+        },
+        tol: a.tol,
+        integrator: None,
+    };
+    let m0 = plan.start_model()?;
     let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
     let guesses = pdw::gaits::guesses(&m0, user, "--guess")?;
-    // --integrator/--rtol/--atol, when given, integrate every stride of the sweep (the gait
-    // search, the continuation and the orbit diagram); otherwise each keeps its default.
-    let user_integrator = (a.integrator.integrator.is_some()
-        || a.integrator.rtol.is_some()
-        || a.integrator.atol.is_some()
-        || a.integrator.rk4_step.is_some()
-        || a.integrator.controller.is_some())
-    .then(|| super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol)))
+    let o = &a.integrator;
+    plan.integrator = (o.integrator.is_some()
+        || o.rtol.is_some()
+        || o.atol.is_some()
+        || o.rk4_step.is_some()
+        || o.controller.is_some())
+    .then(|| super::integrator(o, pdw_limit::gaits::default_integrator(a.tol)))
     .transpose()?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()?;
-    let t0 = std::time::Instant::now();
-    let (found, failed) = match &user_integrator {
-        Some(i) => super::fixedpoint::search_with(&m0, &guesses, a.tol.max(1e-12), i)?,
-        None => search(&m0, &guesses, a.tol.max(1e-12))?,
-    };
-    let start = match a.gait.as_str() {
-        "unstable" => found.iter().find(|f| !f.fp.stable),
-        _ => found.iter().find(|f| f.fp.stable).or_else(|| found.first()),
-    };
+    Ok((plan, m0, guesses))
+}
+
+/// The library's steps ([`pdw::sweep`]); `None` after reporting that no gait was found at A.
+fn compute(
+    plan: &SweepPlan,
+    m0: &BuiltModel,
+    guesses: &[(String, Vec<f64>)],
+    pool: &rayon::ThreadPool,
+    progress: &Progress,
+) -> anyhow::Result<Option<Computed>> {
+    let (start, failed) = pdw::sweep::start_gait(plan, m0, guesses)?;
     let Some(start) = start else {
         eprintln!(
             "no period-one gait of model '{}' at {} = {} to start the continuation from",
-            m0.info.name, sw.name, sw.lo
+            m0.info.name, plan.grid.name, plan.grid.lo
         );
         for (label, g, e) in &failed {
             report_failure(label, g, e);
         }
         eprintln!("try: another start of the range, or --guess");
-        return Ok(ExitCode::from(2));
+        return Ok(None);
     };
-    let mut opts = pdw_limit::grid_options(sw.lo, sw.hi, sw.n);
-    if let Some(i) = user_integrator {
-        opts.integrator = i;
-    }
-    let result = pdw_limit::sweep::sweep(
-        &family,
-        &sw.name,
-        &start.fp.section,
-        (sw.lo, sw.hi, sw.n),
-        &opts,
-        &pool,
-        &progress,
-    )?;
-    for w in &result.warnings {
+    let sweep = pdw::sweep::continuation(plan, &start, pool, progress)?;
+    for w in &sweep.warnings {
         eprintln!("warning: {w}");
     }
-    let main = &result.continued[0].1;
-    let mut bifs: Vec<Bifurcation> = Vec::new();
-    let mut printed = Vec::new();
-    for (i, (_, b)) in result.continued.iter().enumerate() {
+    let columns = pdw::sweep::orbit_diagram(plan, &sweep, &start, pool, progress)?;
+    progress.pb.finish_and_clear();
+    Ok(Some(Computed { sweep, columns }))
+}
+
+/// The sweep in the file's form: the branches, their bifurcations, the orbit diagram (its
+/// first section coordinate, NaN-padded to the recorded strides) and the settings.
+fn sweep_data(
+    plan: &SweepPlan,
+    m0: &BuiltModel,
+    c: &Computed,
+    threads: usize,
+    elapsed: f64,
+) -> SweepData {
+    let mut bifurcations = Vec::new();
+    for (i, (_, b)) in c.sweep.continued.iter().enumerate() {
         for bf in &b.bifurcations {
-            bifs.push(Bifurcation {
+            bifurcations.push(Bifurcation {
                 kind: bf.kind.name().into(),
                 parameter: bf.param,
                 branch: i,
                 section: bf.section.clone(),
             });
-            printed.push((b.period_strides, bf.kind, bf.param));
         }
     }
-    let params = result.params.clone();
-    let grid_failures = result.grid_failures;
-    let branches: Vec<pdw_store::Branch> = result.branches.iter().map(store_branch).collect();
-    // brute-force orbit diagram over the N values (independent values, run in parallel)
-    let mut oo = OrbitOptions {
-        transient: 300,
-        record: 64,
-        ..OrbitOptions::default()
-    };
-    if let Some(i) = user_integrator {
-        oo.integrator = i;
-    }
-    // Each value starts from the continued period-1 gait at the nearest parameter, nudged by
-    // 1e-6 so that an unstable gait is left for whatever attracts beyond it.
-    let starts: Vec<Vec<f64>> = params
-        .iter()
-        .map(|&mu| {
-            let near = main
-                .points
-                .iter()
-                .min_by(|p, q| (p.param - mu).abs().total_cmp(&(q.param - mu).abs()))
-                .map(|p| p.section.clone())
-                .unwrap_or_else(|| start.fp.section.clone());
-            let mut v = near;
-            v[0] += 1e-6;
-            v
-        })
-        .collect();
-    progress.stage("orbit diagram", params.len() as u64, None);
-    let counted = |mu: f64| {
-        progress.inc();
-        at(mu).map(|m| m.walker)
-    };
-    let cols = orbit_diagram(&counted, &params, &OrbitStart::PerParam(starts), &oo, &pool)?;
-    progress.pb.finish_and_clear();
+    let record = plan.orbit_options().record;
     let orbit = OrbitDiagram {
         coordinate: m0.info.section_names[0].to_string(),
-        parameter: params.clone(),
-        points: cols
+        parameter: c.sweep.params.clone(),
+        points: c
+            .columns
             .iter()
-            .map(|c| {
-                let mut v: Vec<f64> = c.points.iter().map(|p| p[0]).collect();
-                v.resize(oo.record, f64::NAN);
+            .map(|col| {
+                let mut v: Vec<f64> = col.points.iter().map(|p| p[0]).collect();
+                v.resize(record, f64::NAN);
                 v
             })
             .collect(),
     };
-    let fp_integrator =
-        user_integrator.unwrap_or_else(|| pdw_limit::gaits::default_integrator(a.tol.max(1e-12)));
-    let elapsed = t0.elapsed().as_secs_f64();
-    let settings = sweep_settings(&sw, &m0, &opts, &oo, a.tol, &fp_integrator, threads);
-    let data = SweepData {
-        command: std::env::args().collect::<Vec<_>>().join(" "),
+    SweepData {
+        command: super::command_line(),
         model: m0.info.name.to_string(),
-        parameter: sw.name.clone(),
+        parameter: plan.grid.name.clone(),
         params: m0.params_json().to_string(),
         section_names: m0
             .info
@@ -344,53 +367,66 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             .iter()
             .map(|s| s.to_string())
             .collect(),
-        branches,
-        bifurcations: bifs,
+        branches: c.sweep.branches.iter().map(store_branch).collect(),
+        bifurcations,
         orbit: Some(orbit),
-        settings,
+        settings: sweep_settings(plan, m0, threads),
         elapsed_s: elapsed,
-    };
-    // the claim refused existing files without --force; its placeholders are replaced
-    write_sweep(&out, true, &data)?;
-    annotate_sweep(
-        &out,
-        &m0,
-        &sw.name,
-        &opts,
-        &oo,
-        a.tol,
-        &fp_integrator,
-        threads,
-    )?;
-    // Units on the picture's axes (the file keeps the bare names, with units attributes).
+    }
+}
+
+/// The HDF5 file (replacing the claim's placeholder) with provenance and units, the picture
+/// (units on its axes; the file keeps the bare names, with units attributes) and the CSV.
+fn write(
+    f: &Files<'_>,
+    plan: &SweepPlan,
+    m0: &BuiltModel,
+    data: &SweepData,
+    threads: usize,
+) -> anyhow::Result<()> {
+    let name = &plan.grid.name;
+    write_sweep(f.out, true, data)?;
+    annotate_sweep(f.out, plan, m0, threads)?;
     let mut shown = data.clone();
-    shown.parameter = format!("{} [{}]", sw.name, super::param_unit(&m0, &sw.name));
-    for (n, u) in shown
-        .section_names
-        .iter_mut()
-        .zip(super::section_units(&m0))
-    {
+    shown.parameter = format!("{name} [{}]", super::param_unit(m0, name));
+    for (n, u) in shown.section_names.iter_mut().zip(super::section_units(m0)) {
         *n = format!("{n} [{u}]");
     }
-    plot_bifurcation(&png, &shown, 0)?;
-    if let Some(c) = &a.csv {
-        let comments = csv_comments(&m0, &sw.name);
-        pdw_store::write_sweep_csv(c, true, &data, &comments)?;
+    plot_bifurcation(f.png, &shown, 0)?;
+    if let Some(c) = f.csv {
+        let comments = csv_comments(m0, name);
+        pdw_store::write_sweep_csv(c, true, data, &comments)?;
     }
+    Ok(())
+}
+
+/// The sweep as JSON (the file's data with units and file names) or as a summary: the
+/// branches, their bifurcations, the orbit diagram's falls, the files.
+fn report(
+    a: &FixedpointArgs,
+    f: &Files<'_>,
+    plan: &SweepPlan,
+    m0: &BuiltModel,
+    c: &Computed,
+    data: &SweepData,
+) -> anyhow::Result<()> {
+    let (sw, threads) = (&plan.grid, a.threads.unwrap_or(2));
+    let pu = super::param_unit(m0, &sw.name);
     if a.json {
-        let mut j = pdw_store::sweep_json(&data);
-        j["parameter_unit"] = serde_json::json!(super::param_unit(&m0, &sw.name));
-        j["section_units"] = serde_json::json!(super::section_units(&m0));
-        j["time_unit"] = serde_json::json!(super::time_unit(&m0));
-        j["length_unit"] = serde_json::json!(super::length_unit(&m0));
+        let mut j = pdw_store::sweep_json(data);
+        j["parameter_unit"] = serde_json::json!(pu);
+        j["section_units"] = serde_json::json!(super::section_units(m0));
+        j["time_unit"] = serde_json::json!(super::time_unit(m0));
+        j["length_unit"] = serde_json::json!(super::length_unit(m0));
         j["files"] = serde_json::json!({
-            "hdf5": out.display().to_string(),
-            "png": png.display().to_string(),
-            "csv": a.csv.as_ref().map(|c| c.display().to_string()),
+            "hdf5": f.out.display().to_string(),
+            "png": f.png.display().to_string(),
+            "csv": f.csv.map(|c| c.display().to_string()),
         });
         crate::outln!("{}", serde_json::to_string_pretty(&j)?);
-        return Ok(ExitCode::SUCCESS);
+        return Ok(());
     }
+    let main = &c.sweep.continued[0].1;
     crate::outln!(
         "model {}: {} continued from {} to {} ({} internal steps on the period-1 branch, end: {:?})",
         m0.info.name,
@@ -408,32 +444,35 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
             sw.n
         );
     }
+    let grid_failures = c.sweep.grid_failures;
     if grid_failures > 0 {
         crate::outln!("  {grid_failures} point(s) of the output grid left out (see the warnings)");
     }
-    for (period, kind, mu) in printed {
-        crate::outln!(
-            "  {:<16} on the period-{period} branch at {} = {mu:.12} {}",
-            kind.name(),
-            sw.name,
-            super::param_unit(&m0, &sw.name)
-        );
+    for (_, b) in &c.sweep.continued {
+        for bf in &b.bifurcations {
+            crate::outln!(
+                "  {:<16} on the period-{} branch at {} = {:.12} {pu}",
+                bf.kind.name(),
+                b.period_strides,
+                sw.name,
+                bf.param
+            );
+        }
     }
-    let falls = cols.iter().filter(|c| c.fall.is_some()).count();
+    let falls = c.columns.iter().filter(|c| c.fall.is_some()).count();
     crate::outln!(
         "  orbit diagram: {} values, {} with a fall; wrote {} and {}{} in {:.2} s ({} thread(s))",
-        params.len(),
+        c.sweep.params.len(),
         falls,
-        out.display(),
-        png.display(),
-        a.csv
-            .as_ref()
+        f.out.display(),
+        f.png.display(),
+        f.csv
             .map(|c| format!(" and {}", c.display()))
             .unwrap_or_default(),
-        elapsed,
+        data.elapsed_s,
         threads
     );
-    Ok(ExitCode::SUCCESS)
+    Ok(())
 }
 
 /// The CSV's comment lines: units of every column and the command.
@@ -469,15 +508,13 @@ fn csv_comments(m: &BuiltModel, parameter: &str) -> Vec<(String, String)> {
 
 /// The file's settings attributes: the output grid, the continuation, the integrators and
 /// tolerances of every stage, the thread count.
-fn sweep_settings(
-    sw: &args::Sweep,
-    m: &BuiltModel,
-    c: &ContinuationOptions,
-    o: &OrbitOptions,
-    tol: f64,
-    fp_integrator: &pdw_hybrid::Options,
-    threads: usize,
-) -> Vec<(String, String)> {
+fn sweep_settings(plan: &SweepPlan, m: &BuiltModel, threads: usize) -> Vec<(String, String)> {
+    let (sw, c, o) = (
+        &plan.grid,
+        &plan.continuation_options(),
+        &plan.orbit_options(),
+    );
+    let fp_integrator = &plan.fixed_point_integrator();
     let j = |v: serde_json::Value| v.to_string();
     vec![
         ("continuation".into(), j(continuation_json(c))),
@@ -500,7 +537,7 @@ fn sweep_settings(
         (
             "tolerances".into(),
             j(serde_json::json!({
-                "fixed_point_newton_tol": tol.max(1e-12),
+                "fixed_point_newton_tol": plan.newton_tol(),
                 "continuation_newton_tol": c.newton_tol,
                 "bifurcation_locate_tol": c.locate_tol,
                 "orbit_diagram_tol_period": o.tol_period,
@@ -525,21 +562,18 @@ fn continuation_json(c: &ContinuationOptions) -> serde_json::Value {
 
 /// Provenance (every numerical option: the gait search, the continuation, the orbit diagram)
 /// and units on every dataset of the sweep file.
-#[allow(clippy::too_many_arguments)]
 fn annotate_sweep(
-    out: &std::path::Path,
+    out: &Path,
+    plan: &SweepPlan,
     m: &BuiltModel,
-    parameter: &str,
-    c: &ContinuationOptions,
-    o: &OrbitOptions,
-    tol: f64,
-    fp_integrator: &pdw_hybrid::Options,
     threads: usize,
 ) -> anyhow::Result<()> {
+    let (c, o) = (&plan.continuation_options(), &plan.orbit_options());
+    let parameter = &plan.grid.name;
     let options = serde_json::json!({
         "fixed_point": {
-            "newton_tol": tol.max(1e-12),
-            "integrator": super::integrator_json(fp_integrator),
+            "newton_tol": plan.newton_tol(),
+            "integrator": super::integrator_json(&plan.fixed_point_integrator()),
         },
         "continuation": continuation_json(c),
         "threads": threads,
