@@ -23,7 +23,7 @@ const FAST_GUARDS: usize = 8;
 /// Callback receiving `(t, x)`.
 /// Called at the start, after accepted steps and at the stop; `false` ends the call
 /// ([`Integrator::integrate_observed_while`]).
-type Observer<'a> = &'a mut dyn FnMut(f64, &[f64]) -> bool;
+pub(crate) type Observer<'a> = &'a mut dyn FnMut(f64, &[f64]) -> bool;
 
 /// Scalar integrator owning its workspace (sized for `dim` at construction; the guard scratch
 /// grows on first use with a system that has more guards, then never allocates again).

@@ -392,7 +392,7 @@ pub trait IntegrateConcrete {
         x: &mut [f64],
         t_end: f64,
         resume: bool,
-        obs: Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+        obs: Option<crate::integrator::Observer<'_>>,
     ) -> crate::StopReason;
 }
 
@@ -405,7 +405,7 @@ impl<T: HybridSystem> IntegrateConcrete for T {
         x: &mut [f64],
         t_end: f64,
         resume: bool,
-        obs: Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+        obs: Option<crate::integrator::Observer<'_>>,
     ) -> crate::StopReason {
         integ.run_concrete(self, mode, t, x, t_end, resume, obs)
     }
