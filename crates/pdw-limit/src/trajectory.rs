@@ -247,7 +247,7 @@ pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
             }
         })
         .collect();
-    let (force, torque) = (mu.force, mu.torque);
+    let (force, torque) = (mu.force.to_string(), mu.torque.to_string());
     TrajectoryUnits {
         time,
         state,

@@ -4,6 +4,7 @@
 
 use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::Section;
+use std::borrow::Cow;
 
 /// A starting point for a fixed-point search on the section.
 #[derive(Clone, Debug, PartialEq)]
@@ -104,27 +105,28 @@ pub struct Pose {
 }
 
 /// Units of a model's quantities, as the model defines them: a dimensionless model (the
-/// simplest walker: time in √(l/g), lengths in leg lengths, forces per hip weight) or a model
-/// per unit mass (the rimless wheel's forces in N/kg) says so here, and every output labels
-/// its columns from this, never from the model's name. Angles are always radians.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// simplest walker: time in √(l/g), lengths in leg lengths, forces per hip weight), a model per
+/// unit mass (the rimless wheel's forces in N/kg) or a spec that declares its own time unit says
+/// so here, and every output labels its columns from this, never from the model's name. Angles
+/// are always radians.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ModelUnits {
     /// Unit of time, e.g. `"s"`, `"sqrt(l/g)"`.
-    pub time: &'static str,
+    pub time: Cow<'static, str>,
     /// Unit of length, e.g. `"m"`, `"l"` (leg lengths).
-    pub length: &'static str,
+    pub length: Cow<'static, str>,
     /// Unit of force, e.g. `"N"`, `"M g"`.
-    pub force: &'static str,
+    pub force: Cow<'static, str>,
     /// Unit of torque, e.g. `"N m"`, `"M g l"`.
-    pub torque: &'static str,
+    pub torque: Cow<'static, str>,
 }
 
 impl ModelUnits {
     /// Seconds, metres, newtons, newton metres.
     pub const SI: ModelUnits = ModelUnits {
-        time: "s",
-        length: "m",
-        force: "N",
-        torque: "N m",
+        time: Cow::Borrowed("s"),
+        length: Cow::Borrowed("m"),
+        force: Cow::Borrowed("N"),
+        torque: Cow::Borrowed("N m"),
     };
 }

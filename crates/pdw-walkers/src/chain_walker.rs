@@ -1753,6 +1753,23 @@ impl Walker for ChainWalker {
     fn energy_unit(&self) -> &str {
         "J"
     }
+    /// Time in the unit the spec declares for `max_stride_time` (`"s"` if none); lengths in m
+    /// for a time in s, else in the spec's reference length `l`; forces and torques in N, N m.
+    fn units(&self) -> pdw_model::ModelUnits {
+        let time = self
+            .spec
+            .parameters
+            .get("max_stride_time")
+            .map(|p| p.unit.clone())
+            .filter(|u| !u.is_empty())
+            .unwrap_or_else(|| "s".to_string());
+        let length = if time == "s" { "m" } else { "l" };
+        pdw_model::ModelUnits {
+            time: time.into(),
+            length: length.into(),
+            ..pdw_model::ModelUnits::SI
+        }
+    }
     fn impact_report(&self, mode: usize, guard: usize, x_pre: &[f64]) -> Option<ImpactReport> {
         (guard == 0)
             .then(|| self.impact_report_at(mode, x_pre))

@@ -290,8 +290,8 @@ impl Walker for Rimless {
     /// SI per unit hub mass: the wheel has no mass parameter, so forces are in N/kg.
     fn units(&self) -> ModelUnits {
         ModelUnits {
-            force: "N/kg",
-            torque: "N m/kg",
+            force: "N/kg".into(),
+            torque: "N m/kg".into(),
             ..ModelUnits::SI
         }
     }

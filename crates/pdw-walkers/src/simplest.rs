@@ -634,10 +634,10 @@ impl Walker for Simplest {
     /// hip weight M g.
     fn units(&self) -> ModelUnits {
         ModelUnits {
-            time: "sqrt(l/g)",
-            length: "l",
-            force: "M g",
-            torque: "M g l",
+            time: "sqrt(l/g)".into(),
+            length: "l".into(),
+            force: "M g".into(),
+            torque: "M g l".into(),
         }
     }
     fn name(&self) -> &str {
