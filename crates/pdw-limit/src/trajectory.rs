@@ -247,12 +247,11 @@ pub fn units(w: &dyn Walker, energy_unit: &str) -> TrajectoryUnits {
             }
         })
         .collect();
-    let (force, torque) = (mu.force.to_string(), mu.torque.to_string());
     TrajectoryUnits {
         time,
         state,
-        force: force.into(),
-        torque: torque.into(),
+        force: mu.force.to_string(),
+        torque: mu.torque.to_string(),
         energy: energy_unit.into(),
     }
 }

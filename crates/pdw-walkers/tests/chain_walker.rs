@@ -415,3 +415,32 @@ fn guard_rates_are_the_derivatives_along_the_flow() {
         }
     }
 }
+
+/// Units of every preset as its TOML text declares them, read here with the `toml` crate and not
+/// through [`WalkerSpec`]: time in the unit of `max_stride_time` (the kneed preset's `T`, Hsu
+/// Chen's time unit), lengths in m when time is in s and in the leg length `l` otherwise, forces
+/// and torques in N and N m. The kneed preset is named explicitly: its outputs were once
+/// labelled rad/s and m while its parameters are in Hsu Chen's units.
+#[test]
+fn every_preset_reports_the_units_its_file_declares() {
+    for (name, text) in pdw_walkers::PRESETS {
+        let raw: toml::Table = text.parse().expect("preset TOML");
+        let declared = raw["parameters"]["max_stride_time"]["unit"]
+            .as_str()
+            .expect("max_stride_time has a unit");
+        let w = ChainWalker::from_spec(WalkerSpec::from_toml(text, name).unwrap()).unwrap();
+        let u = w.units();
+        assert_eq!(u.time, declared, "{name}: time unit");
+        let length = if declared == "s" { "m" } else { "l" };
+        assert_eq!(u.length, length, "{name}: length unit");
+        assert_eq!(
+            (u.force.as_ref(), u.torque.as_ref()),
+            ("N", "N m"),
+            "{name}"
+        );
+    }
+    let kneed = presets::kneed(&[]).unwrap().units();
+    assert_eq!((kneed.time.as_ref(), kneed.length.as_ref()), ("T", "l"));
+    let compass = presets::compass(&[]).unwrap().units();
+    assert_eq!((compass.time.as_ref(), compass.length.as_ref()), ("s", "m"));
+}
