@@ -15,9 +15,10 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use pdw::basin::{BasinPlan, BasinRequest};
+use pdw::simulate::{GaitKind, SimulateFlags, Start, StartError};
 use pdw_limit::basin::{self as lbasin, BasinOptions, Outcome};
 use pdw_limit::gaits::{self, Found};
-use pdw_limit::trajectory::{self, TrajectoryOptions, Validity};
+use pdw_limit::trajectory::{self, Trajectory, Validity};
 use pdw_limit::{Attractor, AttractorKind, AttractorSet};
 use pdw_limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome};
 
@@ -86,13 +87,6 @@ fn err(msg: impl std::fmt::Display) -> PyErr {
 
 fn gib(b: u64) -> String {
     format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
-}
-
-/// Most trajectory samples of a state of `dim` components that fit in half the memory
-/// available (the rest for the arrays handed to numpy).
-fn sample_budget(dim: usize) -> usize {
-    (pdw_limit::resources::memory_available() / 2 / pdw_limit::bytes_per_sample(dim) as u64)
-        .min(usize::MAX as u64) as usize
 }
 
 /// Refuses a basin grid held whole in memory (cells, results, the outcome array) that would
@@ -1000,37 +994,48 @@ fn simulate<'py>(
     dt_out: Option<f64>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if !matches!(gait, "stable" | "unstable") {
-        return Err(err(format!(
-            "gait: '{gait}' is not one of stable, unstable"
-        )));
-    }
+    const FLAGS: SimulateFlags = SimulateFlags {
+        steps: "steps",
+        dt_out: "dt_out",
+        state: "state",
+        gait: "gait",
+        rk4_step: "rk4_step",
+    };
+    let which = GaitKind::parse(gait, "gait").map_err(err)?;
+    pdw::simulate::check_request(steps, dt_out, &FLAGS).map_err(err)?;
     let m = build_kw(model, slope, params)?;
     let tr = interruptible(py, || -> PyResult<_> {
-        let w = m.walker.as_ref();
-        let x0 = match state {
-            Some(v) => trajectory::initial_state(w, &v).map_err(err)?,
-            None => {
-                let (found, failed, n) = find_gaits(&m, None, 1e-12)?;
-                match found.iter().find(|f| f.fp.stable == (gait == "stable")) {
-                    Some(f) => f.fp.state.clone(),
-                    None => return Err(no_gait_error(&m, gait, n, &failed)),
-                }
-            }
+        let start = match state {
+            Some(v) => Start::State(v),
+            None => Start::Gait(which),
         };
-        let opts = TrajectoryOptions {
-            dt_out,
-            max_samples: sample_budget(w.dim()),
-            ..TrajectoryOptions::new(steps)
-        };
-        trajectory::simulate(w, &x0, &opts).map_err(err)
+        let walk = pdw::simulate::start(&m, &start, &FLAGS).map_err(|e| match e {
+            StartError::Input(e) => err(e),
+            StartError::Limit(e) => err(e),
+            StartError::NoGait {
+                which,
+                tried,
+                failed,
+            } => no_gait_error(&m, which.name(), tried, &failed),
+        })?;
+        let opts = pdw::simulate::options(&m, steps, dt_out, pdw::simulate::default_integrator());
+        pdw::simulate::check_samples(&walk, &opts, &FLAGS).map_err(err)?;
+        pdw::simulate::run(&m, &walk, &opts).map_err(err)
     })?;
+    trajectory_dict(py, &m, &tr)
+}
+
+/// A trajectory as `simulate` returns it: time, states (rows), mode, step, forces, flags,
+/// energy where the model has them, the events, the section points, the outcome, the units.
+fn trajectory_dict<'py>(
+    py: Python<'py>,
+    m: &Model,
+    tr: &Trajectory,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    let dim = tr.dim();
-    let n = tr.len();
     d.set_item("state_names", tr.state_names.clone())?;
     d.set_item("t", tr.t.clone().into_pyarray(py))?;
-    d.set_item("x", rows_to_array(py, tr.x.clone(), dim)?)?;
+    d.set_item("x", rows_to_array(py, tr.x.clone(), tr.dim())?)?;
     d.set_item("mode", tr.mode.clone().into_pyarray(py))?;
     d.set_item("step", tr.step.clone().into_pyarray(py))?;
     if let Some(f) = &tr.forces {
@@ -1048,58 +1053,7 @@ fn simulate<'py>(
     if let Some(e) = &tr.energy {
         d.set_item("energy", e.clone().into_pyarray(py))?;
     }
-    let ev = PyDict::new(py);
-    let e = &tr.events;
-    ev.set_item(
-        "t",
-        e.iter().map(|e| e.t).collect::<Vec<_>>().into_pyarray(py),
-    )?;
-    ev.set_item("kind", e.iter().map(|e| e.kind.clone()).collect::<Vec<_>>())?;
-    ev.set_item(
-        "step",
-        e.iter()
-            .map(|e| e.step as u32)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
-    ev.set_item(
-        "ends_step",
-        e.iter()
-            .map(|e| e.ends_step)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
-    ev.set_item(
-        "mode_before",
-        e.iter()
-            .map(|e| e.mode_before as u32)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
-    ev.set_item(
-        "mode_after",
-        e.iter()
-            .map(|e| e.mode_after as u32)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
-    ev.set_item(
-        "pre",
-        rows_to_array(
-            py,
-            e.iter().flat_map(|e| e.pre.iter().copied()).collect(),
-            dim,
-        )?,
-    )?;
-    ev.set_item(
-        "post",
-        rows_to_array(
-            py,
-            e.iter().flat_map(|e| e.post.iter().copied()).collect(),
-            dim,
-        )?,
-    )?;
-    d.set_item("events", ev)?;
+    d.set_item("events", events_dict(py, &tr.events, tr.dim())?)?;
     d.set_item(
         "section",
         rows_to_array(py, tr.section.clone(), m.walker.section_dim())?,
@@ -1113,6 +1067,54 @@ fn simulate<'py>(
             o => o.to_string(),
         },
     )?;
+    d.set_item("units", units_dict(py, tr)?)?;
+    Ok(d)
+}
+
+/// The events of a trajectory as columns: time, kind, step, whether it ends a step, the modes
+/// before and after, the states before and after (rows of `dim`).
+fn events_dict<'py>(
+    py: Python<'py>,
+    e: &[trajectory::TrajectoryEvent],
+    dim: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let ev = PyDict::new(py);
+    let column = |f: &dyn Fn(&trajectory::TrajectoryEvent) -> u32| -> Bound<'py, PyAny> {
+        e.iter()
+            .map(f)
+            .collect::<Vec<_>>()
+            .into_pyarray(py)
+            .into_any()
+    };
+    ev.set_item(
+        "t",
+        e.iter().map(|e| e.t).collect::<Vec<_>>().into_pyarray(py),
+    )?;
+    ev.set_item("kind", e.iter().map(|e| e.kind.clone()).collect::<Vec<_>>())?;
+    ev.set_item("step", column(&|e| e.step as u32))?;
+    ev.set_item(
+        "ends_step",
+        e.iter()
+            .map(|e| e.ends_step)
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    ev.set_item("mode_before", column(&|e| e.mode_before as u32))?;
+    ev.set_item("mode_after", column(&|e| e.mode_after as u32))?;
+    let states = |f: &dyn Fn(&trajectory::TrajectoryEvent) -> &[f64]| {
+        rows_to_array(
+            py,
+            e.iter().flat_map(|e| f(e).iter().copied()).collect(),
+            dim,
+        )
+    };
+    ev.set_item("pre", states(&|e| &e.pre)?)?;
+    ev.set_item("post", states(&|e| &e.post)?)?;
+    Ok(ev)
+}
+
+/// The unit of every column of a trajectory, by the column's name.
+fn units_dict<'py>(py: Python<'py>, tr: &Trajectory) -> PyResult<Bound<'py, PyDict>> {
     let u = &tr.units;
     let ud = PyDict::new(py);
     ud.set_item("t", &u.time)?;
@@ -1124,9 +1126,7 @@ fn simulate<'py>(
     ud.set_item("friction_required", "1")?;
     ud.set_item("knee_torque", &u.torque)?;
     ud.set_item("energy", &u.energy)?;
-    d.set_item("units", ud)?;
-    debug_assert_eq!(tr.mode.len(), n);
-    Ok(d)
+    Ok(ud)
 }
 
 /// Fixed points, stride maps, basins, continuation and trajectories of passive dynamic walkers.

@@ -288,7 +288,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "X1,X2,..")]
     pub state: Option<String>,
     /// Start on the model's stable or unstable gait (found as `fixedpoint` finds it).
-    #[arg(long)]
+    #[arg(long, value_parser = ["stable", "unstable"], conflicts_with = "state")]
     pub gait: Option<String>,
     /// Steps to simulate (heel strike to heel strike).
     #[arg(long, default_value_t = 10)]

@@ -89,6 +89,10 @@ fn bad_input_names_the_value() {
         (vec!["--steps", "0", "--out", out], "--steps"),
         (vec!["--dt-out=-1", "--out", out], "--dt-out"),
         (vec!["--gait", "sideways", "--out", out], "sideways"),
+        (
+            vec!["--state", "0.2,-0.2", "--gait", "stable", "--out", out],
+            "cannot be used with",
+        ),
         (vec!["--out", "t.txt"], "t.txt"),
     ] {
         let o = simulate(&args);

@@ -4,7 +4,7 @@
 //! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]) — and the
 //! computations of the runs themselves, as typed plans and their steps: a basin of attraction
 //! ([`basin`]), a continuation over a parameter grid ([`sweep`]), a bifurcation curve in two
-//! parameters ([`follow`]), a design search ([`design`]). A front end parses its own syntax into
+//! parameters ([`follow`]), a design search ([`design`]), a walk of N steps ([`simulate`]). A front end parses its own syntax into
 //! these types and prints, writes or returns the results; it builds no model, checks no range and
 //! names nothing on its own.
 
@@ -15,6 +15,7 @@ pub mod gaits;
 pub mod input;
 pub mod integrator;
 pub mod model;
+pub mod simulate;
 pub mod sweep;
 
 pub use input::InputError;

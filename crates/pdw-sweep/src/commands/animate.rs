@@ -4,11 +4,12 @@
 //! Frames are the exact states at equally spaced times (the integrator stops at each frame time
 //! and at every event), drawn in world coordinates: the slope descends to the right at angle γ.
 
-use super::build_model;
 use super::fixedpoint::{report_failure, search};
+use super::{build_model, BuiltModel};
 use crate::args::InputError;
 use crate::cli::AnimateArgs;
 use pdw_hybrid::{GuardKind, Integrator, Options, StopReason};
+use pdw_limit::FixedPoint;
 use pdw_store::{animate_gif, Frame};
 use std::process::ExitCode;
 
@@ -46,8 +47,29 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(2));
     };
     let fp = &gait.fp;
-    // Say so when the picture is not of a gait a real walker would show: an unstable gait
-    // (no stable one was found) or one whose constraint forces are flagged.
+    let flags = warnings(&m, fp);
+    let frames = frames(&m, fp)?;
+    let title = format!(
+        "{} walker, slope {:.4} rad: {} gait{}, period {:.4}",
+        m.info.name,
+        m.slope(),
+        if fp.stable { "stable" } else { "UNSTABLE" },
+        if flags.is_empty() { "" } else { " (FLAGGED)" },
+        fp.metrics.period
+    );
+    animate_gif(&a.out, &frames, (640, 400), 60, &title)?;
+    eprintln!(
+        "wrote {} ({} frames, {} strides)",
+        a.out.display(),
+        frames.len(),
+        STRIDES
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Says so when the picture is not of a gait a real walker would show: an unstable gait (no
+/// stable one was found) or one whose constraint forces are flagged. Returns the flags.
+fn warnings(m: &BuiltModel, fp: &FixedPoint) -> Vec<&'static str> {
     if !fp.stable {
         eprintln!(
             "warning: model '{}' has no stable period-one gait from its guesses at slope {}; \
@@ -57,7 +79,7 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
             fp.multipliers.first().map_or(f64::NAN, |l| l.modulus())
         );
     }
-    let validity = super::fixedpoint::validity(&m, fp);
+    let validity = super::fixedpoint::validity(m, fp);
     let flags = validity.as_ref().map(flag_list).unwrap_or_default();
     if !flags.is_empty() {
         eprintln!(
@@ -65,9 +87,16 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
             flags.join("; ")
         );
     }
+    flags
+}
+
+/// The walker of `fp` at [`FRAMES_PER_STRIDE`] equally spaced times over [`STRIDES`] strides,
+/// in world coordinates (the slope descends to the right at angle γ; the stance foot advances
+/// by the swing foot's position at each heel strike), with the swing foot's trace.
+fn frames(m: &BuiltModel, fp: &FixedPoint) -> anyhow::Result<Vec<Frame>> {
+    let w = m.walker.as_ref();
     let gamma = m.slope();
-    let period = fp.metrics.period;
-    let dt = period / FRAMES_PER_STRIDE as f64;
+    let dt = fp.metrics.period / FRAMES_PER_STRIDE as f64;
     let mut integ = Integrator::new(w.dim(), Options::dop853(1e-10))?;
     let mut x = fp.state.clone();
     let mut buf = vec![0.0; x.len()];
@@ -84,9 +113,8 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
             -xs * gamma.sin() + ys * gamma.cos(),
         )
     };
-    let total = STRIDES * FRAMES_PER_STRIDE;
     let mut strides_done = 0;
-    for k in 0..=total {
+    for k in 0..=STRIDES * FRAMES_PER_STRIDE {
         let t_frame = k as f64 * dt;
         // Advance to the frame time, handling every event on the way.
         loop {
@@ -135,22 +163,7 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
             label: format!("t = {t:.3}   stride {}", strides_done + 1),
         });
     }
-    let title = format!(
-        "{} walker, slope {:.4} rad: {} gait{}, period {:.4}",
-        m.info.name,
-        gamma,
-        if fp.stable { "stable" } else { "UNSTABLE" },
-        if flags.is_empty() { "" } else { " (FLAGGED)" },
-        period
-    );
-    animate_gif(&a.out, &frames, (640, 400), 60, &title)?;
-    eprintln!(
-        "wrote {} ({} frames, {} strides)",
-        a.out.display(),
-        frames.len(),
-        STRIDES
-    );
-    Ok(ExitCode::SUCCESS)
+    Ok(frames)
 }
 
 /// The validity flags raised along a gait's step, in words (empty for a valid gait).

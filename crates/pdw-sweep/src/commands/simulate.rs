@@ -3,19 +3,17 @@
 //!
 //! The walk starts from `--state` (section coordinates, or a full state just after a heel
 //! strike) or from a gait of the model (`--gait stable|unstable`, found as `fixedpoint` finds
-//! it). The trajectory itself is [`pdw_limit::trajectory::simulate`]; this file only parses,
-//! converts to the store's plain columns and writes.
+//! it). The walk's setup and the walk are [`pdw::simulate`]'s; this file parses, converts to
+//! the store's plain columns and writes.
 
-use super::fixedpoint::{report_failure, search};
+use super::fixedpoint::report_failure;
 use super::{build_model, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::SimulateArgs;
+use pdw::simulate::{self, GaitKind, SimulateFlags, Start, StartError, Walk};
 use pdw_limit::trajectory::{self, Trajectory, TrajectoryOptions};
 use pdw_store::{TrajColumn, TrajEvents, TrajectoryData};
 use std::process::ExitCode;
-
-/// Residual tolerance of the gait a walk starts from (`--gait`).
-const GAIT_TOL: f64 = 1e-12;
 
 /// Output formats by file extension.
 enum Format {
@@ -38,12 +36,67 @@ fn format_of(path: &std::path::Path) -> Result<Format, InputError> {
     }
 }
 
+/// The names of `simulate`'s options in messages.
+const FLAGS: SimulateFlags = SimulateFlags {
+    steps: "--steps",
+    dt_out: "--dt-out",
+    state: "--state",
+    gait: "--gait",
+    rk4_step: "--rk4-step",
+};
+
 pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
     let format = format_of(&a.out)?;
+    let _claim = claim_out(a, &format)?;
+    // Parse: the request is checked (and a bad --rtol reported) before any gait search.
+    simulate::check_request(a.steps, a.dt_out, &FLAGS)?;
+    let integrator = super::integrator(&a.integrator, simulate::default_integrator())?;
+    let m = build_model(&a.model)?;
+    // Plan: where the walk starts and what it records.
+    let walk = match simulate::start(&m, &start_of(a)?, &FLAGS) {
+        Ok(walk) => walk,
+        Err(StartError::Input(e)) => return Err(e.into()),
+        Err(StartError::Limit(e)) => return Err(e.into()),
+        Err(StartError::NoGait {
+            which,
+            tried,
+            failed,
+        }) => {
+            eprintln!(
+                "error: no {} period-one gait found for model '{}' at slope {} from {tried} \
+                 guess(es); give a starting point with --state",
+                which.name(),
+                m.info.name,
+                m.slope(),
+            );
+            for (label, g, e) in &failed {
+                report_failure(label, g, e);
+            }
+            return Ok(ExitCode::from(2));
+        }
+    };
+    let opts = simulate::options(&m, a.steps, a.dt_out, integrator);
+    simulate::check_samples(&walk, &opts, &FLAGS)?;
+    // Run, write.
+    let tr = simulate::run(&m, &walk, &opts)?;
+    write(
+        a,
+        &format,
+        to_store(&m, &tr, &opts, &walk.label),
+        &tr,
+        &opts,
+    )?;
+    summary(a, &m, &walk, &tr);
+    // A fall is an outcome of the walk (in the file's `outcome`), not an error.
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Claims `--out` (refused if it exists without `--force`, or if it is the model file).
+fn claim_out(a: &SimulateArgs, format: &Format) -> Result<super::output::Claim, InputError> {
     let inputs: Vec<_> = super::output::model_input(&a.model.model)
         .into_iter()
         .collect();
-    let _claim = super::output::claim(
+    super::output::claim(
         &[super::output::Output {
             flag: "--out",
             path: &a.out,
@@ -55,105 +108,38 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
         }],
         &inputs,
         a.force,
-    )?;
-    if a.steps == 0 {
-        return Err(InputError("--steps: 0 must be an integer >= 1".into()).into());
+    )
+}
+
+/// Where the walk starts: `--state` parsed, else `--gait` (default stable).
+fn start_of(a: &SimulateArgs) -> Result<Start, InputError> {
+    if let Some(s) = &a.state {
+        let v = s
+            .split(',')
+            .map(|t| args::parse_f64(t, "--state"))
+            .collect::<Result<Vec<f64>, _>>()?;
+        return Ok(Start::State(v));
     }
-    if let Some(h) = a.dt_out {
-        if !(h.is_finite() && h > 0.0) {
-            return Err(InputError(format!("--dt-out: {h} must be a positive time step")).into());
-        }
-    }
-    // The integrator first: a bad --rtol is reported before any gait search.
-    super::integrator(&a.integrator, TrajectoryOptions::new(1).integrator)?;
-    if a.state.is_some() && a.gait.is_some() {
-        return Err(InputError("--state and --gait: give one or the other".into()).into());
-    }
-    let m = build_model(&a.model)?;
-    let w = m.walker.as_ref();
-    let (x0, start, period) = match &a.state {
-        Some(s) => {
-            let v = s
-                .split(',')
-                .map(|t| args::parse_f64(t, "--state"))
-                .collect::<Result<Vec<f64>, _>>()?;
-            let x0 = trajectory::initial_state(w, &v)
-                .map_err(|e| InputError(format!("--state: {e}")))?;
-            (x0, format!("state {v:?}"), None)
-        }
-        None => {
-            let which = a.gait.as_deref().unwrap_or("stable");
-            if !matches!(which, "stable" | "unstable") {
-                return Err(InputError(format!(
-                    "--gait: '{which}' is not one of stable, unstable"
-                ))
-                .into());
-            }
-            let guesses = pdw_limit::gaits::model_guesses(w);
-            let (found, failed) = search(&m, &guesses, GAIT_TOL)?;
-            let Some(g) = found.iter().find(|f| f.fp.stable == (which == "stable")) else {
-                eprintln!(
-                    "error: no {which} period-one gait found for model '{}' at slope {} from {} \
-                     guess(es); give a starting point with --state",
-                    m.info.name,
-                    m.slope(),
-                    guesses.len()
-                );
-                for (label, g, e) in &failed {
-                    report_failure(label, g, e);
-                }
-                return Ok(ExitCode::from(2));
-            };
-            (
-                g.fp.state.clone(),
-                format!("{which} gait {:?}", g.fp.section),
-                Some(g.fp.metrics.period),
-            )
-        }
-    };
-    let base = TrajectoryOptions::new(a.steps);
-    // Samples are bounded by the memory available (a tiny --dt-out or --rk4-step is refused
-    // when the walk reaches the bound, not an out-of-memory kill).
-    let opts = TrajectoryOptions {
-        dt_out: a.dt_out,
-        integrator: super::integrator(&a.integrator, base.integrator)?,
-        max_samples: (pdw_limit::resources::memory_available()
-            / 2
-            / pdw_limit::bytes_per_sample(w.dim()) as u64)
-            .min(usize::MAX as u64) as usize,
-        ..base
-    };
-    // From a gait its period tells the samples ahead: refuse before computing.
-    let per_stride = match (opts.dt_out, opts.integrator.method) {
-        (Some(h), _) => period.map(|p| p / h),
-        (None, pdw_hybrid::Method::Rk4 { h }) => period.map(|p| p / h),
-        _ => None,
-    };
-    if let Some(n) = per_stride.map(|k| k * a.steps as f64) {
-        if n > opts.max_samples as f64 {
-            return Err(InputError(format!(
-                "{}: {} steps of this gait (period {:.4}) would record about {n:.2e} samples, \
-                 more than the {} that fit in half the memory available; give a larger step or \
-                 fewer --steps",
-                if opts.dt_out.is_some() {
-                    "--dt-out"
-                } else {
-                    "--rk4-step"
-                },
-                a.steps,
-                period.unwrap_or(f64::NAN),
-                opts.max_samples
-            ))
-            .into());
-        }
-    }
-    let tr = trajectory::simulate(w, &x0, &opts).map_err(|e| InputError(e.to_string()))?;
-    let data = to_store(&m, &tr, &opts, &start);
+    Ok(Start::Gait(GaitKind::parse(
+        a.gait.as_deref().unwrap_or("stable"),
+        "--gait",
+    )?))
+}
+
+/// Writes the trajectory to `--out`: HDF5 with provenance and units, or CSV with the
+/// provenance as `# key: value` comment lines among the other attributes.
+fn write(
+    a: &SimulateArgs,
+    format: &Format,
+    mut data: TrajectoryData,
+    tr: &Trajectory,
+    opts: &TrajectoryOptions,
+) -> anyhow::Result<()> {
     let prov = super::provenance(serde_json::json!({
         "integrator": super::integrator_json(&opts.integrator),
         "steps": opts.steps,
         "dt_out": opts.dt_out,
-        "gait_newton_tol": GAIT_TOL,
+        "gait_newton_tol": simulate::GAIT_TOL,
     }));
     let state_units = super::units_list(&tr.units.state);
     match format {
@@ -176,8 +162,6 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             )?;
         }
         Format::Csv => {
-            // CSV: the provenance as `# key: value` comment lines with the other attributes.
-            let mut data = data;
             for (k, v) in [
                 ("crate_version", &prov.crate_version),
                 ("git_commit", &prov.git_commit),
@@ -191,11 +175,16 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             pdw_store::write_trajectory_csv(&a.out, true, &data)?
         }
     }
+    Ok(())
+}
+
+/// The run's three lines: model and start, steps and samples with how it ended, the file.
+fn summary(a: &SimulateArgs, m: &BuiltModel, walk: &Walk, tr: &Trajectory) {
     crate::outln!(
         "model {}  slope {} rad  from {}",
         m.info.name,
         m.slope(),
-        start
+        walk.label
     );
     crate::outln!(
         "{} of {} steps, {} samples, {} events; ended: {}",
@@ -206,16 +195,14 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
         if tr.outcome.is_ok() {
             "all steps done".to_string()
         } else {
-            outcome_name(w, &tr)
+            outcome_name(tr)
         }
     );
     crate::outln!("wrote {}", a.out.display());
-    // A fall is an outcome of the walk (in the file's `outcome`), not an error.
-    Ok(ExitCode::SUCCESS)
 }
 
 /// How a walk that stopped early ended, with the fall named.
-fn outcome_name(_w: &dyn pdw_walkers::Walker, tr: &Trajectory) -> String {
+fn outcome_name(tr: &Trajectory) -> String {
     match tr.outcome {
         pdw_limit::StrideOutcome::Fall { kind, .. } => format!("fell ({})", kind.name()),
         o => o.to_string(),
@@ -288,7 +275,25 @@ pub fn to_store(
         pre: ev.iter().flat_map(|e| e.pre.iter().copied()).collect(),
         post: ev.iter().flat_map(|e| e.post.iter().copied()).collect(),
     };
-    let attrs = vec![
+    let attrs = attrs(m, tr, opts, start);
+    TrajectoryData {
+        attrs,
+        columns,
+        events,
+        dim: d,
+    }
+}
+
+/// The trajectory file's attributes: the command, model and parameters, where the walk
+/// started, the steps asked and done, how it ended, the integrator and output spacing, and the
+/// legend of the validity flags.
+fn attrs(
+    m: &BuiltModel,
+    tr: &Trajectory,
+    opts: &TrajectoryOptions,
+    start: &str,
+) -> Vec<(String, String)> {
+    vec![
         (
             "command".into(),
             std::env::args().collect::<Vec<_>>().join(" "),
@@ -331,11 +336,5 @@ pub fn to_store(
             })
             .to_string(),
         ),
-    ];
-    TrajectoryData {
-        attrs,
-        columns,
-        events,
-        dim: d,
-    }
+    ]
 }

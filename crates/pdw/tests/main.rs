@@ -1,0 +1,5 @@
+//! The library's tests, one binary: the value syntaxes of the front ends ([`input`]) and the
+//! walk's setup ([`simulate`]).
+
+mod input;
+mod simulate;
