@@ -54,6 +54,34 @@ def fixed_point(
     "stable", "unstable" or "all". Raises ValueError for invalid input (`period` outside
     1..=64), or when no orbit is found (the message lists every guess and why it failed)."""
 
+def gaits(
+    model: str = "simplest",
+    slope: Optional[float] = None,
+    starts: int = 256,
+    search_box: Optional[dict[str, tuple[float, float]]] = None,
+    gait: str = "all",
+    tol: float = 1e-12,
+    threads: int = 2,
+    **params: float,
+) -> dict[str, Any]:
+    """Every gait found without a guess, as `pdw-sweep fixedpoint --search` finds them: Newton
+    from `starts` states spread over a box of the section (a Halton sample of the model's own
+    box, with the coordinates named in `search_box` replaced by their `(lo, hi)`), and the
+    stride map iterated 200 strides from each to see where it settles (a gait, a period-K orbit
+    up to K = 8, a fall).
+
+    Returns a dict: `gaits` (the dicts of `fixed_point`, each with `starts_newton`, the starts
+    from which Newton converged to it, and `starts_settled`, the starts whose iterates settled
+    on it, and `starts_near_gaits`, the starts seeded 1e-3 from the unstable gaits along their
+    unstable eigenvector that settled on it), `orbits` (the period-K attractors, K ≥ 2:
+    period_k, orbit (K × d_s ndarray), multipliers, stable, period, residual, starts_settled,
+    starts_near_gaits), `starts`, `fell` (starts whose iterates fell), `unsettled` (neither fell
+    nor settled), `near_gait_starts` and `box` ({name: (lo, hi)}). The
+    result is the same for any `threads`. Raises ValueError for invalid input (a name not in the
+    section, an empty range, a model without a box of its own and no `search_box` for every
+    coordinate)."""
+
+
 def stride_map(
     model: str,
     states: npt.ArrayLike,

@@ -358,34 +358,151 @@ fn fixed_point<'py>(
         if !keep {
             continue;
         }
-        let d = PyDict::new(py);
-        d.set_item("gait", if fp.stable { "stable" } else { "unstable" })?;
-        d.set_item("guess", &f.label)?;
-        d.set_item("section", fp.section.clone().into_pyarray(py))?;
-        d.set_item("state_names", m.info.state_names.to_vec())?;
-        d.set_item("state", fp.state.clone().into_pyarray(py))?;
-        d.set_item("period", fp.metrics.period)?;
-        d.set_item("step_length", fp.metrics.step_length)?;
-        d.set_item("speed", fp.metrics.speed)?;
-        d.set_item("multipliers", complex_array(py, &fp.multipliers))?;
-        d.set_item("stable", fp.stable)?;
-        d.set_item("residual", fp.residual)?;
-        d.set_item("iterations", fp.iterations)?;
-        d.set_item(
-            "validity",
-            v.as_ref().map(|v| validity_dict(py, v)).transpose()?,
-        )?;
-        d.set_item("period_k", 1)?;
-        d.set_item(
-            "orbit",
-            rows_to_array(py, fp.section.clone(), fp.section.len())?,
-        )?;
-        out.append(d)?;
+        out.append(fixed_point_dict(py, &m, fp, &f.label, v.as_ref())?)?;
     }
     if out.is_empty() {
         return Err(no_gait_error(&m, gait, n, &failed));
     }
     Ok(out)
+}
+
+/// One period-one gait as `fixed_point` returns it (the fields of `fixedpoint --json`).
+fn fixed_point_dict<'py>(
+    py: Python<'py>,
+    m: &Model,
+    fp: &pdw_limit::FixedPoint,
+    label: &str,
+    v: Option<&Validity>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("gait", if fp.stable { "stable" } else { "unstable" })?;
+    d.set_item("guess", label)?;
+    d.set_item("section", fp.section.clone().into_pyarray(py))?;
+    d.set_item("state_names", m.info.state_names.to_vec())?;
+    d.set_item("state", fp.state.clone().into_pyarray(py))?;
+    d.set_item("period", fp.metrics.period)?;
+    d.set_item("step_length", fp.metrics.step_length)?;
+    d.set_item("speed", fp.metrics.speed)?;
+    d.set_item("multipliers", complex_array(py, &fp.multipliers))?;
+    d.set_item("stable", fp.stable)?;
+    d.set_item("residual", fp.residual)?;
+    d.set_item("iterations", fp.iterations)?;
+    d.set_item("validity", v.map(|v| validity_dict(py, v)).transpose()?)?;
+    d.set_item("period_k", 1)?;
+    d.set_item(
+        "orbit",
+        rows_to_array(py, fp.section.clone(), fp.section.len())?,
+    )?;
+    Ok(d)
+}
+
+/// `gaits(model="simplest", slope=None, starts=256, search_box=None, gait="all", tol=1e-12,
+/// threads=2, **params)`: every gait found without a guess, as `pdw-sweep fixedpoint --search`
+/// finds them — Newton from `starts` states spread over a box of the section (the model's own,
+/// with the coordinates named in `search_box`, a dict `{name: (lo, hi)}`, replaced), and the
+/// stride map iterated from each. Returns a dict: `gaits` (the dicts of `fixed_point`, each with
+/// `starts_newton` and `starts_settled`), `orbits` (period-K attractors: `period_k`, `orbit`
+/// (K, d_s), `multipliers`, `stable`, `period`, `residual`, `starts_settled`), `starts`, `fell`,
+/// `unsettled` and `box` (`{name: (lo, hi)}`).
+#[pyfunction]
+#[pyo3(name = "gaits", signature = (model="simplest", slope=None, starts=pdw::gaits::SCAN_STARTS, search_box=None, gait="all", tol=1e-12, threads=THREADS, **params))]
+#[allow(clippy::too_many_arguments)]
+fn scan_gaits<'py>(
+    py: Python<'py>,
+    model: &str,
+    slope: Option<f64>,
+    starts: usize,
+    search_box: Option<std::collections::BTreeMap<String, (f64, f64)>>,
+    gait: &str,
+    tol: f64,
+    threads: usize,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(1..=1_000_000).contains(&starts) {
+        return Err(err(format!(
+            "starts: {starts} must be between 1 and 1000000"
+        )));
+    }
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(err(format!("tol: {tol} must be a positive number")));
+    }
+    if !matches!(gait, "stable" | "unstable" | "all") {
+        return Err(err(format!(
+            "gait: '{gait}' is not one of stable, unstable, all"
+        )));
+    }
+    pdw::input::check_threads(threads, "threads").map_err(err)?;
+    let m = build_kw(model, slope, params)?;
+    let given: Vec<pdw::input::AxisRange> = search_box
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(name, (lo, hi))| pdw::input::AxisRange { name, lo, hi })
+        .collect();
+    let b = pdw::gaits::scan_box(&m, &given, "search_box").map_err(err)?;
+    let sc = interruptible(py, || -> PyResult<_> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(err)?;
+        let integrator = gaits::default_integrator(tol);
+        pdw::gaits::scan(&m, &b, starts, tol, &integrator, &pool).map_err(err)
+    })?;
+    scan_dict(py, &m, &sc, gait)
+}
+
+/// The dict `gaits` returns.
+fn scan_dict<'py>(
+    py: Python<'py>,
+    m: &Model,
+    sc: &pdw_limit::scan::Scan,
+    gait: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let keep = |stable: bool| match gait {
+        "stable" => stable,
+        "unstable" => !stable,
+        _ => true,
+    };
+    let found = PyList::empty(py);
+    for g in sc.gaits.iter().filter(|g| keep(g.fp.stable)) {
+        let v = Validity::along_step(m.walker.as_ref(), &g.fp.state);
+        let d = fixed_point_dict(py, m, &g.fp, "scan", v.as_ref())?;
+        d.set_item("starts_newton", g.newton_starts)?;
+        d.set_item("starts_settled", g.attracted_starts)?;
+        d.set_item("starts_near_gaits", g.near_gaits)?;
+        found.append(d)?;
+    }
+    let orbits = PyList::empty(py);
+    for o in sc.orbits.iter().filter(|o| keep(o.orbit.stable)) {
+        let (orbit, d) = (&o.orbit, PyDict::new(py));
+        let ds = orbit.orbit[0].len();
+        d.set_item("period_k", orbit.period_k)?;
+        d.set_item("orbit", rows_to_array(py, orbit.orbit.concat(), ds)?)?;
+        d.set_item("multipliers", complex_array(py, &orbit.multipliers))?;
+        d.set_item("stable", orbit.stable)?;
+        d.set_item("period", orbit.period)?;
+        d.set_item("residual", orbit.residual)?;
+        d.set_item("starts_settled", o.attracted_starts)?;
+        d.set_item("starts_near_gaits", o.near_gaits)?;
+        orbits.append(d)?;
+    }
+    let bx = PyDict::new(py);
+    for (n, (lo, hi)) in m
+        .info
+        .section_names
+        .iter()
+        .zip(sc.scan_box.lo.iter().zip(&sc.scan_box.hi))
+    {
+        bx.set_item(n, (*lo, *hi))?;
+    }
+    let d = PyDict::new(py);
+    d.set_item("gaits", found)?;
+    d.set_item("orbits", orbits)?;
+    d.set_item("starts", sc.starts)?;
+    d.set_item("fell", sc.fell)?;
+    d.set_item("unsettled", sc.unsettled)?;
+    d.set_item("near_gait_starts", sc.near_gait_starts)?;
+    d.set_item("box", bx)?;
+    Ok(d)
 }
 
 /// `fixed_point(period=K)`, K > 1: the period-K orbits of `fixedpoint --period K --json`, with
@@ -1138,6 +1255,7 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(fixed_point, m)?)?;
+    m.add_function(wrap_pyfunction!(scan_gaits, m)?)?;
     m.add_function(wrap_pyfunction!(stride_map, m)?)?;
     m.add_function(wrap_pyfunction!(stride_outcomes, m)?)?;
     m.add_function(wrap_pyfunction!(basin, m)?)?;

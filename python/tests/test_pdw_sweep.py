@@ -62,6 +62,30 @@ def test_fixed_point_keys_and_values_equal_the_cli_json():
         assert g["period"] == r["period"] and g["validity"] == r["validity"]
 
 
+def test_gaits_without_a_guess_equal_the_cli_search():
+    """Both of Garcia's gaits at 0.009 (REFERENCES section 1) from a scan, with the CLI's counts."""
+    got = pdw.gaits("simplest", slope=0.009)
+    assert got["starts"] == 256 and len(got["gaits"]) == 2 and got["orbits"] == []
+    stable = [g for g in got["gaits"] if g["stable"]][0]
+    assert abs(stable["section"][0] - 0.20031090049483) < 1e-9
+    assert stable["starts_settled"] > 0 and stable["starts_newton"] > 0
+    settled = sum(g["starts_settled"] for g in got["gaits"])
+    assert settled + got["fell"] + got["unsettled"] == 256
+    assert set(got["box"]) == {"theta", "thetadot"}
+    with pytest.raises(ValueError, match="no section coordinate 'phi'"):
+        pdw.gaits("simplest", search_box={"phi": (0.0, 1.0)})
+    exe = cli()
+    if exe is None:
+        pytest.skip("pdw-sweep binary not built")
+    out = subprocess.run([exe, "fixedpoint", "--slope", "0.009", "--search", "--json"],
+                         check=True, capture_output=True, text=True).stdout
+    ref = json.loads(out)
+    assert ref["scan"]["fell"] == got["fell"] and ref["scan"]["unsettled"] == got["unsettled"]
+    for g, r in zip(got["gaits"], ref["fixed_points"]):
+        np.testing.assert_array_equal(g["section"], r["section"])
+        assert (g["starts_newton"], g["starts_settled"]) == (r["starts_newton"], r["starts_settled"])
+
+
 def test_errors_raise_value_error_with_the_cli_message():
     with pytest.raises(ValueError, match="unknown model `walker9`"):
         pdw.fixed_point("walker9")

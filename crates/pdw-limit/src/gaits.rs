@@ -204,7 +204,7 @@ pub fn search_periodic(
 
 /// Re-expresses `orbit` from its canonical first point ([`canonical_start`]): points, states
 /// and stride metrics rotated, `DP^K` re-computed there (same multipliers up to round-off).
-fn rotate_to_canonical(
+pub(crate) fn rotate_to_canonical(
     map: &StrideMap<'_>,
     orbit: &mut PeriodicOrbit,
     opts: &NewtonOptions,

@@ -25,6 +25,7 @@ pub mod newton;
 pub mod orbit;
 pub mod periodic;
 pub mod resources;
+pub mod scan;
 pub mod stride;
 pub mod sweep;
 pub mod trajectory;

@@ -74,6 +74,13 @@ pub trait Walker: Section {
     fn swing_clearance(&self, _mode: usize, _x: &[f64]) -> Option<f64> {
         None
     }
+    /// The box of section states (`lo`, `hi` per section coordinate) where the model's
+    /// period-one gaits are looked for when no guess is given (a scan of the section, pdw-limit's
+    /// `scan`): the physically meaningful ranges of its coordinates. `None` if the model does
+    /// not say (a scan then needs a box from its caller).
+    fn section_box(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        None
+    }
     /// Where the swing foot must clear the ground ([`ClearanceRule`]).
     fn clearance_rule(&self) -> ClearanceRule {
         ClearanceRule::AfterMidStance

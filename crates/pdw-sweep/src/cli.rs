@@ -97,6 +97,7 @@ pub struct ModelsArgs {
 // Negative numbers are values, not flags: `--slope -0.009`, `--guess -0.2,0.2`.
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
+#[command(group(clap::ArgGroup::new("pooled").args(["sweep", "search"]).multiple(true)))]
 pub struct FixedpointArgs {
     #[command(flatten)]
     pub model: ModelOpts,
@@ -115,6 +116,24 @@ pub struct FixedpointArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Find every gait without a guess: Newton from N starting states spread over a box of the
+    /// section (a Halton sample; N defaults to 256), and the stride map iterated from each to
+    /// see where it goes (a stable gait, a period-K orbit up to K = 8, a fall). Lists every
+    /// period-one gait, stable and unstable, and every period-K orbit with how many starts
+    /// reached it. Runs by itself when the model's guesses find no gait.
+    #[arg(
+        long,
+        value_name = "N",
+        num_args = 0..=1,
+        default_missing_value = "256",
+        value_parser = parse_starts,
+        conflicts_with_all = ["guess", "sweep", "follow", "period"]
+    )]
+    pub search: Option<usize>,
+    /// With --search: the range of a section coordinate, NAME=LO:HI (repeatable), in place of
+    /// the model's own box for that coordinate (see `pdw-sweep models`).
+    #[arg(long = "search-box", value_name = "NAME=LO:HI", requires = "search", value_parser = parse_search_box)]
+    pub search_box: Vec<pdw::input::AxisRange>,
     /// Period K of the orbits sought, in strides (1..=64): fixed points of the K-stride map
     /// P^K, found by Newton from the guesses, from where the map takes them after a few hundred
     /// strides, and from the period-doubling predictor at the period-one gaits.
@@ -146,7 +165,7 @@ pub struct FixedpointArgs {
     /// With --sweep: worker threads (rayon pool) for the points on the output grid, their
     /// measurements and the orbit diagram (with --follow: the region map); results are
     /// identical for any count. Default 2.
-    #[arg(long, value_parser = crate::args::parse_threads, requires = "sweep")]
+    #[arg(long, value_parser = crate::args::parse_threads, requires = "pooled")]
     pub threads: Option<usize>,
     /// With --sweep (or --follow): no progress bar.
     #[arg(long)]
@@ -409,6 +428,19 @@ fn parse_gait(s: &str) -> Result<String, String> {
 }
 
 /// `fixedpoint --period`: 1 to 64 strides.
+/// `--search N`: 1 to 1 000 000 starting states.
+fn parse_starts(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=1_000_000).contains(&n) => Ok(n),
+        _ => Err(format!("'{s}' is not a number of starts from 1 to 1000000")),
+    }
+}
+
+/// `--search-box NAME=LO:HI`.
+fn parse_search_box(s: &str) -> Result<pdw::input::AxisRange, String> {
+    pdw::input::parse_axis(s, "--search-box").map_err(|e| e.0)
+}
+
 fn parse_period(s: &str) -> Result<usize, String> {
     let k = s.parse::<usize>().map_err(|e| e.to_string())?;
     if (1..=64).contains(&k) {

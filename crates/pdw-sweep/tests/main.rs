@@ -11,6 +11,7 @@ mod follow;
 mod hostile;
 mod lock;
 mod resume_model;
+mod search;
 mod self_describing;
 mod simulate;
 mod sweep_output;

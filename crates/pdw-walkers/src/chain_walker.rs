@@ -1683,6 +1683,19 @@ impl Walker for ChainWalker {
     }
     /// The spec's gaits (or a generic start); a section with the swing knee's rate starts it at
     /// 0 where a gait gives only `(stance, stance_rate, hip_rate)`.
+    /// With `w = √(g/L)` (L the leg length): the stance leg's angle from 0.02 to 0.6 rad just
+    /// after heel strike (legs apart up to 69°), its rate from −2w to 0 (rolling forward), the
+    /// hip's and the swing knee's rates from −2w to 2w. The compass gait's `(0.27, −0.35w,
+    /// 0.23w)` at 3° (Goswami et al. 1998) and Hsu Chen's kneed gait lie well inside.
+    fn section_box(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let w = (self.r.gravity / self.leg_length).sqrt();
+        let (mut lo, mut hi) = (vec![0.02, -2.0 * w, -2.0 * w], vec![0.6, 0.0, 2.0 * w]);
+        if self.section_dim() == 4 {
+            lo.push(-2.0 * w);
+            hi.push(2.0 * w);
+        }
+        Some((lo, hi))
+    }
     fn gait_guesses(&self) -> Vec<GaitGuess> {
         let ds = self.section_dim();
         let mut v = self.gait_guesses3();

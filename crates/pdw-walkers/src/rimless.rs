@@ -400,6 +400,13 @@ impl Walker for Rimless {
             0.5 * lam * lam,
         ))
     }
+    /// `θ̇` just after a spoke impact from 0.01 to 4 √(g/l): rolling forward, up to a hub speed of
+    /// four times √(g l) (the rolling fixed point's `ω*² = 4 (g/l) sin α sin γ cos² 2α / sin² 2α`,
+    /// Coleman, is below it on slopes up to 45° for wheels of up to 50 spokes).
+    fn section_box(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let w = (self.params.g / self.params.l).sqrt();
+        Some((vec![0.01 * w], vec![4.0 * w]))
+    }
     /// The closed-form rolling fixed point, when it exists.
     fn gait_guesses(&self) -> Vec<GaitGuess> {
         self.rolling_fixed_point()

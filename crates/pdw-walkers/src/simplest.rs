@@ -744,6 +744,13 @@ impl Walker for Simplest {
         ))
     }
     /// Garcia's small-slope asymptotics for both gaits (only meaningful for 0 < γ ≲ 0.015).
+    /// `θ` from 0.03 to 0.35 rad and `θ̇` from −0.4 to −0.03 √(g/l) just after heel strike (the
+    /// stance leg behind the hip, rolling forward): Garcia et al. 1998's gaits have `θ̇* ≈ −θ*`
+    /// with `θ* ≈ 0.97 γ^{1/3}` (App. A.2), from 0.045 at γ = 10⁻⁴ to 0.27 at γ = 0.019, the end
+    /// of their walking range — inside this box.
+    fn section_box(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        Some((vec![0.03, -0.4], vec![0.35, -0.03]))
+    }
     fn gait_guesses(&self) -> Vec<GaitGuess> {
         let g = self.params.slope.max(1e-12);
         vec![

@@ -14,6 +14,7 @@ mod newton_simplest;
 mod orbit_garcia;
 mod period_k;
 mod rimless_wheel;
+mod scan;
 mod simplest_gaits;
 mod trajectory;
 mod validity_continuous;

@@ -4,7 +4,8 @@
 use super::{build_model, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
-use pdw_limit::{FixedPoint, LimitError};
+use pdw_limit::scan::Scan;
+use pdw_limit::{FixedPoint, LimitError, PeriodicOrbit};
 use std::process::ExitCode;
 
 pub use pdw_limit::gaits::{Found, FoundOrbit};
@@ -136,6 +137,9 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let m = build_model(&a.model)?;
+    if let Some(n) = a.search {
+        return run_search(a, &m, n, &integrator);
+    }
     let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
     let guesses = pdw::gaits::guesses(&m, user, "--guess")?;
     if a.period > 1 {
@@ -170,8 +174,22 @@ fn run_period_one(
             super::integrator_text(integrator)
         );
         for f in &selected {
-            print_fixed_point(m, f);
+            print_fixed_point(m, &f.fp, &format!("from guess '{}'", f.label));
         }
+    }
+    if selected.is_empty() && a.guess.is_none() && m.walker.section_box().is_some() {
+        eprintln!(
+            "no {}period-one gait found for model '{}' from its {} guess(es); scanning the \
+             section ({} starts, as --search does)",
+            gait_adjective(&a.gait),
+            m.info.name,
+            guesses.len(),
+            pdw::gaits::SCAN_STARTS
+        );
+        for (label, g, e) in &failed {
+            report_failure(label, g, e);
+        }
+        return run_search(a, m, pdw::gaits::SCAN_STARTS, integrator);
     }
     if selected.is_empty() {
         eprintln!(
@@ -187,6 +205,169 @@ fn run_period_one(
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `--search [N]` (and the fallback when the model's guesses find nothing): every gait in the
+/// section's box from N starts ([`pdw::gaits::scan`]), each with the starts that reached it.
+fn run_search(
+    a: &FixedpointArgs,
+    m: &BuiltModel,
+    starts: usize,
+    integrator: &pdw_hybrid::Options,
+) -> anyhow::Result<ExitCode> {
+    let b = pdw::gaits::scan_box(m, &a.search_box, "--search-box")?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(2))
+        .build()?;
+    let sc = pdw::gaits::scan(m, &b, starts, a.tol, integrator, &pool)?;
+    let gaits: Vec<_> = sc
+        .gaits
+        .iter()
+        .filter(|g| wanted(&a.gait, g.fp.stable))
+        .collect();
+    let orbits: Vec<_> = sc
+        .orbits
+        .iter()
+        .filter(|o| wanted(&a.gait, o.orbit.stable))
+        .collect();
+    if a.json {
+        let j = scan_json(m, &sc, &gaits, &orbits, integrator);
+        crate::outln!("{}", serde_json::to_string_pretty(&j)?);
+    } else {
+        print_scan_header(m, &sc, integrator);
+        for g in &gaits {
+            let source = format!(
+                "Newton converged to it from {} of the {} starts; {} settled on it{}",
+                g.newton_starts,
+                sc.starts,
+                g.attracted_starts,
+                near_text(g.near_gaits)
+            );
+            print_fixed_point(m, &g.fp, &source);
+        }
+        for o in &orbits {
+            let source = format!(
+                "{} of the {} starts settled on it{}",
+                o.attracted_starts,
+                sc.starts,
+                near_text(o.near_gaits)
+            );
+            print_orbit(m, &o.orbit, &source);
+        }
+    }
+    if gaits.is_empty() && orbits.is_empty() {
+        eprintln!(
+            "no {}gait found for model '{}' at slope {} by a scan of {} starts ({} fell, {} \
+             neither fell nor settled); try more starts (--search N), a smaller --search-box, \
+             or: {}",
+            gait_adjective(&a.gait),
+            m.info.name,
+            m.slope(),
+            sc.starts,
+            sc.fell,
+            sc.unsettled,
+            advice(m)
+        );
+        return Ok(ExitCode::from(2));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `, and N of the starts near the unstable period-one gaits` when N > 0.
+fn near_text(n: usize) -> String {
+    if n == 0 {
+        String::new()
+    } else {
+        format!(", and {n} of the starts near the unstable period-one gaits")
+    }
+}
+
+/// The scan's first lines: the model, the box and what became of the starts.
+fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options) {
+    crate::outln!(
+        "model {}  slope {} rad ({:.4} deg)  integrator {}",
+        m.info.name,
+        m.slope(),
+        m.slope().to_degrees(),
+        super::integrator_text(integrator)
+    );
+    let b = &sc.scan_box;
+    let ranges: Vec<String> = m
+        .info
+        .section_names
+        .iter()
+        .zip(b.lo.iter().zip(&b.hi))
+        .map(|(n, (lo, hi))| format!("{n} in [{lo}, {hi}]"))
+        .collect();
+    crate::outln!(
+        "scan of the section: {} starts (Halton) over {}",
+        sc.starts,
+        ranges.join(", ")
+    );
+    crate::outln!(
+        "  {} period-one gait(s), {} period-K orbit(s); {} starts fell, {} neither fell nor \
+         settled on an orbit of period ≤ {}; {} more starts near the unstable period-one gaits",
+        sc.gaits.len(),
+        sc.orbits.len(),
+        sc.fell,
+        sc.unsettled,
+        pdw_limit::scan::MAX_PERIOD,
+        sc.near_gait_starts
+    );
+}
+
+/// `--search --json`: the `--json` of the gaits and of the orbits found, each with its starts,
+/// and the scan's box and counts.
+fn scan_json(
+    m: &BuiltModel,
+    sc: &Scan,
+    gaits: &[&pdw_limit::scan::ScanGait],
+    orbits: &[&pdw_limit::scan::ScanOrbit],
+    integrator: &pdw_hybrid::Options,
+) -> serde_json::Value {
+    let found: Vec<Found> = gaits
+        .iter()
+        .map(|g| Found {
+            label: "scan".into(),
+            fp: g.fp.clone(),
+        })
+        .collect();
+    let refs: Vec<&Found> = found.iter().collect();
+    let mut j = gaits_json(m, &refs, integrator);
+    if let Some(fps) = j["fixed_points"].as_array_mut() {
+        for (e, g) in fps.iter_mut().zip(gaits) {
+            e["starts_newton"] = g.newton_starts.into();
+            e["starts_settled"] = g.attracted_starts.into();
+            e["starts_near_gaits"] = g.near_gaits.into();
+        }
+    }
+    let orbits: Vec<serde_json::Value> = orbits
+        .iter()
+        .map(|o| {
+            let fo = FoundOrbit {
+                label: "scan".into(),
+                orbit: o.orbit.clone(),
+            };
+            let mut one = orbits_json(m, o.orbit.period_k, &[&fo]);
+            let mut e = one["fixed_points"][0].take();
+            e["starts_settled"] = o.attracted_starts.into();
+            e["starts_near_gaits"] = o.near_gaits.into();
+            e
+        })
+        .collect();
+    j["orbits"] = orbits.into();
+    j["scan"] = serde_json::json!({
+        "starts": sc.starts,
+        "sample": "halton",
+        "box": m.info.section_names.iter().zip(sc.scan_box.lo.iter().zip(&sc.scan_box.hi))
+            .map(|(n, (lo, hi))| serde_json::json!({"name": n, "lo": lo, "hi": hi}))
+            .collect::<Vec<_>>(),
+        "fell": sc.fell,
+        "unsettled": sc.unsettled,
+        "near_gait_starts": sc.near_gait_starts,
+        "near_gait_offset": pdw_limit::scan::NEAR_GAIT_OFFSET,
+    });
+    j
 }
 
 /// Whether `--gait` (stable, unstable or all) reports a gait of this stability.
@@ -348,13 +529,11 @@ pub fn rimless_min_slope(n: f64) -> f64 {
     hi
 }
 
-fn print_fixed_point(m: &BuiltModel, f: &Found) {
-    let fp = &f.fp;
+fn print_fixed_point(m: &BuiltModel, fp: &FixedPoint, source: &str) {
     crate::outln!();
     crate::outln!(
-        "{} gait (from guess '{}')",
+        "{} gait ({source})",
         if fp.stable { "stable" } else { "unstable" },
-        f.label
     );
     let (tu, lu) = (super::time_unit(m), super::length_unit(m));
     for ((n, v), u) in m
@@ -496,7 +675,7 @@ fn run_period_k(
             m.slope().to_degrees()
         );
         for f in &selected {
-            print_orbit(m, f);
+            print_orbit(m, &f.orbit, &format!("from '{}'", f.label));
         }
     }
     if selected.is_empty() {
@@ -564,14 +743,12 @@ fn orbits_json(m: &BuiltModel, k: usize, selected: &[&FoundOrbit]) -> serde_json
     })
 }
 
-fn print_orbit(m: &BuiltModel, f: &FoundOrbit) {
-    let o = &f.orbit;
+fn print_orbit(m: &BuiltModel, o: &PeriodicOrbit, source: &str) {
     let k = o.period_k;
     crate::outln!();
     crate::outln!(
-        "{} period-{k} orbit (from '{}')",
+        "{} period-{k} orbit ({source})",
         if o.stable { "stable" } else { "unstable" },
-        f.label
     );
     let names = &m.info.section_names;
     crate::outln!(
