@@ -327,14 +327,7 @@ fn fixed_point<'py>(
             "period: {period} must be between 1 and 64 strides"
         )));
     }
-    if !(tol.is_finite() && tol > 0.0) {
-        return Err(err(format!("tol: {tol} must be a positive number")));
-    }
-    if !matches!(gait, "stable" | "unstable" | "all") {
-        return Err(err(format!(
-            "gait: '{gait}' is not one of stable, unstable, all"
-        )));
-    }
+    check_gait_and_tol(gait, tol)?;
     let m = build_kw(model, slope, params)?;
     if period > 1 {
         return fixed_point_period_k(py, &m, period, gait, tol, guess);
@@ -364,6 +357,19 @@ fn fixed_point<'py>(
         return Err(no_gait_error(&m, gait, n, &failed));
     }
     Ok(out)
+}
+
+/// `gait` one of stable, unstable, all; `tol` a positive number.
+fn check_gait_and_tol(gait: &str, tol: f64) -> PyResult<()> {
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(err(format!("tol: {tol} must be a positive number")));
+    }
+    if !matches!(gait, "stable" | "unstable" | "all") {
+        return Err(err(format!(
+            "gait: '{gait}' is not one of stable, unstable, all"
+        )));
+    }
+    Ok(())
 }
 
 /// One period-one gait as `fixed_point` returns it (the fields of `fixedpoint --json`).
@@ -423,14 +429,7 @@ fn scan_gaits<'py>(
             "starts: {starts} must be between 1 and 1000000"
         )));
     }
-    if !(tol.is_finite() && tol > 0.0) {
-        return Err(err(format!("tol: {tol} must be a positive number")));
-    }
-    if !matches!(gait, "stable" | "unstable" | "all") {
-        return Err(err(format!(
-            "gait: '{gait}' is not one of stable, unstable, all"
-        )));
-    }
+    check_gait_and_tol(gait, tol)?;
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let m = build_kw(model, slope, params)?;
     let given: Vec<pdw::input::AxisRange> = search_box

@@ -166,13 +166,7 @@ fn run_period_one(
         let j = gaits_json(m, &selected, integrator);
         crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     } else {
-        crate::outln!(
-            "model {}  slope {} rad ({:.4} deg)  integrator {}",
-            m.info.name,
-            m.slope(),
-            m.slope().to_degrees(),
-            super::integrator_text(integrator)
-        );
+        print_model_line(m, integrator);
         for f in &selected {
             print_fixed_point(m, &f.fp, &format!("from guess '{}'", f.label));
         }
@@ -282,8 +276,8 @@ fn near_text(n: usize) -> String {
     }
 }
 
-/// The scan's first lines: the model, the box and what became of the starts.
-fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options) {
+/// The first line of a gait report: model, slope (rad and degrees), integrator.
+fn print_model_line(m: &BuiltModel, integrator: &pdw_hybrid::Options) {
     crate::outln!(
         "model {}  slope {} rad ({:.4} deg)  integrator {}",
         m.info.name,
@@ -291,6 +285,11 @@ fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options
         m.slope().to_degrees(),
         super::integrator_text(integrator)
     );
+}
+
+/// The scan's first lines: the model, the box and what became of the starts.
+fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options) {
+    print_model_line(m, integrator);
     let b = &sc.scan_box;
     let ranges: Vec<String> = m
         .info
