@@ -213,6 +213,7 @@ impl PiLatchWalker {
     }
 }
 
+pdw_hybrid::integrate_concretely!(PiLatchWalker);
 impl HybridSystem for PiLatchWalker {
     fn dim(&self) -> usize {
         13

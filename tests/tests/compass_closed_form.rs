@@ -182,6 +182,7 @@ struct ClosedCompass {
     p: Gp,
 }
 
+pdw_hybrid::integrate_through_dyn!(ClosedCompass);
 impl HybridSystem for ClosedCompass {
     fn dim(&self) -> usize {
         4

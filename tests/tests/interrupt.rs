@@ -19,6 +19,7 @@ struct Decay {
     trigger: usize,
 }
 
+pdw_hybrid::integrate_through_dyn!(Decay);
 impl HybridSystem for Decay {
     fn dim(&self) -> usize {
         3

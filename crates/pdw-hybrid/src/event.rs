@@ -1229,6 +1229,7 @@ mod tests {
     /// A nonlinear flow of any dimension for the dense-output build (no guards).
     struct Coupled(usize);
 
+    crate::integrate_through_dyn!(Coupled);
     impl HybridSystem for Coupled {
         fn dim(&self) -> usize {
             self.0
@@ -1321,6 +1322,7 @@ mod tests {
         c: f64,
     }
 
+    crate::integrate_through_dyn!(Plane);
     impl HybridSystem for Plane {
         fn dim(&self) -> usize {
             self.d

@@ -233,6 +233,25 @@ impl Integrator {
         sys.integrate_concrete(self, mode, t, x, t_end, resume, obs)
     }
 
+    /// The integration loop compiled once for `dyn HybridSystem` (every flow and guard call
+    /// virtual), for systems that implement [`IntegrateConcrete`](crate::IntegrateConcrete)
+    /// with [`integrate_through_dyn!`](crate::integrate_through_dyn).
+    #[doc(hidden)]
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_dyn(
+        &mut self,
+        sys: &dyn HybridSystem,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        resume: bool,
+        obs: Option<Observer<'_>>,
+    ) -> StopReason {
+        self.run_concrete(sys, mode, t, x, t_end, resume, obs)
+    }
+
     /// The integration loop itself, compiled for the system's concrete type: reached through
     /// [`IntegrateConcrete`](crate::IntegrateConcrete), so that a system held as a trait object
     /// pays one virtual call per segment and its flow is inlined into the steps.

@@ -372,13 +372,27 @@ pub trait HybridSystem: Send + Sync + IntegrateConcrete {
     }
 }
 
-/// The scalar integrator's loop compiled for a system's concrete type, implemented for every
-/// [`HybridSystem`]. The analysis holds its model as `&dyn Section` (one compiled analysis for
-/// every model); without this, every call of the model's flow from the scalar integrator would
-/// go through the vtable and could not be inlined into the Runge–Kutta stages, which costs a
-/// model with a cheap flow (the simplest walker: a few dozen flops) a third of a stride. Through
-/// this trait a trait object pays one virtual call per integrated segment instead, and
+/// How the scalar integrator's loop reaches a system: compiled for its concrete type, or once
+/// for every system through the trait object. The analysis holds its model as `&dyn Section`
+/// (one compiled analysis for every model); a virtual call per evaluation of a model's flow
+/// could not be inlined into the Runge–Kutta stages, which costs a model with a cheap flow (the
+/// simplest walker: a few dozen flops) a third of a stride. Through this trait a trait object
+/// pays one virtual call per integrated segment instead, and
 /// [`Integrator`](crate::Integrator)'s loop runs on the concrete type.
+///
+/// Every [`HybridSystem`] implements it with one of two macros, next to its `HybridSystem`
+/// impl:
+/// - [`integrate_concretely!`](crate::integrate_concretely) — the loop compiled for the type,
+///   once, in the crate that invokes the macro (the models of pdw-walkers, the variational
+///   system of pdw-limit): the fast path;
+/// - [`integrate_through_dyn!`](crate::integrate_through_dyn) — the loop compiled once in
+///   pdw-hybrid for `dyn HybridSystem`, every flow and guard call virtual: the same arithmetic
+///   and the same bits, at the price of a call per evaluation; for test systems and models
+///   whose flow outweighs a call.
+///
+/// The loop is some 200 kB of machine code; a blanket implementation would compile it again
+/// for every type in every crate that makes a trait object of it (Rust shares no generic
+/// instantiation between crates in a release build), minutes of every test build.
 pub trait IntegrateConcrete {
     /// Runs [`Integrator`](crate::Integrator)'s loop on `self` (see
     /// [`Integrator::integrate`](crate::Integrator::integrate) for the arguments).
@@ -396,19 +410,52 @@ pub trait IntegrateConcrete {
     ) -> crate::StopReason;
 }
 
-impl<T: HybridSystem> IntegrateConcrete for T {
-    fn integrate_concrete(
-        &self,
-        integ: &mut crate::Integrator,
-        mode: usize,
-        t: &mut f64,
-        x: &mut [f64],
-        t_end: f64,
-        resume: bool,
-        obs: Option<crate::integrator::Observer<'_>>,
-    ) -> crate::StopReason {
-        integ.run_concrete(self, mode, t, x, t_end, resume, obs)
-    }
+/// Implements [`IntegrateConcrete`] for the listed types with the integrator's loop compiled
+/// for each of them, in the invoking crate (the fast path; see [`IntegrateConcrete`]).
+/// `pdw_hybrid::integrate_concretely!(MyModel);`
+#[macro_export]
+macro_rules! integrate_concretely {
+    ($($t:ty),+ $(,)?) => {$(
+        impl $crate::IntegrateConcrete for $t {
+            // Never inlined into another crate: the instantiation of the loop stays here.
+            #[inline(never)]
+            fn integrate_concrete(
+                &self,
+                integ: &mut $crate::Integrator,
+                mode: usize,
+                t: &mut f64,
+                x: &mut [f64],
+                t_end: f64,
+                resume: bool,
+                obs: ::core::option::Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+            ) -> $crate::StopReason {
+                integ.run_concrete(self, mode, t, x, t_end, resume, obs)
+            }
+        }
+    )+};
+}
+
+/// Implements [`IntegrateConcrete`] for the listed types through the loop compiled once for
+/// `dyn HybridSystem` (see [`IntegrateConcrete`]): no code per type.
+/// `pdw_hybrid::integrate_through_dyn!(MyTestSystem);`
+#[macro_export]
+macro_rules! integrate_through_dyn {
+    ($($t:ty),+ $(,)?) => {$(
+        impl $crate::IntegrateConcrete for $t {
+            fn integrate_concrete(
+                &self,
+                integ: &mut $crate::Integrator,
+                mode: usize,
+                t: &mut f64,
+                x: &mut [f64],
+                t_end: f64,
+                resume: bool,
+                obs: ::core::option::Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+            ) -> $crate::StopReason {
+                integ.run_dyn(self, mode, t, x, t_end, resume, obs)
+            }
+        }
+    )+};
 }
 
 /// A section model seen as `&dyn Section`, whatever its type (a concrete model or a trait object

@@ -92,6 +92,12 @@ impl<S: HybridSystem + ?Sized> LaneDriver<S> for Bouncer {
     }
 }
 
+/// The system as a trait object: the batch engine and the scalar driver loop are compiled once
+/// for `dyn HybridSystem` in this binary, not once per toy system (same arithmetic, same bits).
+fn dynsys<S: HybridSystem>(sys: &S) -> &dyn HybridSystem {
+    sys
+}
+
 fn items(n: usize, seed: u64) -> Vec<Item> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut v: Vec<Item> = (0..n)
@@ -139,7 +145,7 @@ fn batched_equals_scalar_bit_for_bit_for_any_lane_count() {
         let mut integ = Integrator::new(2, opts).unwrap();
         let scalar: Vec<Out> = its
             .iter()
-            .map(|it| pdw_hybrid::run_scalar_with(&mut integ, &sys, &drv, it).unwrap())
+            .map(|it| pdw_hybrid::run_scalar_with(&mut integ, dynsys(&sys), &drv, it).unwrap())
             .collect();
         // The runs exercise both modes, the terminal guard and the immediate stops.
         assert!(scalar.iter().any(|o| o.events >= 12));
@@ -156,7 +162,7 @@ fn batched_equals_scalar_bit_for_bit_for_any_lane_count() {
                 lanes,
                 integrator: opts,
             };
-            let (batched, stats) = run_batch_counted(&sys, &drv, &its, &bo).unwrap();
+            let (batched, stats) = run_batch_counted(dynsys(&sys), &drv, &its, &bo).unwrap();
             assert_eq!(batched.len(), its.len());
             for (i, (b, s)) in batched.iter().zip(&scalar).enumerate() {
                 assert_eq!(b, s, "{:?}, {lanes} lanes, item {i}", opts.method);
@@ -172,6 +178,31 @@ fn batched_equals_scalar_bit_for_bit_for_any_lane_count() {
     }
 }
 
+/// Without the `phase-timing` feature the phase counters cost nothing and count nothing (with
+/// it, `tests/phases.rs` checks what they count).
+#[test]
+fn phase_counters_stay_zero_without_the_feature() {
+    if pdw_hybrid::phases::ENABLED {
+        return;
+    }
+    let sys = Ball { g: 9.81, e: 0.8 };
+    let drv = Bouncer {
+        max_events: 3,
+        start_mode: 0,
+    };
+    let bo = BatchOptions {
+        lanes: 8,
+        integrator: Options::dopri5(1e-9),
+    };
+    let out = run_batch(dynsys(&sys), &drv, &items(16, 5), &bo).unwrap();
+    assert_eq!(out.len(), 16);
+    assert!(out.iter().any(|o| o.events > 0), "the balls bounced");
+    assert_eq!(
+        pdw_hybrid::phases::take(),
+        pdw_hybrid::phases::PhaseTimes::default()
+    );
+}
+
 #[test]
 fn single_mode_batch_equals_scalar() {
     let sys = Ball { g: 9.81, e: 0.7 };
@@ -185,11 +216,11 @@ fn single_mode_batch_equals_scalar() {
             lanes: 64,
             integrator: opts,
         };
-        let batched = run_batch(&sys, &drv, &its, &bo).unwrap();
+        let batched = run_batch(dynsys(&sys), &drv, &its, &bo).unwrap();
         for (i, it) in its.iter().enumerate() {
             assert_eq!(
                 batched[i],
-                run_scalar(&sys, &drv, it, &opts).unwrap(),
+                run_scalar(dynsys(&sys), &drv, it, &opts).unwrap(),
                 "item {i}"
             );
         }
@@ -208,7 +239,7 @@ fn parallel_batches_are_identical_for_any_thread_count_and_chunk_size() {
         lanes: 32,
         integrator: Options::dop853(1e-10),
     };
-    let reference = run_batch(&sys, &drv, &its, &opts).unwrap();
+    let reference = run_batch(dynsys(&sys), &drv, &its, &opts).unwrap();
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -221,7 +252,8 @@ fn parallel_batches_are_identical_for_any_thread_count_and_chunk_size() {
                 done.fetch_max(n, std::sync::atomic::Ordering::Relaxed);
                 calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             };
-            let out = run_batch_par(&sys, &drv, &its, &opts, &pool, chunk, &progress).unwrap();
+            let out =
+                run_batch_par(dynsys(&sys), &drv, &its, &opts, &pool, chunk, &progress).unwrap();
             assert!(out == reference, "{threads} threads, chunk {chunk}");
             assert_eq!(done.into_inner(), its.len());
             // A report per `chunk` items finished (and one at the end of each batch).
@@ -247,7 +279,7 @@ fn bad_batch_arguments_are_errors() {
         integrator: Options::dopri5(1e-8),
     };
     assert_eq!(
-        run_batch(&sys, &drv, &its, &bo).unwrap_err(),
+        run_batch(dynsys(&sys), &drv, &its, &bo).unwrap_err(),
         HybridError::NoLanes { lanes: 0 }
     );
     let bo = BatchOptions {
@@ -259,7 +291,7 @@ fn bad_batch_arguments_are_errors() {
         .build()
         .unwrap();
     assert_eq!(
-        run_batch_par(&sys, &drv, &its, &bo, &pool, 0, &|_| {}).unwrap_err(),
+        run_batch_par(dynsys(&sys), &drv, &its, &bo, &pool, 0, &|_| {}).unwrap_err(),
         HybridError::ZeroChunk { chunk: 0 }
     );
     let bad = Bouncer {
@@ -267,14 +299,14 @@ fn bad_batch_arguments_are_errors() {
         start_mode: 2,
     };
     assert_eq!(
-        run_batch(&sys, &bad, &its, &bo).unwrap_err(),
+        run_batch(dynsys(&sys), &bad, &its, &bo).unwrap_err(),
         HybridError::ModeOutOfRange {
             mode: 2,
             n_modes: 2
         }
     );
     assert_eq!(
-        run_scalar(&sys, &bad, &its[0], &bo.integrator).unwrap_err(),
+        run_scalar(dynsys(&sys), &bad, &its[0], &bo.integrator).unwrap_err(),
         HybridError::ModeOutOfRange {
             mode: 2,
             n_modes: 2
@@ -286,16 +318,18 @@ fn bad_batch_arguments_are_errors() {
         .build()
         .unwrap();
     assert_eq!(
-        run_batch_par(&sys, &bad, &its, &bo, &pool2, 3, &|_| {}).unwrap_err(),
+        run_batch_par(dynsys(&sys), &bad, &its, &bo, &pool2, 3, &|_| {}).unwrap_err(),
         HybridError::ModeOutOfRange {
             mode: 2,
             n_modes: 2
         }
     );
-    assert!(run_batch(&sys, &drv, &[], &bo).unwrap().is_empty());
-    assert!(run_batch_par(&sys, &drv, &[], &bo, &pool2, 3, &|_| {})
-        .unwrap()
-        .is_empty());
+    assert!(run_batch(dynsys(&sys), &drv, &[], &bo).unwrap().is_empty());
+    assert!(
+        run_batch_par(dynsys(&sys), &drv, &[], &bo, &pool2, 3, &|_| {})
+            .unwrap()
+            .is_empty()
+    );
 }
 
 #[test]
@@ -336,6 +370,7 @@ fn soft_ball_contact_conserves_energy_across_mode_switches() {
 /// far from the floor are cleared from their end points and committed without sampling.
 struct RatedSoftBall(SoftBall);
 
+pdw_hybrid::integrate_through_dyn!(RatedSoftBall);
 impl HybridSystem for RatedSoftBall {
     fn dim(&self) -> usize {
         2
@@ -386,7 +421,7 @@ fn register_loop_equals_general_loop_bit_for_bit() {
     register_loop_case(&RatedSoftBall(soft()), true);
 }
 
-fn register_loop_case<S: HybridSystem>(sys: &S, rated: bool) {
+fn register_loop_case(sys: &dyn HybridSystem, rated: bool) {
     let drv = Bouncer {
         max_events: 12,
         start_mode: 0,
@@ -428,14 +463,9 @@ fn register_loop_case<S: HybridSystem>(sys: &S, rated: bool) {
             integ.set_register_loop(on);
             // In contact (the free flight is a parabola, a step or two).
             let (mut t, mut x) = (0.0, [-1e-3, -2.0]);
-            let stop = integ.integrate_observed(
-                sys as &dyn pdw_hybrid::HybridSystem,
-                1,
-                &mut t,
-                &mut x,
-                5.0,
-                &mut |t, x| log.push((t.to_bits(), x[0].to_bits(), x[1].to_bits())),
-            );
+            let stop = integ.integrate_observed(sys, 1, &mut t, &mut x, 5.0, &mut |t, x| {
+                log.push((t.to_bits(), x[0].to_bits(), x[1].to_bits()))
+            });
             assert_eq!(stop, StopReason::Guard { guard: 0 }, "{:?}", base.method);
         }
         assert!(

@@ -147,6 +147,26 @@ fn with_scratch<R>(n: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
     }
 }
 
+/// The integrator's loop compiled for the variational system (pdw-hybrid's
+/// `IntegrateConcrete`): its flow is the model's flow and Jacobian in one pass, inlined into the
+/// Runge–Kutta stages. Instantiated where the wrapper is built — `jacobian.rs` for
+/// `dyn Section`, once, in this crate.
+impl<S: HybridSystem + ?Sized> pdw_hybrid::IntegrateConcrete for Variational<'_, S> {
+    #[inline(never)]
+    fn integrate_concrete(
+        &self,
+        integ: &mut pdw_hybrid::Integrator,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        resume: bool,
+        obs: Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+    ) -> pdw_hybrid::StopReason {
+        integ.run_concrete(self, mode, t, x, t_end, resume, obs)
+    }
+}
+
 impl<S: HybridSystem + ?Sized> HybridSystem for Variational<'_, S> {
     fn dim(&self) -> usize {
         self.d + self.d * self.m

@@ -211,8 +211,14 @@ fn resume_never_reports_a_damaged_file_complete() {
 
 #[test]
 fn no_gait_on_a_level_floor() {
-    for model in ["simplest", "compass"] {
-        for slope in ["0", "-0", "1e-320"] {
+    // Every spelling of a level floor on the simplest walker; the compass once: its guesses fail
+    // as the simplest walker's do, and the scan that follows costs ~40 s of one core (a start
+    // of its 256 whose Newton strides run long: see the note on `pdw_limit::scan`).
+    for (model, slopes) in [
+        ("simplest", &["0", "-0", "1e-320"][..]),
+        ("compass", &["0"][..]),
+    ] {
+        for &slope in slopes {
             let o = run(&["fixedpoint", "--model", model, "--slope", slope]);
             let e = refused(&o);
             assert!(

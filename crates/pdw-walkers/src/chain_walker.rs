@@ -1132,6 +1132,7 @@ fn add_point_mass(l: Link, mp: f64, p: [f64; 2]) -> Link {
     }
 }
 
+pdw_hybrid::integrate_concretely!(ChainWalker);
 impl HybridSystem for ChainWalker {
     fn dim(&self) -> usize {
         2 * self.n

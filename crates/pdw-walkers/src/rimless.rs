@@ -186,6 +186,7 @@ impl Rimless {
     }
 }
 
+pdw_hybrid::integrate_concretely!(Rimless);
 impl HybridSystem for Rimless {
     fn dim(&self) -> usize {
         2

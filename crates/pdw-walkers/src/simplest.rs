@@ -349,6 +349,7 @@ fn jacobian_from(x: &[f64], f: &[f64; 4], [c, sp, cp]: [f64; 3], jac: &mut [f64]
     jac[3 * 4 + 2] = (x[1] * x[1] - c) * cp;
 }
 
+pdw_hybrid::integrate_concretely!(Simplest);
 impl HybridSystem for Simplest {
     fn dim(&self) -> usize {
         4

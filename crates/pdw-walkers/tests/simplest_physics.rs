@@ -402,6 +402,7 @@ fn simplest_guard_rates_are_the_derivatives_along_the_flow() {
 /// which choose how a located root is refined.
 struct NoRates(Simplest);
 
+pdw_hybrid::integrate_through_dyn!(NoRates);
 impl HybridSystem for NoRates {
     fn dim(&self) -> usize {
         self.0.dim()

@@ -369,6 +369,7 @@ fn fd_fixed_point(map: &StrideMap<'_>, guess: &[f64], tol: f64) -> FixedPoint {
 /// vector field from the plain one).
 struct Skewed(Simplest);
 
+pdw_hybrid::integrate_through_dyn!(Skewed);
 impl pdw_hybrid::HybridSystem for Skewed {
     fn dim(&self) -> usize {
         self.0.dim()

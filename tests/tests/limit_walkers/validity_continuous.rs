@@ -46,6 +46,7 @@ impl ThroughBuckling<'_> {
     }
 }
 
+pdw_hybrid::integrate_through_dyn!(ThroughBuckling<'_>);
 impl HybridSystem for ThroughBuckling<'_> {
     fn dim(&self) -> usize {
         self.0.dim()

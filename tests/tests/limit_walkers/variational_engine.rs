@@ -20,6 +20,21 @@ fn walker(gamma: f64) -> Simplest {
 /// on the guard's polynomial, or Illinois on states), which changes the last bits of an event.
 struct Plain<'a, S: ?Sized>(&'a S);
 
+impl<S: HybridSystem + ?Sized> pdw_hybrid::IntegrateConcrete for Plain<'_, S> {
+    fn integrate_concrete(
+        &self,
+        integ: &mut pdw_hybrid::Integrator,
+        mode: usize,
+        t: &mut f64,
+        x: &mut [f64],
+        t_end: f64,
+        resume: bool,
+        obs: Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
+    ) -> pdw_hybrid::StopReason {
+        integ.run_dyn(self, mode, t, x, t_end, resume, obs)
+    }
+}
+
 impl<S: HybridSystem + ?Sized> HybridSystem for Plain<'_, S> {
     fn dim(&self) -> usize {
         self.0.dim()

@@ -33,6 +33,7 @@ impl Oscillator {
     }
 }
 
+pdw_hybrid::integrate_through_dyn!(Oscillator);
 impl HybridSystem for Oscillator {
     fn dim(&self) -> usize {
         2
@@ -73,6 +74,7 @@ impl OscGrowth {
     }
 }
 
+pdw_hybrid::integrate_through_dyn!(OscGrowth);
 impl HybridSystem for OscGrowth {
     fn dim(&self) -> usize {
         3
@@ -129,6 +131,7 @@ impl Pendulum {
     }
 }
 
+pdw_hybrid::integrate_through_dyn!(Pendulum);
 impl HybridSystem for Pendulum {
     fn dim(&self) -> usize {
         2
@@ -171,6 +174,7 @@ pub const BALL_GUARDS: [GuardSpec; 1] = [GuardSpec {
     kind: GuardKind::Reset,
 }];
 
+pdw_hybrid::integrate_through_dyn!(Ball);
 impl HybridSystem for Ball {
     fn dim(&self) -> usize {
         2
@@ -237,6 +241,7 @@ impl SoftBall {
     }
 }
 
+pdw_hybrid::integrate_through_dyn!(SoftBall);
 impl HybridSystem for SoftBall {
     fn dim(&self) -> usize {
         2
@@ -302,6 +307,7 @@ impl HybridSystem for SoftBall {
 /// `ẋ = x²` (exact `x = x₀/(1 − x₀ t)`, blows up at `t = 1/x₀`).
 pub struct BlowUp;
 
+pdw_hybrid::integrate_through_dyn!(BlowUp);
 impl HybridSystem for BlowUp {
     fn dim(&self) -> usize {
         1
@@ -331,6 +337,7 @@ impl HybridSystem for BlowUp {
 /// `ẋ = 1` on `x ≤ 1.5`, NaN beyond: the flow leaves its domain at `t = 1.5 − x₀`.
 pub struct Cliff;
 
+pdw_hybrid::integrate_through_dyn!(Cliff);
 impl HybridSystem for Cliff {
     fn dim(&self) -> usize {
         1

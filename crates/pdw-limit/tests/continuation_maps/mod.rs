@@ -27,6 +27,7 @@ const GUARDS: [GuardSpec; 1] = [GuardSpec {
 }];
 const NAMES: [&str; 3] = ["s0", "s1", "s2"];
 
+pdw_hybrid::integrate_through_dyn!(MapSystem);
 impl HybridSystem for MapSystem {
     fn dim(&self) -> usize {
         self.n + 1
