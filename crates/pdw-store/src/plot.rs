@@ -9,6 +9,7 @@ use std::sync::Once;
 
 use ndarray::ArrayView2;
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
@@ -496,6 +497,19 @@ fn pad((lo, hi): (f64, f64), f: f64) -> (f64, f64) {
     (lo - d, hi + d)
 }
 
+/// A panel of [`plot_bifurcation`]: the swept parameter across, `Y` up.
+type BifPanel<'a, 'b, Y> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, Y>>;
+
+/// The three panels of [`plot_bifurcation`], top to bottom.
+struct BifPanels<'a, 'b: 'a> {
+    /// |λ| (log scale).
+    top: BifPanel<'a, 'b, LogCoord<f64>>,
+    /// Re λ.
+    mid: BifPanel<'a, 'b, RangedCoordf64>,
+    /// The section coordinate.
+    bot: BifPanel<'a, 'b, RangedCoordf64>,
+}
+
 /// Writes a three-panel PNG ([`BIFURCATION_PNG_SIZE`]): top, the moduli of the Floquet
 /// multipliers against the swept parameter (log scale) with the stability boundary |λ| = 1;
 /// middle, their real parts (signed) with horizontal lines at λ = −1 (red: a real multiplier
@@ -533,6 +547,25 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     .unwrap_or((0.0, 1.0));
     let pr = pad(pr, 0.02);
 
+    let top = bifurcation_moduli_panel(&panels[0], data, pr, path)?;
+    let mid = bifurcation_real_panel(&panels[1], data, pr, path)?;
+    let bot = bifurcation_section_panel(&panels[2], data, coordinate, pr, path)?;
+    let mut charts = BifPanels { top, mid, bot };
+    draw_bifurcation_branches(&mut charts, data, coordinate, path)?;
+    draw_bifurcation_points(&mut charts, data, coordinate, path)?;
+    draw_bifurcation_legends(&mut charts, path)?;
+    root.present().map_err(|x| pe(path, x))?;
+    pic.commit(path)
+}
+
+/// Top: |λ| (log scale, the range of the moduli widened to include 0.5 … 2) with the line
+/// |λ| = 1.
+fn bifurcation_moduli_panel<'a, 'b>(
+    area: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    data: &SweepData,
+    pr: (f64, f64),
+    path: &Path,
+) -> Result<BifPanel<'a, 'b, LogCoord<f64>>> {
     // Top: |λ|.
     let mods = data.branches.iter().flat_map(|b| {
         b.multipliers
@@ -541,7 +574,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     });
     let (mlo, mhi) = range_of(mods.filter(|m| *m > 0.0)).unwrap_or((0.1, 10.0));
     let (mlo, mhi) = ((mlo.min(0.5) / 1.5).max(1e-8), (mhi.max(2.0) * 1.5));
-    let mut top = ChartBuilder::on(&panels[0])
+    let mut top = ChartBuilder::on(area)
         .caption(format!("{}: Floquet multipliers", data.model), (FONT, 20))
         .margin(12)
         .x_label_area_size(45)
@@ -565,6 +598,17 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     .map_err(|x| pe(path, x))?
     .label("|λ| = 1")
     .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK));
+    Ok(top)
+}
+
+/// Middle: Re λ (the range of the real parts widened to include ±1.2), with the
+/// period-doubling (−1) and fold (+1) lines.
+fn bifurcation_real_panel<'a, 'b>(
+    area: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    data: &SweepData,
+    pr: (f64, f64),
+    path: &Path,
+) -> Result<BifPanel<'a, 'b, RangedCoordf64>> {
     // Middle: Re λ, with the period-doubling (−1) and fold (+1) lines.
     let res = data
         .branches
@@ -572,7 +616,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
         .flat_map(|b| b.multipliers.iter().flat_map(|v| v.iter().map(|z| z.0)));
     let (rlo, rhi) = range_of(res).unwrap_or((-1.0, 1.0));
     let rr = pad((rlo.min(-1.2), rhi.max(1.2)), 0.05);
-    let mut mid = ChartBuilder::on(&panels[1])
+    let mut mid = ChartBuilder::on(area)
         .caption(
             format!("{}: real parts of the multipliers", data.model),
             (FONT, 20),
@@ -609,6 +653,18 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     .map_err(|x| pe(path, x))?
     .label("λ = +1: fold / branch point")
     .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+    Ok(mid)
+}
+
+/// Bottom: section coordinate number `coordinate` (its range over the branches, their
+/// measured orbits and the orbit diagram), with the orbit diagram's samples as grey dots.
+fn bifurcation_section_panel<'a, 'b>(
+    area: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    data: &SweepData,
+    coordinate: usize,
+    pr: (f64, f64),
+    path: &Path,
+) -> Result<BifPanel<'a, 'b, RangedCoordf64>> {
     // Bottom: section coordinate.
     let sec_vals = data
         .branches
@@ -625,7 +681,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
                 .flat_map(|o| o.points.iter().flatten().copied()),
         );
     let sr = pad(range_of(sec_vals).unwrap_or((0.0, 1.0)), 0.05);
-    let mut bot = ChartBuilder::on(&panels[2])
+    let mut bot = ChartBuilder::on(area)
         .caption(
             format!("{} on the section", data.section_names[coordinate]),
             (FONT, 20),
@@ -655,7 +711,18 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
             .label(format!("orbit diagram ({})", o.coordinate))
             .legend(|(x, y)| Circle::new((x + 10, y), 2, RGBColor(110, 110, 110).filled()));
     }
+    Ok(bot)
+}
 
+/// Each branch in its colour on all three panels, run by run of equal stability (stable solid
+/// and thicker, unstable dashed), with its legend entry on the bottom panel.
+fn draw_bifurcation_branches(
+    c: &mut BifPanels,
+    data: &SweepData,
+    coordinate: usize,
+    path: &Path,
+) -> Result<()> {
+    let BifPanels { top, mid, bot } = c;
     for (bi, b) in data.branches.iter().enumerate() {
         let col = SERIES_COLOURS[bi % SERIES_COLOURS.len()];
         let m = b.multipliers.first().map_or(0, |v| v.len());
@@ -726,6 +793,19 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
             .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
     }
+    Ok(())
+}
+
+/// The bifurcations: period doublings as red triangles, others as black diamonds; on the
+/// |λ| = 1 line above, on λ = −1 (period doublings) or +1 (folds, branch points) in the middle,
+/// on the branch below; with their legend entries on the bottom panel.
+fn draw_bifurcation_points(
+    c: &mut BifPanels,
+    data: &SweepData,
+    coordinate: usize,
+    path: &Path,
+) -> Result<()> {
+    let BifPanels { top, mid, bot } = c;
     let is_pd = |k: &str| k.to_ascii_lowercase().contains("period");
     // Bifurcations: on the |λ| = 1 line above, on the branch below.
     for z in &data.bifurcations {
@@ -766,29 +846,36 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
                     + Polygon::new(vec![(0, -6), (6, 0), (0, 6), (-6, 0)], BLACK.filled())
             });
     }
-    top.configure_series_labels()
+    Ok(())
+}
+
+/// The three panels' legends: upper left, lower left (middle), upper left.
+fn draw_bifurcation_legends(c: &mut BifPanels, path: &Path) -> Result<()> {
+    c.top
+        .configure_series_labels()
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperLeft)
         .draw()
         .map_err(|x| pe(path, x))?;
-    mid.configure_series_labels()
+    c.mid
+        .configure_series_labels()
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(SeriesLabelPosition::LowerLeft)
         .draw()
         .map_err(|x| pe(path, x))?;
-    bot.configure_series_labels()
+    c.bot
+        .configure_series_labels()
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperLeft)
         .draw()
         .map_err(|x| pe(path, x))?;
-    root.present().map_err(|x| pe(path, x))?;
-    pic.commit(path)
+    Ok(())
 }
 
 /// Writes a two-panel PNG ([`STABILITY_PNG_SIZE`]) of basin stability against the parameter.

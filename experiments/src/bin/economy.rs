@@ -25,6 +25,7 @@ use pdw_hybrid::{
 };
 use pdw_limit::{find_fixed_point, Multiplier, NewtonOptions, StrideMap};
 use pdw_walkers::simplest::GarciaGait;
+use pdw_walkers::ChainWalker;
 use std::fmt::Write as _;
 
 const GAMMA_A: f64 = 0.009;
@@ -356,6 +357,49 @@ fn largest_step(ok: impl Fn(f64) -> bool) -> Option<f64> {
     Some(lo)
 }
 
+/// The exact model's step from the gait, measured: the reference (DOP853 1e-13), the work of
+/// DOP853 at `tol` and the largest RK4 step that still reaches the heel strike.
+struct ExactStep {
+    /// Heel-strike time of the reference (s).
+    t_ref: f64,
+    /// Swing foot at the reference's heel strike (m).
+    foot_ref: [f64; 2],
+    /// Swing foot at heel strike with DOP853 at `tol` (m).
+    foot_e: [f64; 2],
+    /// DOP853's work at `tol`.
+    st_e: Stats,
+    /// DOP853's mean wall time at `tol` (s).
+    wall_e: f64,
+    /// Largest RK4 step within 1 ms / 1 mm of the reference.
+    ex_rk4: Option<f64>,
+}
+
+/// The charts' series over the PI latch's gains: `(K_p, value)`.
+#[derive(Default)]
+struct LatchSeries {
+    /// DOP853 step attempts.
+    steps: Vec<(f64, f64)>,
+    /// RK4 steps at the largest working step.
+    rk4: Vec<(f64, f64)>,
+    /// Largest foot penetration (m).
+    pen: Vec<(f64, f64)>,
+    /// Double-support duration (s).
+    tds: Vec<(f64, f64)>,
+}
+
+/// Exact model: single support to heel strike from section state `s`; how it stopped, when,
+/// where the swing foot is, and the integrator's work.
+fn exact_ss(exact: &ChainWalker, s: &[f64], opts: Options) -> (StopReason, f64, [f64; 2], Stats) {
+    let mut integ = Integrator::new(8, opts).expect("options");
+    let mut x = [0.0; 8];
+    exact.lift(s, &mut x);
+    let mut t = 0.0;
+    let stop = integ.integrate(exact, exact.locked_mode(), &mut t, &mut x, 5.0);
+    (stop, t, exact.swing_foot(&x), integ.stats())
+}
+
+/// Part (b): the exact knee lock against the PI latch over one step of the seed walker's gait
+/// at γ = 0.05, at increasing gains; writes the table, the two charts and section (b) of `md`.
 fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
     let exact = pdw_walkers::presets::seed5(&[])?;
     let emap = StrideMap::new(&exact, Options::dop853(1e-13))?;
@@ -366,31 +410,8 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
     )?;
     let s = &fp.section;
     eprintln!("seed5 locked-knee gait at 0.05: {s:?}");
-    // Exact model: single support to heel strike.
-    let exact_ss = |opts: Options| -> (StopReason, f64, [f64; 2], Stats) {
-        let mut integ = Integrator::new(8, opts).expect("options");
-        let mut x = [0.0; 8];
-        exact.lift(s, &mut x);
-        let mut t = 0.0;
-        let stop = integ.integrate(&exact, exact.locked_mode(), &mut t, &mut x, 5.0);
-        (stop, t, exact.swing_foot(&x), integ.stats())
-    };
-    let (_, t_ref, foot_ref, _) = exact_ss(Options::dop853(1e-13));
     let tol = 1e-8;
-    let ((_, _, foot_e, st_e), _) = time_once(|| exact_ss(Options::dop853(tol)));
-    let (_, wall_e) = time_mean(0.3, || exact_ss(Options::dop853(tol)));
-    let ex_rk4 = largest_step(|h| {
-        let (stop, t, f, _) = exact_ss(Options::rk4(h));
-        stop == StopReason::Guard { guard: 0 }
-            && (t - t_ref).abs() < 1e-3
-            && (f[0] - foot_ref[0]).abs() < 1e-3
-    });
-    eprintln!(
-        "exact: t_hs {t_ref}, foot {foot_ref:?}, DOP853 {tol}: {st_e:?} {wall_e:.2e} s, RK4 h_max {ex_rk4:?}"
-    );
-
-    let mut x0 = [0.0; 13];
-    let s10 = [s[0], 0.0, -2.0 * s[0], 0.0, s[1], 0.0, s[2], 0.0, 0.0, 0.0];
+    let e = exact_step(&exact, s, tol);
     let mut t = Table::new(&[
         "knee K_p (N m/rad)",
         "ground K_p (N/m)",
@@ -409,7 +430,74 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
         "max knee |q| double support (rad)",
         "post-switch (q₁, q̇₁, q̇₃) − s* (∞-norm)",
     ]);
-    t.row(vec![
+    t.row(exact_row(&exact, s, &e));
+    let mut series = LatchSeries::default();
+    for kp in [1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9] {
+        t.row(pi_latch_row(&exact, s, tol, &e, kp, &mut series)?);
+    }
+    plot_latch(dir, series, &e)?;
+    let ExactStep {
+        t_ref, foot_ref, ..
+    } = e;
+    let _ = writeln!(
+        md,
+        "## (b) Exact knee lock vs the thesis' PI latch and compliant ground\n\n\
+         Seed walker (Table 3.1, both knees locked, γ = 0.05), one step from the exact model's \
+         period-one gait s* = ({:.9}, {:.9}, {:.9}) (Newton to 1e-12 on DOP853 1e-14). Exact \
+         model: pseudo-joint knees, single support to heel strike (t = {t_ref:.9} s, swing foot \
+         at y = {:.9} m), impulsive double support. PI model (`PiLatchWalker`): latch torque \
+         `τ_lock − K_p q − K_i ∫q` on both knees (K_i = K_p/100, no derivative term, as in the \
+         thesis), single support to touchdown, then compliant ground `R = −K_p,g e − K_i,g ∫e` \
+         (K_p,g = 10 K_p, K_i,g = K_p/10) until the old stance foot unloads (switch) or 0.5 s. \
+         DOP853 at rtol = atol = {tol:.0e} for both. \"Largest RK4 step\": largest fixed step \
+         (halving from 0.2 s, then 6 log-bisections) whose result stays within 1 ms / 1 mm of \
+         the DOP853 result, knees within 0.01 rad, penetration within 10 %.\n\n{}\n\
+         ![cost](latch_cost.png) ![error](latch_error.png)\n",
+        s[0],
+        s[1],
+        s[2],
+        foot_ref[0],
+        t.markdown()
+    );
+    Ok(())
+}
+
+/// The exact model's step from `s`, measured (DOP853 1e-13 as the reference, DOP853 at `tol`,
+/// the largest RK4 step).
+fn exact_step(exact: &ChainWalker, s: &[f64], tol: f64) -> ExactStep {
+    let (_, t_ref, foot_ref, _) = exact_ss(exact, s, Options::dop853(1e-13));
+    let ((_, _, foot_e, st_e), _) = time_once(|| exact_ss(exact, s, Options::dop853(tol)));
+    let (_, wall_e) = time_mean(0.3, || exact_ss(exact, s, Options::dop853(tol)));
+    let ex_rk4 = largest_step(|h| {
+        let (stop, t, f, _) = exact_ss(exact, s, Options::rk4(h));
+        stop == StopReason::Guard { guard: 0 }
+            && (t - t_ref).abs() < 1e-3
+            && (f[0] - foot_ref[0]).abs() < 1e-3
+    });
+    eprintln!(
+        "exact: t_hs {t_ref}, foot {foot_ref:?}, DOP853 {tol}: {st_e:?} {wall_e:.2e} s, RK4 h_max {ex_rk4:?}"
+    );
+    ExactStep {
+        t_ref,
+        foot_ref,
+        foot_e,
+        st_e,
+        wall_e,
+        ex_rk4,
+    }
+}
+
+/// The table's row of the exact lock (its RK4 run at h = 1e-3 made here).
+fn exact_row(exact: &ChainWalker, s: &[f64], e: &ExactStep) -> Vec<String> {
+    let ExactStep {
+        t_ref,
+        foot_ref,
+        foot_e,
+        st_e,
+        wall_e,
+        ex_rk4,
+    } = *e;
+    vec![
         "exact lock".into(),
         "impulse".into(),
         st_e.accepted.to_string(),
@@ -425,7 +513,7 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
         }),
         ex_rk4.map_or("—".into(), |h| format!("{:.0}", (t_ref / h).ceil())),
         {
-            let (stop, tt, _, _) = exact_ss(Options::rk4(1e-3));
+            let (stop, tt, _, _) = exact_ss(exact, s, Options::rk4(1e-3));
             if stop == (StopReason::Guard { guard: 0 }) {
                 format!("completes, Δt = {}", sci((tt - t_ref).abs()))
             } else {
@@ -439,90 +527,111 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
         "0".into(),
         "0".into(),
         "0 (s* is a fixed point)".into(),
-    ]);
-    let mut s_steps = Vec::new();
-    let mut s_rk4 = Vec::new();
-    let mut s_pen = Vec::new();
-    let mut s_tds = Vec::new();
-    let exact_steps = st_e.accepted + st_e.rejected;
-    let exact_rk4 = ex_rk4.map(|h| (t_ref / h).ceil());
-    for kp in [1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9] {
-        let gains = PiGains {
-            knee_kp: kp,
-            knee_ki: kp / 100.0,
-            knee_kd: 0.0,
-            ground_kp: 10.0 * kp,
-            ground_ki: kp / 10.0,
-            ground_kd: 0.0,
-        };
-        let w = PiLatchWalker::new(exact.clone(), gains)?;
-        w.lift(&s10, &mut x0);
-        let ((r, wall), _) =
-            time_once(|| time_once(|| compliant_step(&w, Options::dop853(tol), &x0, 0.5)));
-        let h = if r.ok {
-            largest_step(|h| rk4_ok(&w, h, &x0, &r))
-        } else {
-            None
-        };
-        let rk4_steps = h.map(|h| ((r.t_touchdown + r.t_double) / h).ceil());
-        let fixed = compliant_step(&w, Options::rk4(1e-3), &x0, r.t_double.max(1e-3));
-        let fixed_txt = if fixed.ok && rk4_ok(&w, 1e-3, &x0, &r) {
-            "completes".to_string()
-        } else if fixed.ok {
-            format!(
-                "wrong: knee {} rad, penetration {} m",
-                sci(fixed.max_knee_single.max(fixed.max_knee_double)),
-                sci(fixed.max_penetration)
-            )
-        } else {
-            format!(
-                "blows up: {} (knee reached {} rad)",
-                fixed.why,
-                sci(fixed.max_knee_single)
-            )
-        };
-        eprintln!(
-            "K = {kp:e}: ok {} ({}), {:?}, {wall:.3} s, RK4 h {h:?}, td {} foot {:?} pen {:e} Tds {} knee {:e}/{:e}; RK4 1e-3: {fixed_txt}",
-            r.ok, r.why, r.stats, r.t_touchdown, r.foot_touchdown, r.max_penetration, r.t_double,
-            r.max_knee_single, r.max_knee_double
-        );
-        let n = r.stats.accepted + r.stats.rejected;
-        s_steps.push((kp, n as f64));
-        if let Some(k) = rk4_steps {
-            s_rk4.push((kp, k));
-        }
-        if r.ok {
-            s_pen.push((kp, r.max_penetration));
-            s_tds.push((kp, r.t_double));
-        }
-        t.row(vec![
-            format!("{kp:.0e}"),
-            format!("{:.0e}", 10.0 * kp),
-            r.stats.accepted.to_string(),
-            r.stats.rejected.to_string(),
-            r.stats.rhs_evals.to_string(),
-            format!("{:.2}", wall * 1e3),
-            h.map_or("none ≥ 1e-7".into(), |h| format!("{h:.3e}")),
-            rk4_steps.map_or("—".into(), |k| format!("{k:.0}")),
-            fixed_txt,
-            sci(r.max_knee_single),
-            sci(r.t_touchdown - t_ref),
-            sci(r.foot_touchdown[0] - foot_ref[0]),
-            format!("{} ({})", sci(r.t_double), r.why),
-            sci(r.max_penetration),
-            sci(r.max_knee_double),
-            if r.why == "switch" {
-                sci(r
-                    .post
-                    .iter()
-                    .zip(s.iter())
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max))
-            } else {
-                "no switch".into()
-            },
-        ]);
+    ]
+}
+
+/// One gain of the PI latch (knee K_p = `kp`, ground K_p = 10 `kp`): one step from the gait `s`
+/// with DOP853 at `tol`, the largest RK4 step and RK4 at h = 1e-3, against the exact step `e`;
+/// returns the table's row and adds to `series`.
+fn pi_latch_row(
+    exact: &ChainWalker,
+    s: &[f64],
+    tol: f64,
+    e: &ExactStep,
+    kp: f64,
+    series: &mut LatchSeries,
+) -> anyhow::Result<Vec<String>> {
+    let (t_ref, foot_ref) = (e.t_ref, e.foot_ref);
+    let mut x0 = [0.0; 13];
+    let s10 = [s[0], 0.0, -2.0 * s[0], 0.0, s[1], 0.0, s[2], 0.0, 0.0, 0.0];
+    let gains = PiGains {
+        knee_kp: kp,
+        knee_ki: kp / 100.0,
+        knee_kd: 0.0,
+        ground_kp: 10.0 * kp,
+        ground_ki: kp / 10.0,
+        ground_kd: 0.0,
+    };
+    let w = PiLatchWalker::new(exact.clone(), gains)?;
+    w.lift(&s10, &mut x0);
+    let ((r, wall), _) =
+        time_once(|| time_once(|| compliant_step(&w, Options::dop853(tol), &x0, 0.5)));
+    let h = if r.ok {
+        largest_step(|h| rk4_ok(&w, h, &x0, &r))
+    } else {
+        None
+    };
+    let rk4_steps = h.map(|h| ((r.t_touchdown + r.t_double) / h).ceil());
+    let fixed = compliant_step(&w, Options::rk4(1e-3), &x0, r.t_double.max(1e-3));
+    let fixed_txt = if fixed.ok && rk4_ok(&w, 1e-3, &x0, &r) {
+        "completes".to_string()
+    } else if fixed.ok {
+        format!(
+            "wrong: knee {} rad, penetration {} m",
+            sci(fixed.max_knee_single.max(fixed.max_knee_double)),
+            sci(fixed.max_penetration)
+        )
+    } else {
+        format!(
+            "blows up: {} (knee reached {} rad)",
+            fixed.why,
+            sci(fixed.max_knee_single)
+        )
+    };
+    eprintln!(
+        "K = {kp:e}: ok {} ({}), {:?}, {wall:.3} s, RK4 h {h:?}, td {} foot {:?} pen {:e} Tds {} knee {:e}/{:e}; RK4 1e-3: {fixed_txt}",
+        r.ok, r.why, r.stats, r.t_touchdown, r.foot_touchdown, r.max_penetration, r.t_double,
+        r.max_knee_single, r.max_knee_double
+    );
+    let n = r.stats.accepted + r.stats.rejected;
+    series.steps.push((kp, n as f64));
+    if let Some(k) = rk4_steps {
+        series.rk4.push((kp, k));
     }
+    if r.ok {
+        series.pen.push((kp, r.max_penetration));
+        series.tds.push((kp, r.t_double));
+    }
+    Ok(vec![
+        format!("{kp:.0e}"),
+        format!("{:.0e}", 10.0 * kp),
+        r.stats.accepted.to_string(),
+        r.stats.rejected.to_string(),
+        r.stats.rhs_evals.to_string(),
+        format!("{:.2}", wall * 1e3),
+        h.map_or("none ≥ 1e-7".into(), |h| format!("{h:.3e}")),
+        rk4_steps.map_or("—".into(), |k| format!("{k:.0}")),
+        fixed_txt,
+        sci(r.max_knee_single),
+        sci(r.t_touchdown - t_ref),
+        sci(r.foot_touchdown[0] - foot_ref[0]),
+        format!("{} ({})", sci(r.t_double), r.why),
+        sci(r.max_penetration),
+        sci(r.max_knee_double),
+        if r.why == "switch" {
+            sci(r
+                .post
+                .iter()
+                .zip(s.iter())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max))
+        } else {
+            "no switch".into()
+        },
+    ])
+}
+
+/// The two charts of part (b): integration work against the latch gain (with the exact lock's
+/// and a √K reference) and the compliant ground's error.
+fn plot_latch(dir: &std::path::Path, s: LatchSeries, e: &ExactStep) -> anyhow::Result<()> {
+    let LatchSeries {
+        steps: s_steps,
+        rk4: s_rk4,
+        pen: s_pen,
+        tds: s_tds,
+    } = s;
+    let exact_steps = e.st_e.accepted + e.st_e.rejected;
+    let exact_rk4 = e.ex_rk4.map(|h| (e.t_ref / h).ceil());
     // √K reference through the highest-gain DOP853 point.
     let (kl, nl) = *s_steps.last().context("no gains")?;
     let sqrt_ref: Vec<(f64, f64)> = s_steps
@@ -574,26 +683,6 @@ fn part_b(md: &mut String, dir: &std::path::Path) -> anyhow::Result<()> {
         true,
         true,
     )?;
-    let _ = writeln!(
-        md,
-        "## (b) Exact knee lock vs the thesis' PI latch and compliant ground\n\n\
-         Seed walker (Table 3.1, both knees locked, γ = 0.05), one step from the exact model's \
-         period-one gait s* = ({:.9}, {:.9}, {:.9}) (Newton to 1e-12 on DOP853 1e-14). Exact \
-         model: pseudo-joint knees, single support to heel strike (t = {t_ref:.9} s, swing foot \
-         at y = {:.9} m), impulsive double support. PI model (`PiLatchWalker`): latch torque \
-         `τ_lock − K_p q − K_i ∫q` on both knees (K_i = K_p/100, no derivative term, as in the \
-         thesis), single support to touchdown, then compliant ground `R = −K_p,g e − K_i,g ∫e` \
-         (K_p,g = 10 K_p, K_i,g = K_p/10) until the old stance foot unloads (switch) or 0.5 s. \
-         DOP853 at rtol = atol = {tol:.0e} for both. \"Largest RK4 step\": largest fixed step \
-         (halving from 0.2 s, then 6 log-bisections) whose result stays within 1 ms / 1 mm of \
-         the DOP853 result, knees within 0.01 rad, penetration within 10 %.\n\n{}\n\
-         ![cost](latch_cost.png) ![error](latch_error.png)\n",
-        s[0],
-        s[1],
-        s[2],
-        foot_ref[0],
-        t.markdown()
-    );
     Ok(())
 }
 

@@ -209,6 +209,21 @@ fn cost_model(md: &mut String, rows: &[Row], t_rhs: f64, t_rhs1: f64) {
     }
 }
 
+/// The basin, fixed-point and right-hand-side timings.
+struct Timings {
+    /// Median of the three basin runs (s).
+    t_basin: f64,
+    /// The three basin runs (s), as printed.
+    basin_runs: String,
+    /// Basin cells that reach the gait.
+    gait_cells: usize,
+    /// Mean time of the fixed point at the CLI's settings (s).
+    t_fp: f64,
+    /// One lane-evaluation of the batched right-hand side on 2 threads, on 1 (s).
+    t_rhs: f64,
+    t_rhs1: f64,
+}
+
 fn main() -> anyhow::Result<()> {
     let dir = results_dir("engine")?;
     let load_start = loadavg();
@@ -237,6 +252,27 @@ fn main() -> anyhow::Result<()> {
         .collect();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
 
+    let mut rows = Vec::new();
+    for (method, tol, opts) in &settings() {
+        rows.push(measure(
+            &sys, method, tol, opts, &s_ref, &p_ref, &states, &guess, &pool,
+        )?);
+    }
+    let peer = run_peer();
+    let peer_1e10 = add_peer_rows(&peer, &s_ref, &mut rows);
+    let tm = basin_and_fixed_point(&sys, &s_ref, &refmap, &guess, &states, &pool)?;
+    let load_end = loadavg();
+    let tab = results_table(&rows);
+    let md = report(&rows, &tab, &peer, peer_1e10, &tm, &load_start, &load_end);
+    write_text(&dir, "table.md", &md)?;
+    plot(&dir, &rows)?;
+    print!("{md}");
+    Ok(())
+}
+
+/// The settings measured: DOPRI5, DOP853 and DOPRI5 at the peer's settings at each of
+/// [`TOLS`], and RK4 at 40, 160 and 640 steps per stride.
+fn settings() -> Vec<(&'static str, String, Options)> {
     let mut settings: Vec<(&'static str, String, Options)> = Vec::new();
     for tol in TOLS {
         settings.push(("DOPRI5", sci(tol), Options::dopri5(tol)));
@@ -256,54 +292,76 @@ fn main() -> anyhow::Result<()> {
         // RK4 with a fixed step: n steps over the stride period (≈ 3.85).
         settings.push(("RK4", format!("{n} steps"), Options::rk4(3.85 / n)));
     }
-    let mut rows = Vec::new();
-    for (method, tol, opts) in &settings {
-        let map = StrideMap::new(&sys, *opts)?;
-        let mut integ = Integrator::new(4, *opts)?;
-        let (st, t) = time_mean(0.4, || map.stride_with(&mut integ, &s_ref));
-        let st = st?;
-        integ.reset_stats();
-        map.stride_with(&mut integ, &s_ref)?;
-        let evals = integ.stats().rhs_evals as f64;
-        let steps = (integ.stats().accepted + integ.stats().rejected) as f64;
-        let err_stride = pdw_experiments::max_abs_diff(&st.next, &p_ref);
-        let (_, tb) = time_mean(1.5, || {
-            map.strides_par(&states, BATCH_LANES, &pool, 256, &|_| {})
-                .map(|v| v.len())
-        });
-        // Newton on the plain map at this setting: finite-difference Jacobians (with the
-        // variational Jacobian the iterates would follow the variational integration, whose
-        // steps are controlled on the tangent block as well — a more accurate map than the one
-        // being measured).
-        let newton = NewtonOptions {
-            tol: (opts.rtol * 100.0).clamp(1e-12, 1e-4),
-            dp: DpMethod::FiniteDifference {
-                scheme: FdScheme::default(),
-                lanes: 8,
-            },
-            ..NewtonOptions::default()
-        };
-        let err_fp = match find_fixed_point(&map, &guess, &newton) {
-            Ok(fp) => pdw_experiments::max_abs_diff(&fp.section, &s_ref),
-            Err(_) => f64::NAN,
-        };
-        rows.push(Row {
-            engine: "pdw-sweep",
-            method: method.to_string(),
-            tol: tol.clone(),
-            scalar_us: t * 1e6,
-            batch_us: tb / states.len() as f64 * 1e6,
-            evals,
-            steps,
-            err_fp,
-            err_stride,
-            print_limited: false,
-        });
-        eprintln!("{method} {tol}: {:.2} µs/stride", t * 1e6);
-    }
-    let peer = run_peer();
+    settings
+}
+
+/// One setting's row: a stride from the fixed point (scalar, timed), the batched strides of
+/// `states` (2 threads, timed), the stride's error against `p_ref` and Newton's against `s_ref`.
+#[allow(clippy::too_many_arguments)]
+fn measure(
+    sys: &Simplest,
+    method: &str,
+    tol: &str,
+    opts: &Options,
+    s_ref: &[f64],
+    p_ref: &[f64],
+    states: &[Vec<f64>],
+    guess: &[f64],
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<Row> {
+    let map = StrideMap::new(sys, *opts)?;
+    let mut integ = Integrator::new(4, *opts)?;
+    let (st, t) = time_mean(0.4, || map.stride_with(&mut integ, s_ref));
+    let st = st?;
+    integ.reset_stats();
+    map.stride_with(&mut integ, s_ref)?;
+    let evals = integ.stats().rhs_evals as f64;
+    let steps = (integ.stats().accepted + integ.stats().rejected) as f64;
+    let err_stride = pdw_experiments::max_abs_diff(&st.next, p_ref);
+    let (_, tb) = time_mean(1.5, || {
+        map.strides_par(states, BATCH_LANES, pool, 256, &|_| {})
+            .map(|v| v.len())
+    });
+    // Newton on the plain map at this setting: finite-difference Jacobians (with the
+    // variational Jacobian the iterates would follow the variational integration, whose
+    // steps are controlled on the tangent block as well — a more accurate map than the one
+    // being measured).
+    let newton = NewtonOptions {
+        tol: (opts.rtol * 100.0).clamp(1e-12, 1e-4),
+        dp: DpMethod::FiniteDifference {
+            scheme: FdScheme::default(),
+            lanes: 8,
+        },
+        ..NewtonOptions::default()
+    };
+    let err_fp = match find_fixed_point(&map, guess, &newton) {
+        Ok(fp) => pdw_experiments::max_abs_diff(&fp.section, s_ref),
+        Err(_) => f64::NAN,
+    };
+    let row = Row {
+        engine: "pdw-sweep",
+        method: method.to_string(),
+        tol: tol.to_string(),
+        scalar_us: t * 1e6,
+        batch_us: tb / states.len() as f64 * 1e6,
+        evals,
+        steps,
+        err_fp,
+        err_stride,
+        print_limited: false,
+    };
+    eprintln!("{method} {tol}: {:.2} µs/stride", t * 1e6);
+    Ok(row)
+}
+
+/// The peer's rows (if it ran) added to `rows`; returns its µs per stride at 1e-10.
+fn add_peer_rows(
+    peer: &Result<Vec<PeerRow>, String>,
+    s_ref: &[f64],
+    rows: &mut Vec<Row>,
+) -> Option<f64> {
     let mut peer_1e10 = None;
-    match &peer {
+    match peer {
         Ok(p) => {
             for &(tol, us, nf, th, thd) in p {
                 let err = (th - s_ref[0]).abs().max((thd - s_ref[1]).abs());
@@ -326,12 +384,23 @@ fn main() -> anyhow::Result<()> {
         }
         Err(e) => eprintln!("peer not run: {e}"),
     }
+    peer_1e10
+}
 
-    // The default basin on 2 threads (no file output), and the fixed point to 1e-12 (CLI).
+/// The default basin on 2 threads (no file output), and the fixed point to 1e-12 (CLI); the
+/// right-hand side's cost per lane on 2 threads and on 1.
+fn basin_and_fixed_point(
+    sys: &Simplest,
+    s_ref: &[f64],
+    refmap: &StrideMap,
+    guess: &[f64],
+    states: &[Vec<f64>],
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<Timings> {
     let fall = Outcome::of_fall;
-    let prob = BasinProblem::new(&sys, s_ref.clone(), &fall);
+    let prob = BasinProblem::new(sys, s_ref.to_vec(), &fall);
     let cells = grid_cells(
-        &s_ref,
+        s_ref,
         0,
         &linspace(0.15, 0.25, 1000),
         1,
@@ -341,7 +410,7 @@ fn main() -> anyhow::Result<()> {
     let mut basin = None;
     for _ in 0..3 {
         let (b, t) =
-            time_once(|| classify_cells(&prob, &cells, &BasinOptions::default(), &pool, &|_| {}));
+            time_once(|| classify_cells(&prob, &cells, &BasinOptions::default(), pool, &|_| {}));
         runs.push(t);
         basin = Some(b);
     }
@@ -359,13 +428,23 @@ fn main() -> anyhow::Result<()> {
         .filter(|c| c.outcome() == Outcome::Gait)
         .count();
     let (_, t_fp) = time_mean(1.0, || {
-        find_fixed_point(&refmap, &guess, &NewtonOptions::default()).map(|f| f.residual)
+        find_fixed_point(refmap, guess, &NewtonOptions::default()).map(|f| f.residual)
     });
-    let t_rhs = rhs_per_lane_eval(&sys, &states, &pool);
+    let t_rhs = rhs_per_lane_eval(sys, states, pool);
     let pool1 = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    let t_rhs1 = rhs_per_lane_eval(&sys, &states, &pool1);
-    let load_end = loadavg();
+    let t_rhs1 = rhs_per_lane_eval(sys, states, &pool1);
+    Ok(Timings {
+        t_basin,
+        basin_runs,
+        gait_cells,
+        t_fp,
+        t_rhs,
+        t_rhs1,
+    })
+}
 
+/// The table of every row.
+fn results_table(rows: &[Row]) -> Table {
     let mut tab = Table::new(&[
         "engine",
         "method",
@@ -377,7 +456,7 @@ fn main() -> anyhow::Result<()> {
         "fixed-point error",
         "stride error",
     ]);
-    for r in &rows {
+    for r in rows {
         let fmt = |v: f64| {
             if v.is_nan() {
                 "–".to_string()
@@ -405,6 +484,27 @@ fn main() -> anyhow::Result<()> {
             },
         ]);
     }
+    tab
+}
+
+/// `table.md`: the table, the targets and the cost model.
+fn report(
+    rows: &[Row],
+    tab: &Table,
+    peer: &Result<Vec<PeerRow>, String>,
+    peer_1e10: Option<f64>,
+    tm: &Timings,
+    load_start: &str,
+    load_end: &str,
+) -> String {
+    let Timings {
+        t_basin,
+        ref basin_runs,
+        gait_cells,
+        t_fp,
+        t_rhs,
+        t_rhs1,
+    } = *tm;
     let pick = |m: &str, t: &str| {
         rows.iter()
             .find(|r| r.engine == "pdw-sweep" && r.method == m && r.tol == t)
@@ -451,9 +551,12 @@ fn main() -> anyhow::Result<()> {
         );
     }
     let _ = writeln!(md, "\nBasin: {gait_cells} of 10⁶ cells reach the gait.");
-    cost_model(&mut md, &rows, t_rhs, t_rhs1);
-    write_text(&dir, "table.md", &md)?;
+    cost_model(&mut md, rows, t_rhs, t_rhs1);
+    md
+}
 
+/// `engine.png`: time per stride against the fixed point's error, every engine and method.
+fn plot(dir: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     for (engine, method) in [
         ("pdw-sweep", "DOPRI5"),
@@ -489,6 +592,5 @@ fn main() -> anyhow::Result<()> {
         true,
         true,
     )?;
-    print!("{md}");
     Ok(())
 }

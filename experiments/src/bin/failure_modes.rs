@@ -30,10 +30,22 @@ fn main() -> anyhow::Result<()> {
     let mut md = String::new();
     let _ = writeln!(md, "# Failure modes, triggered and diagnosed\n");
     let _ = writeln!(md, "Reproduce: `{}`.\n", command("failure_modes"));
-
-    // ---- 1. Fixed-step RK4 with steps as long as a large part of the stride. ----
     let w = simplest(0.009)?;
-    let reference = StrideMap::new(w.as_ref(), Options::dop853(1e-14))?;
+    rk4_straddles_heel_strike(w.as_ref(), &mut md)?;
+    let map = StrideMap::new(w.as_ref(), Options::dop853(1e-12))?;
+    newton_from_bad_guesses(&map, &mut md);
+    chaos(&mut md)?;
+    rimless_on_shallow_slopes(&mut md)?;
+    absurd_inputs(w.as_ref(), &map, &mut md);
+    write_text(&dir, "table.md", &md)?;
+    Ok(())
+}
+
+/// Step 1: Fixed-step RK4 with steps as long as a large part of the stride: one stride of the
+/// simplest walker `w` (γ = 0.009) from its fixed point, and Newton from Garcia's guess, at
+/// each step against DOP853 1e-14.
+fn rk4_straddles_heel_strike(w: &dyn Walker, md: &mut String) -> anyhow::Result<()> {
+    let reference = StrideMap::new(w, Options::dop853(1e-14))?;
     let s_star = [0.20031090054425046, -0.19983247300495477];
     let p_ref = reference.stride(&s_star)?;
     let mut t = Table::new(&[
@@ -45,7 +57,7 @@ fn main() -> anyhow::Result<()> {
         "fixed point from Garcia's guess",
     ]);
     for h in [0.01, 0.1, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0] {
-        let map = StrideMap::new(w.as_ref(), Options::rk4(h))?;
+        let map = StrideMap::new(w, Options::rk4(h))?;
         let st = map.stride(&s_star)?;
         let err = if st.outcome.is_ok() {
             st.next
@@ -94,9 +106,12 @@ fn main() -> anyhow::Result<()> {
         p_ref.period,
         t.markdown()
     );
+    Ok(())
+}
 
-    // ---- 2. Newton from bad guesses. ----
-    let map = StrideMap::new(w.as_ref(), Options::dop853(1e-12))?;
+/// Step 2: Newton from bad guesses on the simplest walker's stride `map` (γ = 0.009, DOP853
+/// 1e-12).
+fn newton_from_bad_guesses(map: &StrideMap, md: &mut String) {
     let mut t = Table::new(&["guess (θ, θ̇)", "what it is", "engine's answer"]);
     for (g, what) in [
         (
@@ -109,7 +124,7 @@ fn main() -> anyhow::Result<()> {
         (vec![f64::NAN, -0.2], "non-finite guess"),
         (vec![0.2], "wrong dimension"),
     ] {
-        let r = find_fixed_point(&map, &g, &NewtonOptions::default());
+        let r = find_fixed_point(map, &g, &NewtonOptions::default());
         let ans = match r {
             Ok(fp) => format!(
                 "converged in {} iterations to ({:.10}, {:.10}), residual {}, {}",
@@ -124,8 +139,11 @@ fn main() -> anyhow::Result<()> {
         t.row(vec![format!("{g:?}"), what.into(), ans]);
     }
     let _ = writeln!(md, "\n## 2. Newton from bad guesses\n\n{}", t.markdown());
+}
 
-    // ---- 3. Chaos: no attracting period-one gait. ----
+/// Step 3: Chaos: no attracting period-one gait. Brute-force orbits (2000 transient strides, 256
+/// recorded, 2 threads) beside Newton's period-one fixed point at five slopes of the cascade.
+fn chaos(md: &mut String) -> anyhow::Result<()> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     let gammas = [0.0150, 0.0160, 0.0180, 0.0185, 0.0189];
     let starts: Vec<Vec<f64>> = gammas
@@ -182,8 +200,12 @@ fn main() -> anyhow::Result<()> {
         t.row(vec![format!("{g}"), fp, orbit, sci(spread)]);
     }
     let _ = writeln!(md, "\n## 3. Chaos (simplest walker)\n\n{}", t.markdown());
+    Ok(())
+}
 
-    // ---- 4. Rimless wheel on a slope too shallow to keep rolling. ----
+/// Step 4: Rimless wheel on a slope too shallow to keep rolling: up to 200 strides from each
+/// start ω₀, and whether a rolling fixed point exists.
+fn rimless_on_shallow_slopes(md: &mut String) -> anyhow::Result<()> {
     let mut t = Table::new(&[
         "slope",
         "ω₀",
@@ -232,8 +254,12 @@ fn main() -> anyhow::Result<()> {
         "\n## 4. Rimless wheel on a shallow slope (8 spokes)\n\n{}",
         t.markdown()
     );
+    Ok(())
+}
 
-    // ---- 5. Non-finite states and absurd parameters. ----
+/// Step 5: Non-finite states and absurd parameters: models, integrators (with the simplest
+/// walker `w`) and strides (of `map`) that must be refused or reported, each answer in words.
+fn absurd_inputs(w: &dyn Walker, map: &StrideMap, md: &mut String) {
     let mut t = Table::new(&["input", "engine's answer"]);
     let cases: Vec<(&str, String)> = vec![
         (
@@ -280,14 +306,14 @@ fn main() -> anyhow::Result<()> {
         ),
         (
             "DOPRI5 with rtol = 1e-20",
-            match StrideMap::new(w.as_ref(), Options::dopri5(1e-20)) {
+            match StrideMap::new(w, Options::dopri5(1e-20)) {
                 Ok(_) => "accepted".into(),
                 Err(e) => format!("rejected: {}", one_line(e)),
             },
         ),
         (
             "RK4 with h = 0",
-            match StrideMap::new(w.as_ref(), Options::rk4(0.0)) {
+            match StrideMap::new(w, Options::rk4(0.0)) {
                 Ok(_) => "accepted".into(),
                 Err(e) => format!("rejected: {}", one_line(e)),
             },
@@ -322,6 +348,4 @@ fn main() -> anyhow::Result<()> {
         "\n## 5. Non-finite states and absurd parameters\n\n{}",
         t.markdown()
     );
-    write_text(&dir, "table.md", &md)?;
-    Ok(())
 }

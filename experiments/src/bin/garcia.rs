@@ -14,12 +14,13 @@ use pdw_experiments::{command, fmt_multipliers, results_dir, sci, time_once, wri
 use pdw_hybrid::Options;
 use pdw_limit::{
     continue_branch, find_fixed_point, orbit_diagram, period_doubling_cascade, Bifurcation,
-    BifurcationKind, Branch, ContinuationOptions, NewtonOptions, OrbitOptions, OrbitStart,
-    StrideMap,
+    BifurcationKind, Branch, ContinuationOptions, FixedPoint, Multiplier, NewtonOptions,
+    OrbitOptions, OrbitStart, StrideMap,
 };
 use pdw_walkers::simplest::GarciaGait;
 use pdw_walkers::{Walker, WalkerError};
 use std::fmt::Write as _;
+use std::path::Path;
 
 fn family(g: f64) -> Result<Box<dyn Walker>, WalkerError> {
     pdw_walkers::build("simplest", &[("slope", g)])
@@ -95,33 +96,94 @@ fn join(down: &Branch, up: &Branch) -> Branch {
     }
 }
 
+/// The slope both gaits are found at and continued from.
+const G0: f64 = 0.009;
+/// The cascade's window: the orbit diagram's slopes and the zoomed diagram's range.
+const WINDOW: (f64, f64) = (0.0145, 0.0192);
+
+/// The period-doubling cascade on the long-period gait.
+struct Cascade {
+    /// The located period doublings, in order.
+    pds: Vec<Bifurcation>,
+    /// The branches followed: the period-one start, then each doubled one.
+    branches: Vec<Branch>,
+    /// Wall time (s).
+    seconds: f64,
+}
+
+/// The brute-force orbit diagram over [`WINDOW`].
+struct Orbit {
+    diagram: pdw_store::OrbitDiagram,
+    /// Number of slopes.
+    n: usize,
+    opts: OrbitOptions,
+    /// Slopes without a detected period (chaotic or not converged).
+    chaotic: usize,
+    /// Slopes where the walker fell.
+    fell: usize,
+    /// Wall time (s).
+    seconds: f64,
+}
+
+/// One direct solve of the small-slope scaling: `(gait, γ, θ, θ̇, τ, λ)`.
+type ScalingRow = (GarciaGait, f64, f64, f64, f64, Vec<Multiplier>);
+
+/// The scaling laws fitted for one gait: `(gait, θ*/γ^{1/3} fit, α, c₁, τ fit, points)`; each
+/// fit is `[c₀, c₁, c₂]` of `c₀ + c₁ x + c₂ x²` in x = γ^{2/3}.
+type Fit = (GarciaGait, [f64; 3], f64, f64, [f64; 3], usize);
+
 fn main() -> anyhow::Result<()> {
     faer::set_global_parallelism(faer::Par::Seq);
     let dir = results_dir("garcia")?;
-    let mut md = String::new();
-    let _ = writeln!(md, "# Garcia et al. 1998 reproduced (simplest walker)\n");
-    let _ = writeln!(md, "Reproduce: `{}`.\n", command("garcia"));
-
-    // ---- 1. Both gaits against the slope by pseudo-arclength continuation. ----
-    let g0 = 0.009;
-    let w0 = family(g0)?;
-    let map0 = StrideMap::new(w0.as_ref(), Options::dop853(1e-14))?;
     let no = NewtonOptions {
         tol: 1e-13,
         ..NewtonOptions::default()
     };
+    let gaits = gaits_at_g0(&no)?;
+    let (branches, t_cont) = continue_gaits(&gaits)?;
+    let cascade = cascade(&branches)?;
+    let orbit = orbit_diagram_over_cascade(&branches)?;
+    store(&dir, &branches, &cascade, &orbit)?;
+    let scaling = scaling_solves(&no)?;
+    let fits = fit_window(&scaling, 1e-4);
+    let fits_small = fit_window(&scaling, 1e-6);
+    plot_scaling(&dir, &scaling, &fits)?;
+    let md = report(
+        &gaits,
+        &branches,
+        t_cont,
+        &cascade,
+        &orbit,
+        &fits,
+        &fits_small,
+    );
+    write_text(&dir, "scaling.csv", &scaling_csv(&scaling))?;
+    write_text(&dir, "table.md", &md)?;
+    Ok(())
+}
+
+/// Step 1: Both gaits at γ = [`G0`] (DOP853 1e-14, Newton to `no`'s tolerance): long period first.
+fn gaits_at_g0(no: &NewtonOptions) -> anyhow::Result<Vec<FixedPoint>> {
+    let w0 = family(G0)?;
+    let map0 = StrideMap::new(w0.as_ref(), Options::dop853(1e-14))?;
     let mut gaits = Vec::new();
     for g in [GarciaGait::LongPeriod, GarciaGait::ShortPeriod] {
-        let fp = find_fixed_point(&map0, &g.section_guess(g0), &no)?;
+        let fp = find_fixed_point(&map0, &g.section_guess(G0), no)?;
         gaits.push(fp);
     }
+    Ok(gaits)
+}
+
+/// Step 1: Both gaits against the slope by pseudo-arclength continuation: each continued down
+/// and up from [`G0`] and joined; returns the named branches and the wall time of all four (s).
+fn continue_gaits(gaits: &[FixedPoint]) -> anyhow::Result<(Vec<(String, Branch)>, f64)> {
     let mut copts = ContinuationOptions::new(2e-4, 0.0195);
     copts.ds_max = 2e-3;
     let mut branches = Vec::new();
     let mut t_cont = 0.0;
     for (name, fp) in ["long-period (stable at 0.009)", "short-period"]
         .iter()
-        .zip(&gaits)
+        .zip(gaits)
     {
         let mut up = copts;
         up.direction = 1.0;
@@ -129,8 +191,8 @@ fn main() -> anyhow::Result<()> {
         down.direction = -1.0;
         let ((bu, bd), t) = time_once(|| {
             (
-                continue_branch(&family, &fp.section, g0, 1, &up),
-                continue_branch(&family, &fp.section, g0, 1, &down),
+                continue_branch(&family, &fp.section, G0, 1, &up),
+                continue_branch(&family, &fp.section, G0, 1, &down),
             )
         });
         t_cont += t;
@@ -144,8 +206,11 @@ fn main() -> anyhow::Result<()> {
         );
         branches.push((name.to_string(), join(&bd, &bu)));
     }
+    Ok((branches, t_cont))
+}
 
-    // ---- 2. Period-doubling cascade on the long-period gait. ----
+/// Step 2: Period-doubling cascade on the long-period gait, from its point nearest γ = 0.013.
+fn cascade(branches: &[(String, Branch)]) -> anyhow::Result<Cascade> {
     let mut casc = ContinuationOptions::new(0.012, 0.0195);
     casc.ds_max = 5e-4;
     casc.ds_init = 1e-4;
@@ -171,12 +236,19 @@ fn main() -> anyhow::Result<()> {
             p.param
         );
     }
+    Ok(Cascade {
+        pds,
+        branches: cbranches,
+        seconds: t_casc,
+    })
+}
 
-    // ---- 3. Orbit diagram over the cascade. ----
+/// Step 3: Orbit diagram over the cascade ([`WINDOW`], 800 slopes, 2 threads).
+fn orbit_diagram_over_cascade(branches: &[(String, Branch)]) -> anyhow::Result<Orbit> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     let n_orbit = 800;
     let mus: Vec<f64> = (0..n_orbit)
-        .map(|i| 0.0145 + (0.0192 - 0.0145) * i as f64 / (n_orbit - 1) as f64)
+        .map(|i| WINDOW.0 + (WINDOW.1 - WINDOW.0) * i as f64 / (n_orbit - 1) as f64)
         .collect();
     // Start each slope from the period-one branch (interpolated), nudged off it.
     let p1 = &branches[0].1.points;
@@ -218,11 +290,40 @@ fn main() -> anyhow::Result<()> {
         .filter(|c| c.fall.is_none() && c.period.is_none())
         .count();
     let fell = cols.iter().filter(|c| c.fall.is_some()).count();
+    Ok(Orbit {
+        diagram: orbit,
+        n: n_orbit,
+        opts: oopts,
+        chaotic,
+        fell,
+        seconds: t_orbit,
+    })
+}
 
-    // ---- Store: HDF5 sweep file + bifurcation diagrams. ----
+/// Store: HDF5 sweep file + bifurcation diagrams (the full one and the cascade's zoom).
+fn store(
+    dir: &Path,
+    branches: &[(String, Branch)],
+    cascade: &Cascade,
+    orbit: &Orbit,
+) -> anyhow::Result<()> {
+    let data = sweep_data(branches, &cascade.branches, &orbit.diagram);
+    pdw_store::write_sweep(dir.join("garcia.h5"), true, &data)?;
+    pdw_store::plot_bifurcation(dir.join("bifurcation_full.png"), &data, 0)?;
+    pdw_store::plot_bifurcation(dir.join("cascade.png"), &zoom(&data), 0)?;
+    Ok(())
+}
+
+/// The sweep file's contents: both period-one branches, then the cascade's doubled branches
+/// (its first, the period-one start, left out), each with its bifurcations.
+fn sweep_data(
+    branches: &[(String, Branch)],
+    cbranches: &[Branch],
+    orbit: &pdw_store::OrbitDiagram,
+) -> pdw_store::SweepData {
     let mut sb = Vec::new();
     let mut sbif = Vec::new();
-    for (name, b) in &branches {
+    for (name, b) in branches {
         for bf in &b.bifurcations {
             sbif.push(pdw_store::Bifurcation {
                 kind: kind_name(bf.kind).into(),
@@ -244,23 +345,25 @@ fn main() -> anyhow::Result<()> {
         }
         sb.push(store_branch(&format!("period-{}", b.period_strides), b));
     }
-    let data = pdw_store::SweepData {
+    pdw_store::SweepData {
         command: command("garcia"),
         model: "simplest".into(),
         parameter: "slope".into(),
         params: "{}".into(),
         section_names: vec!["theta".into(), "thetadot".into()],
-        branches: sb.clone(),
-        bifurcations: sbif.clone(),
+        branches: sb,
+        bifurcations: sbif,
         orbit: Some(orbit.clone()),
         ..Default::default()
-    };
-    pdw_store::write_sweep(dir.join("garcia.h5"), true, &data)?;
-    pdw_store::plot_bifurcation(dir.join("bifurcation_full.png"), &data, 0)?;
-    // Zoom on the cascade: branch points inside the window only.
-    let (lo, hi) = (0.0145, 0.0192);
+    }
+}
+
+/// Zoom on the cascade: branch points inside [`WINDOW`] only.
+fn zoom(data: &pdw_store::SweepData) -> pdw_store::SweepData {
+    let (lo, hi) = WINDOW;
     let zoom = pdw_store::SweepData {
-        branches: sb
+        branches: data
+            .branches
             .iter()
             .map(|b| {
                 let keep: Vec<usize> = (0..b.parameter.len())
@@ -280,7 +383,8 @@ fn main() -> anyhow::Result<()> {
         ..data.clone()
     };
     let zoom = pdw_store::SweepData {
-        bifurcations: sbif
+        bifurcations: data
+            .bifurcations
             .iter()
             .filter(|b| zoom.branches[b.branch].parameter.len() > 1)
             .cloned()
@@ -309,14 +413,16 @@ fn main() -> anyhow::Result<()> {
             })
         })
         .collect();
-    let zoom = pdw_store::SweepData {
+    pdw_store::SweepData {
         branches: zb,
         bifurcations: zbif,
         ..zoom
-    };
-    pdw_store::plot_bifurcation(dir.join("cascade.png"), &zoom, 0)?;
+    }
+}
 
-    // ---- 4. Small-slope scaling, direct solves. ----
+/// Step 4: Small-slope scaling, direct solves: both gaits at 41 slopes 10⁻⁹ … 10⁻², each from the
+/// asymptotic guess (Newton to `no`'s tolerance), else from the previous solution (to 1e-12).
+fn scaling_solves(no: &NewtonOptions) -> anyhow::Result<Vec<ScalingRow>> {
     let gammas: Vec<f64> = (0..=40)
         .map(|i| 10f64.powf(-9.0 + 7.0 * i as f64 / 40.0))
         .collect();
@@ -327,7 +433,7 @@ fn main() -> anyhow::Result<()> {
             let w = family(gm)?;
             let map = StrideMap::new(w.as_ref(), Options::dop853(1e-14))?;
             let guess = g.section_guess(gm).to_vec();
-            let r = find_fixed_point(&map, &guess, &no).or_else(|_| {
+            let r = find_fixed_point(&map, &guess, no).or_else(|_| {
                 find_fixed_point(
                     &map,
                     prev.as_deref().unwrap_or(&guess),
@@ -353,30 +459,35 @@ fn main() -> anyhow::Result<()> {
             }
         }
     }
-    let fit_window = |gmax: f64| {
-        let mut fits = Vec::new();
-        for g in [GarciaGait::LongPeriod, GarciaGait::ShortPeriod] {
-            let pts: Vec<_> = scaling.iter().filter(|r| r.0 == g && r.1 <= gmax).collect();
-            let x: Vec<f64> = pts.iter().map(|r| r.1.powf(2.0 / 3.0)).collect();
-            let yt: Vec<f64> = pts.iter().map(|r| r.2 / r.1.cbrt()).collect();
-            let yd: Vec<f64> = pts.iter().map(|r| r.3 / r.1.cbrt()).collect();
-            let yp: Vec<f64> = pts.iter().map(|r| r.4).collect();
-            let ft = quad_fit(&x, &yt);
-            let fd = quad_fit(&x, &yd);
-            let fpd = quad_fit(&x, &yp);
-            // Θ₀ = ft0, Θ₁ = ft1; α = fd0/Θ₀; c₁ = fd1 − α Θ₁.
-            let alpha = fd[0] / ft[0];
-            let c1 = fd[1] - alpha * ft[1];
-            fits.push((g, ft, alpha, c1, fpd, pts.len()));
-        }
-        fits
-    };
-    let fits = fit_window(1e-4);
-    let fits_small = fit_window(1e-6);
+    Ok(scaling)
+}
 
+/// The scaling laws of both gaits fitted over the solves with γ ≤ `gmax`.
+fn fit_window(scaling: &[ScalingRow], gmax: f64) -> Vec<Fit> {
+    let mut fits = Vec::new();
+    for g in [GarciaGait::LongPeriod, GarciaGait::ShortPeriod] {
+        let pts: Vec<_> = scaling.iter().filter(|r| r.0 == g && r.1 <= gmax).collect();
+        let x: Vec<f64> = pts.iter().map(|r| r.1.powf(2.0 / 3.0)).collect();
+        let yt: Vec<f64> = pts.iter().map(|r| r.2 / r.1.cbrt()).collect();
+        let yd: Vec<f64> = pts.iter().map(|r| r.3 / r.1.cbrt()).collect();
+        let yp: Vec<f64> = pts.iter().map(|r| r.4).collect();
+        let ft = quad_fit(&x, &yt);
+        let fd = quad_fit(&x, &yd);
+        let fpd = quad_fit(&x, &yp);
+        // Θ₀ = ft0, Θ₁ = ft1; α = fd0/Θ₀; c₁ = fd1 − α Θ₁.
+        let alpha = fd[0] / ft[0];
+        let c1 = fd[1] - alpha * ft[1];
+        fits.push((g, ft, alpha, c1, fpd, pts.len()));
+    }
+    fits
+}
+
+/// The charts of the small-slope scaling: θ*/γ^{1/3} and the period against γ^{2/3}, computed,
+/// Garcia's laws and (for θ*) the fitted ones.
+fn plot_scaling(dir: &Path, scaling: &[ScalingRow], fits: &[Fit]) -> anyhow::Result<()> {
     // Scaling chart: θ*/γ^{1/3} against γ^{2/3}.
     let mut series = Vec::new();
-    for (g, ft, _, _, _, _) in &fits {
+    for (g, ft, _, _, _, _) in fits {
         let name = match g {
             GarciaGait::LongPeriod => "long",
             GarciaGait::ShortPeriod => "short",
@@ -416,7 +527,7 @@ fn main() -> anyhow::Result<()> {
         false,
     )?;
     let mut series = Vec::new();
-    for (g, _, _, _, fpd, _) in &fits {
+    for (g, _, _, _, fpd, _) in fits {
         let name = match g {
             GarciaGait::LongPeriod => "long",
             GarciaGait::ShortPeriod => "short",
@@ -446,8 +557,31 @@ fn main() -> anyhow::Result<()> {
         false,
         false,
     )?;
+    Ok(())
+}
 
-    // ---- Tables. ----
+/// Tables: `table.md`, section by section.
+fn report(
+    gaits: &[FixedPoint],
+    branches: &[(String, Branch)],
+    t_cont: f64,
+    cascade: &Cascade,
+    orbit: &Orbit,
+    fits: &[Fit],
+    fits_small: &[Fit],
+) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# Garcia et al. 1998 reproduced (simplest walker)\n");
+    let _ = writeln!(md, "Reproduce: `{}`.\n", command("garcia"));
+    report_gaits(&mut md, gaits);
+    report_branches(&mut md, branches, t_cont);
+    report_cascade(&mut md, cascade, orbit);
+    report_scaling(&mut md, fits, fits_small);
+    md
+}
+
+/// Both gaits at γ = 0.009 against Garcia's printed values.
+fn report_gaits(md: &mut String, gaits: &[FixedPoint]) {
     let _ = writeln!(
         md,
         "## Both gaits at γ = 0.009 (DOP853 1e-14, Newton to 1e-13)\n"
@@ -489,12 +623,16 @@ fn main() -> anyhow::Result<()> {
          differences; the exact (variational) ones above differ by {}.\n",
         sci((gaits[0].multipliers[0].re + 0.191).hypot(gaits[0].multipliers[0].im.abs() - 0.556))
     );
+}
+
+/// The continued branches: their ranges, ends and bifurcations.
+fn report_branches(md: &mut String, branches: &[(String, Branch)], t_cont: f64) {
     let _ = writeln!(
         md,
         "## Branches (pseudo-arclength, DOP853 1e-13) — {t_cont:.2} s for both\n"
     );
     let _ = writeln!(md, "![bifurcation](bifurcation_full.png)\n");
-    for (name, b) in &branches {
+    for (name, b) in branches {
         let ps: Vec<f64> = b.points.iter().map(|p| p.param).collect();
         let _ = writeln!(
             md,
@@ -515,6 +653,12 @@ fn main() -> anyhow::Result<()> {
             );
         }
     }
+}
+
+/// The period doublings with their Feigenbaum-type ratios against Garcia's, and the orbit
+/// diagram's counts.
+fn report_cascade(md: &mut String, cascade: &Cascade, orbit: &Orbit) {
+    let (pds, t_casc) = (&cascade.pds, cascade.seconds);
     let _ = writeln!(md, "\n## Period-doubling cascade — {t_casc:.1} s\n");
     let _ = writeln!(md, "![cascade](cascade.png)\n");
     let mut t = Table::new(&[
@@ -545,13 +689,19 @@ fn main() -> anyhow::Result<()> {
         ]);
     }
     let _ = writeln!(md, "{}", t.markdown());
+    let (lo, hi) = WINDOW;
+    let (n_orbit, t_orbit, chaotic, fell) = (orbit.n, orbit.seconds, orbit.chaotic, orbit.fell);
     let _ = writeln!(
         md,
         "Orbit diagram: {n_orbit} slopes in [{lo}, {hi}], {} transient + {} recorded strides each \
          (DOP853 1e-10, 2 threads): {t_orbit:.1} s. No period ≤ 64 detected (chaotic or \
          not converged) at {chaotic} slopes; the walker fell at {fell}.\n",
-        oopts.transient, oopts.record
+        orbit.opts.transient, orbit.opts.record
     );
+}
+
+/// The scaling coefficients: Garcia's against both fits.
+fn report_scaling(md: &mut String, fits: &[Fit], fits_small: &[Fit]) {
     let _ = writeln!(md, "## Small-slope scaling (Garcia App. A.2)\n");
     let _ = writeln!(
         md,
@@ -564,7 +714,7 @@ fn main() -> anyhow::Result<()> {
         "fitted, γ ≤ 1e-4",
         "fitted, γ ≤ 1e-6",
     ]);
-    for ((g, ft, alpha, c1, fpd, _), (_, ft2, alpha2, c12, fpd2, _)) in fits.iter().zip(&fits_small)
+    for ((g, ft, alpha, c1, fpd, _), (_, ft2, alpha2, c12, fpd2, _)) in fits.iter().zip(fits_small)
     {
         let a = g.asymptotics();
         let name = format!("{g:?}");
@@ -587,8 +737,12 @@ fn main() -> anyhow::Result<()> {
         }
     }
     let _ = writeln!(md, "{}", t.markdown());
+}
+
+/// `scaling.csv`: every direct solve, full precision.
+fn scaling_csv(scaling: &[ScalingRow]) -> String {
     let mut csv = String::from("gait,slope,theta,thetadot,period,multipliers\n");
-    for r in &scaling {
+    for r in scaling {
         let _ = writeln!(
             csv,
             "{:?},{:e},{:.16e},{:.16e},{:.16e},{}",
@@ -600,7 +754,5 @@ fn main() -> anyhow::Result<()> {
             fmt_multipliers(&r.5, 12).replace(", ", ";")
         );
     }
-    write_text(&dir, "scaling.csv", &csv)?;
-    write_text(&dir, "table.md", &md)?;
-    Ok(())
+    csv
 }

@@ -10,10 +10,12 @@ use pdw_experiments::{command, fmt_multipliers, results_dir, sci, time_once, wri
 use pdw_hybrid::{GuardKind, Integrator, Options, Scratch, StopReason};
 use pdw_limit::{
     basin_metrics, classify_cells, continue_branch, find_fixed_point, grid_cells, legend, linspace,
-    BasinOptions, BasinProblem, Branch, ContinuationOptions, NewtonOptions, Outcome, StrideMap,
+    BasinOptions, BasinProblem, Branch, ContinuationOptions, FixedPoint, NewtonOptions, Outcome,
+    StrideMap,
 };
 use pdw_walkers::{Walker, WalkerError};
 use std::fmt::Write as _;
+use std::path::Path;
 
 const G0: f64 = 0.05;
 
@@ -141,15 +143,65 @@ fn continue_both_ways(free: bool, hip: f64, s0: &[f64]) -> anyhow::Result<(Branc
     ))
 }
 
+/// A period-one gait at γ = [`G0`]: `(free swing knee, section state, stable)`.
+type Gait = (bool, Vec<f64>, bool);
+
+/// A chart's named polyline.
+type Series = (String, Vec<(f64, f64)>);
+
+/// The charts against the slope, one series of each per branch.
+#[derive(Default)]
+struct SlopeSeries {
+    /// Smallest knee-lock torque over a stride (N m).
+    knee: Vec<Series>,
+    /// Largest multiplier modulus.
+    lam: Vec<Series>,
+    /// Smallest normal force over a stride (N).
+    norm: Vec<Series>,
+}
+
 fn main() -> anyhow::Result<()> {
     faer::set_global_parallelism(faer::Par::Seq);
     let dir = results_dir("seed5")?;
     let mut md = String::new();
     let _ = writeln!(md, "# The seed thesis' walker (Table 3.1)\n");
     let _ = writeln!(md, "Reproduce: `{}`.\n", command("seed5"));
-    let no = NewtonOptions::default();
+    let locked = build(G0, false, 0.0)?;
+    let gaits = gaits_at_g0(locked.as_ref(), &mut md)?;
+    slope_branches(&dir, &gaits, &mut md)?;
+    let stable_gait = gaits.iter().find(|g| !g.0 && g.2).cloned();
+    if let Some((_, s, _)) = &stable_gait {
+        profile(&dir, locked.as_ref(), s, &mut md)?;
+    }
+    let valid_hip = hip_mass(stable_gait.as_ref().map(|g| g.1.as_slice()), &mut md)?;
+    if let Some((_, s, _)) = &stable_gait {
+        basin(&dir, locked.as_ref(), s, &mut md)?;
+    }
+    if let Some((hip, _)) = &valid_hip {
+        let _ = writeln!(
+            md,
+            "First hip mass with a stable gait and all flags clear: {hip} kg.\n"
+        );
+    }
+    write_text(&dir, "table.md", &md)?;
+    Ok(())
+}
 
-    // ---- 1. Gaits at γ = 0.05 for both variants. ----
+/// The variant's name in the gaits table.
+fn variant(free: bool) -> &'static str {
+    if free {
+        "free swing knee"
+    } else {
+        "knees locked"
+    }
+}
+
+/// Step 1: Gaits at γ = 0.05 for both variants: Newton (DOP853 1e-14) from the model's gait
+/// guesses (`locked`'s), and for the free swing knee from a small grid around them too; distinct
+/// gaits kept (1e-7), failed starts listed (the free knee's first 3 only). Writes section 1 to
+/// `md`.
+fn gaits_at_g0(locked: &dyn Walker, md: &mut String) -> anyhow::Result<Vec<Gait>> {
+    let no = NewtonOptions::default();
     let mut t = Table::new(&[
         "variant",
         "guess",
@@ -160,13 +212,12 @@ fn main() -> anyhow::Result<()> {
         "multipliers",
         "stable",
     ]);
-    let locked = build(G0, false, 0.0)?;
     let guesses: Vec<(String, Vec<f64>)> = locked
         .gait_guesses()
         .into_iter()
         .map(|g| (g.gait.to_string(), g.section))
         .collect();
-    let mut gaits: Vec<(bool, Vec<f64>, bool)> = Vec::new();
+    let mut gaits: Vec<Gait> = Vec::new();
     for free in [false, true] {
         let w = build(G0, free, 0.0)?;
         let map = StrideMap::new(w.as_ref(), Options::dop853(1e-14))?;
@@ -194,53 +245,12 @@ fn main() -> anyhow::Result<()> {
                     }
                     seen.push(fp.section.clone());
                     gaits.push((free, fp.section.clone(), fp.stable));
-                    t.row(vec![
-                        if free {
-                            "free swing knee"
-                        } else {
-                            "knees locked"
-                        }
-                        .into(),
-                        label.clone(),
-                        format!(
-                            "converged ({} it., residual {})",
-                            fp.iterations,
-                            sci(fp.residual)
-                        ),
-                        format!(
-                            "({:.9}, {:.9}, {:.9})",
-                            fp.section[0], fp.section[1], fp.section[2]
-                        ),
-                        format!("{:.6}", fp.metrics.period),
-                        map.stride(&fp.section).ok().map_or("—".into(), |st| {
-                            format!("{:.5}", w.step_length(&st.pre_event))
-                        }),
-                        fmt_multipliers(&fp.multipliers, 4),
-                        fp.stable.to_string(),
-                    ]);
+                    t.row(gait_row(free, label, &fp, &map, w.as_ref()));
                 }
                 Err(e) => {
                     failures += 1;
                     if !free || failures <= 3 {
-                        let msg = e.to_string().replace('\n', " ").replace('|', "/");
-                        t.row(vec![
-                            if free {
-                                "free swing knee"
-                            } else {
-                                "knees locked"
-                            }
-                            .into(),
-                            label.clone(),
-                            format!(
-                                "no convergence: {}",
-                                msg.chars().take(160).collect::<String>()
-                            ),
-                            "—".into(),
-                            "—".into(),
-                            "—".into(),
-                            "—".into(),
-                            "—".into(),
-                        ]);
+                        t.row(failure_row(free, label, &e));
                     }
                 }
             }
@@ -262,8 +272,60 @@ fn main() -> anyhow::Result<()> {
         }
     }
     let _ = writeln!(md, "## 1. Period-one gaits at γ = {G0}\n\n{}", t.markdown());
+    Ok(gaits)
+}
 
-    // ---- 2. Continuation in the slope, validity along each branch. ----
+/// The gaits table's row of a gait found from start `label`.
+fn gait_row(
+    free: bool,
+    label: &str,
+    fp: &FixedPoint,
+    map: &StrideMap,
+    w: &dyn Walker,
+) -> Vec<String> {
+    vec![
+        variant(free).into(),
+        label.to_string(),
+        format!(
+            "converged ({} it., residual {})",
+            fp.iterations,
+            sci(fp.residual)
+        ),
+        format!(
+            "({:.9}, {:.9}, {:.9})",
+            fp.section[0], fp.section[1], fp.section[2]
+        ),
+        format!("{:.6}", fp.metrics.period),
+        map.stride(&fp.section).ok().map_or("—".into(), |st| {
+            format!("{:.5}", w.step_length(&st.pre_event))
+        }),
+        fmt_multipliers(&fp.multipliers, 4),
+        fp.stable.to_string(),
+    ]
+}
+
+/// The gaits table's row of a start `label` from which Newton failed with `e`.
+fn failure_row(free: bool, label: &str, e: &impl std::fmt::Display) -> Vec<String> {
+    let msg = e.to_string().replace('\n', " ").replace('|', "/");
+    vec![
+        variant(free).into(),
+        label.to_string(),
+        format!(
+            "no convergence: {}",
+            msg.chars().take(160).collect::<String>()
+        ),
+        "—".into(),
+        "—".into(),
+        "—".into(),
+        "—".into(),
+        "—".into(),
+    ]
+}
+
+/// Step 2: Continuation in the slope, validity along each branch: every gait continued both ways
+/// over γ ∈ [0.005, 0.15], one stride's constraint forces checked at each point (about 12 rows
+/// per branch in the table); writes section 2 to `md` and its two charts.
+fn slope_branches(dir: &Path, gaits: &[Gait], md: &mut String) -> anyhow::Result<()> {
     let mut tb = Table::new(&[
         "branch",
         "γ",
@@ -278,11 +340,9 @@ fn main() -> anyhow::Result<()> {
         "min knee torque (N m)",
         "flags",
     ]);
-    let mut s_knee = Vec::new();
-    let mut s_lam = Vec::new();
-    let mut s_norm = Vec::new();
+    let mut series = SlopeSeries::default();
     let mut ends_txt = String::new();
-    for (k, (free, s, stable)) in gaits.iter().enumerate() {
+    for (free, s, stable) in gaits {
         let name = format!(
             "{} {}",
             if *free { "free knee" } else { "locked" },
@@ -312,50 +372,7 @@ fn main() -> anyhow::Result<()> {
                 .collect::<Vec<_>>()
                 .join(", ")
         );
-        let mut kn = Vec::new();
-        let mut la = Vec::new();
-        let mut nf = Vec::new();
-        let every = (br.points.len() / 12).max(1);
-        for (i, p) in br.points.iter().enumerate() {
-            if !(0.005..=0.15).contains(&p.param) {
-                continue;
-            }
-            let w = build(p.param, *free, 0.0)?;
-            let v = validity(w.as_ref(), &p.section, 0.02);
-            let lmax = p
-                .multipliers
-                .iter()
-                .map(|m| m.modulus())
-                .fold(0.0, f64::max);
-            la.push((p.param, lmax));
-            if let Some(v) = &v {
-                kn.push((p.param, v.min_knee));
-                nf.push((p.param, v.min_normal));
-            }
-            if i % every == 0 || i + 1 == br.points.len() {
-                tb.row(vec![
-                    name.clone(),
-                    format!("{:.4}", p.param),
-                    format!("{:.6}", p.section[0]),
-                    format!("{:.6}", p.section[1]),
-                    format!("{:.6}", p.section[2]),
-                    format!("{:.5}", p.period),
-                    format!("{lmax:.4}"),
-                    p.stable.to_string(),
-                    v.as_ref()
-                        .map_or("—".into(), |v| format!("{:.2}", v.min_normal)),
-                    v.as_ref()
-                        .map_or("—".into(), |v| format!("{:.3}", v.max_friction)),
-                    v.as_ref()
-                        .map_or("—".into(), |v| format!("{:.3}", v.min_knee)),
-                    v.as_ref().map_or("stride failed".into(), |v| v.flag_text()),
-                ]);
-            }
-        }
-        s_knee.push((format!("{name}: min knee-lock torque (N m)"), kn));
-        s_lam.push((format!("{name}: |λ|max"), la));
-        s_norm.push((format!("{name}: min normal force / 100 N"), nf));
-        let _ = k;
+        branch_validity(&name, *free, &br, &mut tb, &mut series)?;
     }
     let _ = writeln!(
         md,
@@ -365,8 +382,73 @@ fn main() -> anyhow::Result<()> {
          a **negative** locking torque means the knee would unlock (flex).\n\n{}",
         tb.markdown()
     );
-    let mut series = s_knee.clone();
-    for (n, v) in &s_norm {
+    plot_slope_series(dir, &series, md)
+}
+
+/// One branch's validity: each point's stride checked (h ≤ 0.02 s), its series added to
+/// `series`, about 12 of its points (and the last) added to `tb`.
+fn branch_validity(
+    name: &str,
+    free: bool,
+    br: &Branch,
+    tb: &mut Table,
+    series: &mut SlopeSeries,
+) -> anyhow::Result<()> {
+    let mut kn = Vec::new();
+    let mut la = Vec::new();
+    let mut nf = Vec::new();
+    let every = (br.points.len() / 12).max(1);
+    for (i, p) in br.points.iter().enumerate() {
+        if !(0.005..=0.15).contains(&p.param) {
+            continue;
+        }
+        let w = build(p.param, free, 0.0)?;
+        let v = validity(w.as_ref(), &p.section, 0.02);
+        let lmax = p
+            .multipliers
+            .iter()
+            .map(|m| m.modulus())
+            .fold(0.0, f64::max);
+        la.push((p.param, lmax));
+        if let Some(v) = &v {
+            kn.push((p.param, v.min_knee));
+            nf.push((p.param, v.min_normal));
+        }
+        if i % every == 0 || i + 1 == br.points.len() {
+            tb.row(vec![
+                name.to_string(),
+                format!("{:.4}", p.param),
+                format!("{:.6}", p.section[0]),
+                format!("{:.6}", p.section[1]),
+                format!("{:.6}", p.section[2]),
+                format!("{:.5}", p.period),
+                format!("{lmax:.4}"),
+                p.stable.to_string(),
+                v.as_ref()
+                    .map_or("—".into(), |v| format!("{:.2}", v.min_normal)),
+                v.as_ref()
+                    .map_or("—".into(), |v| format!("{:.3}", v.max_friction)),
+                v.as_ref()
+                    .map_or("—".into(), |v| format!("{:.3}", v.min_knee)),
+                v.as_ref().map_or("stride failed".into(), |v| v.flag_text()),
+            ]);
+        }
+    }
+    series
+        .knee
+        .push((format!("{name}: min knee-lock torque (N m)"), kn));
+    series.lam.push((format!("{name}: |λ|max"), la));
+    series
+        .norm
+        .push((format!("{name}: min normal force / 100 N"), nf));
+    Ok(())
+}
+
+/// Section 2's charts (validity and multipliers against the slope), unless every series is
+/// empty; their image links are added to `md`.
+fn plot_slope_series(dir: &Path, s: &SlopeSeries, md: &mut String) -> anyhow::Result<()> {
+    let mut series = s.knee.clone();
+    for (n, v) in &s.norm {
         series.push((n.clone(), v.iter().map(|(a, b)| (*a, b / 100.0)).collect()));
     }
     if !series.iter().all(|s| s.1.is_empty()) {
@@ -384,7 +466,7 @@ fn main() -> anyhow::Result<()> {
             "Seed walker: largest Floquet multiplier modulus",
             "slope γ (rad)",
             "|λ|max",
-            &s_lam,
+            &s.lam,
             false,
             false,
         )?;
@@ -393,66 +475,71 @@ fn main() -> anyhow::Result<()> {
             "![validity](validity_vs_slope.png) ![multipliers](multipliers_vs_slope.png)\n"
         );
     }
+    Ok(())
+}
 
-    // ---- 3. Profiles over one stride at γ = 0.05 (stable locked-knee gait). ----
-    let stable_gait = gaits.iter().find(|g| !g.0 && g.2).cloned();
-    if let Some((_, s, _)) = &stable_gait {
-        let v = validity(locked.as_ref(), s, 0.005).ok_or_else(|| anyhow::anyhow!("stride"))?;
-        let col =
-            |i: usize| -> Vec<(f64, f64)> { v.profile.iter().map(|p| (p[0], p[i])).collect() };
-        pdw_store::plot_lines(
-            dir.join("profile_005.png"),
-            "Seed walker, knees locked, γ = 0.05: one stride of the gait",
-            "time since heel strike (s)",
-            "N  |  N m",
-            &[
-                ("stance-foot normal force (N)".into(), col(1)),
-                ("stance-foot tangential force (N, +downhill)".into(), col(2)),
-                ("stance-knee lock torque (N m)".into(), col(3)),
-                ("swing-knee lock torque (N m)".into(), col(4)),
-            ],
-            false,
-            false,
-        )?;
-        let (imin, tmin) = v
-            .profile
+/// Step 3: Profiles over one stride at γ = 0.05 (stable locked-knee gait `s`): the chart and
+/// section 3 of `md`.
+fn profile(dir: &Path, locked: &dyn Walker, s: &[f64], md: &mut String) -> anyhow::Result<()> {
+    let v = validity(locked, s, 0.005).ok_or_else(|| anyhow::anyhow!("stride"))?;
+    let col = |i: usize| -> Vec<(f64, f64)> { v.profile.iter().map(|p| (p[0], p[i])).collect() };
+    pdw_store::plot_lines(
+        dir.join("profile_005.png"),
+        "Seed walker, knees locked, γ = 0.05: one stride of the gait",
+        "time since heel strike (s)",
+        "N  |  N m",
+        &[
+            ("stance-foot normal force (N)".into(), col(1)),
+            ("stance-foot tangential force (N, +downhill)".into(), col(2)),
+            ("stance-knee lock torque (N m)".into(), col(3)),
+            ("swing-knee lock torque (N m)".into(), col(4)),
+        ],
+        false,
+        false,
+    )?;
+    let (imin, tmin) = v
+        .profile
+        .iter()
+        .map(|p| (p[0], p[3].min(p[4])))
+        .fold((0.0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+    let frac_neg = v
+        .profile
+        .iter()
+        .filter(|p| p[3] < 0.0 || p[4] < 0.0)
+        .count() as f64
+        / v.profile.len() as f64;
+    let _ = writeln!(
+        md,
+        "\n## 3. Ground reaction and knee-lock torques over one stride (γ = 0.05, knees \
+         locked, stable gait)\n\n\
+         {} samples (DOP853 1e-10, h ≤ 5 ms). Normal force {:.1} … {:.1} N (weight {:.1} N), \
+         friction needed ≤ {:.3}; knee-lock torque minimum {:.3} N m at t = {:.3} s; a \
+         negative torque in {:.0} % of the samples. Flags: **{}**.\n\n\
+         ![profile](profile_005.png)\n",
+        v.profile.len(),
+        v.min_normal,
+        v.profile
             .iter()
-            .map(|p| (p[0], p[3].min(p[4])))
-            .fold((0.0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
-        let frac_neg = v
-            .profile
-            .iter()
-            .filter(|p| p[3] < 0.0 || p[4] < 0.0)
-            .count() as f64
-            / v.profile.len() as f64;
-        let _ = writeln!(
-            md,
-            "\n## 3. Ground reaction and knee-lock torques over one stride (γ = 0.05, knees \
-             locked, stable gait)\n\n\
-             {} samples (DOP853 1e-10, h ≤ 5 ms). Normal force {:.1} … {:.1} N (weight {:.1} N), \
-             friction needed ≤ {:.3}; knee-lock torque minimum {:.3} N m at t = {:.3} s; a \
-             negative torque in {:.0} % of the samples. Flags: **{}**.\n\n\
-             ![profile](profile_005.png)\n",
-            v.profile.len(),
-            v.min_normal,
-            v.profile
-                .iter()
-                .map(|p| p[1])
-                .fold(f64::NEG_INFINITY, f64::max),
-            10.0 * 9.81,
-            v.max_friction,
-            tmin,
-            imin,
-            100.0 * frac_neg,
-            v.flag_text()
-        );
-        eprintln!(
-            "profile: min knee {tmin} at {imin}, flags {}",
-            v.flag_text()
-        );
-    }
+            .map(|p| p[1])
+            .fold(f64::NEG_INFINITY, f64::max),
+        10.0 * 9.81,
+        v.max_friction,
+        tmin,
+        imin,
+        100.0 * frac_neg,
+        v.flag_text()
+    );
+    eprintln!(
+        "profile: min knee {tmin} at {imin}, flags {}",
+        v.flag_text()
+    );
+    Ok(())
+}
 
-    // ---- 4. An added hip mass. ----
+/// Step 4: An added hip mass: pseudo-arclength in the hip mass from the stable gait `s` (if any),
+/// each point's stride checked; writes section 4 to `md` and returns the first hip mass (and
+/// gait) that is stable with every flag clear.
+fn hip_mass(s: Option<&[f64]>, md: &mut String) -> anyhow::Result<Option<(f64, Vec<f64>)>> {
     let mut th = Table::new(&[
         "hip mass (kg)",
         "|λ|max",
@@ -466,7 +553,7 @@ fn main() -> anyhow::Result<()> {
     ]);
     let mut valid_hip: Option<(f64, Vec<f64>)> = None;
     let mut hip_end = String::new();
-    if let Some((_, s, _)) = &stable_gait {
+    if let Some(s) = s {
         let family = |h: f64| build(G0, false, h);
         let mut co = ContinuationOptions::new(0.005, 60.0);
         co.integrator = Options::dop853(1e-12);
@@ -489,41 +576,7 @@ fn main() -> anyhow::Result<()> {
                         .collect::<Vec<_>>()
                         .join(", ")
                 );
-                let every = (br.points.len() / 16).max(1);
-                for (i, p) in br.points.iter().enumerate() {
-                    let w = build(G0, false, p.param.max(0.0))?;
-                    let v = validity(w.as_ref(), &p.section, 0.02);
-                    if let Some(v) = &v {
-                        if v.valid() && p.stable && valid_hip.is_none() {
-                            valid_hip = Some((p.param, p.section.clone()));
-                        }
-                    }
-                    if i % every == 0 || i + 1 == br.points.len() {
-                        th.row(vec![
-                            format!("{:.3}", p.param),
-                            format!(
-                                "|λ|max {:.4}",
-                                p.multipliers
-                                    .iter()
-                                    .map(|m| m.modulus())
-                                    .fold(0.0, f64::max)
-                            ),
-                            format!(
-                                "({:.6}, {:.6}, {:.6})",
-                                p.section[0], p.section[1], p.section[2]
-                            ),
-                            fmt_multipliers(&p.multipliers, 4),
-                            p.stable.to_string(),
-                            v.as_ref()
-                                .map_or("—".into(), |v| format!("{:.2}", v.min_normal)),
-                            v.as_ref()
-                                .map_or("—".into(), |v| format!("{:.3}", v.max_friction)),
-                            v.as_ref()
-                                .map_or("—".into(), |v| format!("{:.3}", v.min_knee)),
-                            v.as_ref().map_or("stride failed".into(), |v| v.flag_text()),
-                        ]);
-                    }
-                }
+                valid_hip = hip_validity(&br, &mut th)?;
             }
             Err(e) => hip_end = format!("Continuation in the hip mass failed: {e}"),
         }
@@ -534,74 +587,111 @@ fn main() -> anyhow::Result<()> {
          {hip_end}\n\n{}",
         th.markdown()
     );
+    Ok(valid_hip)
+}
 
-    // ---- 5. Basin of the stable gait at γ = 0.05 (knees locked). ----
-    if let Some((_, s, _)) = &stable_gait {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
-        let n = 60;
-        let xs = linspace(s[0] - 0.08, s[0] + 0.08, n);
-        let ys = linspace(s[1] - 0.3, s[1] + 0.3, n);
-        let fall = Outcome::of_fall;
-        let problem = BasinProblem::new(locked.as_ref(), s.clone(), &fall);
-        let cells = grid_cells(s, 0, &xs, 1, &ys);
-        let bo = BasinOptions {
-            max_strides: 60,
-            ..BasinOptions::default()
-        };
-        let (res, tb) = time_once(|| classify_cells(&problem, &cells, &bo, &pool, &|_| {}));
-        let labels: Vec<u8> = res?.iter().map(|c| c.outcome).collect();
-        let m = basin_metrics(&labels, n, n, 5)?;
-        let header = pdw_store::BasinHeader {
-            command: command("seed5"),
-            model: "seed5".into(),
-            slope: G0,
-            params: "{}".into(),
-            model_resolved: String::new(),
-            integrator: "dop853".into(),
-            tolerances: "{\"rtol\":1e-9,\"atol\":1e-9}".into(),
-            max_strides: 60,
-            x_name: "stance q₁ (rad)".into(),
-            x: xs.clone(),
-            y_name: "stance rate q̇₁ (rad/s)".into(),
-            y: ys.clone(),
-            state_names: vec!["stance".into(), "stance_rate".into(), "hip_rate".into()],
-            legend: legend()
-                .into_iter()
-                .map(|(c, nm)| (c, nm.to_string()))
-                .collect(),
-            shard: None,
-        };
-        let arr = ndarray::Array2::from_shape_vec((n, n), labels)?;
-        pdw_store::plot_basin(
-            dir.join("basin_005.png"),
-            &header,
-            arr.view(),
-            Some((s[0], s[1])),
-            &format!("Seed walker, knees locked, γ = 0.05 (q̇₃ = {:.4})", s[2]),
-        )?;
-        let _ = writeln!(
-            md,
-            "\n## 5. Basin of the stable locked-knee gait (γ = 0.05)\n\n{n} × {n} cells over \
-             q₁ ∈ s*₀ ± 0.08, q̇₁ ∈ s*₁ ± 0.3 (q̇₃ fixed at s*₂), DOP853 1e-9, 60 strides, \
-             {tb:.1} s on 2 threads. Fractions: {}; basin entropy {:.4}, boundary entropy \
-             {:.4}.\n\n![basin](basin_005.png)\n",
-            m.fractions
-                .iter()
-                .filter(|f| f.2 > 0.0)
-                .map(|f| format!("{} {:.4}", f.1, f.2))
-                .collect::<Vec<_>>()
-                .join(", "),
-            m.basin_entropy,
-            m.boundary_entropy
-        );
-        eprintln!("basin {tb:.1} s");
+/// The hip-mass branch's validity: each point's stride checked (h ≤ 0.02 s), about 16 of its
+/// points (and the last) added to `th`; returns the first stable point with every flag clear.
+fn hip_validity(br: &Branch, th: &mut Table) -> anyhow::Result<Option<(f64, Vec<f64>)>> {
+    let mut valid_hip = None;
+    let every = (br.points.len() / 16).max(1);
+    for (i, p) in br.points.iter().enumerate() {
+        let w = build(G0, false, p.param.max(0.0))?;
+        let v = validity(w.as_ref(), &p.section, 0.02);
+        if let Some(v) = &v {
+            if v.valid() && p.stable && valid_hip.is_none() {
+                valid_hip = Some((p.param, p.section.clone()));
+            }
+        }
+        if i % every == 0 || i + 1 == br.points.len() {
+            th.row(vec![
+                format!("{:.3}", p.param),
+                format!(
+                    "|λ|max {:.4}",
+                    p.multipliers
+                        .iter()
+                        .map(|m| m.modulus())
+                        .fold(0.0, f64::max)
+                ),
+                format!(
+                    "({:.6}, {:.6}, {:.6})",
+                    p.section[0], p.section[1], p.section[2]
+                ),
+                fmt_multipliers(&p.multipliers, 4),
+                p.stable.to_string(),
+                v.as_ref()
+                    .map_or("—".into(), |v| format!("{:.2}", v.min_normal)),
+                v.as_ref()
+                    .map_or("—".into(), |v| format!("{:.3}", v.max_friction)),
+                v.as_ref()
+                    .map_or("—".into(), |v| format!("{:.3}", v.min_knee)),
+                v.as_ref().map_or("stride failed".into(), |v| v.flag_text()),
+            ]);
+        }
     }
-    if let Some((hip, _)) = &valid_hip {
-        let _ = writeln!(
-            md,
-            "First hip mass with a stable gait and all flags clear: {hip} kg.\n"
-        );
-    }
-    write_text(&dir, "table.md", &md)?;
+    Ok(valid_hip)
+}
+
+/// Step 5: Basin of the stable gait `s` at γ = 0.05 (knees locked): 60 × 60 cells around it, 60
+/// strides, 2 threads; the picture and section 5 of `md`.
+fn basin(dir: &Path, locked: &dyn Walker, s: &[f64], md: &mut String) -> anyhow::Result<()> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let n = 60;
+    let xs = linspace(s[0] - 0.08, s[0] + 0.08, n);
+    let ys = linspace(s[1] - 0.3, s[1] + 0.3, n);
+    let fall = Outcome::of_fall;
+    let problem = BasinProblem::new(locked, s.to_vec(), &fall);
+    let cells = grid_cells(s, 0, &xs, 1, &ys);
+    let bo = BasinOptions {
+        max_strides: 60,
+        ..BasinOptions::default()
+    };
+    let (res, tb) = time_once(|| classify_cells(&problem, &cells, &bo, &pool, &|_| {}));
+    let labels: Vec<u8> = res?.iter().map(|c| c.outcome).collect();
+    let m = basin_metrics(&labels, n, n, 5)?;
+    let header = pdw_store::BasinHeader {
+        command: command("seed5"),
+        model: "seed5".into(),
+        slope: G0,
+        params: "{}".into(),
+        model_resolved: String::new(),
+        integrator: "dop853".into(),
+        tolerances: "{\"rtol\":1e-9,\"atol\":1e-9}".into(),
+        max_strides: 60,
+        x_name: "stance q₁ (rad)".into(),
+        x: xs.clone(),
+        y_name: "stance rate q̇₁ (rad/s)".into(),
+        y: ys.clone(),
+        state_names: vec!["stance".into(), "stance_rate".into(), "hip_rate".into()],
+        legend: legend()
+            .into_iter()
+            .map(|(c, nm)| (c, nm.to_string()))
+            .collect(),
+        shard: None,
+    };
+    let arr = ndarray::Array2::from_shape_vec((n, n), labels)?;
+    pdw_store::plot_basin(
+        dir.join("basin_005.png"),
+        &header,
+        arr.view(),
+        Some((s[0], s[1])),
+        &format!("Seed walker, knees locked, γ = 0.05 (q̇₃ = {:.4})", s[2]),
+    )?;
+    let _ = writeln!(
+        md,
+        "\n## 5. Basin of the stable locked-knee gait (γ = 0.05)\n\n{n} × {n} cells over \
+         q₁ ∈ s*₀ ± 0.08, q̇₁ ∈ s*₁ ± 0.3 (q̇₃ fixed at s*₂), DOP853 1e-9, 60 strides, \
+         {tb:.1} s on 2 threads. Fractions: {}; basin entropy {:.4}, boundary entropy \
+         {:.4}.\n\n![basin](basin_005.png)\n",
+        m.fractions
+            .iter()
+            .filter(|f| f.2 > 0.0)
+            .map(|f| format!("{} {:.4}", f.1, f.2))
+            .collect::<Vec<_>>()
+            .join(", "),
+        m.basin_entropy,
+        m.boundary_entropy
+    );
+    eprintln!("basin {tb:.1} s");
     Ok(())
 }

@@ -320,28 +320,86 @@ fn judge(
     j
 }
 
+/// The two models judged and the layout of the free parameters, shared by every step.
+struct Setup {
+    /// `seed5_stage2.toml` with stop knees.
+    stop: ModelInfo,
+    /// The same with latched knees.
+    latched: ModelInfo,
+    /// The free parameters' names ([`FREE`]).
+    names: Vec<&'static str>,
+    /// Every parameter of the model at its default.
+    base: Vec<f64>,
+    /// The stop model's own gait guesses at `base`.
+    model_guesses: Vec<(String, Vec<f64>)>,
+}
+
+impl Setup {
+    /// Reads `seed5_stage2.toml` from `dir`.
+    fn new(dir: &std::path::Path) -> anyhow::Result<Self> {
+        let path = dir.join("seed5_stage2.toml");
+        let spec = WalkerSpec::from_file(&path).context("seed5_stage2.toml")?;
+        let stop = ModelInfo::from_spec(spec.clone());
+        let latched = ModelInfo::from_spec(latched_spec(&spec));
+        let names: Vec<&str> = FREE.iter().map(|f| f.0).collect();
+        let base: Vec<f64> = stop.params.iter().map(|p| p.default).collect();
+        let model_guesses = pdw_limit::gaits::model_guesses(stop.build_from(&base)?.as_ref());
+        Ok(Self {
+            stop,
+            latched,
+            names,
+            base,
+            model_guesses,
+        })
+    }
+
+    /// Index of parameter `n` in the model's parameters.
+    fn index(&self, n: &str) -> usize {
+        self.stop.params.iter().position(|p| p.name == n).unwrap()
+    }
+
+    /// Every parameter's value: `base` with the free ones set to `p`.
+    fn values_of(&self, p: &[f64]) -> Vec<f64> {
+        let mut v = self.base.clone();
+        for (k, n) in self.names.iter().enumerate() {
+            v[self.index(n)] = p[k];
+        }
+        v
+    }
+
+    /// [`judge`] of all the parameters' values `values`.
+    fn judge(&self, values: &[f64], guesses: &[(String, Vec<f64>)]) -> Judged {
+        judge(&self.stop, &self.latched, values, guesses)
+    }
+}
+
+/// A judged design: its free parameters and the verdict.
+type Design = (Vec<f64>, Judged);
+
 fn main() -> anyhow::Result<()> {
     let (budget, init, map_n) = sizes()?;
     let dir = results_dir("seed5_design")?;
-    let path = dir.join("seed5_stage2.toml");
-    let spec = WalkerSpec::from_file(&path).context("seed5_stage2.toml")?;
-    let stop = ModelInfo::from_spec(spec.clone());
-    let latched = ModelInfo::from_spec(latched_spec(&spec));
-    let names: Vec<&str> = FREE.iter().map(|f| f.0).collect();
-    let index = |n: &str| stop.params.iter().position(|p| p.name == n).unwrap();
-    let base: Vec<f64> = stop.params.iter().map(|p| p.default).collect();
-    let values_of = |p: &[f64]| {
-        let mut v = base.clone();
-        for (k, n) in names.iter().enumerate() {
-            v[index(n)] = p[k];
-        }
-        v
-    };
-    let model_guesses = pdw_limit::gaits::model_guesses(stop.build_from(&base)?.as_ref());
+    let setup = Setup::new(&dir)?;
+    let (judged, search_s) = run_search(&setup, budget, init)?;
+    let counts = write_csv(&dir, &setup, &judged)?;
+    let best = judged
+        .iter()
+        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
+        .cloned()
+        .context("no design evaluated")?;
+    let mut md = report_search(&setup, budget, init, search_s, &counts, &best);
+    robustness(&setup, &judged, &mut md);
+    maps(&dir, &setup, &best, map_n, &mut md)?;
+    write_text(&dir, "redesign.md", &md)?;
+    print!("{md}");
+    Ok(())
+}
 
-    // 1. the search
+/// Step 1: the search (seeded random designs, then Nelder–Mead, on the margin objective); every
+/// design judged, in order, and the search's wall time (s).
+fn run_search(setup: &Setup, budget: usize, init: usize) -> anyhow::Result<(Vec<Design>, f64)> {
     let space = DesignSpace {
-        names: names.iter().map(|s| s.to_string()).collect(),
+        names: setup.names.iter().map(|s| s.to_string()).collect(),
         lo: FREE.iter().map(|f| f.1).collect(),
         hi: FREE.iter().map(|f| f.2).collect(),
     };
@@ -352,7 +410,13 @@ fn main() -> anyhow::Result<()> {
         min_margin: MIN_MARGIN,
         budget,
         seed: 7,
-        start: Some(names.iter().map(|n| base[index(n)]).collect()),
+        start: Some(
+            setup
+                .names
+                .iter()
+                .map(|n| setup.base[setup.index(n)])
+                .collect(),
+        ),
         init,
         basin_grid: 3,
         basin_box: [0.02, 0.08],
@@ -362,7 +426,7 @@ fn main() -> anyhow::Result<()> {
     let mut judged: Vec<(Vec<f64>, Judged)> = Vec::new();
     let t0 = std::time::Instant::now();
     let mut eval = |p: &[f64], guesses: &[(String, Vec<f64>)]| -> DesignEval {
-        let j = judge(&stop, &latched, &values_of(p), guesses);
+        let j = setup.judge(&setup.values_of(p), guesses);
         eprintln!(
             "design {:>3}: {} cost {:.4} ({}, {:.3e})",
             judged.len(),
@@ -398,16 +462,24 @@ fn main() -> anyhow::Result<()> {
         judged.push((p.to_vec(), j));
         ev
     };
-    let history = search(&space, &opts, &model_guesses, Vec::new(), &mut eval)?;
+    let history = search(&space, &opts, &setup.model_guesses, Vec::new(), &mut eval)?;
     let search_s = t0.elapsed().as_secs_f64();
     let _ = history;
+    Ok((judged, search_s))
+}
 
+/// `redesign.csv`: every design judged; returns how many got each verdict.
+fn write_csv(
+    dir: &std::path::Path,
+    setup: &Setup,
+    judged: &[Design],
+) -> anyhow::Result<[usize; NAMES.len()]> {
     let mut csv = format!(
         "{},verdict,cost,max_abs_lambda,binding,relative_margin,swing_knee_rate\n",
-        names.join(",")
+        setup.names.join(",")
     );
     let mut counts = [0usize; NAMES.len()];
-    for (p, j) in &judged {
+    for (p, j) in judged {
         counts[j.code as usize] += 1;
         let _ = writeln!(
             csv,
@@ -424,13 +496,19 @@ fn main() -> anyhow::Result<()> {
             j.knee_rate
         );
     }
-    write_text(&dir, "redesign.csv", &csv)?;
-    let best = judged
-        .iter()
-        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
-        .cloned()
-        .context("no design evaluated")?;
+    write_text(dir, "redesign.csv", &csv)?;
+    Ok(counts)
+}
 
+/// The file's head and the search's section: verdict counts and the best design.
+fn report_search(
+    setup: &Setup,
+    budget: usize,
+    init: usize,
+    search_s: f64,
+    counts: &[usize; NAMES.len()],
+    best: &Design,
+) -> String {
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -459,7 +537,8 @@ fn main() -> anyhow::Result<()> {
         "\nBest design (cost {:.4}): {} — verdict **{}**, binding `{}` at relative margin \
          {:.3e}, max |λ| {:.4}, swing knee leaves heel strike at {:.4} rad/s.\n",
         best.1.cost,
-        names
+        setup
+            .names
             .iter()
             .zip(&best.0)
             .map(|(n, v)| format!("{n} = {v:.5}"))
@@ -471,8 +550,12 @@ fn main() -> anyhow::Result<()> {
         best.1.rho,
         best.1.knee_rate
     );
+    md
+}
 
-    // 3. robustness of the feasible designs
+/// Step 3: robustness of the feasible designs (the first 5): each free parameter ±5 %, and 16
+/// random sign patterns of ±5 % in all of them (seeded), judged from the design's gait.
+fn robustness(setup: &Setup, judged: &[Design], md: &mut String) {
     let feasible: Vec<&(Vec<f64>, Judged)> = judged.iter().filter(|d| d.1.code == 0).collect();
     let _ = writeln!(md, "## Robustness (±5 % in every free parameter)\n");
     if feasible.is_empty() {
@@ -499,11 +582,11 @@ fn main() -> anyhow::Result<()> {
             .section
             .iter()
             .map(|s| ("design gait".to_string(), s.clone()))
-            .chain(model_guesses.iter().cloned())
+            .chain(setup.model_guesses.iter().cloned())
             .collect();
         let ok = perturbed
             .iter()
-            .filter(|q| judge(&stop, &latched, &values_of(q), &guesses).code <= 1)
+            .filter(|q| setup.judge(&setup.values_of(q), &guesses).code <= 1)
             .count();
         let _ = writeln!(
             md,
@@ -512,76 +595,44 @@ fn main() -> anyhow::Result<()> {
             perturbed.len()
         );
     }
+}
 
-    // 2. maps through the best design
-    let maps = [
-        ("foot_radius", "slope"),
-        ("thigh_cn", "shank_cn"),
-        ("thigh_com", "shank_com"),
-        ("hip_mass", "slope"),
-    ];
+/// The maps: pairs of free parameters through the best design.
+const MAPS: [(&str, &str); 4] = [
+    ("foot_radius", "slope"),
+    ("thigh_cn", "shank_cn"),
+    ("thigh_com", "shank_com"),
+    ("hip_mass", "slope"),
+];
+
+/// Step 2: maps through the best design, computed in parallel (2 threads), written with their
+/// sections of `md`.
+fn maps(
+    dir: &std::path::Path,
+    setup: &Setup,
+    best: &Design,
+    map_n: usize,
+    md: &mut String,
+) -> anyhow::Result<()> {
     let _ = writeln!(md, "\n## Maps through the best design\n");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     let results: Vec<MapResult> = pool.install(|| {
         use rayon::prelude::*;
-        maps.par_iter()
-            .map(|&(xn, yn)| {
-                let (kx, ky) = (
-                    names.iter().position(|n| *n == xn).unwrap(),
-                    names.iter().position(|n| *n == yn).unwrap(),
-                );
-                let xs = pdw_limit::linspace(FREE[kx].1, FREE[kx].2, map_n);
-                let ys = pdw_limit::linspace(FREE[ky].1, FREE[ky].2, map_n);
-                let mut code = Array2::<u8>::zeros((map_n, map_n));
-                let mut sections: Vec<Vec<Option<Vec<f64>>>> = vec![vec![None; map_n]; map_n];
-                let mut mcsv =
-                    format!("{xn},{yn},verdict,max_abs_lambda,binding,relative_margin\n");
-                for iy in 0..map_n {
-                    for ix in 0..map_n {
-                        let mut p = best.0.clone();
-                        p[kx] = xs[ix];
-                        p[ky] = ys[iy];
-                        let mut guesses: Vec<(String, Vec<f64>)> = Vec::new();
-                        for (jx, jy) in [(ix.wrapping_sub(1), iy), (ix, iy.wrapping_sub(1))] {
-                            if let Some(Some(s)) = sections.get(jy).and_then(|r| r.get(jx)) {
-                                guesses.push(("neighbour".into(), s.clone()));
-                            }
-                        }
-                        if let Some(s) = &best.1.section {
-                            guesses.push(("best design".into(), s.clone()));
-                        }
-                        guesses.extend(model_guesses.iter().cloned());
-                        let j = judge(&stop, &latched, &values_of(&p), &guesses);
-                        code[[iy, ix]] = j.code;
-                        sections[iy][ix] = j.section.clone().or(j.latched.clone());
-                        let _ = writeln!(
-                            mcsv,
-                            "{},{},{},{},\"{}\",{}",
-                            xs[ix],
-                            ys[iy],
-                            NAMES[j.code as usize],
-                            j.rho,
-                            j.binding.replace('"', "'"),
-                            j.relative
-                        );
-                    }
-                    eprintln!("map {xn} x {yn}: row {iy} done");
-                }
-                (code, mcsv, xs, ys)
-            })
+        MAPS.par_iter()
+            .map(|&(xn, yn)| map(setup, best, xn, yn, map_n))
             .collect()
     });
-    for (&(xn, yn), (code, mcsv, xs, ys)) in maps.iter().zip(results) {
+    for (&(xn, yn), (code, mcsv, xs, ys)) in MAPS.iter().zip(results) {
         let (kx, ky) = (
-            names.iter().position(|n| *n == xn).unwrap(),
-            names.iter().position(|n| *n == yn).unwrap(),
+            setup.names.iter().position(|n| *n == xn).unwrap(),
+            setup.names.iter().position(|n| *n == yn).unwrap(),
         );
         let file = format!("map_{xn}_{yn}");
-        write_text(&dir, &format!("{file}.csv"), &mcsv)?;
+        write_text(dir, &format!("{file}.csv"), &mcsv)?;
         let header = pdw_store::BasinHeader {
             command: command("seed5_redesign"),
             model: "seed5_stage2 (stop knees)".into(),
-            slope: values_of(&best.0)[index("slope")],
+            slope: setup.values_of(&best.0)[setup.index("slope")],
             params: String::new(),
             model_resolved: String::new(),
             integrator: String::new(),
@@ -619,7 +670,52 @@ fn main() -> anyhow::Result<()> {
             c.join(", ")
         );
     }
-    write_text(&dir, "redesign.md", &md)?;
-    print!("{md}");
     Ok(())
+}
+
+/// One map: `map_n` × `map_n` designs over free parameters `xn` × `yn`, the others at the best
+/// design's; each cell judged from its left and lower neighbours' gaits, the best design's and
+/// the model's.
+fn map(setup: &Setup, best: &Design, xn: &str, yn: &str, map_n: usize) -> MapResult {
+    let (kx, ky) = (
+        setup.names.iter().position(|n| *n == xn).unwrap(),
+        setup.names.iter().position(|n| *n == yn).unwrap(),
+    );
+    let xs = pdw_limit::linspace(FREE[kx].1, FREE[kx].2, map_n);
+    let ys = pdw_limit::linspace(FREE[ky].1, FREE[ky].2, map_n);
+    let mut code = Array2::<u8>::zeros((map_n, map_n));
+    let mut sections: Vec<Vec<Option<Vec<f64>>>> = vec![vec![None; map_n]; map_n];
+    let mut mcsv = format!("{xn},{yn},verdict,max_abs_lambda,binding,relative_margin\n");
+    for iy in 0..map_n {
+        for ix in 0..map_n {
+            let mut p = best.0.clone();
+            p[kx] = xs[ix];
+            p[ky] = ys[iy];
+            let mut guesses: Vec<(String, Vec<f64>)> = Vec::new();
+            for (jx, jy) in [(ix.wrapping_sub(1), iy), (ix, iy.wrapping_sub(1))] {
+                if let Some(Some(s)) = sections.get(jy).and_then(|r| r.get(jx)) {
+                    guesses.push(("neighbour".into(), s.clone()));
+                }
+            }
+            if let Some(s) = &best.1.section {
+                guesses.push(("best design".into(), s.clone()));
+            }
+            guesses.extend(setup.model_guesses.iter().cloned());
+            let j = setup.judge(&setup.values_of(&p), &guesses);
+            code[[iy, ix]] = j.code;
+            sections[iy][ix] = j.section.clone().or(j.latched.clone());
+            let _ = writeln!(
+                mcsv,
+                "{},{},{},{},\"{}\",{}",
+                xs[ix],
+                ys[iy],
+                NAMES[j.code as usize],
+                j.rho,
+                j.binding.replace('"', "'"),
+                j.relative
+            );
+        }
+        eprintln!("map {xn} x {yn}: row {iy} done");
+    }
+    (code, mcsv, xs, ys)
 }
