@@ -38,11 +38,15 @@
 //!
 //! The parameters `slope` (rad), `gravity` and `max_stride_time` always exist (defaults: slope
 //! required, 9.81, 5.0); a spec sets their defaults, units and descriptions in `[parameters]`
-//! like any other parameter. Unknown keys, a leg without segments, a knee on a one-segment leg,
+//! like any other parameter. A parameter's value is in its `unit`, converted into the spec's
+//! base unit by the table of [`crate::units`] (`{ value = 3, unit = "deg" }` is 3° in rad,
+//! `{ value = 50, unit = "cm" }` 0.5 m in an SI spec; `L`, `M`, `T` and `1` are taken as is).
+//! Unknown keys, unknown units, a leg without segments, a knee on a one-segment leg,
 //! non-positive masses and lengths, NaN, unknown names in expressions are errors that name the
 //! field, its value and the rule.
 
 use crate::error::WalkerError;
+use crate::units::{self, UnitSystem};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -88,7 +92,10 @@ impl std::fmt::Display for Num {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParamDef {
+    /// The default, in `unit`.
     pub value: f64,
+    /// The unit of `value` (default `"1"`): converted into the spec's base unit by
+    /// [`crate::units`] (`deg` → rad, `cm` → m in an SI spec), refused when unknown.
     #[serde(default = "default_unit")]
     pub unit: String,
     #[serde(default)]
@@ -235,8 +242,9 @@ pub struct Resolved {
 
 impl WalkerSpec {
     /// Parses a spec from TOML text; `source_name` names it in errors (a file path or preset).
+    /// Every parameter's unit is checked ([`crate::units`]).
     pub fn from_toml(text: &str, source_name: &str) -> Result<Self, WalkerError> {
-        toml::from_str(text).map_err(|e| WalkerError::SpecSyntax {
+        let spec: Self = toml::from_str(text).map_err(|e| WalkerError::SpecSyntax {
             source_name: source_name.to_string(),
             message: e.message().to_string()
                 + &e.span()
@@ -245,7 +253,32 @@ impl WalkerSpec {
                         format!(" (line {line})")
                     })
                     .unwrap_or_default(),
-        })
+        })?;
+        spec.check_units(source_name)?;
+        Ok(spec)
+    }
+
+    /// The unit system of the spec's lengths, masses and times: abstract when a parameter uses
+    /// `L`, `M` or `T`, else SI ([`crate::units::system_of`]).
+    pub fn unit_system(&self) -> UnitSystem {
+        units::system_of(self.parameters.values().map(|p| p.unit.as_str()))
+    }
+
+    /// Refuses a parameter whose unit the table of [`crate::units`] does not know or cannot
+    /// convert, naming the parameter, the unit and the units accepted.
+    pub fn check_units(&self, source_name: &str) -> Result<(), WalkerError> {
+        let system = self.unit_system();
+        for (name, p) in &self.parameters {
+            if let Err(why) = units::to_base(p.value, &p.unit, system) {
+                return Err(WalkerError::InvalidSpec {
+                    source_name: source_name.to_string(),
+                    field: format!("parameters.{name}.unit"),
+                    value: format!("\"{}\"", p.unit),
+                    rule: format!("{why}; units accepted: {}", units::ACCEPTED),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Reads and parses a spec file: a regular file (after following links) of at most
@@ -292,8 +325,15 @@ impl WalkerSpec {
         toml::to_string(self).unwrap_or_default()
     }
 
-    /// The parameter table with the spec's defaults (builtins added where missing).
+    /// The parameter table with the spec's defaults (builtins added where missing), each value
+    /// converted into its base unit ([`crate::units::to_base`]: `3 deg` is 0.0523… rad, `50 cm`
+    /// 0.5 m) and listed with that unit. A unit the table refuses is left as written here;
+    /// [`WalkerSpec::resolve`] refuses it.
     pub fn param_table(&self) -> ParamTable {
+        let system = self.unit_system();
+        let base = |p: &ParamDef| {
+            units::to_base(p.value, &p.unit, system).unwrap_or_else(|_| (p.value, p.unit.clone()))
+        };
         let mut t = ParamTable {
             names: vec![],
             values: vec![],
@@ -303,7 +343,10 @@ impl WalkerSpec {
         // builtins first, in a fixed order, then the spec's own names sorted
         for (name, default, unit, desc) in BUILTIN_PARAMS {
             let (v, u, d) = match self.parameters.get(name) {
-                Some(p) => (p.value, p.unit.clone(), p.description.clone()),
+                Some(p) => {
+                    let (v, u) = base(p);
+                    (v, u, p.description.clone())
+                }
                 None => (default, unit.to_string(), desc.to_string()),
             };
             t.names.push(name.to_string());
@@ -315,9 +358,10 @@ impl WalkerSpec {
             if BUILTIN_PARAMS.iter().any(|b| b.0 == name) {
                 continue;
             }
+            let (v, u) = base(p);
             t.names.push(name.clone());
-            t.values.push(p.value);
-            t.units.push(p.unit.clone());
+            t.values.push(v);
+            t.units.push(u);
             t.descriptions.push(p.description.clone());
         }
         t
@@ -340,6 +384,7 @@ impl WalkerSpec {
     /// Evaluates and validates the geometry at parameter values `values` (in
     /// [`WalkerSpec::param_table`] order).
     pub fn resolve(&self, values: &[f64]) -> Result<Resolved, WalkerError> {
+        self.check_units(&self.name)?;
         let table = self.param_table();
         for name in self.parameters.keys() {
             if !is_identifier(name) {
