@@ -5,7 +5,8 @@
 //! strike to the next is the same map every step) as a list of segments from the foot up to the
 //! hip, the knees between consecutive segments, a hip point mass, gravity, slope and the gait
 //! guesses of the Poincaré section. Every numeric field is either a number or an expression over
-//! the spec's parameters (`"a + b"`, `"0.5 * thigh_length"`, `+ − * /`, parentheses), so that a
+//! the spec's parameters (`"a + b"`, `"0.5 * thigh_length"`, `"m * l^2 / 12"`: `+ − * /`, `^` or
+//! `**`, unary minus, parentheses; [`eval_expr`]), so that a
 //! preset keeps the parameter names of its source (Goswami's `a`, `b`, `leg_mass`, …).
 //!
 //! ```toml
@@ -633,8 +634,8 @@ pub const MAX_SPEC_BYTES: u64 = 1 << 20;
 /// Longest expression evaluated, in characters.
 pub const MAX_EXPR_CHARS: usize = 10_000;
 
-/// Deepest nesting of parentheses and unary minus in an expression (the parser recurses once
-/// per level; the limit keeps a hostile spec from exhausting the stack).
+/// Deepest nesting of parentheses, unary minus and powers in an expression (the parser
+/// recurses once per level; the limit keeps a hostile spec from exhausting the stack).
 pub const MAX_EXPR_DEPTH: usize = 256;
 
 /// Characters of an expression echoed in a message.
@@ -652,9 +653,12 @@ pub fn quoted(e: &str) -> String {
     }
 }
 
-/// Evaluates an arithmetic expression (`+ − * /`, unary minus, parentheses, numbers, parameter
-/// names) over `env`. Errors name what is wrong. Expressions longer than [`MAX_EXPR_CHARS`] or
-/// nested deeper than [`MAX_EXPR_DEPTH`] are refused.
+/// Evaluates an arithmetic expression over `env`: numbers (`0.5`, `1e-3`), parameter names,
+/// `+ − * /`, powers `^` or `**`, unary minus and parentheses, with the usual precedence — `^`
+/// first and right-associative (`2^3^2` = 512), then unary minus (`-2^2` = −4, as in
+/// mathematics and Python), then `* /`, then `+ −`, each left to right. Errors name what is
+/// wrong. Expressions longer than [`MAX_EXPR_CHARS`] or nested (parentheses, unary minus,
+/// powers) deeper than [`MAX_EXPR_DEPTH`] are refused.
 pub fn eval_expr(text: &str, env: &[(&str, f64)]) -> Result<f64, String> {
     let n = text.chars().count();
     if n > MAX_EXPR_CHARS {
@@ -701,7 +705,11 @@ fn tokenize(s: &str) -> Result<Vec<Tok>, String> {
         let c = b[i];
         if c.is_whitespace() {
             i += 1;
-        } else if "+-*/()".contains(c) {
+        } else if c == '*' && b.get(i + 1) == Some(&'*') {
+            // `**` is `^` (Python's and Fortran's power)
+            out.push(Tok::Op('^'));
+            i += 2;
+        } else if "+-*/^()".contains(c) {
             out.push(Tok::Op(c));
             i += 1;
         } else if c.is_ascii_digit() || c == '.' {
@@ -741,7 +749,7 @@ struct Parser<'a> {
     toks: &'a [Tok],
     i: usize,
     env: &'a [(&'a str, f64)],
-    /// Open parentheses and unary minuses around the current token.
+    /// Open parentheses, unary minuses and power exponents around the current token.
     depth: usize,
 }
 
@@ -751,8 +759,8 @@ impl Parser<'_> {
         self.depth += 1;
         if self.depth > MAX_EXPR_DEPTH {
             return Err(format!(
-                "the expression nests parentheses or unary minus more than {MAX_EXPR_DEPTH} \
-                 levels deep"
+                "the expression nests parentheses, unary minus or powers more than \
+                 {MAX_EXPR_DEPTH} levels deep"
             ));
         }
         Ok(())
@@ -776,6 +784,8 @@ impl Parser<'_> {
         }
         Ok(v)
     }
+    /// A unary minus applies to the power after it: `-2^2` is `-(2^2)` = −4, as in
+    /// mathematics (and Python's `-2**2`).
     fn unary(&mut self) -> Result<f64, String> {
         if let Some(Tok::Op('-')) = self.toks.get(self.i) {
             self.i += 1;
@@ -784,7 +794,20 @@ impl Parser<'_> {
             self.depth -= 1;
             return Ok(v);
         }
-        self.atom()
+        self.power()
+    }
+    /// `a ^ b` (or `a ** b`): right-associative (`2^3^2` is `2^(3^2)` = 512), binding tighter
+    /// than a unary minus on its left; the exponent may carry its own minus (`2^-1` = 0.5).
+    fn power(&mut self) -> Result<f64, String> {
+        let base = self.atom()?;
+        if let Some(Tok::Op('^')) = self.toks.get(self.i) {
+            self.i += 1;
+            self.nest()?;
+            let exponent = self.unary()?;
+            self.depth -= 1;
+            return Ok(base.powf(exponent));
+        }
+        Ok(base)
     }
     fn atom(&mut self) -> Result<f64, String> {
         let t = self.toks.get(self.i).cloned();
@@ -842,6 +865,33 @@ mod tests {
         assert!(e.contains("256 levels"), "{e}");
         let e = eval_expr(&format!("{}a", "-".repeat(100_000)), &env).unwrap_err();
         assert!(e.contains("more than the 10000"), "{e}");
+    }
+
+    #[test]
+    fn powers_bind_tighter_than_unary_minus_and_associate_to_the_right() {
+        let env = [("a", 2.0), ("l", 0.5)];
+        let ev = |e: &str| eval_expr(e, &env);
+        assert_eq!(ev("2^3"), Ok(8.0));
+        assert_eq!(ev("2**3"), Ok(8.0));
+        assert_eq!(ev("-2^2"), Ok(-4.0));
+        assert_eq!(ev("-2**2"), Ok(-4.0));
+        assert_eq!(ev("(-2)^2"), Ok(4.0));
+        assert_eq!(ev("2^3^2"), Ok(512.0));
+        assert_eq!(ev("2**3**2"), Ok(512.0));
+        assert_eq!(ev("(2^3)^2"), Ok(64.0));
+        assert_eq!(ev("2^-1"), Ok(0.5));
+        assert_eq!(ev("2 * 3^2"), Ok(18.0));
+        assert_eq!(ev("12 / 2^2"), Ok(3.0));
+        assert_eq!(ev("1 + a^2"), Ok(5.0));
+        assert_eq!(ev("a * l^2 / 12"), Ok(2.0 * 0.25 / 12.0));
+        assert_eq!(ev("l ** 0.5"), Ok(0.5f64.sqrt()));
+        assert_eq!(ev("1e-3^2"), Ok(1e-6));
+        assert!(ev("2^").is_err());
+        assert!(ev("^2").is_err());
+        assert!(ev("2***3").is_err());
+        // a long chain of powers is a nesting like any other
+        let e = ev(&format!("1{}", "^1".repeat(300))).unwrap_err();
+        assert!(e.contains("256 levels"), "{e}");
     }
 
     #[test]
