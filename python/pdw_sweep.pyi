@@ -1,6 +1,6 @@
 """Type stubs of the `pdw_sweep` extension (functions and results: python/README.md)."""
 
-from typing import Any, Optional, Sequence, Tuple, TypedDict
+from typing import Any, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -25,7 +25,7 @@ def models() -> list[ModelDescription]:
 
 def fixed_point(
     model: str = "simplest",
-    slope: Optional[float] = None,
+    slope: Optional[Union[float, str]] = None,
     period: int = 1,
     gait: str = "all",
     tol: float = 1e-12,
@@ -50,13 +50,15 @@ def fixed_point(
     binding (the criterion with the smallest relative margin), min_relative_margin and
     violations (criterion, t_start, t_end, worst).
 
-    `slope` in rad; `params` are the model's parameters by name (see `models()`). `gait` is
+    `slope` in rad, or a string with a unit as the CLI's --slope takes it ("3deg", "3°",
+    "0.05"; a slope above 0.3 rad gives a UserWarning naming its degrees); `params` are the
+    model's parameters by name (see `models()`). `gait` is
     "stable", "unstable" or "all". Raises ValueError for invalid input (`period` outside
     1..=64), or when no orbit is found (the message lists every guess and why it failed)."""
 
 def gaits(
     model: str = "simplest",
-    slope: Optional[float] = None,
+    slope: Optional[Union[float, str]] = None,
     starts: int = 256,
     search_box: Optional[dict[str, tuple[float, float]]] = None,
     gait: str = "all",
@@ -85,7 +87,7 @@ def gaits(
 def stride_map(
     model: str,
     states: npt.ArrayLike,
-    slope: Optional[float] = None,
+    slope: Optional[Union[float, str]] = None,
     **params: float,
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.uint8], npt.NDArray[np.float64]]:
     """One step of the stride map from each row of `states` (N, d_s section coordinates),
@@ -99,7 +101,7 @@ def stride_outcomes(model: str = "simplest", **params: float) -> dict[int, str]:
 
 def basin(
     model: str = "simplest",
-    slope: Optional[float] = None,
+    slope: Optional[Union[float, str]] = None,
     grid: Tuple[int, int] = (101, 101),
     x: Optional[Tuple[str, float, float]] = None,
     y: Optional[Tuple[str, float, float]] = None,
@@ -157,7 +159,7 @@ def continuation(
 
 def simulate(
     model: str = "simplest",
-    slope: Optional[float] = None,
+    slope: Optional[Union[float, str]] = None,
     state: Optional[Sequence[float]] = None,
     gait: str = "stable",
     steps: int = 10,

@@ -69,6 +69,8 @@ where
             }
         }
         let r = worker.join().unwrap_or_else(Err);
+        // the models built on the worker (a sweep's) may have warned
+        give_warnings(py)?;
         if pdw_hybrid::interrupt::requested() {
             return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
                 "interrupted: the computation was stopped by an interrupt",
@@ -135,16 +137,70 @@ fn overrides(
     pdw::model::overrides_from_values(values, slope).map_err(err)
 }
 
+/// `slope=` as given: a number (rad) or a string with the CLI's `--slope` syntax (`"3deg"`,
+/// `"3°"`, `"0.05"`, `"0.05rad"`; [`pdw::input::parse_slope_for`]).
+fn slope_arg(slope: Option<&Bound<'_, PyAny>>) -> PyResult<Option<f64>> {
+    let Some(s) = slope else {
+        return Ok(None);
+    };
+    if let Ok(v) = s.extract::<f64>() {
+        return Ok(Some(v));
+    }
+    if let Ok(text) = s.extract::<String>() {
+        return pdw::input::parse_slope_for(&text, "slope")
+            .map(Some)
+            .map_err(err);
+    }
+    Err(pyo3::exceptions::PyTypeError::new_err(format!(
+        "slope: {} is neither a number (rad) nor a string like '3deg', '3°' or '0.05'",
+        s.repr().map_or_else(|_| "?".into(), |r| r.to_string())
+    )))
+}
+
+/// The library's warnings of the current call, given to Python by [`give_warnings`].
+static PENDING_WARNINGS: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+
+/// The library's warning sink ([`pdw::model::set_warning_sink`]): queued, because a model
+/// may be built on a worker thread without the interpreter.
+fn queue_warning(msg: &str) {
+    if let Ok(mut q) = PENDING_WARNINGS.lock() {
+        q.push(msg.to_string());
+    }
+}
+
+/// Gives the queued warnings through `warnings.warn` (`UserWarning`; Python's filters decide
+/// whether and how often they show), and lets the library warn again in the next call.
+fn give_warnings(py: Python<'_>) -> PyResult<()> {
+    let queued = PENDING_WARNINGS
+        .lock()
+        .map(|mut q| std::mem::take(&mut *q))
+        .unwrap_or_default();
+    pdw::model::rearm_warnings();
+    for w in queued {
+        let msg = std::ffi::CString::new(w).map_err(err)?;
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
+/// Builds the model ([`pdw::build`]) and gives its warnings (a steep slope).
 fn build(model: &str, ov: &[(String, f64)]) -> PyResult<Model> {
-    pdw::build(model, ov).map_err(err)
+    let m = pdw::build(model, ov).map_err(err)?;
+    Python::attach(give_warnings)?;
+    Ok(m)
 }
 
 fn build_kw(
     model: &str,
-    slope: Option<f64>,
+    slope: Option<&Bound<'_, PyAny>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Model> {
-    build(model, &overrides(slope, params)?)
+    build(model, &overrides(slope_arg(slope)?, params)?)
 }
 
 fn rows_to_array<'py>(py: Python<'py>, v: Vec<f64>, cols: usize) -> PyResult<Bound<'py, PyAny>> {
@@ -315,7 +371,7 @@ fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> 
 fn fixed_point<'py>(
     py: Python<'py>,
     model: &str,
-    slope: Option<f64>,
+    slope: Option<&Bound<'py, PyAny>>,
     period: usize,
     gait: &str,
     tol: f64,
@@ -416,7 +472,7 @@ fn fixed_point_dict<'py>(
 fn scan_gaits<'py>(
     py: Python<'py>,
     model: &str,
-    slope: Option<f64>,
+    slope: Option<&Bound<'py, PyAny>>,
     starts: usize,
     search_box: Option<std::collections::BTreeMap<String, (f64, f64)>>,
     gait: &str,
@@ -667,7 +723,7 @@ fn stride_map<'py>(
     py: Python<'py>,
     model: &str,
     states: PyArrayLike2<'py, f64, AllowTypeChange>,
-    slope: Option<f64>,
+    slope: Option<&Bound<'py, PyAny>>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let m = build_kw(model, slope, params)?;
@@ -744,7 +800,7 @@ fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, Py
 fn basin<'py>(
     py: Python<'py>,
     model: &str,
-    slope: Option<f64>,
+    slope: Option<&Bound<'py, PyAny>>,
     grid: (usize, usize),
     x: Option<(String, f64, f64)>,
     y: Option<(String, f64, f64)>,
@@ -767,7 +823,7 @@ type GivenAxis = Option<(String, f64, f64)>;
 /// model's section.
 fn basin_request(
     model: &str,
-    slope: Option<f64>,
+    slope: Option<&Bound<'_, PyAny>>,
     grid: (usize, usize),
     (x, y): (GivenAxis, GivenAxis),
     max_strides: u32,
@@ -1066,7 +1122,9 @@ fn continuation<'py>(
         tol: 1e-12,
         integrator: None,
     };
-    let m0 = plan.start_model().map_err(err)?;
+    let m0 = plan.start_model();
+    give_warnings(py)?;
+    let m0 = m0.map_err(err)?;
     let ds = m0.walker.section_dim();
     let result = interruptible(py, || -> PyResult<pdw_limit::Sweep> {
         let guesses = pdw::gaits::guesses(&m0, None, "guess").map_err(err)?;
@@ -1103,7 +1161,7 @@ fn continuation<'py>(
 fn simulate<'py>(
     py: Python<'py>,
     model: &str,
-    slope: Option<f64>,
+    slope: Option<&Bound<'py, PyAny>>,
     state: Option<Vec<f64>>,
     gait: &str,
     steps: usize,
@@ -1252,6 +1310,7 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // returns, an import interrupted by a pending KeyboardInterrupt would panic.
     let _ = numpy::PyArray1::<f64>::zeros(m.py(), 0, false);
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    pdw::model::set_warning_sink(queue_warning);
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(fixed_point, m)?)?;
     m.add_function(wrap_pyfunction!(scan_gaits, m)?)?;

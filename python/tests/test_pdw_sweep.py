@@ -366,3 +366,33 @@ def test_ctrl_c_raises_keyboard_interrupt_at_once_and_the_next_call_works(which)
     after = lines[1].split()
     assert after[0] == "AFTER" and after[1] == "0", r.stdout
     assert abs(float(after[2]) - GARCIA_THETA) < 1e-9, r.stdout
+
+
+def test_slope_as_a_string_with_a_unit_equals_the_number():
+    """slope="3deg", "3°", " 3 deg" are the CLI's --slope forms: 3π/180 rounded once, the compass
+    preset's 0.05235987755982988; "0.05" and 0.05 are radians."""
+    three_deg = 0.05235987755982988
+    ref = pdw.fixed_point("compass", slope=three_deg, gait="stable")[0]
+    for form in ["3deg", "3°", " 3 deg"]:
+        fp = pdw.fixed_point("compass", slope=form, gait="stable")[0]
+        assert np.array_equal(fp["section"], ref["section"]), form
+    a = pdw.fixed_point("simplest", slope="0.009", gait="stable")[0]
+    b = pdw.fixed_point("simplest", slope=0.009, gait="stable")[0]
+    assert np.array_equal(a["section"], b["section"])
+    with pytest.raises(ValueError, match="furlong"):
+        pdw.fixed_point("simplest", slope="3 furlong")
+    with pytest.raises(TypeError, match="neither a number"):
+        pdw.fixed_point("simplest", slope=[3])
+
+
+def test_a_steep_slope_warns_naming_its_degrees():
+    """slope=1 (meant as 1°) is 57°: a UserWarning through warnings.warn, once per call."""
+    with pytest.warns(UserWarning, match=r"slope 1(\.0)? rad = 57\.3° .*did you mean") as rec:
+        nxt, outcome, _ = pdw.stride_map("compass", np.array([[0.27, -1.09, 0.72]]), slope=1.0)
+    assert len([w for w in rec if "far steeper" in str(w.message)]) == 1
+    assert len(outcome) == 1
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pdw.fixed_point("simplest", slope="0.5deg", gait="stable")

@@ -173,6 +173,19 @@ pub enum StopReason {
     MaxSteps,
 }
 
+/// Why an integration stopped, in plain words (for messages).
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StopReason::Guard { guard } => write!(f, "guard {guard} crossed zero"),
+            StopReason::EndTime => f.write_str("the end time was reached"),
+            StopReason::NonFinite => f.write_str("the state became non-finite"),
+            StopReason::StepTooSmall => f.write_str("the step size became too small"),
+            StopReason::MaxSteps => f.write_str("the most steps in one call were taken"),
+        }
+    }
+}
+
 /// Work counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Stats {

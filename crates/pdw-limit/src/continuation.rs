@@ -277,6 +277,34 @@ pub enum BranchEnd {
     CorrectorFailed { param: f64, reason: String },
 }
 
+/// Why a branch ended, in plain words for a console line: "the parameter left the range at
+/// 0.0191", "the corrector failed after 0.0151: …".
+impl std::fmt::Display for BranchEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BranchEnd::ParamBound { param } => {
+                write!(f, "the parameter left the range at {param}")
+            }
+            BranchEnd::MaxPoints => f.write_str("the branch reached the most points it may have"),
+            BranchEnd::FoldSuspected {
+                param,
+                multiplier,
+                reason,
+            } => write!(
+                f,
+                "a fold is suspected after {param} (a multiplier at {multiplier:.6}, near +1): \
+                 {reason}"
+            ),
+            BranchEnd::Stopped { kind, param } => {
+                write!(f, "stopped at the {} at {param}", kind.name())
+            }
+            BranchEnd::CorrectorFailed { param, reason } => {
+                write!(f, "the corrector failed after {param}: {reason}")
+            }
+        }
+    }
+}
+
 /// A continued branch of period-k orbits.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Branch {

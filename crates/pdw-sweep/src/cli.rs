@@ -44,7 +44,7 @@ pub struct ModelOpts {
     /// `pdw-sweep models --spec compass > my.toml`).
     #[arg(long, default_value = "simplest")]
     pub model: String,
-    /// Slope in radians, or degrees with a `deg` suffix (e.g. 3deg). Default: the model's preset.
+    /// Slope in radians, or with an angle unit (3deg, 3°, 0.05rad). Default: the model's preset.
     #[arg(long)]
     pub slope: Option<String>,
     /// Override a model parameter, NAME=VALUE (repeatable).

@@ -15,3 +15,4 @@ mod search;
 mod self_describing;
 mod simulate;
 mod sweep_output;
+mod units;

@@ -319,3 +319,28 @@ fn a_decreasing_sweep_gives_its_n_values_in_its_own_order_and_bad_threads_are_re
         assert!(stderr(&o).contains("--threads"), "{}", stderr(&o));
     }
 }
+
+/// The console summary of a sweep is plain words: no Rust `Debug` text (`ParamBound { param:
+/// … }`) reaches it; the branch's end is said as a sentence.
+#[test]
+fn sweep_console_output_has_no_debug_text() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bif.h5");
+    let o = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.009:0.011:3",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned() + &stderr(&o);
+    assert!(
+        text.contains("end: the parameter left the range at "),
+        "{text}"
+    );
+    for debug in ["ParamBound", "param:", " { ", "Some(", "None", "::"] {
+        assert!(!text.contains(debug), "{debug:?} in:\n{text}");
+    }
+}

@@ -15,6 +15,7 @@ pub mod registry;
 pub mod rimless;
 pub mod simplest;
 pub mod spec;
+pub mod units;
 /// The validity types every model reports in ([`pdw_model::validity`]).
 pub use pdw_model::validity;
 

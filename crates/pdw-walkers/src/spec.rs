@@ -5,7 +5,8 @@
 //! strike to the next is the same map every step) as a list of segments from the foot up to the
 //! hip, the knees between consecutive segments, a hip point mass, gravity, slope and the gait
 //! guesses of the Poincaré section. Every numeric field is either a number or an expression over
-//! the spec's parameters (`"a + b"`, `"0.5 * thigh_length"`, `+ − * /`, parentheses), so that a
+//! the spec's parameters (`"a + b"`, `"0.5 * thigh_length"`, `"m * l^2 / 12"`: `+ − * /`, `^` or
+//! `**`, unary minus, parentheses; [`eval_expr`]), so that a
 //! preset keeps the parameter names of its source (Goswami's `a`, `b`, `leg_mass`, …).
 //!
 //! ```toml
@@ -38,11 +39,15 @@
 //!
 //! The parameters `slope` (rad), `gravity` and `max_stride_time` always exist (defaults: slope
 //! required, 9.81, 5.0); a spec sets their defaults, units and descriptions in `[parameters]`
-//! like any other parameter. Unknown keys, a leg without segments, a knee on a one-segment leg,
+//! like any other parameter. A parameter's value is in its `unit`, converted into the spec's
+//! base unit by the table of [`crate::units`] (`{ value = 3, unit = "deg" }` is 3° in rad,
+//! `{ value = 50, unit = "cm" }` 0.5 m in an SI spec; `L`, `M`, `T` and `1` are taken as is).
+//! Unknown keys, unknown units, a leg without segments, a knee on a one-segment leg,
 //! non-positive masses and lengths, NaN, unknown names in expressions are errors that name the
 //! field, its value and the rule.
 
 use crate::error::WalkerError;
+use crate::units::{self, UnitSystem};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -88,7 +93,10 @@ impl std::fmt::Display for Num {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParamDef {
+    /// The default, in `unit`.
     pub value: f64,
+    /// The unit of `value` (default `"1"`): converted into the spec's base unit by
+    /// [`crate::units`] (`deg` → rad, `cm` → m in an SI spec), refused when unknown.
     #[serde(default = "default_unit")]
     pub unit: String,
     #[serde(default)]
@@ -235,8 +243,9 @@ pub struct Resolved {
 
 impl WalkerSpec {
     /// Parses a spec from TOML text; `source_name` names it in errors (a file path or preset).
+    /// Every parameter's unit is checked ([`crate::units`]).
     pub fn from_toml(text: &str, source_name: &str) -> Result<Self, WalkerError> {
-        toml::from_str(text).map_err(|e| WalkerError::SpecSyntax {
+        let spec: Self = toml::from_str(text).map_err(|e| WalkerError::SpecSyntax {
             source_name: source_name.to_string(),
             message: e.message().to_string()
                 + &e.span()
@@ -245,7 +254,32 @@ impl WalkerSpec {
                         format!(" (line {line})")
                     })
                     .unwrap_or_default(),
-        })
+        })?;
+        spec.check_units(source_name)?;
+        Ok(spec)
+    }
+
+    /// The unit system of the spec's lengths, masses and times: abstract when a parameter uses
+    /// `L`, `M` or `T`, else SI ([`crate::units::system_of`]).
+    pub fn unit_system(&self) -> UnitSystem {
+        units::system_of(self.parameters.values().map(|p| p.unit.as_str()))
+    }
+
+    /// Refuses a parameter whose unit the table of [`crate::units`] does not know or cannot
+    /// convert, naming the parameter, the unit and the units accepted.
+    pub fn check_units(&self, source_name: &str) -> Result<(), WalkerError> {
+        let system = self.unit_system();
+        for (name, p) in &self.parameters {
+            if let Err(why) = units::to_base(p.value, &p.unit, system) {
+                return Err(WalkerError::InvalidSpec {
+                    source_name: source_name.to_string(),
+                    field: format!("parameters.{name}.unit"),
+                    value: format!("\"{}\"", p.unit),
+                    rule: format!("{why}; units accepted: {}", units::ACCEPTED),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Reads and parses a spec file: a regular file (after following links) of at most
@@ -292,8 +326,15 @@ impl WalkerSpec {
         toml::to_string(self).unwrap_or_default()
     }
 
-    /// The parameter table with the spec's defaults (builtins added where missing).
+    /// The parameter table with the spec's defaults (builtins added where missing), each value
+    /// converted into its base unit ([`crate::units::to_base`]: `3 deg` is 0.0523… rad, `50 cm`
+    /// 0.5 m) and listed with that unit. A unit the table refuses is left as written here;
+    /// [`WalkerSpec::resolve`] refuses it.
     pub fn param_table(&self) -> ParamTable {
+        let system = self.unit_system();
+        let base = |p: &ParamDef| {
+            units::to_base(p.value, &p.unit, system).unwrap_or_else(|_| (p.value, p.unit.clone()))
+        };
         let mut t = ParamTable {
             names: vec![],
             values: vec![],
@@ -303,7 +344,10 @@ impl WalkerSpec {
         // builtins first, in a fixed order, then the spec's own names sorted
         for (name, default, unit, desc) in BUILTIN_PARAMS {
             let (v, u, d) = match self.parameters.get(name) {
-                Some(p) => (p.value, p.unit.clone(), p.description.clone()),
+                Some(p) => {
+                    let (v, u) = base(p);
+                    (v, u, p.description.clone())
+                }
                 None => (default, unit.to_string(), desc.to_string()),
             };
             t.names.push(name.to_string());
@@ -315,9 +359,10 @@ impl WalkerSpec {
             if BUILTIN_PARAMS.iter().any(|b| b.0 == name) {
                 continue;
             }
+            let (v, u) = base(p);
             t.names.push(name.clone());
-            t.values.push(p.value);
-            t.units.push(p.unit.clone());
+            t.values.push(v);
+            t.units.push(u);
             t.descriptions.push(p.description.clone());
         }
         t
@@ -340,6 +385,7 @@ impl WalkerSpec {
     /// Evaluates and validates the geometry at parameter values `values` (in
     /// [`WalkerSpec::param_table`] order).
     pub fn resolve(&self, values: &[f64]) -> Result<Resolved, WalkerError> {
+        self.check_units(&self.name)?;
         let table = self.param_table();
         for name in self.parameters.keys() {
             if !is_identifier(name) {
@@ -588,8 +634,8 @@ pub const MAX_SPEC_BYTES: u64 = 1 << 20;
 /// Longest expression evaluated, in characters.
 pub const MAX_EXPR_CHARS: usize = 10_000;
 
-/// Deepest nesting of parentheses and unary minus in an expression (the parser recurses once
-/// per level; the limit keeps a hostile spec from exhausting the stack).
+/// Deepest nesting of parentheses, unary minus and powers in an expression (the parser
+/// recurses once per level; the limit keeps a hostile spec from exhausting the stack).
 pub const MAX_EXPR_DEPTH: usize = 256;
 
 /// Characters of an expression echoed in a message.
@@ -607,9 +653,12 @@ pub fn quoted(e: &str) -> String {
     }
 }
 
-/// Evaluates an arithmetic expression (`+ − * /`, unary minus, parentheses, numbers, parameter
-/// names) over `env`. Errors name what is wrong. Expressions longer than [`MAX_EXPR_CHARS`] or
-/// nested deeper than [`MAX_EXPR_DEPTH`] are refused.
+/// Evaluates an arithmetic expression over `env`: numbers (`0.5`, `1e-3`), parameter names,
+/// `+ − * /`, powers `^` or `**`, unary minus and parentheses, with the usual precedence — `^`
+/// first and right-associative (`2^3^2` = 512), then unary minus (`-2^2` = −4, as in
+/// mathematics and Python), then `* /`, then `+ −`, each left to right. Errors name what is
+/// wrong. Expressions longer than [`MAX_EXPR_CHARS`] or nested (parentheses, unary minus,
+/// powers) deeper than [`MAX_EXPR_DEPTH`] are refused.
 pub fn eval_expr(text: &str, env: &[(&str, f64)]) -> Result<f64, String> {
     let n = text.chars().count();
     if n > MAX_EXPR_CHARS {
@@ -656,7 +705,11 @@ fn tokenize(s: &str) -> Result<Vec<Tok>, String> {
         let c = b[i];
         if c.is_whitespace() {
             i += 1;
-        } else if "+-*/()".contains(c) {
+        } else if c == '*' && b.get(i + 1) == Some(&'*') {
+            // `**` is `^` (Python's and Fortran's power)
+            out.push(Tok::Op('^'));
+            i += 2;
+        } else if "+-*/^()".contains(c) {
             out.push(Tok::Op(c));
             i += 1;
         } else if c.is_ascii_digit() || c == '.' {
@@ -696,7 +749,7 @@ struct Parser<'a> {
     toks: &'a [Tok],
     i: usize,
     env: &'a [(&'a str, f64)],
-    /// Open parentheses and unary minuses around the current token.
+    /// Open parentheses, unary minuses and power exponents around the current token.
     depth: usize,
 }
 
@@ -706,8 +759,8 @@ impl Parser<'_> {
         self.depth += 1;
         if self.depth > MAX_EXPR_DEPTH {
             return Err(format!(
-                "the expression nests parentheses or unary minus more than {MAX_EXPR_DEPTH} \
-                 levels deep"
+                "the expression nests parentheses, unary minus or powers more than \
+                 {MAX_EXPR_DEPTH} levels deep"
             ));
         }
         Ok(())
@@ -731,6 +784,8 @@ impl Parser<'_> {
         }
         Ok(v)
     }
+    /// A unary minus applies to the power after it: `-2^2` is `-(2^2)` = −4, as in
+    /// mathematics (and Python's `-2**2`).
     fn unary(&mut self) -> Result<f64, String> {
         if let Some(Tok::Op('-')) = self.toks.get(self.i) {
             self.i += 1;
@@ -739,7 +794,20 @@ impl Parser<'_> {
             self.depth -= 1;
             return Ok(v);
         }
-        self.atom()
+        self.power()
+    }
+    /// `a ^ b` (or `a ** b`): right-associative (`2^3^2` is `2^(3^2)` = 512), binding tighter
+    /// than a unary minus on its left; the exponent may carry its own minus (`2^-1` = 0.5).
+    fn power(&mut self) -> Result<f64, String> {
+        let base = self.atom()?;
+        if let Some(Tok::Op('^')) = self.toks.get(self.i) {
+            self.i += 1;
+            self.nest()?;
+            let exponent = self.unary()?;
+            self.depth -= 1;
+            return Ok(base.powf(exponent));
+        }
+        Ok(base)
     }
     fn atom(&mut self) -> Result<f64, String> {
         let t = self.toks.get(self.i).cloned();
@@ -797,6 +865,33 @@ mod tests {
         assert!(e.contains("256 levels"), "{e}");
         let e = eval_expr(&format!("{}a", "-".repeat(100_000)), &env).unwrap_err();
         assert!(e.contains("more than the 10000"), "{e}");
+    }
+
+    #[test]
+    fn powers_bind_tighter_than_unary_minus_and_associate_to_the_right() {
+        let env = [("a", 2.0), ("l", 0.5)];
+        let ev = |e: &str| eval_expr(e, &env);
+        assert_eq!(ev("2^3"), Ok(8.0));
+        assert_eq!(ev("2**3"), Ok(8.0));
+        assert_eq!(ev("-2^2"), Ok(-4.0));
+        assert_eq!(ev("-2**2"), Ok(-4.0));
+        assert_eq!(ev("(-2)^2"), Ok(4.0));
+        assert_eq!(ev("2^3^2"), Ok(512.0));
+        assert_eq!(ev("2**3**2"), Ok(512.0));
+        assert_eq!(ev("(2^3)^2"), Ok(64.0));
+        assert_eq!(ev("2^-1"), Ok(0.5));
+        assert_eq!(ev("2 * 3^2"), Ok(18.0));
+        assert_eq!(ev("12 / 2^2"), Ok(3.0));
+        assert_eq!(ev("1 + a^2"), Ok(5.0));
+        assert_eq!(ev("a * l^2 / 12"), Ok(2.0 * 0.25 / 12.0));
+        assert_eq!(ev("l ** 0.5"), Ok(0.5f64.sqrt()));
+        assert_eq!(ev("1e-3^2"), Ok(1e-6));
+        assert!(ev("2^").is_err());
+        assert!(ev("^2").is_err());
+        assert!(ev("2***3").is_err());
+        // a long chain of powers is a nesting like any other
+        let e = ev(&format!("1{}", "^1".repeat(300))).unwrap_err();
+        assert!(e.contains("256 levels"), "{e}");
     }
 
     #[test]

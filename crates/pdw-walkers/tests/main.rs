@@ -14,3 +14,4 @@ mod round_feet;
 mod seed5;
 mod simplest_physics;
 mod simplest_trajectory;
+mod units;

@@ -226,7 +226,7 @@ pub fn locate_start(plan: &FollowPlan, gait: &[f64]) -> StartSearch {
                         options: copts,
                     };
                 }
-                ends.push(format!("{name}: {:?}", br.end));
+                ends.push(format!("{name}: {}", br.end));
             }
             Err(e) => ends.push(format!("{name}: {e}")),
         }

@@ -1,5 +1,5 @@
 //! Input errors and the parsers of the compact value syntaxes the front ends accept
-//! ([docs/cli.md](../../../docs/cli.md): slopes in rad or `3deg`, `NAME=VALUE`, `NAME=A:B`,
+//! ([docs/cli.md](../../../docs/cli.md): slopes in rad, `3deg` or `3°`, `NAME=VALUE`, `NAME=A:B`,
 //! `NXxNY`, `NAME=A:B:N`, `I/N`, `X1,X2,..`).
 //!
 //! Every parser returns a message that names the bad value and says what is allowed; the CLI
@@ -32,24 +32,44 @@ pub fn parse_f64(s: &str, what: &str) -> Result<f64, InputError> {
     }
 }
 
-/// A slope in radians, or in degrees with a `deg` suffix (`3deg`); must lie in (−π/2, π/2).
+/// A slope in radians, or with an angle unit: `3deg`, `3°`, ` 3 deg`, `0.05rad` (the units of
+/// spec files, [`pdw_walkers::units`]: degrees are converted as `v · π / 180`, so `3deg` is
+/// 0.05235987755982988, the compass preset's 3°); must lie in (−π/2, π/2).
 pub fn parse_slope(s: &str) -> Result<f64, InputError> {
     parse_slope_for(s, "--slope")
 }
 
 /// [`parse_slope`] with the messages naming `flag` (e.g. `--set slope`, `--sweep slope`).
 pub fn parse_slope_for(s: &str, flag: &str) -> Result<f64, InputError> {
+    const FORMS: &str = "give radians (0.05, 0.05rad) or degrees (3deg, 3°)";
     let t = s.trim();
-    let v = if let Some(d) = t.strip_suffix("deg") {
-        parse_f64(d, flag)?.to_radians()
-    } else if let Some(r) = t.strip_suffix("rad") {
-        parse_f64(r, flag)?
+    // the unit: the letters (or °) the value ends with
+    let number_end = t
+        .char_indices()
+        .rev()
+        .take_while(|(_, c)| c.is_alphabetic() || *c == '°')
+        .last()
+        .map_or(t.len(), |(i, _)| i);
+    let (number, unit) = t.split_at(number_end);
+    let v = match number.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => v,
+        _ => return err(format!("{flag}: '{s}' is not a number; {FORMS}")),
+    };
+    let v = if unit.is_empty() {
+        v
     } else {
-        parse_f64(t, flag)?
+        match pdw_walkers::units::to_base(v, unit, pdw_walkers::units::UnitSystem::Si) {
+            Ok((rad, base)) if base == "rad" => rad,
+            _ => {
+                return err(format!(
+                    "{flag}: '{s}' has the unit `{unit}`, not an angle; {FORMS}"
+                ))
+            }
+        }
     };
     if v.abs() >= std::f64::consts::FRAC_PI_2 {
         return err(format!(
-            "{flag}: '{s}' is outside (-pi/2, pi/2) rad; give radians (0.009) or degrees (3deg)"
+            "{flag}: '{s}' is outside (-pi/2, pi/2) rad; {FORMS}"
         ));
     }
     Ok(v)

@@ -1,17 +1,67 @@
 //! Models by name or spec file with parameter overrides: the one place both front ends build
-//! a model, check its overrides and read its units.
+//! a model, check its overrides and read its units, and where a slope that looks like degrees
+//! given as radians draws a warning ([`steep_slope_warning`]).
 
 use crate::input::{self, InputError};
 use pdw_hybrid::Options;
 use pdw_walkers::{ModelInfo, Walker};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
+
+/// Slopes steeper than this (rad, in magnitude) draw a warning. Passive walkers walk down a few
+/// degrees: Garcia et al. 1998's simplest walker up to γ ≈ 0.019 (then chaos and falls),
+/// Goswami et al. 1998's compass gait at 3°–5°, McGeer 1990's walkers at 1–3 %; 0.3 rad (17°)
+/// is far beyond all of them, and a slope of 1 (meant as 1°) is 57°.
+pub const STEEP_SLOPE: f64 = 0.3;
+
+/// The warning for a slope (rad) steeper than [`STEEP_SLOPE`], naming it in degrees:
+/// "slope 1 rad = 57.3° is far steeper than passive walking (≲ 0.3 rad); did you mean 1deg?".
+pub fn steep_slope_warning(slope: f64) -> Option<String> {
+    (slope.abs() > STEEP_SLOPE).then(|| {
+        format!(
+            "slope {slope} rad = {:.1}° is far steeper than passive walking (≲ {STEEP_SLOPE} \
+             rad); did you mean {slope}deg?",
+            slope.to_degrees()
+        )
+    })
+}
+
+/// Where the library's warnings go when a front end says so (Python: `warnings.warn`);
+/// without one, to stderr as `warning: …` (the CLI).
+static WARNING_SINK: OnceLock<fn(&str)> = OnceLock::new();
+
+/// Whether the steep-slope warning was given in this run.
+static STEEP_SLOPE_WARNED: AtomicBool = AtomicBool::new(false);
+
+/// Sends the library's warnings to `sink` instead of stderr. The first sink set stays; returns
+/// whether this one was set.
+pub fn set_warning_sink(sink: fn(&str)) -> bool {
+    WARNING_SINK.set(sink).is_ok()
+}
+
+/// Lets each warning be given once more: a new run begins (the CLI's run is the process;
+/// Python calls this after each call has given its warnings).
+pub fn rearm_warnings() {
+    STEEP_SLOPE_WARNED.store(false, Ordering::Relaxed);
+}
+
+/// Gives `msg` unless `given` says it was given in this run.
+fn warn_once(given: &AtomicBool, msg: &str) {
+    if !given.swap(true, Ordering::Relaxed) {
+        match WARNING_SINK.get() {
+            Some(sink) => sink(msg),
+            None => eprintln!("warning: {msg}"),
+        }
+    }
+}
 
 /// Which model, in the front ends' terms: a registry name or a spec file (`.toml`), the slope
-/// as text (radians, or degrees with `deg`), and `NAME=VALUE` overrides.
+/// as text (radians, or degrees with `deg` or `°`), and `NAME=VALUE` overrides.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ModelChoice {
     /// Model name (`pdw-sweep models`) or a walker spec file.
     pub model: String,
-    /// The slope as given (`0.009`, `3deg`); `None`: the model's preset.
+    /// The slope as given (`0.009`, `3deg`, `3°`); `None`: the model's preset.
     pub slope: Option<String>,
     /// `NAME=VALUE` overrides, each parameter at most once.
     pub set: Vec<String>,
@@ -116,7 +166,9 @@ pub fn build_with(choice: &ModelChoice, extra: &[(String, f64)]) -> Result<Built
 }
 
 /// Builds model `name` (a registry name or a spec file) with `overrides` (`(name, value)`,
-/// checked against the model's parameters).
+/// checked against the model's parameters). Every model of both front ends is built here, so
+/// a slope steeper than [`STEEP_SLOPE`] — from `--slope`, `--set slope`, a spec's default, a
+/// sweep or Python's `slope=` — draws [`steep_slope_warning`], once per run.
 pub fn build(name: &str, overrides: &[(String, f64)]) -> Result<BuiltModel, InputError> {
     let info = pdw_walkers::model_info(name).map_err(|e| InputError(e.to_string()))?;
     let refs: Vec<(&str, f64)> = overrides.iter().map(|(n, v)| (n.as_str(), *v)).collect();
@@ -131,11 +183,15 @@ pub fn build(name: &str, overrides: &[(String, f64)]) -> Result<BuiltModel, Inpu
         .map(|p| p.name.clone())
         .zip(values)
         .collect();
-    Ok(BuiltModel {
+    let m = BuiltModel {
         info,
         walker,
         params,
-    })
+    };
+    if let Some(msg) = steep_slope_warning(m.slope()) {
+        warn_once(&STEEP_SLOPE_WARNED, &msg);
+    }
+    Ok(m)
 }
 
 /// `‖P(s) − s‖∞` of the stride map integrated by `integrator` at section state `s` (infinite

@@ -140,7 +140,7 @@ fn frames(m: &BuiltModel, fp: &FixedPoint) -> anyhow::Result<Vec<Frame>> {
                 },
                 other => {
                     return Err(anyhow::anyhow!(
-                        "integration stopped at t = {t:.4}: {other:?}"
+                        "integration stopped at t = {t:.4}: {other}"
                     ))
                 }
             }

@@ -428,7 +428,7 @@ fn report(
     }
     let main = &c.sweep.continued[0].1;
     crate::outln!(
-        "model {}: {} continued from {} to {} ({} internal steps on the period-1 branch, end: {:?})",
+        "model {}: {} continued from {} to {} ({} internal steps on the period-1 branch; end: {})",
         m0.info.name,
         sw.name,
         sw.lo,
