@@ -415,9 +415,25 @@ pub trait IntegrateConcrete {
 /// `pdw_hybrid::integrate_concretely!(MyModel);`
 #[macro_export]
 macro_rules! integrate_concretely {
-    ($($t:ty),+ $(,)?) => {$(
+    ($($t:ty),+ $(,)?) => {$( $crate::__integrate_with!(run_concrete, $t); )+};
+}
+
+/// Implements [`IntegrateConcrete`] for the listed types through the loop compiled once for
+/// `dyn HybridSystem` (see [`IntegrateConcrete`]): no code per type.
+/// `pdw_hybrid::integrate_through_dyn!(MyTestSystem);`
+#[macro_export]
+macro_rules! integrate_through_dyn {
+    ($($t:ty),+ $(,)?) => {$( $crate::__integrate_with!(run_dyn, $t); )+};
+}
+
+/// The impl behind [`integrate_concretely!`] and [`integrate_through_dyn!`]: `integrate_concrete`
+/// forwarding to the integrator's `$run` (never inlined into another crate, so that the
+/// instantiation of the loop stays in the crate that invoked the macro).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __integrate_with {
+    ($run:ident, $t:ty) => {
         impl $crate::IntegrateConcrete for $t {
-            // Never inlined into another crate: the instantiation of the loop stays here.
             #[inline(never)]
             fn integrate_concrete(
                 &self,
@@ -429,33 +445,10 @@ macro_rules! integrate_concretely {
                 resume: bool,
                 obs: ::core::option::Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
             ) -> $crate::StopReason {
-                integ.run_concrete(self, mode, t, x, t_end, resume, obs)
+                integ.$run(self, mode, t, x, t_end, resume, obs)
             }
         }
-    )+};
-}
-
-/// Implements [`IntegrateConcrete`] for the listed types through the loop compiled once for
-/// `dyn HybridSystem` (see [`IntegrateConcrete`]): no code per type.
-/// `pdw_hybrid::integrate_through_dyn!(MyTestSystem);`
-#[macro_export]
-macro_rules! integrate_through_dyn {
-    ($($t:ty),+ $(,)?) => {$(
-        impl $crate::IntegrateConcrete for $t {
-            fn integrate_concrete(
-                &self,
-                integ: &mut $crate::Integrator,
-                mode: usize,
-                t: &mut f64,
-                x: &mut [f64],
-                t_end: f64,
-                resume: bool,
-                obs: ::core::option::Option<&mut dyn FnMut(f64, &[f64]) -> bool>,
-            ) -> $crate::StopReason {
-                integ.run_dyn(self, mode, t, x, t_end, resume, obs)
-            }
-        }
-    )+};
+    };
 }
 
 /// A section model seen as `&dyn Section`, whatever its type (a concrete model or a trait object

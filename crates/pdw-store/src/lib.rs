@@ -97,8 +97,8 @@ pub use design::{
 };
 pub use error::StoreError;
 pub use plot::{
-    animate_gif, outcome_colours, plot_basin, plot_basin_attractors, plot_basin_stability,
-    plot_bifurcation, plot_lines, Frame,
+    animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_basin_attractors,
+    plot_basin_stability, plot_bifurcation, plot_lines, Frame,
 };
 pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
 pub use shard::{merge, shard_rows, ShardSpec};

@@ -16,7 +16,7 @@ use plotters::style::FontStyle;
 
 use crate::basin::{Attractor, BasinHeader, NOT_COMPUTED};
 use crate::h5util::Staged;
-use crate::sweep::SweepData;
+use crate::sweep::{Branch, SweepData};
 use crate::{Result, StoreError};
 
 /// Pixel size of [`plot_basin`]'s PNG.
@@ -517,7 +517,10 @@ struct BifPanels<'a, 'b: 'a> {
 /// told apart; bottom, section coordinate number `coordinate` against the parameter (every one
 /// of the K points of a measured period-K branch), with the orbit diagram's samples as grey
 /// dots if present. Stable stretches solid, unstable dashed; period doublings marked by red
-/// triangles, other bifurcations by black diamonds.
+/// triangles, other bifurcations by black diamonds; points whose orbit is physically invalid
+/// (a stride where the ground, a knee lock or an impact must pull, or the swing foot scuffs:
+/// [`invalid_reasons`]) ringed by hollow circles on the |λ| and section panels, with a legend
+/// entry naming what fails.
 pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: usize) -> Result<()> {
     let path = path.as_ref();
     data.validate()?;
@@ -552,6 +555,7 @@ pub fn plot_bifurcation(path: impl AsRef<Path>, data: &SweepData, coordinate: us
     let bot = bifurcation_section_panel(&panels[2], data, coordinate, pr, path)?;
     let mut charts = BifPanels { top, mid, bot };
     draw_bifurcation_branches(&mut charts, data, coordinate, path)?;
+    draw_invalid_points(&mut charts, data, coordinate, path)?;
     draw_bifurcation_points(&mut charts, data, coordinate, path)?;
     draw_bifurcation_legends(&mut charts, path)?;
     root.present().map_err(|x| pe(path, x))?;
@@ -792,6 +796,76 @@ fn draw_bifurcation_branches(
             .map_err(|x| pe(path, x))?
             .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
+    }
+    Ok(())
+}
+
+/// What makes point `i` of branch `b` physically invalid, in words — the flags raised on any
+/// of its strides (`"invalid"` for a stride marked invalid without a named flag) — or `None`
+/// where every stride is valid, unchecked (a model without constraint forces) or not measured.
+pub fn invalid_reasons(b: &Branch, i: usize) -> Option<Vec<&'static str>> {
+    let mut reasons = Vec::new();
+    for v in b.validity.get(i)?.iter().filter(|v| v.checked && !v.valid) {
+        let named = [
+            (v.normal_force_negative, "the ground must pull"),
+            (v.knee_unlocks, "a knee lock must pull"),
+            (v.impact_violation, "an impact must pull"),
+            (v.swing_foot_scuffs, "the swing foot scuffs"),
+        ];
+        for (raised, what) in named {
+            if raised && !reasons.contains(&what) {
+                reasons.push(what);
+            }
+        }
+        if !named.iter().any(|n| n.0) && !reasons.contains(&"invalid") {
+            reasons.push("invalid");
+        }
+    }
+    (!reasons.is_empty()).then_some(reasons)
+}
+
+/// Rings every physically invalid point ([`invalid_reasons`]) with a hollow circle in its
+/// branch's colour — on the |λ| panel at the leading multiplier, on the section panel at each of
+/// its orbit's points — and adds one legend entry naming every reason found.
+fn draw_invalid_points(
+    c: &mut BifPanels,
+    data: &SweepData,
+    coordinate: usize,
+    path: &Path,
+) -> Result<()> {
+    let BifPanels { top, bot, .. } = c;
+    let mut all: Vec<&'static str> = Vec::new();
+    for (bi, b) in data.branches.iter().enumerate() {
+        let col = SERIES_COLOURS[bi % SERIES_COLOURS.len()];
+        let ring = |p: (f64, f64)| Circle::new(p, 6, col.stroke_width(2));
+        for i in 0..b.parameter.len() {
+            let Some(reasons) = invalid_reasons(b, i) else {
+                continue;
+            };
+            for r in reasons {
+                if !all.contains(&r) {
+                    all.push(r);
+                }
+            }
+            let x = b.parameter[i];
+            if let Some(z) = b.multipliers.get(i).and_then(|m| m.first()) {
+                let m = z.0.hypot(z.1);
+                if m > 0.0 && m.is_finite() {
+                    top.draw_series([ring((x, m))]).map_err(|e| pe(path, e))?;
+                }
+            }
+            let points = b.orbit.get(i).map_or(&b.section[i..=i], |o| &o[..]);
+            for s in points {
+                bot.draw_series([ring((x, s[coordinate]))])
+                    .map_err(|e| pe(path, e))?;
+            }
+        }
+    }
+    if !all.is_empty() {
+        bot.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(|e| pe(path, e))?
+            .label(format!("physically invalid: {}", all.join(", ")))
+            .legend(|(x, y)| Circle::new((x + 10, y), 5, BLACK.stroke_width(2)));
     }
     Ok(())
 }

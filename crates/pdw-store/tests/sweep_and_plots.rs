@@ -5,9 +5,9 @@ use crate::common;
 use common::*;
 use pdw_store::plot::{BASIN_PNG_SIZE, BIFURCATION_PNG_SIZE, LINES_PNG_SIZE};
 use pdw_store::{
-    animate_gif, outcome_colours, plot_basin, plot_bifurcation, plot_lines, read_basin, read_sweep,
-    write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram, StoreError, StrideValidity,
-    SweepData,
+    animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_bifurcation, plot_lines,
+    read_basin, read_sweep, write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram,
+    StoreError, StrideValidity, SweepData,
 };
 
 fn sweep() -> SweepData {
@@ -218,6 +218,56 @@ fn basin_png_has_stated_size_and_paints_cells_in_outcome_colours() {
         "",
     );
     assert!(matches!(err, Err(StoreError::Invalid { .. })));
+}
+
+/// Invalid gaits are told apart from valid ones: the reasons come from the strides' flags, and
+/// the PNG rings exactly the invalid points (the same data with every stride valid draws no
+/// ring: the pixels differ only where the rings and their legend entry are).
+#[test]
+fn invalid_gaits_are_ringed_and_named_in_the_bifurcation_png() {
+    let data = sweep();
+    let p2 = &data.branches[1];
+    assert_eq!(invalid_reasons(p2, 0), None);
+    assert_eq!(invalid_reasons(p2, 1), None);
+    // Point 2: stride 0 invalid with no named flag, stride 1 scuffs.
+    assert_eq!(
+        invalid_reasons(p2, 2),
+        Some(vec!["invalid", "the swing foot scuffs"])
+    );
+    // Unmeasured (the period-1 branch) and unchecked strides are never "invalid".
+    assert_eq!(invalid_reasons(&data.branches[0], 0), None);
+    let mut unchecked = p2.clone();
+    for v in unchecked.validity.iter_mut().flatten() {
+        *v = StrideValidity::unchecked();
+    }
+    assert_eq!(invalid_reasons(&unchecked, 2), None);
+
+    let dir = scratch("invalidpng");
+    let (with, without) = (dir.join("with.png"), dir.join("without.png"));
+    plot_bifurcation(&with, &data, 0).unwrap();
+    let mut all_valid = data.clone();
+    for v in all_valid.branches[1].validity.iter_mut().flatten() {
+        v.valid = true;
+        v.swing_foot_scuffs = false;
+    }
+    plot_bifurcation(&without, &all_valid, 0).unwrap();
+    let (w, h, a, _) = decode_png(&with);
+    let (_, _, b, _) = decode_png(&without);
+    let differs = |rows: std::ops::Range<u32>| {
+        rows.flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let k = ((y * w + x) * 3) as usize;
+                a[k..k + 3] != b[k..k + 3]
+            })
+            .count()
+    };
+    // Rings on the |λ| panel and on the section panel; none on the Re λ panel.
+    assert!(differs(0..h / 3) > 20, "no ring on the |λ| panel");
+    assert!(differs(h / 3..2 * h / 3) == 0, "the Re λ panel changed");
+    assert!(
+        differs(2 * h / 3..h) > 40,
+        "no rings or legend entry on the section panel"
+    );
 }
 
 #[test]

@@ -3,23 +3,7 @@
 //! its own closed form, the compass gait's short-period unstable gait, and `animate` warning on
 //! unstable or flagged gaits.
 
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(o: &Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", stderr(o));
-    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
-}
+use crate::common::{json, run, stderr};
 
 /// Garcia et al., J. Biomech. Eng. 120 (1998), from Garcia's own code.
 const STABLE: [f64; 2] = [0.20031090049483, -0.19983247291764];

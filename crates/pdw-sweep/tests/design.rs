@@ -2,19 +2,9 @@
 //! continued on its file gives the uninterrupted run's designs bit for bit, and bad input is
 //! refused with exit code 2 naming the value.
 
+use crate::common::{run, stderr};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use std::process::Output;
 
 const COLS: [&str; 3] = ["cost", "rho", "min_knee_torque"];
 

@@ -4,18 +4,8 @@
 
 use crate::common;
 
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::common::{run, stderr};
+use std::process::Command;
 
 fn exits_2_naming(args: &[&str], words: &[&str]) {
     let o = run(args);

@@ -3,14 +3,7 @@
 //! guesses find no gait of the kind asked (the period-2 attractor at γ = 0.016, past the first
 //! period doubling), and the bad boxes and conflicts refused with exit 2.
 
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
+use crate::common::run;
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()

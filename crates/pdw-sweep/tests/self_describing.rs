@@ -4,17 +4,11 @@
 //! Attributes are read back with the hdf5 crate.
 
 use crate::common;
+use crate::common::run;
 use common::*;
 use hdf5::types::{FixedAscii, VarLenUnicode};
 use std::path::Path;
 use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
 
 fn ok(args: &[&str]) -> Output {
     let o = run(args);

@@ -3,19 +3,8 @@
 //! against iterating the stride map), the measurements per point, `--json` and `--csv` holding
 //! the HDF5 file's values, and results independent of `--threads`.
 
+use crate::common::{run, stderr};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -343,4 +332,53 @@ fn sweep_console_output_has_no_debug_text() {
     for debug in ["ParamBound", "param:", " { ", "Some(", "None", "::"] {
         assert!(!text.contains(debug), "{debug:?} in:\n{text}");
     }
+}
+
+/// The kneed preset's gait holds its knees with a latch that has to pull (its `valid` flags are
+/// 0 in the file): the console counts the invalid points of the branch and names what fails,
+/// from the same flags the file stores; the simplest walker (no constraint forces, unchecked)
+/// says nothing of validity.
+#[test]
+fn sweep_console_counts_and_names_physically_invalid_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("kneed.h5");
+    let o = run(&[
+        "fixedpoint",
+        "--model",
+        "kneed",
+        "--sweep",
+        "slope=0.0504:0.052:3",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let data = pdw_store::read_sweep(&out).unwrap();
+    let b = &data.branches[0];
+    let invalid = b
+        .validity
+        .iter()
+        .filter(|strides| strides.iter().any(|v| v.checked && !v.valid))
+        .count();
+    let knee = b.validity.iter().flatten().any(|v| v.knee_unlocks);
+    assert_eq!(invalid, 3, "the preset's latch pulls at every point");
+    assert!(knee);
+    assert!(
+        text.contains("3 points on the output grid of 3 values; 3 physically invalid (")
+            && text.contains("a knee lock must pull"),
+        "{text}"
+    );
+
+    let simple = dir.path().join("simplest.h5");
+    let o = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.009:0.011:3",
+        "--out",
+        s(&simple),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("invalid"));
 }

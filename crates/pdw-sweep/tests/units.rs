@@ -2,23 +2,7 @@
 //! preset's 0.05235987755982988, a spec parameter in degrees is converted, and a slope far
 //! steeper than passive walking (`--slope 1`, meant as 1°) draws one warning naming its degrees.
 
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(o: &Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", stderr(o));
-    serde_json::from_slice(&o.stdout).expect("stdout is JSON")
-}
+use crate::common::{json, run, stderr};
 
 #[test]
 fn slope_in_degrees_with_a_sign_or_a_word_is_the_presets_slope() {

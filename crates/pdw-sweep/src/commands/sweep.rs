@@ -71,6 +71,28 @@ pub fn binding_code(v: &Validity) -> u8 {
         .unwrap_or(0) as u8
 }
 
+/// `"; N physically invalid (what fails)"` for a branch with points whose orbit needs a
+/// pulling contact, knee lock or impact, or scuffs ([`pdw_store::invalid_reasons`], as the PNG
+/// rings them); empty when every point is valid or unchecked.
+fn invalid_summary(b: &pdw_store::Branch) -> String {
+    let mut reasons: Vec<&str> = Vec::new();
+    let mut n = 0;
+    for i in 0..b.parameter.len() {
+        if let Some(r) = pdw_store::invalid_reasons(b, i) {
+            n += 1;
+            for what in r {
+                if !reasons.contains(&what) {
+                    reasons.push(what);
+                }
+            }
+        }
+    }
+    if n == 0 {
+        return String::new();
+    }
+    format!("; {n} physically invalid ({})", reasons.join(", "))
+}
+
 /// The branch in the file's form, from its measured points on the output grid.
 fn store_branch(b: &GridBranch) -> pdw_store::Branch {
     let pts = &b.points;
@@ -438,10 +460,11 @@ fn report(
     );
     for b in &data.branches {
         crate::outln!(
-            "  {:<16} {} points on the output grid of {} values",
+            "  {:<16} {} points on the output grid of {} values{}",
             b.name,
             b.parameter.len(),
-            sw.n
+            sw.n,
+            invalid_summary(b)
         );
     }
     let grid_failures = c.sweep.grid_failures;
