@@ -41,6 +41,20 @@ struct Validity {
     profile: Vec<[f64; 5]>,
 }
 
+/// The table cells of a stride's validity: least normal force, most friction needed, least
+/// knee torque, and the flags ("—" and "stride failed" where the stride failed).
+fn validity_cells(v: Option<&Validity>) -> [String; 4] {
+    match v {
+        Some(v) => [
+            format!("{:.2}", v.min_normal),
+            format!("{:.3}", v.max_friction),
+            format!("{:.3}", v.min_knee),
+            v.flag_text(),
+        ],
+        None => ["—".into(), "—".into(), "—".into(), "stride failed".into()],
+    }
+}
+
 impl Validity {
     fn valid(&self) -> bool {
         !self.flags.iter().any(|f| *f)
@@ -415,23 +429,21 @@ fn branch_validity(
             nf.push((p.param, v.min_normal));
         }
         if i % every == 0 || i + 1 == br.points.len() {
-            tb.row(vec![
-                name.to_string(),
-                format!("{:.4}", p.param),
-                format!("{:.6}", p.section[0]),
-                format!("{:.6}", p.section[1]),
-                format!("{:.6}", p.section[2]),
-                format!("{:.5}", p.period),
-                format!("{lmax:.4}"),
-                p.stable.to_string(),
-                v.as_ref()
-                    .map_or("—".into(), |v| format!("{:.2}", v.min_normal)),
-                v.as_ref()
-                    .map_or("—".into(), |v| format!("{:.3}", v.max_friction)),
-                v.as_ref()
-                    .map_or("—".into(), |v| format!("{:.3}", v.min_knee)),
-                v.as_ref().map_or("stride failed".into(), |v| v.flag_text()),
-            ]);
+            tb.row(
+                vec![
+                    name.to_string(),
+                    format!("{:.4}", p.param),
+                    format!("{:.6}", p.section[0]),
+                    format!("{:.6}", p.section[1]),
+                    format!("{:.6}", p.section[2]),
+                    format!("{:.5}", p.period),
+                    format!("{lmax:.4}"),
+                    p.stable.to_string(),
+                ]
+                .into_iter()
+                .chain(validity_cells(v.as_ref()))
+                .collect(),
+            );
         }
     }
     series
@@ -604,29 +616,27 @@ fn hip_validity(br: &Branch, th: &mut Table) -> anyhow::Result<Option<(f64, Vec<
             }
         }
         if i % every == 0 || i + 1 == br.points.len() {
-            th.row(vec![
-                format!("{:.3}", p.param),
-                format!(
-                    "|λ|max {:.4}",
-                    p.multipliers
-                        .iter()
-                        .map(|m| m.modulus())
-                        .fold(0.0, f64::max)
-                ),
-                format!(
-                    "({:.6}, {:.6}, {:.6})",
-                    p.section[0], p.section[1], p.section[2]
-                ),
-                fmt_multipliers(&p.multipliers, 4),
-                p.stable.to_string(),
-                v.as_ref()
-                    .map_or("—".into(), |v| format!("{:.2}", v.min_normal)),
-                v.as_ref()
-                    .map_or("—".into(), |v| format!("{:.3}", v.max_friction)),
-                v.as_ref()
-                    .map_or("—".into(), |v| format!("{:.3}", v.min_knee)),
-                v.as_ref().map_or("stride failed".into(), |v| v.flag_text()),
-            ]);
+            th.row(
+                vec![
+                    format!("{:.3}", p.param),
+                    format!(
+                        "|λ|max {:.4}",
+                        p.multipliers
+                            .iter()
+                            .map(|m| m.modulus())
+                            .fold(0.0, f64::max)
+                    ),
+                    format!(
+                        "({:.6}, {:.6}, {:.6})",
+                        p.section[0], p.section[1], p.section[2]
+                    ),
+                    fmt_multipliers(&p.multipliers, 4),
+                    p.stable.to_string(),
+                ]
+                .into_iter()
+                .chain(validity_cells(v.as_ref()))
+                .collect(),
+            );
         }
     }
     Ok(valid_hip)
