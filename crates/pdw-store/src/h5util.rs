@@ -309,6 +309,7 @@ pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
         });
     }
+    check_global_heaps(path)?;
     let mut b = hdf5::File::with_options();
     b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0).file_locking(false));
     if rw { b.open_rw(path) } else { b.open(path) }.at(path, "opening the file")
@@ -335,6 +336,7 @@ pub(crate) fn lock_existing(path: &Path) -> Result<OutputLock> {
 /// the advisory lock already excludes other writers and would conflict with it).
 pub(crate) fn open_locked(path: &Path, rw: bool) -> Result<hdf5::File> {
     no_close_at_exit();
+    check_global_heaps(path)?;
     let mut b = hdf5::File::with_options();
     b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0).file_locking(false));
     if rw { b.open_rw(path) } else { b.open(path) }.at(path, "opening the file")
@@ -517,4 +519,98 @@ where
 pub(crate) fn matrix(rows: &[Vec<f64>], ncols: usize) -> Array2<f64> {
     let flat: Vec<f64> = rows.iter().flatten().copied().collect();
     Array2::from_shape_vec((rows.len(), ncols), flat).expect("shape validated")
+}
+
+/// Refuses a file with a global heap collection the HDF5 library would loop on forever.
+///
+/// Variable-length strings (every string attribute here) live in global heap collections
+/// (HDF5 File Format Specification v3, §III.E "Global Heap": signature `GCOL`, version 1, three
+/// reserved bytes, the collection size; then objects of index (2 bytes), reference count (2),
+/// reserved (4), size (8), data padded to 8 bytes; index 0 is the free space, whose size
+/// includes its header). The library's reader steps from one object to the next by its stored
+/// size; a damaged free-space object of size 0 never moves it (`H5HG__cache_heap_deserialize`,
+/// HDF5 2.2.0), so one flipped byte there would hang any read of the file. This walks every
+/// collection the same way first and refuses such a file as damaged. Collections are found by
+/// their signature with the version, reserved bytes and a size that fits the file checked, so
+/// the same four bytes inside a dataset are not taken for one.
+pub(crate) fn check_global_heaps(path: &Path) -> Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return Ok(()); // unreadable: HDF5's own open names the error
+    };
+    let len = f.metadata().map_or(0, |m| m.len());
+    // Chunks overlap by 3 bytes so that a signature across a boundary is seen.
+    const CHUNK: usize = 8 << 20;
+    let mut buf = vec![0u8; CHUNK + 3];
+    let (mut base, mut carry) = (0u64, 0usize);
+    loop {
+        let n = f.read(&mut buf[carry..]).unwrap_or(0);
+        if n == 0 {
+            return Ok(());
+        }
+        let filled = carry + n;
+        let hits: Vec<u64> = buf[..filled]
+            .windows(4)
+            .enumerate()
+            .filter(|(_, w)| *w == b"GCOL")
+            .map(|(i, _)| base + i as u64)
+            .collect();
+        let resume_at = base + filled as u64;
+        for start in hits {
+            let mut c = vec![0u8; (len - start).min(1 << 24) as usize];
+            let read = f
+                .seek(SeekFrom::Start(start))
+                .and_then(|_| f.read_exact(&mut c));
+            if read.is_ok() {
+                if let Some(offset) = stuck_heap_object(&c) {
+                    return Err(crate::StoreError::Format {
+                        path: path.to_path_buf(),
+                        expected: "HDF5",
+                        detail: format!(
+                            "damaged global heap at byte {}: an object of size 0 (the HDF5 \
+                             library would never finish reading it)",
+                            start + offset as u64
+                        ),
+                    });
+                }
+            }
+        }
+        if f.seek(SeekFrom::Start(resume_at)).is_err() {
+            return Ok(());
+        }
+        carry = filled.min(3);
+        buf.copy_within(filled - carry..filled, 0);
+        base = resume_at - carry as u64;
+    }
+}
+
+/// The offset, from the collection's start, of a free-space object of size 0 in the global heap
+/// collection at the start of `c` ([`check_global_heaps`]); `None` for a sound collection or
+/// bytes that are not one.
+fn stuck_heap_object(c: &[u8]) -> Option<usize> {
+    const HEADER: usize = 16;
+    let u64_at =
+        |i: usize| -> Option<u64> { Some(u64::from_le_bytes(c.get(i..i + 8)?.try_into().ok()?)) };
+    if c.get(4..8)? != [1, 0, 0, 0] {
+        return None;
+    }
+    let size = usize::try_from(u64_at(8)?).ok()?;
+    if !(4096..=c.len()).contains(&size) {
+        return None;
+    }
+    let mut p = HEADER;
+    while p + HEADER <= size {
+        let idx = u16::from_le_bytes([c[p], c[p + 1]]);
+        let len = usize::try_from(u64_at(p + 8)?).ok()?;
+        let need = if idx > 0 {
+            HEADER.checked_add(len.checked_add(7)? & !7)?
+        } else {
+            len
+        };
+        if need == 0 {
+            return Some(p);
+        }
+        p = p.checked_add(need)?;
+    }
+    None
 }
