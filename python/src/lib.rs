@@ -788,6 +788,14 @@ fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, Py
     d.set_item("multipliers", complex_array(py, &a.multipliers))?;
     d.set_item("period_time", a.period_time)?;
     d.set_item("radius", a.radius)?;
+    // Physical validity of the orbit: True, False, or None (not checked).
+    let (valid, reasons): (Option<bool>, Vec<&str>) = match &a.validity {
+        pdw_limit::OrbitValidity::Unchecked => (None, Vec::new()),
+        pdw_limit::OrbitValidity::Valid => (Some(true), Vec::new()),
+        pdw_limit::OrbitValidity::Invalid(r) => (Some(false), r.clone()),
+    };
+    d.set_item("valid", valid)?;
+    d.set_item("invalid", reasons)?;
     Ok(d)
 }
 
@@ -1211,6 +1219,9 @@ fn trajectory_dict<'py>(
     d.set_item("t", tr.t.clone().into_pyarray(py))?;
     d.set_item("x", rows_to_array(py, tr.x.clone(), tr.dim())?)?;
     d.set_item("mode", tr.mode.clone().into_pyarray(py))?;
+    // What the mode codes and the state components mean (`pdw-sweep models` lists the same).
+    d.set_item("mode_names", m.walker.mode_names())?;
+    d.set_item("coordinates", m.walker.coordinate_meanings())?;
     d.set_item("step", tr.step.clone().into_pyarray(py))?;
     if let Some(f) = &tr.forces {
         d.set_item("normal_force", f.normal.clone().into_pyarray(py))?;

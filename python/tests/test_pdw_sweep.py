@@ -132,6 +132,7 @@ def cli_basin(exe, h5py, args):
                     "period_k": int(g.attrs["period_k"]),
                     "section": g["section"][()],
                     "multipliers": g["multipliers_re"][()] + 1j * g["multipliers_im"][()],
+                    "validity": g.attrs["validity"],
                 }
     return outcome, legend, atts
 
@@ -161,6 +162,8 @@ def test_basin_labels_and_attractors_equal_the_cli_for_a_small_grid(slope):
         assert a["period_k"] == r["period_k"] and legend[a["code"]] == name
         np.testing.assert_array_equal(a["points"], r["section"])
         np.testing.assert_array_equal(a["multipliers"], r["multipliers"])
+        word = {True: "valid", False: "invalid", None: "not checked"}[a["valid"]]
+        assert word == r["validity"]
     assert abs(sum(metrics["fractions"].values()) - 1) < 1e-12
     if slope == 0.009:
         assert legend[0] == "gait" and "gait" in got and metrics["gait"] is not None
@@ -396,3 +399,16 @@ def test_a_steep_slope_warns_naming_its_degrees():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         pdw.fixed_point("simplest", slope="0.5deg", gait="stable")
+
+
+def test_basin_attractors_say_what_makes_them_physically_invalid():
+    # The kneed preset at slope 0.051 walks only if its stance-knee lock pulls (the knee torque
+    # of `simulate` goes negative along the stride); the compass gait needs nothing of the kind.
+    _, _, kneed = pdw.basin("kneed", slope=0.051, grid=(7, 7))
+    gait = {a["name"]: a for a in kneed["attractors"]}["gait"]
+    assert gait["valid"] is False and "a knee lock must pull" in gait["invalid"]
+    tr = pdw.simulate("kneed", slope=0.051, steps=1, dt_out=0.002)
+    assert np.nanmin(tr["knee_torque"]) < 0
+    _, _, compass = pdw.basin("compass", slope="3deg", grid=(7, 7))
+    gait = {a["name"]: a for a in compass["attractors"]}["gait"]
+    assert gait["valid"] is True and gait["invalid"] == []

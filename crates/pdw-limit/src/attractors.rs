@@ -61,6 +61,7 @@ use crate::gaits::Found;
 use crate::newton::{FixedPoint, NewtonOptions};
 use crate::periodic::{canonical_start, find_periodic_orbit, same_orbit, PeriodicOrbit};
 use crate::stride::StrideMap;
+use crate::validity::{orbit_validity, OrbitValidity};
 use pdw_hybrid::{FallKind, Integrator, Section};
 use pdw_model::Walker;
 
@@ -91,6 +92,8 @@ pub struct Attractor {
     /// Chaotic: a walking cell whose last state lies within this ∞-distance of a sample point
     /// belongs to this attractor. 0 for periodic attractors.
     pub radius: f64,
+    /// Physical validity of its orbit ([`AttractorSet::check_validity`]; unchecked until then).
+    pub validity: OrbitValidity,
 }
 
 impl Attractor {
@@ -105,6 +108,7 @@ impl Attractor {
             multipliers: fp.multipliers.clone(),
             period_time: fp.metrics.period,
             radius: 0.0,
+            validity: OrbitValidity::Unchecked,
         }
     }
 
@@ -118,6 +122,7 @@ impl Attractor {
             multipliers: o.multipliers.clone(),
             period_time: o.period,
             radius: 0.0,
+            validity: OrbitValidity::Unchecked,
         }
     }
 
@@ -192,6 +197,16 @@ impl AttractorSet {
             }
         }
         l
+    }
+
+    /// Checks every periodic attractor's orbit for physical validity ([`orbit_validity`]: one
+    /// stride from each of its points, along the dense solution); chaotic ones stay unchecked.
+    pub fn check_validity(&mut self, w: &dyn Walker) {
+        for a in &mut self.attractors {
+            if a.kind == AttractorKind::Periodic {
+                a.validity = orbit_validity(w, &a.points);
+            }
+        }
     }
 
     /// The engine's problem: the gait (or none) and the periodic attractors as known orbits
@@ -412,6 +427,7 @@ pub fn discover(
                         multipliers: Vec::new(),
                         period_time: f64::NAN,
                         radius: (disc.chaos_radius * extent).max(floor),
+                        validity: OrbitValidity::Unchecked,
                     });
                 }
             }

@@ -67,5 +67,5 @@ pub use trajectory::{
     bytes_per_sample, initial_state, model_energy, simulate, Trajectory, TrajectoryError,
     TrajectoryEvent, TrajectoryOptions, Validity,
 };
-pub use validity::{ImpactCheck, Margin, Violation};
+pub use validity::{orbit_validity, ImpactCheck, Margin, OrbitValidity, Violation};
 pub use variational::{ErrorControl, Variational};

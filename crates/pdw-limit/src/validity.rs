@@ -188,6 +188,23 @@ impl Validity {
             .min_by(|a, b| a.relative.total_cmp(&b.relative))
     }
 
+    /// What fails, in words (empty when [`valid`](Self::valid)): "the ground must pull",
+    /// "a knee lock must pull", "an impact must pull", "the swing foot scuffs", and "it falls"
+    /// for a stride that does not end in a heel strike — the wording of the bifurcation
+    /// diagrams' legend (`pdw_store::invalid_reasons`).
+    pub fn failures(&self) -> Vec<&'static str> {
+        [
+            (self.fell.is_some(), "it falls"),
+            (self.normal_force_negative, "the ground must pull"),
+            (self.knee_unlocks, "a knee lock must pull"),
+            (self.impact_violation, "an impact must pull"),
+            (self.swing_foot_scuffs, "the swing foot scuffs"),
+        ]
+        .into_iter()
+        .filter_map(|(raised, what)| raised.then_some(what))
+        .collect()
+    }
+
     /// The smallest relative margin, if any.
     pub fn min_relative_margin(&self) -> Option<f64> {
         self.binding().map(|m| m.relative)
@@ -862,5 +879,57 @@ pub fn illinois(f: &mut dyn FnMut(f64) -> f64, a: f64, fa: f64, b: f64, fb: f64)
         a
     } else {
         b
+    }
+}
+
+/// Physical validity of an attractor's orbit: every stride of a periodic orbit checked along
+/// the dense solution ([`Validity::along_step`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum OrbitValidity {
+    /// Not checked: the model reports no constraint forces, or the attractor is chaotic (a
+    /// sample of its points is no orbit whose strides all repeat).
+    #[default]
+    Unchecked,
+    /// Every stride of the orbit valid.
+    Valid,
+    /// What fails on some stride of the orbit ([`Validity::failures`], each named once).
+    Invalid(Vec<&'static str>),
+}
+
+impl OrbitValidity {
+    /// `"valid"`, `"not checked"` or `"physically invalid: …"` (reasons joined by `, `).
+    pub fn describe(&self) -> String {
+        match self {
+            OrbitValidity::Unchecked => "not checked".into(),
+            OrbitValidity::Valid => "valid".into(),
+            OrbitValidity::Invalid(r) => format!("physically invalid: {}", r.join(", ")),
+        }
+    }
+}
+
+/// The validity of the periodic orbit through the section points `points` of `w` (each lifted
+/// with [`pdw_hybrid::Section::lift`] and checked over one stride); [`OrbitValidity::Unchecked`]
+/// for no points or a model without constraint forces.
+pub fn orbit_validity(w: &dyn Walker, points: &[Vec<f64>]) -> OrbitValidity {
+    let mut reasons: Vec<&'static str> = Vec::new();
+    let mut x = vec![0.0; w.dim()];
+    for p in points {
+        if p.len() != w.section_dim() {
+            return OrbitValidity::Unchecked;
+        }
+        w.lift(p, &mut x);
+        let Some(v) = Validity::along_step(w, &x) else {
+            return OrbitValidity::Unchecked;
+        };
+        for f in v.failures() {
+            if !reasons.contains(&f) {
+                reasons.push(f);
+            }
+        }
+    }
+    match (points.is_empty(), reasons.is_empty()) {
+        (true, _) => OrbitValidity::Unchecked,
+        (false, true) => OrbitValidity::Valid,
+        (false, false) => OrbitValidity::Invalid(reasons),
     }
 }

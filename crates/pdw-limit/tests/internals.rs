@@ -17,6 +17,7 @@ mod attractors {
             multipliers: Vec::new(),
             period_time: 1.0,
             radius: 0.1,
+            validity: pdw_limit::OrbitValidity::Unchecked,
         }
     }
 

@@ -31,6 +31,16 @@ pub trait Walker: Section {
     fn step_length(&self, x_pre: &[f64]) -> f64;
     /// Initial guesses for the gaits the model is known to have at its current parameters.
     fn gait_guesses(&self) -> Vec<GaitGuess>;
+    /// Name of each mode of the flow, in mode order (what a trajectory's `mode` column means),
+    /// e.g. `["swing knee free", "knees locked"]`; `mode k` where the model names none.
+    fn mode_names(&self) -> Vec<String> {
+        (0..self.n_modes()).map(|k| format!("mode {k}")).collect()
+    }
+    /// What each state component means — the angle it measures, from what, and its sign — in
+    /// state order; empty where the model does not say.
+    fn coordinate_meanings(&self) -> Vec<String> {
+        Vec::new()
+    }
     /// The walker's drawing at full state `x`, for animations; `None` if the model has none.
     fn pose(&self, _x: &[f64]) -> Option<Pose> {
         None

@@ -332,6 +332,40 @@ pub struct Attractor {
     pub section: Vec<Vec<f64>>,
     /// Floquet multipliers `(re, im)`, by decreasing modulus.
     pub multipliers: Vec<(f64, f64)>,
+    /// Physical validity of the orbit (attributes `validity`, `invalid_reasons` of its group;
+    /// files without them read as unchecked).
+    pub validity: OrbitCheck,
+}
+
+/// Physical validity of an attractor's orbit as a file records it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum OrbitCheck {
+    /// The model reports no constraint forces, or the attractor is chaotic.
+    #[default]
+    Unchecked,
+    /// Every stride of the orbit valid.
+    Valid,
+    /// What fails (e.g. "a knee lock must pull"), each named once.
+    Invalid(Vec<String>),
+}
+
+impl OrbitCheck {
+    /// The `validity` attribute's value: `valid`, `invalid` or `not checked`.
+    pub fn word(&self) -> &'static str {
+        match self {
+            OrbitCheck::Unchecked => "not checked",
+            OrbitCheck::Valid => "valid",
+            OrbitCheck::Invalid(_) => "invalid",
+        }
+    }
+
+    /// What fails, if the orbit is invalid.
+    pub fn reasons(&self) -> Option<&[String]> {
+        match self {
+            OrbitCheck::Invalid(r) => Some(r),
+            _ => None,
+        }
+    }
 }
 
 impl Attractor {
@@ -356,6 +390,7 @@ impl Attractor {
                 .iter()
                 .zip(&other.multipliers)
                 .all(|(a, b)| bits(&[a.0, a.1], &[b.0, b.1]))
+            && self.validity == other.validity
     }
 
     /// `name (period k, n points)`, for messages.
@@ -797,8 +832,14 @@ impl BasinWriter {
             }
         }
         let damaged = damaged_blocks(&old, &found, &rows_done);
+        // Everything `read_basin` reads besides the blocks must read back too: a damaged
+        // `created` string would otherwise make a file "complete" that no reader opens.
+        let run_ok = get_str(path, KIND, &old, "version").is_ok()
+            && get_str(path, KIND, &old, "created").is_ok()
+            && get_attr::<f64>(path, KIND, &old, "elapsed_s").is_ok();
         let extras_ok = !complete
-            || (read_metrics(path, &old, &found.legend).is_ok_and(|m| m.is_some())
+            || (run_ok
+                && read_metrics(path, &old, &found.legend).is_ok_and(|m| m.is_some())
                 && read_attractors(path, &old).is_ok()
                 && (!old.link_exists("provenance")
                     || crate::provenance::read_provenance(path, &old).is_ok_and(|p| p.is_some())));
@@ -1531,8 +1572,36 @@ pub(crate) fn write_attractors(
                 .create(n)
                 .at(path, "writing an attractor")?;
         }
+        set_str(path, &ga, "validity", a.validity.word())?;
+        if let Some(r) = a.validity.reasons() {
+            set_str(path, &ga, "invalid_reasons", &r.join("; "))?;
+        }
     }
     Ok(())
+}
+
+/// An attractor group's `validity` and `invalid_reasons` (unchecked where absent: files written
+/// before validity was recorded).
+fn read_orbit_check(path: &Path, ga: &Group) -> Result<OrbitCheck> {
+    if !has_attr(ga, "validity") {
+        return Ok(OrbitCheck::Unchecked);
+    }
+    Ok(match get_str(path, KIND, ga, "validity")?.as_str() {
+        "valid" => OrbitCheck::Valid,
+        "invalid" => OrbitCheck::Invalid(
+            get_str(path, KIND, ga, "invalid_reasons")?
+                .split("; ")
+                .map(str::to_string)
+                .collect(),
+        ),
+        "not checked" => OrbitCheck::Unchecked,
+        other => {
+            return Err(format_err(
+                path,
+                format!("attractor validity {other:?} is not valid, invalid or not checked"),
+            ))
+        }
+    })
 }
 
 fn read_metrics(path: &Path, f: &File, legend: &[(u8, String)]) -> Result<Option<BasinMetrics>> {
@@ -1591,6 +1660,7 @@ pub(crate) fn read_attractors(path: &Path, f: &File) -> Result<Vec<Attractor>> {
             period_time: get_attr(path, KIND, &ga, "period_time")?,
             section: sec.rows().into_iter().map(|r| r.to_vec()).collect(),
             multipliers: re.into_iter().zip(im).collect(),
+            validity: read_orbit_check(path, &ga)?,
         });
     }
     Ok(out)

@@ -88,7 +88,7 @@ pub mod trajectory;
 
 pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
-    BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
+    BasinMetrics, BasinWriter, OrbitCheck, BLOCK_ROWS, NOT_COMPUTED,
 };
 pub use curve::{plot_curve, read_curve_points, write_curve, CurveData, RegionMap, CURVE_FORMAT};
 pub use design::{

@@ -197,10 +197,12 @@ pub fn plot_basin(
 ) -> Result<()> {
     let marks: Vec<Marks> = marker
         .map(|m| Marks {
+            name: String::new(),
             label: "fixed point".into(),
             points: vec![m],
             colour: None,
             cloud: false,
+            invalid: None,
         })
         .into_iter()
         .collect();
@@ -209,13 +211,21 @@ pub fn plot_basin(
 
 /// Points marked on a basin picture.
 struct Marks {
+    /// The attractor's (outcome's) name, empty for a plain marker.
+    name: String,
     label: String,
     points: Vec<(f64, f64)>,
     /// Fill of the ring (the attractor's basin colour), white if `None`.
     colour: Option<[u8; 3]>,
     /// A sample of a chaotic attractor: small dots, not ringed crosses.
     cloud: bool,
+    /// What makes the orbit physically invalid: drawn hollow with a red ring, the reasons
+    /// named under the legend.
+    invalid: Option<Vec<String>>,
 }
+
+/// Ring colour of a physically invalid orbit's marks.
+const INVALID_RING: RGBColor = RGBColor(200, 0, 0);
 
 /// [`plot_basin`] with every attractor's points marked: the points of a periodic orbit as
 /// ringed crosses filled with its basin's colour (the legend entry of the same name), a chaotic
@@ -251,11 +261,13 @@ pub fn plot_basin_attractors(
                     .map(|(c, _)| *c);
                 let colour = code.and_then(|c| colours.iter().find(|(k, _)| *k == c).map(|x| x.1));
                 let cloud = a.period_strides == 0;
+                let invalid = a.validity.reasons().map(<[String]>::to_vec);
                 Marks {
-                    label: if cloud {
-                        format!("{} (sample)", a.name)
-                    } else {
-                        format!("{} orbit", a.name)
+                    name: a.name.clone(),
+                    label: match (cloud, &invalid) {
+                        (true, _) => format!("{} (sample)", a.name),
+                        (false, None) => format!("{} orbit", a.name),
+                        (false, Some(_)) => format!("{} orbit (invalid)", a.name),
                     },
                     points: a
                         .section
@@ -265,6 +277,7 @@ pub fn plot_basin_attractors(
                         .collect(),
                     colour,
                     cloud,
+                    invalid,
                 }
             })
             .collect(),
@@ -354,13 +367,13 @@ fn plot_basin_marked(
                 .map_err(|x| pe(path, x))?;
             continue;
         }
-        let fill = rgb(mk.colour.unwrap_or([255, 255, 255]));
+        let (fill, ring) = mark_style(mk);
         for &(mx, my) in &pts {
             chart
                 .draw_series([
                     EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, fill.filled()),
                     EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, WHITE.stroke_width(4)),
-                    EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, BLACK.stroke_width(2)),
+                    EmptyElement::at((mx, my)) + Circle::new((0, 0), 9, ring.stroke_width(2)),
                 ])
                 .map_err(|x| pe(path, x))?;
             chart
@@ -378,8 +391,13 @@ fn plot_basin_marked(
         .filter(|(c, _)| counts[*c as usize] > 0)
         .map(|(c, col)| {
             let name = header.outcome_name(*c).unwrap_or("?");
+            let invalid = marks.iter().any(|m| m.name == name && m.invalid.is_some());
             (
-                format!("{name} {:.1}%", 100.0 * counts[*c as usize] as f64 / total),
+                format!(
+                    "{name} {:.1}%{}",
+                    100.0 * counts[*c as usize] as f64 / total,
+                    if invalid { " (invalid)" } else { "" }
+                ),
                 *col,
             )
         })
@@ -422,12 +440,12 @@ fn plot_basin_marked(
                     .map_err(|x| pe(path, x))?;
             }
         } else {
-            let fill = rgb(mk.colour.unwrap_or([255, 255, 255]));
+            let (fill, ring) = mark_style(mk);
             right
                 .draw(&Circle::new((21, y + 10), 8, fill.filled()))
                 .map_err(|x| pe(path, x))?;
             right
-                .draw(&Circle::new((21, y + 10), 8, BLACK.stroke_width(2)))
+                .draw(&Circle::new((21, y + 10), 8, ring.stroke_width(2)))
                 .map_err(|x| pe(path, x))?;
             right
                 .draw(&Cross::new((21, y + 10), 5, BLACK.stroke_width(2)))
@@ -441,8 +459,44 @@ fn plot_basin_marked(
             ))
             .map_err(|x| pe(path, x))?;
     }
+    let below = legend_top + 30 * (entries.len() + marks.len()) as i32 + 20;
+    draw_invalid_reasons(&right, marks, below, path)?;
     root.present().map_err(|x| pe(path, x))?;
     pic.commit(path)
+}
+
+/// Fill and ring of a periodic orbit's marks: its basin's colour (white without one) ringed in
+/// black, or hollow (white) ringed in red when the orbit is physically invalid.
+fn mark_style(mk: &Marks) -> (RGBColor, RGBColor) {
+    match mk.invalid {
+        Some(_) => (WHITE, INVALID_RING),
+        None => (rgb(mk.colour.unwrap_or([255, 255, 255])), BLACK),
+    }
+}
+
+/// Under the legend, in red: for each physically invalid orbit its name and what fails, one
+/// reason per line.
+fn draw_invalid_reasons(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    marks: &[Marks],
+    top: i32,
+    path: &Path,
+) -> Result<()> {
+    let style = (FONT, 14).into_font().color(&INVALID_RING);
+    let mut y = top;
+    for mk in marks {
+        let Some(reasons) = &mk.invalid else {
+            continue;
+        };
+        let lines = std::iter::once(format!("{}: physically invalid,", mk.name))
+            .chain(reasons.iter().map(|r| format!("  {r}")));
+        for line in lines {
+            area.draw(&Text::new(line, (10, y), style.clone()))
+                .map_err(|x| pe(path, x))?;
+            y += 18;
+        }
+    }
+    Ok(())
 }
 
 /// Colours of the branches of a bifurcation diagram and of the polylines of [`plot_lines`]

@@ -425,3 +425,69 @@ fn start_resumes_existing_files_and_creates_missing_ones() {
     let w = BasinWriter::start(&p, &h, false, true).unwrap();
     assert_eq!(w.rows_todo().len(), 40);
 }
+
+/// Attractor validity: written as the `validity` / `invalid_reasons` attributes another reader
+/// sees, read back; a file without them (written before validity was recorded) reads as
+/// unchecked; an unknown word is a format error naming the words allowed.
+#[test]
+fn attractor_validity_is_recorded_and_old_files_read_as_unchecked() {
+    use pdw_store::OrbitCheck;
+    let dir = scratch("orbitcheck");
+    let p = dir.join("basin.h5");
+    let h = header(5, 4);
+    let mut w = BasinWriter::create(&p, &h, false).unwrap();
+    write_block(&mut w, 0, 4);
+    let (o, _, _) = block(&h, 0, 4);
+    w.finish(&fractions(&h, &o), &attractors()).unwrap();
+    {
+        let f = hdf5::File::open(&p).unwrap();
+        let word = |g: &str, a: &str| -> String {
+            let v: hdf5::types::VarLenUnicode = f
+                .group(&format!("attractors/{g}"))
+                .unwrap()
+                .attr(a)
+                .unwrap()
+                .read_scalar()
+                .unwrap();
+            v.as_str().to_string()
+        };
+        assert_eq!(word("gait", "validity"), "valid");
+        assert_eq!(word("period2", "validity"), "invalid");
+        assert_eq!(
+            word("period2", "invalid_reasons"),
+            "a knee lock must pull; the swing foot scuffs"
+        );
+    }
+    let d = read_basin(&p).unwrap();
+    assert_eq!(d.attractors[0].validity, OrbitCheck::Valid);
+    assert_eq!(
+        d.attractors[1].validity.reasons().unwrap(),
+        ["a knee lock must pull", "the swing foot scuffs"]
+    );
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        let g = f.group("attractors/period2").unwrap();
+        g.delete_attr("validity").unwrap();
+        g.delete_attr("invalid_reasons").unwrap();
+    }
+    assert_eq!(
+        read_basin(&p).unwrap().attractors[1].validity,
+        OrbitCheck::Unchecked
+    );
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        let g = f.group("attractors/gait").unwrap();
+        g.delete_attr("validity").unwrap();
+        let bad: hdf5::types::VarLenUnicode = "maybe".parse().unwrap();
+        g.new_attr::<hdf5::types::VarLenUnicode>()
+            .create("validity")
+            .unwrap()
+            .write_scalar(&bad)
+            .unwrap();
+    }
+    let e = read_basin(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("\"maybe\"") && e.contains("valid, invalid or not checked"),
+        "{e}"
+    );
+}

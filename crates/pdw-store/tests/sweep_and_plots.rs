@@ -5,9 +5,9 @@ use crate::common;
 use common::*;
 use pdw_store::plot::{BASIN_PNG_SIZE, BIFURCATION_PNG_SIZE, LINES_PNG_SIZE};
 use pdw_store::{
-    animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_bifurcation, plot_lines,
-    read_basin, read_sweep, write_sweep, BasinWriter, Bifurcation, Branch, Frame, OrbitDiagram,
-    StoreError, StrideValidity, SweepData,
+    animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_basin_attractors,
+    plot_bifurcation, plot_lines, read_basin, read_sweep, write_sweep, BasinWriter, Bifurcation,
+    Branch, Frame, OrbitDiagram, StoreError, StrideValidity, SweepData,
 };
 
 fn sweep() -> SweepData {
@@ -218,6 +218,52 @@ fn basin_png_has_stated_size_and_paints_cells_in_outcome_colours() {
         "",
     );
     assert!(matches!(err, Err(StoreError::Invalid { .. })));
+}
+
+/// A physically invalid attractor is drawn apart on a basin picture: its orbit hollow with a red
+/// ring, "(invalid)" in its legend entry and what fails in red under the legend; the same
+/// attractors all valid draw no red at all.
+#[test]
+fn invalid_attractors_are_hollow_red_and_named_on_the_basin_png() {
+    let dir = scratch("basininvalid");
+    let h = header(40, 30);
+    let p = dir.join("b.h5");
+    let mut w = BasinWriter::create(&p, &h, false).unwrap();
+    write_block(&mut w, 0, 30);
+    drop(w);
+    let d = read_basin(&p).unwrap();
+    let atts = attractors();
+    assert!(
+        atts[1].validity.reasons().is_some(),
+        "the fixture has an invalid orbit"
+    );
+    let mut valid = atts.clone();
+    valid[1].validity = pdw_store::OrbitCheck::Valid;
+    let (with, without) = (dir.join("with.png"), dir.join("without.png"));
+    plot_basin_attractors(&with, &d.header, d.outcome.view(), &atts, "t").unwrap();
+    plot_basin_attractors(&without, &d.header, d.outcome.view(), &valid, "t").unwrap();
+    let red = |path: &std::path::Path| {
+        let (w, _, px, _) = decode_png(path);
+        let legend_x = w - 220;
+        let (mut plot, mut legend) = (0, 0);
+        for (i, q) in px.chunks(3).enumerate() {
+            if q == [200, 0, 0] {
+                if (i as u32 % w) < legend_x {
+                    plot += 1
+                } else {
+                    legend += 1
+                }
+            }
+        }
+        (plot, legend)
+    };
+    let (plot, legend) = red(&with);
+    assert!(
+        plot > 20,
+        "no red ring on the invalid orbit's points ({plot} px)"
+    );
+    assert!(legend > 100, "no red legend mark and reasons ({legend} px)");
+    assert_eq!(red(&without), (0, 0));
 }
 
 /// Invalid gaits are told apart from valid ones: the reasons come from the strides' flags, and

@@ -764,3 +764,79 @@ fn ctrl_c_during_the_gait_search_stops_it_at_once() {
     // The uninterrupted search takes ~40 s; ten seconds leaves room for any load on the machine.
     assert!(latency < 10.0, "exited {latency:.1} s after the signal");
 }
+
+/// A basin's attractors carry their physical validity (console, file), and the verdict agrees
+/// with an independent computation: the knee-lock torque and normal force `simulate` samples
+/// along one stride of the same gait (forces at output samples, not the dense location the
+/// basin's check uses). The kneed preset at slope 0.051 needs its stance-knee lock to pull;
+/// the compass gait at its default slope needs nothing the ground cannot give.
+#[test]
+fn basin_names_a_physically_invalid_gait_as_its_trajectory_shows() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (model, slope, invalid) in [("kneed", "0.051", true), ("compass", "3deg", false)] {
+        let out = p(d, &format!("{model}.h5"));
+        let o = run(&[
+            "basin",
+            "--model",
+            model,
+            "--slope",
+            slope,
+            "--grid",
+            "9x9",
+            "--out",
+            s(&out),
+            "--png",
+            s(&p(d, &format!("{model}.png"))),
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        let gait = pdw_store::read_basin(&out).unwrap().attractors[0].clone();
+        assert_eq!(gait.name, "gait");
+        let traj = p(d, &format!("{model}_t.h5"));
+        let o = run(&[
+            "simulate",
+            "--model",
+            model,
+            "--slope",
+            slope,
+            "--steps",
+            "1",
+            "--dt-out",
+            "0.002",
+            "--out",
+            s(&traj),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let tr = pdw_store::read_trajectory_h5(&traj).unwrap();
+        let min = |name: &str| {
+            tr.column(name)
+                .unwrap()
+                .values
+                .iter()
+                .copied()
+                .filter(|v| !v.is_nan())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let pulls = min("knee_torque") < 0.0 || min("normal_force") < 0.0;
+        assert_eq!(
+            pulls, invalid,
+            "{model}: sampled forces disagree with the verdict"
+        );
+        if invalid {
+            let reasons = gait.validity.reasons().expect("an invalid gait");
+            assert!(
+                reasons.iter().any(|r| r == "a knee lock must pull"),
+                "{reasons:?}"
+            );
+            assert!(
+                text.contains("(physically invalid: a knee lock must pull"),
+                "{text}"
+            );
+        } else {
+            assert_eq!(gait.validity, pdw_store::OrbitCheck::Valid);
+            assert!(!text.contains("physically invalid"), "{text}");
+        }
+    }
+}

@@ -1645,6 +1645,22 @@ impl Walker for ChainWalker {
     fn state_names(&self) -> Vec<String> {
         self.state_names.clone()
     }
+    /// Module docs, "Coordinates": `q₀` absolute from the slope normal, every other joint
+    /// relative to the segment above it.
+    fn coordinate_meanings(&self) -> Vec<String> {
+        self.state_names
+            .iter()
+            .map(|n| chain_coordinate(n))
+            .collect()
+    }
+    /// Module docs, "Modes".
+    fn mode_names(&self) -> Vec<String> {
+        if self.free_knee.is_some() {
+            vec!["swing knee free".into(), "knees locked".into()]
+        } else {
+            vec!["knees locked".into()]
+        }
+    }
     /// The resolved geometry (every segment, knee and foot at the current
     /// parameter values), not the expressions that gave it: two specs that resolve to the
     /// same walker have the same fingerprint. Gait guesses are left out (they start Newton
@@ -1812,5 +1828,29 @@ impl Walker for ChainWalker {
         } else {
             ClearanceRule::AfterMidStance
         }
+    }
+}
+
+/// What a chain walker's state component `name` measures (module docs, "Coordinates").
+fn chain_coordinate(name: &str) -> String {
+    if let Some(base) = name.strip_suffix("_rate") {
+        return format!("rate of {base} (rad per time unit)");
+    }
+    match name {
+        "stance" => "angle of the stance leg's lowest segment from the slope normal (rad); \
+                     positive: stance foot downhill of the hip"
+            .into(),
+        "hip" => "swing leg relative to the stance leg at the hip (rad); 0: legs together".into(),
+        n if n.starts_with("stance_knee") => {
+            "stance knee flexion relative to the segment below (rad); flexes with q > 0, \
+             straight at 0"
+                .into()
+        }
+        n if n.starts_with("swing_knee") => {
+            "swing knee flexion relative to the segment above (rad); flexes with q < 0, \
+             straight at 0"
+                .into()
+        }
+        n => format!("joint {n} (rad)"),
     }
 }

@@ -302,6 +302,18 @@ impl Walker for Rimless {
     fn state_names(&self) -> Vec<String> {
         STATE_NAMES.iter().map(|s| s.to_string()).collect()
     }
+    /// Module docs, "Coordinates and signs".
+    fn coordinate_meanings(&self) -> Vec<String> {
+        vec![
+            "θ: stance spoke's angle from the slope normal (rad); positive: hub downhill of the \
+             contact point"
+                .into(),
+            "θ̇: rate of θ (rad/s); positive rolls forward".into(),
+        ]
+    }
+    fn mode_names(&self) -> Vec<String> {
+        vec!["rolling on one spoke".into()]
+    }
     fn param_values(&self) -> Vec<(String, f64)> {
         self.params.named_values()
     }

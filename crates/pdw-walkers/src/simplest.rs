@@ -647,6 +647,22 @@ impl Walker for Simplest {
     fn state_names(&self) -> Vec<String> {
         STATE_NAMES.iter().map(|s| s.to_string()).collect()
     }
+    /// Module docs, "Coordinates and signs".
+    fn coordinate_meanings(&self) -> Vec<String> {
+        [
+            "θ: stance-leg angle from the slope normal (rad); positive: stance foot downhill of \
+             the hip",
+            "θ̇: rate of θ (rad/√(l/g))",
+            "φ: angle between the legs, θ − ψ with ψ the swing leg's angle from the slope normal \
+             (rad)",
+            "φ̇: rate of φ (rad/√(l/g))",
+        ]
+        .map(String::from)
+        .to_vec()
+    }
+    fn mode_names(&self) -> Vec<String> {
+        vec!["single support".into()]
+    }
     fn param_values(&self) -> Vec<(String, f64)> {
         self.params.named_values()
     }

@@ -305,7 +305,8 @@ impl BasinPlan {
         self.gaits.stable()
     }
 
-    /// Every attractor reached from the box ([`pdw_limit::box_attractors`]) and the number of
+    /// Every attractor reached from the box ([`pdw_limit::box_attractors`]), each periodic one
+    /// checked for physical validity ([`AttractorSet::check_validity`]), and the number of
     /// seeds tried.
     pub fn attractors(
         &self,
@@ -313,7 +314,7 @@ impl BasinPlan {
         pool: &rayon::ThreadPool,
     ) -> Result<(AttractorSet, usize), LimitError> {
         let (x, y) = (&self.bx.x, &self.bx.y);
-        pdw_limit::box_attractors(
+        let (mut set, seeds) = pdw_limit::box_attractors(
             m.walker.as_ref(),
             &self.gaits.found,
             self.gait(),
@@ -323,7 +324,9 @@ impl BasinPlan {
             (y.index, (y.range.lo, y.range.hi)),
             &self.opts,
             pool,
-        )
+        )?;
+        set.check_validity(m.walker.as_ref());
+        Ok((set, seeds))
     }
 
     /// The start states of the cells of the rows at `row_ys`, row by row.

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use pdw_store::{Attractor, BasinHeader, BasinMetrics, BasinWriter, ShardSpec};
+use pdw_store::{Attractor, BasinHeader, BasinMetrics, BasinWriter, OrbitCheck, ShardSpec};
 
 /// A fresh empty directory under the system temp dir, unique per process and test; removed
 /// when the test passes, kept for inspection when it fails.
@@ -166,6 +166,7 @@ pub fn attractors() -> Vec<Attractor> {
             period_time: 3.812_140_6,
             section: vec![vec![0.200_310_900_544_287_4, -0.199_832_473_004_977_74]],
             multipliers: vec![(-0.19, 0.58), (-0.19, -0.58)],
+            validity: OrbitCheck::Valid,
         },
         Attractor {
             name: "period2".into(),
@@ -173,6 +174,10 @@ pub fn attractors() -> Vec<Attractor> {
             period_time: 7.6,
             section: vec![vec![0.21, -0.2], vec![0.19, -0.19]],
             multipliers: vec![(0.5, 0.0), (0.01, 0.0)],
+            validity: OrbitCheck::Invalid(vec![
+                "a knee lock must pull".into(),
+                "the swing foot scuffs".into(),
+            ]),
         },
     ]
 }

@@ -16,10 +16,10 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::basin::{AxisFlags, BasinPlan, BasinRequest};
 use pdw_limit::attractors::{Attractor as LimitAttractor, DiscoveryOptions};
 use pdw_limit::basin::{basin_metrics, classify_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX};
-use pdw_limit::AttractorSet;
+use pdw_limit::{AttractorSet, OrbitValidity};
 use pdw_store::{
     plot_basin_attractors, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter,
-    ShardSpec, StoreError, BLOCK_ROWS,
+    OrbitCheck, ShardSpec, StoreError, BLOCK_ROWS,
 };
 use pdw_walkers::ModelInfo;
 use std::io::IsTerminal;
@@ -330,7 +330,12 @@ fn discover(
             } else {
                 set.attractors
                     .iter()
-                    .map(|at| at.name.clone())
+                    .map(|at| match &at.validity {
+                        OrbitValidity::Invalid(_) => {
+                            format!("{} ({})", at.name, at.validity.describe())
+                        }
+                        _ => at.name.clone(),
+                    })
                     .collect::<Vec<_>>()
                     .join(", ")
             }
@@ -671,7 +676,7 @@ fn write_results(
     match &out_metrics {
         Some(mt) => {
             plot(a, p, described, &attractors)?;
-            print_summary(a, p, mt, elapsed);
+            print_summary(a, p, mt, &attractors, elapsed);
         }
         None => crate::outln!(
             "shard {} of {}: {} rows written to {} in {:.2} s; join the shards with `pdw-sweep merge`",
@@ -722,6 +727,13 @@ pub fn store_attractor(a: &LimitAttractor) -> Attractor {
         period_time: a.period_time,
         section: a.points.clone(),
         multipliers: a.multipliers.iter().map(|l| (l.re, l.im)).collect(),
+        validity: match &a.validity {
+            OrbitValidity::Unchecked => OrbitCheck::Unchecked,
+            OrbitValidity::Valid => OrbitCheck::Valid,
+            OrbitValidity::Invalid(r) => {
+                OrbitCheck::Invalid(r.iter().map(|s| s.to_string()).collect())
+            }
+        },
     }
 }
 
@@ -832,7 +844,13 @@ pub fn store_metrics(
 
 /// The summary on stdout: the grid, the fraction of each outcome, the basin entropies and the
 /// files written.
-fn print_summary(a: &BasinArgs, p: &Parsed, mt: &BasinMetrics, elapsed: f64) {
+fn print_summary(
+    a: &BasinArgs,
+    p: &Parsed,
+    mt: &BasinMetrics,
+    attractors: &[Attractor],
+    elapsed: f64,
+) {
     let (m, (nx, ny)) = (&p.m, p.req.grid);
     crate::outln!(
         "basin of the {} walker at slope {} rad: {}x{} cells, up to {} strides, {} thread(s)",
@@ -844,7 +862,14 @@ fn print_summary(a: &BasinArgs, p: &Parsed, mt: &BasinMetrics, elapsed: f64) {
         a.threads
     );
     for (name, f) in mt.fractions.iter().filter(|(_, f)| *f > 0.0) {
-        crate::outln!("  {name:<24} {:>8.4} %", 100.0 * f);
+        let invalid = attractors
+            .iter()
+            .find(|at| at.name == *name)
+            .and_then(|at| at.validity.reasons())
+            .map_or(String::new(), |r| {
+                format!("  (physically invalid: {})", r.join(", "))
+            });
+        crate::outln!("  {name:<24} {:>8.4} %{invalid}", 100.0 * f);
     }
     if mt.basin_entropy.is_finite() {
         crate::outln!(

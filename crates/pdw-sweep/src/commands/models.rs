@@ -23,14 +23,26 @@ pub fn run(a: &ModelsArgs) -> anyhow::Result<ExitCode> {
         };
     }
     let all = models();
+    // What the coordinates and modes mean, from each model built at its defaults.
+    let described: Vec<(Vec<String>, Vec<String>)> = all
+        .iter()
+        .map(|m| {
+            pdw_walkers::build(&m.name, &[])
+                .map(|w| (w.coordinate_meanings(), w.mode_names()))
+                .unwrap_or_default()
+        })
+        .collect();
     if a.json {
         let list: Vec<serde_json::Value> = all
             .iter()
-            .map(|m| {
+            .zip(&described)
+            .map(|(m, (coords, modes))| {
                 serde_json::json!({
                     "name": m.name,
                     "description": m.description,
                     "state_names": m.state_names,
+                    "coordinates": coords,
+                    "modes": modes,
                     "section_names": m.section_names,
                     "params": m.params.iter().map(|p| serde_json::json!({
                         "name": p.name, "unit": p.unit, "default": p.default,
@@ -42,9 +54,13 @@ pub fn run(a: &ModelsArgs) -> anyhow::Result<ExitCode> {
         crate::outln!("{}", serde_json::to_string_pretty(&list)?);
         return Ok(ExitCode::SUCCESS);
     }
-    for m in &all {
+    for (m, (coords, modes)) in all.iter().zip(&described) {
         crate::outln!("{} — {}", m.name, m.description);
         crate::outln!("  state:   {}", m.state_names.join(", "));
+        for (name, meaning) in m.state_names.iter().zip(coords) {
+            crate::outln!("    {name:<18} {meaning}");
+        }
+        crate::outln!("  modes:   {}", numbered(modes));
         crate::outln!("  section: {}", m.section_names.join(", "));
         crate::outln!("  parameters:");
         for p in &m.params {
@@ -69,4 +85,14 @@ fn short(v: f64) -> String {
     } else {
         format!("{v:.10}").trim_end_matches('0').to_string()
     }
+}
+
+/// `0 = first, 1 = second`.
+fn numbered(names: &[String]) -> String {
+    names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| format!("{k} = {n}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

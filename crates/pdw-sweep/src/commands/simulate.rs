@@ -328,6 +328,29 @@ fn attrs(
                 }),
         ),
         (
+            "mode_legend".into(),
+            serde_json::Value::Object(
+                m.walker
+                    .mode_names()
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, n)| (k.to_string(), n.into()))
+                    .collect(),
+            )
+            .to_string(),
+        ),
+        (
+            "coordinates".into(),
+            serde_json::Value::Object(
+                tr.state_names
+                    .iter()
+                    .cloned()
+                    .zip(m.walker.coordinate_meanings().into_iter().map(Into::into))
+                    .collect(),
+            )
+            .to_string(),
+        ),
+        (
             "flags_legend".into(),
             serde_json::json!({
                 trajectory::FLAG_NORMAL_NEGATIVE.to_string(): "normal force negative",
