@@ -1235,6 +1235,9 @@ fn trajectory_dict<'py>(
     if let Some(fl) = &tr.flags {
         d.set_item("flags", fl.clone().into_pyarray(py))?;
     }
+    if let Some(e) = pdw::simulate::fixed_frame_energy(m, tr) {
+        d.set_item("energy_fixed_frame", e.into_pyarray(py))?;
+    }
     if let Some(e) = &tr.energy {
         d.set_item("energy", e.clone().into_pyarray(py))?;
     }

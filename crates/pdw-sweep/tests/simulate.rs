@@ -174,3 +174,50 @@ fn walks_that_would_not_fit_in_memory_are_refused() {
         "a walk exactly at the bound is whole"
     );
 }
+
+/// Energy in a fixed frame, checked against Garcia's closed-form heel strike (1998, the jump map:
+/// `θ̇⁺ = cos 2θ · θ̇⁻`, the massless swing foot carries no energy): on the simplest walker's
+/// gait the fixed-frame energy is constant within each step (the flow conserves it) and drops
+/// at each heel strike by the kinetic energy the strike removes, `½ θ̇⁻² sin² 2θ⁻` — which is
+/// also the `m g L sin γ` one step down the slope releases, `L = 2 |sin θ⁻|`. The model's own
+/// energy (potential zero at the stance foot) instead comes back to the same value each step.
+#[test]
+fn fixed_frame_energy_drops_by_the_heel_strike_loss() {
+    let dir = tempfile::tempdir().unwrap();
+    let h5 = dir.path().join("s.h5");
+    let o = simulate(&["--steps", "3", "--out", h5.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    let col = |n: &str| d.column(n).unwrap().values.clone();
+    let (e, fixed, step) = (col("energy"), col("energy_fixed_frame"), col("step"));
+    assert_eq!(d.column("energy_fixed_frame").unwrap().units, "M g l");
+    for k in 0..3 {
+        let within: Vec<f64> = (0..e.len())
+            .filter(|&i| step[i] == k as f64)
+            .map(|i| fixed[i])
+            .collect();
+        let spread = within.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - within.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(
+            spread < 1e-9,
+            "step {k}: fixed-frame energy varies by {spread:e}"
+        );
+    }
+    let slope = 0.009_f64;
+    for (k, pre) in d.events.pre.chunks(4).enumerate() {
+        let (th, thd) = (pre[0], pre[1]);
+        let loss = 0.5 * thd * thd * (2.0 * th).sin().powi(2);
+        let released = 2.0 * th.sin().abs() * slope.sin();
+        let at = |s: f64| (0..e.len()).find(|&i| step[i] == s).unwrap();
+        let drop = fixed[at(k as f64)] - fixed[at(k as f64 + 1.0)];
+        assert!(
+            (drop - loss).abs() < 1e-9,
+            "step {k}: drop {drop:e}, strike loss {loss:e}"
+        );
+        assert!(
+            (loss - released).abs() < 1e-9,
+            "step {k}: {loss:e} vs {released:e}"
+        );
+        assert!((e[at(k as f64)] - e[at(k as f64 + 1.0)]).abs() < 1e-9);
+    }
+}

@@ -211,3 +211,54 @@ pub fn run(
 ) -> Result<Trajectory, InputError> {
     trajectory::simulate(m.walker.as_ref(), &walk.x0, opts).map_err(|e| InputError(e.to_string()))
 }
+
+/// The total mechanical energy of a walk in one fixed frame: the model's own energy has its
+/// potential zero at the current stance foot, which moves down the slope at every heel strike,
+/// so its series jumps up by the drop at each foot change. Measured from the first stance
+/// foot instead, `E_fixed = E − m g Σ_{k<j} L_k sin γ` on step `j`, with `L_k` the step
+/// length of step `k` (the distance between the feet at its heel strike, along the slope) and
+/// `m g` the total weight (the model's [`Scales`](pdw_model::Scales)): constant between
+/// impacts, it drops at each impact by what the impact dissipates — on a gait, by the
+/// `m g L sin γ` one step on the slope releases (Garcia et al. 1998 §4: the energy balance of
+/// a passive gait).
+///
+/// `None` where the model defines no energy or scales, and for round feet (the contact point
+/// rolls along the foot during stance, so the stance frame's origin is not a fixed point of
+/// the slope between strikes).
+pub fn fixed_frame_energy(m: &BuiltModel, tr: &Trajectory) -> Option<Vec<f64>> {
+    let w = m.walker.as_ref();
+    let (energy, scales) = (tr.energy.as_ref()?, w.scales()?);
+    let round = m
+        .params
+        .iter()
+        .any(|(n, v)| n == "foot_radius" && *v != 0.0);
+    let slope = m.slope();
+    if round || !slope.is_finite() {
+        return None;
+    }
+    // Height of the stance foot below the first one after each completed step.
+    let drops: Vec<f64> = tr
+        .events
+        .iter()
+        .filter(|e| e.ends_step)
+        .scan(0.0, |h, e| {
+            *h += w.step_length(&e.pre) * slope.sin();
+            Some(*h)
+        })
+        .collect();
+    let weight = scales.force();
+    Some(
+        energy
+            .iter()
+            .zip(&tr.step)
+            .map(|(&e, &j)| {
+                let below = (j as usize)
+                    .checked_sub(1)
+                    .and_then(|k| drops.get(k))
+                    .copied()
+                    .unwrap_or(0.0);
+                e - weight * below
+            })
+            .collect(),
+    )
+}

@@ -265,6 +265,9 @@ pub fn to_store(
     if let Some(e) = &tr.energy {
         columns.push(TrajColumn::scalar("energy", &u.energy, e.clone()));
     }
+    if let Some(e) = pdw::simulate::fixed_frame_energy(m, tr) {
+        columns.push(TrajColumn::scalar("energy_fixed_frame", &u.energy, e));
+    }
     let ev = &tr.events;
     let events = TrajEvents {
         t: ev.iter().map(|e| e.t).collect(),
