@@ -88,7 +88,7 @@ pub mod trajectory;
 
 pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
-    BasinMetrics, BasinWriter, BLOCK_ROWS, NOT_COMPUTED,
+    BasinMetrics, BasinWriter, ZAxis, BLOCK_ROWS, NOT_COMPUTED,
 };
 pub use curve::{plot_curve, read_curve_points, write_curve, CurveData, RegionMap, CURVE_FORMAT};
 pub use design::{
@@ -101,7 +101,7 @@ pub use plot::{
     plot_basin_stability, plot_bifurcation, plot_lines, Frame,
 };
 pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
-pub use shard::{merge, shard_rows, ShardSpec};
+pub use shard::{grid_shard_rows, merge, shard_rows, ShardSpec};
 pub use stability::{
     read_stability, write_stability, StabilityAttractor, StabilityData, STABILITY_FORMAT,
 };
