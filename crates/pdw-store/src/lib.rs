@@ -47,6 +47,13 @@
 //! /metrics          attrs basin_entropy, boundary_entropy, entropy_box, fractions (JSON object
 //!                   name → fraction), fraction_NAME (one f64 per outcome)
 //! ```
+//! A 3-D grid ([`BasinHeader::z`]) adds `/grid/z` (f64 [nz], attr `name`; the scale of
+//! dimension 0) and stores its cells in z, y, x order: outcome and strides [nz, ny, nx], final
+//! [nz, ny, nx, d], chunked by blocks of [`BLOCK_ROWS`] rows within one z-slice; rows_done is
+//! [nz·ny] and block_digest [nz·⌈ny/16⌉] over the grid's (z, y) rows, row `k·ny + i` for
+//! `(z[k], y[i])`. `/slice` then also records the z-slice the picture draws (attrs `z`,
+//! `z_index`, `z_value`; dataset `outcome` [ny, nx]; see
+//! [`provenance::write_slice_view`]).
 //! Every dataset carries a `units` attribute (written by the caller through
 //! [`provenance::annotate`]; the writers do not know the model).
 //! `outcome`, `strides` and `final` are chunked by blocks of [`BLOCK_ROWS`] rows and
@@ -74,6 +81,8 @@
 //! ```
 
 pub mod basin;
+/// The ndarray crate of the arrays read and written here.
+pub use ndarray;
 pub mod curve;
 pub mod design;
 mod error;
