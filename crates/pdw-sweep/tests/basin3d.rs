@@ -93,7 +93,7 @@ fn every_z_slice_equals_the_2d_basin_with_z_fixed() {
     }
     // the 3-D fractions are the slices' mean (equal slices), and so is the pooled entropy
     // (one 5×5 box per 9×9 slice)
-    let m3 = d3.metrics.unwrap();
+    let m3 = d3.metrics.clone().unwrap();
     for (n, f) in &m3.fractions {
         assert!(
             (f - fractions_2d[n]).abs() < 1e-12,
@@ -171,7 +171,7 @@ fn shards_of_a_3d_grid_merged_and_a_resumed_run_equal_a_single_run() {
     let (a, b) = (read(&single), read(&merged));
     assert_eq!(b.header.z, a.header.z);
     assert_eq!(cells(&a, 0..60), cells(&b, 0..60));
-    let (ma, mb) = (a.metrics.unwrap(), b.metrics.unwrap());
+    let (ma, mb) = (a.metrics.clone().unwrap(), b.metrics.unwrap());
     assert_eq!(ma.fractions, mb.fractions);
     assert_eq!(ma.basin_entropy.to_bits(), mb.basin_entropy.to_bits());
     // an interrupted run (killed by SIGTERM after its 23rd row: mid-block of slice 1) resumed
