@@ -663,15 +663,7 @@ fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
     let yd = ds(&grid, "y")?;
     let x = xd.read_raw::<f64>().at(path, "reading /grid/x")?;
     let y = yd.read_raw::<f64>().at(path, "reading /grid/y")?;
-    let z = if grid.link_exists("z") {
-        let zd = ds(&grid, "z")?;
-        Some(ZAxis {
-            name: get_str(path, KIND, &zd, "name")?,
-            values: zd.read_raw::<f64>().at(path, "reading /grid/z")?,
-        })
-    } else {
-        None
-    };
+    let z = read_z_axis(path, &grid)?;
     let outcome = ds(&basin, "outcome")?;
     let fin = ds(&basin, "final")?;
     let names_text = get_str(path, KIND, &fin, "names")?;
@@ -732,6 +724,20 @@ fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
     }
     h.validate().map_err(|e| format_err(path, e.to_string()))?;
     Ok(h)
+}
+
+/// `/grid/z` of a 3-D file (`None` for a 2-D one).
+fn read_z_axis(path: &Path, grid: &Group) -> Result<Option<ZAxis>> {
+    if !grid.link_exists("z") {
+        return Ok(None);
+    }
+    let zd = grid
+        .dataset("z")
+        .map_err(|e| format_err(path, format!("dataset /grid/z: {e}")))?;
+    Ok(Some(ZAxis {
+        name: get_str(path, KIND, &zd, "name")?,
+        values: zd.read_raw::<f64>().at(path, "reading /grid/z")?,
+    }))
 }
 
 fn read_rows_done(path: &Path, f: &File) -> Result<Vec<bool>> {
