@@ -102,9 +102,10 @@ def stride_outcomes(model: str = "simplest", **params: float) -> dict[int, str]:
 def basin(
     model: str = "simplest",
     slope: Optional[Union[float, str]] = None,
-    grid: Tuple[int, int] = (101, 101),
+    grid: Union[Tuple[int, int], Tuple[int, int, int]] = (101, 101),
     x: Optional[Tuple[str, float, float]] = None,
     y: Optional[Tuple[str, float, float]] = None,
+    z: Optional[Tuple[str, float, float]] = None,
     max_strides: int = 100,
     threads: int = 2,
     **params: float,
@@ -116,7 +117,9 @@ def basin(
     orbit's values. The attractors reached from the grid's box (period-k gaits, chaotic ones)
     are discovered first from a fixed seed set, then each cell is labelled by the attractor it
     reaches, a fall, `other`, `nonfinite` or `timeout`. Labels, legend and attractors equal the
-    CLI's for the same grid, for any `threads`.
+    CLI's for the same grid, for any `threads`. With `z = (name, lo, hi)` (a third section
+    coordinate) and `grid = (nx, ny, nz)` the grid is 3-D and the outcome array (nz, ny, nx),
+    the order of the CLI file's `/basin/outcome`; metrics then has `z_name` and `z` (nz,) too.
 
     Returns (outcome codes (ny, nx) uint8, legend {code: name}: the fixed codes (0 `gait` — the
     stable period-one gait, if there is one —, falls, other, nonfinite, timeout, ...) and one

@@ -93,15 +93,21 @@ fn gib(b: u64) -> String {
 
 /// Refuses a basin grid held whole in memory (cells, results, the outcome array) that would
 /// need more than 80 % of the memory available, naming the estimate.
-fn check_basin_memory(nx: usize, ny: usize, d: usize) -> PyResult<()> {
+fn check_basin_memory(grid: &[usize], d: usize) -> PyResult<()> {
     // per cell: its start state and its result (two vectors of d values with their headers
     // and allocations), the outcome byte twice (vector and numpy array)
     let per_cell = 2 * (24 + 16 + 8 * d as u64) + 8 + 2;
-    let need = nx as u64 * ny as u64 * per_cell + (64 << 20);
+    let cells = grid.iter().fold(1u64, |a, &n| a.saturating_mul(n as u64));
+    let need = cells.saturating_mul(per_cell).saturating_add(64 << 20);
     let have = pdw_limit::resources::memory_available();
     if need > have / 5 * 4 {
+        let g = grid
+            .iter()
+            .map(|n| n.to_string())
+            .collect::<Vec<_>>()
+            .join(", ");
         return Err(err(format!(
-            "grid: ({nx}, {ny}) needs about {} of memory, more than the {} available (80 % of \
+            "grid: ({g}) needs about {} of memory, more than the {} available (80 % of \
              {}); use a smaller grid, or the command line's `pdw-sweep basin`, which streams rows \
              to a file and splits across machines with --shard",
             gib(need),
@@ -799,24 +805,26 @@ fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, Py
     Ok(d)
 }
 
-/// `basin(model="simplest", slope=None, grid=(nx, ny), x=None, y=None, max_strides=100,
-/// threads=2, **params)`: every cell labelled by the attractor it reaches, as `pdw-sweep basin`
-/// (the same setup, [`pdw::basin`]).
+/// `basin(model="simplest", slope=None, grid=(nx, ny), x=None, y=None, z=None,
+/// max_strides=100, threads=2, **params)`: every cell labelled by the attractor it reaches, as
+/// `pdw-sweep basin` (the same setup, [`pdw::basin`]); with `z=(name, lo, hi)` and
+/// `grid=(nx, ny, nz)` a 3-D grid, returned as an (nz × ny × nx) array.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, grid=(101, 101), x=None, y=None, max_strides=100, threads=THREADS, **params))]
+#[pyo3(signature = (model="simplest", slope=None, grid=vec![101, 101], x=None, y=None, z=None, max_strides=100, threads=THREADS, **params))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn basin<'py>(
     py: Python<'py>,
     model: &str,
     slope: Option<&Bound<'py, PyAny>>,
-    grid: (usize, usize),
+    grid: Vec<usize>,
     x: Option<(String, f64, f64)>,
     y: Option<(String, f64, f64)>,
+    z: Option<(String, f64, f64)>,
     max_strides: u32,
     threads: usize,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
-    let (m, req) = basin_request(model, slope, grid, (x, y), max_strides, threads, params)?;
+    let (m, req) = basin_request(model, slope, &grid, [x, y, z], max_strides, threads, params)?;
     let gaits = interruptible(py, || pdw::basin::find_gaits(&m).map_err(err))?;
     let plan = basin_plan(&m, &req, gaits)?;
     let (outcome, metrics, set) = interruptible(py, || classify_basin(&m, &plan, threads))?;
@@ -832,36 +840,65 @@ type GivenAxis = Option<(String, f64, f64)>;
 fn basin_request(
     model: &str,
     slope: Option<&Bound<'_, PyAny>>,
-    grid: (usize, usize),
-    (x, y): (GivenAxis, GivenAxis),
+    grid: &[usize],
+    [x, y, z]: [GivenAxis; 3],
     max_strides: u32,
     threads: usize,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(Model, BasinRequest)> {
-    let (nx, ny) = grid;
-    if nx == 0 || ny == 0 || nx.saturating_mul(ny) > 1_000_000_000 {
-        return Err(err(format!(
-            "grid: ({nx}, {ny}) must have positive sizes and at most 10^9 cells"
-        )));
-    }
+    let (nx, ny, nz) = basin_grid(grid, z.is_some())?;
     let max_strides = pdw::basin::check_max_strides(max_strides, "max_strides").map_err(err)?;
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let m = build_kw(model, slope, params)?;
     pdw::basin::check_section(&m.info, "grid").map_err(err)?;
-    check_basin_memory(nx, ny, m.info.section_names.len())?;
+    check_basin_memory(grid, m.info.section_names.len())?;
     let axis = |given: GivenAxis, which: &str| {
         let range = given.map(|(name, lo, hi)| pdw::input::AxisRange { name, lo, hi });
         pdw::basin::resolve_axis(&m.info, range, which).map_err(err)
     };
+    let z = axis(z, "z")?.zip(nz);
     let req = BasinRequest {
-        grid,
+        grid: (nx, ny),
         x: axis(x, "x")?,
         y: axis(y, "y")?,
+        z,
         fixed: Vec::new(),
         max_strides,
         integrator: BasinOptions::default_integrator(),
     };
     Ok((m, req))
+}
+
+/// `grid` as (nx, ny) and nz: three sizes exactly when a z axis is given (`three_d`), each
+/// positive, at most 10⁹ cells in all.
+fn basin_grid(grid: &[usize], three_d: bool) -> PyResult<(usize, usize, Option<usize>)> {
+    let g = grid
+        .iter()
+        .map(|n| n.to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    match (grid.len(), three_d) {
+        (2, false) | (3, true) => {}
+        (3, false) => {
+            return Err(err(format!(
+                "grid: ({g}) has three sizes, but no z axis was given; give z=(name, lo, hi) \
+                 for a 3-D grid, or grid=(nx, ny)"
+            )))
+        }
+        (_, true) => {
+            return Err(err(format!(
+                "z needs a 3-D grid: grid=(nx, ny, nz), not ({g})"
+            )))
+        }
+        _ => return Err(err(format!("grid: ({g}) must be (nx, ny)"))),
+    }
+    let cells = grid.iter().fold(1usize, |a, &n| a.saturating_mul(n));
+    if grid.contains(&0) || cells > 1_000_000_000 {
+        return Err(err(format!(
+            "grid: ({g}) must have positive sizes and at most 10^9 cells"
+        )));
+    }
+    Ok((grid[0], grid[1], grid.get(2).copied()))
 }
 
 /// The grid of `req` around the gait (the stable one, else the first found; with both axes
@@ -880,7 +917,11 @@ fn basin_plan(m: &Model, req: &BasinRequest, gaits: pdw::basin::Gaits) -> PyResu
         }
         return Err(err(e));
     };
-    let flags = pdw::basin::AxisFlags { x: "x", y: "y" };
+    let flags = pdw::basin::AxisFlags {
+        x: "x",
+        y: "y",
+        z: "z",
+    };
     let bx =
         pdw::basin::choose_box(req, &m.info.section_names, &centre, flags, "grid").map_err(err)?;
     Ok(BasinPlan::new(req, bx, gaits, centre))
@@ -900,19 +941,21 @@ fn classify_basin(
     let (set, _) = plan.attractors(m, &pool).map_err(err)?;
     let fall = Outcome::of_fall;
     let problem = set.problem(m.walker.as_ref(), &fall);
-    let cells = plan.cells(&plan.ys);
+    let rows: Vec<usize> = (0..plan.bx.ny * plan.bx.nz).collect();
+    let cells = plan.row_cells(&rows);
     let mut res =
         lbasin::classify_cells(&problem, &cells, &plan.opts, &pool, &|_| {}).map_err(err)?;
     set.relabel(&mut res);
     let outcome: Vec<u8> = res.iter().map(|c| c.outcome).collect();
-    let (nx, ny) = (plan.bx.nx, plan.bx.ny);
-    let metrics =
-        lbasin::basin_metrics(&outcome, nx, ny, lbasin::DEFAULT_ENTROPY_BOX).map_err(err)?;
+    let (nx, ny, nz) = (plan.bx.nx, plan.bx.ny, plan.bx.nz);
+    let metrics = lbasin::basin_metrics_slices(&outcome, nx, ny, nz, lbasin::DEFAULT_ENTROPY_BOX)
+        .map_err(err)?;
     Ok((outcome, metrics, set))
 }
 
-/// `basin`'s result: the outcome array (ny × nx), the legend (code → name) and a dict of the
-/// metrics, axes, attractors and gait.
+/// `basin`'s result: the outcome array (ny × nx; nz × ny × nx for a 3-D grid), the legend
+/// (code → name) and a dict of the metrics, axes (`z_name`, `z` too for a 3-D grid),
+/// attractors and gait.
 fn basin_result<'py>(
     py: Python<'py>,
     m: &Model,
@@ -921,7 +964,17 @@ fn basin_result<'py>(
     metrics: &lbasin::BasinMetrics,
     set: &AttractorSet,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
-    let arr = Array2::from_shape_vec((plan.bx.ny, plan.bx.nx), outcome).map_err(err)?;
+    let (nx, ny, nz) = (plan.bx.nx, plan.bx.ny, plan.bx.nz);
+    let arr = match &plan.bx.z {
+        None => Array2::from_shape_vec((ny, nx), outcome)
+            .map_err(err)?
+            .into_pyarray(py)
+            .into_any(),
+        Some(_) => numpy::ndarray::Array3::from_shape_vec((nz, ny, nx), outcome)
+            .map_err(err)?
+            .into_pyarray(py)
+            .into_any(),
+    };
     let legend = PyDict::new(py);
     let fr = PyDict::new(py);
     for (c, name) in set.legend() {
@@ -942,6 +995,10 @@ fn basin_result<'py>(
     md.set_item("y_name", &m.info.section_names[plan.bx.y.index])?;
     md.set_item("x", plan.xs.clone().into_pyarray(py))?;
     md.set_item("y", plan.ys.clone().into_pyarray(py))?;
+    if let Some(z) = &plan.bx.z {
+        md.set_item("z_name", &m.info.section_names[z.index])?;
+        md.set_item("z", plan.zs.clone().into_pyarray(py))?;
+    }
     let atts = PyList::empty(py);
     for a in &set.attractors {
         atts.append(attractor_dict(py, a)?)?;
@@ -953,7 +1010,7 @@ fn basin_result<'py>(
         "gait_multipliers",
         gait.map(|fp| complex_array(py, &fp.multipliers)),
     )?;
-    Ok((arr.into_pyarray(py).into_any(), legend, md))
+    Ok((arr, legend, md))
 }
 
 fn bifurcation_dict<'py>(py: Python<'py>, bf: &Bifurcation) -> PyResult<Bound<'py, PyDict>> {

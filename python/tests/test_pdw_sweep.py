@@ -188,6 +188,41 @@ def test_basin_default_grid_without_a_stable_period_one_gait():
     assert "period-2" in legend.values()
 
 
+def test_3d_basin_equals_the_cli_file_and_refuses_bad_grids():
+    # A 3-D grid over the compass walker's three section coordinates: the (nz, ny, nx) array
+    # equals the CLI file's /basin/outcome, cell for cell, with the same legend and z axis.
+    exe = cli()
+    if exe is None:
+        pytest.skip("pdw-sweep binary not built")
+    h5py = pytest.importorskip("h5py")
+    axes = dict(x=("stance", 0.2, 0.34), y=("stance_rate", -1.37, -0.82),
+                z=("hip_rate", 0.4, 1.0))
+    outcome, legend, metrics = pdw.basin("compass", grid=(6, 5, 4), max_strides=60, **axes)
+    ref_outcome, ref_legend, ref_atts = cli_basin(
+        exe, h5py, ["--model", "compass", "--grid", "6x5x4", "--x", "stance=0.2:0.34",
+                    "--y", "stance_rate=-1.37:-0.82", "--z", "hip_rate=0.4:1.0",
+                    "--max-strides", "60"])
+    assert outcome.shape == (4, 5, 6) and ref_outcome.shape == (4, 5, 6)
+    np.testing.assert_array_equal(outcome, ref_outcome)
+    assert {int(k): v for k, v in legend.items() if k != 255} == \
+        {k: v for k, v in ref_legend.items() if k != 255}
+    assert {a["name"] for a in metrics["attractors"]} == set(ref_atts)
+    assert metrics["z_name"] == "hip_rate"
+    np.testing.assert_allclose(metrics["z"], [0.4, 0.6, 0.8, 1.0], rtol=0, atol=1e-15)
+    # the fractions count every cell of the 3-D grid
+    for name, f in metrics["fractions"].items():
+        code = [c for c, n in legend.items() if n == name][0]
+        assert f == np.count_nonzero(outcome == code) / outcome.size
+    with pytest.raises(ValueError, match="three sizes, but no z axis"):
+        pdw.basin("compass", grid=(5, 5, 3))
+    with pytest.raises(ValueError, match="z needs a 3-D grid"):
+        pdw.basin("compass", grid=(5, 5), z=("hip_rate", 0.4, 1.0))
+    with pytest.raises(ValueError, match="already the x axis"):
+        pdw.basin("compass", grid=(5, 5, 3), x=("stance", 0.2, 0.3), z=("stance", 0.1, 0.2))
+    with pytest.raises(ValueError, match="needs about .* of memory"):
+        pdw.basin("compass", grid=(1000, 1000, 1000), z=("hip_rate", 0.4, 1.0))
+
+
 def test_continuation_finds_garcia_period_doubling():
     branches = pdw.continuation("simplest", "slope", 0.010, 0.019, points=40)
     main = branches[0]

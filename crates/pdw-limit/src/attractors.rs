@@ -461,7 +461,9 @@ pub fn grid_centre(walker: &dyn Walker, found: &[Found], axes_given: bool) -> Op
 /// (the period-one orbits `found`, with the `fixed` coordinates applied, and a
 /// [`DiscoveryOptions::default`] lattice over the box), the selected `gait` first; periodic
 /// orbits are confirmed on the fixed-point search's integrator
-/// ([`crate::gaits::FIXEDPOINT_INTEGRATOR_TOL`]). Returns the set and the seeds' count. Every
+/// ([`crate::gaits::FIXEDPOINT_INTEGRATOR_TOL`]). A 3-D box (`z`: its coordinate and the
+/// values it is seeded at) repeats the lattice at each of those values, in their order, after
+/// the period-one seeds. Returns the set and the seeds' count. Every
 /// basin (the CLI's `basin`, `basin --over`, Python's `basin`) labels a box with this, so they
 /// agree cell for cell.
 #[allow(clippy::too_many_arguments)]
@@ -473,6 +475,7 @@ pub fn box_attractors(
     base: &[f64],
     (ix, xr): (usize, (f64, f64)),
     (iy, yr): (usize, (f64, f64)),
+    z: Option<(usize, &[f64])>,
     opts: &BasinOptions,
     pool: &rayon::ThreadPool,
 ) -> Result<(AttractorSet, usize), LimitError> {
@@ -488,7 +491,19 @@ pub fn box_attractors(
             s
         })
         .collect();
-    let seeds = seed_set(base, ix, xr, iy, yr, disc.lattice, &extra);
+    let seeds = match z {
+        None => seed_set(base, ix, xr, iy, yr, disc.lattice, &extra),
+        Some((iz, levels)) => {
+            let mut seeds = Vec::new();
+            for (k, &v) in levels.iter().enumerate() {
+                let mut b = base.to_vec();
+                b[iz] = v;
+                let first = if k == 0 { &extra[..] } else { &[] };
+                seeds.extend(seed_set(&b, ix, xr, iy, yr, disc.lattice, first));
+            }
+            seeds
+        }
+    };
     let step = |x: &[f64]| walker.step_length(x);
     let newton_map = StrideMap::new(
         walker,

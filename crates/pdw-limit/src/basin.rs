@@ -909,3 +909,41 @@ pub fn basin_metrics(
         boundary_boxes: nb,
     })
 }
+
+/// [`basin_metrics`] of a 3-D grid of `nz` slices of `ny × nx` cells (`outcomes` slice by
+/// slice, each row-major): the fractions over every cell, and the basin entropies of Daza et
+/// al. 2016 (Sci. Rep. 6:31416, eqs. 3–4) over the `box_size × box_size` boxes of every
+/// z-slice pooled — S_b the mean over all of them, S_bb over all that hold more than one
+/// outcome. With `nz = 1` it is [`basin_metrics`].
+pub fn basin_metrics_slices(
+    outcomes: &[u8],
+    nx: usize,
+    ny: usize,
+    nz: usize,
+    box_size: usize,
+) -> Result<BasinMetrics, LimitError> {
+    if nz == 0 || outcomes.len() != nx * ny * nz {
+        return Err(LimitError::InvalidOption {
+            name: "outcomes",
+            value: outcomes.len() as f64,
+            allowed: "must hold nx·ny·nz > 0 codes",
+        });
+    }
+    if nz == 1 {
+        return basin_metrics(outcomes, nx, ny, box_size);
+    }
+    let mut all = basin_metrics(outcomes, nx, ny * nz, box_size)?;
+    let (mut sum, mut sum_b, mut boxes, mut nb) = (0.0, 0.0, 0, 0);
+    for slice in outcomes.chunks(nx * ny) {
+        let m = basin_metrics(slice, nx, ny, box_size)?;
+        sum += m.basin_entropy * m.boxes as f64;
+        sum_b += m.boundary_entropy * m.boundary_boxes as f64;
+        boxes += m.boxes;
+        nb += m.boundary_boxes;
+    }
+    all.basin_entropy = if boxes > 0 { sum / boxes as f64 } else { 0.0 };
+    all.boundary_entropy = if nb > 0 { sum_b / nb as f64 } else { 0.0 };
+    all.boxes = boxes;
+    all.boundary_boxes = nb;
+    Ok(all)
+}

@@ -37,9 +37,9 @@ pub use attractors::{
     DiscoveryOptions,
 };
 pub use basin::{
-    basin_metrics, classify_cells, classify_cells_scalar, decay_exponent, grid_cells, legend,
-    linspace, stands_still, state_scale, walk_dies_out, BasinDriver, BasinMetrics, BasinOptions,
-    BasinProblem, CellResult, Outcome, STANDSTILL_WINDOW,
+    basin_metrics, basin_metrics_slices, classify_cells, classify_cells_scalar, decay_exponent,
+    grid_cells, legend, linspace, stands_still, state_scale, walk_dies_out, BasinDriver,
+    BasinMetrics, BasinOptions, BasinProblem, CellResult, Outcome, STANDSTILL_WINDOW,
 };
 pub use codim2::{
     follow_curve, region_map, Codim2Kind, Codim2Options, Curve, CurveEnd, CurvePoint, CurveStart,

@@ -38,6 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         x: lin(0.15, 0.25, nx),
         y_name: "thetadot".into(),
         y: lin(-0.25, -0.15, ny),
+        z: None,
         state_names: vec!["theta".into(), "thetadot".into()],
         legend: vec![
             (0, "gait".into()),

@@ -34,13 +34,13 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use hdf5::{Dataset, File, Group};
-use ndarray::{s, Array2, Array3, ArrayView2, ArrayView3};
+use ndarray::{s, Array2, Array3, ArrayView3};
 
 use crate::h5util::{
     create_file, ensure_space, get_attr, get_str, has_attr, lock_existing, open_file, open_locked,
     rename_into_place, set_attr, set_str, temp_sibling, At, OutputLock,
 };
-use crate::shard::{shard_rows, ShardSpec};
+use crate::shard::{grid_shard_rows, ShardSpec};
 use crate::{time, Result, StoreError};
 
 /// Value of the root attribute `format` of a basin file.
@@ -87,6 +87,9 @@ pub struct BasinHeader {
     pub y_name: String,
     /// Grid ordinates (ny), finite.
     pub y: Vec<f64>,
+    /// The third axis of a 3-D grid (`None`: a 2-D grid). Its cells are stored `[nz, ny, nx]`,
+    /// and the writer's rows are the grid's (z, y) pairs, row `k·ny + i` for `(z[k], y[i])`.
+    pub z: Option<ZAxis>,
     /// Names of the d section coordinates stored in `/basin/final`.
     pub state_names: Vec<String>,
     /// Outcome codes and names, e.g. `(0, "gait")`; codes unique and not [`NOT_COMPUTED`].
@@ -104,6 +107,19 @@ impl BasinHeader {
     pub fn ny(&self) -> usize {
         self.y.len()
     }
+    /// Number of z-slices: 1 for a 2-D grid.
+    pub fn nz(&self) -> usize {
+        self.z.as_ref().map_or(1, |z| z.values.len())
+    }
+    /// Rows of nx cells the writer handles: ny for a 2-D grid, nz·ny for a 3-D one (row
+    /// `k·ny + i` is `(z[k], y[i])`).
+    pub fn rows(&self) -> usize {
+        self.nz() * self.ny()
+    }
+    /// Chunk blocks of the grid ([`block_count`]).
+    pub fn blocks(&self) -> usize {
+        block_count(self.ny(), self.nz())
+    }
     /// Dimension of the stored section state.
     pub fn d(&self) -> usize {
         self.state_names.len()
@@ -118,8 +134,8 @@ impl BasinHeader {
     /// Rows this file is responsible for: all rows, or its shard's.
     pub fn own_rows(&self) -> Vec<usize> {
         match self.shard {
-            None => (0..self.ny()).collect(),
-            Some(s) => shard_rows(self.ny(), s.index, s.count).unwrap_or_default(),
+            None => (0..self.rows()).collect(),
+            Some(s) => grid_shard_rows(self.ny(), self.nz(), s.index, s.count).unwrap_or_default(),
         }
     }
 
@@ -144,6 +160,9 @@ impl BasinHeader {
                     format!("{axis} axis ({name}) holds {bad}"),
                 ));
             }
+        }
+        if let Some(z) = &self.z {
+            z.validate(&self.x_name, &self.y_name)?;
         }
         if self.state_names.is_empty() || self.state_names.iter().any(|n| n.is_empty()) {
             return Err(StoreError::invalid(
@@ -278,6 +297,7 @@ impl BasinHeader {
                 return Err(mism(&format!("{axis} grid"), desc(fv), desc(ev)));
             }
         }
+        check_z_matches(&found.z, &self.z, path)?;
         if found.state_names != self.state_names {
             return Err(mism(
                 "section coordinates",
@@ -297,6 +317,164 @@ impl BasinHeader {
             return Err(mism("shard", show(found.shard), show(self.shard)));
         }
         Ok(())
+    }
+}
+
+/// The third axis of a 3-D basin grid: a section coordinate and its values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ZAxis {
+    /// Section coordinate along z, e.g. `"hip_rate"`.
+    pub name: String,
+    /// The nz values of the grid's z-slices, finite.
+    pub values: Vec<f64>,
+}
+
+impl ZAxis {
+    /// Rejects an empty name or values, a non-finite value, and a coordinate already an axis.
+    fn validate(&self, x: &str, y: &str) -> Result<()> {
+        let bad = |d: String| Err(StoreError::invalid("grid", d));
+        if self.name.is_empty() {
+            return bad("z axis has no name".into());
+        }
+        if self.values.is_empty() {
+            return bad(format!("z axis ({}) has no points", self.name));
+        }
+        if let Some(v) = self.values.iter().find(|a| !a.is_finite()) {
+            return bad(format!("z axis ({}) holds {v}", self.name));
+        }
+        if self.name == x || self.name == y {
+            return bad(format!("z axis ({}) is also the x or y axis", self.name));
+        }
+        Ok(())
+    }
+}
+
+/// The first difference of the z axes `found` (read from `path`) and `expected`, as an error.
+fn check_z_matches(found: &Option<ZAxis>, expected: &Option<ZAxis>, path: &Path) -> Result<()> {
+    let show = |z: &Option<ZAxis>| match z {
+        None => "no z axis (a 2-D grid)".to_string(),
+        Some(z) => format!(
+            "{}: {} points {}..{}",
+            z.name,
+            z.values.len(),
+            z.values.first().copied().unwrap_or(f64::NAN),
+            z.values.last().copied().unwrap_or(f64::NAN)
+        ),
+    };
+    let bits = |z: &Option<ZAxis>| {
+        z.as_ref().map(|z| {
+            let v: Vec<u64> = z.values.iter().map(|a| a.to_bits()).collect();
+            (z.name.clone(), v)
+        })
+    };
+    if bits(found) == bits(expected) {
+        return Ok(());
+    }
+    Err(StoreError::Mismatch {
+        path: path.to_path_buf(),
+        field: "z grid".into(),
+        found: show(found),
+        expected: show(expected),
+    })
+}
+
+/// Chunk blocks of a grid of `nz` slices of `ny` rows: each slice is cut into blocks of
+/// [`BLOCK_ROWS`] rows (the last one shorter), so that no block spans two slices and each is
+/// one chunk of the datasets.
+pub fn block_count(ny: usize, nz: usize) -> usize {
+    nz * ny.div_ceil(BLOCK_ROWS)
+}
+
+/// The chunk block holding row `r` (row `k·ny + i` is slice k, row i) of a grid of `ny` rows
+/// per slice: `r / BLOCK_ROWS` for a 2-D grid.
+pub fn block_of(r: usize, ny: usize) -> usize {
+    (r / ny) * ny.div_ceil(BLOCK_ROWS) + (r % ny) / BLOCK_ROWS
+}
+
+/// Rows (as writer rows, `k·ny + i`) of chunk block `b` of a grid of `ny` rows per slice.
+pub fn block_range(b: usize, ny: usize) -> std::ops::Range<usize> {
+    let per_slice = ny.div_ceil(BLOCK_ROWS);
+    let (k, j) = (b / per_slice, b % per_slice);
+    k * ny + j * BLOCK_ROWS..k * ny + ((j + 1) * BLOCK_ROWS).min(ny)
+}
+
+/// Where a chunk block's cells are in the datasets: `[rows, nx(, d)]` for a 2-D grid,
+/// `[1, rows, nx(, d)]` within its z-slice for a 3-D one.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Layout {
+    ny: usize,
+    three_d: bool,
+}
+
+impl Layout {
+    pub(crate) fn of(h: &BasinHeader) -> Self {
+        Layout {
+            ny: h.ny(),
+            three_d: h.z.is_some(),
+        }
+    }
+
+    /// Block `b` of a dataset whose cells have the trailing dimensions `trailing` (`[nx]`,
+    /// `[nx, d]`): its hyperslab and its shape.
+    fn block(&self, b: usize, trailing: &[usize]) -> (hdf5::Selection, Vec<usize>) {
+        use hdf5::SliceOrIndex;
+        let r = block_range(b, self.ny);
+        let mut sel: Vec<SliceOrIndex> = Vec::new();
+        let mut shape = Vec::new();
+        if self.three_d {
+            let k = r.start / self.ny;
+            sel.push((k..k + 1).into());
+            sel.push((r.start - k * self.ny..r.end - k * self.ny).into());
+            shape.push(1);
+        } else {
+            sel.push(r.clone().into());
+        }
+        shape.push(r.len());
+        for &t in trailing {
+            sel.push((..).into());
+            shape.push(t);
+        }
+        (hdf5::Selection::new(hdf5::Hyperslab::from(sel)), shape)
+    }
+
+    /// The values of block `b` of `ds`, row-major.
+    pub(crate) fn read<T: hdf5::H5Type + Copy>(
+        &self,
+        ds: &Dataset,
+        b: usize,
+        trailing: &[usize],
+    ) -> hdf5::Result<Vec<T>> {
+        let (sel, _) = self.block(b, trailing);
+        let a = ds.read_slice::<T, _, ndarray::IxDyn>(sel)?;
+        Ok(a.iter().copied().collect())
+    }
+
+    /// Writes block `b` of `ds` from its values, row-major.
+    fn write<T: hdf5::H5Type>(
+        &self,
+        ds: &Dataset,
+        b: usize,
+        trailing: &[usize],
+        v: &[T],
+    ) -> hdf5::Result<()> {
+        let (sel, shape) = self.block(b, trailing);
+        let a = ndarray::ArrayViewD::from_shape(ndarray::IxDyn(&shape), v)
+            .map_err(|e| hdf5::Error::from(e.to_string()))?;
+        ds.write_slice(a, sel)
+    }
+
+    /// The shape of a whole dataset whose cells have the trailing dimensions `trailing`, and
+    /// its chunk (one block).
+    fn dataset(&self, nz: usize, trailing: &[usize]) -> (Vec<usize>, Vec<usize>) {
+        let rb = BLOCK_ROWS.min(self.ny);
+        let (mut shape, mut chunk) = if self.three_d {
+            (vec![nz, self.ny], vec![1, rb])
+        } else {
+            (vec![self.ny], vec![rb])
+        };
+        shape.extend_from_slice(trailing);
+        chunk.extend_from_slice(trailing);
+        (shape, chunk)
     }
 }
 
@@ -416,17 +594,30 @@ pub struct BasinData {
     pub elapsed_s: f64,
     /// Whether every row of the file (or shard) was written and `finish` was called.
     pub complete: bool,
-    /// (ny × nx) outcome codes; [`NOT_COMPUTED`] where no row was written.
+    /// (rows × nx) outcome codes; [`NOT_COMPUTED`] where no row was written. The rows of a
+    /// 3-D grid are its (z, y) pairs ([`BasinHeader::rows`]; [`BasinData::outcome_3d`]).
     pub outcome: Array2<u8>,
-    /// (ny × nx) strides until classified.
+    /// (rows × nx) strides until classified.
     pub strides: Array2<u16>,
-    /// (ny × nx × d) last section state.
+    /// (rows × nx × d) last section state.
     pub final_state: Array3<f64>,
-    /// (ny) whether each row is on disk.
+    /// (rows) whether each row is on disk.
     pub rows_done: Vec<bool>,
     /// Present once finished.
     pub metrics: Option<BasinMetrics>,
     pub attractors: Vec<Attractor>,
+}
+
+impl BasinData {
+    /// The outcome codes as (nz × ny × nx), the order of the file's dataset (nz = 1 for a 2-D
+    /// grid).
+    pub fn outcome_3d(&self) -> ArrayView3<'_, u8> {
+        let h = &self.header;
+        self.outcome
+            .view()
+            .into_shape_with_order((h.nz(), h.ny(), h.nx()))
+            .expect("rows = nz·ny")
+    }
 }
 
 pub(crate) fn legend_json(legend: &[(u8, String)]) -> String {
@@ -507,6 +698,7 @@ fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
     let yd = ds(&grid, "y")?;
     let x = xd.read_raw::<f64>().at(path, "reading /grid/x")?;
     let y = yd.read_raw::<f64>().at(path, "reading /grid/y")?;
+    let z = read_z_axis(path, &grid)?;
     let outcome = ds(&basin, "outcome")?;
     let fin = ds(&basin, "final")?;
     let names_text = get_str(path, KIND, &fin, "names")?;
@@ -539,16 +731,21 @@ fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
         x,
         y_name: get_str(path, KIND, &yd, "name")?,
         y,
+        z,
         state_names,
         legend: parse_legend(path, &get_str(path, KIND, &outcome, "legend")?)?,
         shard,
     };
-    let (nx, ny, d) = (h.nx(), h.ny(), h.d());
+    let (nx, d, lay) = (h.nx(), h.d(), Layout::of(&h));
     for (name, dset, want) in [
-        ("outcome", &outcome, vec![ny, nx]),
-        ("strides", &ds(&basin, "strides")?, vec![ny, nx]),
-        ("final", &fin, vec![ny, nx, d]),
-        ("rows_done", &ds(&basin, "rows_done")?, vec![ny]),
+        ("outcome", &outcome, lay.dataset(h.nz(), &[nx]).0),
+        (
+            "strides",
+            &ds(&basin, "strides")?,
+            lay.dataset(h.nz(), &[nx]).0,
+        ),
+        ("final", &fin, lay.dataset(h.nz(), &[nx, d]).0),
+        ("rows_done", &ds(&basin, "rows_done")?, vec![h.rows()]),
     ] {
         if dset.shape() != want {
             return Err(format_err(
@@ -562,6 +759,20 @@ fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
     }
     h.validate().map_err(|e| format_err(path, e.to_string()))?;
     Ok(h)
+}
+
+/// `/grid/z` of a 3-D file (`None` for a 2-D one).
+fn read_z_axis(path: &Path, grid: &Group) -> Result<Option<ZAxis>> {
+    if !grid.link_exists("z") {
+        return Ok(None);
+    }
+    let zd = grid
+        .dataset("z")
+        .map_err(|e| format_err(path, format!("dataset /grid/z: {e}")))?;
+    Ok(Some(ZAxis {
+        name: get_str(path, KIND, &zd, "name")?,
+        values: zd.read_raw::<f64>().at(path, "reading /grid/z")?,
+    }))
 }
 
 fn read_rows_done(path: &Path, f: &File) -> Result<Vec<bool>> {
@@ -659,7 +870,8 @@ impl BasinWriter {
     pub fn create(path: impl AsRef<Path>, header: &BasinHeader, force: bool) -> Result<Self> {
         let path = path.as_ref();
         header.validate()?;
-        let reserve = 64 * 1024 + 8 * (header.nx() + header.ny()) as u64 + header.ny() as u64;
+        let reserve =
+            64 * 1024 + 8 * (header.nx() + header.ny() + header.nz()) as u64 + header.rows() as u64;
         let (file, lock) = create_file(path, force, true, reserve)?;
         let mut made = Vec::new();
         match Self::init(path, &file, header, &mut made) {
@@ -670,7 +882,7 @@ impl BasinWriter {
                 poisoned: false,
                 damaged: Vec::new(),
                 header: header.clone(),
-                rows_done: vec![false; header.ny()],
+                rows_done: vec![false; header.rows()],
                 own: own_mask(header),
                 pending: BTreeMap::new(),
                 elapsed_before: 0.0,
@@ -696,7 +908,8 @@ impl BasinWriter {
         made: &mut Vec<hdf5::Location>,
     ) -> Result<Handles> {
         let file = file.clone();
-        let (nx, ny, d) = (h.nx(), h.ny(), h.d());
+        let (nx, d, nz, lay) = (h.nx(), h.d(), h.nz(), Layout::of(h));
+        let (rows, blocks) = (h.rows(), h.blocks());
         for (k, v) in [
             ("format", BASIN_FORMAT),
             ("version", env!("CARGO_PKG_VERSION")),
@@ -718,25 +931,15 @@ impl BasinWriter {
             set_attr(path, &file, "shard_index", &(s.index as u64))?;
             set_attr(path, &file, "shard_count", &(s.count as u64))?;
         }
-        let grid = file.create_group("grid").at(path, "creating /grid")?;
-        made.push((*grid).clone());
-        for (name, coord, v) in [("x", &h.x_name, &h.x), ("y", &h.y_name, &h.y)] {
-            let ds = grid
-                .new_dataset::<f64>()
-                .shape([v.len()])
-                .create(name)
-                .at(path, "creating the grid")?;
-            made.push((**ds).clone());
-            ds.write_raw(v.as_slice()).at(path, "writing the grid")?;
-            set_str(path, &ds, "name", coord)?;
-        }
+        write_grid(path, &file, h, made)?;
         let basin = file.create_group("basin").at(path, "creating /basin")?;
         made.push((*basin).clone());
-        let rb = BLOCK_ROWS.min(ny);
+        let (cells, cells_chunk) = lay.dataset(nz, &[nx]);
+        let (states, states_chunk) = lay.dataset(nz, &[nx, d]);
         let outcome = basin
             .new_dataset::<u8>()
-            .shape([ny, nx])
-            .chunk([rb, nx])
+            .shape(cells.clone())
+            .chunk(cells_chunk.clone())
             .deflate(DEFLATE_LEVEL)
             .fletcher32()
             .fill_value(NOT_COMPUTED)
@@ -746,8 +949,8 @@ impl BasinWriter {
         set_str(path, &outcome, "legend", &file_legend_json(&h.legend))?;
         let strides = basin
             .new_dataset::<u16>()
-            .shape([ny, nx])
-            .chunk([rb, nx])
+            .shape(cells)
+            .chunk(cells_chunk)
             .shuffle()
             .deflate(DEFLATE_LEVEL)
             .fletcher32()
@@ -756,8 +959,8 @@ impl BasinWriter {
         made.push((**strides).clone());
         let final_state = basin
             .new_dataset::<f64>()
-            .shape([ny, nx, d])
-            .chunk([rb, nx, d])
+            .shape(states)
+            .chunk(states_chunk)
             .shuffle()
             .deflate(DEFLATE_LEVEL)
             .fletcher32()
@@ -770,21 +973,21 @@ impl BasinWriter {
         set_str(path, &final_state, "description", FINAL_DESCRIPTION)?;
         let rows_done_ds = basin
             .new_dataset::<u8>()
-            .shape([ny])
+            .shape([rows])
             .create("rows_done")
             .at(path, "creating /basin/rows_done")?;
         made.push((**rows_done_ds).clone());
         rows_done_ds
-            .write_raw(&vec![0u8; ny])
+            .write_raw(&vec![0u8; rows])
             .at(path, "writing /basin/rows_done")?;
         let digest_ds = basin
             .new_dataset::<u64>()
-            .shape([ny.div_ceil(BLOCK_ROWS)])
+            .shape([blocks])
             .create("block_digest")
             .at(path, "creating /basin/block_digest")?;
         made.push((**digest_ds).clone());
         digest_ds
-            .write_raw(&vec![0u64; ny.div_ceil(BLOCK_ROWS)])
+            .write_raw(&vec![0u64; blocks])
             .at(path, "writing /basin/block_digest")?;
         set_str(path, &digest_ds, "description", DIGEST_DESCRIPTION)?;
         file.flush().at(path, "flushing")?;
@@ -823,8 +1026,8 @@ impl BasinWriter {
         // A partly marked block is one a stopped run wrote with the rows it had; it is checked
         // against its digest like a whole one. Files without digests were written by versions
         // that wrote whole blocks only: a partly marked block there is redone whole.
-        if !matches!(read_digests(&old, found.ny()), Some(Some(_))) {
-            for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
+        if !matches!(read_digests(&old, found.blocks()), Some(Some(_))) {
+            for b in 0..found.blocks() {
                 let r = block_range(b, found.ny());
                 if !rows_done[r.clone()].iter().all(|d| *d) {
                     rows_done[r].iter_mut().for_each(|d| *d = false);
@@ -849,14 +1052,14 @@ impl BasinWriter {
             });
         }
         for &b in &damaged {
-            let r = block_range(b, expected.ny());
+            let r = block_range(b, found.ny());
             rows_done[r].iter_mut().for_each(|d| *d = false);
         }
         // The rows of partly marked blocks go back into memory, to be written with the rest of
         // their block (or again when this run stops): completing the chunk in place would
         // write it a second time (see the module's notes on crash safety).
         let mut pending = BTreeMap::new();
-        for b in 0..found.ny().div_ceil(BLOCK_ROWS) {
+        for b in 0..found.blocks() {
             let r = block_range(b, found.ny());
             let marked = rows_done[r.clone()].to_vec();
             if marked.iter().any(|d| *d) && !marked.iter().all(|d| *d) {
@@ -874,8 +1077,8 @@ impl BasinWriter {
         // kill during the rebuild loses nothing.
         let tmp = temp_sibling(path);
         let reserve = 64 * 1024
-            + 8 * (found.nx() + found.ny()) as u64
-            + found.ny() as u64
+            + 8 * (found.nx() + found.ny() + found.nz()) as u64
+            + found.rows() as u64
             + std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
         let (file, lock) = create_file(&tmp, true, true, reserve)?;
         let mut made = Vec::new();
@@ -1003,16 +1206,18 @@ impl BasinWriter {
     /// held in memory in an incomplete block (handed to [`write_rows`](Self::write_rows), or
     /// taken back by [`resume`](Self::resume) from a block written before it was complete).
     pub fn rows_todo(&self) -> Vec<usize> {
-        (0..self.header.ny())
+        (0..self.header.rows())
             .filter(|&i| self.own[i] && !self.rows_done[i] && !self.held(i))
             .collect()
     }
 
     /// Whether row `r` is held in memory in an incomplete block.
     fn held(&self, r: usize) -> bool {
+        let ny = self.header.ny();
+        let b = block_of(r, ny);
         self.pending
-            .get(&(r / BLOCK_ROWS))
-            .is_some_and(|pb| pb.have[r % BLOCK_ROWS])
+            .get(&b)
+            .is_some_and(|pb| pb.have[r - block_range(b, ny).start])
     }
 
     /// Hands over rows `row0 .. row0 + k`; every chunk block they complete is written and
@@ -1033,6 +1238,7 @@ impl BasinWriter {
         final_state: &[f64],
     ) -> Result<usize> {
         let (nx, ny, d) = (self.header.nx(), self.header.ny(), self.header.d());
+        let rows = self.header.rows();
         if outcome.is_empty() || (outcome.len() / nx) * nx != outcome.len() {
             return Err(StoreError::invalid(
                 "row block",
@@ -1055,10 +1261,10 @@ impl BasinWriter {
                 ),
             ));
         }
-        if row0 + k > ny {
+        if row0 + k > rows {
             return Err(StoreError::invalid(
                 "row block",
-                format!("rows {row0}..{} outside the grid's {ny} rows", row0 + k),
+                format!("rows {row0}..{} outside the grid's {rows} rows", row0 + k),
             ));
         }
         if let Some(r) = (row0..row0 + k).find(|&r| !self.own[r]) {
@@ -1087,7 +1293,7 @@ impl BasinWriter {
         }
         let mut complete = Vec::new();
         for r in row0..row0 + k {
-            let b = r / BLOCK_ROWS;
+            let b = block_of(r, ny);
             let range = block_range(b, ny);
             let kb = range.len();
             let pb = self
@@ -1141,22 +1347,16 @@ impl BasinWriter {
     /// Writes one chunk block, flushes, marks its received rows done (`pb.have`; all of them for
     /// a complete block), flushes. Returns the rows marked.
     fn write_block(&mut self, b: usize, pb: &PendingBlock) -> Result<usize> {
-        let (nx, d) = (self.header.nx(), self.header.d());
+        let (nx, d, lay) = (self.header.nx(), self.header.d(), Layout::of(&self.header));
         let range = block_range(b, self.header.ny());
-        let (r0, r1, k) = (range.start, range.end, range.len());
+        let (r0, r1) = (range.start, range.end);
         let p = &self.path;
         let h = self.h.as_ref().expect("writer is open");
-        let o = ArrayView2::from_shape((k, nx), &pb.outcome).expect("block shape");
-        let st = ArrayView2::from_shape((k, nx), &pb.strides).expect("block shape");
-        let fs = ArrayView3::from_shape((k, nx, d), &pb.final_state).expect("block shape");
-        h.outcome
-            .write_slice(o, s![r0..r1, ..])
+        lay.write(&h.outcome, b, &[nx], &pb.outcome)
             .at(p, "writing /basin/outcome")?;
-        h.strides
-            .write_slice(st, s![r0..r1, ..])
+        lay.write(&h.strides, b, &[nx], &pb.strides)
             .at(p, "writing /basin/strides")?;
-        h.final_state
-            .write_slice(fs, s![r0..r1, .., ..])
+        lay.write(&h.final_state, b, &[nx, d], &pb.final_state)
             .at(p, "writing /basin/final")?;
         set_attr(p, &h.file, "elapsed_s", &self.elapsed())?;
         h.file.flush().at(p, "flushing")?;
@@ -1177,13 +1377,17 @@ impl BasinWriter {
         Ok(pb.have.iter().filter(|&&h| h).count())
     }
 
-    /// Reads back the (ny × nx) outcome codes written so far ([`NOT_COMPUTED`] elsewhere), e.g.
-    /// to compute metrics before [`finish`](Self::finish).
+    /// Reads back the (rows × nx) outcome codes written so far ([`NOT_COMPUTED`] elsewhere),
+    /// e.g. to compute metrics before [`finish`](Self::finish); a 3-D grid's rows are its
+    /// (z, y) pairs ([`BasinHeader::rows`]).
     pub fn read_outcome(&self) -> Result<Array2<u8>> {
-        self.h()
+        let v = self
+            .h()
             .outcome
-            .read_2d::<u8>()
-            .at(&self.path, "reading /basin/outcome")
+            .read_raw::<u8>()
+            .at(&self.path, "reading /basin/outcome")?;
+        Array2::from_shape_vec((self.header.rows(), self.header.nx()), v)
+            .map_err(|e| format_err(&self.path, format!("/basin/outcome: {e}")))
     }
 
     pub(crate) fn set_elapsed_before(&mut self, s: f64) {
@@ -1215,7 +1419,7 @@ impl BasinWriter {
     /// Every row of the file (or shard) must be on disk ([`StoreError::Incomplete`] otherwise).
     pub fn finish(mut self, metrics: &BasinMetrics, attractors: &[Attractor]) -> Result<()> {
         let expected = self.own.iter().filter(|b| **b).count();
-        let done = (0..self.header.ny())
+        let done = (0..self.header.rows())
             .filter(|&i| self.own[i] && self.rows_done[i])
             .count();
         if done < expected {
@@ -1239,6 +1443,32 @@ impl BasinWriter {
         })();
         self.close_after(r)
     }
+}
+
+/// `/grid`: the axes' values, each with its coordinate's `name` (`z` only for a 3-D grid).
+fn write_grid(
+    path: &Path,
+    file: &File,
+    h: &BasinHeader,
+    made: &mut Vec<hdf5::Location>,
+) -> Result<()> {
+    let grid = file.create_group("grid").at(path, "creating /grid")?;
+    made.push((*grid).clone());
+    let mut axes = vec![("x", &h.x_name, &h.x), ("y", &h.y_name, &h.y)];
+    if let Some(z) = &h.z {
+        axes.push(("z", &z.name, &z.values));
+    }
+    for (name, coord, v) in axes {
+        let ds = grid
+            .new_dataset::<f64>()
+            .shape([v.len()])
+            .create(name)
+            .at(path, "creating the grid")?;
+        made.push((**ds).clone());
+        ds.write_raw(v.as_slice()).at(path, "writing the grid")?;
+        set_str(path, &ds, "name", coord)?;
+    }
+    Ok(())
 }
 
 /// Rows of one chunk block received so far (or, after [`BasinWriter::resume`], found on disk in
@@ -1272,7 +1502,7 @@ impl PendingBlock {
 /// outside the legend (e.g. the fill value of a chunk never written).
 fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
     let Ok(basin) = f.group("basin") else {
-        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+        return (0..h.blocks()).collect();
     };
     let (o, st, fs) = (
         basin.dataset("outcome"),
@@ -1280,7 +1510,7 @@ fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
         basin.dataset("final"),
     );
     let (Ok(o), Ok(st), Ok(fs)) = (o, st, fs) else {
-        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+        return (0..h.blocks()).collect();
     };
     // Type and filter pipeline as written (a damaged datatype or filter message reads back
     // different values without any error): otherwise every block is suspect. Files from
@@ -1303,37 +1533,35 @@ fn damaged_blocks(f: &File, h: &BasinHeader, rows_done: &[bool]) -> Vec<usize> {
         && as_written(&st, hdf5::Datatype::from_type::<u16>(), true)
         && as_written(&fs, hdf5::Datatype::from_type::<f64>(), true))
     {
-        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+        return (0..h.blocks()).collect();
     }
     // The digest of each block as written (files from before it have none: the checks below
     // then rest on the checksums and the outcome codes).
-    let Some(digests) = read_digests(f, h.ny()) else {
-        return (0..h.ny().div_ceil(BLOCK_ROWS)).collect();
+    let Some(digests) = read_digests(f, h.blocks()) else {
+        return (0..h.blocks()).collect();
     };
     let mut bad = Vec::new();
-    for b in 0..h.ny().div_ceil(BLOCK_ROWS) {
+    let (lay, nx, d) = (Layout::of(h), h.nx(), h.d());
+    for b in 0..h.blocks() {
         let r = block_range(b, h.ny());
         let marked = &rows_done[r.clone()];
         if !marked.iter().any(|d| *d) {
             continue;
         }
         let read = (
-            o.read_slice_2d::<u8, _>(s![r.clone(), ..]),
-            st.read_slice_2d::<u16, _>(s![r.clone(), ..]),
-            fs.read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..]),
+            lay.read::<u8>(&o, b, &[nx]),
+            lay.read::<u16>(&st, b, &[nx]),
+            lay.read::<f64>(&fs, b, &[nx, d]),
         );
         let ok = match read {
-            (Ok(ob), Ok(sb), Ok(fb)) => {
-                let ov: Vec<u8> = ob.iter().copied().collect();
+            (Ok(ov), Ok(sv), Ok(fv)) => {
                 ov.chunks(h.nx())
                     .zip(marked)
                     .filter(|(_, m)| **m)
                     .all(|(row, _)| row.iter().all(|c| h.legend.iter().any(|(l, _)| l == c)))
-                    && digests.as_ref().is_none_or(|d| {
-                        let sv: Vec<u16> = sb.iter().copied().collect();
-                        let fv: Vec<f64> = fb.iter().copied().collect();
-                        d[b] == block_digest(&ov, &sv, &fv)
-                    })
+                    && digests
+                        .as_ref()
+                        .is_none_or(|d| d[b] == block_digest(&ov, &sv, &fv))
             }
             _ => false,
         };
@@ -1353,28 +1581,19 @@ fn read_partial_block(
     b: usize,
     marked: &[bool],
 ) -> Result<PendingBlock> {
-    let (nx, d) = (h.nx(), h.d());
+    let (nx, d, lay) = (h.nx(), h.d(), Layout::of(h));
     let r = block_range(b, h.ny());
     let basin = old.group("basin").at(path, "opening /basin")?;
     let open = |n: &str| basin.dataset(n).at(path, "opening the basin datasets");
-    let ov: Vec<u8> = open("outcome")?
-        .read_slice_2d::<u8, _>(s![r.clone(), ..])
-        .at(path, "reading /basin/outcome")?
-        .iter()
-        .copied()
-        .collect();
-    let sv: Vec<u16> = open("strides")?
-        .read_slice_2d::<u16, _>(s![r.clone(), ..])
-        .at(path, "reading /basin/strides")?
-        .iter()
-        .copied()
-        .collect();
-    let fv: Vec<f64> = open("final")?
-        .read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..])
-        .at(path, "reading /basin/final")?
-        .iter()
-        .copied()
-        .collect();
+    let ov: Vec<u8> = lay
+        .read(&open("outcome")?, b, &[nx])
+        .at(path, "reading /basin/outcome")?;
+    let sv: Vec<u16> = lay
+        .read(&open("strides")?, b, &[nx])
+        .at(path, "reading /basin/strides")?;
+    let fv: Vec<f64> = lay
+        .read(&open("final")?, b, &[nx, d])
+        .at(path, "reading /basin/final")?;
     let mut pb = PendingBlock::empty(r.len(), nx, d);
     for i in (0..r.len()).filter(|&i| marked[i]) {
         let (c, f) = (i * nx..(i + 1) * nx, i * nx * d..(i + 1) * nx * d);
@@ -1401,32 +1620,27 @@ fn copy_done_blocks(
     let basin = old.group("basin").at(old_path, "opening /basin")?;
     let open = |n: &str| basin.dataset(n).at(old_path, "opening the basin datasets");
     let (o, st, fs) = (open("outcome")?, open("strides")?, open("final")?);
-    for b in 0..header.ny().div_ceil(BLOCK_ROWS) {
+    let (lay, nx, d) = (Layout::of(header), header.nx(), header.d());
+    for b in 0..header.blocks() {
         let r = block_range(b, header.ny());
         if !rows_done[r.clone()].iter().all(|d| *d) {
             continue;
         }
-        let ob = o
-            .read_slice_2d::<u8, _>(s![r.clone(), ..])
+        let ov: Vec<u8> = lay
+            .read(&o, b, &[nx])
             .at(old_path, "reading /basin/outcome")?;
-        let sb = st
-            .read_slice_2d::<u16, _>(s![r.clone(), ..])
+        let sv: Vec<u16> = lay
+            .read(&st, b, &[nx])
             .at(old_path, "reading /basin/strides")?;
-        let fb = fs
-            .read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..])
+        let fv: Vec<f64> = lay
+            .read(&fs, b, &[nx, d])
             .at(old_path, "reading /basin/final")?;
-        h.outcome
-            .write_slice(&ob, s![r.clone(), ..])
+        lay.write(&h.outcome, b, &[nx], &ov)
             .at(new_path, "writing /basin/outcome")?;
-        h.strides
-            .write_slice(&sb, s![r.clone(), ..])
+        lay.write(&h.strides, b, &[nx], &sv)
             .at(new_path, "writing /basin/strides")?;
-        h.final_state
-            .write_slice(&fb, s![r.clone(), .., ..])
+        lay.write(&h.final_state, b, &[nx, d], &fv)
             .at(new_path, "writing /basin/final")?;
-        let ov: Vec<u8> = ob.iter().copied().collect();
-        let sv: Vec<u16> = sb.iter().copied().collect();
-        let fv: Vec<f64> = fb.iter().copied().collect();
         h.digest_ds
             .write_slice(&[block_digest(&ov, &sv, &fv)], s![b..b + 1])
             .at(new_path, "writing /basin/block_digest")?;
@@ -1462,9 +1676,10 @@ pub(crate) fn block_digest(outcome: &[u8], strides: &[u16], final_state: &[f64])
     h
 }
 
-/// `/basin/block_digest` of an open file: `Some(None)` for files written before it existed,
-/// `None` if it is there but cannot be read whole (damage).
-pub(crate) fn read_digests(f: &File, ny: usize) -> Option<Option<Vec<u64>>> {
+/// `/basin/block_digest` of an open file of `blocks` chunk blocks ([`BasinHeader::blocks`]):
+/// `Some(None)` for files written before it existed, `None` if it is there but cannot be read
+/// whole (damage).
+pub(crate) fn read_digests(f: &File, blocks: usize) -> Option<Option<Vec<u64>>> {
     let Ok(basin) = f.group("basin") else {
         return None;
     };
@@ -1475,16 +1690,11 @@ pub(crate) fn read_digests(f: &File, ny: usize) -> Option<Option<Vec<u64>>> {
         .dataset("block_digest")
         .and_then(|d| d.read_raw::<u64>())
         .ok()?;
-    (v.len() == ny.div_ceil(BLOCK_ROWS)).then_some(Some(v))
-}
-
-/// Rows `start .. end` of chunk block `b` of a grid of `ny` rows.
-fn block_range(b: usize, ny: usize) -> std::ops::Range<usize> {
-    b * BLOCK_ROWS..((b + 1) * BLOCK_ROWS).min(ny)
+    (v.len() == blocks).then_some(Some(v))
 }
 
 fn own_mask(h: &BasinHeader) -> Vec<bool> {
-    let mut own = vec![false; h.ny()];
+    let mut own = vec![false; h.rows()];
     for r in h.own_rows() {
         own[r] = true;
     }
@@ -1673,8 +1883,8 @@ pub fn read_basin_header(path: impl AsRef<Path>) -> Result<BasinHeader> {
     read_header(path, &f)
 }
 
-/// Reads the header and the (ny × nx) outcome codes only (for plotting large files without
-/// loading `/basin/final`).
+/// Reads the header and the (rows × nx) outcome codes only (for plotting large files without
+/// loading `/basin/final`); a 3-D grid's rows are its (z, y) pairs ([`BasinHeader::rows`]).
 pub fn read_basin_outcome(path: impl AsRef<Path>) -> Result<(BasinHeader, Array2<u8>)> {
     let path = path.as_ref();
     let f = open_file(path, false)?;
@@ -1683,53 +1893,35 @@ pub fn read_basin_outcome(path: impl AsRef<Path>) -> Result<(BasinHeader, Array2
     let ds = f
         .dataset("basin/outcome")
         .at(path, "opening /basin/outcome")?;
-    let o = read_blocks_2d(path, &ds, "outcome", &rows_done, h.nx(), NOT_COMPUTED)?;
+    let o = read_blocks(path, &ds, "outcome", &h, &rows_done, NOT_COMPUTED)?;
+    let o = Array2::from_shape_vec((h.rows(), h.nx()), o).expect("rows × nx cells");
     Ok((h, o))
 }
 
-/// Reads a (ny × nx) dataset block by block ([`BLOCK_ROWS`] rows). A block with no row marked
-/// in `rows_done` that cannot be read (a writer killed mid-block can leave its chunk index
-/// pointing past the end of the file) reads as `fill`, the value of cells not computed; a block
-/// with rows marked done that cannot be read is an error.
-fn read_blocks_2d<T: hdf5::H5Type + Copy>(
+/// Reads a dataset of `h`'s grid block by block (chunk blocks of [`BLOCK_ROWS`] rows), as
+/// rows × nx (× d for `final`) values, row-major. A block with no row marked in `rows_done`
+/// that cannot be read (a writer killed mid-block can leave its chunk index pointing past the
+/// end of the file) reads as `fill`, the value of cells not computed; a block with rows marked
+/// done that cannot be read is an error.
+fn read_blocks<T: hdf5::H5Type + Copy>(
     path: &Path,
     ds: &Dataset,
     name: &str,
+    h: &BasinHeader,
     rows_done: &[bool],
-    nx: usize,
     fill: T,
-) -> Result<Array2<T>> {
-    let ny = rows_done.len();
-    let mut out = Array2::from_elem((ny, nx), fill);
-    for b in 0..ny.div_ceil(BLOCK_ROWS) {
-        let r = block_range(b, ny);
-        match ds.read_slice_2d::<T, _>(s![r.clone(), ..]) {
-            Ok(v) => out.slice_mut(s![r, ..]).assign(&v),
+) -> Result<Vec<T>> {
+    let lay = Layout::of(h);
+    let (nx, d) = (h.nx(), h.d());
+    let trailing: &[usize] = if name == "final" { &[nx, d] } else { &[nx] };
+    let per_row: usize = trailing.iter().product();
+    let mut out = vec![fill; h.rows() * per_row];
+    for b in 0..h.blocks() {
+        let r = block_range(b, h.ny());
+        match lay.read::<T>(ds, b, trailing) {
+            Ok(v) => out[r.start * per_row..r.end * per_row].copy_from_slice(&v),
             Err(e) if rows_done[r.clone()].iter().any(|d| *d) => {
                 return Err(e).at(path, &format!("reading /basin/{name}"))
-            }
-            Err(_) => {}
-        }
-    }
-    Ok(out)
-}
-
-/// [`read_blocks_2d`] for the (ny × nx × d) final states (NaN where not computed).
-fn read_blocks_3d(
-    path: &Path,
-    ds: &Dataset,
-    rows_done: &[bool],
-    nx: usize,
-    d: usize,
-) -> Result<Array3<f64>> {
-    let ny = rows_done.len();
-    let mut out = Array3::from_elem((ny, nx, d), f64::NAN);
-    for b in 0..ny.div_ceil(BLOCK_ROWS) {
-        let r = block_range(b, ny);
-        match ds.read_slice::<f64, _, ndarray::Ix3>(s![r.clone(), .., ..]) {
-            Ok(v) => out.slice_mut(s![r, .., ..]).assign(&v),
-            Err(e) if rows_done[r.clone()].iter().any(|d| *d) => {
-                return Err(e).at(path, "reading /basin/final")
             }
             Err(_) => {}
         }
@@ -1745,17 +1937,22 @@ pub fn read_basin(path: impl AsRef<Path>) -> Result<BasinData> {
     let basin = f.group("basin").at(path, "opening /basin")?;
     let rows_done = read_rows_done(path, &f)?;
     let open = |n: &str| basin.dataset(n).at(path, &format!("opening /basin/{n}"));
-    let (nx, d) = (header.nx(), header.d());
-    let outcome = read_blocks_2d(
+    let (rows, nx, d) = (header.rows(), header.nx(), header.d());
+    let h = &header;
+    let outcome = read_blocks(
         path,
         &open("outcome")?,
         "outcome",
+        h,
         &rows_done,
-        nx,
         NOT_COMPUTED,
     )?;
-    let strides = read_blocks_2d(path, &open("strides")?, "strides", &rows_done, nx, 0u16)?;
-    let final_state = read_blocks_3d(path, &open("final")?, &rows_done, nx, d)?;
+    let strides = read_blocks(path, &open("strides")?, "strides", h, &rows_done, 0u16)?;
+    let final_state = read_blocks(path, &open("final")?, "final", h, &rows_done, f64::NAN)?;
+    let outcome = Array2::from_shape_vec((rows, nx), outcome).expect("rows × nx cells");
+    let strides = Array2::from_shape_vec((rows, nx), strides).expect("rows × nx cells");
+    let final_state =
+        Array3::from_shape_vec((rows, nx, d), final_state).expect("rows × nx × d values");
     Ok(BasinData {
         version: get_str(path, KIND, &f, "version")?,
         created: get_str(path, KIND, &f, "created")?,

@@ -47,6 +47,13 @@
 //! /metrics          attrs basin_entropy, boundary_entropy, entropy_box, fractions (JSON object
 //!                   name → fraction), fraction_NAME (one f64 per outcome)
 //! ```
+//! A 3-D grid ([`BasinHeader::z`]) adds `/grid/z` (f64 [nz], attr `name`; the scale of
+//! dimension 0) and stores its cells in z, y, x order: outcome and strides [nz, ny, nx], final
+//! [nz, ny, nx, d], chunked by blocks of [`BLOCK_ROWS`] rows within one z-slice; rows_done is
+//! [nz·ny] and block_digest [nz·⌈ny/16⌉] over the grid's (z, y) rows, row `k·ny + i` for
+//! `(z[k], y[i])`. `/slice` then also records the z-slice the picture draws (attrs `z`,
+//! `z_index`, `z_value`; dataset `outcome` [ny, nx]; see
+//! [`provenance::write_slice_view`]).
 //! Every dataset carries a `units` attribute (written by the caller through
 //! [`provenance::annotate`]; the writers do not know the model).
 //! `outcome`, `strides` and `final` are chunked by blocks of [`BLOCK_ROWS`] rows and
@@ -74,6 +81,8 @@
 //! ```
 
 pub mod basin;
+/// The ndarray crate of the arrays read and written here.
+pub use ndarray;
 pub mod curve;
 pub mod design;
 mod error;
@@ -88,7 +97,7 @@ pub mod trajectory;
 
 pub use basin::{
     read_basin, read_basin_header, read_basin_outcome, Attractor, BasinData, BasinHeader,
-    BasinMetrics, BasinWriter, OrbitCheck, BLOCK_ROWS, NOT_COMPUTED,
+    BasinMetrics, BasinWriter, OrbitCheck, ZAxis, BLOCK_ROWS, NOT_COMPUTED,
 };
 pub use curve::{plot_curve, read_curve_points, write_curve, CurveData, RegionMap, CURVE_FORMAT};
 pub use design::{
@@ -101,7 +110,7 @@ pub use plot::{
     plot_basin_stability, plot_bifurcation, plot_lines, Frame,
 };
 pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
-pub use shard::{merge, shard_rows, ShardSpec};
+pub use shard::{grid_shard_rows, merge, shard_rows, ShardSpec};
 pub use stability::{
     read_stability, write_stability, StabilityAttractor, StabilityData, STABILITY_FORMAT,
 };

@@ -588,7 +588,12 @@ pub fn annotate_merged(out: &Path, shards: &[&Path], p: &Provenance) -> Result<(
     if let Some(first) = shards.first() {
         copy_units_and_slice(out, &f, first)?;
     }
-    attach_scales(out, &f, &basin_scales())?;
+    let scales = if f.link_exists("grid/z") {
+        basin_scales_3d()
+    } else {
+        basin_scales()
+    };
+    attach_scales(out, &f, &scales)?;
     f.flush().at(out, "flushing")?;
     f.close().at(out, "closing")
 }
@@ -613,6 +618,77 @@ pub fn basin_scales() -> Vec<ScaleAttach> {
             ]
         })
         .collect()
+}
+
+/// The dimension scales of a 3-D basin file: `/grid/z`, `/grid/y` and `/grid/x` on dimensions
+/// 0, 1 and 2 of `/basin/outcome`, `/basin/strides` and `/basin/final`.
+pub fn basin_scales_3d() -> Vec<ScaleAttach> {
+    ["basin/outcome", "basin/strides", "basin/final"]
+        .iter()
+        .flat_map(|d| {
+            ["grid/z", "grid/y", "grid/x"]
+                .iter()
+                .enumerate()
+                .map(|(dim, s)| ScaleAttach {
+                    data: d.to_string(),
+                    dim,
+                    scale: s.to_string(),
+                })
+        })
+        .collect()
+}
+
+/// The z-slice of a 3-D basin the picture draws, written into `/slice`: attributes `z` (the
+/// coordinate), `z_index` (the slice, from 0) and `z_value`, and the dataset `outcome`, u8
+/// `[ny, nx]`, equal to `/basin/outcome[z_index]`.
+pub fn write_slice_view(
+    path: &Path,
+    z_name: &str,
+    z_index: usize,
+    z_value: f64,
+    outcome: ndarray::ArrayView2<'_, u8>,
+) -> Result<()> {
+    let f = File::open_rw(path).at(path, "opening for the slice")?;
+    let g = group_at(path, &f, "slice", "creating /slice")?;
+    set_str(path, &g, "z", z_name)?;
+    set_attr(path, &g, "z_index", &(z_index as u64))?;
+    set_attr(path, &g, "z_value", &z_value)?;
+    if g.link_exists("outcome") {
+        g.unlink("outcome").at(path, "replacing /slice/outcome")?;
+    }
+    let ds = g
+        .new_dataset_builder()
+        .with_data(&outcome.as_standard_layout())
+        .create("outcome")
+        .at(path, "writing /slice/outcome")?;
+    set_str(path, &ds, "units", "1")?;
+    set_str(
+        path,
+        &ds,
+        "description",
+        "the z-slice /basin/outcome[z_index] the picture draws (legend as /basin/outcome)",
+    )?;
+    drop(ds);
+    f.flush().at(path, "flushing")?;
+    f.close().at(path, "closing")
+}
+
+/// The z-slice recorded by [`write_slice_view`]: `(z, z_index, z_value)`, `None` for a 2-D
+/// basin.
+pub fn read_slice_view(path: &Path) -> Result<Option<(String, usize, f64)>> {
+    let f = File::open(path).at(path, "opening")?;
+    let Ok(g) = f.group("slice") else {
+        return Ok(None);
+    };
+    if !has_attr(&g, "z_index") {
+        return Ok(None);
+    }
+    let kind = "pdw-sweep basin";
+    Ok(Some((
+        get_str(path, kind, &g, "z")?,
+        crate::h5util::get_attr::<u64>(path, kind, &g, "z_index")? as usize,
+        crate::h5util::get_attr::<f64>(path, kind, &g, "z_value")?,
+    )))
 }
 
 /// The slice of a basin file (`None` for files written before `/slice` existed).

@@ -1,7 +1,7 @@
 //! Splitting a basin grid across processes and joining the pieces.
 //!
 //! # Split
-//! Rows are dealt out in blocks of [`BLOCK_ROWS`] (the chunk height of the datasets),
+//! Rows are dealt out in blocks of [`BLOCK_ROWS`](crate::BLOCK_ROWS) (the chunk height of the datasets),
 //! round-robin: block `b = row / BLOCK_ROWS` goes to shard `b mod N`. Round-robin balances the
 //! load (cells near the basin's thin band take many strides, cells far from it fall at once, so
 //! contiguous halves of a grid can differ in cost by a large factor), and aligning to chunks means
@@ -22,10 +22,11 @@ use std::fmt;
 use std::path::Path;
 use std::str::FromStr;
 
-use ndarray::{s, ArrayView2};
+use ndarray::ArrayView2;
 
 use crate::basin::{
-    read_attractors, Attractor, BasinHeader, BasinMetrics, BasinWriter, BLOCK_ROWS,
+    block_of, block_range, read_attractors, Attractor, BasinHeader, BasinMetrics, BasinWriter,
+    Layout,
 };
 use crate::h5util::{check_target, get_attr, open_file, At, Staged};
 use crate::{Result, StoreError};
@@ -80,13 +81,21 @@ impl FromStr for ShardSpec {
 }
 
 /// Rows of a grid of `ny` rows that shard `index` of `count` computes, ascending: the rows of
-/// blocks `b ≡ index (mod count)`, blocks being [`BLOCK_ROWS`] consecutive rows.
+/// blocks `b ≡ index (mod count)`, blocks being [`BLOCK_ROWS`](crate::BLOCK_ROWS) consecutive rows.
 ///
 /// Over `index = 0..count` every row appears exactly once.
 pub fn shard_rows(ny: usize, index: usize, count: usize) -> Result<Vec<usize>> {
+    grid_shard_rows(ny, 1, index, count)
+}
+
+/// [`shard_rows`] of a 3-D grid of `nz` slices of `ny` rows, its rows being the (z, y) pairs
+/// (row `k·ny + i`): blocks are dealt out round-robin in the order slice by slice, each slice
+/// cut into blocks of [`BLOCK_ROWS`](crate::BLOCK_ROWS) rows ([`crate::basin::block_of`]); `nz = 1` is
+/// [`shard_rows`].
+pub fn grid_shard_rows(ny: usize, nz: usize, index: usize, count: usize) -> Result<Vec<usize>> {
     ShardSpec { index, count }.validate()?;
-    Ok((0..ny)
-        .filter(|r| (r / BLOCK_ROWS) % count == index)
+    Ok((0..nz * ny)
+        .filter(|&r| block_of(r, ny) % count == index)
         .collect())
 }
 
@@ -96,7 +105,7 @@ pub fn shard_rows(ny: usize, index: usize, count: usize) -> Result<Vec<usize>> {
 /// params, grid, legend, … as [`BasinWriter::resume`] compares) with the same shard count and
 /// the same attractors, and that their indices are `0..N` exactly once — so together they cover
 /// every row exactly once. Then copies the rows into a temporary file beside `out`, computes the
-/// whole grid's metrics with `metrics(header, outcome)` (outcome (ny × nx)), finishes the file
+/// whole grid's metrics with `metrics(header, outcome)` (outcome (rows × nx), [`BasinHeader::rows`]), finishes the file
 /// (`complete = true`, `elapsed_s` = the shards' sum, attractors of the shards) and renames it
 /// onto `out`. An existing `out` is refused unless `force`, and is replaced only by a finished
 /// file; on any error `out` and the shards are untouched. `command` is recorded in the new file.
@@ -141,7 +150,7 @@ pub fn merge<P: AsRef<Path>>(
             .dataset("basin/rows_done")
             .and_then(|d| d.read_raw::<u8>())
             .at(p, "reading /basin/rows_done")?;
-        let own = shard_rows(header.ny(), spec.index, spec.count)?;
+        let own = grid_shard_rows(header.ny(), header.nz(), spec.index, spec.count)?;
         let n_done = own.iter().filter(|&&r| done[r] != 0).count();
         let complete: bool = get_attr(p, "pdw-sweep basin", &f, "complete")?;
         if n_done != own.len() || !complete {
@@ -221,62 +230,13 @@ pub fn merge<P: AsRef<Path>>(
     let result = (|| -> Result<BasinHeader> {
         let mut w = BasinWriter::create(tmp, &header, true)?;
         w.set_elapsed_before(list.iter().map(|s| s.elapsed).sum());
-        let (nx, d) = (header.nx(), header.d());
         for (s, p) in list.iter().zip(shards) {
-            let p = p.as_ref();
-            let f = open_file(p, false)?;
-            let ds = |n: &str| f.dataset(n).at(p, "opening the basin datasets");
-            let (o, st, fs) = (
-                ds("basin/outcome")?,
-                ds("basin/strides")?,
-                ds("basin/final")?,
-            );
-            let spec = s.header.shard.expect("checked above");
-            let rows = shard_rows(header.ny(), spec.index, spec.count)?;
-            let damaged = |r0: usize, r1: usize| StoreError::Format {
-                path: p.to_path_buf(),
-                expected: "pdw-sweep basin",
-                detail: format!(
-                    "rows {r0}..{r1} do not read back as written (damaged); run that shard \
-                     again with --resume, which recomputes damaged blocks"
-                ),
-            };
-            let digests = crate::basin::read_digests(&f, header.ny())
-                .ok_or_else(|| damaged(rows[0], rows[rows.len() - 1] + 1))?;
-            for block in rows.chunks(BLOCK_ROWS) {
-                // Blocks of a shard are runs of consecutive rows.
-                let (r0, r1) = (block[0], block[block.len() - 1] + 1);
-                debug_assert_eq!(r1 - r0, block.len());
-                let ob = o
-                    .read_slice_2d::<u8, _>(s![r0..r1, ..])
-                    .at(p, "reading rows")?;
-                let sb = st
-                    .read_slice_2d::<u16, _>(s![r0..r1, ..])
-                    .at(p, "reading rows")?;
-                let fb = fs
-                    .read_slice::<f64, _, ndarray::Ix3>(s![r0..r1, .., ..])
-                    .at(p, "reading rows")?;
-                let k = r1 - r0;
-                let ov: Vec<u8> = ob.iter().copied().collect();
-                let sv: Vec<u16> = sb.iter().copied().collect();
-                let fv: Vec<f64> = fb.iter().copied().collect();
-                if let Some(dg) = &digests {
-                    let b = r0 / BLOCK_ROWS;
-                    if r0 % BLOCK_ROWS != 0
-                        || dg.get(b) != Some(&crate::basin::block_digest(&ov, &sv, &fv))
-                    {
-                        return Err(damaged(r0, r1));
-                    }
-                }
-                if ov.len() != k * nx || fv.len() != k * nx * d {
-                    return Err(StoreError::Format {
-                        path: p.to_path_buf(),
-                        expected: "pdw-sweep basin",
-                        detail: "row block of unexpected size".into(),
-                    });
-                }
-                w.write_rows(r0, &ov, &sv, &fv)?;
-            }
+            copy_shard(
+                &mut w,
+                &header,
+                s.header.shard.expect("checked above"),
+                p.as_ref(),
+            )?;
         }
         let outcome = w.read_outcome()?;
         let m = metrics(&header, outcome.view());
@@ -286,4 +246,52 @@ pub fn merge<P: AsRef<Path>>(
     let h = result?;
     staged.commit(out)?;
     Ok(h)
+}
+
+/// Copies the blocks of shard `spec` (file `p`, complete and checked) into the merged file's
+/// writer `w`, each checked against its digest.
+fn copy_shard(w: &mut BasinWriter, header: &BasinHeader, spec: ShardSpec, p: &Path) -> Result<()> {
+    let (nx, d, lay) = (header.nx(), header.d(), Layout::of(header));
+    let f = open_file(p, false)?;
+    let ds = |n: &str| f.dataset(n).at(p, "opening the basin datasets");
+    let (o, st, fs) = (
+        ds("basin/outcome")?,
+        ds("basin/strides")?,
+        ds("basin/final")?,
+    );
+    let damaged = |r: std::ops::Range<usize>| StoreError::Format {
+        path: p.to_path_buf(),
+        expected: "pdw-sweep basin",
+        detail: format!(
+            "rows {}..{} do not read back as written (damaged); run that shard again with \
+             --resume, which recomputes damaged blocks",
+            r.start, r.end
+        ),
+    };
+    let blocks: Vec<usize> = (0..header.blocks())
+        .filter(|b| b % spec.count == spec.index)
+        .collect();
+    let own = grid_shard_rows(header.ny(), header.nz(), spec.index, spec.count)?;
+    let all = own.first().map_or(0..0, |&r0| r0..own[own.len() - 1] + 1);
+    let digests = crate::basin::read_digests(&f, header.blocks()).ok_or_else(|| damaged(all))?;
+    for b in blocks {
+        let r = block_range(b, header.ny());
+        let ov: Vec<u8> = lay.read(&o, b, &[nx]).at(p, "reading rows")?;
+        let sv: Vec<u16> = lay.read(&st, b, &[nx]).at(p, "reading rows")?;
+        let fv: Vec<f64> = lay.read(&fs, b, &[nx, d]).at(p, "reading rows")?;
+        if let Some(dg) = &digests {
+            if dg.get(b) != Some(&crate::basin::block_digest(&ov, &sv, &fv)) {
+                return Err(damaged(r));
+            }
+        }
+        if ov.len() != r.len() * nx || fv.len() != r.len() * nx * d {
+            return Err(StoreError::Format {
+                path: p.to_path_buf(),
+                expected: "pdw-sweep basin",
+                detail: "row block of unexpected size".into(),
+            });
+        }
+        w.write_rows(r.start, &ov, &sv, &fv)?;
+    }
+    Ok(())
 }

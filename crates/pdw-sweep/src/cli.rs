@@ -204,7 +204,7 @@ pub struct BasinArgs {
     pub model: ModelOpts,
     #[command(flatten)]
     pub integrator: IntegratorOpts,
-    /// Grid size NXxNY. Default: 401x401; 41x41 with --over.
+    /// Grid size NXxNY, or NXxNYxNZ with --z. Default: 401x401; 41x41 with --over.
     #[arg(long)]
     pub grid: Option<String>,
     /// Horizontal axis: NAME=A:B (inclusive). Default: the model's first section coordinate
@@ -214,6 +214,21 @@ pub struct BasinArgs {
     /// Vertical axis: NAME=A:B (inclusive).
     #[arg(long)]
     pub y: Option<String>,
+    /// Third axis, NAME=A:B (inclusive): a 3-D grid over a section coordinate other than --x
+    /// and --y (--grid then gives NXxNYxNZ). The file holds [nz, ny, nx] datasets; the picture
+    /// draws one z-slice (--slice).
+    #[arg(long, conflicts_with = "over")]
+    pub z: Option<String>,
+    /// With --z: the z-slice the picture draws, NAME=VALUE (NAME the --z coordinate or `z`):
+    /// the slice nearest VALUE, which must lie in the --z range. Default: the middle slice
+    /// (always, for shards and their merge).
+    #[arg(
+        long,
+        requires = "z",
+        conflicts_with = "shard",
+        value_name = "NAME=VALUE"
+    )]
+    pub slice: Option<String>,
     /// Stride budget per cell, 1 to 65535. A stride here is one step: heel strike to the next
     /// heel strike (one application of the stride map), not biomechanics' two steps.
     #[arg(long, default_value_t = 100, value_parser = pdw::basin::parse_max_strides)]

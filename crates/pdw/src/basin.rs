@@ -22,12 +22,17 @@ use pdw_walkers::ModelInfo;
 /// the fixed-point search's integrator, [`pdw_limit::gaits::default_integrator`]).
 pub const GAIT_NEWTON_TOL: f64 = 1e-12;
 
-/// The names a front end gives the two axes in its messages (`--x`/`--y`, or `x`/`y`).
+/// The names a front end gives the axes in its messages (`--x`/`--y`/`--z`, or `x`/`y`/`z`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisFlags {
     pub x: &'static str,
     pub y: &'static str,
+    pub z: &'static str,
 }
+
+/// Z-levels at which attractor discovery seeds a 3-D box: the lattice of the 2-D box is laid
+/// at this many evenly spaced values of z (every z of the grid when it has no more).
+pub const DISCOVERY_Z_LEVELS: usize = 5;
 
 /// An axis of the grid: a section coordinate (by index) over an inclusive range.
 #[derive(Clone, Debug, PartialEq)]
@@ -126,6 +131,9 @@ pub struct BasinRequest {
     /// The axes given; the default box fills the others ([`default_axis`]).
     pub x: Option<Axis>,
     pub y: Option<Axis>,
+    /// The third axis of a 3-D grid and its cells along it (`None`: a 2-D grid). It is never
+    /// defaulted.
+    pub z: Option<(Axis, usize)>,
     /// Section coordinates held fixed off the axes, by index.
     pub fixed: Vec<(usize, f64)>,
     /// Stride budget per cell.
@@ -205,13 +213,18 @@ pub fn default_axis(names: &[String], index: usize, centre: &[f64]) -> Axis {
     }
 }
 
-/// The box of section states a basin covers: two axes and the cells along each.
+/// The box of section states a basin covers: two axes (three for a 3-D grid) and the cells
+/// along each.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BasinBox {
     pub x: Axis,
     pub y: Axis,
     pub nx: usize,
     pub ny: usize,
+    /// The third axis of a 3-D grid.
+    pub z: Option<Axis>,
+    /// Cells along z: 1 for a 2-D grid.
+    pub nz: usize,
 }
 
 impl BasinBox {
@@ -223,6 +236,13 @@ impl BasinBox {
     /// The y values of the grid's rows (both bounds included).
     pub fn ys(&self) -> Vec<f64> {
         linspace(self.y.range.lo, self.y.range.hi, self.ny)
+    }
+
+    /// The z values of a 3-D grid's slices (both bounds included); empty for a 2-D grid.
+    pub fn zs(&self) -> Vec<f64> {
+        self.z
+            .as_ref()
+            .map_or_else(Vec::new, |z| linspace(z.range.lo, z.range.hi, self.nz))
     }
 }
 
@@ -250,27 +270,47 @@ pub fn choose_box(
             flags.x, flags.y, names[x.index]
         )));
     }
-    if let Some((i, _)) = req
-        .fixed
-        .iter()
-        .find(|(i, _)| *i == x.index || *i == y.index)
-    {
+    let z = req.z.as_ref().map(|(z, _)| z.clone());
+    if let Some(z) = &z {
+        let other = [(&x, flags.x), (&y, flags.y)]
+            .into_iter()
+            .find(|(a, _)| a.index == z.index);
+        if let Some((_, flag)) = other {
+            return Err(InputError(format!(
+                "{} names '{}', already the {flag} axis; choose a third coordinate",
+                flags.z, names[z.index]
+            )));
+        }
+    }
+    let on_axis =
+        |i: usize| i == x.index || i == y.index || z.as_ref().is_some_and(|z| z.index == i);
+    if let Some((i, _)) = req.fixed.iter().find(|(i, _)| on_axis(*i)) {
         return Err(InputError(format!(
             "--set {}: that coordinate is an axis of the {what}",
             names[*i]
         )));
     }
     let (nx, ny) = req.grid;
-    Ok(BasinBox { x, y, nx, ny })
+    let nz = req.z.as_ref().map_or(1, |(_, n)| *n);
+    Ok(BasinBox {
+        x,
+        y,
+        nx,
+        ny,
+        z,
+        nz,
+    })
 }
 
 /// Everything a basin run computes from: the box and its grid values, the section state off
 /// the axes, the gaits and the engine's options.
 pub struct BasinPlan {
     pub bx: BasinBox,
-    /// Column and row values ([`BasinBox::xs`], [`BasinBox::ys`]).
+    /// Column, row and slice values ([`BasinBox::xs`], [`BasinBox::ys`], [`BasinBox::zs`];
+    /// `zs` empty for a 2-D grid).
     pub xs: Vec<f64>,
     pub ys: Vec<f64>,
+    pub zs: Vec<f64>,
     /// The grid's centre ([`grid_centre`]).
     pub centre: Vec<f64>,
     /// Every cell's state off the two axes: the centre with the fixed coordinates applied.
@@ -291,6 +331,7 @@ impl BasinPlan {
         BasinPlan {
             xs: bx.xs(),
             ys: bx.ys(),
+            zs: bx.zs(),
             bx,
             centre,
             base,
@@ -314,6 +355,7 @@ impl BasinPlan {
         pool: &rayon::ThreadPool,
     ) -> Result<(AttractorSet, usize), LimitError> {
         let (x, y) = (&self.bx.x, &self.bx.y);
+        let levels = self.discovery_levels();
         let (mut set, seeds) = pdw_limit::box_attractors(
             m.walker.as_ref(),
             &self.gaits.found,
@@ -322,11 +364,43 @@ impl BasinPlan {
             &self.base,
             (x.index, (x.range.lo, x.range.hi)),
             (y.index, (y.range.lo, y.range.hi)),
+            self.bx.z.as_ref().map(|z| (z.index, &levels[..])),
             &self.opts,
             pool,
         )?;
         set.check_validity(m.walker.as_ref());
         Ok((set, seeds))
+    }
+
+    /// The z values a 3-D box's attractor discovery seeds at ([`DISCOVERY_Z_LEVELS`] evenly
+    /// spaced over z, or every z of the grid); empty for a 2-D box.
+    pub fn discovery_levels(&self) -> Vec<f64> {
+        match &self.bx.z {
+            Some(z) => linspace(z.range.lo, z.range.hi, self.bx.nz.min(DISCOVERY_Z_LEVELS)),
+            None => Vec::new(),
+        }
+    }
+
+    /// The start states of the cells of the grid's rows `rows`, row by row: row `k·ny + i` is
+    /// `(z[k], y[i])` on a 3-D grid, row `i` is `y[i]` on a 2-D one.
+    pub fn row_cells(&self, rows: &[usize]) -> Vec<Vec<f64>> {
+        let ny = self.bx.ny;
+        let mut cells = Vec::with_capacity(rows.len() * self.bx.nx);
+        for &r in rows {
+            let mut base = self.base.clone();
+            if let Some(z) = &self.bx.z {
+                base[z.index] = self.zs[r / ny];
+            }
+            let y = [self.ys[r % ny]];
+            cells.extend(grid_cells(
+                &base,
+                self.bx.x.index,
+                &self.xs,
+                self.bx.y.index,
+                &y,
+            ));
+        }
+        cells
     }
 
     /// The start states of the cells of the rows at `row_ys`, row by row.

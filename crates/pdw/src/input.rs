@@ -150,6 +150,30 @@ pub fn parse_grid_for(flag: &str, s: &str) -> Result<(usize, usize), InputError>
     Ok((nx, ny))
 }
 
+/// A grid of two or three dimensions, `NXxNY` or `NXxNYxNZ` of the option `flag`: each a
+/// positive integer, at most 10⁹ cells in all.
+pub fn parse_grid_dims(flag: &str, s: &str) -> Result<Vec<usize>, InputError> {
+    let lower = s.trim().to_ascii_lowercase();
+    let parts: Vec<&str> = lower.split('x').collect();
+    if !(2..=3).contains(&parts.len()) {
+        return err(format!(
+            "{flag}: '{s}' is not of the form NXxNY or NXxNYxNZ (e.g. 401x401, 41x41x21)"
+        ));
+    }
+    let dims = parts
+        .iter()
+        .map(|t| match t.parse::<usize>() {
+            Ok(n) if n >= 1 => Ok(n),
+            _ => err(format!("{flag}: '{t}' in '{s}' is not a positive integer")),
+        })
+        .collect::<Result<Vec<usize>, InputError>>()?;
+    let cells = dims.iter().fold(1usize, |a, &n| a.saturating_mul(n));
+    if cells > 1_000_000_000 {
+        return err(format!("{flag}: {s} has more than 10^9 cells"));
+    }
+    Ok(dims)
+}
+
 /// [`parse_grid_for`] of `--grid`.
 pub fn parse_grid(s: &str) -> Result<(usize, usize), InputError> {
     parse_grid_for("--grid", s)

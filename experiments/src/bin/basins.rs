@@ -166,6 +166,7 @@ fn png(
         x: r.xs.clone(),
         y_name: names[1].into(),
         y: r.ys.clone(),
+        z: None,
         state_names: state_names.iter().map(|s| s.to_string()).collect(),
         legend: legend()
             .into_iter()

@@ -672,6 +672,7 @@ fn basin(dir: &Path, locked: &dyn Walker, s: &[f64], md: &mut String) -> anyhow:
         x: xs.clone(),
         y_name: "stance rate q̇₁ (rad/s)".into(),
         y: ys.clone(),
+        z: None,
         state_names: vec!["stance".into(), "stance_rate".into(), "hip_rate".into()],
         legend: legend()
             .into_iter()

@@ -642,6 +642,7 @@ fn maps(
             x: xs.clone(),
             y_name: yn.into(),
             y: ys.clone(),
+            z: None,
             state_names: vec![xn.into(), yn.into()],
             legend: NAMES
                 .iter()

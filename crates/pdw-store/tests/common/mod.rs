@@ -72,6 +72,7 @@ pub fn header(nx: usize, ny: usize) -> BasinHeader {
         x: linspace(0.15, 0.25, nx),
         y_name: "thetadot".into(),
         y: linspace(-0.25, -0.15, ny),
+        z: None,
         state_names: vec!["theta".into(), "thetadot".into()],
         legend: LEGEND.iter().map(|(c, n)| (*c, n.to_string())).collect(),
         shard: None,

@@ -15,11 +15,13 @@ use crate::cli::BasinArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::basin::{AxisFlags, BasinPlan, BasinRequest};
 use pdw_limit::attractors::{Attractor as LimitAttractor, DiscoveryOptions};
-use pdw_limit::basin::{basin_metrics, classify_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX};
+use pdw_limit::basin::{
+    basin_metrics_slices, classify_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX,
+};
 use pdw_limit::{AttractorSet, OrbitValidity};
 use pdw_store::{
     plot_basin_attractors, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter,
-    OrbitCheck, ShardSpec, StoreError, BLOCK_ROWS,
+    OrbitCheck, ShardSpec, StoreError, ZAxis, BLOCK_ROWS,
 };
 use pdw_walkers::ModelInfo;
 use std::io::IsTerminal;
@@ -31,7 +33,11 @@ use std::time::{Duration, Instant};
 const DEFAULT_GRID: &str = "401x401";
 
 /// How the axes are named in messages.
-pub(super) const AXIS_FLAGS: AxisFlags = AxisFlags { x: "--x", y: "--y" };
+pub(super) const AXIS_FLAGS: AxisFlags = AxisFlags {
+    x: "--x",
+    y: "--y",
+    z: "--z",
+};
 
 /// Most rows handed to the engine per call (written and flushed as soon as their block is
 /// complete).
@@ -57,13 +63,14 @@ fn rows_for_next_call(secs_per_row: Option<f64>, nx: usize) -> usize {
 /// HDF5's largest chunk (4 GiB − 1 byte).
 const MAX_CHUNK_BYTES: u64 = (1 << 32) - 1;
 
-/// Estimated peak memory (bytes) of a basin run on an `nx × ny` grid with `d` section
-/// coordinates and `dim` state components: per-row bookkeeping (axes, done/owned flags, the
-/// row list), the cells in flight in one engine call (start states, integrator lanes, results),
-/// two pending chunk blocks, the outcome read back for metrics and plot (three copies of
-/// nx·ny bytes), HDF5's 32 MiB chunk cache and a fixed allowance.
-fn memory_estimate(nx: usize, ny: usize, d: usize, dim: usize) -> u64 {
-    let (nx, ny, d, dim) = (nx as u64, ny as u64, d as u64, dim as u64);
+/// Estimated peak memory (bytes) of a basin run on an `nx × ny` grid (rows: ny, or nz·ny for a
+/// 3-D grid) with `d` section coordinates and `dim` state components: per-row bookkeeping
+/// (axes, done/owned flags, the row list), the cells in flight in one engine call (start
+/// states, integrator lanes, results), two pending chunk blocks, the outcome read back for
+/// metrics and plot (three copies of nx·rows bytes), HDF5's 32 MiB chunk cache and a fixed
+/// allowance.
+fn memory_estimate(nx: usize, rows: usize, d: usize, dim: usize) -> u64 {
+    let (nx, ny, d, dim) = (nx as u64, rows as u64, d as u64, dim as u64);
     let per_row = 56;
     let per_col = 32;
     let per_cell_in_flight = 96 + 24 * d + 8 * dim * 20;
@@ -81,25 +88,40 @@ pub(super) fn gib(b: u64) -> String {
     format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
 }
 
+/// The grid as written on the command line: `NXxNY` or `NXxNYxNZ`.
+fn grid_text(nx: usize, ny: usize, nz: Option<usize>) -> String {
+    match nz {
+        Some(nz) => format!("{nx}x{ny}x{nz}"),
+        None => format!("{nx}x{ny}"),
+    }
+}
+
 /// Refuses grids whose row of cells exceeds HDF5's chunk limit or whose estimated memory
-/// exceeds what is available, before anything is computed.
-pub(super) fn check_memory(nx: usize, ny: usize, d: usize, dim: usize) -> Result<(), InputError> {
+/// exceeds what is available, before anything is computed (`nz`: the slices of a 3-D grid).
+pub(super) fn check_memory(
+    nx: usize,
+    ny: usize,
+    nz: Option<usize>,
+    d: usize,
+    dim: usize,
+) -> Result<(), InputError> {
+    let g = grid_text(nx, ny, nz);
     let chunk = BLOCK_ROWS.min(ny) as u64 * nx as u64 * d as u64 * 8;
     if chunk > MAX_CHUNK_BYTES {
         return Err(InputError(format!(
-            "--grid {nx}x{ny}: rows of {nx} cells are too wide for the file's chunks ({} per \
+            "--grid {g}: rows of {nx} cells are too wide for the file's chunks ({} per \
              {}-row block, HDF5 allows 4 GiB); at most {} columns",
             gib(chunk),
             BLOCK_ROWS.min(ny),
             MAX_CHUNK_BYTES / (BLOCK_ROWS.min(ny) as u64 * d as u64 * 8)
         )));
     }
-    let need = memory_estimate(nx, ny, d, dim);
+    let need = memory_estimate(nx, ny.saturating_mul(nz.unwrap_or(1)), d, dim);
     // `MemAvailable` and the room under the cgroup's limit, whichever is smaller
     let have = pdw_limit::resources::memory_available();
     if need > have * 4 / 5 {
         return Err(InputError(format!(
-            "--grid {nx}x{ny}: needs about {} of memory, more than the {} available (80 % of \
+            "--grid {g}: needs about {} of memory, more than the {} available (80 % of \
              {}); use a smaller grid, or split it with --shard I/N across machines",
             gib(need),
             gib(have * 4 / 5),
@@ -148,6 +170,8 @@ struct Parsed {
     shard: Option<ShardSpec>,
     out: PathBuf,
     png: PathBuf,
+    /// The z-slice the picture draws (`--slice`; default the middle one).
+    slice: Option<usize>,
 }
 
 impl Parsed {
@@ -206,7 +230,7 @@ fn nothing_written<T>() -> Step<T> {
 /// Everything checked before any file is touched: the grid, integrator, shard, model (with
 /// `--set` split into parameters and fixed section coordinates), memory and axes.
 fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
-    let grid = args::parse_grid(a.grid.as_deref().unwrap_or(DEFAULT_GRID))?;
+    let (grid, nz) = grid_dims(a)?;
     let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
     let shard = match &a.shard {
         Some(s) => {
@@ -220,21 +244,28 @@ fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
     check_memory(
         grid.0,
         grid.1,
+        nz,
         info.section_names.len(),
         info.state_names.len(),
     )?;
     let (params, fixed) = pdw::basin::split_overrides(overrides(&a.model)?, &info.section_names);
     let m = pdw::build(&a.model.model, &params)?;
+    let z = axis(&info, &a.z, "--z")?.zip(nz);
     let req = BasinRequest {
         grid,
         x: axis(&info, &a.x, "--x")?,
         y: axis(&info, &a.y, "--y")?,
+        z,
         fixed,
         max_strides: a.max_strides,
         integrator,
     };
     let out = a.out_path();
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
+    let slice = match (&a.slice, &req.z) {
+        (Some(text), Some((z, nz))) => Some(slice_index(&parse_slice(text)?, z, *nz)?),
+        _ => None,
+    };
     Ok(Parsed {
         req,
         info,
@@ -242,7 +273,69 @@ fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
         shard,
         out,
         png,
+        slice,
     })
+}
+
+/// `--grid` as (nx, ny) and, for a 3-D grid, nz: three sizes exactly when `--z` is given.
+fn grid_dims(a: &BasinArgs) -> Result<((usize, usize), Option<usize>), InputError> {
+    let text = a.grid.as_deref().unwrap_or(DEFAULT_GRID);
+    let dims = args::parse_grid_dims("--grid", text)?;
+    match (dims.len(), a.z.is_some()) {
+        (2, false) => Ok(((dims[0], dims[1]), None)),
+        (3, true) => Ok(((dims[0], dims[1]), Some(dims[2]))),
+        (3, false) => Err(InputError(format!(
+            "--grid {text} has three sizes, but no --z axis was given; give --z NAME=A:B for a \
+             3-D grid, or --grid NXxNY"
+        ))),
+        _ => Err(InputError(format!(
+            "--z needs a 3-D grid: --grid NXxNYxNZ (e.g. {}x5), not '{text}'",
+            text.trim()
+        ))),
+    }
+}
+
+/// The slice of the `nz` z values over axis `z` nearest `--slice NAME=VALUE`; NAME must be the
+/// z coordinate (or `z`) and VALUE within its range.
+fn slice_index(
+    (name, v): &(String, f64),
+    z: &pdw::basin::Axis,
+    nz: usize,
+) -> Result<usize, InputError> {
+    let r = &z.range;
+    if *name != r.name && name != "z" {
+        return Err(InputError(format!(
+            "--slice {name}={v}: the slices are of the --z coordinate '{}'; give --slice {}=VALUE",
+            r.name, r.name
+        )));
+    }
+    let tol = 1e-9 * (r.hi - r.lo);
+    if *v < r.lo - tol || *v > r.hi + tol {
+        return Err(InputError(format!(
+            "--slice {name}={v}: outside the --z range {}:{}",
+            r.lo, r.hi
+        )));
+    }
+    let zs = pdw_limit::basin::linspace(r.lo, r.hi, nz);
+    let k = (0..nz)
+        .min_by(|&i, &j| (zs[i] - v).abs().total_cmp(&(zs[j] - v).abs()))
+        .unwrap_or(0);
+    Ok(k)
+}
+
+/// `--slice NAME=VALUE`.
+fn parse_slice(s: &str) -> Result<(String, f64), InputError> {
+    let bad = || {
+        InputError(format!(
+            "--slice: '{s}' is not of the form NAME=VALUE (e.g. z=0.3)"
+        ))
+    };
+    let (n, v) = s.split_once('=').ok_or_else(bad)?;
+    let v: f64 = v.trim().parse().map_err(|_| bad())?;
+    if !v.is_finite() {
+        return Err(bad());
+    }
+    Ok((n.trim().to_string(), v))
 }
 
 /// Claims `--out` and (unless a shard, which writes no picture) `--png`. With --resume an
@@ -392,6 +485,10 @@ fn header(
         x: plan.xs.clone(),
         y_name: plan.bx.y.range.name.clone(),
         y: plan.ys.clone(),
+        z: plan.bx.z.as_ref().map(|z| ZAxis {
+            name: z.range.name.clone(),
+            values: plan.zs.clone(),
+        }),
         state_names: names.to_vec(),
         legend: set.legend(),
         shard: p.shard,
@@ -458,6 +555,8 @@ struct Described {
     sec_units: Vec<String>,
     /// The section coordinates along x and y.
     axes: (usize, usize),
+    /// The section coordinate along z (3-D grids).
+    z: Option<usize>,
     slice: pdw_store::Slice,
 }
 
@@ -472,13 +571,13 @@ fn describe(
     let (opts, bx) = (&plan.opts, &plan.bx);
     let sec_units = super::section_units(&p.m);
     let gait = plan.gait();
-    let slice = basin_slice(
+    let mut slice = basin_slice(
         p.names(),
         &sec_units,
         plan,
         gait.map_or(&plan.centre[..], |fp| &fp.section[..]),
     );
-    let options = serde_json::json!({
+    let mut options = serde_json::json!({
         "integrator": super::integrator_json(&opts.integrator),
         "max_strides": opts.max_strides,
         "tol_gait": opts.tol_gait,
@@ -501,18 +600,35 @@ fn describe(
         "threads": a.threads,
         "shard": a.shard,
     });
+    if let Some(z) = &bx.z {
+        options["grid"] = serde_json::json!([bx.nx, bx.ny, bx.nz]);
+        options["z"] = serde_json::json!({"name": z.range.name, "lo": z.range.lo, "hi": z.range.hi,
+            "discovery_levels": plan.discovery_levels()});
+    }
     let prov = super::provenance(options);
-    let units = basin_units(&sec_units, bx.x.index, bx.y.index);
-    let scales = pdw_store::provenance::basin_scales();
+    let iz = bx.z.as_ref().map(|z| z.index);
+    let units = basin_units(&sec_units, bx.x.index, bx.y.index, iz);
+    let scales = if iz.is_some() {
+        pdw_store::provenance::basin_scales_3d()
+    } else {
+        pdw_store::provenance::basin_scales()
+    };
     writer.annotate(&pdw_store::Annotations {
         provenance: Some(&prov),
         units: &units,
         slice: Some(&slice),
         scales: &scales,
     })?;
+    if let Some(i) = iz {
+        // A 3-D grid's picture is one z-slice: the gait lies on it only within half a z-step.
+        let g = gait.map_or(plan.centre[i], |fp| fp.section[i]);
+        let k = p.slice.unwrap_or(plan.zs.len() / 2);
+        slice.on_fixed_point &= near_slice(&plan.zs, k, g);
+    }
     Ok(Described {
         sec_units,
         axes: (bx.x.index, bx.y.index),
+        z: iz,
         slice,
     })
 }
@@ -592,9 +708,8 @@ fn compute_rows(
         let end = consecutive_end(todo, k, max_rows);
         let call_start = Instant::now();
         let rows = &todo[k..end];
-        let row_ys: Vec<f64> = rows.iter().map(|&r| plan.ys[r]).collect();
         let done_before = pb.position();
-        let res = classify_cells(&problem, &plan.cells(&row_ys), &plan.opts, pool, &|n| {
+        let res = classify_cells(&problem, &plan.row_cells(rows), &plan.opts, pool, &|n| {
             pb.set_position(done_before + n as u64)
         });
         if stopped() {
@@ -644,12 +759,13 @@ fn write_results(
     t0: Instant,
 ) -> anyhow::Result<()> {
     let (nx, ny) = p.req.grid;
+    let nz = p.req.z.as_ref().map_or(1, |(_, n)| *n);
     let attractors: Vec<Attractor> = set.attractors.iter().map(store_attractor).collect();
     let legend = set.legend();
     let out_metrics = if p.shard.is_none() {
         let outcome = writer.read_outcome()?;
         let flat: Vec<u8> = outcome.iter().copied().collect();
-        let m = basin_metrics(&flat, nx, ny, DEFAULT_ENTROPY_BOX)?;
+        let m = basin_metrics_slices(&flat, nx, ny, nz, DEFAULT_ENTROPY_BOX)?;
         Some(store_metrics(&m, &legend, nx, ny))
     } else {
         None
@@ -667,7 +783,7 @@ fn write_results(
         &p.out,
         &pdw_store::Annotations {
             provenance: None,
-            units: &basin_units(&described.sec_units, ix, iy),
+            units: &basin_units(&described.sec_units, ix, iy, described.z),
             slice: None,
             scales: &[],
         },
@@ -690,8 +806,9 @@ fn write_results(
     Ok(())
 }
 
-/// The PNG heatmap of the finished file. Orbit points are drawn only where the slice passes
-/// through the gait: off the slice their projection would mislead.
+/// The PNG heatmap of the finished file (of a 3-D grid: the chosen z-slice, recorded in
+/// `/slice`). Orbit points are drawn only where the slice passes through the gait: off the
+/// slice their projection would mislead.
 fn plot(
     a: &BasinArgs,
     p: &Parsed,
@@ -700,22 +817,68 @@ fn plot(
 ) -> anyhow::Result<()> {
     let (h, outcome) = read_basin_outcome(&p.out)?;
     let slice = &described.slice;
+    let (ix, iy) = described.axes;
+    let u = &described.sec_units;
+    let (view, label) = match (&h.z, described.z) {
+        (Some(z), Some(iz)) => {
+            let k = p.slice.unwrap_or(z.values.len() / 2);
+            let (view, label) = slice_view(&p.out, &h, &outcome, k, &u[iz])?;
+            (view, Some(label))
+        }
+        _ => (outcome, None),
+    };
+    let budget = u32::from(a.max_strides);
+    let title = basin_title(&p.info.name, p.m.slope(), budget, slice, label.as_deref());
     let shown: &[Attractor] = if slice.on_fixed_point {
         attractors
     } else {
         &[]
     };
-    let title = basin_title(&p.info.name, p.m.slope(), u32::from(a.max_strides), slice);
-    let (ix, iy) = described.axes;
-    let u = &described.sec_units;
     plot_basin_attractors(
         &p.png,
         &labelled(&h, &u[ix], &u[iy]),
-        outcome.view(),
+        view.view(),
         shown,
         &title,
     )?;
     Ok(())
+}
+
+/// Whether `g` lies within half a z-step of slice `k` of `zs` (the slice passes through it).
+fn near_slice(zs: &[f64], k: usize, g: f64) -> bool {
+    let step = if zs.len() > 1 {
+        (zs[zs.len() - 1] - zs[0]) / (zs.len() - 1) as f64
+    } else {
+        0.0
+    };
+    (g - zs[k]).abs() <= 0.5 * step + 1e-12 * (1.0 + g.abs())
+}
+
+/// Slice `k` of a 3-D basin's (rows × nx) `outcome`, written into the file's `/slice`
+/// ([`pdw_store::provenance::write_slice_view`]), and its label for the picture's title
+/// (`hip_rate = 0.3 rad/s`, `unit` the z coordinate's).
+pub(super) fn slice_view(
+    path: &std::path::Path,
+    h: &BasinHeader,
+    outcome: &pdw_store::ndarray::Array2<u8>,
+    k: usize,
+    unit: &str,
+) -> anyhow::Result<(pdw_store::ndarray::Array2<u8>, String)> {
+    let z = h.z.as_ref().expect("a 3-D grid");
+    let ny = h.ny();
+    let view = outcome
+        .slice(pdw_store::ndarray::s![k * ny..(k + 1) * ny, ..])
+        .to_owned();
+    let v = z.values[k];
+    pdw_store::provenance::write_slice_view(path, &z.name, k, v, view.view())?;
+    let label = format!(
+        "{} = {} {unit} (slice {} of {})",
+        z.name,
+        pdw_store::provenance::short(v),
+        k + 1,
+        z.values.len()
+    );
+    Ok((view, label))
 }
 
 /// An attractor in the file's plain form (`period_strides` 0 and no multipliers for a chaotic
@@ -746,7 +909,8 @@ fn basin_slice(
     gait: &[f64],
 ) -> pdw_store::Slice {
     let (ix, iy, base) = (plan.bx.x.index, plan.bx.y.index, &plan.base);
-    let off_axes = || (0..names.len()).filter(|&i| i != ix && i != iy);
+    let iz = plan.bx.z.as_ref().map(|z| z.index);
+    let off_axes = || (0..names.len()).filter(move |&i| i != ix && i != iy && Some(i) != iz);
     let fixed: Vec<(String, f64, String, String)> = off_axes()
         .map(|i| {
             let source = if plan.fixed.iter().any(|(j, _)| *j == i) {
@@ -771,14 +935,21 @@ fn basin_slice(
     }
 }
 
-/// The unit of every dataset of a basin file, by path.
-fn basin_units(units: &[String], ix: usize, iy: usize) -> impl Fn(&str) -> Option<String> {
+/// The unit of every dataset of a basin file, by path (`iz`: the z coordinate of a 3-D grid).
+fn basin_units(
+    units: &[String],
+    ix: usize,
+    iy: usize,
+    iz: Option<usize>,
+) -> impl Fn(&str) -> Option<String> {
     let (ux, uy) = (units[ix].clone(), units[iy].clone());
+    let uz = iz.map(|i| units[i].clone());
     let list = super::units_list(units);
     move |p: &str| -> Option<String> {
         match p {
             "grid/x" => Some(ux.clone()),
             "grid/y" => Some(uy.clone()),
+            "grid/z" => uz.clone(),
             "basin/outcome" | "basin/strides" | "basin/rows_done" | "basin/block_digest" => {
                 Some("1".into())
             }
@@ -791,14 +962,25 @@ fn basin_units(units: &[String], ix: usize, iy: usize) -> impl Fn(&str) -> Optio
 }
 
 /// The picture's title: model, slope, stride budget, and the slice when the section has more
-/// coordinates than the two axes.
-pub fn basin_title(model: &str, slope: f64, max_strides: u32, slice: &pdw_store::Slice) -> String {
+/// coordinates than the two axes (`z`: the drawn z-slice of a 3-D grid, as [`slice_view`]
+/// labels it).
+pub fn basin_title(
+    model: &str,
+    slope: f64,
+    max_strides: u32,
+    slice: &pdw_store::Slice,
+    z: Option<&str>,
+) -> String {
     let slope = pdw_store::provenance::short(slope);
-    if slice.fixed.is_empty() {
+    if slice.fixed.is_empty() && z.is_none() {
         return format!("{model} walker basin, slope {slope} rad, {max_strides} strides");
     }
     // Short enough to fit the picture's width: the slice replaces the stride budget.
-    let mut t = format!("{model}, slope {slope} rad | {}", slice.describe());
+    let mut parts: Vec<String> = z.map(str::to_string).into_iter().collect();
+    if !slice.fixed.is_empty() {
+        parts.push(slice.describe());
+    }
+    let mut t = format!("{model}, slope {slope} rad | {}", parts.join(", "));
     if !slice.on_fixed_point {
         t.push_str(", gait off slice");
     }
@@ -852,12 +1034,12 @@ fn print_summary(
     elapsed: f64,
 ) {
     let (m, (nx, ny)) = (&p.m, p.req.grid);
+    let nz = p.req.z.as_ref().map(|(_, n)| *n);
     crate::outln!(
-        "basin of the {} walker at slope {} rad: {}x{} cells, up to {} strides, {} thread(s)",
+        "basin of the {} walker at slope {} rad: {} cells, up to {} strides, {} thread(s)",
         m.info.name,
         m.slope(),
-        nx,
-        ny,
+        grid_text(nx, ny, nz),
         a.max_strides,
         a.threads
     );
@@ -889,7 +1071,7 @@ fn print_summary(
     crate::outln!(
         "  {:.2} s, {:.0} cells/s; wrote {} and {}",
         elapsed,
-        (nx * ny) as f64 / elapsed,
+        (nx * ny * nz.unwrap_or(1)) as f64 / elapsed,
         p.out.display(),
         p.png.display()
     );

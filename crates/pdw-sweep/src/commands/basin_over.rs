@@ -128,6 +128,7 @@ fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
     check_memory(
         grid.0,
         grid.1,
+        None,
         info.section_names.len(),
         info.state_names.len(),
     )?;
@@ -209,6 +210,7 @@ fn plan(a: &BasinArgs, p: &Parsed) -> anyhow::Result<Plan> {
         grid: p.grid,
         x: axis(&p.info, &a.x, "--x")?,
         y: axis(&p.info, &a.y, "--y")?,
+        z: None,
         fixed: p.fixed.clone(),
         max_strides: a.max_strides,
         integrator: p.integrator,

@@ -4,8 +4,8 @@
 use super::basin::store_metrics;
 use super::output::{Format, Input, Output};
 use crate::cli::MergeArgs;
-use pdw_limit::basin::{basin_metrics, DEFAULT_ENTROPY_BOX};
-use pdw_store::{merge, plot_basin_attractors, read_basin, BasinMetrics};
+use pdw_limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
+use pdw_store::{merge, plot_basin_attractors, read_basin, BasinHeader, BasinMetrics};
 use std::process::ExitCode;
 
 pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
@@ -42,7 +42,7 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
     // the claim refused an existing --out without --force; its placeholder is replaced
     let header = merge(&a.shards, &a.out, true, &command, |h, outcome| {
         let flat: Vec<u8> = outcome.iter().copied().collect();
-        match basin_metrics(&flat, h.nx(), h.ny(), DEFAULT_ENTROPY_BOX) {
+        match basin_metrics_slices(&flat, h.nx(), h.ny(), h.nz(), DEFAULT_ENTROPY_BOX) {
             Ok(m) => store_metrics(&m, &h.legend, h.nx(), h.ny()),
             Err(e) => {
                 failure = Some(e.to_string());
@@ -65,34 +65,13 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
         "entropy_box": DEFAULT_ENTROPY_BOX,
     }));
     pdw_store::provenance::annotate_merged(&a.out, &inputs, &prov)?;
-    let data = read_basin(&a.out)?;
-    let slice = pdw_store::provenance::read_slice(&a.out)?;
-    // Orbit points are drawn only where the slice passes through the gait (files without
-    // /slice: as before): off the slice their projection would mislead.
-    let on_slice = slice.as_ref().is_none_or(|s| s.on_fixed_point);
-    let shown: &[_] = if on_slice { &data.attractors } else { &[] };
-    let title = match &slice {
-        Some(s) => format!(
-            "{} (merged)",
-            super::basin::basin_title(&header.model, header.slope, header.max_strides, s)
-        ),
-        None => format!(
-            "{} walker basin, slope {} rad (merged)",
-            header.model, header.slope
-        ),
-    };
-    let mut labelled = header.clone();
-    for (name, ds) in [
-        (&mut labelled.x_name, "grid/x"),
-        (&mut labelled.y_name, "grid/y"),
-    ] {
-        if let Some(u) = pdw_store::provenance::read_units(&a.out, ds)? {
-            *name = format!("{name} [{u}]");
-        }
-    }
-    plot_basin_attractors(&png, &labelled, data.outcome.view(), shown, &title)?;
+    draw(&a.out, &png, &header)?;
+    let nz = header
+        .z
+        .as_ref()
+        .map_or(String::new(), |z| format!("x{}", z.values.len()));
     crate::outln!(
-        "merged {} shard(s) into {} ({}x{} cells) and {}",
+        "merged {} shard(s) into {} ({}x{}{nz} cells) and {}",
         a.shards.len(),
         a.out.display(),
         header.nx(),
@@ -100,6 +79,52 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
         png.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// The merged file's picture (a 3-D grid's: its middle z-slice, recorded in `/slice`).
+fn draw(out: &std::path::Path, png: &std::path::Path, header: &BasinHeader) -> anyhow::Result<()> {
+    let data = read_basin(out)?;
+    let slice = pdw_store::provenance::read_slice(out)?;
+    // Orbit points are drawn only where the slice passes through the gait (files without
+    // /slice: as before): off the slice their projection would mislead.
+    let on_slice = slice.as_ref().is_none_or(|s| s.on_fixed_point);
+    let shown: &[_] = if on_slice { &data.attractors } else { &[] };
+    let mut labelled = header.clone();
+    for (name, ds) in [
+        (&mut labelled.x_name, "grid/x"),
+        (&mut labelled.y_name, "grid/y"),
+    ] {
+        if let Some(u) = pdw_store::provenance::read_units(out, ds)? {
+            *name = format!("{name} [{u}]");
+        }
+    }
+    let (view, label) = match &header.z {
+        Some(z) => {
+            let unit = pdw_store::provenance::read_units(out, "grid/z")?.unwrap_or_default();
+            let k = z.values.len() / 2;
+            let (view, label) = super::basin::slice_view(out, header, &data.outcome, k, &unit)?;
+            (view, Some(label))
+        }
+        None => (data.outcome.clone(), None),
+    };
+    let title = match &slice {
+        Some(s) => format!(
+            "{} (merged)",
+            super::basin::basin_title(
+                &header.model,
+                header.slope,
+                header.max_strides,
+                s,
+                label.as_deref()
+            )
+        ),
+        None => format!(
+            "{} walker basin, slope {} rad (merged)",
+            header.model, header.slope
+        ),
+    };
+    plot_basin_attractors(png, &labelled, view.view(), shown, &title)?;
+    Ok(())
 }
 
 /// Shards written by different builds (crate version, git commit) or numeric contracts may
