@@ -3,6 +3,7 @@
 //! `cargo test --release -p pdw-sweep --test sweep <file>::`.
 
 mod basin_stability;
+mod cascade;
 mod clear_cli;
 mod cli;
 mod common;
