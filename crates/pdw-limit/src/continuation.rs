@@ -48,6 +48,12 @@
 //! the multiplier −1 (computed by inverse iteration). [`switch_period_doubling`] corrects the
 //! predictor `y_PD + ε (v, 0)` on `G_{2k} = 0` with the constraint `v·(s − s_PD) = ε`, checks that
 //! the result is not a period-k point, and continues the new branch by pseudo-arclength.
+//!
+//! # Both ways from a point inside the range
+//! [`continue_both_ways`] continues from the same corrected first point towards `mu_min` and
+//! towards `mu_max` and joins the halves ([`join_halves`]): one branch in the direction
+//! `opts.direction`, the start point once, every tangent along the joined order, the
+//! bifurcations of both halves re-indexed into it.
 
 use crate::error::LimitError;
 use crate::family::{Built, ModelFamily};

@@ -28,6 +28,8 @@
 //! where the stride map is far from any gait can spend its iterations on long variational
 //! strides (measured: the compass gait's default box on a level floor, 256 starts, 40 s on one
 //! core, of which one start took 30 s — 18 Newton iterations ending in a failed line search).
+//! [`ScanOptions::newton_max_iters`] caps the iterations per start; a sweep that scans for its
+//! start gait uses 12, which finds what the default 40 finds on every model the scan tests use.
 
 use crate::continuation::real_eigenvector;
 use crate::error::LimitError;
