@@ -139,18 +139,27 @@ def continuation(
     points: int = 100,
     gait: str = "stable",
     threads: int = 2,
+    max_period: int = 2,
+    start_at: Optional[float] = None,
     **params: float,
 ) -> list[dict[str, Any]]:
-    """`pdw-sweep fixedpoint --sweep NAME=start:stop:points`: pseudo-arclength continuation of
-    the period-one gait (`gait`: the stable one, else the first found; or "unstable") in
-    `parameter`, plus the period-2 branch switched onto at the first period doubling, each put
-    on the `points` evenly spaced values start, ..., stop: exactly one point per value where the
-    branch exists (a branch that folds back: one per crossing; the period-2 branch: the values
-    past the doubling), corrected at that value. A value whose correction fails is left out
-    with a UserWarning.
+    """`pdw-sweep fixedpoint --sweep NAME=start:stop:points --max-period P --from MU`:
+    pseudo-arclength continuation of the period-one gait (`gait`: the stable one, else the
+    first found; or "unstable") in `parameter`, and the period-doubling cascade followed down to
+    period `max_period` (a power of two, 1 to 64; default 2): on each period-k branch the
+    period-2k branch is switched onto at its first period doubling. Each branch is put on the
+    `points` evenly spaced values start, ..., stop: exactly one point per value where the branch
+    exists (a branch that folds back: one per crossing; a period-2k branch: the values past its
+    doubling), corrected at that value. A value whose correction fails, or a switch that fails,
+    is a UserWarning.
+
+    The start gait is found at `start_at` (within start..stop) and continued both ways into one
+    branch; without it, at `start` (from the model's guesses, else by a scan of the section) or,
+    when `start` has no gait, at the values inward from it (the middle, then the quarter
+    points). Raises ValueError when none of them has a gait, naming the values tried.
 
     One dict per branch (n = its points, K = period_k, m = multipliers per point): name
-    ("period-1", "period-2"), period_k, parameter (n,), section (n, d_s; the orbit's first
+    ("period-1", "period-2", "period-4", ...), period_k, parameter (n,), section (n, d_s; the orbit's first
     point), orbit (n, K, d_s; all K points in stride order), period (n,; the K strides
     together), step_length (n, K; per stride), speed (n,; K step lengths over the period),
     stable (n,), valid (n, K; validity along each stride, True where unchecked), validity

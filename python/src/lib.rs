@@ -370,6 +370,30 @@ fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> 
     err(pdw::gaits::no_gait_message(m, which, n, failed))
 }
 
+/// No start gait for a sweep: the values tried (Newton from the guesses, then a section scan at
+/// each), the failed guesses at the first, and what to pass instead.
+fn no_start_error(
+    m: &Model,
+    plan: &pdw::sweep::SweepPlan,
+    which: &str,
+    none: &pdw::sweep::NoStart,
+) -> PyErr {
+    let values: Vec<String> = none.tried.iter().map(|v| v.to_string()).collect();
+    let mut msg = format!(
+        "no {which} period-one gait of model '{}' at {} = {} to start the continuation from (at \
+         each: Newton from the guesses, then a scan of the section with {} starts); pass \
+         start_at= a value of the range with a gait (gaits() lists the gaits at one value)",
+        m.info.name,
+        plan.grid.name,
+        values.join(", "),
+        pdw::sweep::START_SCAN_STARTS
+    );
+    for (label, g, e) in &none.failed {
+        msg.push_str(&format!("\n  guess '{label}' {g:?}: {e}"));
+    }
+    err(msg)
+}
+
 /// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None, **params)`.
 #[pyfunction]
 #[pyo3(signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, **params))]
@@ -1142,9 +1166,10 @@ fn branch_dict<'py>(
 }
 
 /// `continuation(model, parameter="slope", start, stop, points=100, gait="stable", threads=2,
-/// **params)`: `pdw-sweep fixedpoint --sweep NAME=start:stop:points`, branch by branch.
+/// max_period=2, start_at=None, **params)`: `pdw-sweep fixedpoint --sweep
+/// NAME=start:stop:points --max-period P --from MU`, branch by branch.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", parameter="slope", start=0.001, stop=0.019, points=100, gait="stable", threads=THREADS, **params))]
+#[pyo3(signature = (model="simplest", parameter="slope", start=0.001, stop=0.019, points=100, gait="stable", threads=THREADS, max_period=2, start_at=None, **params))]
 #[allow(clippy::too_many_arguments)]
 fn continuation<'py>(
     py: Python<'py>,
@@ -1155,6 +1180,8 @@ fn continuation<'py>(
     points: usize,
     gait: &str,
     threads: usize,
+    max_period: usize,
+    start_at: Option<f64>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     if points < 2 {
@@ -1169,39 +1196,47 @@ fn continuation<'py>(
         )));
     }
     pdw::input::check_threads(threads, "threads").map_err(err)?;
+    pdw::input::check_max_period(max_period, "max_period").map_err(err)?;
     let mut fixed = overrides(None, params)?;
     fixed.retain(|(n, _)| n != parameter);
+    let grid = pdw::input::Sweep {
+        name: parameter.to_string(),
+        lo: start,
+        hi: stop,
+        n: points,
+    };
+    let from = start_at
+        .map(|mu| pdw::input::check_from(mu, &grid, "start_at"))
+        .transpose()
+        .map_err(err)?;
     let plan = pdw::sweep::SweepPlan {
         model: model.to_string(),
         fixed,
-        grid: pdw::input::Sweep {
-            name: parameter.to_string(),
-            lo: start,
-            hi: stop,
-            n: points,
-        },
+        grid,
         start: match gait {
             "unstable" => pdw::sweep::StartChoice::Unstable,
             _ => pdw::sweep::StartChoice::Stable,
         },
         tol: 1e-12,
         integrator: None,
+        from,
+        max_period,
     };
     let m0 = plan.start_model();
     give_warnings(py)?;
     let m0 = m0.map_err(err)?;
     let ds = m0.walker.section_dim();
     let result = interruptible(py, || -> PyResult<pdw_limit::Sweep> {
-        let guesses = pdw::gaits::guesses(&m0, None, "guess").map_err(err)?;
-        let (s, failed) = pdw::sweep::start_gait(&plan, &m0, &guesses).map_err(err)?;
-        let Some(s) = s else {
-            return Err(no_gait_error(&m0, gait, guesses.len(), &failed));
-        };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(err)?;
-        pdw::sweep::continuation(&plan, &s, &pool, &pdw_limit::sweep::Silent).map_err(err)
+        let s = match pdw::sweep::find_start(&plan, None, &pool).map_err(err)? {
+            Ok(s) => s,
+            Err(none) => return Err(no_start_error(&m0, &plan, gait, &none)),
+        };
+        let silent = &pdw_limit::sweep::Silent;
+        pdw::sweep::continuation(&plan, &s.section, s.param, &pool, silent).map_err(err)
     })?;
     for w in &result.warnings {
         let msg = std::ffi::CString::new(w.as_str()).map_err(err)?;

@@ -447,3 +447,28 @@ def test_basin_attractors_say_what_makes_them_physically_invalid():
     _, _, compass = pdw.basin("compass", slope="3deg", grid=(7, 7))
     gait = {a["name"]: a for a in compass["attractors"]}["gait"]
     assert gait["valid"] is True and gait["invalid"] == []
+
+
+def test_continuation_follows_the_cascade_and_starts_anywhere():
+    # max_period=4: period-1, period-2 and period-4 branches, each period-4 point a fixed point
+    # of the four-stride orbit found directly (Newton on P^4, fixed_point(period=4)).
+    grid = np.linspace(0.014, 0.0185, 6)
+    deep = pdw.continuation("simplest", "slope", 0.014, 0.0185, points=6, max_period=4)
+    assert [b["name"] for b in deep] == ["period-1", "period-2", "period-4"]
+    four = deep[2]
+    assert four["period_k"] == 4 and four["orbit"].shape[1:] == (4, 2)
+    i = int(np.argmax(four["parameter"]))
+    ref = pdw.fixed_point(slope=four["parameter"][i], period=4, guess=four["section"][i])[0]
+    assert min(np.abs(ref["orbit"] - four["section"][i]).max(axis=1)) < 1e-8
+    # Started in the middle, the same points as started at the first value.
+    mid = pdw.continuation(
+        "simplest", "slope", 0.014, 0.0185, points=6, max_period=4, start_at=grid[3]
+    )
+    assert [b["name"] for b in mid] == ["period-1", "period-2", "period-4"]
+    for a, b in zip(deep, mid):
+        np.testing.assert_array_equal(a["parameter"], b["parameter"])
+        np.testing.assert_allclose(a["section"], b["section"], rtol=0, atol=1e-9)
+    with pytest.raises(ValueError, match="max_period: 3 is not a power of two"):
+        pdw.continuation("simplest", "slope", 0.014, 0.0185, points=6, max_period=3)
+    with pytest.raises(ValueError, match="start_at: 0.5 is outside the swept range"):
+        pdw.continuation("simplest", "slope", 0.014, 0.0185, points=6, start_at=0.5)

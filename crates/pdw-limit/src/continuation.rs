@@ -48,6 +48,12 @@
 //! the multiplier −1 (computed by inverse iteration). [`switch_period_doubling`] corrects the
 //! predictor `y_PD + ε (v, 0)` on `G_{2k} = 0` with the constraint `v·(s − s_PD) = ε`, checks that
 //! the result is not a period-k point, and continues the new branch by pseudo-arclength.
+//!
+//! # Both ways from a point inside the range
+//! [`continue_both_ways`] continues from the same corrected first point towards `mu_min` and
+//! towards `mu_max` and joins the halves ([`join_halves`]): one branch in the direction
+//! `opts.direction`, the start point once, every tangent along the joined order, the
+//! bifurcations of both halves re-indexed into it.
 
 use crate::error::LimitError;
 use crate::family::{Built, ModelFamily};
@@ -1048,6 +1054,73 @@ where
         branch = switch_erased(family, &pd, opts)?;
     }
     Ok((pds, branches))
+}
+
+/// Continue the branch of period-`period_strides` orbits through the guess `s0` at `mu0` both
+/// ways: towards `opts.mu_min` and towards `opts.mu_max` (two runs of [`continue_branch`] from
+/// the same first point, `opts.direction` set to −1 and +1), joined into one branch ordered in
+/// the direction `opts.direction` ([`join_halves`]). The start point appears once; the
+/// bifurcations of both halves are kept, in the joined order.
+pub fn continue_both_ways<S, E, F>(
+    family: &F,
+    s0: &[f64],
+    mu0: f64,
+    period_strides: usize,
+    opts: &ContinuationOptions,
+) -> Result<Branch, LimitError>
+where
+    S: Section + ?Sized,
+    E: Display,
+    F: Fn(f64) -> Result<Box<S>, E>,
+{
+    let towards = |direction: f64| {
+        let mut o = *opts;
+        o.direction = direction;
+        continue_erased(family, s0, mu0, period_strides, &o)
+    };
+    let back = towards(-opts.direction)?;
+    let ahead = towards(opts.direction)?;
+    Ok(join_halves(back, ahead))
+}
+
+/// One branch from two halves continued from the same start point in opposite directions:
+/// `back`'s points reversed (their tangents turned round, so that every tangent points along
+/// the joined order), then `ahead`'s from its second point on. A bifurcation between points
+/// `j − 1` and `j` of `back` lies between the joined points `m − j` and `m − j + 1` (`m + 1`
+/// points in `back`), one of `ahead` between `m + j − 1` and `m + j`; the joined list holds
+/// `back`'s in reverse, then `ahead`'s. The joined branch ends as `ahead` does.
+pub fn join_halves(back: Branch, ahead: Branch) -> Branch {
+    let m = back.points.len().saturating_sub(1);
+    let mut points: Vec<BranchPoint> = back
+        .points
+        .into_iter()
+        .skip(1)
+        .rev()
+        .map(|mut p| {
+            p.tangent.iter_mut().for_each(|t| *t = -*t);
+            p
+        })
+        .collect();
+    points.extend(ahead.points);
+    let mut bifurcations: Vec<Bifurcation> = back
+        .bifurcations
+        .into_iter()
+        .rev()
+        .map(|mut b| {
+            b.index = m + 1 - b.index;
+            b
+        })
+        .collect();
+    bifurcations.extend(ahead.bifurcations.into_iter().map(|mut b| {
+        b.index += m;
+        b
+    }));
+    Branch {
+        period_strides: ahead.period_strides,
+        points,
+        bifurcations,
+        end: ahead.end,
+    }
 }
 
 /// One point of a branch at a requested parameter value ([`branch_at_params`]).

@@ -46,9 +46,9 @@ pub use codim2::{
     LostReason, Region, RegionOptions,
 };
 pub use continuation::{
-    branch_at_params, continue_branch, period_doubling_cascade, real_eigenvector,
-    switch_period_doubling, Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint,
-    ContinuationMethod, ContinuationOptions, SampledPoint,
+    branch_at_params, continue_both_ways, continue_branch, join_halves, period_doubling_cascade,
+    real_eigenvector, switch_period_doubling, Bifurcation, BifurcationKind, Branch, BranchEnd,
+    BranchPoint, ContinuationMethod, ContinuationOptions, SampledPoint,
 };
 pub use error::LimitError;
 pub use floquet::{is_stable, multipliers, Multiplier};
@@ -62,7 +62,7 @@ pub use newton::{
 pub use orbit::{orbit_diagram, OrbitColumn, OrbitOptions, OrbitStart};
 pub use periodic::{find_periodic_orbit, PeriodKProblem, PeriodicOrbit};
 pub use stride::{EventDriver, Stride, StrideEnd, StrideMap, StrideOutcome, MAX_EVENTS_PER_STRIDE};
-pub use sweep::{grid_options, GridBranch, MeasuredPoint, Sweep, SweepProgress};
+pub use sweep::{grid_options, GridBranch, MeasuredPoint, Sweep, SweepProgress, SweepSpec};
 pub use trajectory::{
     bytes_per_sample, initial_state, model_energy, simulate, Trajectory, TrajectoryError,
     TrajectoryEvent, TrajectoryOptions, Validity,

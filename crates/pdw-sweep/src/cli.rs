@@ -147,6 +147,18 @@ pub struct FixedpointArgs {
     /// to 1e-10 and stored separately. Also an orbit diagram at the same N values.
     #[arg(long)]
     pub sweep: Option<String>,
+    /// With --sweep: follow the period-doubling cascade down to period P strides (a power of
+    /// two, 1 to 64): on each period-k branch, the period-2k branch is switched onto at its
+    /// first period doubling and continued, until period P (branches period-1, period-2,
+    /// period-4, …). Default 2: the period-2 branch only.
+    #[arg(long, value_name = "P", default_value_t = 2, value_parser = parse_max_period, requires = "sweep")]
+    pub max_period: usize,
+    /// With --sweep NAME=A:B:N: find the gait to start from at NAME = MU (within A..B) and
+    /// continue it both ways, towards A and towards B, into one branch. Without it the gait
+    /// is found at A — from the guesses, else by a scan of the section — or, when A has none,
+    /// at the grid values inward from A (the middle, then the quarter points).
+    #[arg(long = "from", value_name = "MU", requires = "sweep", value_parser = parse_from)]
+    pub from: Option<f64>,
     /// HDF5 output of a sweep (default bif.h5), or of --follow KIND (default KIND.h5: pd.h5,
     /// fold.h5).
     #[arg(long)]
@@ -463,6 +475,20 @@ fn parse_period(s: &str) -> Result<usize, String> {
     } else {
         Err(format!("--period: {k} must be between 1 and 64 strides"))
     }
+}
+
+/// `--max-period P`: a power of two from 1 to 64.
+fn parse_max_period(s: &str) -> Result<usize, String> {
+    let p = s
+        .trim()
+        .parse::<usize>()
+        .map_err(|_| format!("--max-period: '{s}' is not a whole number"))?;
+    pdw::input::check_max_period(p, "--max-period").map_err(|e| e.to_string())
+}
+
+/// `--from MU`: a finite number (checked against the range once the sweep is parsed).
+fn parse_from(s: &str) -> Result<f64, String> {
+    pdw::input::parse_f64(s, "--from").map_err(|e| e.to_string())
 }
 
 /// `design --objective`: basin or margin.

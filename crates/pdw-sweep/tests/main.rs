@@ -4,6 +4,7 @@
 
 mod basin3d;
 mod basin_stability;
+mod cascade;
 mod clear_cli;
 mod cli;
 mod common;

@@ -289,3 +289,30 @@ pub fn parse_threads(s: &str) -> Result<usize, InputError> {
         err(format!("{n} must be between 1 and {MAX_THREADS}"))
     }
 }
+
+/// The deepest period of a sweep's period-doubling cascade: a power of two from 1 to 64
+/// ([`pdw_limit::sweep::MAX_CASCADE_PERIOD`]); messages name `what` (e.g. `--max-period`).
+pub fn check_max_period(p: usize, what: &str) -> Result<usize, InputError> {
+    let most = pdw_limit::sweep::MAX_CASCADE_PERIOD;
+    if p.is_power_of_two() && p <= most {
+        Ok(p)
+    } else {
+        err(format!(
+            "{what}: {p} is not a power of two from 1 to {most} (1, 2, 4, 8, 16, 32 or 64)"
+        ))
+    }
+}
+
+/// The value a sweep starts at, inside its range `sw` (either end included); messages name
+/// `what` (e.g. `--from`).
+pub fn check_from(mu: f64, sw: &Sweep, what: &str) -> Result<f64, InputError> {
+    let (a, b) = (sw.lo.min(sw.hi), sw.lo.max(sw.hi));
+    if mu.is_finite() && a <= mu && mu <= b {
+        Ok(mu)
+    } else {
+        err(format!(
+            "{what}: {mu} is outside the swept range {}:{} of '{}'",
+            sw.lo, sw.hi, sw.name
+        ))
+    }
+}

@@ -6,6 +6,7 @@
 
 mod attractors_simplest;
 mod basin_simplest;
+mod cascade_garcia;
 mod chain_walker_gaits;
 mod codim2;
 mod continuation_garcia;

@@ -207,3 +207,53 @@ fn a_scan_finds_no_gait_on_a_level_floor() {
     assert_accounted(&sc);
     assert!(sc.gaits.is_empty() && sc.orbits.is_empty());
 }
+
+/// The gaits and orbits of two scans, by their points (the scan's order).
+fn found(sc: &Scan) -> (Vec<Vec<f64>>, Vec<Vec<Vec<f64>>>) {
+    (
+        sc.gaits.iter().map(|g| g.fp.section.clone()).collect(),
+        sc.orbits.iter().map(|o| o.orbit.orbit.clone()).collect(),
+    )
+}
+
+/// The Newton budget a sweep's start scan uses (12 iterations a start, 64 starts) finds what
+/// the default budget (40) finds, on every model and slope scanned above: the simplest
+/// walker's two gaits at 0.009, its period-2 attractor at 0.016, nothing on a level floor, the
+/// rimless wheel's rolling gait.
+#[test]
+fn a_capped_newton_budget_finds_the_same_gaits() {
+    let rimless = Rimless::new(RimlessParams {
+        slope: 0.08,
+        n_spokes: 8.0,
+        ..Default::default()
+    })
+    .unwrap();
+    let walkers: Vec<Box<dyn Walker>> = vec![
+        Box::new(simplest(0.009)),
+        Box::new(simplest(0.016)),
+        Box::new(simplest(0.0)),
+        Box::new(rimless),
+    ];
+    for w in &walkers {
+        let b = model_box(w.as_ref());
+        let full = ScanOptions::new(64, 1e-12);
+        let capped = ScanOptions {
+            newton_max_iters: 12,
+            ..full.clone()
+        };
+        let (x, y) = (
+            scan(w.as_ref(), &b, &full, &pool(2)).unwrap(),
+            scan(w.as_ref(), &b, &capped, &pool(2)).unwrap(),
+        );
+        let ((gx, ox), (gy, oy)) = (found(&x), found(&y));
+        assert_eq!((gx.len(), ox.len()), (gy.len(), oy.len()));
+        let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(u, v)| (u - v).abs() < 1e-9);
+        assert!(
+            gx.iter().zip(&gy).all(|(a, b)| close(a, b)),
+            "{gx:?} {gy:?}"
+        );
+        for (a, b) in ox.iter().zip(&oy) {
+            assert!(a.iter().zip(b).all(|(p, q)| close(p, q)), "{a:?} {b:?}");
+        }
+    }
+}

@@ -1,7 +1,9 @@
 //! `pdw-sweep fixedpoint --sweep NAME=A:B:N`: continuation of the gait in a parameter
-//! (pseudo-arclength, with period-doubling, fold and Neimark–Sacker detection and a switch onto
-//! the period-2 branch at the first period doubling), plus a brute-force orbit diagram over the
-//! N parameter values; written to HDF5 and drawn as a PNG bifurcation diagram.
+//! (pseudo-arclength, with period-doubling, fold and Neimark–Sacker detection and the
+//! period-doubling cascade followed down to `--max-period`, 2 by default: the period-2 branch
+//! switched onto at the first period doubling), from the gait at A or, with `--from MU` (or when
+//! A has no gait), both ways from a gait inside the range; plus a brute-force orbit diagram over
+//! the N parameter values; written to HDF5 and drawn as a PNG bifurcation diagram.
 //!
 //! The output holds exactly the N requested values per branch ([`pdw_limit::branch_at_params`]
 //! corrects the branch at each), every point measured (all K orbit points, the K-stride
@@ -198,6 +200,8 @@ impl pdw::sweep::Progress for Progress {
 
 /// What the run computed: the branches on the grid and the orbit diagram's columns.
 struct Computed {
+    /// The value of the swept parameter the start gait was at.
+    from: f64,
     sweep: pdw_limit::Sweep,
     columns: Vec<OrbitColumn>,
 }
@@ -219,14 +223,14 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         csv: a.csv.as_deref(),
     };
     let _claim = claim(&files, a)?;
-    let (plan, m0, guesses) = plan(a, sw)?;
+    let (plan, m0, user) = plan(a, sw)?;
     let threads = a.threads.unwrap_or(2);
     let progress = Progress::new(a.quiet);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;
     let t0 = std::time::Instant::now();
-    let Some(computed) = compute(&plan, &m0, &guesses, &pool, &progress)? else {
+    let Some(computed) = compute(&plan, &m0, user.as_deref(), &pool, &progress)? else {
         return Ok(ExitCode::from(2));
     };
     let data = sweep_data(&plan, &m0, &computed, threads, t0.elapsed().as_secs_f64());
@@ -281,15 +285,19 @@ fn claim(f: &Files<'_>, a: &FixedpointArgs) -> Result<super::output::Claim, Inpu
     super::output::claim(&outputs, &inputs, a.force)
 }
 
-/// The plan, the model at A (both ends of the range checked) and the guesses there.
+/// The plan, the model at A (both ends of the range checked) and the user's guess (its length
+/// checked against the model's section).
 /// `--integrator`, `--rtol`, `--atol`, `--rk4-step` or `--controller`, when given, integrate
 /// every stride of the sweep (the gait search, the continuation and the orbit diagram);
 /// otherwise each stage keeps its default.
-#[allow(clippy::type_complexity)]
 fn plan(
     a: &FixedpointArgs,
     grid: Sweep,
-) -> anyhow::Result<(SweepPlan, BuiltModel, Vec<(String, Vec<f64>)>)> {
+) -> anyhow::Result<(SweepPlan, BuiltModel, Option<Vec<f64>>)> {
+    let from = a
+        .from
+        .map(|mu| pdw::input::check_from(mu, &grid, "--from"))
+        .transpose()?;
     let mut plan = SweepPlan {
         model: a.model.model.clone(),
         fixed: super::overrides(&a.model)?,
@@ -300,10 +308,12 @@ fn plan(
         },
         tol: a.tol,
         integrator: None,
+        from,
+        max_period: a.max_period,
     };
     let m0 = plan.start_model()?;
     let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
-    let guesses = pdw::gaits::guesses(&m0, user, "--guess")?;
+    pdw::gaits::guesses(&m0, user.clone(), "--guess")?;
     let o = &a.integrator;
     plan.integrator = (o.integrator.is_some()
         || o.rtol.is_some()
@@ -312,36 +322,66 @@ fn plan(
         || o.controller.is_some())
     .then(|| super::integrator(o, pdw_limit::gaits::default_integrator(a.tol)))
     .transpose()?;
-    Ok((plan, m0, guesses))
+    Ok((plan, m0, user))
 }
 
-/// The library's steps ([`pdw::sweep`]); `None` after reporting that no gait was found at A.
+/// The library's steps ([`pdw::sweep`]); `None` after reporting that no gait was found to
+/// start from. A start other than the guesses' gait at A is said on stderr.
 fn compute(
     plan: &SweepPlan,
     m0: &BuiltModel,
-    guesses: &[(String, Vec<f64>)],
+    user: Option<&[f64]>,
     pool: &rayon::ThreadPool,
     progress: &Progress,
 ) -> anyhow::Result<Option<Computed>> {
-    let (start, failed) = pdw::sweep::start_gait(plan, m0, guesses)?;
-    let Some(start) = start else {
-        eprintln!(
-            "no period-one gait of model '{}' at {} = {} to start the continuation from",
-            m0.info.name, plan.grid.name, plan.grid.lo
-        );
-        for (label, g, e) in &failed {
-            report_failure(label, g, e);
+    let start = match pdw::sweep::find_start(plan, user, pool)? {
+        Ok(s) => s,
+        Err(none) => {
+            report_no_start(plan, m0, &none);
+            return Ok(None);
         }
-        eprintln!("try: another start of the range, or --guess");
-        return Ok(None);
     };
-    let sweep = pdw::sweep::continuation(plan, &start, pool, progress)?;
+    if start.param != plan.grid.lo || start.how != "the guesses" {
+        eprintln!(
+            "starting from the gait at {} = {} (found by {}), continued both ways",
+            plan.grid.name, start.param, start.how
+        );
+    }
+    let sweep = pdw::sweep::continuation(plan, &start.section, start.param, pool, progress)?;
     for w in &sweep.warnings {
         eprintln!("warning: {w}");
     }
-    let columns = pdw::sweep::orbit_diagram(plan, &sweep, &start, pool, progress)?;
+    let columns = pdw::sweep::orbit_diagram(plan, &sweep, &start.section, pool, progress)?;
     progress.pb.finish_and_clear();
-    Ok(Some(Computed { sweep, columns }))
+    Ok(Some(Computed {
+        from: start.param,
+        sweep,
+        columns,
+    }))
+}
+
+/// No gait at any value tried: the values, the failed guesses at the first, what to try.
+fn report_no_start(plan: &SweepPlan, m0: &BuiltModel, none: &pdw::sweep::NoStart) {
+    let values: Vec<String> = none.tried.iter().map(|v| v.to_string()).collect();
+    eprintln!(
+        "no period-one gait of model '{}' at {} = {} to start the continuation from (at each: \
+         Newton from the guesses, then a scan of the section with {} starts)",
+        m0.info.name,
+        plan.grid.name,
+        values.join(", "),
+        pdw::sweep::START_SCAN_STARTS
+    );
+    for (label, g, e) in &none.failed {
+        report_failure(label, g, e);
+    }
+    let at = match plan.grid.name.as_str() {
+        "slope" => "--slope VALUE".to_string(),
+        name => format!("--set {name}=VALUE"),
+    };
+    eprintln!(
+        "try: --from VALUE at a value of the range with a gait (list the gaits at one value with \
+         fixedpoint {at} --search), or --guess"
+    );
 }
 
 /// The sweep in the file's form: the branches, their bifurcations, the orbit diagram (its
@@ -392,7 +432,7 @@ fn sweep_data(
         branches: c.sweep.branches.iter().map(store_branch).collect(),
         bifurcations,
         orbit: Some(orbit),
-        settings: sweep_settings(plan, m0, threads),
+        settings: sweep_settings(plan, m0, c.from, threads),
         elapsed_s: elapsed,
     }
 }
@@ -449,8 +489,14 @@ fn report(
         return Ok(());
     }
     let main = &c.sweep.continued[0].1;
+    let both = if c.from != sw.lo {
+        format!(" both ways from {}", c.from)
+    } else {
+        String::new()
+    };
     crate::outln!(
-        "model {}: {} continued from {} to {} ({} internal steps on the period-1 branch; end: {})",
+        "model {}: {} continued from {} to {}{both} ({} internal steps on the period-1 branch; \
+         end: {})",
         m0.info.name,
         sw.name,
         sw.lo,
@@ -458,9 +504,15 @@ fn report(
         main.points.len(),
         main.end
     );
-    for b in &data.branches {
+    for (b, (_, cb)) in data.branches.iter().zip(&c.sweep.continued) {
+        // Down the cascade (period 4 and more) a branch may end inside the range: say why.
+        let end = match &cb.end {
+            pdw_limit::BranchEnd::ParamBound { .. } => String::new(),
+            e if cb.period_strides >= 4 => format!(" (the branch ended: {e})"),
+            _ => String::new(),
+        };
         crate::outln!(
-            "  {:<16} {} points on the output grid of {} values{}",
+            "  {:<16} {} points on the output grid of {} values{}{end}",
             b.name,
             b.parameter.len(),
             sw.n,
@@ -530,8 +582,14 @@ fn csv_comments(m: &BuiltModel, parameter: &str) -> Vec<(String, String)> {
 }
 
 /// The file's settings attributes: the output grid, the continuation, the integrators and
-/// tolerances of every stage, the thread count.
-fn sweep_settings(plan: &SweepPlan, m: &BuiltModel, threads: usize) -> Vec<(String, String)> {
+/// tolerances of every stage, the thread count. The grid names the start value (`start`) when
+/// it is not A, and the cascade's depth (`max_period`) when it is not 2.
+fn sweep_settings(
+    plan: &SweepPlan,
+    m: &BuiltModel,
+    from: f64,
+    threads: usize,
+) -> Vec<(String, String)> {
     let (sw, c, o) = (
         &plan.grid,
         &plan.continuation_options(),
@@ -539,15 +597,19 @@ fn sweep_settings(plan: &SweepPlan, m: &BuiltModel, threads: usize) -> Vec<(Stri
     );
     let fp_integrator = &plan.fixed_point_integrator();
     let j = |v: serde_json::Value| v.to_string();
+    let mut grid = serde_json::json!({
+        "parameter": sw.name, "from": sw.lo, "to": sw.hi, "n": sw.n,
+        "unit": super::param_unit(m, &sw.name),
+    });
+    if from != sw.lo {
+        grid["start"] = serde_json::json!(from);
+    }
+    if plan.max_period != 2 {
+        grid["max_period"] = serde_json::json!(plan.max_period);
+    }
     vec![
         ("continuation".into(), j(continuation_json(c))),
-        (
-            "grid".into(),
-            j(serde_json::json!({
-                "parameter": sw.name, "from": sw.lo, "to": sw.hi, "n": sw.n,
-                "unit": super::param_unit(m, &sw.name),
-            })),
-        ),
+        ("grid".into(), j(grid)),
         (
             "integrator".into(),
             j(serde_json::json!({
