@@ -22,6 +22,12 @@ use pdw_limit::trajectory::{self, Trajectory, Validity};
 use pdw_limit::{Attractor, AttractorKind, AttractorSet};
 use pdw_limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome};
 
+mod animate;
+mod basin_over;
+mod design;
+mod follow;
+mod orbit;
+
 /// Threads of the pool that runs batched strides and basins.
 const THREADS: usize = 2;
 /// Integration tolerance (DOP853) of `stride_map`, the basin engine's default.
@@ -186,6 +192,36 @@ fn give_warnings(py: Python<'_>) -> PyResult<()> {
         )?;
     }
     Ok(())
+}
+
+/// Gives each of `msgs` through `warnings.warn` (`UserWarning`).
+fn warn_all(py: Python<'_>, msgs: &[String]) -> PyResult<()> {
+    for w in msgs {
+        let msg = std::ffi::CString::new(w.as_str()).map_err(err)?;
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
+/// The model and its overrides (`slope` and the keyword arguments, checked) as the library's
+/// [`pdw::ModelChoice`], for the plans that build models with further values on top.
+fn model_choice(
+    model: &str,
+    slope: Option<&Bound<'_, PyAny>>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<pdw::ModelChoice> {
+    let ov = overrides(slope_arg(slope)?, params)?;
+    Ok(pdw::ModelChoice {
+        model: model.to_string(),
+        slope: None,
+        // f64's Display is the shortest text that reads back as the same number
+        set: ov.iter().map(|(n, v)| format!("{n}={v}")).collect(),
+    })
 }
 
 /// Builds the model ([`pdw::build`]) and gives its warnings (a steep slope).
@@ -366,7 +402,10 @@ fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> 
 
 /// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None, **params)`.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, **params))]
+#[pyo3(
+    signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, **params),
+    text_signature = "(model='simplest', slope=None, period=1, gait='all', tol=1e-12, guess=None, **params)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn fixed_point<'py>(
     py: Python<'py>,
@@ -467,7 +506,11 @@ fn fixed_point_dict<'py>(
 /// (K, d_s), `multipliers`, `stable`, `period`, `residual`, `starts_settled`), `starts`, `fell`,
 /// `unsettled` and `box` (`{name: (lo, hi)}`).
 #[pyfunction]
-#[pyo3(name = "gaits", signature = (model="simplest", slope=None, starts=pdw::gaits::SCAN_STARTS, search_box=None, gait="all", tol=1e-12, threads=THREADS, **params))]
+#[pyo3(
+    name = "gaits",
+    signature = (model="simplest", slope=None, starts=pdw::gaits::SCAN_STARTS, search_box=None, gait="all", tol=1e-12, threads=THREADS, **params),
+    text_signature = "(model='simplest', slope=None, starts=256, search_box=None, gait='all', tol=1e-12, threads=2, **params)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn scan_gaits<'py>(
     py: Python<'py>,
@@ -684,7 +727,7 @@ fn stride_code(o: StrideOutcome) -> u8 {
 
 /// `stride_outcomes(model="simplest", **params)`: legend of `stride_map`'s outcome codes.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", **params))]
+#[pyo3(signature = (model="simplest", **params), text_signature = "(model='simplest', **params)")]
 fn stride_outcomes<'py>(
     py: Python<'py>,
     model: &str,
@@ -718,7 +761,7 @@ fn stride_outcomes<'py>(
 
 /// `stride_map(model, states, slope=None, **params)` → `(next, outcome, time)`.
 #[pyfunction]
-#[pyo3(signature = (model, states, slope=None, **params))]
+#[pyo3(signature = (model, states, slope=None, **params), text_signature = "(model, states, slope=None, **params)")]
 fn stride_map<'py>(
     py: Python<'py>,
     model: &str,
@@ -795,7 +838,10 @@ fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, Py
 /// threads=2, **params)`: every cell labelled by the attractor it reaches, as `pdw-sweep basin`
 /// (the same setup, [`pdw::basin`]).
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, grid=(101, 101), x=None, y=None, max_strides=100, threads=THREADS, **params))]
+#[pyo3(
+    signature = (model="simplest", slope=None, grid=(101, 101), x=None, y=None, max_strides=100, threads=THREADS, **params),
+    text_signature = "(model='simplest', slope=None, grid=(101, 101), x=None, y=None, max_strides=100, threads=2, **params)"
+)]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn basin<'py>(
     py: Python<'py>,
@@ -916,7 +962,12 @@ fn basin_result<'py>(
     let arr = Array2::from_shape_vec((plan.bx.ny, plan.bx.nx), outcome).map_err(err)?;
     let legend = PyDict::new(py);
     let fr = PyDict::new(py);
+    // the codes the outcome can hold: code 0 (`gait`) only with a gait to reach
+    let has_gait = set.gait().is_some();
     for (c, name) in set.legend() {
+        if c == Outcome::Gait.code() && !has_gait {
+            continue;
+        }
         let f = metrics
             .fractions
             .iter()
@@ -1156,7 +1207,10 @@ fn continuation<'py>(
 
 /// `simulate(model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params)`.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params))]
+#[pyo3(
+    signature = (model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params),
+    text_signature = "(model='simplest', slope=None, state=None, gait='stable', steps=10, dt_out=None, **params)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn simulate<'py>(
     py: Python<'py>,
@@ -1319,5 +1373,10 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(basin, m)?)?;
     m.add_function(wrap_pyfunction!(continuation, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(orbit::orbit_diagram, m)?)?;
+    m.add_function(wrap_pyfunction!(basin_over::basin_over, m)?)?;
+    m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design, m)?)?;
+    m.add_function(wrap_pyfunction!(animate::animate, m)?)?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use std::process::ExitCode;
 pub use pdw_limit::gaits::{Found, FoundOrbit};
 use pdw_limit::Validity;
 
-pub use pdw::gaits::{search, search_with};
+pub use pdw::gaits::search_with;
 
 /// Constraint loads, swing-foot clearance and impacts along one step of a gait, located on
 /// the dense solution ([`Validity::along_step`], module docs of [`pdw_limit::validity`]).
