@@ -31,6 +31,7 @@ def fixed_point(
     gait: str = "all",
     tol: float = 1e-12,
     guess: Optional[Sequence[float]] = None,
+    jacobian: bool = False,
     **params: float,
 ) -> list[dict[str, Any]]:
     """Period-one gaits (fixed points of the stride map), or with `period=K` the period-K
@@ -55,7 +56,13 @@ def fixed_point(
     "0.05"; a slope above 0.3 rad gives a UserWarning naming its degrees); `params` are the
     model's parameters by name (see `models()`). `gait` is
     "stable", "unstable" or "all". Raises ValueError for invalid input (`period` outside
-    1..=64), or when no orbit is found (the message lists every guess and why it failed)."""
+    1..=64), or when no orbit is found (the message lists every guess and why it failed).
+
+    With `jacobian=True` (period one) each gait also has: jacobian (d_s × d_s, DP by the
+    variational equations), eigenvalues (complex, by decreasing modulus) and eigenvectors
+    (complex d_s × d_s, column k for eigenvalue k, unit norm), impacts (every reset along the
+    stride: event, t, mode_before, mode_after, pre (the pre-impact state), saltation (d × d)),
+    lyapunov (the finite-time Lyapunov exponents over lyapunov_strides = 100 strides)."""
 
 def gaits(
     model: str = "simplest",
@@ -264,3 +271,14 @@ def animate(
 ) -> Any:
     """Writes the GIF of `pdw-sweep animate` (two strides of the gait) to `out` (an existing
     file only with force=True) and returns its path."""
+
+def lyapunov(
+    model: str = "simplest",
+    state: Optional[Sequence[float]] = None,
+    strides: int = 100,
+    slope: Optional[Union[float, str]] = None,
+    **params: float,
+) -> npt.NDArray[np.float64]:
+    """Finite-time Lyapunov exponents of the stride map (per stride, descending) over `strides`
+    strides from section state `state` (default: the stable gait, else the first found), by QR
+    iteration of DP along the orbit."""

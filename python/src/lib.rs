@@ -26,6 +26,7 @@ mod animate;
 mod basin_over;
 mod design;
 mod follow;
+mod linear;
 mod orbit;
 
 /// Threads of the pool that runs batched strides and basins.
@@ -400,11 +401,13 @@ fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> 
     err(pdw::gaits::no_gait_message(m, which, n, failed))
 }
 
-/// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None, **params)`.
+/// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None,
+/// jacobian=False, **params)`; with `jacobian=True` (period one) each gait also carries its
+/// linear stability data ([`linear::set_linear`]).
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, **params),
-    text_signature = "(model='simplest', slope=None, period=1, gait='all', tol=1e-12, guess=None, **params)"
+    signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, jacobian=false, **params),
+    text_signature = "(model='simplest', slope=None, period=1, gait='all', tol=1e-12, guess=None, jacobian=False, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 fn fixed_point<'py>(
@@ -415,6 +418,7 @@ fn fixed_point<'py>(
     gait: &str,
     tol: f64,
     guess: Option<Vec<f64>>,
+    jacobian: bool,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     if !(1..=64).contains(&period) {
@@ -425,28 +429,42 @@ fn fixed_point<'py>(
     check_gait_and_tol(gait, tol)?;
     let m = build_kw(model, slope, params)?;
     if period > 1 {
+        if jacobian {
+            return Err(err("jacobian: given for period-one gaits only (period=1)"));
+        }
         return fixed_point_period_k(py, &m, period, gait, tol, guess);
     }
-    let (found, failed, n, validity) = interruptible(py, || -> PyResult<_> {
+    let keep = |stable: bool| match gait {
+        "stable" => stable,
+        "unstable" => !stable,
+        _ => true,
+    };
+    let (found, failed, n, validity, lin) = interruptible(py, || -> PyResult<_> {
         let (found, failed, n) = find_gaits(&m, guess, tol)?;
         let validity: Vec<Option<Validity>> = found
             .iter()
             .map(|f| Validity::along_step(m.walker.as_ref(), &f.fp.state))
             .collect();
-        Ok((found, failed, n, validity))
+        let lin = found
+            .iter()
+            .map(|f| {
+                (jacobian && keep(f.fp.stable))
+                    .then(|| linear::linear(&m, &f.fp.section))
+                    .transpose()
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok((found, failed, n, validity, lin))
     })?;
     let out = PyList::empty(py);
-    for (f, v) in found.iter().zip(&validity) {
-        let fp = &f.fp;
-        let keep = match gait {
-            "stable" => fp.stable,
-            "unstable" => !fp.stable,
-            _ => true,
-        };
-        if !keep {
+    for ((f, v), l) in found.iter().zip(&validity).zip(&lin) {
+        if !keep(f.fp.stable) {
             continue;
         }
-        out.append(fixed_point_dict(py, &m, fp, &f.label, v.as_ref())?)?;
+        let d = fixed_point_dict(py, &m, &f.fp, &f.label, v.as_ref())?;
+        if let Some(l) = l {
+            linear::set_linear(py, &d, l)?;
+        }
+        out.append(d)?;
     }
     if out.is_empty() {
         return Err(no_gait_error(&m, gait, n, &failed));
@@ -1378,5 +1396,6 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
     m.add_function(wrap_pyfunction!(design::design, m)?)?;
     m.add_function(wrap_pyfunction!(animate::animate, m)?)?;
+    m.add_function(wrap_pyfunction!(linear::lyapunov, m)?)?;
     Ok(())
 }

@@ -116,6 +116,12 @@ pub struct FixedpointArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// With --json, for period-one gaits: each gait's linear stability data under `linear` —
+    /// the stride-map Jacobian DP (variational equations), its eigenvalues and unit
+    /// eigenvectors, the saltation matrix of every impact along the stride, and the
+    /// finite-time Lyapunov exponents of the stride map over 100 strides (docs/cli.md).
+    #[arg(long, requires = "json", conflicts_with_all = ["search", "sweep", "follow", "period"])]
+    pub jacobian: bool,
     /// Find every gait without a guess: Newton from N starting states spread over a box of the
     /// section (a Halton sample; N defaults to 256), and the stride map iterated from each to
     /// see where it goes (a stable gait, a period-K orbit up to K = 8, a fall). Lists every

@@ -6,7 +6,7 @@
 //! ([`basin`]), basin stability over a parameter ([`basin_over`]), a continuation over a
 //! parameter grid and its orbit diagram ([`sweep`]), a bifurcation curve in two parameters
 //! ([`follow`]), a design search ([`design`]), a walk of N steps ([`simulate`]), the animation
-//! of a gait ([`animate`]). A front end parses its own syntax into
+//! of a gait ([`animate`]), the linear stability data of a gait ([`linear`]). A front end parses its own syntax into
 //! these types and prints, writes or returns the results; it builds no model, checks no range and
 //! names nothing on its own.
 
@@ -18,6 +18,7 @@ pub mod follow;
 pub mod gaits;
 pub mod input;
 pub mod integrator;
+pub mod linear;
 pub mod model;
 pub mod simulate;
 pub mod sweep;
