@@ -1,5 +1,6 @@
 """Type stubs of the `pdw_sweep` extension (functions and results: python/README.md)."""
 
+import os
 from typing import Any, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
@@ -30,6 +31,7 @@ def fixed_point(
     gait: str = "all",
     tol: float = 1e-12,
     guess: Optional[Sequence[float]] = None,
+    jacobian: bool = False,
     **params: float,
 ) -> list[dict[str, Any]]:
     """Period-one gaits (fixed points of the stride map), or with `period=K` the period-K
@@ -54,7 +56,13 @@ def fixed_point(
     "0.05"; a slope above 0.3 rad gives a UserWarning naming its degrees); `params` are the
     model's parameters by name (see `models()`). `gait` is
     "stable", "unstable" or "all". Raises ValueError for invalid input (`period` outside
-    1..=64), or when no orbit is found (the message lists every guess and why it failed)."""
+    1..=64), or when no orbit is found (the message lists every guess and why it failed).
+
+    With `jacobian=True` (period one) each gait also has: jacobian (d_s × d_s, DP by the
+    variational equations), eigenvalues (complex, by decreasing modulus) and eigenvectors
+    (complex d_s × d_s, column k for eigenvalue k, unit norm), impacts (every reset along the
+    stride: event, t, mode_before, mode_after, pre (the pre-impact state), saltation (d × d)),
+    lyapunov (the finite-time Lyapunov exponents over lyapunov_strides = 100 strides)."""
 
 def gaits(
     model: str = "simplest",
@@ -121,8 +129,9 @@ def basin(
     coordinate) and `grid = (nx, ny, nz)` the grid is 3-D and the outcome array (nz, ny, nx),
     the order of the CLI file's `/basin/outcome`; metrics then has `z_name` and `z` (nz,) too.
 
-    Returns (outcome codes (ny, nx) uint8, legend {code: name}: the fixed codes (0 `gait` — the
-    stable period-one gait, if there is one —, falls, other, nonfinite, timeout, ...) and one
+    Returns (outcome codes (ny, nx) uint8, legend {code: name}: exactly the codes the outcome
+    can hold — the fixed codes (0 `gait` only when there is a stable period-one gait; falls,
+    other, nonfinite, timeout, ...) and one
     code from 10 up per other attractor (`period-2`, `period-2b`, `chaotic`, ...), metrics):
     metrics has fractions {name: fraction of cells}, basin_entropy, boundary_entropy, box_size,
     x_name, y_name, x (nx,), y (ny,), attractors (list of dicts in discovery order: name, code,
@@ -184,3 +193,104 @@ def simulate(
     knee_torque (n, 2; NaN where a knee is free or absent), flags, energy (where defined),
     events (dict of arrays: t, kind, step, ends_step, mode_before, mode_after, pre, post),
     section (steps_done, d_s), steps_done, outcome ("ok" or how it ended), units (dict)."""
+
+def orbit_diagram(
+    model: str = "simplest",
+    parameter: str = "slope",
+    start: float = 0.001,
+    stop: float = 0.019,
+    points: int = 100,
+    gait: str = "stable",
+    guess: Optional[Sequence[float]] = None,
+    tol: float = 1e-12,
+    threads: int = 2,
+    **params: float,
+) -> dict[str, Any]:
+    """The orbit diagram of `pdw-sweep fixedpoint --sweep parameter=start:stop:points`: at each
+    value the stride map iterated from the continued period-one gait, 300 strides dropped, 64
+    recorded. Keys: parameter, values (N,), points (N, 64, d_s; NaN after a fall),
+    section_names, period (N,; 0 = none detected), fall_stride (N,; -1 = none), fall (names or
+    None), transient, record. Docs: docs/python.md."""
+
+def basin_over(
+    model: str = "simplest",
+    over: Optional[str] = None,
+    parameter: Optional[str] = None,
+    start: Optional[float] = None,
+    stop: Optional[float] = None,
+    points: int = 6,
+    slope: Optional[Union[float, str]] = None,
+    grid: Tuple[int, int] = (41, 41),
+    x: Optional[Tuple[str, float, float]] = None,
+    y: Optional[Tuple[str, float, float]] = None,
+    max_strides: int = 100,
+    threads: int = 2,
+    **params: float,
+) -> dict[str, Any]:
+    """Basin stability over a parameter, `pdw-sweep basin --over NAME=A:B:N` (over="NAME=A:B:N",
+    or parameter, start, stop, points). Keys: parameter, values (N,), columns, kinds, fractions
+    (N, C), outcome_columns, outcome_fractions (N, 10), attractors (per value), box,
+    max_strides. Docs: docs/python.md."""
+
+def follow(
+    model: str = "simplest",
+    kind: str = "pd",
+    sweep: Optional[str] = None,
+    free: Optional[str] = None,
+    gait: str = "all",
+    guess: Optional[Sequence[float]] = None,
+    tol: float = 1e-12,
+    map_grid: Optional[Tuple[int, int]] = None,
+    threads: int = 2,
+    slope: Optional[Union[float, str]] = None,
+    **params: float,
+) -> dict[str, Any]:
+    """The curve of period doublings (kind="pd") or folds ("fold") of the period-one gait in
+    two parameters, `pdw-sweep fixedpoint --follow KIND --sweep SWEEP --free FREE`
+    (sweep="NAME=A:B:N", free="NAME" or "NAME=LO:HI"). Keys: kind, params, p_step, p_free,
+    section, state, critical_multiplier, multipliers, period, residual, test_value,
+    newton_iterations, complete, start, region_map (with map_grid=(nx, ny)). Docs:
+    docs/python.md."""
+
+def design(
+    model: str = "compass",
+    free: Optional[Union[dict[str, Tuple[float, float]], str, Sequence[str]]] = None,
+    objective: str = "basin",
+    budget: int = 60,
+    seed: int = 0,
+    init: int = 0,
+    mu: float = 0.6,
+    knee_margin: float = 0.1,
+    min_margin: float = 0.0,
+    basin_grid: int = 15,
+    basin_box: Tuple[float, float] = (0.02, 0.08),
+    max_strides: int = 40,
+    threads: int = 2,
+    slope: Optional[Union[float, str]] = None,
+    **params: float,
+) -> dict[str, Any]:
+    """The design search of `pdw-sweep design` (free={name: (lo, hi)} or "NAME=LO:HI" texts).
+    Keys: free_names, objective, params (n, k), status, status_names, reasons, section (n, 3),
+    cost, basin_fraction, rho, min_normal_force, max_friction, min_knee_torque, period,
+    step_length, min_relative_margin, best. Docs: docs/python.md."""
+
+def animate(
+    model: str = "simplest",
+    slope: Optional[Union[float, str]] = None,
+    out: Union[str, "os.PathLike[str]"] = "gait.gif",
+    force: bool = False,
+    **params: float,
+) -> Any:
+    """Writes the GIF of `pdw-sweep animate` (two strides of the gait) to `out` (an existing
+    file only with force=True) and returns its path."""
+
+def lyapunov(
+    model: str = "simplest",
+    state: Optional[Sequence[float]] = None,
+    strides: int = 100,
+    slope: Optional[Union[float, str]] = None,
+    **params: float,
+) -> npt.NDArray[np.float64]:
+    """Finite-time Lyapunov exponents of the stride map (per stride, descending) over `strides`
+    strides from section state `state` (default: the stable gait, else the first found), by QR
+    iteration of DP along the orbit."""

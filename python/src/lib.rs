@@ -22,6 +22,13 @@ use pdw_limit::trajectory::{self, Trajectory, Validity};
 use pdw_limit::{Attractor, AttractorKind, AttractorSet};
 use pdw_limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome};
 
+mod animate;
+mod basin_over;
+mod design;
+mod follow;
+mod linear;
+mod orbit;
+
 /// Threads of the pool that runs batched strides and basins.
 const THREADS: usize = 2;
 /// Integration tolerance (DOP853) of `stride_map`, the basin engine's default.
@@ -192,6 +199,36 @@ fn give_warnings(py: Python<'_>) -> PyResult<()> {
         )?;
     }
     Ok(())
+}
+
+/// Gives each of `msgs` through `warnings.warn` (`UserWarning`).
+fn warn_all(py: Python<'_>, msgs: &[String]) -> PyResult<()> {
+    for w in msgs {
+        let msg = std::ffi::CString::new(w.as_str()).map_err(err)?;
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
+    Ok(())
+}
+
+/// The model and its overrides (`slope` and the keyword arguments, checked) as the library's
+/// [`pdw::ModelChoice`], for the plans that build models with further values on top.
+fn model_choice(
+    model: &str,
+    slope: Option<&Bound<'_, PyAny>>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<pdw::ModelChoice> {
+    let ov = overrides(slope_arg(slope)?, params)?;
+    Ok(pdw::ModelChoice {
+        model: model.to_string(),
+        slope: None,
+        // f64's Display is the shortest text that reads back as the same number
+        set: ov.iter().map(|(n, v)| format!("{n}={v}")).collect(),
+    })
 }
 
 /// Builds the model ([`pdw::build`]) and gives its warnings (a steep slope).
@@ -394,9 +431,14 @@ fn no_start_error(
     err(msg)
 }
 
-/// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None, **params)`.
+/// `fixed_point(model, slope=None, period=1, gait="all", tol=1e-12, guess=None,
+/// jacobian=False, **params)`; with `jacobian=True` (period one) each gait also carries its
+/// linear stability data ([`linear::set_linear`]).
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, **params))]
+#[pyo3(
+    signature = (model="simplest", slope=None, period=1, gait="all", tol=1e-12, guess=None, jacobian=false, **params),
+    text_signature = "(model='simplest', slope=None, period=1, gait='all', tol=1e-12, guess=None, jacobian=False, **params)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn fixed_point<'py>(
     py: Python<'py>,
@@ -406,6 +448,7 @@ fn fixed_point<'py>(
     gait: &str,
     tol: f64,
     guess: Option<Vec<f64>>,
+    jacobian: bool,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     if !(1..=64).contains(&period) {
@@ -416,28 +459,42 @@ fn fixed_point<'py>(
     check_gait_and_tol(gait, tol)?;
     let m = build_kw(model, slope, params)?;
     if period > 1 {
+        if jacobian {
+            return Err(err("jacobian: given for period-one gaits only (period=1)"));
+        }
         return fixed_point_period_k(py, &m, period, gait, tol, guess);
     }
-    let (found, failed, n, validity) = interruptible(py, || -> PyResult<_> {
+    let keep = |stable: bool| match gait {
+        "stable" => stable,
+        "unstable" => !stable,
+        _ => true,
+    };
+    let (found, failed, n, validity, lin) = interruptible(py, || -> PyResult<_> {
         let (found, failed, n) = find_gaits(&m, guess, tol)?;
         let validity: Vec<Option<Validity>> = found
             .iter()
             .map(|f| Validity::along_step(m.walker.as_ref(), &f.fp.state))
             .collect();
-        Ok((found, failed, n, validity))
+        let lin = found
+            .iter()
+            .map(|f| {
+                (jacobian && keep(f.fp.stable))
+                    .then(|| linear::linear(&m, &f.fp.section))
+                    .transpose()
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok((found, failed, n, validity, lin))
     })?;
     let out = PyList::empty(py);
-    for (f, v) in found.iter().zip(&validity) {
-        let fp = &f.fp;
-        let keep = match gait {
-            "stable" => fp.stable,
-            "unstable" => !fp.stable,
-            _ => true,
-        };
-        if !keep {
+    for ((f, v), l) in found.iter().zip(&validity).zip(&lin) {
+        if !keep(f.fp.stable) {
             continue;
         }
-        out.append(fixed_point_dict(py, &m, fp, &f.label, v.as_ref())?)?;
+        let d = fixed_point_dict(py, &m, &f.fp, &f.label, v.as_ref())?;
+        if let Some(l) = l {
+            linear::set_linear(py, &d, l)?;
+        }
+        out.append(d)?;
     }
     if out.is_empty() {
         return Err(no_gait_error(&m, gait, n, &failed));
@@ -497,7 +554,11 @@ fn fixed_point_dict<'py>(
 /// (K, d_s), `multipliers`, `stable`, `period`, `residual`, `starts_settled`), `starts`, `fell`,
 /// `unsettled` and `box` (`{name: (lo, hi)}`).
 #[pyfunction]
-#[pyo3(name = "gaits", signature = (model="simplest", slope=None, starts=pdw::gaits::SCAN_STARTS, search_box=None, gait="all", tol=1e-12, threads=THREADS, **params))]
+#[pyo3(
+    name = "gaits",
+    signature = (model="simplest", slope=None, starts=pdw::gaits::SCAN_STARTS, search_box=None, gait="all", tol=1e-12, threads=THREADS, **params),
+    text_signature = "(model='simplest', slope=None, starts=256, search_box=None, gait='all', tol=1e-12, threads=2, **params)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn scan_gaits<'py>(
     py: Python<'py>,
@@ -714,7 +775,7 @@ fn stride_code(o: StrideOutcome) -> u8 {
 
 /// `stride_outcomes(model="simplest", **params)`: legend of `stride_map`'s outcome codes.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", **params))]
+#[pyo3(signature = (model="simplest", **params), text_signature = "(model='simplest', **params)")]
 fn stride_outcomes<'py>(
     py: Python<'py>,
     model: &str,
@@ -748,7 +809,7 @@ fn stride_outcomes<'py>(
 
 /// `stride_map(model, states, slope=None, **params)` → `(next, outcome, time)`.
 #[pyfunction]
-#[pyo3(signature = (model, states, slope=None, **params))]
+#[pyo3(signature = (model, states, slope=None, **params), text_signature = "(model, states, slope=None, **params)")]
 fn stride_map<'py>(
     py: Python<'py>,
     model: &str,
@@ -834,7 +895,10 @@ fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, Py
 /// `pdw-sweep basin` (the same setup, [`pdw::basin`]); with `z=(name, lo, hi)` and
 /// `grid=(nx, ny, nz)` a 3-D grid, returned as an (nz × ny × nx) array.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, grid=vec![101, 101], x=None, y=None, z=None, max_strides=100, threads=THREADS, **params))]
+#[pyo3(
+    signature = (model="simplest", slope=None, grid=vec![101, 101], x=None, y=None, z=None, max_strides=100, threads=THREADS, **params),
+    text_signature = "(model='simplest', slope=None, grid=(101, 101), x=None, y=None, z=None, max_strides=100, threads=2, **params)"
+)]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn basin<'py>(
     py: Python<'py>,
@@ -1001,7 +1065,12 @@ fn basin_result<'py>(
     };
     let legend = PyDict::new(py);
     let fr = PyDict::new(py);
+    // the codes the outcome can hold: code 0 (`gait`) only with a gait to reach
+    let has_gait = set.gait().is_some();
     for (c, name) in set.legend() {
+        if c == Outcome::Gait.code() && !has_gait {
+            continue;
+        }
         let f = metrics
             .fractions
             .iter()
@@ -1169,7 +1238,10 @@ fn branch_dict<'py>(
 /// max_period=2, start_at=None, **params)`: `pdw-sweep fixedpoint --sweep
 /// NAME=start:stop:points --max-period P --from MU`, branch by branch.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", parameter="slope", start=0.001, stop=0.019, points=100, gait="stable", threads=THREADS, max_period=2, start_at=None, **params))]
+#[pyo3(
+    signature = (model="simplest", parameter="slope", start=0.001, stop=0.019, points=100, gait="stable", threads=THREADS, max_period=2, start_at=None, **params),
+    text_signature = "(model='simplest', parameter='slope', start=0.001, stop=0.019, points=100, gait='stable', threads=2, max_period=2, start_at=None, **params)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn continuation<'py>(
     py: Python<'py>,
@@ -1256,7 +1328,10 @@ fn continuation<'py>(
 
 /// `simulate(model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params)`.
 #[pyfunction]
-#[pyo3(signature = (model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params))]
+#[pyo3(
+    signature = (model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params),
+    text_signature = "(model='simplest', slope=None, state=None, gait='stable', steps=10, dt_out=None, **params)"
+)]
 #[allow(clippy::too_many_arguments)]
 fn simulate<'py>(
     py: Python<'py>,
@@ -1425,5 +1500,11 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(basin, m)?)?;
     m.add_function(wrap_pyfunction!(continuation, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(orbit::orbit_diagram, m)?)?;
+    m.add_function(wrap_pyfunction!(basin_over::basin_over, m)?)?;
+    m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design, m)?)?;
+    m.add_function(wrap_pyfunction!(animate::animate, m)?)?;
+    m.add_function(wrap_pyfunction!(linear::lyapunov, m)?)?;
     Ok(())
 }

@@ -116,6 +116,12 @@ pub struct FixedpointArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// With --json, for period-one gaits: each gait's linear stability data under `linear` —
+    /// the stride-map Jacobian DP (variational equations), its eigenvalues and unit
+    /// eigenvectors, the saltation matrix of every impact along the stride, and the
+    /// finite-time Lyapunov exponents of the stride map over 100 strides (docs/cli.md).
+    #[arg(long, requires = "json", conflicts_with_all = ["search", "sweep", "follow", "period"])]
+    pub jacobian: bool,
     /// Find every gait without a guess: Newton from N starting states spread over a box of the
     /// section (a Halton sample; N defaults to 256), and the stride map iterated from each to
     /// see where it goes (a stable gait, a period-K orbit up to K = 8, a fall). Lists every
@@ -422,16 +428,6 @@ fn number(s: &str) -> Result<f64, String> {
     s.parse::<f64>().map_err(|e| e.to_string())
 }
 
-/// An integer in `lo..=hi`; `what` follows the value in the message (e.g. `designs`).
-fn integer_in(s: &str, flag: &str, what: &str, (lo, hi): (i64, i64)) -> Result<i64, String> {
-    let n = s.parse::<i64>().map_err(|e| e.to_string())?;
-    if (lo..=hi).contains(&n) {
-        Ok(n)
-    } else {
-        Err(format!("{flag}: {n}{what} is outside {lo}..={hi}"))
-    }
-}
-
 /// `fixedpoint --tol`: within [`MIN_TOL`, `MAX_TOL`].
 fn parse_tol(s: &str) -> Result<f64, String> {
     let t = number(s)?;
@@ -493,72 +489,45 @@ fn parse_from(s: &str) -> Result<f64, String> {
 
 /// `design --objective`: basin or margin.
 fn parse_objective(s: &str) -> Result<Objective, String> {
-    match s {
-        "basin" => Ok(Objective::Basin),
-        "margin" => Ok(Objective::Margin),
-        o => Err(format!("--objective: '{o}' is not one of basin, margin")),
-    }
+    pdw::design::parse_objective(s, "--objective").map_err(|e| e.0)
 }
 
 /// `design --mu`: a finite friction coefficient > 0.
 fn parse_mu(s: &str) -> Result<f64, String> {
-    let mu = number(s)?;
-    if mu.is_finite() && mu > 0.0 {
-        Ok(mu)
-    } else {
-        Err(format!(
-            "--mu: {mu} is not a friction coefficient; give a finite value > 0 (e.g. 0.6)"
-        ))
-    }
+    pdw::design::check_mu(number(s)?, "--mu").map_err(|e| e.0)
 }
 
 /// `design --knee-margin`: a finite torque ≥ 0.
 fn parse_knee_margin(s: &str) -> Result<f64, String> {
-    let k = number(s)?;
-    if k.is_finite() && k >= 0.0 {
-        Ok(k)
-    } else {
-        Err(format!(
-            "--knee-margin: {k} N m is not allowed; give a finite torque >= 0"
-        ))
-    }
+    pdw::design::check_knee_margin(number(s)?, "--knee-margin").map_err(|e| e.0)
 }
 
 /// `design --min-margin`: a finite relative margin ≥ 0.
 fn parse_min_margin(s: &str) -> Result<f64, String> {
-    let m = number(s)?;
-    if m.is_finite() && m >= 0.0 {
-        Ok(m)
-    } else {
-        Err(format!(
-            "--min-margin: {m} is not allowed; give a finite relative margin >= 0 (e.g. 0.05)"
-        ))
-    }
+    pdw::design::check_min_margin(number(s)?, "--min-margin").map_err(|e| e.0)
+}
+
+fn integer(s: &str) -> Result<i64, String> {
+    s.parse::<i64>().map_err(|e| e.to_string())
 }
 
 /// `design --budget`: 1 to 100000 designs.
 fn parse_budget(s: &str) -> Result<usize, String> {
-    integer_in(s, "--budget", " designs", (1, 100_000)).map(|n| n as usize)
+    pdw::design::check_budget(integer(s)?, "--budget").map_err(|e| e.0)
 }
 
 /// `design --basin-grid`: 1 to 200 cells per side.
 fn parse_basin_grid(s: &str) -> Result<usize, String> {
-    integer_in(s, "--basin-grid", " cells per side", (1, 200)).map(|n| n as usize)
+    pdw::design::check_basin_grid(integer(s)?, "--basin-grid").map_err(|e| e.0)
 }
 
 /// `design --max-strides`: 1 to 10000 strides per basin cell.
 fn parse_max_strides(s: &str) -> Result<u16, String> {
-    integer_in(s, "--max-strides", "", (1, 10_000)).map(|n| n as u16)
+    pdw::design::check_max_strides(integer(s)?, "--max-strides").map_err(|e| e.0)
 }
 
 /// `design --basin-box`: two positive half widths `DSTANCE,DSTANCE_RATE`.
 fn parse_basin_box(s: &str) -> Result<[f64; 2], String> {
     let v = crate::args::parse_guess(s).map_err(|e| e.to_string())?;
-    match v[..] {
-        [a, b] if [a, b].iter().all(|x| x.is_finite() && *x > 0.0) => Ok([a, b]),
-        _ => Err(format!(
-            "--basin-box: '{s}' must be two positive half widths DSTANCE,DSTANCE_RATE (e.g. \
-             0.05,0.2)"
-        )),
-    }
+    pdw::design::check_basin_box(&v, s, "--basin-box").map_err(|e| e.0)
 }

@@ -2,10 +2,13 @@
 //! their bounds, for the most robust (or most stable) passive gait that is physically valid
 //! along the whole stride. The plan ([`DesignPlan`]) holds the model, the free parameters and
 //! the search's options; [`settings`] is what a stored search is continued by; [`search`]
-//! runs it, every design built from the plan's model with the free values on top.
+//! runs it, every design built from the plan's model with the free values on top. The checks
+//! of a front end's values ([`check_model`], [`space`], [`check_mu`] and the others) name the
+//! front end's flag in their messages.
 
+use crate::input::{AxisRange, InputError};
 use crate::model::{build_with, BuiltModel, ModelChoice};
-use pdw_limit::design::{evaluate_design, DesignEval, DesignOptions, DesignSpace};
+use pdw_limit::design::{evaluate_design, DesignEval, DesignOptions, DesignSpace, Objective};
 use pdw_limit::LimitError;
 
 /// A checked design search.
@@ -71,4 +74,190 @@ pub fn search(
         ev
     };
     pdw_limit::design::search(&plan.space, &plan.options, &guesses, history, &mut eval)
+}
+
+/// The design's model must be a chain walker (the search varies a walker spec's parameters);
+/// `flag` names the model in the message.
+pub fn check_model(base: &BuiltModel, flag: &str) -> Result<(), InputError> {
+    if base.info.spec().is_none() {
+        return Err(InputError(format!(
+            "{flag}: '{}' is not a chain walker (section of {} coordinates); design searches \
+             run on walker specs (compass, kneed, seed5 or a .toml file)",
+            base.info.name,
+            base.info.section_names.len()
+        )));
+    }
+    Ok(())
+}
+
+/// The free parameters `free` (`NAME=LO:HI` each, `flag` naming them): each a parameter of the
+/// model `base` (built from `model`), given once, not also set by `model`'s overrides, both
+/// bounds making a model; at least one.
+pub fn space(
+    model: &ModelChoice,
+    base: &BuiltModel,
+    free: &[String],
+    flag: &str,
+) -> Result<DesignSpace, InputError> {
+    let set_names: Vec<String> = crate::model::overrides(model)?
+        .into_iter()
+        .map(|p| p.0)
+        .collect();
+    let mut space = DesignSpace {
+        names: Vec::new(),
+        lo: Vec::new(),
+        hi: Vec::new(),
+    };
+    for f in free {
+        let r = free_parameter(model, base, (&space.names[..], &set_names[..]), f, flag)?;
+        space.names.push(r.name);
+        space.lo.push(r.lo);
+        space.hi.push(r.hi);
+    }
+    if space.names.is_empty() {
+        return Err(InputError(format!("{flag}: give at least one NAME=LO:HI")));
+    }
+    Ok(space)
+}
+
+/// One free parameter `f` (`NAME=LO:HI`), checked against the model, the free parameters
+/// before it and the parameters set.
+fn free_parameter(
+    model: &ModelChoice,
+    base: &BuiltModel,
+    (names, set_names): (&[String], &[String]),
+    f: &str,
+    flag: &str,
+) -> Result<AxisRange, InputError> {
+    let r = crate::input::parse_axis(f, flag)?;
+    if !base.params.iter().any(|p| p.0 == r.name) {
+        return Err(InputError(format!(
+            "{flag}: '{}' is not a parameter of model '{}' (parameters: {})",
+            r.name,
+            base.info.name,
+            base.params
+                .iter()
+                .map(|p| p.0.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    if names.contains(&r.name) {
+        return Err(InputError(format!("{flag}: '{}' is given twice", r.name)));
+    }
+    if set_names.contains(&r.name) {
+        return Err(InputError(format!(
+            "{flag}: '{}' is also fixed by --set/--slope; a parameter is either free or set",
+            r.name
+        )));
+    }
+    // both bounds must make a model (checked once, here)
+    for v in [r.lo, r.hi] {
+        build_with(model, &[(r.name.clone(), v)]).map_err(|e| {
+            InputError(format!(
+                "{flag} {f}: the bound {v} does not make a model: {e}"
+            ))
+        })?;
+    }
+    Ok(r)
+}
+
+/// The model's own values of the free parameters: where the search starts.
+pub fn start(base: &BuiltModel, space: &DesignSpace) -> Vec<f64> {
+    space
+        .names
+        .iter()
+        .map(|n| {
+            base.params
+                .iter()
+                .find(|p| p.0 == *n)
+                .map_or(f64::NAN, |p| p.1)
+        })
+        .collect()
+}
+
+/// The search's objective by name: `basin` or `margin`.
+pub fn parse_objective(s: &str, flag: &str) -> Result<Objective, InputError> {
+    match s {
+        "basin" => Ok(Objective::Basin),
+        "margin" => Ok(Objective::Margin),
+        o => Err(InputError(format!(
+            "{flag}: '{o}' is not one of basin, margin"
+        ))),
+    }
+}
+
+/// The largest friction coefficient: finite and > 0.
+pub fn check_mu(mu: f64, flag: &str) -> Result<f64, InputError> {
+    if mu.is_finite() && mu > 0.0 {
+        Ok(mu)
+    } else {
+        Err(InputError(format!(
+            "{flag}: {mu} is not a friction coefficient; give a finite value > 0 (e.g. 0.6)"
+        )))
+    }
+}
+
+/// The smallest knee-lock torque: finite and ≥ 0.
+pub fn check_knee_margin(k: f64, flag: &str) -> Result<f64, InputError> {
+    if k.is_finite() && k >= 0.0 {
+        Ok(k)
+    } else {
+        Err(InputError(format!(
+            "{flag}: {k} N m is not allowed; give a finite torque >= 0"
+        )))
+    }
+}
+
+/// The smallest relative margin: finite and ≥ 0.
+pub fn check_min_margin(m: f64, flag: &str) -> Result<f64, InputError> {
+    if m.is_finite() && m >= 0.0 {
+        Ok(m)
+    } else {
+        Err(InputError(format!(
+            "{flag}: {m} is not allowed; give a finite relative margin >= 0 (e.g. 0.05)"
+        )))
+    }
+}
+
+/// An integer count in `lo..=hi`; `what` follows the value in the message (e.g. ` designs`).
+pub fn check_count(
+    n: i64,
+    flag: &str,
+    what: &str,
+    (lo, hi): (i64, i64),
+) -> Result<i64, InputError> {
+    if (lo..=hi).contains(&n) {
+        Ok(n)
+    } else {
+        Err(InputError(format!(
+            "{flag}: {n}{what} is outside {lo}..={hi}"
+        )))
+    }
+}
+
+/// Designs evaluated in all: 1 to 100000.
+pub fn check_budget(n: i64, flag: &str) -> Result<usize, InputError> {
+    check_count(n, flag, " designs", (1, 100_000)).map(|n| n as usize)
+}
+
+/// Basin cells per side: 1 to 200.
+pub fn check_basin_grid(n: i64, flag: &str) -> Result<usize, InputError> {
+    check_count(n, flag, " cells per side", (1, 200)).map(|n| n as usize)
+}
+
+/// Strides per basin cell of a design: 1 to 10000.
+pub fn check_max_strides(n: i64, flag: &str) -> Result<u16, InputError> {
+    check_count(n, flag, "", (1, 10_000)).map(|n| n as u16)
+}
+
+/// The basin box's half widths `DSTANCE,DSTANCE_RATE`: two positive values (`given` as typed).
+pub fn check_basin_box(v: &[f64], given: &str, flag: &str) -> Result<[f64; 2], InputError> {
+    match v[..] {
+        [a, b] if [a, b].iter().all(|x| x.is_finite() && *x > 0.0) => Ok([a, b]),
+        _ => Err(InputError(format!(
+            "{flag}: '{given}' must be two positive half widths DSTANCE,DSTANCE_RATE (e.g. \
+             0.05,0.2)"
+        ))),
+    }
 }

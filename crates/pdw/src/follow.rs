@@ -319,3 +319,239 @@ pub fn kind_long(k: Codim2Kind) -> &'static str {
         Codim2Kind::Fold => "fold",
     }
 }
+
+/// How a front end names the curve's inputs in its messages: the flags (`--sweep`, `--free`,
+/// `--follow`; Python's `sweep`, `free`, `kind`) and how a range of the free parameter and a
+/// value of a parameter are given.
+pub struct FollowFlags {
+    pub kind: &'static str,
+    pub sweep: &'static str,
+    pub free: &'static str,
+    /// How to give parameter `name` a range, e.g. `--free slope=LO:HI`.
+    pub free_range_hint: fn(&str) -> String,
+    /// How to set parameter `name` to a value, e.g. `--set slope=VALUE or --slope`.
+    pub set_hint: fn(&str) -> String,
+}
+
+/// The curve's kind by name: `pd` (period doubling) or `fold`.
+pub fn parse_kind(kind: &str, flag: &str) -> Result<Codim2Kind, InputError> {
+    match kind {
+        "pd" => Ok(Codim2Kind::PeriodDoubling),
+        "fold" => Ok(Codim2Kind::Fold),
+        "ns" => Err(InputError(format!(
+            "{flag} ns: not supported: Neimark-Sacker curves (a complex pair of multipliers on \
+             the unit circle) are not implemented; {flag} takes pd or fold"
+        ))),
+        other => Err(InputError(format!(
+            "{flag}: '{other}' is not one of pd (period doubling), fold"
+        ))),
+    }
+}
+
+/// The free parameter of a curve: its name and its domain (if given).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Free {
+    pub name: String,
+    pub range: Option<(f64, f64)>,
+}
+
+/// `NAME` or `NAME=LO:HI` (a slope in any angle unit, e.g. `slope=2deg:8deg`).
+pub fn parse_free(s: &str, flag: &str) -> Result<Free, InputError> {
+    let Some((name, range)) = s.split_once('=') else {
+        let name = s.trim();
+        if name.is_empty() {
+            return Err(InputError(format!("{flag}: empty parameter name")));
+        }
+        return Ok(Free {
+            name: name.to_string(),
+            range: None,
+        });
+    };
+    let name = name.trim().to_string();
+    let Some((lo, hi)) = range.split_once(':') else {
+        return Err(InputError(format!(
+            "{flag}: '{s}' is not of the form NAME or NAME=LO:HI (e.g. slope=2deg:8deg)"
+        )));
+    };
+    let conv = |t: &str| {
+        if name == "slope" {
+            crate::input::parse_slope_for(t, &format!("{flag} slope"))
+        } else {
+            crate::input::parse_f64(t, &format!("{flag} {name}"))
+        }
+    };
+    let (lo, hi) = (conv(lo)?, conv(hi)?);
+    if lo >= hi {
+        return Err(InputError(format!(
+            "{flag}: range {lo}:{hi} is empty or inverted; LO must be below HI"
+        )));
+    }
+    Ok(Free {
+        name,
+        range: Some((lo, hi)),
+    })
+}
+
+fn value_of(m: &BuiltModel, name: &str) -> Option<f64> {
+    m.params.iter().find(|(n, _)| n == name).map(|p| p.1)
+}
+
+fn unknown(m: &BuiltModel, flag: &str, name: &str) -> InputError {
+    InputError(format!(
+        "{flag}: model '{}' has no parameter '{name}'; its parameters are {}",
+        m.info.name,
+        m.params
+            .iter()
+            .map(|(n, _)| n.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ))
+}
+
+/// The free parameter's domain: the range given, else [`default_free_range`] around the
+/// model's value `free_own`, which must lie inside (the one-parameter search starts there).
+pub fn free_domain(
+    free: &Free,
+    free_own: f64,
+    flags: &FollowFlags,
+) -> Result<(f64, f64), InputError> {
+    let (lo, hi) = match free.range {
+        Some(r) => r,
+        None => default_free_range(&free.name, free_own).ok_or_else(|| {
+            InputError(format!(
+                "{} {}: the model's value {free_own} is not positive, so there is no default \
+                 range; give one: {}",
+                flags.free,
+                free.name,
+                (flags.free_range_hint)(&free.name)
+            ))
+        })?,
+    };
+    if !(lo..=hi).contains(&free_own) {
+        return Err(InputError(format!(
+            "{} {}={lo}:{hi}: the model's value {free_own} (where the one-parameter search \
+             starts) lies outside; set it inside with {}",
+            flags.free,
+            free.name,
+            (flags.set_hint)(&free.name)
+        )));
+    }
+    Ok((lo, hi))
+}
+
+/// The plan of a curve of `kind` with `step` stepped and `free` solved for, from `model` at
+/// its own values (returned too): both parameters exist and differ, the free domain holds the
+/// model's value. The guess is unset and the integrator DOP853 at 1e-13; a front end sets
+/// either before [`start_model`].
+#[allow(clippy::too_many_arguments)]
+pub fn plan(
+    model: ModelChoice,
+    kind: Codim2Kind,
+    step: Sweep,
+    free: &Free,
+    gait: GaitChoice,
+    tol: f64,
+    flags: &FollowFlags,
+) -> Result<(FollowPlan, BuiltModel), InputError> {
+    if free.name == step.name {
+        return Err(InputError(format!(
+            "{} {} and {} {}: the same parameter; the curve needs two different parameters \
+             (one stepped, one solved for)",
+            flags.free, free.name, flags.sweep, step.name
+        )));
+    }
+    let m_own = crate::model::build_model(&model)?;
+    let step_own =
+        value_of(&m_own, &step.name).ok_or_else(|| unknown(&m_own, flags.sweep, &step.name))?;
+    let free_own =
+        value_of(&m_own, &free.name).ok_or_else(|| unknown(&m_own, flags.free, &free.name))?;
+    let (lo, hi) = free_domain(free, free_own, flags)?;
+    let plan = FollowPlan {
+        model,
+        kind,
+        step,
+        free: free.name.clone(),
+        free_range: (lo, hi),
+        free_given: free.range,
+        free_own,
+        step_own,
+        guess: None,
+        gait,
+        tol,
+        integrator: Options::dop853(1e-13),
+    };
+    Ok((plan, m_own))
+}
+
+/// The checks made before computing: every corner of the plane is a model
+/// ([`FollowPlan::check_corners`]), the user's guess (`flag` names it) fits the section at the
+/// start, which becomes the plan's guess; returns the model at `(A, free_own)`.
+pub fn start_model(
+    plan: &mut FollowPlan,
+    guess: Option<Vec<f64>>,
+    flag: &str,
+) -> Result<BuiltModel, InputError> {
+    plan.check_corners()?;
+    let m_a = plan.model_at(plan.step.lo, plan.free_own)?;
+    if guess.is_some() {
+        let g = crate::gaits::guesses(&m_a, guess, flag)?;
+        plan.guess = g.into_iter().next().map(|(_, v)| v);
+    }
+    Ok(m_a)
+}
+
+/// Why no gait was found to start the curve from, in words.
+pub fn no_gait_message(plan: &FollowPlan, m_a: &BuiltModel, why: &NoStartGait) -> String {
+    let (name, a_val) = (&plan.step.name, plan.step.lo);
+    format!(
+        "no period-one gait of model '{}' at {name} = {a_val} to start from (Newton there: {}; \
+         at the model's own {name} = {}: {})",
+        m_a.info.name,
+        why.at_start,
+        plan.step_own,
+        if why.at_own.is_empty() {
+            "a gait exists but its continuation to A failed"
+        } else {
+            why.at_own.as_str()
+        }
+    )
+}
+
+/// Why no bifurcation of the plan's kind was found on the start gait's branch, in words
+/// (`ends`: how each direction of [`locate_start`] ended).
+pub fn no_bifurcation_message(plan: &FollowPlan, ends: &[String]) -> String {
+    let (lo, hi) = plan.free_range;
+    format!(
+        "no {} of the period-one gait on {} in [{lo}, {hi}] at {} = {} (the branch from {} = {} \
+         ended {})",
+        kind_long(plan.kind),
+        plan.free,
+        plan.step.name,
+        plan.step.lo,
+        plan.free,
+        plan.free_own,
+        ends.join("; ")
+    )
+}
+
+/// How a lost curve ended, in words (`None` for a complete one); the points reached are kept.
+pub fn lost_message(plan: &FollowPlan, curve: &Curve) -> Option<String> {
+    let pdw_limit::CurveEnd::Lost {
+        last,
+        tried,
+        reason,
+    } = &curve.end
+    else {
+        return None;
+    };
+    Some(format!(
+        "the {} curve was lost {} (the step to {} = {tried} failed even at 1/256 of the \
+         spacing): {reason}",
+        kind_long(plan.kind),
+        match last {
+            Some(l) => format!("after {} = {l}", plan.step.name),
+            None => format!("at its start, {} = {}", plan.step.name, plan.step.lo),
+        },
+        plan.step.name,
+    ))
+}

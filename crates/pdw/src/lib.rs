@@ -3,17 +3,22 @@
 //! parameter overrides ([`model`]), reading the values people type ([`input`]), choosing the
 //! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]) — and the
 //! computations of the runs themselves, as typed plans and their steps: a basin of attraction
-//! ([`basin`]), a continuation over a parameter grid ([`sweep`]), a bifurcation curve in two
-//! parameters ([`follow`]), a design search ([`design`]), a walk of N steps ([`simulate`]). A front end parses its own syntax into
+//! ([`basin`]), basin stability over a parameter ([`basin_over`]), a continuation over a
+//! parameter grid and its orbit diagram ([`sweep`]), a bifurcation curve in two parameters
+//! ([`follow`]), a design search ([`design`]), a walk of N steps ([`simulate`]), the animation
+//! of a gait ([`animate`]), the linear stability data of a gait ([`linear`]). A front end parses its own syntax into
 //! these types and prints, writes or returns the results; it builds no model, checks no range and
 //! names nothing on its own.
 
+pub mod animate;
 pub mod basin;
+pub mod basin_over;
 pub mod design;
 pub mod follow;
 pub mod gaits;
 pub mod input;
 pub mod integrator;
+pub mod linear;
 pub mod model;
 pub mod simulate;
 pub mod sweep;

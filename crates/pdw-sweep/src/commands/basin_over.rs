@@ -9,17 +9,18 @@
 //! `--x`/`--y`, else the default box of `basin` around the gait at A (stated in the output).
 //!
 //! [`run`] reads as the command runs: [`parse`], claim the outputs, [`plan`] (a model per value
-//! and the box), [`at_value`] for every value, [`write`] the file and the chart, and print.
+//! and the box), the library's [`pdw::basin_over::at_value`] for every value, [`write`] the
+//! file and the chart, and print.
 
 use super::basin::{axis, check_memory, fixed_json, progress_bar, AXIS_FLAGS};
 use super::output::{Claim, Format, Output};
-use super::{overrides, BuiltModel};
+use super::overrides;
 use crate::args::{self, InputError, Sweep};
 use crate::cli::BasinArgs;
-use indicatif::ProgressBar;
-use pdw::basin::{BasinBox, BasinPlan, BasinRequest};
-use pdw_limit::basin::{classify_cells, BasinOptions, CellResult, Outcome};
-use pdw_limit::{Attractor, AttractorKind, AttractorSet};
+use pdw::basin::BasinRequest;
+use pdw::basin_over::{AtValue, OverPlan};
+use pdw_limit::basin::{BasinOptions, Outcome};
+use pdw_limit::{Attractor, AttractorKind};
 use pdw_store::{StabilityAttractor, StabilityData};
 use pdw_walkers::ModelInfo;
 use std::path::PathBuf;
@@ -28,29 +29,6 @@ use std::time::Instant;
 
 /// Default grid of `--over`: 41 × 41 cells per value.
 pub const DEFAULT_OVER_GRID: &str = "41x41";
-
-/// The column an outcome code counts in: an attractor's name (the gait, codes ≥ 10), `fall`
-/// (every fall kind), `timeout`, or `other` (an orbit no attractor of the set explains, a
-/// non-finite state, an integrator failure).
-fn column_of(code: u8, set: &AttractorSet) -> (String, &'static str) {
-    if let Some(a) = set.attractors.iter().find(|a| a.code == code) {
-        return (a.name.clone(), "attractor");
-    }
-    match Outcome::from_code(code) {
-        Some(o) if o.is_fall() => ("fall".into(), "fall"),
-        Some(Outcome::Timeout) => ("timeout".into(), "timeout"),
-        _ => ("other".into(), "other"),
-    }
-}
-
-/// One parameter value's result.
-struct AtValue {
-    /// `(column, kind, fraction)` in the order met.
-    fractions: Vec<(String, &'static str, f64)>,
-    /// Fractions of the fixed outcome codes (before attractors are told apart).
-    outcomes: Vec<f64>,
-    attractors: Vec<StabilityAttractor>,
-}
 
 /// The command line, parsed and checked before any file is touched.
 struct Parsed {
@@ -65,19 +43,6 @@ struct Parsed {
     fixed: Vec<(usize, f64)>,
     out: PathBuf,
     png: PathBuf,
-}
-
-/// The models and the box every value is classified on.
-struct Plan {
-    values: Vec<f64>,
-    /// The model at each value.
-    models: Vec<BuiltModel>,
-    req: BasinRequest,
-    bx: BasinBox,
-    /// The box's centre (the gait at A): the state off the axes at a value without a gait.
-    centre_a: Vec<f64>,
-    /// Where the box comes from, for the output.
-    box_source: String,
 }
 
 /// The file's contents and what the output prints besides.
@@ -103,9 +68,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         "{elapsed_precise} [{wide_bar}] {pos}/{len} cells  {msg}  ETA {eta}",
     );
     let mut results: Vec<AtValue> = Vec::with_capacity(plan.values.len());
-    for (&mu, m) in plan.values.iter().zip(&plan.models) {
+    for (i, mu) in plan.values.iter().enumerate() {
         pb.set_message(format!("{} = {mu}", p.over.name));
-        results.push(at_value(a, &p, &plan, mu, m, &pool, &pb)?);
+        results.push(at_value(a, &p, &plan, i, &pool, &pb)?);
     }
     pb.finish_and_clear();
     let w = write(a, &p, &plan, &results, t0)?;
@@ -133,26 +98,7 @@ fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
         info.state_names.len(),
     )?;
     let (params, fixed) = pdw::basin::split_overrides(overrides(&a.model)?, &info.section_names);
-    if let Some((_, v)) = params.iter().find(|(n, _)| *n == over.name) {
-        return Err(InputError(format!(
-            "--over {}: the parameter is also set to {v} (--slope or --set); give it once",
-            over.name
-        ))
-        .into());
-    }
-    if !info.params.iter().any(|p| p.name == over.name) {
-        return Err(InputError(format!(
-            "--over: model '{}' has no parameter '{}'; its parameters are {}",
-            info.name,
-            over.name,
-            info.params
-                .iter()
-                .map(|p| p.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
-        .into());
-    }
+    pdw::basin_over::check_over(&info, &params, &over, "--over")?;
     let out = a.out_path();
     let png = a.png.clone().unwrap_or_else(|| out.with_extension("png"));
     Ok(Parsed {
@@ -193,19 +139,9 @@ fn claim_outputs(a: &BasinArgs, p: &Parsed) -> Result<Claim, InputError> {
     )
 }
 
-/// The model at every value (a bad value is refused before anything is computed) and the box:
-/// `--x`/`--y`, else `basin`'s default box around the gait at A, for every value.
-fn plan(a: &BasinArgs, p: &Parsed) -> anyhow::Result<Plan> {
-    let over = &p.over;
-    let values = pdw_limit::basin::linspace(over.lo, over.hi, over.n);
-    let models: Vec<BuiltModel> = values
-        .iter()
-        .map(|&mu| {
-            let mut sets = p.params.clone();
-            sets.push((over.name.clone(), mu));
-            pdw::build(&a.model.model, &sets)
-        })
-        .collect::<Result<_, _>>()?;
+/// The model at every value and the box ([`pdw::basin_over::plan`]): `--x`/`--y`, else
+/// `basin`'s default box around the gait at A, for every value.
+fn plan(a: &BasinArgs, p: &Parsed) -> anyhow::Result<OverPlan> {
     let req = BasinRequest {
         grid: p.grid,
         x: axis(&p.info, &a.x, "--x")?,
@@ -215,54 +151,28 @@ fn plan(a: &BasinArgs, p: &Parsed) -> anyhow::Result<Plan> {
         max_strides: a.max_strides,
         integrator: p.integrator,
     };
-    let gaits_a = pdw::basin::find_gaits(&models[0])?;
-    let Some(centre_a) = pdw::basin::grid_centre(&models[0], &gaits_a, req.axes_given()) else {
-        return Err(InputError(format!(
-            "--over: no period-one gait of model '{}' at {} = {} to centre the default \
-             box on; give both --x and --y",
-            p.info.name, over.name, over.lo
-        ))
-        .into());
-    };
-    let box_source = if req.axes_given() {
-        "--x and --y".to_string()
-    } else {
-        format!(
-            "the default basin box around the period-one gait at {} = {} (fixed for every \
-             value)",
-            over.name, over.lo
-        )
-    };
-    let bx = pdw::basin::choose_box(&req, &p.info.section_names, &centre_a, AXIS_FLAGS, "box")?;
-    Ok(Plan {
-        values,
-        models,
+    Ok(pdw::basin_over::plan(
+        &a.model.model,
+        &p.params,
+        &p.over,
         req,
-        bx,
-        centre_a,
-        box_source,
-    })
+        AXIS_FLAGS,
+        "--over",
+    )?)
 }
 
-/// The box classified at one value `mu` of the parameter (model `m`): the coordinates off the
-/// box's axes at this value's gait, as `basin` takes them, and its own attractors.
+/// The box classified at value `i` ([`pdw::basin_over::at_value`]), warning as `basin` warns:
+/// cells near a slowly attracting orbit need more strides than given.
 fn at_value(
     a: &BasinArgs,
     p: &Parsed,
-    plan: &Plan,
-    mu: f64,
-    m: &BuiltModel,
+    plan: &OverPlan,
+    i: usize,
     pool: &rayon::ThreadPool,
-    pb: &ProgressBar,
+    pb: &indicatif::ProgressBar,
 ) -> anyhow::Result<AtValue> {
-    let gaits = pdw::basin::find_gaits(m)?;
-    let centre = gaits
-        .centre()
-        .map_or_else(|| plan.centre_a.clone(), <[f64]>::to_vec);
-    let vp = BasinPlan::new(&plan.req, plan.bx.clone(), gaits, centre);
-    let (set, _) = vp.attractors(m, pool)?;
-    // As `basin` warns: cells near a slowly attracting orbit need more strides than given.
-    for s in pdw::basin::slow_attractors(&set, a.max_strides) {
+    let mu = plan.values[i];
+    let mut slow = |s: &pdw::basin::SlowAttractor<'_>| {
         let at = s.attractor;
         pb.suspend(|| {
             eprintln!(
@@ -272,53 +182,11 @@ fn at_value(
                 p.over.name, at.name, s.modulus, at.period_k, s.strides, a.max_strides
             )
         });
-    }
-    let fall = Outcome::of_fall;
-    let problem = set.problem(m.walker.as_ref(), &fall);
-    let done = pb.position();
-    let res = classify_cells(&problem, &vp.cells(&vp.ys), &vp.opts, pool, &|k| {
-        pb.set_position(done + k as u64)
-    })?;
-    Ok(tally(res, &set))
-}
-
-/// The fractions of the cells `res` by outcome code, then by column (count / n, as `basin`'s
-/// metrics compute them), and the attractors of `set`.
-fn tally(mut res: Vec<CellResult>, set: &AttractorSet) -> AtValue {
-    let n = res.len() as f64;
-    let counts = |res: &[CellResult]| {
-        let mut counts = [0usize; 256];
-        for c in res {
-            counts[c.outcome as usize] += 1;
-        }
-        counts
     };
-    let by_code = counts(&res);
-    let outcomes: Vec<f64> = Outcome::ALL
-        .iter()
-        .map(|o| by_code[o.code() as usize] as f64 / n)
-        .collect();
-    set.relabel(&mut res);
-    let mut fractions: Vec<(String, &'static str, usize)> = set
-        .attractors
-        .iter()
-        .map(|at| (at.name.clone(), "attractor", 0))
-        .collect();
-    for (code, &k) in counts(&res).iter().enumerate().filter(|(_, k)| **k > 0) {
-        let (name, kind) = column_of(code as u8, set);
-        match fractions.iter_mut().find(|(n, _, _)| *n == name) {
-            Some(e) => e.2 += k,
-            None => fractions.push((name, kind, k)),
-        }
-    }
-    AtValue {
-        fractions: fractions
-            .into_iter()
-            .map(|(name, kind, k)| (name, kind, k as f64 / n))
-            .collect(),
-        outcomes,
-        attractors: set.attractors.iter().map(stability_attractor).collect(),
-    }
+    let done = pb.position();
+    Ok(pdw::basin_over::at_value(plan, i, pool, &mut slow, &|k| {
+        pb.set_position(done + k as u64)
+    })?)
 }
 
 /// An attractor in the file's form (period 0 for a chaotic one).
@@ -336,51 +204,17 @@ fn stability_attractor(at: &Attractor) -> StabilityAttractor {
     }
 }
 
-/// The columns: every attractor met (in order met), then fall, timeout, other.
-fn columns(results: &[AtValue]) -> Vec<(String, &'static str)> {
-    let mut columns: Vec<(String, &'static str)> = Vec::new();
-    for r in results {
-        for (name, kind, _) in r.fractions.iter().filter(|c| c.1 == "attractor") {
-            if !columns.iter().any(|(n, _)| n == name) {
-                columns.push((name.clone(), kind));
-            }
-        }
-    }
-    for (n, k) in [("fall", "fall"), ("timeout", "timeout"), ("other", "other")] {
-        columns.push((n.into(), k));
-    }
-    columns
-}
-
-/// Every value's fraction in every column (0 where a column was not met).
-fn fraction_table(results: &[AtValue], columns: &[(String, &'static str)]) -> Vec<Vec<f64>> {
-    results
-        .iter()
-        .map(|r| {
-            columns
-                .iter()
-                .map(|(c, _)| {
-                    r.fractions
-                        .iter()
-                        .find(|(n, _, _)| n == c)
-                        .map_or(0.0, |f| f.2)
-                })
-                .collect()
-        })
-        .collect()
-}
-
 /// The file (HDF5, with provenance and units) and the stacked chart.
 fn write(
     a: &BasinArgs,
     p: &Parsed,
-    plan: &Plan,
+    plan: &OverPlan,
     results: &[AtValue],
     t0: Instant,
 ) -> anyhow::Result<Written> {
     let (over, bx, names) = (&p.over, &plan.bx, &p.info.section_names);
     let (x, y) = (&bx.x.range, &bx.y.range);
-    let columns = columns(results);
+    let columns = pdw::basin_over::columns(results);
     let unit = super::param_unit(&plan.models[0], &over.name);
     let sec_units = super::section_units(&plan.models[0]);
     let box_json = serde_json::json!({
@@ -416,10 +250,13 @@ fn write(
         values: plan.values.clone(),
         columns: columns.iter().map(|c| c.0.clone()).collect(),
         kinds: columns.iter().map(|c| c.1.to_string()).collect(),
-        fractions: fraction_table(results, &columns),
+        fractions: pdw::basin_over::fraction_table(results, &columns),
         outcome_columns: Outcome::ALL.iter().map(|o| o.name().to_string()).collect(),
         outcome_fractions: results.iter().map(|r| r.outcomes.clone()).collect(),
-        attractors: results.iter().map(|r| r.attractors.clone()).collect(),
+        attractors: results
+            .iter()
+            .map(|r| r.attractors.iter().map(stability_attractor).collect())
+            .collect(),
         settings: vec![("options".into(), options.to_string())],
         elapsed_s: t0.elapsed().as_secs_f64(),
     };
@@ -463,7 +300,7 @@ fn annotate(out: &std::path::Path, options: serde_json::Value, unit: &str) -> an
 }
 
 /// `--json`: the fractions at every value as one JSON object.
-fn print_json(a: &BasinArgs, p: &Parsed, plan: &Plan, w: &Written) -> anyhow::Result<()> {
+fn print_json(a: &BasinArgs, p: &Parsed, plan: &OverPlan, w: &Written) -> anyhow::Result<()> {
     let data = &w.data;
     let j = serde_json::json!({
         "model": data.model,
@@ -489,7 +326,7 @@ fn print_json(a: &BasinArgs, p: &Parsed, plan: &Plan, w: &Written) -> anyhow::Re
 }
 
 /// The fractions at every value as a table.
-fn print_table(a: &BasinArgs, p: &Parsed, plan: &Plan, w: &Written) {
+fn print_table(a: &BasinArgs, p: &Parsed, plan: &OverPlan, w: &Written) {
     let (over, bx, data, unit) = (&p.over, &plan.bx, &w.data, &w.unit);
     let (x, y) = (&bx.x.range, &bx.y.range);
     crate::outln!(

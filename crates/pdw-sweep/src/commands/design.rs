@@ -10,7 +10,7 @@
 
 use super::output::{Claim, Format, Output};
 use super::{build_with, BuiltModel};
-use crate::args::{self, InputError};
+use crate::args::InputError;
 use crate::cli::DesignArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::design::DesignPlan;
@@ -106,80 +106,13 @@ pub fn run(a: &DesignArgs) -> anyhow::Result<ExitCode> {
     report(a, &png, &plan, &hist.designs, hist.stored)
 }
 
-/// The model (a chain walker) and the free parameters: each a parameter of the model, given
-/// once, not also set, both bounds making a model.
+/// The model (a chain walker) and the free parameters ([`pdw::design::space`]): each a
+/// parameter of the model, given once, not also set, both bounds making a model.
 fn parse(a: &DesignArgs) -> anyhow::Result<(BuiltModel, DesignSpace)> {
     let base = build_with(&a.model, &[])?;
-    if base.info.spec().is_none() {
-        return Err(InputError(format!(
-            "--model: '{}' is not a chain walker (section of {} coordinates); design searches \
-             run on walker specs (compass, kneed, seed5 or a .toml file)",
-            base.info.name,
-            base.info.section_names.len()
-        ))
-        .into());
-    }
-    let set_names: Vec<String> = super::overrides(&a.model)?
-        .into_iter()
-        .map(|p| p.0)
-        .collect();
-    let mut space = DesignSpace {
-        names: Vec::new(),
-        lo: Vec::new(),
-        hi: Vec::new(),
-    };
-    for f in &a.free {
-        let r = free_parameter(a, &base, &space.names, &set_names, f)?;
-        space.names.push(r.name);
-        space.lo.push(r.lo);
-        space.hi.push(r.hi);
-    }
-    if space.names.is_empty() {
-        return Err(InputError("--free: give at least one NAME=LO:HI".into()).into());
-    }
+    pdw::design::check_model(&base, "--model")?;
+    let space = pdw::design::space(&super::choice(&a.model), &base, &a.free, "--free")?;
     Ok((base, space))
-}
-
-/// One `--free NAME=LO:HI`, checked against the model and the parameters before it.
-fn free_parameter(
-    a: &DesignArgs,
-    base: &BuiltModel,
-    names: &[String],
-    set_names: &[String],
-    f: &str,
-) -> Result<args::AxisRange, InputError> {
-    let r = args::parse_axis(f, "--free")?;
-    if !base.params.iter().any(|p| p.0 == r.name) {
-        return Err(InputError(format!(
-            "--free: '{}' is not a parameter of model '{}' (parameters: {})",
-            r.name,
-            base.info.name,
-            base.params
-                .iter()
-                .map(|p| p.0.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
-    }
-    if names.contains(&r.name) {
-        return Err(InputError(format!("--free: '{}' is given twice", r.name)));
-    }
-    if set_names.contains(&r.name) {
-        return Err(InputError(format!(
-            "--free: '{}' is also fixed by --set/--slope; a parameter is either free or set",
-            r.name
-        )));
-    }
-    // both bounds must make a model (checked once, here)
-    for v in [r.lo, r.hi] {
-        build_with(&a.model, &[(r.name.clone(), v)]).map_err(|e| {
-            InputError(format!(
-                "--free {}: the bound {v} does not make a model: {e}",
-                f
-            ))
-        })?;
-    }
-    Ok(r)
 }
 
 /// Claims `--out` (an existing one continues its search unless `--force`) and the picture
@@ -210,16 +143,7 @@ fn claim(a: &DesignArgs, png: &Path) -> Result<Claim, InputError> {
 /// The plan: the model, the free parameters (starting from the model's own values) and the
 /// search's options from the flags.
 fn plan(a: &DesignArgs, base: &BuiltModel, space: DesignSpace) -> anyhow::Result<DesignPlan> {
-    let start = space
-        .names
-        .iter()
-        .map(|n| {
-            base.params
-                .iter()
-                .find(|p| p.0 == *n)
-                .map_or(f64::NAN, |p| p.1)
-        })
-        .collect();
+    let start = pdw::design::start(base, &space);
     let options = DesignOptions {
         objective: a.objective,
         mu: a.mu,

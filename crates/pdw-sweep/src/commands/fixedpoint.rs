@@ -11,7 +11,7 @@ use std::process::ExitCode;
 pub use pdw_limit::gaits::{Found, FoundOrbit};
 use pdw_limit::Validity;
 
-pub use pdw::gaits::{search, search_with};
+pub use pdw::gaits::search_with;
 
 /// Constraint loads, swing-foot clearance and impacts along one step of a gait, located on
 /// the dense solution ([`Validity::along_step`], module docs of [`pdw_limit::validity`]).
@@ -163,7 +163,12 @@ fn run_period_one(
         .filter(|f| wanted(&a.gait, f.fp.stable))
         .collect();
     if a.json {
-        let j = gaits_json(m, &selected, integrator);
+        let mut j = gaits_json(m, &selected, integrator);
+        if a.jacobian {
+            for (k, f) in selected.iter().enumerate() {
+                j["fixed_points"][k]["linear"] = linear_json(m, &f.fp.section)?;
+            }
+        }
         crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     } else {
         print_model_line(m, integrator);
@@ -461,6 +466,35 @@ fn gaits_json(
         "integrator": super::integrator_json(integrator),
         "fixed_points": fps,
     })
+}
+
+/// `--jacobian`: the linear stability data of the gait at section state `s`
+/// ([`pdw::linear`]): `jacobian` (rows), `eigenvalues` ({re, im}), `eigenvectors` (one per
+/// eigenvalue, unit norm, {re, im} entries), `impacts` (event, t, modes, pre-impact state,
+/// `saltation` rows) and `lyapunov` over `lyapunov_strides` strides.
+fn linear_json(m: &BuiltModel, s: &[f64]) -> anyhow::Result<serde_json::Value> {
+    const STRIDES: usize = 100;
+    let n = s.len();
+    let (dp, _) = pdw::linear::jacobian(m, s)?;
+    let pairs = pdw::linear::eigenpairs(&dp, n)?;
+    let impacts = pdw::linear::impacts(m, s)?;
+    let c = |z: &(f64, f64)| serde_json::json!({"re": z.0, "im": z.1});
+    let rows = |v: &[f64], k: usize| v.chunks(k).map(<[f64]>::to_vec).collect::<Vec<_>>();
+    Ok(serde_json::json!({
+        "jacobian": rows(&dp, n),
+        "eigenvalues": pairs.iter().map(|p| c(&p.value)).collect::<Vec<_>>(),
+        "eigenvectors": pairs.iter().map(|p| p.vector.iter().map(c).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        "impacts": impacts.iter().map(|i| serde_json::json!({
+            "event": i.event,
+            "t": i.t,
+            "mode_before": i.mode_before,
+            "mode_after": i.mode_after,
+            "pre": i.pre,
+            "saltation": rows(&i.saltation, i.pre.len()),
+        })).collect::<Vec<_>>(),
+        "lyapunov": pdw::linear::lyapunov(m, s, STRIDES)?,
+        "lyapunov_strides": STRIDES,
+    }))
 }
 
 /// What to try when no gait is found, by model: the rimless wheel rolls only on a slope steep

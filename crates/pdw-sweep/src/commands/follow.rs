@@ -8,10 +8,10 @@
 //! ([`compute`]), the file and the picture written ([`write`]), the curve printed ([`report`]).
 
 use super::output::{Format, Output};
-use super::{build_model, BuiltModel};
+use super::BuiltModel;
 use crate::args::{self, InputError, Sweep};
 use crate::cli::FixedpointArgs;
-use pdw::follow::{kind_long, FollowPlan, GaitChoice, StartSearch};
+use pdw::follow::{kind_long, FollowFlags, FollowPlan, Free, GaitChoice, StartSearch};
 use pdw_hybrid::Options;
 use pdw_limit::{
     Bifurcation, Codim2Kind, Codim2Options, ContinuationOptions, Curve, CurveEnd, Region,
@@ -24,63 +24,19 @@ use std::process::ExitCode;
 /// Default `--map-grid`.
 const MAP_GRID: &str = "40x40";
 
-/// The free parameter: its name and its domain (if given).
-struct Free {
-    name: String,
-    range: Option<(f64, f64)>,
-}
-
-fn parse_free(s: &str) -> Result<Free, InputError> {
-    let Some((name, range)) = s.split_once('=') else {
-        let name = s.trim();
-        if name.is_empty() {
-            return Err(InputError("--free: empty parameter name".into()));
-        }
-        return Ok(Free {
-            name: name.to_string(),
-            range: None,
-        });
-    };
-    let name = name.trim().to_string();
-    let Some((lo, hi)) = range.split_once(':') else {
-        return Err(InputError(format!(
-            "--free: '{s}' is not of the form NAME or NAME=LO:HI (e.g. slope=2deg:8deg)"
-        )));
-    };
-    let conv = |t: &str| {
-        if name == "slope" {
-            args::parse_slope_for(t, "--free slope")
-        } else {
-            args::parse_f64(t, &format!("--free {name}"))
-        }
-    };
-    let (lo, hi) = (conv(lo)?, conv(hi)?);
-    if lo >= hi {
-        return Err(InputError(format!(
-            "--free: range {lo}:{hi} is empty or inverted; LO must be below HI"
-        )));
-    }
-    Ok(Free {
-        name,
-        range: Some((lo, hi)),
-    })
-}
-
-fn value_of(m: &BuiltModel, name: &str) -> Option<f64> {
-    m.params.iter().find(|(n, _)| n == name).map(|p| p.1)
-}
-
-fn unknown(m: &BuiltModel, flag: &str, name: &str) -> InputError {
-    InputError(format!(
-        "{flag}: model '{}' has no parameter '{name}'; its parameters are {}",
-        m.info.name,
-        m.params
-            .iter()
-            .map(|(n, _)| n.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
-    ))
-}
+/// How the CLI names a curve's inputs in messages.
+const FLAGS: FollowFlags = FollowFlags {
+    kind: "--follow",
+    sweep: "--sweep",
+    free: "--free",
+    free_range_hint: |n| format!("--free {n}=LO:HI"),
+    set_hint: |n| {
+        format!(
+            "--set {n}=VALUE{}",
+            if n == "slope" { " or --slope" } else { "" }
+        )
+    },
+};
 
 /// The flags of a curve run, checked without the model.
 struct Parsed {
@@ -135,16 +91,7 @@ fn parse_kind(follow: Option<&str>) -> Result<Codim2Kind, InputError> {
              parameters); add --follow"
                 .into(),
         )),
-        Some("pd") => Ok(Codim2Kind::PeriodDoubling),
-        Some("fold") => Ok(Codim2Kind::Fold),
-        Some("ns") => Err(InputError(
-            "--follow ns: not supported: Neimark-Sacker curves (a complex pair of multipliers \
-             on the unit circle) are not implemented; --follow takes pd or fold"
-                .into(),
-        )),
-        Some(other) => Err(InputError(format!(
-            "--follow: '{other}' is not one of pd (period doubling), fold"
-        ))),
+        Some(k) => pdw::follow::parse_kind(k, FLAGS.kind),
     }
 }
 
@@ -180,14 +127,7 @@ fn parse(a: &FixedpointArgs) -> Result<Parsed, InputError> {
         )));
     }
     let sweep = args::parse_sweep(sweep)?;
-    let free = parse_free(free_text)?;
-    if free.name == sweep.name {
-        return Err(InputError(format!(
-            "--free {} and --sweep {}: the same parameter; the curve needs two different \
-             parameters (one stepped, one solved for)",
-            free.name, sweep.name
-        )));
-    }
+    let free = pdw::follow::parse_free(free_text, FLAGS.free)?;
     let (nx, ny) = args::parse_grid_for("--map-grid", a.map_grid.as_deref().unwrap_or(MAP_GRID))?;
     if nx < 2 || ny < 2 || nx * ny > 250_000 {
         return Err(InputError(format!(
@@ -228,83 +168,36 @@ fn claim(a: &FixedpointArgs, out: &Path) -> Result<super::output::Claim, InputEr
 }
 
 /// The plan, from the model at its own values (returned too): both parameters exist and the
-/// free domain holds the model's value.
+/// free domain holds the model's value ([`pdw::follow::plan`]).
 fn plan(a: &FixedpointArgs, p: &Parsed) -> Result<(FollowPlan, BuiltModel), InputError> {
-    let m_own = build_model(&a.model)?;
-    let (sw, free) = (&p.sweep, &p.free);
-    let step_own =
-        value_of(&m_own, &sw.name).ok_or_else(|| unknown(&m_own, "--sweep", &sw.name))?;
-    let free_own =
-        value_of(&m_own, &free.name).ok_or_else(|| unknown(&m_own, "--free", &free.name))?;
-    let (lo, hi) = free_domain(free, free_own)?;
-    let plan = FollowPlan {
-        model: super::choice(&a.model),
-        kind: p.kind,
-        step: sw.clone(),
-        free: free.name.clone(),
-        free_range: (lo, hi),
-        free_given: free.range,
-        free_own,
-        step_own,
-        guess: None,
-        gait: p.gait,
-        tol: a.tol,
-        integrator: Options::dop853(1e-13),
-    };
-    Ok((plan, m_own))
+    pdw::follow::plan(
+        super::choice(&a.model),
+        p.kind,
+        p.sweep.clone(),
+        &p.free,
+        p.gait,
+        a.tol,
+        &FLAGS,
+    )
 }
 
-/// The checks made once the outputs are claimed: every corner of the plane is a model, the
-/// integrator choice holds, the guess fits the section at the start; the model there.
+/// The checks made once the outputs are claimed: the integrator choice holds, every corner of
+/// the plane is a model, the guess fits the section at the start; the model there.
 fn prepare(
     a: &FixedpointArgs,
     mut plan: FollowPlan,
     m_own: BuiltModel,
     grid: (usize, usize),
 ) -> Result<Planned, InputError> {
-    plan.check_corners()?;
     plan.integrator = super::integrator(&a.integrator, Options::dop853(1e-13))?;
-    let m_a = plan.model_at(plan.step.lo, plan.free_own)?;
     let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
-    if user.is_some() {
-        let g = pdw::gaits::guesses(&m_a, user, "--guess")?;
-        plan.guess = g.into_iter().next().map(|(_, v)| v);
-    }
+    let m_a = pdw::follow::start_model(&mut plan, user, "--guess")?;
     Ok(Planned {
         plan,
         m_own,
         m_a,
         grid,
     })
-}
-
-/// The free parameter's domain: `--free NAME=LO:HI`, else the default around the model's value
-/// `free_own`, which must lie inside (the one-parameter search starts there).
-fn free_domain(free: &Free, free_own: f64) -> Result<(f64, f64), InputError> {
-    let (lo, hi) = match free.range {
-        Some(r) => r,
-        None => pdw::follow::default_free_range(&free.name, free_own).ok_or_else(|| {
-            InputError(format!(
-                "--free {}: the model's value {free_own} is not positive, so there is no \
-                 default range; give one: --free {}=LO:HI",
-                free.name, free.name
-            ))
-        })?,
-    };
-    if !(lo..=hi).contains(&free_own) {
-        return Err(InputError(format!(
-            "--free {}={lo}:{hi}: the model's value {free_own} (where the one-parameter search \
-             starts) lies outside; set it inside with --set {}=VALUE{}",
-            free.name,
-            free.name,
-            if free.name == "slope" {
-                " or --slope"
-            } else {
-                ""
-            }
-        )));
-    }
-    Ok((lo, hi))
 }
 
 /// The four steps of [`pdw::follow`]; `None` after reporting why there is no curve to follow
@@ -347,35 +240,12 @@ fn compute(a: &FixedpointArgs, p: &Planned) -> anyhow::Result<Option<Computed>> 
 }
 
 fn report_no_gait(plan: &FollowPlan, m_a: &BuiltModel, why: pdw::follow::NoStartGait) {
-    let (name, a_val) = (&plan.step.name, plan.step.lo);
-    eprintln!(
-        "error: no period-one gait of model '{}' at {name} = {a_val} to start from (Newton \
-         there: {}; at the model's own {name} = {}: {})",
-        m_a.info.name,
-        why.at_start,
-        plan.step_own,
-        if why.at_own.is_empty() {
-            "a gait exists but its continuation to A failed".to_string()
-        } else {
-            why.at_own
-        }
-    );
+    eprintln!("error: {}", pdw::follow::no_gait_message(plan, m_a, &why));
     eprintln!("try: --guess (section coordinates), or another start of --sweep");
 }
 
 fn report_no_bifurcation(plan: &FollowPlan, ends: &[String]) {
-    let (lo, hi) = plan.free_range;
-    eprintln!(
-        "error: no {} of the period-one gait on {} in [{lo}, {hi}] at {} = {} (the branch from \
-         {} = {} ended {})",
-        kind_long(plan.kind),
-        plan.free,
-        plan.step.name,
-        plan.step.lo,
-        plan.free,
-        plan.free_own,
-        ends.join("; ")
-    );
+    eprintln!("error: {}", pdw::follow::no_bifurcation_message(plan, ends));
     eprintln!(
         "try: another --free range (NAME=LO:HI), another start of --sweep, or the other gait \
          (--gait)"
@@ -472,22 +342,9 @@ fn report(
     } else {
         print_table(a, out, p, c, elapsed);
     }
-    let plan = &p.plan;
-    if let CurveEnd::Lost {
-        last,
-        tried,
-        reason,
-    } = &c.curve.end
-    {
+    if let Some(lost) = pdw::follow::lost_message(&p.plan, &c.curve) {
         eprintln!(
-            "error: the {} curve was lost {} (the step to {} = {tried} failed even at 1/256 of \
-             the spacing): {reason}; the {} points reached are written",
-            kind_long(plan.kind),
-            match last {
-                Some(l) => format!("after {} = {l}", plan.step.name),
-                None => format!("at its start, {} = {}", plan.step.name, plan.step.lo),
-            },
-            plan.step.name,
+            "error: {lost}; the {} points reached are written",
             c.curve.points.len()
         );
         return Ok(ExitCode::from(2));

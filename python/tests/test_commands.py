@@ -1,0 +1,189 @@
+"""The Python functions of the CLI's commands (orbit_diagram, basin_over, follow, design,
+animate) against the CLI on the same input, and against second methods: a plain basin, the
+fixed point, Goswami et al. 1998's period-doubling slope; the signatures and the basin legend."""
+
+import inspect
+import json
+import os
+import subprocess
+import tempfile
+
+import numpy as np
+import pytest
+
+import pdw_sweep as pdw
+
+from test_pdw_sweep import cli
+
+
+def run_cli(*args):
+    exe = cli()
+    if exe is None:
+        pytest.skip("pdw-sweep binary not built")
+    r = subprocess.run([exe, *args], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+def functions():
+    return {n: f for n, f in vars(pdw).items() if callable(f) and not n.startswith("_")}
+
+
+# Every function shows its real defaults (pyo3 renders a constant or tuple default as `...`
+# unless the function names a text signature).
+SIGNED = sorted(functions())
+
+
+@pytest.mark.parametrize("name", SIGNED)
+def test_signatures_show_real_defaults(name):
+    f = functions()[name]
+    assert f.__text_signature__ is not None
+    assert "..." not in f.__text_signature__
+    sig = inspect.signature(f)
+    for p in sig.parameters.values():
+        assert p.default is not Ellipsis, (name, p.name)
+    assert "..." not in str(sig) and "Ellipsis" not in str(sig)
+
+
+def test_signature_defaults_are_the_cli_defaults():
+    b = inspect.signature(pdw.basin).parameters
+    assert b["grid"].default == (101, 101) and b["threads"].default == 2
+    assert b["max_strides"].default == 100
+    g = inspect.signature(pdw.gaits).parameters
+    assert g["starts"].default == 256
+    d = inspect.signature(pdw.design).parameters
+    # `pdw-sweep design`'s defaults (docs/cli.md)
+    assert d["budget"].default == 60 and d["mu"].default == 0.6
+    assert d["knee_margin"].default == 0.1 and d["basin_grid"].default == 15
+    assert d["basin_box"].default == (0.02, 0.08) and d["max_strides"].default == 40
+    assert inspect.signature(pdw.basin_over).parameters["grid"].default == (41, 41)
+
+
+def test_basin_legend_lists_exactly_the_codes_the_result_can_hold():
+    # at 0.016 rad the simplest walker's period-one gait is unstable (period doubling near
+    # 0.0151, Garcia et al. 1998): no code 0
+    out, legend, m = pdw.basin("simplest", slope=0.016, grid=(15, 15))
+    assert m["gait"] is None
+    assert 0 not in legend and "gait" not in m["fractions"]
+    assert set(np.unique(out)) <= set(legend)
+    assert any(a["period_k"] == 2 for a in m["attractors"])
+    # with a stable gait, code 0 is listed and reached
+    out, legend, m = pdw.basin("simplest", slope=0.009, grid=(15, 15))
+    assert legend[0] == "gait" and 0 in np.unique(out)
+    assert set(np.unique(out)) <= set(legend)
+
+
+def test_orbit_diagram_equals_the_cli_and_the_fixed_point():
+    with tempfile.TemporaryDirectory() as d:
+        ref = json.loads(run_cli("fixedpoint", "--sweep", "slope=0.014:0.018:5", "--json",
+                                 "--quiet", "--out", os.path.join(d, "bif.h5")))
+    od = pdw.orbit_diagram("simplest", start=0.014, stop=0.018, points=5)
+    ro = ref["orbit_diagram"]
+    np.testing.assert_array_equal(od["values"], ro["parameter"])
+    first = od["points"][:, :, 0]
+    want = np.array([[np.nan if v is None else v for v in row] for row in ro["points"]])
+    np.testing.assert_array_equal(first, want)
+    assert od["points"].shape == (5, 64, 2) and od["section_names"] == ["theta", "thetadot"]
+    # 0.014: the stable period-one gait, every recorded point on it
+    fp = pdw.fixed_point("simplest", slope=0.014, gait="stable")[0]
+    assert od["period"][0] == 1
+    np.testing.assert_allclose(od["points"][0], np.tile(fp["section"], (64, 1)), atol=1e-7)
+    # 0.016: past the period doubling, a period-2 orbit
+    assert od["period"][2] == 2 and np.all(od["fall_stride"] == -1)
+
+
+def test_basin_over_equals_the_cli_and_a_plain_basin():
+    with tempfile.TemporaryDirectory() as d:
+        ref = json.loads(run_cli("basin", "--over", "slope=0.009:0.012:2", "--grid", "9x9",
+                                 "--json", "--quiet", "--out", os.path.join(d, "bs.h5")))
+    bs = pdw.basin_over("simplest", over="slope=0.009:0.012:2", grid=(9, 9))
+    assert bs["columns"] == ref["columns"] and bs["kinds"] == ref["kinds"]
+    np.testing.assert_array_equal(bs["values"], [v["param"] for v in ref["values"]])
+    want = [[v["fractions"][c] for c in ref["columns"]] for v in ref["values"]]
+    np.testing.assert_array_equal(bs["fractions"], want)
+    np.testing.assert_array_equal(bs["outcome_fractions"], ref["outcome_fractions"])
+    np.testing.assert_allclose(bs["fractions"].sum(axis=1), 1.0, atol=1e-12)
+    # the same range given as parameter/start/stop/points
+    again = pdw.basin_over("simplest", parameter="slope", start=0.009, stop=0.012, points=2,
+                           grid=(9, 9))
+    np.testing.assert_array_equal(again["fractions"], bs["fractions"])
+    # at A the box is a plain basin's default box: the same fractions
+    out, legend, m = pdw.basin("simplest", slope=0.009, grid=(9, 9))
+    gait = bs["columns"].index("gait")
+    assert bs["fractions"][0, gait] == m["fractions"]["gait"]
+    assert bs["box"]["x"][1:3] == (m["x"][0], m["x"][-1])
+    with pytest.raises(ValueError, match="over"):
+        pdw.basin_over("simplest", over="slope=0.009:0.012:2", slope=0.01)
+    with pytest.raises(ValueError, match="no parameter 'nope'"):
+        pdw.basin_over("simplest", over="nope=1:2:2")
+
+
+def test_follow_equals_the_cli_and_goswami_1998():
+    with tempfile.TemporaryDirectory() as d:
+        ref = json.loads(run_cli("fixedpoint", "--model", "compass", "--follow", "pd",
+                                 "--sweep", "hip_mass=8:12:3", "--free", "slope", "--json",
+                                 "--quiet", "--out", os.path.join(d, "pd.h5")))
+    c = pdw.follow("compass", kind="pd", sweep="hip_mass=8:12:3", free="slope")
+    pts = np.array(ref["curve"]["points"])
+    np.testing.assert_array_equal(c["p_step"], pts[:, 0])
+    np.testing.assert_array_equal(c["p_free"], pts[:, 1])
+    np.testing.assert_array_equal(c["section"], [g["section"] for g in ref["gaits"]])
+    np.testing.assert_array_equal(c["critical_multiplier"],
+                                  [g["critical_multiplier"] for g in ref["gaits"]])
+    assert c["complete"] == ref["complete"] and c["start"]["free"] == ref["start"]["free"]
+    # Goswami et al. 1998 (IJRR 17(12)): period doubling near 4.39 deg at mu = m_H/m = 2
+    assert abs(np.degrees(c["p_free"][1]) - 4.39) < 0.005
+    # at a period doubling one multiplier is -1
+    assert np.all(np.abs(c["critical_multiplier"] + 1) < 1e-6)
+    with pytest.raises(ValueError, match="not supported"):
+        pdw.follow("compass", kind="ns", sweep="hip_mass=8:12:3", free="slope")
+    with pytest.raises(ValueError, match="same parameter"):
+        pdw.follow("compass", sweep="slope=0.01:0.02:3", free="slope")
+
+
+def test_design_equals_the_cli_file():
+    h5py = pytest.importorskip("h5py")
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "design.h5")
+        run_cli("design", "--model", "compass", "--free", "hip_mass=5:15", "--budget", "4",
+                "--objective", "margin", "--quiet", "--out", out)
+        with h5py.File(out, "r") as f:
+            params = f["params"][()]
+            status = f["status"][()]
+            cost = f["cost"][()]
+            rho = f["rho"][()]
+    got = pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=4, objective="margin")
+    np.testing.assert_array_equal(got["params"], params)
+    np.testing.assert_array_equal(got["status"], status)
+    np.testing.assert_array_equal(got["cost"], cost)
+    np.testing.assert_array_equal(got["rho"], rho)
+    # the start is the model's own hip mass; the best design has the smallest cost
+    own = [p["default"] for m in pdw.models() if m["name"] == "compass"
+           for p in m["parameters"] if p["name"] == "hip_mass"][0]
+    assert got["params"][0, 0] == own
+    assert got["best"]["cost"] == np.min(got["cost"])
+    # margin objective: a feasible design's cost is its largest |multiplier| (docs/cli.md)
+    feasible = got["status"] == 0
+    np.testing.assert_array_equal(got["cost"][feasible], got["rho"][feasible])
+    with pytest.raises(ValueError, match="mu"):
+        pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, mu=-1.0)
+    with pytest.raises(ValueError, match="not a chain walker"):
+        pdw.design("simplest", free={"slope": (0.005, 0.01)})
+    with pytest.raises(ValueError, match="at least one"):
+        pdw.design("compass")
+
+
+def test_animate_writes_the_cli_gif():
+    with tempfile.TemporaryDirectory() as d:
+        a, b = os.path.join(d, "cli.gif"), os.path.join(d, "py.gif")
+        subprocess.run([cli() or pytest.skip("pdw-sweep binary not built"), "animate",
+                        "--model", "compass", "--slope", "3deg", "--out", a],
+                       check=True, capture_output=True)
+        got = pdw.animate("compass", slope="3deg", out=b)
+        assert os.fspath(got) == b
+        with open(a, "rb") as fa, open(b, "rb") as fb:
+            data = fb.read()
+            assert data[:6] == b"GIF89a" and fa.read() == data
+        with pytest.raises(ValueError, match="exists"):
+            pdw.animate("compass", slope="3deg", out=b)
+        pdw.animate("compass", slope="3deg", out=b, force=True)
