@@ -12,7 +12,11 @@ use pdw::basin_over::{AtValue, OverPlan};
 use pdw_limit::basin::{BasinOptions, Outcome};
 
 /// The names of the axes in messages.
-const FLAGS: AxisFlags = AxisFlags { x: "x", y: "y" };
+const FLAGS: AxisFlags = AxisFlags {
+    x: "x",
+    y: "y",
+    z: "z",
+};
 
 /// The parameter varied: `over="NAME=A:B:N"`, else `parameter`, `start`, `stop`, `points`.
 fn over_range(
@@ -66,7 +70,7 @@ pub(crate) fn basin_over<'py>(
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let info = pdw_walkers::model_info(model).map_err(err)?;
     pdw::basin::check_section(&info, "box").map_err(err)?;
-    crate::check_basin_memory(nx, ny, info.section_names.len())?;
+    crate::check_basin_memory(&[nx, ny], info.section_names.len())?;
     let ov = overrides(crate::slope_arg(slope)?, params)?;
     let (given, fixed) = pdw::basin::split_overrides(ov, &info.section_names);
     pdw::basin_over::check_over(&info, &given, &range, "over").map_err(err)?;
@@ -80,6 +84,7 @@ pub(crate) fn basin_over<'py>(
         grid,
         x: axis(x, "x")?,
         y: axis(y, "y")?,
+        z: None,
         fixed,
         max_strides,
         integrator: BasinOptions::default_integrator(),

@@ -54,6 +54,8 @@ pub(crate) fn sweep_plan(
         },
         tol,
         integrator: None,
+        from: None,
+        max_period: 2,
     })
 }
 
@@ -99,7 +101,7 @@ pub(crate) fn orbit_diagram<'py>(
             .build()
             .map_err(err)?;
         let quiet = &pdw_limit::sweep::Silent;
-        let sweep = pdw::sweep::continuation(&plan, &s, &pool, quiet).map_err(err)?;
+        let sweep = pdw::sweep::continuation(&plan, &s, plan.grid.lo, &pool, quiet).map_err(err)?;
         let cols = pdw::sweep::orbit_diagram(&plan, &sweep, &s, &pool, quiet).map_err(err)?;
         Ok((sweep.params, cols))
     })?;
