@@ -126,7 +126,9 @@ pub(crate) fn design<'py>(
             .map_err(err)?;
         pdw::design::search(&plan, &base, Vec::new(), &pool, &mut |_: &DesignEval| {}).map_err(err)
     })?;
-    design_dict(py, &plan, &hist)
+    let d = design_dict(py, &plan, &hist)?;
+    crate::give_warnings(py)?;
+    Ok(d)
 }
 
 /// Per-design measures, by the names of the CLI's file, in [`measures`]' order.
@@ -211,5 +213,11 @@ fn best_dict<'py>(
     for (name, v) in COLUMNS.iter().zip(measures(b)) {
         d.set_item(*name, v)?;
     }
+    // A best design on a face of the box: named in `on_bound` and warned about.
+    let on_bound = pdw::design::bound_warnings(&plan.space, &b.params);
+    for w in &on_bound {
+        crate::queue_warning(w);
+    }
+    d.set_item("on_bound", on_bound)?;
     Ok(Some(d))
 }

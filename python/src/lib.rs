@@ -175,7 +175,7 @@ static PENDING_WARNINGS: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(V
 
 /// The library's warning sink ([`pdw::model::set_warning_sink`]): queued, because a model
 /// may be built on a worker thread without the interpreter.
-fn queue_warning(msg: &str) {
+pub(crate) fn queue_warning(msg: &str) {
     if let Ok(mut q) = PENDING_WARNINGS.lock() {
         q.push(msg.to_string());
     }

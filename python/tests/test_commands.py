@@ -3,6 +3,7 @@ animate) against the CLI on the same input, and against second methods: a plain 
 fixed point, Goswami et al. 1998's period-doubling slope; the signatures and the basin legend."""
 
 import inspect
+import warnings
 import json
 import os
 import subprocess
@@ -152,7 +153,13 @@ def test_design_equals_the_cli_file():
             status = f["status"][()]
             cost = f["cost"][()]
             rho = f["rho"][()]
-    got = pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=4, objective="margin")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=4, objective="margin")
+    # a best design within 1 % of the range from a bound is named and warned about
+    hm = got["best"]["params"]["hip_mass"]
+    assert bool(got["best"]["on_bound"]) == (min(hm - 5.0, 15.0 - hm) <= 0.1)
+    assert [str(w.message) for w in caught if "bound" in str(w.message)] == got["best"]["on_bound"]
     np.testing.assert_array_equal(got["params"], params)
     np.testing.assert_array_equal(got["status"], status)
     np.testing.assert_array_equal(got["cost"], cost)

@@ -261,3 +261,32 @@ pub fn check_basin_box(v: &[f64], given: &str, flag: &str) -> Result<[f64; 2], I
         ))),
     }
 }
+
+/// Share of a free parameter's range within which a best design counts as on its bound.
+pub const ON_BOUND: f64 = 0.01;
+
+/// Warnings for a best design `best` (values in `space`'s order) that sits on a bound of its
+/// search box — within [`ON_BOUND`] of the range from it: the optimum may lie beyond, and the
+/// range should be widened there (a bounded search reports the best *inside* the box, which is
+/// not a stationary point of the objective when it is on a face of it).
+pub fn bound_warnings(space: &DesignSpace, best: &[f64]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, name) in space.names.iter().enumerate() {
+        let (lo, hi, v) = (space.lo[i], space.hi[i], best[i]);
+        let tol = ON_BOUND * (hi - lo).abs();
+        let side = if (v - lo).abs() <= tol {
+            Some(("lower", lo))
+        } else if (hi - v).abs() <= tol {
+            Some(("upper", hi))
+        } else {
+            None
+        };
+        if let Some((which, b)) = side {
+            out.push(format!(
+                "the best design has {name} = {v} at the {which} bound {b} of its range \
+                 {lo}:{hi}; the optimum may lie beyond it — widen the range there"
+            ));
+        }
+    }
+    out
+}

@@ -401,6 +401,9 @@ fn report(
         a.model.model,
         sets.join(" ")
     );
+    for w in pdw::design::bound_warnings(&plan.space, &b.params) {
+        eprintln!("warning: {w}");
+    }
     crate::outln!("  written: {}, {}", a.out.display(), png.display());
     Ok(if b.feasible() {
         ExitCode::SUCCESS
