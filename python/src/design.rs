@@ -131,32 +131,7 @@ pub(crate) fn design<'py>(
     Ok(d)
 }
 
-/// Per-design measures, by the names of the CLI's file, in [`measures`]' order.
-const COLUMNS: [&str; 9] = [
-    "cost",
-    "basin_fraction",
-    "rho",
-    "min_normal_force",
-    "max_friction",
-    "min_knee_torque",
-    "period",
-    "step_length",
-    "min_relative_margin",
-];
-
-fn measures(e: &DesignEval) -> [f64; 9] {
-    [
-        e.cost,
-        e.basin_fraction,
-        e.rho,
-        e.min_normal_force,
-        e.max_friction,
-        e.min_knee_torque,
-        e.period,
-        e.step_length,
-        e.min_relative_margin,
-    ]
-}
+use pdw::design::{measures, COLUMNS};
 
 /// The dict `design` returns: every design evaluated (in order) and the best one.
 fn design_dict<'py>(

@@ -205,6 +205,32 @@ impl Validity {
         .collect()
     }
 
+    /// The flags raised along the stride, each as a sentence for a report (empty for none):
+    /// what `fixedpoint` prints under "flag:" and `animate` warns with.
+    pub fn flag_descriptions(&self) -> Vec<&'static str> {
+        [
+            (
+                self.normal_force_negative,
+                "the stance foot would lift off (normal force < 0)",
+            ),
+            (
+                self.knee_unlocks,
+                "a locked knee would unlock (lock torque < 0)",
+            ),
+            (
+                self.swing_foot_scuffs,
+                "the swing foot goes below the slope where its clearance rule checks it",
+            ),
+            (
+                self.impact_violation,
+                "an impact needs a pulling contact or stop (negative impulse margin)",
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(raised, what)| raised.then_some(what))
+        .collect()
+    }
+
     /// The smallest relative margin, if any.
     pub fn min_relative_margin(&self) -> Option<f64> {
         self.binding().map(|m| m.relative)

@@ -66,30 +66,10 @@ pub fn gait(m: &BuiltModel) -> Result<(Option<FixedPoint>, Vec<Failed>), LimitEr
     Ok((crate::gaits::selected(&found).map(|f| f.fp.clone()), failed))
 }
 
-/// The validity flags raised along a gait's step, in words (empty for a valid gait).
+/// The validity flags raised along a gait's step, in words (empty for a valid gait):
+/// [`Validity::flag_descriptions`].
 pub fn flag_list(v: &Validity) -> Vec<&'static str> {
-    [
-        (
-            v.normal_force_negative,
-            "the stance foot would lift off (normal force < 0)",
-        ),
-        (
-            v.knee_unlocks,
-            "a locked knee would unlock (lock torque < 0)",
-        ),
-        (
-            v.swing_foot_scuffs,
-            "the swing foot goes below the slope where its clearance rule checks it",
-        ),
-        (
-            v.impact_violation,
-            "an impact needs a pulling contact or stop",
-        ),
-    ]
-    .into_iter()
-    .filter(|(f, _)| *f)
-    .map(|(_, w)| w)
-    .collect()
+    v.flag_descriptions()
 }
 
 /// The flags of `fp`'s step ([`flag_list`] of [`Validity::along_step`]).

@@ -290,3 +290,32 @@ pub fn bound_warnings(space: &DesignSpace, best: &[f64]) -> Vec<String> {
     }
     out
 }
+
+/// Per-design measures as the design file stores them (columns, in this order) and Python
+/// returns them.
+pub const COLUMNS: [&str; 9] = [
+    "cost",
+    "basin_fraction",
+    "rho",
+    "min_normal_force",
+    "max_friction",
+    "min_knee_torque",
+    "period",
+    "step_length",
+    "min_relative_margin",
+];
+
+/// The measures of `e` in [`COLUMNS`]' order.
+pub fn measures(e: &DesignEval) -> [f64; 9] {
+    [
+        e.cost,
+        e.basin_fraction,
+        e.rho,
+        e.min_normal_force,
+        e.max_friction,
+        e.min_knee_torque,
+        e.period,
+        e.step_length,
+        e.min_relative_margin,
+    ]
+}

@@ -21,32 +21,7 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Per-design measures stored as columns, in this order.
-const COLUMNS: [&str; 9] = [
-    "cost",
-    "basin_fraction",
-    "rho",
-    "min_normal_force",
-    "max_friction",
-    "min_knee_torque",
-    "period",
-    "step_length",
-    "min_relative_margin",
-];
-
-fn measures(e: &DesignEval) -> [f64; 9] {
-    [
-        e.cost,
-        e.basin_fraction,
-        e.rho,
-        e.min_normal_force,
-        e.max_friction,
-        e.min_knee_torque,
-        e.period,
-        e.step_length,
-        e.min_relative_margin,
-    ]
-}
+use pdw::design::{measures, COLUMNS};
 
 fn to_data(settings: &str, names: &[String], h: &[DesignEval]) -> DesignData {
     DesignData {

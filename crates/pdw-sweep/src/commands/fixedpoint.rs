@@ -617,27 +617,8 @@ fn print_validity(m: &BuiltModel, v: &Validity) {
             .map(|k| format!(", knee-lock torque ≥ {k:.4} {}", units.torque))
             .unwrap_or_default()
     );
-    for (flag, what) in [
-        (
-            v.normal_force_negative,
-            "the stance foot would lift off (normal force < 0)",
-        ),
-        (
-            v.knee_unlocks,
-            "a locked knee would unlock (lock torque < 0)",
-        ),
-        (
-            v.swing_foot_scuffs,
-            "the swing foot goes below the slope where its clearance rule checks it",
-        ),
-        (
-            v.impact_violation,
-            "an impact needs a pulling contact or stop (negative impulse margin)",
-        ),
-    ] {
-        if flag {
-            crate::outln!("    flag: {what}");
-        }
+    for what in v.flag_descriptions() {
+        crate::outln!("    flag: {what}");
     }
     for x in &v.violations {
         crate::outln!(
