@@ -189,14 +189,27 @@ fn give_warnings(py: Python<'_>) -> PyResult<()> {
         .map(|mut q| std::mem::take(&mut *q))
         .unwrap_or_default();
     pdw::model::rearm_warnings();
-    for w in queued {
-        let msg = std::ffi::CString::new(w).map_err(err)?;
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &msg,
-            1,
-        )?;
+    warn_all(py, &queued)
+}
+
+/// The swept range and start gait of `continuation` and `orbit_diagram`: at least two points,
+/// a non-empty finite range, `stable` or `unstable`.
+pub(crate) fn check_sweep_request(
+    start: f64,
+    stop: f64,
+    points: usize,
+    gait: &str,
+) -> PyResult<()> {
+    if points < 2 {
+        return Err(err(format!("points: {points} must be an integer >= 2")));
+    }
+    if !(start.is_finite() && stop.is_finite()) || start == stop {
+        return Err(err(format!("start, stop: range {start}:{stop} is empty")));
+    }
+    if !matches!(gait, "stable" | "unstable") {
+        return Err(err(format!(
+            "gait: '{gait}' is not one of stable, unstable"
+        )));
     }
     Ok(())
 }
@@ -1256,17 +1269,7 @@ fn continuation<'py>(
     start_at: Option<f64>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    if points < 2 {
-        return Err(err(format!("points: {points} must be an integer >= 2")));
-    }
-    if !(start.is_finite() && stop.is_finite()) || start == stop {
-        return Err(err(format!("start, stop: range {start}:{stop} is empty")));
-    }
-    if !matches!(gait, "stable" | "unstable") {
-        return Err(err(format!(
-            "gait: '{gait}' is not one of stable, unstable"
-        )));
-    }
+    check_sweep_request(start, stop, points, gait)?;
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     pdw::input::check_max_period(max_period, "max_period").map_err(err)?;
     let mut fixed = overrides(None, params)?;

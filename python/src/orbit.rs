@@ -20,17 +20,7 @@ pub(crate) fn sweep_plan(
     tol: f64,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<SweepPlan> {
-    if points < 2 {
-        return Err(err(format!("points: {points} must be an integer >= 2")));
-    }
-    if !(start.is_finite() && stop.is_finite()) || start == stop {
-        return Err(err(format!("start, stop: range {start}:{stop} is empty")));
-    }
-    if !matches!(gait, "stable" | "unstable") {
-        return Err(err(format!(
-            "gait: '{gait}' is not one of stable, unstable"
-        )));
-    }
+    crate::check_sweep_request(start, stop, points, gait)?;
     crate::check_gait_and_tol("all", tol)?;
     let mut fixed = overrides(None, params)?;
     if let Some((_, v)) = fixed.iter().find(|(n, _)| n == parameter) {
