@@ -184,7 +184,7 @@ def simulate(
     state: Optional[Sequence[float]] = None,
     gait: str = "stable",
     steps: int = 10,
-    dt_out: Optional[float] = None,
+    dt_out: Union[float, str, None] = None,
     **params: float,
 ) -> dict[str, Any]:
     """A walk of `steps` steps from `state` (section coordinates or a full state just after a
@@ -192,7 +192,12 @@ def simulate(
     x (n, d), state_names, mode, step, normal_force, tangential_force, friction_required,
     knee_torque (n, 2; NaN where a knee is free or absent), flags, energy (where defined),
     events (dict of arrays: t, kind, step, ends_step, mode_before, mode_after, pre, post),
-    section (steps_done, d_s), steps_done, outcome ("ok" or how it ended), units (dict)."""
+    section (steps_done, d_s), steps_done, outcome ("ok" or how it ended), units (dict),
+    positions (n, P, 2) of the points point_names and com (n, 2) in the walk's fixed slope frame
+    (positions_frame; none for round feet), dt_out and dt_out_source (the spacing used).
+    dt_out=None: 100 samples per step from a gait (T/50, T = sqrt(L/g), from a state) and both
+    sides of every event; "steps": every accepted integrator step and event; a number: exactly
+    at t = k dt_out. Docs: docs/python.md."""
 
 def orbit_diagram(
     model: str = "simplest",

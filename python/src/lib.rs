@@ -1112,6 +1112,7 @@ fn basin_result<'py>(
     md.set_item("attractors", atts)?;
     let gait = plan.gait();
     md.set_item("gait", gait.map(|fp| fp.section.clone().into_pyarray(py)))?;
+    md.set_item("coordinates", coordinates_dict(py, m)?)?;
     md.set_item(
         "gait_multipliers",
         gait.map(|fp| complex_array(py, &fp.multipliers)),
@@ -1323,10 +1324,28 @@ fn continuation<'py>(
         )?;
     }
     let list = PyList::empty(py);
+    let coordinates = coordinates_dict(py, &m0)?;
     for (b, (_, c)) in result.branches.iter().zip(&result.continued) {
-        list.append(branch_dict(py, b, c, ds)?)?;
+        let bd = branch_dict(py, b, c, ds)?;
+        bd.set_item("coordinates", &coordinates)?;
+        list.append(bd)?;
     }
     Ok(list)
+}
+
+/// What each state component of `m` means, state name → meaning (the files' `coordinates`
+/// attribute).
+fn coordinates_dict<'py>(py: Python<'py>, m: &Model) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (n, c) in m
+        .walker
+        .state_names()
+        .into_iter()
+        .zip(m.walker.coordinate_meanings())
+    {
+        d.set_item(n, c)?;
+    }
+    Ok(d)
 }
 
 /// `simulate(model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params)`.
@@ -1343,7 +1362,7 @@ fn simulate<'py>(
     state: Option<Vec<f64>>,
     gait: &str,
     steps: usize,
-    dt_out: Option<f64>,
+    dt_out: Option<&Bound<'py, PyAny>>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     const FLAGS: SimulateFlags = SimulateFlags {
@@ -1354,7 +1373,8 @@ fn simulate<'py>(
         rk4_step: "rk4_step",
     };
     let which = GaitKind::parse(gait, "gait").map_err(err)?;
-    pdw::simulate::check_request(steps, dt_out, &FLAGS).map_err(err)?;
+    let asked = dt_out_of(dt_out)?;
+    pdw::simulate::check_request(steps, asked.every(), &FLAGS).map_err(err)?;
     let m = build_kw(model, slope, params)?;
     let tr = interruptible(py, || -> PyResult<_> {
         let start = match state {
@@ -1370,11 +1390,62 @@ fn simulate<'py>(
                 failed,
             } => no_gait_error(&m, which.name(), tried, &failed),
         })?;
-        let opts = pdw::simulate::options(&m, steps, dt_out, pdw::simulate::default_integrator());
+        let sp = pdw::simulate::spacing(&m, &walk, asked);
+        let opts =
+            pdw::simulate::options_spaced(&m, steps, &sp, pdw::simulate::default_integrator());
         pdw::simulate::check_samples(&walk, &opts, &FLAGS).map_err(err)?;
-        pdw::simulate::run(&m, &walk, &opts).map_err(err)
+        Ok((pdw::simulate::run(&m, &walk, &opts).map_err(err)?, sp))
     })?;
-    trajectory_dict(py, &m, &tr)
+    let (tr, sp) = tr;
+    let d = trajectory_dict(py, &m, &tr)?;
+    d.set_item("dt_out", sp.dt_out)?;
+    d.set_item("dt_out_source", sp.source)?;
+    positions_items(py, &d, &m, &tr)?;
+    Ok(d)
+}
+
+/// `simulate`'s `dt_out`: `None` (the default spacing), `"steps"` or a time step.
+fn dt_out_of(v: Option<&Bound<'_, PyAny>>) -> PyResult<pdw::simulate::DtOut> {
+    use pdw::simulate::DtOut;
+    let Some(v) = v.filter(|v| !v.is_none()) else {
+        return Ok(DtOut::Default);
+    };
+    if let Ok(s) = v.extract::<String>() {
+        return DtOut::parse(&s, "dt_out").map_err(err);
+    }
+    match v.extract::<f64>() {
+        Ok(h) => Ok(DtOut::Every(h)),
+        Err(_) => Err(err(format!(
+            "dt_out: {} is neither a positive time step nor the word steps",
+            v.repr().map(|r| r.to_string()).unwrap_or_default()
+        ))),
+    }
+}
+
+/// The walker's points and centre of mass in the walk's fixed frame: `positions` (n, P, 2),
+/// `point_names`, `com` (n, 2) and `positions_frame`; where there are none, `point_names` is
+/// empty and `positions_frame` says why.
+fn positions_items<'py>(
+    py: Python<'py>,
+    d: &Bound<'py, PyDict>,
+    m: &Model,
+    tr: &Trajectory,
+) -> PyResult<()> {
+    match pdw::simulate::positions(m, tr) {
+        Ok(p) => {
+            let (n, np) = (tr.len(), p.names.len());
+            let a = numpy::ndarray::Array3::from_shape_vec((n, np, 2), p.points).map_err(err)?;
+            d.set_item("positions", a.into_pyarray(py))?;
+            d.set_item("com", rows_to_array(py, p.com, 2)?)?;
+            d.set_item("point_names", p.names)?;
+            d.set_item("positions_frame", pdw::simulate::POSITIONS_FRAME)?;
+        }
+        Err(why) => {
+            d.set_item("point_names", Vec::<String>::new())?;
+            d.set_item("positions_frame", why)?;
+        }
+    }
+    Ok(())
 }
 
 /// A trajectory as `simulate` returns it: time, states (rows), mode, step, forces, flags,

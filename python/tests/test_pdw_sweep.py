@@ -476,3 +476,46 @@ def test_continuation_follows_the_cascade_and_starts_anywhere():
         pdw.continuation("simplest", "slope", 0.014, 0.0185, points=6, max_period=3)
     with pytest.raises(ValueError, match="start_at: 0.5 is outside the swept range"):
         pdw.continuation("simplest", "slope", 0.014, 0.0185, points=6, start_at=0.5)
+
+
+def test_simulate_is_dense_by_default_and_steps_keeps_the_old_series():
+    tr = pdw.simulate("simplest", slope=0.009, steps=3)
+    ev = tr["events"]["t"]
+    period = ev[2] - ev[1]
+    assert abs(tr["dt_out"] - period / 100) < 1e-9 * period
+    assert "period" in tr["dt_out_source"]
+    for k in range(3):
+        grid = [t for t, s in zip(tr["t"], tr["step"]) if s == k and t not in ev]
+        assert 98 <= len(grid) <= 102
+    for te in ev:
+        assert np.count_nonzero(tr["t"] == te) == 2
+    old = pdw.simulate("simplest", slope=0.009, steps=3, dt_out="steps")
+    assert old["dt_out"] is None and old["t"].size < tr["t"].size
+    for bad in ["fast", 0.0, -1.0, [0.1]]:
+        with pytest.raises(ValueError, match="dt_out"):
+            pdw.simulate("simplest", steps=1, dt_out=bad)
+
+
+def test_simulate_positions_follow_the_simplest_walkers_geometry():
+    # Garcia et al. 1998 (the model's docs): hip (-sin θ, cos θ) from the stance foot; each
+    # step's stance foot 2|sin θ⁻| further down the slope than the last.
+    tr = pdw.simulate("simplest", slope=0.009, steps=3)
+    assert tr["point_names"] == ["stance_foot", "hip", "swing_foot"]
+    pos, th = tr["positions"], tr["x"][:, 0]
+    assert pos.shape == (tr["t"].size, 3, 2) and tr["com"].shape == (tr["t"].size, 2)
+    feet = np.concatenate([[0.0], np.cumsum(2 * np.abs(np.sin(tr["events"]["pre"][:, 0])))])
+    foot = feet[tr["step"]]
+    np.testing.assert_allclose(pos[:, 1, 0], foot - np.sin(th), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(pos[:, 1, 1], np.cos(th), rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(tr["com"], pos[:, 1, :])
+    # at each heel strike the swing foot is on the slope, where the next stance foot stands
+    for te in tr["events"]["t"]:
+        i = int(np.flatnonzero(tr["t"] == te)[0])
+        assert abs(pos[i, 2, 1]) < 1e-9 and abs(pos[i, 2, 0] - pos[i + 1, 0, 0]) < 1e-9
+
+
+def test_basin_and_continuation_name_the_coordinates():
+    _, _, metrics = pdw.basin("compass", slope="3deg", grid=(4, 4))
+    assert "slope normal" in metrics["coordinates"]["stance"]
+    branches = pdw.continuation("simplest", "slope", 0.009, 0.01, points=2)
+    assert "stance-leg angle" in branches[0]["coordinates"]["theta"]

@@ -19,7 +19,8 @@
 //! from the state alone.
 //! With `dt_out = Some(h)` the samples are exactly at `t = k h` (the integrator is stopped at
 //! each of these times); events are then only in [`Trajectory::events`], with their pre- and
-//! post-impact states.
+//! post-impact states, unless [`TrajectoryOptions::event_samples`] asks for both sides of every
+//! event among the samples too (the grid and the impacts, for plots).
 //!
 //! A walk that falls, times out or fails numerically ends early; [`Trajectory::outcome`] says
 //! how (a [`StrideOutcome`], [`StrideOutcome::Ok`] when all `N` steps were completed).
@@ -82,6 +83,10 @@ pub struct TrajectoryOptions {
     /// with [`TrajectoryError::TooManySamples`] instead of growing without bound (a tiny
     /// `dt_out` or fixed integrator step); front ends set it from the memory available.
     pub max_samples: usize,
+    /// With `dt_out`: also sample both sides of every event (the pre-impact state in the old
+    /// mode and the post-impact state in the new one, at the event time). Without `dt_out`
+    /// events are always sampled.
+    pub event_samples: bool,
 }
 
 impl TrajectoryOptions {
@@ -92,6 +97,7 @@ impl TrajectoryOptions {
             dt_out: None,
             integrator: Options::dop853(TRAJECTORY_TOL),
             max_samples: usize::MAX,
+            event_samples: false,
         }
     }
 
@@ -391,6 +397,8 @@ pub fn simulate(
     let mut k_out: u64 = 0;
     // Every segment after the first continues the same trajectory (`Integrator::resume`).
     let mut resume = false;
+    // Both sides of every event among the grid's samples (without a grid they always are).
+    let sample_events = opts.dt_out.is_some() && opts.event_samples;
     match opts.dt_out {
         None => rec.push(t, &x, mode, 0),
         Some(_) => {
@@ -431,7 +439,11 @@ pub fn simulate(
                     if stop != StopReason::EndTime || t_end == t_budget {
                         break stop;
                     }
-                    rec.push(t, &x, mode, step);
+                    // A grid time on an event already sampled (a gait's period / N) is not
+                    // sampled twice.
+                    if !(sample_events && rec.tr.t.last() == Some(&t)) {
+                        rec.push(t, &x, mode, step);
+                    }
                     k_out += 1;
                     if rec.full {
                         break stop;
@@ -453,6 +465,9 @@ pub fn simulate(
                         GuardKind::Reset => {
                             let new_mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
                             let ends_step = (mode, guard) == w.section_guard();
+                            if sample_events && rec.tr.t.last() != Some(&t) {
+                                rec.push(t, &x, mode, step);
+                            }
                             rec.tr.events.push(TrajectoryEvent {
                                 t,
                                 step,
@@ -471,12 +486,12 @@ pub fn simulate(
                                 rec.tr.steps_done = step + 1;
                                 w.project(&x, &mut s);
                                 rec.tr.section.extend_from_slice(&s);
-                                if opts.dt_out.is_none() {
+                                if opts.dt_out.is_none() || sample_events {
                                     rec.push(t, &x, mode, step + 1);
                                 }
                                 continue 'steps;
                             }
-                            if opts.dt_out.is_none() {
+                            if opts.dt_out.is_none() || sample_events {
                                 rec.push(t, &x, mode, step);
                             }
                             events += 1;

@@ -289,6 +289,7 @@ impl Validity {
             dt_out: None,
             integrator: opts.integrator,
             max_samples: opts.max_samples,
+            event_samples: false,
         };
         let tr = simulate(w, x0, &opts).ok()?;
         Self::along(w, &tr, 0)

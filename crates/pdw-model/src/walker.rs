@@ -45,6 +45,12 @@ pub trait Walker: Section {
     fn pose(&self, _x: &[f64]) -> Option<Pose> {
         None
     }
+    /// Named points of the walker (stance foot, knees, hip, swing foot, …) and its centre of
+    /// mass at full state `x`, in the frame of [`Walker::pose`]; `None` if the model does not
+    /// give them.
+    fn body_points(&self, _x: &[f64]) -> Option<BodyPoints> {
+        None
+    }
     /// Stance-foot ground reaction and knee-lock torques at `(mode, x)`, if the model
     /// computes them.
     fn constraint_forces(&self, _mode: usize, _x: &[f64]) -> Option<ConstraintForces> {
@@ -119,6 +125,19 @@ pub struct Pose {
     pub joints: Vec<[f64; 2]>,
     /// The swing foot (traced in animations).
     pub swing_foot: Option<[f64; 2]>,
+}
+
+/// Named points of a walker and its centre of mass in the slope frame of [`Pose`] (`x` along
+/// the slope, downhill positive; `y` along the slope normal; stance foot at the origin; model
+/// length units).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BodyPoints {
+    /// Point names, e.g. `["stance_foot", "hip", "swing_foot"]`; the same at every state.
+    pub names: Vec<String>,
+    /// Positions, one per name.
+    pub points: Vec<[f64; 2]>,
+    /// Centre of mass of the whole walker.
+    pub com: [f64; 2],
 }
 
 /// Units of a model's quantities, as the model defines them: a dimensionless model (the

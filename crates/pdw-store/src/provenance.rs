@@ -160,6 +160,9 @@ pub struct Annotations<'a> {
     pub units: &'a dyn Fn(&str) -> Option<String>,
     pub slice: Option<&'a Slice>,
     pub scales: &'a [ScaleAttach],
+    /// The root attribute `coordinates`: what each state component of the model means (JSON
+    /// object, state name → meaning); `None` leaves the file's own.
+    pub coordinates: Option<&'a str>,
 }
 
 /// Opens `path` for writing and annotates it (see [`annotate_file`]).
@@ -187,6 +190,9 @@ pub fn annotate_file(path: &Path, file: &File, a: &Annotations<'_>) -> Result<()
     }
     if !a.scales.is_empty() {
         attach_scales(path, file, a.scales)?;
+    }
+    if let Some(c) = a.coordinates {
+        set_str(path, file, "coordinates", c)?;
     }
     Ok(())
 }
@@ -318,7 +324,8 @@ pub fn copy_shard_provenance(path: &Path, file: &File, shards: &[&Path]) -> Resu
 }
 
 /// Copies the `units` attribute of every dataset of `src` onto the dataset of the same path in
-/// `file`, and `/slice` (a merged basin describes itself as its shards did).
+/// `file`, the root `coordinates` and `/slice` (a merged basin describes itself as its shards
+/// did).
 pub fn copy_units_and_slice(path: &Path, file: &File, src: &Path) -> Result<()> {
     let sf = File::open(src).at(src, "opening a shard")?;
     for ds in dataset_paths(src, &sf)? {
@@ -329,6 +336,10 @@ pub fn copy_units_and_slice(path: &Path, file: &File, src: &Path) -> Result<()> 
             let u = get_str(src, "pdw-sweep file", &s, "units")?;
             set_str(path, &d, "units", &u)?;
         }
+    }
+    if has_attr(&sf, "coordinates") {
+        let c = get_str(src, "pdw-sweep file", &sf, "coordinates")?;
+        set_str(path, file, "coordinates", &c)?;
     }
     if let Ok(sl) = sf.group("slice") {
         let dst = group_at(path, file, "slice", "creating /slice")?;

@@ -345,10 +345,11 @@ pub struct SimulateArgs {
     /// Steps to simulate (heel strike to heel strike).
     #[arg(long, default_value_t = 10)]
     pub steps: usize,
-    /// Output time step (model time units). Default: every accepted integrator step and both
-    /// sides of every event.
-    #[arg(long)]
-    pub dt_out: Option<f64>,
+    /// Output time step (model time units), or `steps`: a sample at every accepted integrator
+    /// step and both sides of every event. Default: 100 samples per step from a gait (its
+    /// period / 100), T/50 from --state (T = sqrt(L/g)), and both sides of every event.
+    #[arg(long, value_name = "H|steps", value_parser = parse_dt_out)]
+    pub dt_out: Option<pdw::simulate::DtOut>,
     /// Output file: .h5/.hdf5 (HDF5) or .csv.
     #[arg(long, default_value = "traj.h5")]
     pub out: PathBuf,
@@ -439,6 +440,11 @@ fn parse_tol(s: &str) -> Result<f64, String> {
              to the gait's scale, and a looser one would accept the initial guess as a gait"
         ))
     }
+}
+
+/// `simulate --dt-out`: a positive time step or `steps`.
+fn parse_dt_out(s: &str) -> Result<pdw::simulate::DtOut, String> {
+    pdw::simulate::DtOut::parse(s, "--dt-out").map_err(|e| e.0)
 }
 
 /// `fixedpoint --gait`: stable, unstable or all.

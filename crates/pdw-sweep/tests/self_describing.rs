@@ -476,3 +476,41 @@ fn design_file_carries_units_and_the_commands_of_every_run() {
         3
     );
 }
+
+/// Basin and sweep files say what the model's coordinates mean (the `coordinates` root
+/// attribute, state name → meaning, as trajectory files): the compass's `stance` is its stance
+/// leg's angle from the slope normal.
+#[test]
+fn basin_and_sweep_files_name_the_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    ok(&[
+        "basin",
+        "--model",
+        "compass",
+        "--grid",
+        "4x4",
+        "--quiet",
+        "--out",
+        &p("b.h5"),
+    ]);
+    ok(&[
+        "fixedpoint",
+        "--model",
+        "compass",
+        "--sweep",
+        "slope=0.05:0.052:2",
+        "--out",
+        &p("s.h5"),
+    ]);
+    for file in ["b.h5", "s.h5"] {
+        let f = h5_open(Path::new(&p(file))).unwrap();
+        let c: serde_json::Value = serde_json::from_str(&attr_str(&f, "coordinates")).unwrap();
+        let stance = c["stance"].as_str().unwrap_or_default();
+        assert!(
+            stance.contains("stance leg") && stance.contains("slope normal"),
+            "{file}: {c}"
+        );
+        assert!(c["hip_rate"].as_str().is_some(), "{file}: {c}");
+    }
+}

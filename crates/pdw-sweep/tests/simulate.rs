@@ -32,6 +32,8 @@ fn hdf5_and_csv_hold_the_library_trajectory() {
             "compass",
             "--steps",
             "3",
+            "--dt-out",
+            "steps",
             "--out",
             p.to_str().unwrap(),
         ]);
@@ -88,6 +90,8 @@ fn bad_input_names_the_value() {
         (vec!["--state", "1,2,3", "--out", out], "3 values given"),
         (vec!["--steps", "0", "--out", out], "--steps"),
         (vec!["--dt-out=-1", "--out", out], "--dt-out"),
+        (vec!["--dt-out", "0", "--out", out], "--dt-out"),
+        (vec!["--dt-out", "fast", "--out", out], "nor the word steps"),
         (vec!["--gait", "sideways", "--out", out], "sideways"),
         (
             vec!["--state", "0.2,-0.2", "--gait", "stable", "--out", out],
@@ -112,7 +116,14 @@ fn walks_that_would_not_fit_in_memory_are_refused() {
     let out = dir.path().join("t.h5");
     for args in [
         &["--steps", "10", "--dt-out", "1e-12"][..],
-        &["--integrator", "rk4", "--rk4-step", "1e-12"][..],
+        &[
+            "--integrator",
+            "rk4",
+            "--rk4-step",
+            "1e-12",
+            "--dt-out",
+            "steps",
+        ][..],
     ] {
         let o = simulate(&[args, &["--out", out.to_str().unwrap()]].concat());
         let e = String::from_utf8_lossy(&o.stderr);
@@ -219,5 +230,129 @@ fn fixed_frame_energy_drops_by_the_heel_strike_loss() {
             "step {k}: {loss:e} vs {released:e}"
         );
         assert!((e[at(k as f64)] - e[at(k as f64 + 1.0)]).abs() < 1e-9);
+    }
+}
+
+fn root_attr(f: &hdf5::File, name: &str) -> String {
+    f.attr(name)
+        .unwrap_or_else(|_| panic!("attribute {name}"))
+        .read_scalar::<hdf5::types::VarLenUnicode>()
+        .unwrap()
+        .as_str()
+        .to_string()
+}
+
+/// Without --dt-out the file is dense: samples every period / 100 of the gait (the period
+/// measured independently as the time between two heel strikes), about 100 per step plus both
+/// sides of every heel strike, and the attributes say so; `--dt-out steps` gives the library's
+/// per-step trajectory, sample for sample.
+#[test]
+fn the_default_output_is_a_hundred_samples_per_step() {
+    let dir = tempfile::tempdir().unwrap();
+    for model in ["simplest", "compass"] {
+        let h5 = dir.path().join(format!("{model}.h5"));
+        let o = simulate(&[
+            "--model",
+            model,
+            "--steps",
+            "3",
+            "--out",
+            h5.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+        let (t, step) = (
+            &d.column("t").unwrap().values,
+            &d.column("step").unwrap().values,
+        );
+        let period = d.events.t[2] - d.events.t[1];
+        let f = crate::common::h5_open(&h5).unwrap();
+        let h: f64 = root_attr(&f, "dt_out").parse().unwrap();
+        assert!(
+            (h - period / 100.0).abs() < 1e-9 * period,
+            "{model}: {h} vs {period}"
+        );
+        assert!(root_attr(&f, "dt_out_source").contains("period"));
+        for k in 0..3 {
+            let grid = (0..t.len())
+                .filter(|&i| step[i] == k as f64 && !d.events.t.contains(&t[i]))
+                .count();
+            assert!(
+                (98..=102).contains(&grid),
+                "{model} step {k}: {grid} samples"
+            );
+        }
+        for te in &d.events.t {
+            assert_eq!(
+                t.iter().filter(|&&s| s == *te).count(),
+                2,
+                "{model}: event {te}"
+            );
+        }
+    }
+    let tr = library_compass();
+    let h5 = dir.path().join("steps.h5");
+    let o = simulate(&[
+        "--model",
+        "compass",
+        "--steps",
+        "3",
+        "--dt-out",
+        "steps",
+        "--out",
+        h5.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    assert_eq!(d.len(), tr.len());
+    let f = crate::common::h5_open(&h5).unwrap();
+    assert_eq!(root_attr(&f, "dt_out"), "every accepted step and event");
+}
+
+/// The positions in the file are the library's ([`pdw::simulate::positions`]): a 2-wide dataset
+/// per point (`pos_hip`, …; CSV columns `pos_hip_x`, `pos_hip_y`), `com`, and the attributes
+/// naming the points and the frame; the hip is the compass's stance-leg geometry by hand.
+#[test]
+fn the_files_hold_the_walkers_positions() {
+    let dir = tempfile::tempdir().unwrap();
+    let (h5, csv) = (dir.path().join("p.h5"), dir.path().join("p.csv"));
+    for p in [&h5, &csv] {
+        let o = simulate(&[
+            "--model",
+            "compass",
+            "--steps",
+            "2",
+            "--out",
+            p.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    let f = crate::common::h5_open(&h5).unwrap();
+    assert_eq!(
+        root_attr(&f, "point_names"),
+        r#"["stance_foot","hip","swing_foot"]"#
+    );
+    assert!(root_attr(&f, "positions_frame").contains("downhill"));
+    let hip = d.column("pos_hip").unwrap();
+    assert_eq!((hip.width, hip.units.as_str()), (2, "m"));
+    assert_eq!(hip.components, ["pos_hip_x", "pos_hip_y"]);
+    let (stance, foot) = (
+        &d.column("stance").unwrap().values,
+        &d.column("pos_stance_foot").unwrap().values,
+    );
+    for i in 0..d.len() {
+        // leg length a + b = 1 m (models/compass.toml)
+        assert!((hip.values[2 * i] - (foot[2 * i] - stance[i].sin())).abs() < 1e-12);
+        assert!((hip.values[2 * i + 1] - stance[i].cos()).abs() < 1e-12);
+    }
+    assert_eq!(d.column("com").unwrap().components, ["com_x", "com_y"]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header = text.lines().find(|l| !l.starts_with('#')).unwrap();
+    for c in ["pos_hip_x", "pos_swing_foot_y", "com_x", "com_y"] {
+        assert!(
+            header.split(',').any(|h| h == c),
+            "{c} missing from {header}"
+        );
     }
 }

@@ -112,7 +112,7 @@ use crate::validity::{
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
-use pdw_model::{GaitGuess, Pose, Walker};
+use pdw_model::{BodyPoints, GaitGuess, Pose, Walker};
 use pdw_soa::{BatchWorkspace, Chain, ChainBuilder, Link, Workspace};
 use std::f64::consts::FRAC_PI_2;
 
@@ -1754,6 +1754,42 @@ impl Walker for ChainWalker {
             p.swing_foot = Some([cs[0], cs[1] - r]);
         }
         Some(p)
+    }
+    /// The kernel's joint points and tip ([`pdw_soa::forward_kinematics`]): the stance foot
+    /// (joint 0), the stance knees, the hip (joint `m`), the swing knees (each named as its
+    /// state coordinate) and the swing foot; the centre of mass is the link masses' weighted
+    /// mean of the kernel's link COMs (the hip mass is part of the top stance link). With
+    /// round feet the chain's root is the stance arc centre, `r` above the contact point at
+    /// the origin (as in [`Walker::pose`]), and the feet are the arc centres.
+    fn body_points(&self, x: &[f64]) -> Option<BodyPoints> {
+        let mut ws = Workspace::new(&self.chain);
+        pdw_soa::forward_kinematics(&self.chain, &mut ws, &x[..self.n]).ok()?;
+        let r = self.radius;
+        let up = |p: [f64; 2]| [p[0], p[1] + r];
+        let mut points: Vec<[f64; 2]> = ws.joint_positions().iter().copied().map(up).collect();
+        points.push(up(ws.tip_position()));
+        let mut names = Vec::with_capacity(self.n + 1);
+        names.push("stance_foot".to_string());
+        for k in 1..self.n {
+            names.push(if k == self.m {
+                "hip".to_string()
+            } else {
+                self.state_names[k].clone()
+            });
+        }
+        names.push("swing_foot".to_string());
+        let links = self.chain.links();
+        let total: f64 = links.iter().map(|l| l.mass).sum();
+        let mut com = [0.0; 2];
+        for (l, c) in links.iter().zip(ws.com_positions()) {
+            com[0] += l.mass * c[0] / total;
+            com[1] += l.mass * c[1] / total;
+        }
+        Some(BodyPoints {
+            names,
+            points,
+            com: up(com),
+        })
     }
     fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
         Some(self.constraint_forces_ws(&mut Scratch::new(), mode, x))

@@ -21,7 +21,7 @@ pub use pdw_model::validity;
 
 pub use chain_walker::ChainWalker;
 pub use error::WalkerError;
-pub use pdw_model::{GaitGuess, ModelUnits, Pose, Walker};
+pub use pdw_model::{BodyPoints, GaitGuess, ModelUnits, Pose, Walker};
 pub use registry::{
     build, chain_pose, model_info, models, preset_text, presets, ClosedInfo, ModelInfo, ParamSpec,
     StaticParam, PRESETS,

@@ -58,7 +58,7 @@ use crate::error::{check_open, WalkerError};
 use crate::registry::{closed_params, ClosedInfo};
 use crate::validity::{ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
-use pdw_model::{GaitGuess, ModelUnits, Pose, Walker};
+use pdw_model::{BodyPoints, GaitGuess, ModelUnits, Pose, Walker};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Guard index of the spoke impact.
@@ -339,6 +339,17 @@ impl Walker for Rimless {
             links,
             joints: vec![hub],
             swing_foot: Some([hub[0] - l * next.sin(), hub[1] - l * next.cos()]),
+        })
+    }
+    /// The stance spoke's foot (the contact point) and the hub, `l (sin θ, cos θ)` above it
+    /// (module docs); all the mass is at the hub, so the centre of mass is the hub.
+    fn body_points(&self, x: &[f64]) -> Option<BodyPoints> {
+        let l = self.params.l;
+        let hub = [l * x[0].sin(), l * x[0].cos()];
+        Some(BodyPoints {
+            names: vec!["stance_foot".into(), "hub".into()],
+            points: vec![[0.0, 0.0], hub],
+            com: hub,
         })
     }
     /// Ground reaction on the stance spoke's foot per unit hub mass (module docs, "Ground

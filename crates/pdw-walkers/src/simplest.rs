@@ -72,7 +72,7 @@ use crate::registry::{closed_params, ClosedInfo};
 use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
-use pdw_model::{GaitGuess, ModelUnits, Pose, Walker};
+use pdw_model::{BodyPoints, GaitGuess, ModelUnits, Pose, Walker};
 use std::f64::consts::FRAC_PI_2;
 
 /// Guard index of the heel strike.
@@ -708,6 +708,19 @@ impl Walker for Simplest {
             links: vec![[[0.0, 0.0], hip], [hip, foot]],
             joints: vec![hip],
             swing_foot: Some(foot),
+        })
+    }
+    /// The stance foot, the hip and the swing foot of [`Walker::pose`]; the centre of mass is
+    /// the hip (Garcia et al. 1998: massless legs, `m/M → 0`).
+    fn body_points(&self, x: &[f64]) -> Option<BodyPoints> {
+        let p = self.pose(x)?;
+        let (hip, foot) = (p.joints[0], p.swing_foot?);
+        Some(BodyPoints {
+            names: ["stance_foot", "hip", "swing_foot"]
+                .map(String::from)
+                .to_vec(),
+            points: vec![[0.0, 0.0], hip, foot],
+            com: hip,
         })
     }
     /// The model's own units: hip mass `M = 1`, leg length `l = 1`, `g = 1` (time in `√(l/g)`).

@@ -85,6 +85,25 @@ impl BuiltModel {
             .unwrap_or(f64::NAN)
     }
 
+    /// What each state component means ([`Walker::coordinate_meanings`]) as a JSON object,
+    /// state name → meaning: the `coordinates` attribute of every file; `{}` where the model
+    /// does not say.
+    pub fn coordinates_json(&self) -> String {
+        serde_json::Value::Object(
+            self.walker
+                .state_names()
+                .into_iter()
+                .zip(
+                    self.walker
+                        .coordinate_meanings()
+                        .into_iter()
+                        .map(Into::into),
+                )
+                .collect(),
+        )
+        .to_string()
+    }
+
     /// Parameters as a JSON object.
     pub fn params_json(&self) -> serde_json::Value {
         serde_json::Value::Object(

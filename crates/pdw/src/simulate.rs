@@ -89,6 +89,119 @@ pub enum StartError {
     Limit(LimitError),
 }
 
+/// Samples per step of the default output spacing from a gait: `dt_out = period / 100`.
+pub const SAMPLES_PER_STEP: f64 = 100.0;
+
+/// Samples per natural time unit of the default output spacing from a state (no period known):
+/// `dt_out = T / 50`, `T = √(L/g)` from the model's [`Scales`](pdw_model::Scales).
+pub const SAMPLES_PER_TIME_SCALE: f64 = 50.0;
+
+/// The output spacing a front end asks for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DtOut {
+    /// Not given: dense and scale free ([`spacing`]).
+    Default,
+    /// `steps`: a sample at every accepted integrator step and both sides of every event.
+    Steps,
+    /// A given time step (model time units).
+    Every(f64),
+}
+
+impl DtOut {
+    /// `steps` or a positive time step; anything else is refused naming `flag`.
+    pub fn parse(s: &str, flag: &str) -> Result<DtOut, InputError> {
+        let t = s.trim();
+        if t == "steps" {
+            return Ok(DtOut::Steps);
+        }
+        match t.parse::<f64>() {
+            Ok(h) if h.is_finite() && h > 0.0 => Ok(DtOut::Every(h)),
+            _ => Err(InputError(format!(
+                "{flag}: '{s}' is neither a positive time step nor the word steps"
+            ))),
+        }
+    }
+
+    /// The given time step, if one was given.
+    pub fn every(self) -> Option<f64> {
+        match self {
+            DtOut::Every(h) => Some(h),
+            _ => None,
+        }
+    }
+}
+
+/// The output spacing a walk uses and where it came from (for the file's `dt_out` and
+/// `dt_out_source` attributes and Python's dict).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spacing {
+    /// The time step of the samples; `None`: every accepted integrator step and event.
+    pub dt_out: Option<f64>,
+    /// Whether both sides of every event are samples too (the default's dense grid).
+    pub event_samples: bool,
+    /// Where the spacing came from, in words.
+    pub source: String,
+}
+
+/// The output spacing of a walk: the one asked for, else the default — from a gait `period /`
+/// [`SAMPLES_PER_STEP`] (100 samples per step), from a state `T /` [`SAMPLES_PER_TIME_SCALE`]
+/// with `T = √(L/g)` the model's natural time scale; a model without scales falls back to
+/// every accepted step and event. The default also samples both sides of every event, so that
+/// the impacts are in the series.
+pub fn spacing(m: &BuiltModel, walk: &Walk, asked: DtOut) -> Spacing {
+    let steps = |source: String| Spacing {
+        dt_out: None,
+        event_samples: true,
+        source,
+    };
+    match asked {
+        DtOut::Steps => steps("asked: every accepted integrator step and event".into()),
+        DtOut::Every(h) => Spacing {
+            dt_out: Some(h),
+            event_samples: false,
+            source: "asked".into(),
+        },
+        DtOut::Default => match (walk.period, m.walker.scales()) {
+            (Some(p), _) => Spacing {
+                dt_out: Some(p / SAMPLES_PER_STEP),
+                event_samples: true,
+                source: format!(
+                    "default: the gait's period {p:?} / {SAMPLES_PER_STEP}, and every event"
+                ),
+            },
+            (None, Some(sc)) => {
+                let t = (sc.length / sc.gravity).sqrt();
+                Spacing {
+                    dt_out: Some(t / SAMPLES_PER_TIME_SCALE),
+                    event_samples: true,
+                    source: format!(
+                        "default: T / {SAMPLES_PER_TIME_SCALE} with T = sqrt(L/g) = {t:?} the \
+                         model's time scale, and every event"
+                    ),
+                }
+            }
+            (None, None) => steps(
+                "default: every accepted integrator step and event (the model has no natural \
+                 scales)"
+                    .into(),
+            ),
+        },
+    }
+}
+
+/// [`options`] with the walk's [`Spacing`].
+pub fn options_spaced(
+    m: &BuiltModel,
+    steps: usize,
+    sp: &Spacing,
+    integrator: Options,
+) -> TrajectoryOptions {
+    TrajectoryOptions {
+        event_samples: sp.event_samples,
+        ..options(m, steps, sp.dt_out, integrator)
+    }
+}
+
 /// Refuses zero steps and an output spacing that is not a positive time step.
 pub fn check_request(
     steps: usize,
@@ -228,10 +341,7 @@ pub fn run(
 pub fn fixed_frame_energy(m: &BuiltModel, tr: &Trajectory) -> Option<Vec<f64>> {
     let w = m.walker.as_ref();
     let (energy, scales) = (tr.energy.as_ref()?, w.scales()?);
-    let round = m
-        .params
-        .iter()
-        .any(|(n, v)| n == "foot_radius" && *v != 0.0);
+    let round = round_feet(m);
     let slope = m.slope();
     if round || !slope.is_finite() {
         return None;
@@ -261,4 +371,82 @@ pub fn fixed_frame_energy(m: &BuiltModel, tr: &Trajectory) -> Option<Vec<f64>> {
             })
             .collect(),
     )
+}
+
+/// Where the positions of a walk are measured: one fixed frame of the slope for the whole
+/// walk (the file's `positions_frame` attribute).
+pub const POSITIONS_FRAME: &str = "slope frame fixed for the whole walk: x along the slope \
+    (downhill positive), y along the slope normal (up), origin at the first stance foot; each \
+    step's stance foot lies the previous steps' step lengths down the slope. World frame \
+    (X horizontal, forward; Y vertical, up): X = x cos(slope) + y sin(slope), \
+    Y = -x sin(slope) + y cos(slope)";
+
+/// The walker's named points and centre of mass along a walk, in [`POSITIONS_FRAME`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Positions {
+    /// Point names ([`pdw_model::BodyPoints::names`]), `P` of them.
+    pub names: Vec<String>,
+    /// `n × P × 2` values, row-major (sample, point, x/y).
+    pub points: Vec<f64>,
+    /// `n × 2` values: the centre of mass per sample.
+    pub com: Vec<f64>,
+}
+
+/// Where the stance foot of each step lies along the slope from the first one: `Σ_{k<j} L_k`
+/// for step `j`, `L_k` the step length of step `k` at its heel strike (the bookkeeping of
+/// [`fixed_frame_energy`]).
+fn stance_offsets(m: &BuiltModel, tr: &Trajectory) -> Vec<f64> {
+    let w = m.walker.as_ref();
+    let mut v = vec![0.0];
+    for e in tr.events.iter().filter(|e| e.ends_step) {
+        let last = *v.last().unwrap_or(&0.0);
+        v.push(last + w.step_length(&e.pre));
+    }
+    v
+}
+
+/// Whether the model has round feet (a non-zero `foot_radius`).
+fn round_feet(m: &BuiltModel) -> bool {
+    m.params
+        .iter()
+        .any(|(n, v)| n == "foot_radius" && *v != 0.0)
+}
+
+/// The walker's named points ([`pdw_model::Walker::body_points`]) and centre of mass at every
+/// sample of `tr`, in the fixed frame of [`POSITIONS_FRAME`]: the stance frame of the sample
+/// shifted down the slope by its step's stance-foot offset. `Err` says why there are none: the
+/// model gives no points, or round feet (the contact point rolls along the foot during
+/// stance, so the stance frame's origin is not a fixed point of the slope between strikes).
+pub fn positions(m: &BuiltModel, tr: &Trajectory) -> Result<Positions, String> {
+    let w = m.walker.as_ref();
+    if round_feet(m) {
+        return Err(
+            "left out for round feet: the contact point rolls along the foot during \
+                    stance, so the stance frame is not fixed on the slope between strikes"
+                .into(),
+        );
+    }
+    let none = || "left out: the model gives no body points".to_string();
+    let first = w.body_points(tr.state(0)).ok_or_else(none)?;
+    let offsets = stance_offsets(m, tr);
+    let n = tr.len();
+    let np = first.names.len();
+    let (mut points, mut com) = (Vec::with_capacity(n * np * 2), Vec::with_capacity(n * 2));
+    for i in 0..n {
+        let b = w.body_points(tr.state(i)).ok_or_else(none)?;
+        let dx = offsets
+            .get(tr.step[i] as usize)
+            .or(offsets.last())
+            .copied()
+            .unwrap_or(0.0);
+        for p in b.points.iter().take(np) {
+            points.extend_from_slice(&[p[0] + dx, p[1]]);
+        }
+        com.extend_from_slice(&[b.com[0] + dx, b.com[1]]);
+    }
+    Ok(Positions {
+        names: first.names,
+        points,
+        com,
+    })
 }

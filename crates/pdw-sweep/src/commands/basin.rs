@@ -613,11 +613,13 @@ fn describe(
     } else {
         pdw_store::provenance::basin_scales()
     };
+    let coordinates = p.m.coordinates_json();
     writer.annotate(&pdw_store::Annotations {
         provenance: Some(&prov),
         units: &units,
         slice: Some(&slice),
         scales: &scales,
+        coordinates: Some(&coordinates),
     })?;
     if let Some(i) = iz {
         // A 3-D grid's picture is one z-slice: the gait lies on it only within half a z-step.
@@ -786,6 +788,7 @@ fn write_results(
             units: &basin_units(&described.sec_units, ix, iy, described.z),
             slice: None,
             scales: &[],
+            coordinates: None,
         },
     )?;
     let elapsed = t0.elapsed().as_secs_f64();

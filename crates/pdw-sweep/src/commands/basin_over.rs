@@ -262,7 +262,7 @@ fn write(
     };
     // the claim refused an existing file without --force; its placeholder is replaced
     pdw_store::write_stability(&p.out, true, &data)?;
-    annotate(&p.out, options, &unit)?;
+    annotate(&p.out, options, &unit, &plan.models[0].coordinates_json())?;
     let title = format!(
         "{} walker: basin stability, {}x{} box {} x {}",
         p.info.name, bx.nx, bx.ny, x.name, y.name
@@ -277,7 +277,12 @@ fn write(
 }
 
 /// Provenance (every numerical option) and units on the file.
-fn annotate(out: &std::path::Path, options: serde_json::Value, unit: &str) -> anyhow::Result<()> {
+fn annotate(
+    out: &std::path::Path,
+    options: serde_json::Value,
+    unit: &str,
+    coordinates: &str,
+) -> anyhow::Result<()> {
     let prov = super::provenance(options);
     let pu = unit.to_string();
     let units = move |p: &str| -> Option<String> {
@@ -294,6 +299,7 @@ fn annotate(out: &std::path::Path, options: serde_json::Value, unit: &str) -> an
             units: &units,
             slice: None,
             scales: &[],
+            coordinates: Some(coordinates),
         },
     )?;
     Ok(())

@@ -207,11 +207,13 @@ fn search(
     options["threads"] = serde_json::json!(a.threads);
     let prov = super::provenance(options);
     let units = design_units(base, &plan.space.names);
+    let coordinates = base.coordinates_json();
     let ann = pdw_store::Annotations {
         provenance: Some(&prov),
         units: &units,
         slice: None,
         scales: &[],
+        coordinates: Some(&coordinates),
     };
     let names = &plan.space.names;
     let write_design = |hist: &[DesignEval]| {

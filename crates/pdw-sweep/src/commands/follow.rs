@@ -565,6 +565,7 @@ fn annotate(
             units: &units,
             slice: None,
             scales: &[],
+            coordinates: Some(&m.coordinates_json()),
         },
     )?;
     Ok(())

@@ -10,7 +10,7 @@ use super::fixedpoint::report_failure;
 use super::{build_model, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::SimulateArgs;
-use pdw::simulate::{self, GaitKind, SimulateFlags, Start, StartError, Walk};
+use pdw::simulate::{self, DtOut, GaitKind, SimulateFlags, Spacing, Start, StartError, Walk};
 use pdw_limit::trajectory::{self, Trajectory, TrajectoryOptions};
 use pdw_store::{TrajColumn, TrajEvents, TrajectoryData};
 use std::process::ExitCode;
@@ -49,7 +49,8 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
     let format = format_of(&a.out)?;
     let _claim = claim_out(a, &format)?;
     // Parse: the request is checked (and a bad --rtol reported) before any gait search.
-    simulate::check_request(a.steps, a.dt_out, &FLAGS)?;
+    let asked = a.dt_out.unwrap_or(DtOut::Default);
+    simulate::check_request(a.steps, asked.every(), &FLAGS)?;
     let integrator = super::integrator(&a.integrator, simulate::default_integrator())?;
     let m = build_model(&a.model)?;
     // Plan: where the walk starts and what it records.
@@ -75,16 +76,18 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
             return Ok(ExitCode::from(2));
         }
     };
-    let opts = simulate::options(&m, a.steps, a.dt_out, integrator);
+    let sp = simulate::spacing(&m, &walk, asked);
+    let opts = simulate::options_spaced(&m, a.steps, &sp, integrator);
     simulate::check_samples(&walk, &opts, &FLAGS)?;
     // Run, write.
     let tr = simulate::run(&m, &walk, &opts)?;
     write(
         a,
         &format,
-        to_store(&m, &tr, &opts, &walk.label),
+        to_store(&m, &tr, &opts, &sp, &walk.label),
         &tr,
         &opts,
+        &sp,
     )?;
     summary(a, &m, &walk, &tr);
     // A fall is an outcome of the walk (in the file's `outcome`), not an error.
@@ -134,11 +137,14 @@ fn write(
     mut data: TrajectoryData,
     tr: &Trajectory,
     opts: &TrajectoryOptions,
+    sp: &Spacing,
 ) -> anyhow::Result<()> {
     let prov = super::provenance(serde_json::json!({
         "integrator": super::integrator_json(&opts.integrator),
         "steps": opts.steps,
         "dt_out": opts.dt_out,
+        "dt_out_source": sp.source,
+        "event_samples": opts.event_samples,
         "gait_newton_tol": simulate::GAIT_TOL,
     }));
     let state_units = super::units_list(&tr.units.state);
@@ -158,6 +164,7 @@ fn write(
                     },
                     slice: None,
                     scales: &[],
+                    coordinates: None,
                 },
             )?;
         }
@@ -214,6 +221,7 @@ pub fn to_store(
     m: &BuiltModel,
     tr: &Trajectory,
     opts: &TrajectoryOptions,
+    sp: &Spacing,
     start: &str,
 ) -> TrajectoryData {
     let u = &tr.units;
@@ -268,6 +276,10 @@ pub fn to_store(
     if let Some(e) = pdw::simulate::fixed_frame_energy(m, tr) {
         columns.push(TrajColumn::scalar("energy_fixed_frame", &u.energy, e));
     }
+    let positions = pdw::simulate::positions(m, tr);
+    if let Ok(p) = &positions {
+        columns.extend(position_columns(p, &m.walker.units().length));
+    }
     let ev = &tr.events;
     let events = TrajEvents {
         t: ev.iter().map(|e| e.t).collect(),
@@ -278,7 +290,20 @@ pub fn to_store(
         pre: ev.iter().flat_map(|e| e.pre.iter().copied()).collect(),
         post: ev.iter().flat_map(|e| e.post.iter().copied()).collect(),
     };
-    let attrs = attrs(m, tr, opts, start);
+    let mut attrs = attrs(m, tr, opts, sp, start);
+    attrs.extend(match &positions {
+        Ok(p) => [
+            ("point_names".into(), serde_json::json!(p.names).to_string()),
+            (
+                "positions_frame".into(),
+                pdw::simulate::POSITIONS_FRAME.to_string(),
+            ),
+        ],
+        Err(why) => [
+            ("point_names".into(), "[]".into()),
+            ("positions_frame".into(), why.clone()),
+        ],
+    });
     TrajectoryData {
         attrs,
         columns,
@@ -294,6 +319,7 @@ fn attrs(
     m: &BuiltModel,
     tr: &Trajectory,
     opts: &TrajectoryOptions,
+    sp: &Spacing,
     start: &str,
 ) -> Vec<(String, String)> {
     vec![
@@ -330,6 +356,7 @@ fn attrs(
                     format!("{h:?}")
                 }),
         ),
+        ("dt_out_source".into(), sp.source.clone()),
         (
             "mode_legend".into(),
             serde_json::Value::Object(
@@ -342,17 +369,7 @@ fn attrs(
             )
             .to_string(),
         ),
-        (
-            "coordinates".into(),
-            serde_json::Value::Object(
-                tr.state_names
-                    .iter()
-                    .cloned()
-                    .zip(m.walker.coordinate_meanings().into_iter().map(Into::into))
-                    .collect(),
-            )
-            .to_string(),
-        ),
+        ("coordinates".into(), m.coordinates_json()),
         (
             "flags_legend".into(),
             serde_json::json!({
@@ -363,4 +380,30 @@ fn attrs(
             .to_string(),
         ),
     ]
+}
+
+/// One 2-wide column per named point, `pos_NAME` with components `pos_NAME_x`, `pos_NAME_y`,
+/// and the centre of mass `com` (`com_x`, `com_y`), in the walk's fixed frame.
+fn position_columns(p: &pdw::simulate::Positions, length: &str) -> Vec<TrajColumn> {
+    let np = p.names.len();
+    let column = |name: String, values: Vec<f64>| TrajColumn {
+        width: 2,
+        components: vec![format!("{name}_x"), format!("{name}_y")],
+        ..TrajColumn::scalar(&name, length, values)
+    };
+    let mut v: Vec<TrajColumn> = p
+        .names
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            let xy = p
+                .points
+                .chunks(2 * np)
+                .flat_map(|row| [row[2 * j], row[2 * j + 1]])
+                .collect();
+            column(format!("pos_{name}"), xy)
+        })
+        .collect();
+    v.push(column("com".into(), p.com.clone()));
+    v
 }

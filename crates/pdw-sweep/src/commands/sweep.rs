@@ -710,6 +710,7 @@ fn annotate_sweep(
             units: &units,
             slice: None,
             scales: &[],
+            coordinates: Some(&m.coordinates_json()),
         },
     )?;
     Ok(())
