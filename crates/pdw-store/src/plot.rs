@@ -1248,7 +1248,7 @@ fn draw_lines<XR, YR>(
     area: &DrawingArea<BitMapBackend<'_>, Shift>,
     path: &Path,
     labels: &Labels<'_>,
-    (series, markers): (&[(String, Vec<(f64, f64)>)], &[Markers]),
+    (series, markers): (&[NamedLine], &[Markers]),
     legend_at: SeriesLabelPosition,
     xr: XR,
     yr: YR,
@@ -1310,6 +1310,9 @@ where
         .map_err(|x| pe(path, x))?;
     Ok(())
 }
+
+/// A named polyline of [`plot_lines`].
+type NamedLine = (String, Vec<(f64, f64)>);
 
 /// Shape of a markers-only series ([`Markers`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
