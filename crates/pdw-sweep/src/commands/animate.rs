@@ -54,10 +54,11 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
     let frames = pdw::animate::frames(&m, &fp, &opts)?;
     pdw::animate::write_gif(&a.out, &m, &fp, &frames, !flags.is_empty(), &opts)?;
     eprintln!(
-        "wrote {} ({} frames, {} strides, {:.4} frames per second, {})",
+        "wrote {} ({} frames, {} stride{}, {:.4} frames per second, {})",
         a.out.display(),
         frames.len(),
         opts.steps,
+        if opts.steps == 1 { "" } else { "s" },
         opts.effective_fps(),
         pdw::animate::time_scale(&m)
     );
