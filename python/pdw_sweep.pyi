@@ -268,26 +268,36 @@ def design(
     knee_margin: float = 0.1,
     min_margin: float = 0.0,
     basin_grid: int = 15,
-    basin_box: Tuple[float, float] = (0.02, 0.08),
+    basin_box: Optional[Tuple[float, float]] = None,
     max_strides: int = 40,
     threads: int = 2,
+    out: Optional[Union[str, "os.PathLike[str]"]] = None,
+    force: bool = False,
     slope: Optional[Union[float, str]] = None,
     **params: float,
 ) -> dict[str, Any]:
-    """The design search of `pdw-sweep design` (free={name: (lo, hi)} or "NAME=LO:HI" texts).
-    Keys: free_names, objective, params (n, k), status, status_names, reasons, section (n, 3),
-    cost, basin_fraction, rho, min_normal_force, max_friction, min_knee_torque, period,
-    step_length, min_relative_margin, best. Docs: docs/python.md."""
+    """The design search of `pdw-sweep design` (free={name: (lo, hi)} or "NAME=LO:HI" texts;
+    basin_box=None scales the box with each design's gait; out= writes the CLI's design file, an
+    existing one only with force=True). Keys: free_names, objective, params (n, k), status,
+    status_names, reasons, section (n, 3), cost, basin_fraction, rho, min_normal_force,
+    max_friction, min_knee_torque, period, step_length, min_relative_margin, basin_box_stance,
+    basin_box_stance_rate, best. Docs: docs/python.md."""
 
 def animate(
     model: str = "simplest",
     slope: Optional[Union[float, str]] = None,
     out: Union[str, "os.PathLike[str]"] = "gait.gif",
     force: bool = False,
+    steps: int = 2,
+    fps: Optional[float] = None,
+    size: Tuple[int, int] = (640, 400),
+    from_file: Optional[Union[str, "os.PathLike[str]"]] = None,
     **params: float,
 ) -> Any:
-    """Writes the GIF of `pdw-sweep animate` (two strides of the gait) to `out` (an existing
-    file only with force=True) and returns its path."""
+    """Writes the GIF of `pdw-sweep animate` (`steps` strides of the gait at `fps` frames per
+    second, default 16.7, one GIF second per model time unit; or, with from_file, a trajectory
+    file of `pdw-sweep simulate`, its model rebuilt from the file) to `out` (an existing file
+    only with force=True) and returns its path."""
 
 def lyapunov(
     model: str = "simplest",

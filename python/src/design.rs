@@ -42,10 +42,14 @@ fn options(
     init: usize,
     (mu, knee_margin, min_margin): (f64, f64, f64),
     basin_grid: i64,
-    basin_box: (f64, f64),
+    basin_box: Option<(f64, f64)>,
     max_strides: i64,
 ) -> PyResult<DesignOptions> {
-    let given = format!("{},{}", basin_box.0, basin_box.1);
+    let basin_box = basin_box
+        .map(|(a, b)| {
+            pdw::design::check_basin_box(&[a, b], &format!("{a},{b}"), "basin_box").map_err(err)
+        })
+        .transpose()?;
     Ok(DesignOptions {
         objective: pdw::design::parse_objective(objective, "objective").map_err(err)?,
         mu: pdw::design::check_mu(mu, "mu").map_err(err)?,
@@ -56,8 +60,7 @@ fn options(
         start: None,
         init,
         basin_grid: pdw::design::check_basin_grid(basin_grid, "basin_grid").map_err(err)?,
-        basin_box: pdw::design::check_basin_box(&[basin_box.0, basin_box.1], &given, "basin_box")
-            .map_err(err)?,
+        basin_box,
         basin: BasinOptions {
             max_strides: pdw::design::check_max_strides(max_strides, "max_strides").map_err(err)?,
             ..BasinOptions::default()
@@ -67,12 +70,14 @@ fn options(
 }
 
 /// `design(model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6,
-/// knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=(0.02, 0.08), max_strides=40,
-/// threads=2, slope=None, **params)`.
+/// knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2,
+/// out=None, force=False, slope=None, **params)`. `basin_box=None` scales the box with each
+/// design's gait; `out` writes the design file `pdw-sweep design` writes (an existing one only
+/// with `force=True`).
 #[pyfunction]
 #[pyo3(
-    signature = (model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=(0.02, 0.08), max_strides=40, threads=THREADS, slope=None, **params),
-    text_signature = "(model='compass', free=None, objective='basin', budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=(0.02, 0.08), max_strides=40, threads=2, slope=None, **params)"
+    signature = (model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=THREADS, out=None, force=false, slope=None, **params),
+    text_signature = "(model='compass', free=None, objective='basin', budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2, out=None, force=False, slope=None, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn design<'py>(
@@ -87,9 +92,11 @@ pub(crate) fn design<'py>(
     knee_margin: f64,
     min_margin: f64,
     basin_grid: i64,
-    basin_box: (f64, f64),
+    basin_box: Option<(f64, f64)>,
     max_strides: i64,
     threads: usize,
+    out: Option<std::path::PathBuf>,
+    force: bool,
     slope: Option<&Bound<'py, PyAny>>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -108,6 +115,12 @@ pub(crate) fn design<'py>(
         max_strides,
     )?;
     pdw::input::check_threads(threads, "threads").map_err(err)?;
+    if let Some(o) = out.as_ref().filter(|o| o.exists() && !force) {
+        return Err(err(format!(
+            "out: '{}' exists; pass force=True to replace it",
+            o.display()
+        )));
+    }
     let choice = crate::model_choice(model, slope, params)?;
     let base = pdw::build_model(&choice).map_err(err)?;
     crate::give_warnings(py)?;
@@ -126,12 +139,38 @@ pub(crate) fn design<'py>(
             .map_err(err)?;
         pdw::design::search(&plan, &base, Vec::new(), &pool, &mut |_: &DesignEval| {}).map_err(err)
     })?;
+    if let Some(o) = &out {
+        write_file(o, &plan, &base, &hist, threads)?;
+    }
     let d = design_dict(py, &plan, &hist)?;
     crate::give_warnings(py)?;
     Ok(d)
 }
 
 use pdw::design::{measures, COLUMNS};
+
+/// `out`: the design file of the search, as `pdw-sweep design` writes it
+/// ([`pdw::design::write_file`]), its provenance naming the Python call.
+fn write_file(
+    out: &std::path::Path,
+    plan: &DesignPlan,
+    base: &pdw::BuiltModel,
+    hist: &[DesignEval],
+    threads: usize,
+) -> PyResult<()> {
+    let settings = pdw::design::settings(plan, base);
+    let options = pdw::design::run_options(&settings, threads);
+    let call = format!(
+        "python: pdw_sweep.design(model='{}', free=[{}], budget={}, seed={}, init={})",
+        plan.model.model,
+        plan.space.names.join(", "),
+        plan.options.budget,
+        plan.options.seed,
+        plan.options.init
+    );
+    let prov = pdw::provenance(&call, &options);
+    pdw::design::write_file(out, (plan, base, &settings), hist, &prov, &[]).map_err(err)
+}
 
 /// The dict `design` returns: every design evaluated (in order) and the best one.
 fn design_dict<'py>(

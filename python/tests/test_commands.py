@@ -56,7 +56,12 @@ def test_signature_defaults_are_the_cli_defaults():
     # `pdw-sweep design`'s defaults (docs/cli.md)
     assert d["budget"].default == 60 and d["mu"].default == 0.6
     assert d["knee_margin"].default == 0.1 and d["basin_grid"].default == 15
-    assert d["basin_box"].default == (0.02, 0.08) and d["max_strides"].default == 40
+    # no box: scaled to each design's gait, as the CLI without --basin-box
+    assert d["basin_box"].default is None and d["max_strides"].default == 40
+    assert d["out"].default is None and d["force"].default is False
+    a = inspect.signature(pdw.animate).parameters
+    assert a["steps"].default == 2 and a["fps"].default is None
+    assert a["size"].default == (640, 400) and a["from_file"].default is None
     assert inspect.signature(pdw.basin_over).parameters["grid"].default == (41, 41)
 
 
@@ -194,3 +199,81 @@ def test_animate_writes_the_cli_gif():
         with pytest.raises(ValueError, match="exists"):
             pdw.animate("compass", slope="3deg", out=b)
         pdw.animate("compass", slope="3deg", out=b, force=True)
+
+
+def test_design_out_writes_the_cli_file():
+    h5py = pytest.importorskip("h5py")
+    with tempfile.TemporaryDirectory() as d:
+        a, b = os.path.join(d, "cli.h5"), os.path.join(d, "py.h5")
+        run_cli("design", "--model", "compass", "--free", "hip_mass=5:15", "--budget", "3",
+                "--objective", "margin", "--quiet", "--out", a)
+        got = pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=3,
+                         objective="margin", out=b)
+        with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+            # the same datasets, the same settings and every value equal (NaN where NaN)
+            assert sorted(fa.keys()) == sorted(fb.keys())
+            assert fa.attrs["settings"] == fb.attrs["settings"]
+            for k in fa.keys():
+                if isinstance(fa[k], h5py.Dataset):
+                    np.testing.assert_array_equal(fa[k][()], fb[k][()])
+                    assert fa[k].attrs.get("units") == fb[k].attrs.get("units")
+            np.testing.assert_array_equal(fb["cost"][()], got["cost"])
+            assert "pdw_sweep.design" in fb["provenance"].attrs["command"]
+        with pytest.raises(ValueError, match="exists"):
+            pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=1, out=b)
+        pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=1, out=b, force=True)
+
+
+def gif_header(path):
+    """Width, height, the first frame's delay (centiseconds) and the frame count of a GIF,
+    walked block by block (GIF89a: header, screen descriptor, global colour table, then
+    extensions and images)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:6] == b"GIF89a"
+    w, h, flags = int.from_bytes(data[6:8], "little"), int.from_bytes(data[8:10], "little"), data[10]
+    i = 13 + (3 * 2 ** ((flags & 7) + 1) if flags & 0x80 else 0)
+    delay, frames = None, 0
+
+    def skip_blocks(i):
+        while data[i]:
+            i += data[i] + 1
+        return i + 1
+
+    while data[i] != 0x3B:
+        if data[i] == 0x21:
+            if data[i + 1] == 0xF9 and delay is None:
+                delay = int.from_bytes(data[i + 4:i + 6], "little")
+            i = skip_blocks(i + 2)
+        else:
+            assert data[i] == 0x2C
+            flags = data[i + 9]
+            i += 10 + (3 * 2 ** ((flags & 7) + 1) if flags & 0x80 else 0)
+            frames += 1
+            i = skip_blocks(i + 1)
+    return w, h, delay, frames
+
+
+def test_animate_options_and_from_file_equal_the_cli():
+    with tempfile.TemporaryDirectory() as d:
+        a, b = os.path.join(d, "cli.gif"), os.path.join(d, "py.gif")
+        run_cli("animate", "--model", "compass", "--steps", "1", "--fps", "25", "--size",
+                "320x240", "--out", a)
+        pdw.animate("compass", steps=1, fps=25, size=(320, 240), out=b)
+        with open(a, "rb") as fa, open(b, "rb") as fb:
+            assert fa.read() == fb.read()
+        # 25 fps: 4 cs; one stride of about 0.734 s: round(0.734 / 0.04) = 18 frames, + 1
+        assert gif_header(b) == (320, 240, 4, 19)
+        t = os.path.join(d, "t.h5")
+        run_cli("simulate", "--model", "compass", "--steps", "2", "--out", t)
+        c, p = os.path.join(d, "tcli.gif"), os.path.join(d, "tpy.gif")
+        run_cli("animate", "--from", t, "--out", c)
+        pdw.animate(from_file=t, out=p)
+        with open(c, "rb") as fa, open(p, "rb") as fb:
+            assert fa.read() == fb.read()
+        for bad, says in [(dict(steps=0), "steps"), (dict(fps=60.0), "fps"),
+                          (dict(size=(10, 10)), "size"),
+                          (dict(from_file=os.path.join(d, "none.h5")), "none.h5"),
+                          (dict(from_file=t, slope=0.01), "from_file")]:
+            with pytest.raises(ValueError, match=says):
+                pdw.animate("compass", out=os.path.join(d, "bad.gif"), **bad)

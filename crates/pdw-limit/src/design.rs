@@ -16,10 +16,11 @@
 //!    criterion's margin relative to its natural scale at least `min_margin`, and — with a
 //!    free-swing knee — a knee strike before the heel strike;
 //! 3. scores it. Feasible designs (stable and valid) get the objective: `margin` — `ρ` (smaller is
-//!    better); `basin` — minus the fraction of a fixed box of section states around the gait that
+//!    better); `basin` — minus the fraction of a box of section states around the gait that
 //!    walk into it ([`crate::classify_cells`] on a coarse grid; the box is `stance ± Δ₀`,
-//!    `stance_rate ± Δ₁`, `hip_rate` at the gait's), plus `1e-3·ρ` to break ties between equal
-//!    coarse fractions. Infeasible designs get a graded penalty above every feasible cost:
+//!    `stance_rate ± Δ₁`, `hip_rate` at the gait's; `Δ` given, or by default scaled to the
+//!    gait, `Δ = 0.15 · (|stance|, |stance_rate|)`, [`basin_box`]), plus `1e-3·ρ` to break ties
+//!    between equal coarse fractions. Infeasible designs get a graded penalty above every feasible cost:
 //!    `1 + v` (stable but invalid; `v` the normalised violation, at most 3), `5 + min(ρ − 1, 4)`
 //!    (unstable), `10` (no gait found), `11` (the parameters do not make a model). The violation
 //!    sums, over the failed constraints, the shortfall of the knee torque over a torque scale
@@ -34,8 +35,9 @@
 //! centre of the bounds) and `init` seeded random designs, then runs argmin's Nelder–Mead over
 //! the free parameters scaled to the unit cube `[0, 1]ᵏ` (a point outside it costs
 //! `20 + distance` and is not evaluated) from the best design so far with an initial simplex of
-//! edge 0.25; when the simplex collapses (standard deviation of its costs below 1e-6) with
-//! budget left, it restarts from the best design found with half the edge. Every evaluated design goes through a cache
+//! edge 0.25 (its `k + 1` vertices evaluated before the solver starts: a budget that runs out
+//! among them ends the search there); when the simplex collapses (standard deviation of its
+//! costs below 1e-6) with budget left, it restarts from the best design found with half the edge. Every evaluated design goes through a cache
 //! keyed by its exact parameter bits, so that a rerun over a stored history replays the same
 //! deterministic sequence at no cost and continues where the stored run stopped (resumable), and
 //! the same seed gives the same designs (reproducible). Guesses for a design's gait: the model's
@@ -54,7 +56,7 @@ use std::cell::RefCell;
 /// What a feasible design is scored by.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Objective {
-    /// Fraction of a fixed box of section states around the gait that reaches it (larger is
+    /// Fraction of a box of section states around the gait that reaches it (larger is
     /// better).
     Basin,
     /// Largest multiplier modulus (smaller is better).
@@ -92,8 +94,9 @@ pub struct DesignOptions {
     pub init: usize,
     /// Basin grid: `n × n` cells over the box (objective `basin`).
     pub basin_grid: usize,
-    /// Half widths of the basin box in `stance` (rad) and `stance_rate` (rad/s).
-    pub basin_box: [f64; 2],
+    /// Half widths of the basin box in `stance` (rad) and `stance_rate` (rad/s); `None`: scaled
+    /// to each design's gait ([`basin_box`]).
+    pub basin_box: Option<[f64; 2]>,
     /// Basin engine options (coarse: fewer strides than a basin map).
     pub basin: BasinOptions,
     /// Newton residual tolerance of the gait search.
@@ -139,6 +142,9 @@ pub struct DesignEval {
     /// The smallest relative margin of the validity criteria (the binding one's,
     /// [`Validity::binding`]); NaN when not measured.
     pub min_relative_margin: f64,
+    /// Half widths of the basin box the fraction was measured in (`stance`, `stance_rate`);
+    /// NaN when not measured.
+    pub basin_box: [f64; 2],
 }
 
 impl DesignEval {
@@ -157,6 +163,7 @@ impl DesignEval {
             period: f64::NAN,
             step_length: f64::NAN,
             min_relative_margin: f64::NAN,
+            basin_box: [f64::NAN; 2],
         }
     }
 
@@ -169,6 +176,32 @@ impl DesignEval {
     pub fn feasible(&self) -> bool {
         self.status == status::FEASIBLE
     }
+}
+
+/// Factor of the gait-scaled basin box: half widths `BASIN_BOX_SCALE · (|stance|,
+/// |stance_rate|)` of the gait's section ([`basin_box`]). Chosen on the Goswami compass preset
+/// (15 × 15 cells, 40 strides): factors 0.05, 0.1, 0.15, 0.2, 0.3 give it basin fractions
+/// 0.93, 0.72, 0.50, 0.35, 0.17; 0.15 puts it mid-range, where designs can gain or lose.
+pub const BASIN_BOX_SCALE: f64 = 0.15;
+
+/// The basin box's half widths about the gait `section` (`stance`, `stance_rate` first): the
+/// options' fixed box, else [`BASIN_BOX_SCALE`] times the gait's `|stance|` and
+/// `|stance_rate|`, so that designs with larger or faster strides are perturbed in proportion
+/// (a fixed box that is large for one gait and small for another measures the box, not the
+/// basin). A zero component falls back to the default fixed box's (0.02 rad, 0.08 rad/s).
+pub fn basin_box(opts: &DesignOptions, section: &[f64]) -> [f64; 2] {
+    if let Some(b) = opts.basin_box {
+        return b;
+    }
+    let scaled = |v: f64, fallback: f64| {
+        let h = BASIN_BOX_SCALE * v.abs();
+        if h.is_finite() && h > 0.0 {
+            h
+        } else {
+            fallback
+        }
+    };
+    [scaled(section[0], 0.02), scaled(section[1], 0.08)]
 }
 
 /// Cost of a design whose parameters do not make a model.
@@ -338,8 +371,10 @@ pub fn evaluate_design(
         Objective::Basin => {
             let n = opts.basin_grid;
             let s = &fp.section;
-            let xs = linspace(s[0] - opts.basin_box[0], s[0] + opts.basin_box[0], n);
-            let ys = linspace(s[1] - opts.basin_box[1], s[1] + opts.basin_box[1], n);
+            let bx = basin_box(opts, s);
+            ev.basin_box = bx;
+            let xs = linspace(s[0] - bx[0], s[0] + bx[0], n);
+            let ys = linspace(s[1] - bx[1], s[1] + bx[1], n);
             let cells = grid_cells(s, 0, &xs, 1, &ys);
             let fall = Outcome::of_fall;
             let problem = BasinProblem::new(walker, s.clone(), &fall);
@@ -554,6 +589,12 @@ pub fn search(
             // step inward so that the vertex stays in the cube
             v[i] += if v[i] + edge <= 1.0 { edge } else { -edge };
             simplex.push(v);
+        }
+        // argmin's Nelder–Mead evaluates its first simplex without a way to stop (it unwraps
+        // each cost), so every vertex is evaluated here first: the solver then replays them,
+        // and a budget too small for the simplex ends the search with the history complete
+        if simplex.iter().any(|v| problem.cost_at(v).is_err()) {
+            break;
         }
         let solver = NelderMead::new(simplex)
             .with_sd_tolerance(1e-6)

@@ -107,7 +107,8 @@ pub use design::{
 pub use error::StoreError;
 pub use plot::{
     animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_basin_attractors,
-    plot_basin_stability, plot_bifurcation, plot_lines, Frame,
+    plot_basin_stability, plot_bifurcation, plot_lines, plot_lines_marked, Frame, MarkerShape,
+    Markers,
 };
 pub use provenance::{annotate, annotate_file, Annotations, Provenance, ScaleAttach, Slice};
 pub use shard::{grid_shard_rows, merge, shard_rows, ShardSpec};

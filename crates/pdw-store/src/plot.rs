@@ -1012,8 +1012,9 @@ fn draw_bifurcation_legends(c: &mut BifPanels, path: &Path) -> Result<()> {
 /// on the top edge), coloured as the basin picture colours the same names
 /// ([`outcome_colours`]: the gait green, falls red, timeout grey, `other` blue, other
 /// attractors in their own colours); columns that are zero at every value are left out of the
-/// legend. Bottom: each attractor's fraction alone (lines with a marker per value, its own
-/// scale), since basins are often a few per cent of the box.
+/// legend. An attractor found physically invalid at some value is named `NAME (invalid)` and
+/// its band outlined in red. Bottom: each attractor's fraction alone (lines with a marker per
+/// value, its own scale), since basins are often a few per cent of the box.
 pub fn plot_basin_stability(
     path: impl AsRef<Path>,
     data: &crate::stability::StabilityData,
@@ -1067,11 +1068,17 @@ pub fn plot_basin_stability(
         if data.fractions.iter().any(|r| r[c] > 0.0) {
             let mut poly: Vec<(f64, f64)> = (0..n).map(|i| (data.values[i], upper[i])).collect();
             poly.extend((0..n).rev().map(|i| (data.values[i], lower[i])));
-            chart
-                .draw_series(std::iter::once(Polygon::new(poly, col.filled())))
-                .map_err(|x| pe(path, x))?
-                .label(name.as_str())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], col.filled()));
+            if data.invalid_column(name) {
+                draw_invalid_band(&mut chart, poly, col, name, path)?;
+            } else {
+                chart
+                    .draw_series(std::iter::once(Polygon::new(poly, col.filled())))
+                    .map_err(|x| pe(path, x))?
+                    .label(name.as_str())
+                    .legend(move |(x, y)| {
+                        Rectangle::new([(x, y - 5), (x + 16, y + 5)], col.filled())
+                    });
+            }
         }
         lower = upper;
     }
@@ -1129,7 +1136,7 @@ pub fn plot_basin_stability(
             .collect();
         bot.draw_series(LineSeries::new(pts.iter().copied(), col.stroke_width(2)))
             .map_err(|x| pe(path, x))?
-            .label(data.columns[c].as_str())
+            .label(stability_label(data, c))
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], col.stroke_width(2)));
         bot.draw_series(pts.iter().map(|&p| Circle::new(p, 4, col.filled())))
             .map_err(|x| pe(path, x))?;
@@ -1145,6 +1152,45 @@ pub fn plot_basin_stability(
     }
     root.present().map_err(|x| pe(path, x))?;
     pic.commit(path)
+}
+
+/// The legend name of column `c`: suffixed ` (invalid)` for a physically invalid attractor.
+fn stability_label(data: &crate::stability::StabilityData, c: usize) -> String {
+    let name = &data.columns[c];
+    if data.invalid_column(name) {
+        format!("{name} (invalid)")
+    } else {
+        name.clone()
+    }
+}
+
+/// The band `poly` of a physically invalid attractor: filled in its colour, outlined in
+/// [`INVALID_RING`] red, named `NAME (invalid)` with a red-bordered legend swatch.
+fn draw_invalid_band<'a, 'b: 'a>(
+    chart: &mut ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    poly: Vec<(f64, f64)>,
+    col: RGBColor,
+    name: &str,
+    path: &Path,
+) -> Result<()> {
+    let mut ring = poly.clone();
+    ring.push(poly[0]);
+    chart
+        .draw_series(std::iter::once(Polygon::new(poly, col.filled())))
+        .map_err(|x| pe(path, x))?
+        .label(format!("{name} (invalid)"))
+        .legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + Rectangle::new([(0, -5), (16, 5)], col.filled())
+                + Rectangle::new([(0, -5), (16, 5)], INVALID_RING.stroke_width(2))
+        });
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            ring,
+            INVALID_RING.stroke_width(2),
+        )))
+        .map_err(|x| pe(path, x))?;
+    Ok(())
 }
 
 /// Title and axis labels of a chart.
@@ -1202,7 +1248,7 @@ fn draw_lines<XR, YR>(
     area: &DrawingArea<BitMapBackend<'_>, Shift>,
     path: &Path,
     labels: &Labels<'_>,
-    series: &[(String, Vec<(f64, f64)>)],
+    (series, markers): (&[NamedLine], &[Markers]),
     legend_at: SeriesLabelPosition,
     xr: XR,
     yr: YR,
@@ -1251,6 +1297,9 @@ where
                 .map_err(|x| pe(path, x))?;
         }
     }
+    for m in markers {
+        draw_markers(&mut chart, m, path)?;
+    }
     chart
         .configure_series_labels()
         .position(legend_at)
@@ -1259,6 +1308,78 @@ where
         .border_style(BLACK)
         .draw()
         .map_err(|x| pe(path, x))?;
+    Ok(())
+}
+
+/// A named polyline of [`plot_lines`].
+type NamedLine = (String, Vec<(f64, f64)>);
+
+/// Shape of a markers-only series ([`Markers`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MarkerShape {
+    Circle,
+    Square,
+    Triangle,
+    Cross,
+}
+
+/// A markers-only series of [`plot_lines_marked`]: points drawn as `shape` in `colour`, no
+/// line, with a legend entry `name`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Markers {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+    pub colour: [u8; 3],
+    pub shape: MarkerShape,
+}
+
+/// Draws `m`'s points (5 px markers) with its legend entry.
+fn draw_markers<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'b>, Cartesian2d<X, Y>>,
+    m: &Markers,
+    path: &Path,
+) -> Result<()>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let col = rgb(m.colour);
+    let pts = m.points.iter().copied();
+    let name = m.name.as_str();
+    match m.shape {
+        MarkerShape::Circle => {
+            chart
+                .draw_series(pts.map(|p| Circle::new(p, 5, col.filled())))
+                .map_err(|x| pe(path, x))?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, col.filled()));
+        }
+        MarkerShape::Square => {
+            chart
+                .draw_series(pts.map(|p| {
+                    EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], col.filled())
+                }))
+                .map_err(|x| pe(path, x))?
+                .label(name)
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x + 4, y - 4), (x + 12, y + 4)], col.filled())
+                });
+        }
+        MarkerShape::Triangle => {
+            chart
+                .draw_series(pts.map(|p| TriangleMarker::new(p, 6, col.filled())))
+                .map_err(|x| pe(path, x))?
+                .label(name)
+                .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, col.filled()));
+        }
+        MarkerShape::Cross => {
+            chart
+                .draw_series(pts.map(|p| Cross::new(p, 5, col.stroke_width(2))))
+                .map_err(|x| pe(path, x))?
+                .label(name)
+                .legend(move |(x, y)| Cross::new((x + 8, y), 5, col.stroke_width(2)));
+        }
+    }
     Ok(())
 }
 
@@ -1274,6 +1395,20 @@ pub fn plot_lines(
     log_x: bool,
     log_y: bool,
 ) -> Result<()> {
+    plot_lines_marked(path, title, x_label, y_label, series, &[], (log_x, log_y))
+}
+
+/// [`plot_lines`] with markers-only series drawn over the lines (each with its shape, colour
+/// and legend entry after the lines'); the axes cover the markers' points too.
+pub fn plot_lines_marked(
+    path: impl AsRef<Path>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    markers: &[Markers],
+    (log_x, log_y): (bool, bool),
+) -> Result<()> {
     let path = path.as_ref();
     let keep = |p: &(f64, f64)| {
         p.0.is_finite() && p.1.is_finite() && (!log_x || p.0 > 0.0) && (!log_y || p.1 > 0.0)
@@ -1282,7 +1417,17 @@ pub fn plot_lines(
         .iter()
         .map(|(n, v)| (n.clone(), v.iter().copied().filter(keep).collect()))
         .collect();
-    let all = || series.iter().flat_map(|(_, v)| v.iter().copied());
+    let markers: Vec<Markers> = markers
+        .iter()
+        .map(|m| Markers {
+            points: m.points.iter().copied().filter(keep).collect(),
+            ..m.clone()
+        })
+        .collect();
+    // the legend's corner and the axes see the markers as points of unnamed series
+    let mut placed = series.clone();
+    placed.extend(markers.iter().map(|m| (String::new(), m.points.clone())));
+    let all = || placed.iter().flat_map(|(_, v)| v.iter().copied());
     let (xr, yr) = match (range_of(all().map(|p| p.0)), range_of(all().map(|p| p.1))) {
         (Some(x), Some(y)) => (x, y),
         _ => {
@@ -1314,14 +1459,15 @@ pub fn plot_lines(
     };
     let (xa, xb, ya, yb) = (xr.0, xr.1, yr.0, yr.1);
     let lin = |a: f64, b: f64| a..b;
-    let at = legend_corner(&series, (xr, yr), (log_x, log_y));
+    let at = legend_corner(&placed, (xr, yr), (log_x, log_y));
+    let series = (&series[..], &markers[..]);
     match (log_x, log_y) {
-        (false, false) => draw_lines(&root, path, &labels, &series, at, lin(xa, xb), lin(ya, yb)),
+        (false, false) => draw_lines(&root, path, &labels, series, at, lin(xa, xb), lin(ya, yb)),
         (true, false) => draw_lines(
             &root,
             path,
             &labels,
-            &series,
+            series,
             at,
             lin(xa, xb).log_scale(),
             lin(ya, yb),
@@ -1330,7 +1476,7 @@ pub fn plot_lines(
             &root,
             path,
             &labels,
-            &series,
+            series,
             at,
             lin(xa, xb),
             lin(ya, yb).log_scale(),
@@ -1339,7 +1485,7 @@ pub fn plot_lines(
             &root,
             path,
             &labels,
-            &series,
+            series,
             at,
             lin(xa, xb).log_scale(),
             lin(ya, yb).log_scale(),
@@ -1404,9 +1550,66 @@ fn clip_line(
     })
 }
 
+/// Height (pixels) of a GIF frame's caption band: the title on one line, the frame's label
+/// below it.
+pub const GIF_CAPTION_H: u32 = 46;
+
+/// `text` at the largest font size from `max` down to 9 px whose width is at most `width`
+/// pixels (measured with the font, as drawn); at 9 px still too wide, cut at the end with "…"
+/// until it fits.
+pub(crate) fn fit_text(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    text: &str,
+    max: u32,
+    width: u32,
+) -> (String, u32) {
+    register_fonts();
+    let w = |t: &str, px: u32| {
+        area.estimate_text_size(t, &TextStyle::from((FONT, px).into_font()))
+            .map_or(u32::MAX, |s| s.0)
+    };
+    for px in (9..=max.max(9)).rev() {
+        if w(text, px) <= width {
+            return (text.to_string(), px);
+        }
+    }
+    let mut chars: Vec<char> = text.chars().collect();
+    while !chars.is_empty() {
+        chars.pop();
+        let t: String = chars.iter().collect::<String>() + "…";
+        if w(&t, 9) <= width {
+            return (t, 9);
+        }
+    }
+    (String::new(), 9)
+}
+
+/// Draws a caption line `(text, font size)` centred at `y` pixels from the band's top.
+fn draw_caption(
+    band: &DrawingArea<BitMapBackend<'_>, Shift>,
+    (text, px): &(String, u32),
+    y: i32,
+    path: &Path,
+) -> Result<()> {
+    if text.is_empty() {
+        return Ok(());
+    }
+    let style = TextStyle::from((FONT, *px).into_font()).color(&BLACK).pos(
+        plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Center,
+            plotters::style::text_anchor::VPos::Top,
+        ),
+    );
+    let x = band.dim_in_pixel().0 as i32 / 2;
+    band.draw_text(text, &style, (x, y))
+        .map_err(|x| pe(path, x))
+}
+
 /// Writes an animated GIF of `frames` at `size` pixels, `delay_ms` per frame, with the same
 /// axes in every frame (the bounding box of all links, joints and traces, padded, with equal
 /// scales on x and y): slope in brown, links black, joints as dots, swing-foot trace in blue.
+/// The caption band on top holds `title` and, below it, the frame's label, each at the
+/// largest font size (18 and 14 px at most) that fits the picture's width ([`fit_text`]).
 pub fn animate_gif(
     path: impl AsRef<Path>,
     frames: &[Frame],
@@ -1415,12 +1618,15 @@ pub fn animate_gif(
     title: &str,
 ) -> Result<()> {
     let path = path.as_ref();
-    if frames.is_empty() || size.0 < 64 || size.1 < 64 {
+    if frames.is_empty() || size.0 < 64 || size.1 < GIF_CAPTION_H + 64 {
         return Err(StoreError::invalid(
             "animation",
             format!(
-                "need at least one frame and at least 64 × 64 pixels (got {} frames, {size:?})",
-                frames.len()
+                "need at least one frame and at least 64 × {} pixels (got {} frames, {} × {})",
+                GIF_CAPTION_H + 64,
+                frames.len(),
+                size.0,
+                size.1
             ),
         ));
     }
@@ -1444,8 +1650,10 @@ pub fn animate_gif(
     };
     // Equal scales: widen the narrower extent to the picture's aspect ratio (the plotting area
     // is the picture minus the caption band).
-    let caption_h = 40.0;
-    let (w, h) = (size.0 as f64 - 20.0, size.1 as f64 - caption_h - 20.0);
+    let (w, h) = (
+        size.0 as f64 - 20.0,
+        size.1 as f64 - GIF_CAPTION_H as f64 - 20.0,
+    );
     let (sx, sy) = ((xr.1 - xr.0) / w, (yr.1 - yr.0) / h);
     let s = sx.max(sy);
     let (cx, cy) = ((xr.0 + xr.1) / 2.0, (yr.0 + yr.1) / 2.0);
@@ -1457,15 +1665,14 @@ pub fn animate_gif(
     let root = BitMapBackend::gif(&tmp, size, delay_ms)
         .map_err(|x| pe(path, x))?
         .into_drawing_area();
+    let (band, body) = root.split_vertically(GIF_CAPTION_H);
+    let title_line = fit_text(&band, title, 18, size.0.saturating_sub(16));
     for f in frames {
         root.fill(&WHITE).map_err(|x| pe(path, x))?;
-        let caption = if f.label.is_empty() {
-            title.to_string()
-        } else {
-            format!("{title}   {}", f.label)
-        };
-        let mut chart = ChartBuilder::on(&root)
-            .caption(caption, (FONT, 18))
+        draw_caption(&band, &title_line, 4, path)?;
+        let label_line = fit_text(&band, &f.label, 14, size.0.saturating_sub(16));
+        draw_caption(&band, &label_line, 26, path)?;
+        let mut chart = ChartBuilder::on(&body)
             .margin(10)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|x| pe(path, x))?;

@@ -19,7 +19,8 @@
 //!                    integrator_failure, by code) before attractors are told apart; attr columns
 //! /values/NNN        attrs parameter, attractors (JSON list, one object per attractor found at
 //!                    that value: name, period_strides (0 = chaotic), period_time, points,
-//!                    multipliers [[re, im], …])
+//!                    multipliers [[re, im], …], validity ("valid", "invalid", "not
+//!                    checked"), invalid_reasons)
 //! ```
 //! Written whole to a temporary sibling and renamed into place.
 
@@ -49,6 +50,30 @@ pub struct StabilityAttractor {
     pub points: Vec<Vec<f64>>,
     /// Multipliers `[re, im]` of the period map (empty for a chaotic attractor).
     pub multipliers: Vec<[f64; 2]>,
+    /// Physical validity of the orbit: `valid`, `invalid` or `not checked` (empty in files
+    /// written before it was recorded).
+    #[serde(default)]
+    pub validity: String,
+    /// What fails on the orbit when `invalid`.
+    #[serde(default)]
+    pub invalid_reasons: Vec<String>,
+}
+
+impl StabilityAttractor {
+    /// Its orbit is physically invalid.
+    pub fn invalid(&self) -> bool {
+        self.validity == "invalid"
+    }
+}
+
+impl StabilityData {
+    /// The column `name` is an attractor found physically invalid at some value.
+    pub fn invalid_column(&self, name: &str) -> bool {
+        self.attractors
+            .iter()
+            .flatten()
+            .any(|a| a.name == name && a.invalid())
+    }
 }
 
 /// Everything a basin-stability file holds.

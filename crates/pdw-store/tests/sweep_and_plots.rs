@@ -461,6 +461,8 @@ fn basin_stability_file_round_trips_refuses_bad_rows_and_draws_its_chart() {
                 period_time: Some(3.8),
                 points: vec![vec![0.2, -0.2]],
                 multipliers: vec![[-0.5, 0.1], [-0.5, -0.1]],
+                validity: "valid".into(),
+                invalid_reasons: vec![],
             }],
             vec![],
             vec![StabilityAttractor {
@@ -469,6 +471,8 @@ fn basin_stability_file_round_trips_refuses_bad_rows_and_draws_its_chart() {
                 period_time: None,
                 points: vec![vec![0.24, -0.23], vec![0.26, -0.25]],
                 multipliers: vec![],
+                validity: "not checked".into(),
+                invalid_reasons: vec![],
             }],
         ],
         settings: vec![("options".into(), r#"{"threads":2}"#.into())],
@@ -496,4 +500,161 @@ fn basin_stability_file_round_trips_refuses_bad_rows_and_draws_its_chart() {
     let count = |c: [u8; 3]| px.chunks(3).filter(|q| *q == c).count();
     assert!(count([44, 160, 44]) > 1000, "gait band missing");
     assert!(count([214, 39, 40]) > 10000, "fall band missing");
+    // no attractor is invalid: no red outline
+    let ring = [200, 0, 0];
+    assert_eq!(count(ring), 0);
+    // the gait found physically invalid at the first value: its band is outlined in red (in
+    // the top panel: the band's edge and the legend swatch)
+    let mut inv = d.clone();
+    inv.attractors[0][0].validity = "invalid".into();
+    inv.attractors[0][0].invalid_reasons = vec!["a knee lock must pull".into()];
+    assert!(inv.invalid_column("gait") && !inv.invalid_column("chaotic"));
+    let q = dir.join("bs-invalid.png");
+    plot_basin_stability(&q, &inv, "slope [rad]", "basin stability").unwrap();
+    let (_, _, px2, _) = decode_png(&q);
+    let red_rows: Vec<usize> = px2
+        .chunks(3 * w as usize)
+        .enumerate()
+        .filter(|(_, row)| row.chunks(3).any(|q| *q == ring))
+        .map(|(y, _)| y)
+        .collect();
+    assert!(
+        red_rows.len() > 20,
+        "no red outline ({} rows)",
+        red_rows.len()
+    );
+    assert!(
+        red_rows.iter().all(|&y| y < h as usize / 2),
+        "outline outside the top panel"
+    );
+    // read back, the validity is kept
+    let p2 = dir.join("bs-invalid.h5");
+    write_stability(&p2, false, &inv).unwrap();
+    assert_eq!(read_stability(&p2).unwrap(), inv);
+}
+
+/// The first frame of a GIF (RGBA), its size and delay (centiseconds), and the frame count.
+fn decode_gif(p: &std::path::Path) -> (u32, u32, Vec<u8>, u16, usize) {
+    let mut opts = gif::DecodeOptions::new();
+    opts.set_color_output(gif::ColorOutput::RGBA);
+    let mut dec = opts.read_info(std::fs::File::open(p).unwrap()).unwrap();
+    let (w, h) = (dec.width() as u32, dec.height() as u32);
+    let first = dec.read_next_frame().unwrap().unwrap();
+    let (px, delay) = (first.buffer.to_vec(), first.delay);
+    // the first frame covers the picture (plotters writes whole frames)
+    assert_eq!(px.len(), (w * h * 4) as usize);
+    let mut count = 1;
+    while dec.read_next_frame().unwrap().is_some() {
+        count += 1;
+    }
+    (w, h, px, delay, count)
+}
+
+#[test]
+fn a_long_gif_title_is_fitted_inside_the_picture() {
+    use pdw_store::plot::GIF_CAPTION_H;
+    let dir = scratch("giftitle");
+    let frame = |label: &str| Frame {
+        links: vec![((0.0, 0.0), (0.1, 1.0))],
+        joints: vec![(0.1, 1.0)],
+        slope: ((0.0, 0.0), (1.0, -0.05)),
+        trace: vec![],
+        label: label.into(),
+    };
+    let title = "a_walker_spec_with_a_very_long_name_indeed walker, slope 0.0523 rad: UNSTABLE \
+                 gait (FLAGGED), period 0.7340";
+    for (w, h) in [(640, 400), (320, 240)] {
+        let p = dir.join(format!("t{w}.gif"));
+        let frames = [frame("t = 0.000   stride 1"), frame("t = 0.060   stride 1")];
+        animate_gif(&p, &frames, (w, h), 60, title).unwrap();
+        let (gw, gh, px, delay, count) = decode_gif(&p);
+        assert_eq!((gw, gh, delay, count), (w, h, 6, 2));
+        // dark pixels of the caption band (title and label): some, and none within 3 px of
+        // either edge (a title wider than the picture runs into both edges when centred)
+        let dark: Vec<u32> = (0..GIF_CAPTION_H.min(h))
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let i = ((y * w + x) * 4) as usize;
+                px[i] < 110 && px[i + 1] < 110 && px[i + 2] < 110
+            })
+            .map(|(x, _)| x)
+            .collect();
+        assert!(dark.len() > 100, "no caption drawn at {w} px");
+        let (lo, hi) = (*dark.iter().min().unwrap(), *dark.iter().max().unwrap());
+        assert!(lo >= 3 && hi + 3 < w, "caption spans x = {lo}..{hi} of {w}");
+    }
+}
+
+#[test]
+fn status_markers_appear_where_their_designs_lie() {
+    use pdw_store::{plot_lines_marked, MarkerShape, Markers};
+    let dir = scratch("markers");
+    let p = dir.join("m.png");
+    let (orange, purple) = ([255, 127, 14], [148, 103, 189]);
+    // the line occupies the middle; one invalid design at the upper left, one unstable at
+    // the lower right: the legend takes the upper right (the first empty corner)
+    let line = vec![(
+        "best so far".to_string(),
+        vec![(1.0, 5.0), (5.0, 5.0), (10.0, 5.0)],
+    )];
+    let markers = [
+        Markers {
+            name: "invalid".into(),
+            points: vec![(1.5, 9.5)],
+            colour: orange,
+            shape: MarkerShape::Triangle,
+        },
+        Markers {
+            name: "unstable".into(),
+            points: vec![(9.5, 0.5)],
+            colour: purple,
+            shape: MarkerShape::Square,
+        },
+    ];
+    plot_lines_marked(&p, "t", "x", "y", &line, &markers, (false, false)).unwrap();
+    let (w, h, px, ct) = decode_png(&p);
+    assert_eq!((w, h), LINES_PNG_SIZE);
+    assert_eq!(ct, png::ColorType::Rgb);
+    let at = |c: [u8; 3]| -> Vec<(u32, u32)> {
+        (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let i = ((y * w + x) * 3) as usize;
+                px[i..i + 3] == c
+            })
+            .collect()
+    };
+    let (left, right, top, bottom) = (
+        0.35 * w as f64,
+        0.65 * w as f64,
+        0.35 * h as f64,
+        0.65 * h as f64,
+    );
+    let o = at(orange);
+    let u = at(purple);
+    // each marker where its design lies, and not in the other's corner
+    assert!(
+        o.iter()
+            .any(|&(x, y)| (x as f64) < left && (y as f64) < top),
+        "no invalid marker at the upper left"
+    );
+    assert!(
+        u.iter()
+            .any(|&(x, y)| (x as f64) > right && (y as f64) > bottom),
+        "no unstable marker at the lower right"
+    );
+    assert!(!o
+        .iter()
+        .any(|&(x, y)| (x as f64) > right && (y as f64) > bottom));
+    assert!(!u
+        .iter()
+        .any(|&(x, y)| (x as f64) < left && (y as f64) < top));
+    // both named in the legend (upper right): each colour there too
+    for c in [&o, &u] {
+        assert!(
+            c.iter()
+                .any(|&(x, y)| (x as f64) > right && (y as f64) < top),
+            "legend entry missing"
+        );
+    }
 }

@@ -321,6 +321,21 @@ pub struct MergeArgs {
 pub struct AnimateArgs {
     #[command(flatten)]
     pub model: ModelOpts,
+    /// Strides of the gait shown, 1 to 1000.
+    #[arg(long, default_value_t = pdw::animate::STRIDES, value_parser = parse_anim_steps)]
+    pub steps: usize,
+    /// Frames per second, 0.5 to 50 (the GIF's delay is round(100/F) centiseconds). One second
+    /// of the GIF is one model time unit: real time for models in seconds. Default: 16.7 (a
+    /// 60 ms delay).
+    #[arg(long, value_parser = parse_fps)]
+    pub fps: Option<f64>,
+    /// Picture size WIDTHxHEIGHT in pixels (width 64 to 4096, height 110 to 4096).
+    #[arg(long, default_value = "640x400", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Animate a trajectory file written by `simulate` (HDF5) instead of a gait: its model is
+    /// rebuilt from the file, --model/--slope/--set/--steps are not used.
+    #[arg(long, value_name = "TRAJ.h5", conflicts_with_all = ["model", "slope", "set", "steps"])]
+    pub from: Option<PathBuf>,
     /// Output GIF.
     #[arg(long, default_value = "gait.gif")]
     pub out: PathBuf,
@@ -394,8 +409,9 @@ pub struct DesignArgs {
     #[arg(long, default_value_t = 15, value_parser = parse_basin_grid)]
     pub basin_grid: usize,
     /// Half widths of the basin box around the gait: DSTANCE,DSTANCE_RATE (rad, rad/s).
-    #[arg(long, default_value = "0.02,0.08", value_parser = parse_basin_box)]
-    pub basin_box: [f64; 2],
+    /// Default: scaled to each design's gait, 0.15 x (|stance|, |stance_rate|).
+    #[arg(long, value_parser = parse_basin_box)]
+    pub basin_box: Option<[f64; 2]>,
     /// Stride budget per basin cell.
     #[arg(long, default_value_t = 40, value_parser = parse_max_strides)]
     pub max_strides: u16,
@@ -536,4 +552,19 @@ fn parse_max_strides(s: &str) -> Result<u16, String> {
 fn parse_basin_box(s: &str) -> Result<[f64; 2], String> {
     let v = crate::args::parse_guess(s).map_err(|e| e.to_string())?;
     pdw::design::check_basin_box(&v, s, "--basin-box").map_err(|e| e.0)
+}
+
+/// `animate --steps`: 1 to 1000 strides.
+fn parse_anim_steps(s: &str) -> Result<usize, String> {
+    pdw::animate::check_steps(integer(s)?, "--steps").map_err(|e| e.0)
+}
+
+/// `animate --fps`: 0.5 to 50 frames per second.
+fn parse_fps(s: &str) -> Result<f64, String> {
+    pdw::animate::check_fps(number(s)?, "--fps").map_err(|e| e.0)
+}
+
+/// `animate --size`: WIDTHxHEIGHT pixels.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    pdw::animate::parse_size(s, "--size").map_err(|e| e.0)
 }

@@ -245,3 +245,81 @@ fn bad_over_input_is_refused_naming_the_value() {
     }
     assert!(!out.exists());
 }
+
+#[test]
+fn basin_over_names_a_physically_invalid_gait_and_outlines_its_band() {
+    // the kneed walker's gait at 0.051 rad needs its knee lock to pull (the sampled knee
+    // torque of its stride is negative: the same verdict as `basin`'s, tested in cli.rs)
+    let dir = tempfile::tempdir().unwrap();
+    let (out, png) = (dir.path().join("k.h5"), dir.path().join("k.png"));
+    let o = run(&[
+        "basin",
+        "--model",
+        "kneed",
+        "--over",
+        "slope=0.050:0.051:2",
+        "--grid",
+        "9x9",
+        "--out",
+        s(&out),
+        "--png",
+        s(&png),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let traj = dir.path().join("t.h5");
+    let o = run(&[
+        "simulate",
+        "--model",
+        "kneed",
+        "--slope",
+        "0.051",
+        "--steps",
+        "1",
+        "--dt-out",
+        "0.002",
+        "--out",
+        s(&traj),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let tr = pdw_store::read_trajectory_h5(&traj).unwrap();
+    let min_torque = tr
+        .column("knee_torque")
+        .unwrap()
+        .values
+        .iter()
+        .copied()
+        .filter(|v| !v.is_nan())
+        .fold(f64::INFINITY, f64::min);
+    assert!(min_torque < 0.0, "the stride's knee torque {min_torque}");
+    let d = pdw_store::read_stability(&out).unwrap();
+    let gait = d.attractors[1]
+        .iter()
+        .find(|a| a.name == "gait")
+        .expect("a gait at 0.051");
+    assert_eq!(gait.validity, "invalid");
+    assert!(
+        gait.invalid_reasons
+            .iter()
+            .any(|r| r == "a knee lock must pull"),
+        "{:?}",
+        gait.invalid_reasons
+    );
+    assert!(d.invalid_column("gait"));
+    // the chart outlines the band in red (200, 0, 0), in the top panel only
+    let dec = png::Decoder::new(std::fs::File::open(&png).unwrap());
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let red_rows: Vec<usize> = buf[..w * h * 3]
+        .chunks(3 * w)
+        .enumerate()
+        .filter(|(_, row)| row.chunks(3).any(|q| q == [200, 0, 0]))
+        .map(|(y, _)| y)
+        .collect();
+    assert!(
+        !red_rows.is_empty() && red_rows.iter().all(|&y| y < h / 2),
+        "{red_rows:?}"
+    );
+}

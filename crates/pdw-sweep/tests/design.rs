@@ -172,3 +172,70 @@ fn min_margin_rejects_a_design_below_it() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--min-margin"), "{}", stderr(&o));
 }
+
+#[test]
+fn the_default_basin_box_follows_each_gait_and_is_not_saturated() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b.h5");
+    let o = run(&[
+        "design",
+        "--model",
+        "compass",
+        "--free",
+        "hip_mass=4:25",
+        "--objective",
+        "basin",
+        "--budget",
+        "6",
+        "--init",
+        "2",
+        "--basin-grid",
+        "11",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    let cols = [
+        "basin_fraction",
+        "basin_box_stance",
+        "basin_box_stance_rate",
+    ];
+    let d = pdw_store::read_design(&out, &cols).unwrap();
+    let frac = d.column("basin_fraction").unwrap();
+    let (b0, b1) = (
+        d.column("basin_box_stance").unwrap(),
+        d.column("basin_box_stance_rate").unwrap(),
+    );
+    let mut measured = Vec::new();
+    for i in 0..d.params.len() {
+        if !frac[i].is_finite() {
+            continue;
+        }
+        // the box stored is 0.15 of the gait's |stance| and |stance_rate|
+        assert_eq!(b0[i], 0.15 * d.section[i][0].abs());
+        assert_eq!(b1[i], 0.15 * d.section[i][1].abs());
+        assert!(
+            frac[i] <= 0.95,
+            "design {i}: fraction {} fills the box",
+            frac[i]
+        );
+        measured.push(frac[i]);
+    }
+    assert!(measured.len() >= 3, "{measured:?}");
+    assert!(
+        measured.iter().any(|f| (f - measured[0]).abs() > 0.0),
+        "every design got the same fraction: {measured:?}"
+    );
+    // the units of the box are the section's
+    let f = crate::common::h5_open(&out).unwrap();
+    let u: String = f
+        .dataset("basin_box_stance_rate")
+        .unwrap()
+        .attr("units")
+        .unwrap()
+        .read_scalar::<hdf5::types::VarLenUnicode>()
+        .unwrap()
+        .to_string();
+    assert_eq!(u, "rad/s");
+}

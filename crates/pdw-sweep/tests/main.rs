@@ -2,6 +2,7 @@
 //! instantiations instead of one per file. Each file is a module; run one with
 //! `cargo test --release -p pdw-sweep --test sweep <file>::`.
 
+mod animate;
 mod basin3d;
 mod basin_stability;
 mod cascade;

@@ -1,10 +1,21 @@
-//! An animated GIF of two strides of a gait, as both front ends draw it (the CLI's `animate`,
+//! An animated GIF of strides of a gait, as both front ends draw it (the CLI's `animate`,
 //! Python's `animate`).
 //!
 //! The gait is the first stable fixed point the model's guesses lead to (else an unstable one,
 //! [`gait`]). Frames are the exact states at equally spaced times (the integrator stops at each
 //! frame time and at every event), drawn in world coordinates: the slope descends to the right
-//! at angle γ ([`frames`]); [`write_gif`] draws them with [`pdw_store::animate_gif`].
+//! at angle γ ([`frames`]); [`write_gif`] draws them with [`pdw_store::animate_gif`]. A
+//! trajectory file of `simulate` is drawn the same way ([`crate::animate_trajectory`]).
+//!
+//! # Time
+//! One second of the GIF is one unit of the model's time ([`crate::model::time_unit`]): real
+//! time for models in seconds, `sqrt(l/g)` for the simplest walker, `T` for the kneed preset.
+//! The GIF stores each frame's delay in whole centiseconds, so the delay is `round(100 / fps)`
+//! cs (2 to 200: 0.5 to 50 frames per second) and frames are [`AnimOptions::frame_time`] =
+//! delay / 100 model time units apart. A gait's stride (period `T`) gets
+//! `n = max(2, round(T / frame_time))` frames spaced `T / n`, so that the animation loops on a
+//! whole stride: playback is real time to within `1 / (2n)` of the speed, and the GIF has
+//! `steps · n + 1` frames.
 
 use crate::gaits::Failed;
 use crate::input::InputError;
@@ -14,13 +25,117 @@ use pdw_limit::{FixedPoint, LimitError, Validity};
 use pdw_store::Frame;
 use std::path::Path;
 
-/// Frames per stride of the animation.
-pub const FRAMES_PER_STRIDE: usize = 40;
-/// Strides shown.
+/// Strides shown by default.
 pub const STRIDES: usize = 2;
-/// Size of the picture (pixels) and delay between frames (ms).
-const SIZE: (u32, u32) = (640, 400);
-const DELAY_MS: u32 = 60;
+/// Frames per second by default: a delay of 6 cs (60 ms) per frame.
+pub const DEFAULT_FPS: f64 = 100.0 / 6.0;
+/// Picture size (pixels) by default.
+pub const SIZE: (u32, u32) = (640, 400);
+/// Largest picture side (pixels).
+pub const MAX_SIDE: u32 = 4096;
+/// Most frames in one GIF.
+pub const MAX_FRAMES: usize = 20_000;
+
+/// How an animation is drawn: strides (of a gait), frame rate and picture size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnimOptions {
+    /// Strides of the gait shown (1 to 1000; a trajectory is shown whole).
+    pub steps: usize,
+    /// Frames per second asked for (0.5 to 50); see [`AnimOptions::delay_cs`].
+    pub fps: f64,
+    /// Picture width and height (pixels).
+    pub size: (u32, u32),
+}
+
+impl Default for AnimOptions {
+    fn default() -> Self {
+        Self {
+            steps: STRIDES,
+            fps: DEFAULT_FPS,
+            size: SIZE,
+        }
+    }
+}
+
+impl AnimOptions {
+    /// The GIF's delay per frame in centiseconds: `round(100 / fps)`, 2 to 200.
+    pub fn delay_cs(&self) -> u32 {
+        (100.0 / self.fps).round().clamp(2.0, 200.0) as u32
+    }
+    /// The frame rate the GIF plays at (`100 / delay_cs`).
+    pub fn effective_fps(&self) -> f64 {
+        100.0 / self.delay_cs() as f64
+    }
+    /// Model time between frames: the delay in seconds (one GIF second is one model time unit).
+    pub fn frame_time(&self) -> f64 {
+        self.delay_cs() as f64 / 100.0
+    }
+    /// Frames per stride of a gait of period `period`: `max(2, round(period / frame_time))`.
+    pub fn frames_per_stride(&self, period: f64) -> usize {
+        ((period / self.frame_time()).round() as usize).max(2)
+    }
+}
+
+/// Strides shown: 1 to 1000.
+pub fn check_steps(n: i64, flag: &str) -> Result<usize, InputError> {
+    if (1..=1000).contains(&n) {
+        Ok(n as usize)
+    } else {
+        Err(InputError(format!(
+            "{flag}: {n} strides is outside 1..=1000"
+        )))
+    }
+}
+
+/// Frames per second: finite, 0.5 to 50 (a GIF's delay is 2 to 200 centiseconds here).
+pub fn check_fps(f: f64, flag: &str) -> Result<f64, InputError> {
+    if f.is_finite() && (0.5..=50.0).contains(&f) {
+        Ok(f)
+    } else {
+        Err(InputError(format!(
+            "{flag}: {f} frames per second is outside 0.5..=50 (a GIF frame lasts a whole \
+             number of centiseconds, at least 2)"
+        )))
+    }
+}
+
+/// Picture size: width 64 to [`MAX_SIDE`], height [`pdw_store::plot::GIF_CAPTION_H`] + 64 to
+/// [`MAX_SIDE`] pixels.
+pub fn check_size((w, h): (u32, u32), flag: &str) -> Result<(u32, u32), InputError> {
+    let min_h = pdw_store::plot::GIF_CAPTION_H + 64;
+    if (64..=MAX_SIDE).contains(&w) && (min_h..=MAX_SIDE).contains(&h) {
+        Ok((w, h))
+    } else {
+        Err(InputError(format!(
+            "{flag}: {w}x{h} pixels is outside the sizes drawn (width 64 to {MAX_SIDE}, height \
+             {min_h} to {MAX_SIDE})"
+        )))
+    }
+}
+
+/// Picture size from `WxH` text (e.g. `640x400`), checked by [`check_size`].
+pub fn parse_size(s: &str, flag: &str) -> Result<(u32, u32), InputError> {
+    let bad = || {
+        InputError(format!(
+            "{flag}: '{s}' is not a size WIDTHxHEIGHT in pixels (e.g. 640x400)"
+        ))
+    };
+    let (w, h) = s.trim().split_once(['x', 'X', '×']).ok_or_else(bad)?;
+    let w: u32 = w.trim().parse().map_err(|_| bad())?;
+    let h: u32 = h.trim().parse().map_err(|_| bad())?;
+    check_size((w, h), flag)
+}
+
+/// The frame count `n` is refused above [`MAX_FRAMES`].
+pub fn check_frames(n: usize) -> Result<(), AnimateError> {
+    if n > MAX_FRAMES {
+        return Err(AnimateError::Input(InputError(format!(
+            "the animation would have {n} frames, more than {MAX_FRAMES}; show fewer strides \
+             or lower the frame rate"
+        ))));
+    }
+    Ok(())
+}
 
 /// Why an animation was not drawn.
 #[derive(Debug)]
@@ -99,14 +214,35 @@ pub fn write_gif(
     fp: &FixedPoint,
     frames: &[Frame],
     flagged: bool,
+    opts: &AnimOptions,
 ) -> Result<(), AnimateError> {
-    pdw_store::animate_gif(path, frames, SIZE, DELAY_MS, &title(m, fp, flagged))
+    write_titled(path, frames, opts, &title(m, fp, flagged))
+}
+
+/// Draws `frames` into the GIF `path` under `title`, at `opts`' size and frame delay.
+pub fn write_titled(
+    path: &Path,
+    frames: &[Frame],
+    opts: &AnimOptions,
+    title: &str,
+) -> Result<(), AnimateError> {
+    pdw_store::animate_gif(path, frames, opts.size, opts.delay_cs() * 10, title)
         .map_err(AnimateError::Store)
+}
+
+/// What one second of the GIF shows, in words: one unit of the model's time.
+pub fn time_scale(m: &BuiltModel) -> String {
+    let u = crate::model::time_unit(m);
+    if u == "s" {
+        "real time".to_string()
+    } else {
+        format!("one second of the GIF is 1 {u} of model time")
+    }
 }
 
 /// Maps a point in slope coordinates (stance foot advanced by `off` along the slope) to world
 /// coordinates, the slope descending to the right at angle `gamma`.
-fn world(gamma: f64, p: [f64; 2], off: f64) -> (f64, f64) {
+pub(crate) fn world(gamma: f64, p: [f64; 2], off: f64) -> (f64, f64) {
     let (xs, ys) = (p[0] + off, p[1]);
     (
         xs * gamma.cos() + ys * gamma.sin(),
@@ -116,7 +252,13 @@ fn world(gamma: f64, p: [f64; 2], off: f64) -> (f64, f64) {
 
 /// The walker at the frame `label`led, in world coordinates, the stance foot `offset` along
 /// the slope; `trace` is the swing foot's path so far.
-fn frame(m: &BuiltModel, x: &[f64], offset: f64, trace: &[(f64, f64)], label: String) -> Frame {
+pub(crate) fn frame(
+    m: &BuiltModel,
+    x: &[f64],
+    offset: f64,
+    trace: &[(f64, f64)],
+    label: String,
+) -> Frame {
     let gamma = m.slope();
     let pose = m
         .walker
@@ -140,12 +282,19 @@ fn frame(m: &BuiltModel, x: &[f64], offset: f64, trace: &[(f64, f64)], label: St
     }
 }
 
-/// The walker of `fp` at [`FRAMES_PER_STRIDE`] equally spaced times over [`STRIDES`] strides,
-/// in world coordinates (the slope descends to the right at angle γ; the stance foot advances
-/// by the swing foot's position at each heel strike), with the swing foot's trace.
-pub fn frames(m: &BuiltModel, fp: &FixedPoint) -> Result<Vec<Frame>, AnimateError> {
+/// The walker of `fp` at [`AnimOptions::frames_per_stride`] equally spaced times per stride
+/// over `opts.steps` strides (`steps · n + 1` frames), in world coordinates (the slope
+/// descends to the right at angle γ; the stance foot advances by the swing foot's position at
+/// each heel strike), with the swing foot's trace.
+pub fn frames(
+    m: &BuiltModel,
+    fp: &FixedPoint,
+    opts: &AnimOptions,
+) -> Result<Vec<Frame>, AnimateError> {
     let w = m.walker.as_ref();
-    let dt = fp.metrics.period / FRAMES_PER_STRIDE as f64;
+    let per_stride = opts.frames_per_stride(fp.metrics.period);
+    check_frames(opts.steps * per_stride + 1)?;
+    let dt = fp.metrics.period / per_stride as f64;
     let mut integ = Integrator::new(w.dim(), Options::dop853(1e-10))
         .map_err(|e| AnimateError::Walk(e.to_string()))?;
     let mut x = fp.state.clone();
@@ -157,7 +306,7 @@ pub fn frames(m: &BuiltModel, fp: &FixedPoint) -> Result<Vec<Frame>, AnimateErro
     let mut frames = Vec::new();
     let section = w.section_guard();
     let mut strides_done = 0;
-    for k in 0..=STRIDES * FRAMES_PER_STRIDE {
+    for k in 0..=opts.steps * per_stride {
         let t_frame = k as f64 * dt;
         // Advance to the frame time, handling every event on the way.
         loop {
@@ -176,9 +325,10 @@ pub fn frames(m: &BuiltModel, fp: &FixedPoint) -> Result<Vec<Frame>, AnimateErro
                     }
                     GuardKind::Terminal(kind) => {
                         return Err(AnimateError::Walk(format!(
-                            "the gait fell ({}) at t = {t:.4} while animating (state {x:?}, strides {strides_done})",
-                            kind.name()
-                        )))
+                        "the gait fell ({}) at t = {t:.4} while animating, after {strides_done} \
+                             strides",
+                        kind.name()
+                    )))
                     }
                 },
                 other => {

@@ -7,9 +7,13 @@
 //! front end's flag in their messages.
 
 use crate::input::{AxisRange, InputError};
+use crate::model::units_list;
 use crate::model::{build_with, BuiltModel, ModelChoice};
-use pdw_limit::design::{evaluate_design, DesignEval, DesignOptions, DesignSpace, Objective};
+use pdw_limit::design::{
+    evaluate_design, status, DesignEval, DesignOptions, DesignSpace, Objective,
+};
 use pdw_limit::LimitError;
+use pdw_store::DesignData;
 
 /// A checked design search.
 pub struct DesignPlan {
@@ -49,6 +53,16 @@ pub fn settings(plan: &DesignPlan, base: &BuiltModel) -> String {
         "model_resolved": base.walker.fingerprint(),
     })
     .to_string()
+}
+
+/// The options a design file's provenance records: the search's `settings` and the worker
+/// `threads`.
+pub fn run_options(settings: &str, threads: usize) -> serde_json::Value {
+    let mut options: serde_json::Value = serde_json::from_str(settings).unwrap_or_default();
+    if let Some(o) = options.as_object_mut() {
+        o.insert("threads".into(), serde_json::json!(threads));
+    }
+    options
 }
 
 /// Runs the search from `history` (designs already evaluated, replayed without evaluation)
@@ -252,6 +266,7 @@ pub fn check_max_strides(n: i64, flag: &str) -> Result<u16, InputError> {
 }
 
 /// The basin box's half widths `DSTANCE,DSTANCE_RATE`: two positive values (`given` as typed).
+/// Without them the box scales with each design's gait ([`pdw_limit::design::basin_box`]).
 pub fn check_basin_box(v: &[f64], given: &str, flag: &str) -> Result<[f64; 2], InputError> {
     match v[..] {
         [a, b] if [a, b].iter().all(|x| x.is_finite() && *x > 0.0) => Ok([a, b]),
@@ -292,8 +307,9 @@ pub fn bound_warnings(space: &DesignSpace, best: &[f64]) -> Vec<String> {
 }
 
 /// Per-design measures as the design file stores them (columns, in this order) and Python
-/// returns them.
-pub const COLUMNS: [&str; 9] = [
+/// returns them; `basin_box_*` are the half widths of the box each basin fraction was measured
+/// in ([`pdw_limit::design::basin_box`]).
+pub const COLUMNS: [&str; 11] = [
     "cost",
     "basin_fraction",
     "rho",
@@ -303,10 +319,12 @@ pub const COLUMNS: [&str; 9] = [
     "period",
     "step_length",
     "min_relative_margin",
+    "basin_box_stance",
+    "basin_box_stance_rate",
 ];
 
 /// The measures of `e` in [`COLUMNS`]' order.
-pub fn measures(e: &DesignEval) -> [f64; 9] {
+pub fn measures(e: &DesignEval) -> [f64; 11] {
     [
         e.cost,
         e.basin_fraction,
@@ -317,5 +335,108 @@ pub fn measures(e: &DesignEval) -> [f64; 9] {
         e.period,
         e.step_length,
         e.min_relative_margin,
+        e.basin_box[0],
+        e.basin_box[1],
     ]
+}
+
+/// The design file's contents: the search's `settings`, the free parameters' `names` and every
+/// design of `hist`.
+pub fn to_data(settings: &str, names: &[String], hist: &[DesignEval]) -> DesignData {
+    DesignData {
+        settings: settings.to_string(),
+        free_names: names.to_vec(),
+        status_names: status::NAMES.iter().map(|s| s.to_string()).collect(),
+        params: hist.iter().map(|e| e.params.clone()).collect(),
+        status: hist.iter().map(|e| e.status).collect(),
+        reasons: hist.iter().map(|e| e.reason.clone()).collect(),
+        section: hist.iter().map(|e| e.section).collect(),
+        columns: COLUMNS
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.to_string(), hist.iter().map(|e| measures(e)[i]).collect()))
+            .collect(),
+    }
+}
+
+/// The designs of a design file (a column the file lacks reads NaN).
+pub fn from_data(d: &DesignData) -> Vec<DesignEval> {
+    (0..d.params.len())
+        .map(|i| {
+            let c = |name: &str| d.column(name).map_or(f64::NAN, |v| v[i]);
+            DesignEval {
+                params: d.params[i].clone(),
+                status: d.status[i],
+                reason: d.reasons[i].clone(),
+                cost: c("cost"),
+                basin_fraction: c("basin_fraction"),
+                rho: c("rho"),
+                section: d.section[i],
+                min_normal_force: c("min_normal_force"),
+                max_friction: c("max_friction"),
+                min_knee_torque: c("min_knee_torque"),
+                period: c("period"),
+                step_length: c("step_length"),
+                min_relative_margin: c("min_relative_margin"),
+                basin_box: [c("basin_box_stance"), c("basin_box_stance_rate")],
+            }
+        })
+        .collect()
+}
+
+/// The units of the design file's datasets, by name, for the model `base` and the free
+/// parameters `names`.
+pub fn units(base: &BuiltModel, names: &[String]) -> impl Fn(&str) -> Option<String> {
+    use crate::model::{length_unit, model_units, param_unit, section_units, time_unit};
+    let param_units = units_list(
+        &names
+            .iter()
+            .map(|n| param_unit(base, n))
+            .collect::<Vec<_>>(),
+    );
+    let sec = section_units(base);
+    let section_units = units_list(&sec);
+    let box_units = (
+        sec.first().cloned().unwrap_or_default(),
+        sec.get(1).cloned().unwrap_or_default(),
+    );
+    let mu = model_units(base);
+    let (tu, lu) = (time_unit(base), length_unit(base));
+    move |ds: &str| -> Option<String> {
+        Some(match ds {
+            "params" => param_units.clone(),
+            "section" => section_units.clone(),
+            "min_normal_force" => mu.force.clone(),
+            "min_knee_torque" => mu.torque.clone(),
+            "period" => tu.clone(),
+            "step_length" => lu.clone(),
+            "basin_box_stance" => box_units.0.clone(),
+            "basin_box_stance_rate" => box_units.1.clone(),
+            // codes, fractions, multiplier moduli, friction coefficients, costs, the reasons' text
+            _ => "1".into(),
+        })
+    }
+}
+
+/// Writes the design file `path` (replacing it): every design of `hist` under the search's
+/// `settings` ([`settings`]), with units and the provenance `prov`; `earlier` are the command
+/// lines of the runs that wrote the search before.
+pub fn write_file(
+    path: &std::path::Path,
+    (plan, base, settings): (&DesignPlan, &BuiltModel, &str),
+    hist: &[DesignEval],
+    prov: &pdw_store::Provenance,
+    earlier: &[String],
+) -> Result<(), pdw_store::StoreError> {
+    let units = units(base, &plan.space.names);
+    let coordinates = base.coordinates_json();
+    let ann = pdw_store::Annotations {
+        provenance: Some(prov),
+        units: &units,
+        slice: None,
+        scales: &[],
+        coordinates: Some(&coordinates),
+    };
+    let d = to_data(settings, &plan.space.names, hist);
+    pdw_store::write_design_annotated(path, &d, Some(&ann), earlier)
 }

@@ -11,6 +11,7 @@
 //! names nothing on its own.
 
 pub mod animate;
+pub mod animate_trajectory;
 pub mod basin;
 pub mod basin_over;
 pub mod design;
@@ -26,3 +27,12 @@ pub mod sweep;
 pub use input::InputError;
 pub use integrator::{integrator, integrator_json, integrator_text, IntegratorChoice};
 pub use model::{build, build_model, build_with, BuiltModel, ModelChoice};
+
+/// A run's provenance: build (version, commit, profile), the SIMD path chosen at run time and
+/// the numeric contract all paths keep, host, `command` (the command line, or the Python call)
+/// and `options` (every numerical option of the run, a JSON object).
+pub fn provenance(command: &str, options: &serde_json::Value) -> pdw_store::Provenance {
+    let mut p = pdw_store::Provenance::new(command, pdw_simd::path().name(), options);
+    p.numerics = pdw_simd::NUMERICS.to_string();
+    p
+}

@@ -419,7 +419,7 @@ fn run_search(setup: &Setup, budget: usize, init: usize) -> anyhow::Result<(Vec<
         ),
         init,
         basin_grid: 3,
-        basin_box: [0.02, 0.08],
+        basin_box: Some([0.02, 0.08]),
         basin: BasinOptions::default(),
         newton_tol: 1e-10,
     };
@@ -454,6 +454,7 @@ fn run_search(setup: &Setup, budget: usize, init: usize) -> anyhow::Result<(Vec<
             period: f64::NAN,
             step_length: f64::NAN,
             min_relative_margin: j.relative,
+            basin_box: [f64::NAN; 2],
         };
         // the stop model's gait, else the latched one, as the neighbours' start
         if let Some(s) = j.section.as_ref().or(j.latched.as_ref()) {

@@ -32,7 +32,7 @@ fn opts(objective: Objective) -> DesignOptions {
         start: None,
         init: 0,
         basin_grid: 5,
-        basin_box: [0.02, 0.08],
+        basin_box: Some([0.02, 0.08]),
         basin: BasinOptions {
             max_strides: 30,
             ..BasinOptions::default()
@@ -98,4 +98,73 @@ fn constraints_and_objectives_of_one_design() {
         assert!(k.reason.contains(why), "{why}: {}", k.reason);
     }
     assert!(k.cost > 1.0 && k.cost < 5.0 && k.min_relative_margin < 0.0);
+}
+
+/// The compass with `hip_mass` set (the preset's other values).
+fn compass_with(hip_mass: f64) -> Box<dyn Walker> {
+    pdw_walkers::build("compass", &[("hip_mass", hip_mass)]).unwrap()
+}
+
+#[test]
+fn the_default_basin_box_scales_with_the_gait_and_tells_designs_apart() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    // the front ends' defaults: 15 × 15 cells, 40 strides, the box scaled to the gait
+    let o = DesignOptions {
+        basin_grid: 15,
+        basin_box: None,
+        basin: BasinOptions {
+            max_strides: 40,
+            ..BasinOptions::default()
+        },
+        ..opts(Objective::Basin)
+    };
+    let mut fractions = Vec::new();
+    for hip_mass in [10.0, 4.0, 7.0, 16.0] {
+        let w = compass_with(hip_mass);
+        let g = pdw_limit::gaits::model_guesses(w.as_ref());
+        let e = evaluate_design(&[hip_mass], w.as_ref(), &g, &o, &pool);
+        assert_eq!(
+            e.status,
+            status::FEASIBLE,
+            "hip mass {hip_mass}: {}",
+            e.reason
+        );
+        // the box recorded is the rule's: half widths 0.15·|stance|, 0.15·|stance_rate|
+        let want = [
+            pdw_limit::design::BASIN_BOX_SCALE * e.section[0].abs(),
+            pdw_limit::design::BASIN_BOX_SCALE * e.section[1].abs(),
+        ];
+        assert_eq!(e.basin_box, want);
+        assert!(
+            e.basin_fraction <= 0.95,
+            "hip mass {hip_mass}: fraction {} fills the box",
+            e.basin_fraction
+        );
+        fractions.push(e.basin_fraction);
+    }
+    // the preset's design lands well inside (0.2, 0.8): the measure is not saturated
+    assert!(
+        fractions[0] > 0.2 && fractions[0] < 0.8,
+        "preset fraction {}",
+        fractions[0]
+    );
+    // designs that differ get different fractions
+    assert!(
+        fractions
+            .windows(2)
+            .any(|w| (w[0] - w[1]).abs() >= 1.0 / 225.0),
+        "{fractions:?}"
+    );
+    // an explicit box is used as given
+    let fixed = DesignOptions {
+        basin_box: Some([0.02, 0.08]),
+        ..o.clone()
+    };
+    let w = compass_with(10.0);
+    let g = pdw_limit::gaits::model_guesses(w.as_ref());
+    let e = evaluate_design(&[10.0], w.as_ref(), &g, &fixed, &pool);
+    assert_eq!(e.basin_box, [0.02, 0.08]);
 }

@@ -20,7 +20,7 @@ use crate::cli::BasinArgs;
 use pdw::basin::BasinRequest;
 use pdw::basin_over::{AtValue, OverPlan};
 use pdw_limit::basin::{BasinOptions, Outcome};
-use pdw_limit::{Attractor, AttractorKind};
+use pdw_limit::{Attractor, AttractorKind, OrbitValidity};
 use pdw_store::{StabilityAttractor, StabilityData};
 use pdw_walkers::ModelInfo;
 use std::path::PathBuf;
@@ -201,6 +201,16 @@ fn stability_attractor(at: &Attractor) -> StabilityAttractor {
         period_time: at.period_time.is_finite().then_some(at.period_time),
         points: at.points.clone(),
         multipliers: at.multipliers.iter().map(|l| [l.re, l.im]).collect(),
+        validity: match &at.validity {
+            OrbitValidity::Unchecked => "not checked",
+            OrbitValidity::Valid => "valid",
+            OrbitValidity::Invalid(_) => "invalid",
+        }
+        .to_string(),
+        invalid_reasons: match &at.validity {
+            OrbitValidity::Invalid(r) => r.iter().map(|s| s.to_string()).collect(),
+            _ => Vec::new(),
+        },
     }
 }
 

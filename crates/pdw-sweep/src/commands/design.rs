@@ -16,52 +16,12 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::design::DesignPlan;
 use pdw_limit::basin::BasinOptions;
 use pdw_limit::design::{status, DesignEval, DesignOptions, DesignSpace};
-use pdw_store::{read_design, read_design_commands, write_design_annotated, DesignData};
+use pdw_store::{read_design, read_design_commands, MarkerShape, Markers};
 use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
-use pdw::design::{measures, COLUMNS};
-
-fn to_data(settings: &str, names: &[String], h: &[DesignEval]) -> DesignData {
-    DesignData {
-        settings: settings.to_string(),
-        free_names: names.to_vec(),
-        status_names: status::NAMES.iter().map(|s| s.to_string()).collect(),
-        params: h.iter().map(|e| e.params.clone()).collect(),
-        status: h.iter().map(|e| e.status).collect(),
-        reasons: h.iter().map(|e| e.reason.clone()).collect(),
-        section: h.iter().map(|e| e.section).collect(),
-        columns: COLUMNS
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (c.to_string(), h.iter().map(|e| measures(e)[i]).collect()))
-            .collect(),
-    }
-}
-
-fn from_data(d: &DesignData) -> Vec<DesignEval> {
-    (0..d.params.len())
-        .map(|i| {
-            let c = |name: &str| d.column(name).map_or(f64::NAN, |v| v[i]);
-            DesignEval {
-                params: d.params[i].clone(),
-                status: d.status[i],
-                reason: d.reasons[i].clone(),
-                cost: c("cost"),
-                basin_fraction: c("basin_fraction"),
-                rho: c("rho"),
-                section: d.section[i],
-                min_normal_force: c("min_normal_force"),
-                max_friction: c("max_friction"),
-                min_knee_torque: c("min_knee_torque"),
-                period: c("period"),
-                step_length: c("step_length"),
-                min_relative_margin: c("min_relative_margin"),
-            }
-        })
-        .collect()
-}
+use pdw::design::{from_data, COLUMNS};
 
 /// A stored search continued: its designs and the command lines that made them.
 struct Stored {
@@ -161,31 +121,6 @@ fn stored(a: &DesignArgs, claim: &Claim, settings: &str) -> anyhow::Result<Store
     })
 }
 
-/// The units of the design file's datasets, by name.
-fn design_units(base: &BuiltModel, names: &[String]) -> impl Fn(&str) -> Option<String> {
-    let param_units = super::units_list(
-        &names
-            .iter()
-            .map(|n| super::param_unit(base, n))
-            .collect::<Vec<_>>(),
-    );
-    let section_units = super::units_list(&super::section_units(base));
-    let mu = super::model_units(base);
-    let (tu, lu) = (super::time_unit(base), super::length_unit(base));
-    move |ds: &str| -> Option<String> {
-        Some(match ds {
-            "params" => param_units.clone(),
-            "section" => section_units.clone(),
-            "min_normal_force" => mu.force.clone(),
-            "min_knee_torque" => mu.torque.clone(),
-            "period" => tu.clone(),
-            "step_length" => lu.clone(),
-            // codes, fractions, multiplier moduli, friction coefficients, costs, the reasons' text
-            _ => "1".into(),
-        })
-    }
-}
-
 /// Every design of a search and how many of them were stored before this run.
 struct Searched {
     designs: Vec<DesignEval>,
@@ -203,22 +138,15 @@ fn search(
     stored: Stored,
     claim: &mut Claim,
 ) -> anyhow::Result<Searched> {
-    let mut options: serde_json::Value = serde_json::from_str(settings)?;
-    options["threads"] = serde_json::json!(a.threads);
-    let prov = super::provenance(options);
-    let units = design_units(base, &plan.space.names);
-    let coordinates = base.coordinates_json();
-    let ann = pdw_store::Annotations {
-        provenance: Some(&prov),
-        units: &units,
-        slice: None,
-        scales: &[],
-        coordinates: Some(&coordinates),
-    };
-    let names = &plan.space.names;
+    let prov = super::provenance(pdw::design::run_options(settings, a.threads));
     let write_design = |hist: &[DesignEval]| {
-        let d = to_data(settings, names, hist);
-        write_design_annotated(&a.out, &d, Some(&ann), &stored.commands)
+        pdw::design::write_file(
+            &a.out,
+            (plan, base, settings),
+            hist,
+            &prov,
+            &stored.commands,
+        )
     };
     let n_stored = stored.history.len();
     let pool = rayon::ThreadPoolBuilder::new()
@@ -277,15 +205,20 @@ fn progress_bar(a: &DesignArgs, stored: usize) -> ProgressBar {
     pb
 }
 
-/// The search's picture: the cost of every design and the best so far.
+/// Marker colour and shape of each design status on the search's picture, by status code.
+const STATUS_MARKERS: [([u8; 3], MarkerShape); 5] = [
+    ([44, 160, 44], MarkerShape::Circle),    // feasible: green
+    ([255, 127, 14], MarkerShape::Triangle), // invalid: orange
+    ([148, 103, 189], MarkerShape::Square),  // unstable: purple
+    ([127, 127, 127], MarkerShape::Cross),   // no gait: grey
+    ([0, 0, 0], MarkerShape::Cross),         // not a model: black
+];
+
+/// The search's picture: the best cost so far (a line) and every design's cost as a marker
+/// by its status (legend entry per status present).
 fn plot(png: &Path, base: &BuiltModel, plan: &DesignPlan, s: &Searched) -> anyhow::Result<()> {
     let hist = &s.designs;
     let mut run_best = f64::INFINITY;
-    let each: Vec<(f64, f64)> = hist
-        .iter()
-        .enumerate()
-        .map(|(i, e)| ((i + 1) as f64, e.cost))
-        .collect();
     let best_line: Vec<(f64, f64)> = hist
         .iter()
         .enumerate()
@@ -294,7 +227,23 @@ fn plot(png: &Path, base: &BuiltModel, plan: &DesignPlan, s: &Searched) -> anyho
             ((i + 1) as f64, run_best)
         })
         .collect();
-    pdw_store::plot_lines(
+    let markers: Vec<Markers> = STATUS_MARKERS
+        .iter()
+        .enumerate()
+        .map(|(code, &(colour, shape))| Markers {
+            name: status::NAMES[code].replace('_', " "),
+            points: hist
+                .iter()
+                .enumerate()
+                .filter(|(_, e)| e.status as usize == code)
+                .map(|(i, e)| ((i + 1) as f64, e.cost))
+                .collect(),
+            colour,
+            shape,
+        })
+        .filter(|m| !m.points.is_empty())
+        .collect();
+    pdw_store::plot_lines_marked(
         png,
         &format!(
             "design search, {} ({}): cost < 1 feasible; 1-5 invalid; 5-9 unstable; 10 no gait",
@@ -303,12 +252,9 @@ fn plot(png: &Path, base: &BuiltModel, plan: &DesignPlan, s: &Searched) -> anyho
         ),
         "design evaluated",
         "cost",
-        &[
-            ("each design".to_string(), each),
-            ("best so far".to_string(), best_line),
-        ],
-        false,
-        false,
+        &[("best so far".to_string(), best_line)],
+        &markers,
+        (false, false),
     )?;
     Ok(())
 }

@@ -87,7 +87,5 @@ pub fn command_line() -> String {
 /// and the numeric contract all paths keep, host, command line and `options` (every numerical
 /// option of the run, a JSON object).
 pub fn provenance(options: serde_json::Value) -> pdw_store::Provenance {
-    let mut p = pdw_store::Provenance::new(&command_line(), pdw_simd::path().name(), &options);
-    p.numerics = pdw_simd::NUMERICS.to_string();
-    p
+    pdw::provenance(&command_line(), &options)
 }
