@@ -28,6 +28,7 @@ pub mod resources;
 pub mod scan;
 pub mod stride;
 pub mod sweep;
+pub mod terrain;
 pub mod trajectory;
 pub mod validity;
 pub mod variational;
