@@ -12,6 +12,7 @@ mod design;
 mod follow;
 mod hostile;
 mod lock;
+mod mfpt;
 mod resume_model;
 mod search;
 mod self_describing;
