@@ -20,6 +20,7 @@ pub mod family;
 pub mod floquet;
 pub mod gaits;
 pub mod jacobian;
+pub mod markov;
 pub mod metrics;
 pub mod newton;
 pub mod orbit;

@@ -160,6 +160,16 @@ impl<'a> SlopeWalk<'a> {
     pub fn integrator(&self, dim: usize) -> Result<Integrator, LimitError> {
         Ok(Integrator::new(dim, self.integrator)?)
     }
+
+    /// The integrator options of the strides.
+    pub fn options(&self) -> Options {
+        self.integrator
+    }
+
+    /// The model at slope `slope`.
+    pub fn model(&self, slope: f64) -> Result<Box<dyn Walker>, LimitError> {
+        (self.model_at)(slope)
+    }
 }
 
 /// How one walker's walk ended: the heel strikes completed and, for a fall, how the stride
@@ -310,4 +320,44 @@ fn failure_counts(fates: &[Fate]) -> Vec<(String, usize)> {
         *m.entry(o.to_string()).or_default() += 1;
     }
     m.into_iter().collect()
+}
+
+/// The section states (in the frame of the line each was reached on) of every heel strike of
+/// `walkers` walkers from `x0`, at most `max_steps` each: the set a Markov chain's mesh must
+/// cover ([`crate::markov`]). Projected with the mean slope's model (a section projection does
+/// not depend on the slope).
+pub fn visited(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    walkers: usize,
+    max_steps: usize,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<Vec<f64>>, LimitError> {
+    let base = walk.model(walk.mean())?;
+    let per: Vec<Vec<Vec<f64>>> = pool.install(|| {
+        (0..walkers)
+            .into_par_iter()
+            .map(|i| {
+                let mut integ = walk.integrator(x0.len())?;
+                let mut x = x0.to_vec();
+                let mut out = Vec::new();
+                for k in 0..max_steps {
+                    let s = terrain.slope(i as u64, k as u64 + 1);
+                    let st = walk.stride(&mut integ, &x, s)?;
+                    if !st.outcome.is_ok() {
+                        break;
+                    }
+                    let mut y = st.post.clone();
+                    walk.shift(&mut y, walk.mean(), s);
+                    let mut sec = vec![0.0; base.section_dim()];
+                    base.project(&y, &mut sec);
+                    out.push(sec);
+                    x = st.post;
+                }
+                Ok(out)
+            })
+            .collect::<Result<_, LimitError>>()
+    })?;
+    Ok(per.into_iter().flatten().collect())
 }

@@ -8,7 +8,9 @@
 //!                          seed, walkers, max_steps, falls, censored, total_steps, mfpt,
 //!                          stderr (steps / falls and its standard error), restricted_mean,
 //!                          restricted_stderr (mean of min(T, max_steps)), estimator (text),
-//!                          elapsed_s
+//!                          elapsed_s; with the Markov chain (method "monte carlo + markov
+//!                          chain") also chain_* numbers (chain_mfpt_coarse, chain_mfpt_fine,
+//!                          chain_mesh_coarse, …: see `MfptData::chain`)
 //! /mfpt/survival    f64 [max_steps + 1] fraction of walkers that completed at least k steps
 //! /mfpt/failures    u64 [F] falls per kind; attr kinds (JSON list of the F kinds' names)
 //! /mfpt/start       f64 [d] the section state the walkers start from; attr names (JSON list)
@@ -60,6 +62,9 @@ pub struct MfptData {
     pub start: Vec<f64>,
     pub start_names: Vec<String>,
     pub elapsed_s: f64,
+    /// The Markov chain's numbers as `(name, value)`, stored as the attributes `chain_NAME` of
+    /// `/mfpt` (empty without the chain).
+    pub chain: Vec<(String, f64)>,
 }
 
 impl MfptData {
@@ -140,6 +145,9 @@ fn fill(p: &Path, f: &File, d: &MfptData) -> Result<()> {
     ] {
         set_attr(p, &g, k, &v)?;
     }
+    for (k, v) in &d.chain {
+        set_attr(p, &g, &format!("chain_{k}"), v)?;
+    }
     put(p, &g, "survival", d.survival.as_slice())?;
     let counts: Vec<u64> = d.failures.iter().map(|x| x.1).collect();
     let kinds: Vec<String> = d.failures.iter().map(|x| x.0.clone()).collect();
@@ -164,6 +172,14 @@ pub fn read_mfpt(path: impl AsRef<Path>) -> Result<MfptData> {
     }
     let g = f.group("mfpt").at(p, "opening /mfpt")?;
     let mut d = read_group(p, &g)?;
+    let mut names = g.attr_names().at(p, "listing attributes")?;
+    names.sort();
+    for a in names {
+        if let Some(k) = a.strip_prefix("chain_") {
+            d.chain
+                .push((k.to_string(), get_attr::<f64>(p, KIND, &g, &a)?));
+        }
+    }
     d.command = get_str(p, KIND, &f, "command")?;
     d.model = get_str(p, KIND, &f, "model")?;
     d.params = get_str(p, KIND, &f, "params")?;

@@ -370,6 +370,18 @@ pub struct MfptArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Also compute the MFPT as a Markov chain on a mesh of the section (Byl & Tedrake 2009),
+    /// at --mesh and twice --mesh nodes per section axis (models with up to 3 section
+    /// coordinates).
+    #[arg(long)]
+    pub chain: bool,
+    /// With --chain: mesh nodes per section axis (the finer mesh has twice as many). Default:
+    /// 200 for one section coordinate, 60 for two, 12 for three.
+    #[arg(long, requires = "chain")]
+    pub mesh: Option<usize>,
+    /// With --chain: Gauss–Hermite nodes of the slope distribution.
+    #[arg(long, default_value_t = 11, requires = "chain")]
+    pub nodes: usize,
 }
 
 #[derive(Args, Debug)]

@@ -159,3 +159,75 @@ pub fn run(
     let est = terrain::estimate(&fates, plan.max_steps);
     Ok((fates, est))
 }
+
+/// A Markov-chain MFPT ([`pdw_limit::markov`]): Gauss–Hermite nodes of the slope, mesh nodes
+/// per section axis, and the box (`None`: the box the Monte Carlo walkers visit, padded).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainPlan {
+    pub nodes: usize,
+    pub mesh: usize,
+    pub bounds: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+/// Walkers and steps of the Monte Carlo pass that finds the visited box, and its padding (a
+/// fraction of each side's range).
+pub const BOX_WALKERS: usize = 200;
+pub const BOX_STEPS: usize = 200;
+pub const BOX_PAD: f64 = 0.1;
+
+/// The box the walkers of `plan` visit (the first [`BOX_WALKERS`] walkers, at most
+/// [`BOX_STEPS`] steps each), padded by [`BOX_PAD`] of its range on each side.
+pub fn visited_box(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
+    let at = model_at(m);
+    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let pts = terrain::visited(&walk, &plan.terrain, x0, BOX_WALKERS, BOX_STEPS, pool)?;
+    let d = m.info.section_names.len();
+    let mut s0 = vec![0.0; d];
+    m.walker.project(x0, &mut s0);
+    let (mut lo, mut hi) = (s0.clone(), s0);
+    for p in &pts {
+        for a in 0..d {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    for a in 0..d {
+        let pad = BOX_PAD * (hi[a] - lo[a]).max(1e-9);
+        lo[a] -= pad;
+        hi[a] += pad;
+    }
+    Ok((lo, hi))
+}
+
+/// The chain's MFPT from `x0` on `chain`'s mesh over `bounds`.
+pub fn chain(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: &ChainPlan,
+    bounds: &(Vec<f64>, Vec<f64>),
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<pdw_limit::markov::ChainResult, LimitError> {
+    use pdw_limit::markov;
+    let at = model_at(m);
+    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let (z, w) = markov::gauss_hermite(chain.nodes);
+    let t = plan.terrain;
+    let slopes: Vec<(f64, f64)> = z
+        .iter()
+        .zip(&w)
+        .map(|(z, w)| (t.mean + t.sd * z, *w))
+        .collect();
+    let mesh = markov::Mesh {
+        lo: bounds.0.clone(),
+        hi: bounds.1.clone(),
+        n: chain.mesh,
+    };
+    let tr = markov::transitions(&walk, &slopes, &mesh, x0, pool)?;
+    Ok(markov::solve_chain(&tr))
+}

@@ -288,3 +288,90 @@ fn round_feet_and_bad_requests_are_refused_with_clear_messages() {
         .contains("--walkers"));
     assert!(mfpt::check_plan(&plan(0.01, 10), &FLAGS).is_ok());
 }
+
+#[test]
+fn gauss_hermite_integrates_the_normal_moments_exactly() {
+    for n in [1usize, 2, 5, 11, 20] {
+        let (z, w) = pdw_limit::markov::gauss_hermite(n);
+        // E Z^{2k} = (2k − 1)!!, E Z^{2k+1} = 0, exact for degree < 2n
+        let mut dfact = 1.0;
+        for k in 0..n {
+            if k > 0 {
+                dfact *= (2 * k - 1) as f64;
+            }
+            let even: f64 = z
+                .iter()
+                .zip(&w)
+                .map(|(z, w)| w * z.powi(2 * k as i32))
+                .sum();
+            let odd: f64 = z
+                .iter()
+                .zip(&w)
+                .map(|(z, w)| w * z.powi(2 * k as i32 + 1))
+                .sum();
+            // a node error of ε changes z^{2k} by about 2k ε relative: 1e-9 leaves room for
+            // k ≤ 19 and the eigen-solver's ~1e-13
+            assert!(
+                (even - dfact).abs() < 1e-9 * dfact,
+                "n {n} k {k}: {even} vs {dfact}"
+            );
+            assert!(odd.abs() < 1e-11 * dfact.max(1.0), "n {n} k {k}: {odd}");
+        }
+        assert!(w.iter().all(|w| *w > 0.0));
+    }
+}
+
+/// The rimless wheel (Byl & Tedrake 2009's first example; one section coordinate, so a fine
+/// mesh is cheap) at its preset 0.08 rad with σ = 0.5°: MFPT ≈ 120 steps, every walker falls
+/// within the step limit, so the walkers' mean is the MFPT from the start without censoring.
+#[test]
+fn the_markov_chain_agrees_with_the_monte_carlo_walkers() {
+    let m = model("rimless", 0.08);
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let plan = MfptPlan {
+        terrain: SlopeTerrain {
+            mean: 0.08,
+            sd: 0.5f64.to_radians(),
+            seed: 1,
+        },
+        walkers: 2000,
+        max_steps: 20_000,
+        integrator: mfpt::default_integrator(),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let (_, mc) = mfpt::run(&m, &plan, &x0, &pool, &|_| {}).unwrap();
+    assert_eq!(mc.censored, 0, "{mc:?}");
+    assert!(
+        mc.restricted_mean > 20.0 && mc.restricted_mean < 500.0,
+        "{mc:?}"
+    );
+    let bounds = mfpt::visited_box(&m, &plan, &x0, &pool).unwrap();
+    let run = |mesh| {
+        let c = mfpt::ChainPlan {
+            nodes: 11,
+            mesh,
+            bounds: None,
+        };
+        mfpt::chain(&m, &plan, &c, &bounds, &x0, &pool).unwrap()
+    };
+    let (coarse, fine) = (run(200), run(400));
+    eprintln!(
+        "MC {} ± {}; chain {coarse:?} {fine:?} box {bounds:?}",
+        mc.restricted_mean, mc.restricted_stderr
+    );
+    let tol = 3.0 * mc.restricted_stderr + (fine.mfpt - coarse.mfpt).abs();
+    assert!(
+        (fine.mfpt - mc.restricted_mean).abs() < tol,
+        "{} vs {}",
+        fine.mfpt,
+        mc.restricted_mean
+    );
+    for c in [&coarse, &fine] {
+        assert!(c.residual < 1e-10, "{c:?}");
+        let rel = (c.mfpt_lambda - c.mfpt_quasi_stationary).abs() / c.mfpt_lambda;
+        assert!(rel < 1e-6, "{c:?}");
+    }
+}

@@ -59,8 +59,12 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let secs = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
     summary(&m, &plan, &section, &est, secs);
+    let chain = match chain_plan(a, &m)? {
+        Some(c) => run_chain(&m, &plan, &c, &x0, &pool)?,
+        None => Vec::new(),
+    };
     if let (Some(out), Some(_claim)) = (&a.out, claim) {
-        write(out, &m, &plan, &section, &est, secs)?;
+        write(out, &m, &plan, &section, &est, secs, chain)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -156,13 +160,19 @@ fn write(
     section: &[f64],
     est: &MfptEstimate,
     secs: f64,
+    chain: Vec<(String, f64)>,
 ) -> anyhow::Result<()> {
     let t = plan.terrain;
     let data = pdw_store::MfptData {
         command: super::command_line(),
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
-        method: "monte carlo".into(),
+        method: if chain.is_empty() {
+            "monte carlo"
+        } else {
+            "monte carlo + markov chain"
+        }
+        .into(),
         terrain: "slope".into(),
         mean: t.mean,
         sd: t.sd,
@@ -186,6 +196,7 @@ fn write(
         start: section.to_vec(),
         start_names: m.info.section_names.clone(),
         elapsed_s: secs,
+        chain,
     };
     // the claim refused an existing file without --force; its placeholder is replaced
     pdw_store::write_mfpt(out, true, &data)?;
@@ -228,7 +239,93 @@ fn write(
         "fraction still walking after k steps",
         &[("Monte Carlo".to_string(), curve)],
         false,
-        false,
+        // a constant fall probability per step is a straight line on a log axis
+        true,
     )?;
     Ok(())
+}
+
+/// The chain's plan from `--chain`, `--mesh`, `--nodes` (checked), or `None` without `--chain`.
+fn chain_plan(a: &MfptArgs, m: &BuiltModel) -> Result<Option<mfpt::ChainPlan>, InputError> {
+    if !a.chain {
+        return Ok(None);
+    }
+    let d = m.info.section_names.len();
+    let default = match d {
+        1 => 200,
+        2 => 60,
+        3 => 12,
+        _ => {
+            return Err(InputError(format!(
+                "--chain: model '{}' has {d} section coordinates; the mesh is built for at \
+                 most 3",
+                m.info.name
+            )))
+        }
+    };
+    let mesh = a.mesh.unwrap_or(default);
+    if mesh < 2 {
+        return Err(InputError(format!("--mesh: {mesh} must be at least 2")));
+    }
+    if !(1..=40).contains(&a.nodes) {
+        return Err(InputError(format!(
+            "--nodes: {} must be between 1 and 40",
+            a.nodes
+        )));
+    }
+    Ok(Some(mfpt::ChainPlan {
+        nodes: a.nodes,
+        mesh,
+        bounds: None,
+    }))
+}
+
+/// The chain at `--mesh` and twice as fine over the box the walkers visit; prints both and
+/// returns the numbers the file keeps.
+fn run_chain(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    c: &mfpt::ChainPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<Vec<(String, f64)>> {
+    let bounds = mfpt::visited_box(m, plan, x0, pool)?;
+    crate::outln!(
+        "Markov chain: {} Gauss-Hermite slope nodes, mesh over {:?} .. {:?} (the walkers' box, \
+         padded)",
+        c.nodes,
+        bounds.0,
+        bounds.1
+    );
+    let mut out = vec![("nodes".to_string(), c.nodes as f64)];
+    for (label, n) in [("coarse", c.mesh), ("fine", 2 * c.mesh)] {
+        let t0 = Instant::now();
+        let fine = mfpt::ChainPlan {
+            mesh: n,
+            ..c.clone()
+        };
+        let r = mfpt::chain(m, plan, &fine, &bounds, x0, pool)?;
+        crate::outln!(
+            "  mesh {n}: MFPT {:.4} steps from the start; lambda {:.10}, 1/(1-lambda)-1 = {:.4} \
+             (quasi-stationary by the solve: {:.4}); {} states, out of mesh {:.2e} per step; \
+             {:.1} s",
+            r.mfpt,
+            r.lambda,
+            r.mfpt_lambda,
+            r.mfpt_quasi_stationary,
+            r.states,
+            r.out_of_mesh,
+            t0.elapsed().as_secs_f64()
+        );
+        for (k, v) in [
+            ("mesh", n as f64),
+            ("mfpt", r.mfpt),
+            ("lambda", r.lambda),
+            ("mfpt_lambda", r.mfpt_lambda),
+            ("out_of_mesh", r.out_of_mesh),
+        ] {
+            out.push((format!("{k}_{label}"), v));
+        }
+    }
+    Ok(out)
 }
