@@ -147,9 +147,11 @@ impl Mesh {
     pub fn weights(&self, p: &[f64]) -> Option<Vec<(usize, f64)>> {
         let d = self.lo.len();
         let mut base = Vec::with_capacity(d);
-        for a in 0..d {
-            let u = (p[a] - self.lo[a]) / (self.hi[a] - self.lo[a]) * (self.n - 1) as f64;
-            if !(u >= 0.0 && u <= (self.n - 1) as f64) {
+        let top = (self.n - 1) as f64;
+        for ((pa, lo), hi) in p.iter().zip(&self.lo).zip(&self.hi) {
+            let u = (pa - lo) / (hi - lo) * top;
+            // false for NaN too
+            if !(0.0..=top).contains(&u) {
                 return None;
             }
             let i = (u.floor() as usize).min(self.n - 2);
@@ -341,19 +343,21 @@ fn solve(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
         let rho1 = dot(&r0, &r);
         let beta = (rho1 / rho) * (alpha / omega);
         rho = rho1;
-        for k in 0..n {
-            p[k] = r[k] + beta * (p[k] - omega * v[k]);
+        for ((pk, rk), vk) in p.iter_mut().zip(&r).zip(&v) {
+            *pk = rk + beta * (*pk - omega * vk);
         }
         apply(&p, &mut v);
         alpha = rho / dot(&r0, &v);
-        for k in 0..n {
-            s[k] = r[k] - alpha * v[k];
+        for ((sk, rk), vk) in s.iter_mut().zip(&r).zip(&v) {
+            *sk = rk - alpha * vk;
         }
         apply(&s, &mut tt);
         omega = dot(&tt, &s) / dot(&tt, &tt);
-        for k in 0..n {
-            x[k] += alpha * p[k] + omega * s[k];
-            r[k] = s[k] - omega * tt[k];
+        for ((xk, pk), sk) in x.iter_mut().zip(&p).zip(&s) {
+            *xk += alpha * pk + omega * sk;
+        }
+        for ((rk, sk), tk) in r.iter_mut().zip(&s).zip(&tt) {
+            *rk = sk - omega * tk;
         }
         res = dot(&r, &r).sqrt() / bn;
         if !res.is_finite() || res < 1e-12 {

@@ -191,15 +191,15 @@ pub fn visited_box(
     m.walker.project(x0, &mut s0);
     let (mut lo, mut hi) = (s0.clone(), s0);
     for p in &pts {
-        for a in 0..d {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
+        for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
+            *l = l.min(*v);
+            *h = h.max(*v);
         }
     }
-    for a in 0..d {
-        let pad = BOX_PAD * (hi[a] - lo[a]).max(1e-9);
-        lo[a] -= pad;
-        hi[a] += pad;
+    for (l, h) in lo.iter_mut().zip(hi.iter_mut()) {
+        let pad = BOX_PAD * (*h - *l).max(1e-9);
+        *l -= pad;
+        *h += pad;
     }
     Ok((lo, hi))
 }

@@ -122,8 +122,13 @@ fn a_terrain_stride_on_the_mean_slope_is_the_ordinary_stride_bit_for_bit() {
     for (name, slope) in [("simplest", 0.009), ("compass", 0.05235987755982988)] {
         let m = model(name, slope);
         let (s, x) = gait(&m);
-        let s = vec![s[0] * 0.98, s[1] * 1.01, s.get(2).copied().unwrap_or(0.0)];
-        let s = &s[..m.info.section_names.len()];
+        // off the gait: a stride that changes the state
+        let s: Vec<f64> = s
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v * if i == 0 { 0.98 } else { 1.01 })
+            .collect();
+        let s = s.as_slice();
         let opts = mfpt::default_integrator();
         let map = StrideMap::new(m.walker.as_ref(), opts).unwrap();
         let plain = map.stride(s).unwrap();
