@@ -117,9 +117,12 @@ fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate,
         est.total_steps
     );
     if est.falls == 0 {
+        // no fall in S strides: p < 3/S at 95 % confidence (the rule of three), MFPT > S/3 − 1
         crate::outln!(
-            "MFPT: no fall seen; more than about {} steps",
-            est.total_steps / 3
+            "MFPT: no fall in {} steps; more than about {} steps at 95 % confidence (rule of \
+             three)",
+            est.total_steps,
+            (est.total_steps / 3).saturating_sub(1)
         );
     } else {
         crate::outln!(
