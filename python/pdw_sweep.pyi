@@ -178,6 +178,24 @@ def continuation(
     multipliers), internal_points (the continuation's own steps). Equal to the CLI's `--json`
     branches."""
 
+def mfpt(
+    model: str = "simplest",
+    slope: Optional[Union[float, str]] = None,
+    sd: Optional[Union[float, str]] = None,
+    walkers: int = 1000,
+    max_steps: int = 1000,
+    seed: int = 0,
+    threads: int = 2,
+    **params: float,
+) -> dict[str, Any]:
+    """Mean first-passage time on a random slope per step (`pdw-sweep mfpt`, Monte Carlo):
+    walkers start on the stable gait of the mean slope `slope`; every landing line has a slope
+    drawn from N(slope, sd²) (`sd` in rad or '1deg'). Returns mfpt and stderr (steps / falls,
+    the maximum-likelihood estimate), restricted_mean and restricted_stderr (mean of
+    min(T, max_steps)), walkers, falls, censored, total_steps, survival (max_steps + 1,),
+    failures (fall kind → count), start (section state), mean, sd. The same on any `threads`."""
+    ...
+
 def simulate(
     model: str = "simplest",
     slope: Optional[Union[float, str]] = None,

@@ -1348,6 +1348,95 @@ fn coordinates_dict<'py>(py: Python<'py>, m: &Model) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
+/// `mfpt(model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000, seed=0,
+/// threads=2, **params)`: the Monte Carlo of `pdw-sweep mfpt` (the slope is the mean slope).
+#[pyfunction]
+#[pyo3(
+    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, **params),
+    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, **params)"
+)]
+#[allow(clippy::too_many_arguments)]
+fn mfpt<'py>(
+    py: Python<'py>,
+    model: &str,
+    slope: Option<&Bound<'py, PyAny>>,
+    sd: Option<&Bound<'py, PyAny>>,
+    walkers: usize,
+    max_steps: usize,
+    seed: u64,
+    threads: usize,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
+        terrain: "terrain",
+        sd: "sd",
+        mean: "slope",
+        walkers: "walkers",
+        max_steps: "max_steps",
+    };
+    pdw::input::check_threads(threads, "threads").map_err(err)?;
+    let sd = match sd {
+        None => {
+            return Err(err(
+                "sd: give the slope's standard deviation (rad, or '1deg')",
+            ))
+        }
+        Some(v) => match v.extract::<f64>() {
+            Ok(x) => pdw::mfpt::parse_sd(&x.to_string(), &FLAGS).map_err(err)?,
+            Err(_) => pdw::mfpt::parse_sd(&v.extract::<String>()?, &FLAGS).map_err(err)?,
+        },
+    };
+    let m = build_kw(model, slope, params)?;
+    pdw::mfpt::check_model(&m).map_err(err)?;
+    let plan = pdw::mfpt::MfptPlan {
+        terrain: pdw_limit::terrain::SlopeTerrain {
+            mean: m.slope(),
+            sd,
+            seed,
+        },
+        walkers,
+        max_steps,
+        integrator: pdw::mfpt::default_integrator(),
+    };
+    pdw::mfpt::check_plan(&plan, &FLAGS).map_err(err)?;
+    let (est, start) = interruptible(py, || -> PyResult<_> {
+        let (x0, section) = pdw::mfpt::start(&m).map_err(err)?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(err)?;
+        let (_, est) = pdw::mfpt::run(&m, &plan, &x0, &pool, &|_| {}).map_err(err)?;
+        Ok((est, section))
+    })?;
+    let d = PyDict::new(py);
+    for (k, v) in [
+        ("mfpt", est.mfpt),
+        ("stderr", est.stderr),
+        ("restricted_mean", est.restricted_mean),
+        ("restricted_stderr", est.restricted_stderr),
+        ("mean", plan.terrain.mean),
+        ("sd", sd),
+    ] {
+        d.set_item(k, v)?;
+    }
+    for (k, v) in [
+        ("walkers", est.walkers),
+        ("falls", est.falls),
+        ("censored", est.censored),
+    ] {
+        d.set_item(k, v)?;
+    }
+    d.set_item("total_steps", est.total_steps)?;
+    d.set_item("survival", est.survival.clone().into_pyarray(py))?;
+    let f = PyDict::new(py);
+    for (k, n) in &est.failures {
+        f.set_item(k, n)?;
+    }
+    d.set_item("failures", f)?;
+    d.set_item("start", start)?;
+    Ok(d)
+}
+
 /// `simulate(model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params)`.
 #[pyfunction]
 #[pyo3(
@@ -1574,6 +1663,7 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(basin, m)?)?;
     m.add_function(wrap_pyfunction!(continuation, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(mfpt, m)?)?;
     m.add_function(wrap_pyfunction!(orbit::orbit_diagram, m)?)?;
     m.add_function(wrap_pyfunction!(basin_over::basin_over, m)?)?;
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;

@@ -519,3 +519,19 @@ def test_basin_and_continuation_name_the_coordinates():
     assert "slope normal" in metrics["coordinates"]["stance"]
     branches = pdw.continuation("simplest", "slope", 0.009, 0.01, points=2)
     assert "stance-leg angle" in branches[0]["coordinates"]["theta"]
+
+
+def test_mfpt_survival_estimator_and_thread_count():
+    r = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=5000, seed=1)
+    surv = r["survival"]
+    # survival starts at 1, never rises; steps / falls is the estimate
+    assert surv[0] == 1.0 and np.all(np.diff(surv) <= 0)
+    assert r["falls"] + r["censored"] == 300
+    assert r["mfpt"] == r["total_steps"] / r["falls"]
+    assert abs(r["restricted_mean"] - surv[1:].sum()) < 1e-9
+    assert sum(r["failures"].values()) == r["falls"]
+    # the same walkers on one thread (sd as radians: the same number as '0.5deg')
+    r1 = pdw.mfpt("rimless", sd=0.5 * np.pi / 180, walkers=300, max_steps=5000, seed=1, threads=1)
+    assert r1["total_steps"] == r["total_steps"]
+    with pytest.raises(ValueError, match="sd"):
+        pdw.mfpt("rimless", sd="-1deg")

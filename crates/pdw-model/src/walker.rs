@@ -101,6 +101,15 @@ pub trait Walker: Section {
     fn clearance_rule(&self) -> ClearanceRule {
         ClearanceRule::AfterMidStance
     }
+    /// How the state changes when the same configuration is measured in the frame of another
+    /// ground line through the stance foot (random terrain): `(index, sign)` of the one absolute
+    /// angle — the state component that becomes `x[index] + sign·(s' − s)` when the frame of a
+    /// line inclined `s` (downhill positive) is replaced by that of a line inclined `s'`; every
+    /// other component (relative angles, rates) is unchanged. `None`: the model does not walk
+    /// on such terrain (e.g. round feet, whose contact point moves along the line).
+    fn terrain_frame(&self) -> Option<(usize, f64)> {
+        None
+    }
     /// The fully resolved model, one `key = value` line per quantity that determines its
     /// dynamics (floats in shortest round-trip form, so equal text means bit-equal values).
     /// Files that can be continued store it and refuse to continue under a different model,

@@ -87,6 +87,7 @@ pub mod curve;
 pub mod design;
 mod error;
 mod h5util;
+pub mod mfpt;
 pub mod plot;
 pub mod provenance;
 pub mod shard;
@@ -105,6 +106,7 @@ pub use design::{
     DESIGN_FORMAT,
 };
 pub use error::StoreError;
+pub use mfpt::{read_mfpt, write_mfpt, MfptData, MFPT_FORMAT};
 pub use plot::{
     animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_basin_attractors,
     plot_basin_stability, plot_bifurcation, plot_lines, plot_lines_marked, Frame, MarkerShape,

@@ -33,6 +33,8 @@ pub enum Command {
     Animate(AnimateArgs),
     /// Simulate N steps and write the time series (states, events, forces, energy) to HDF5 or CSV.
     Simulate(SimulateArgs),
+    /// Mean first-passage time on random terrain (steps before a fall), by Monte Carlo.
+    Mfpt(MfptArgs),
     /// Search free design parameters for the most robust physically valid gait (HDF5 + PNG).
     Design(DesignArgs),
 }
@@ -342,6 +344,59 @@ pub struct AnimateArgs {
     /// Overwrite an existing --out.
     #[arg(long)]
     pub force: bool,
+}
+
+// Negative numbers are values, not flags: `--mean -0.01`.
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct MfptArgs {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    #[command(flatten)]
+    pub integrator: IntegratorOpts,
+    /// The terrain: slope (a random ground slope per step, normal around --mean with --sd).
+    #[arg(long, default_value = "slope")]
+    pub terrain: String,
+    /// Standard deviation of the slope, radians or with a unit (1deg, 0.5°).
+    #[arg(long)]
+    pub sd: String,
+    /// Mean slope, radians or with a unit (3deg). Default: the model's slope (--slope or its
+    /// preset).
+    #[arg(long, conflicts_with = "slope")]
+    pub mean: Option<String>,
+    /// Number of walkers.
+    #[arg(long, default_value_t = 10000)]
+    pub walkers: usize,
+    /// Steps at most per walker; a walker still walking then is censored (not a fall).
+    #[arg(long, default_value_t = 1000)]
+    pub max_steps: usize,
+    /// Seed of the terrain's random numbers (walker i, step k and the seed give the slope).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (rayon pool); results are identical for any count.
+    #[arg(long, default_value_t = 2, value_parser = crate::args::parse_threads)]
+    pub threads: usize,
+    /// Output file (HDF5, with a PNG of the survival curve next to it). Default: none.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Overwrite an existing --out.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Also compute the MFPT as a Markov chain on a mesh of the section (Byl & Tedrake 2009),
+    /// at --mesh and twice --mesh nodes per section axis (models with up to 3 section
+    /// coordinates).
+    #[arg(long)]
+    pub chain: bool,
+    /// With --chain: mesh nodes per section axis (the finer mesh has twice as many). Default:
+    /// 200 for one section coordinate, 60 for two, 12 for three.
+    #[arg(long, requires = "chain")]
+    pub mesh: Option<usize>,
+    /// With --chain: Gauss–Hermite nodes of the slope distribution.
+    #[arg(long, default_value_t = 11, requires = "chain")]
+    pub nodes: usize,
 }
 
 #[derive(Args, Debug)]

@@ -13,6 +13,7 @@ mod design;
 mod follow;
 mod hostile;
 mod lock;
+mod mfpt;
 mod resume_model;
 mod search;
 mod self_describing;

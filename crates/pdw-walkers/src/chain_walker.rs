@@ -1639,6 +1639,13 @@ impl Section for ChainWalker {
 }
 
 impl Walker for ChainWalker {
+    /// `q₀` is the one absolute angle (Garcia's θ, module docs "Coordinates"; gravity enters as
+    /// the base acceleration of slope γ, so the stance leg's world angle is `q₀ − γ`): it grows by
+    /// `s' − s`. Round feet: `None` — the stance arc's contact point moves along the line, so a
+    /// change of line is not a rotation about the contact point.
+    fn terrain_frame(&self) -> Option<(usize, f64)> {
+        (self.radius == 0.0).then_some((0, 1.0))
+    }
     fn name(&self) -> &str {
         &self.spec.name
     }

@@ -282,6 +282,11 @@ impl Section for Rimless {
 }
 
 impl Walker for Rimless {
+    /// θ is absolute with the opposite sign to Garcia's (hub downhill positive), the flow sees
+    /// `θ + γ` (module docs): θ changes by `−(s' − s)`.
+    fn terrain_frame(&self) -> Option<(usize, f64)> {
+        Some((0, -1.0))
+    }
     fn energy(&self, x: &[f64]) -> Option<f64> {
         Some(Self::energy(self, x))
     }

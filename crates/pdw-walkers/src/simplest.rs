@@ -625,6 +625,12 @@ impl Section for Simplest {
 }
 
 impl Walker for Simplest {
+    /// θ is absolute (from the slope normal, stance foot ahead positive) and the flow sees only
+    /// `θ − γ` (module docs): the world angle `θ − s` of the stance leg is the same in every
+    /// line's frame, so θ grows by `s' − s`; φ is relative.
+    fn terrain_frame(&self) -> Option<(usize, f64)> {
+        Some((0, 1.0))
+    }
     fn energy(&self, x: &[f64]) -> Option<f64> {
         Some(Self::energy(self, x))
     }

@@ -20,6 +20,7 @@ pub mod gaits;
 pub mod input;
 pub mod integrator;
 pub mod linear;
+pub mod mfpt;
 pub mod model;
 pub mod simulate;
 pub mod sweep;

@@ -3,4 +3,5 @@
 
 mod design;
 mod input;
+mod mfpt;
 mod simulate;

@@ -9,6 +9,7 @@ mod design;
 mod fixedpoint;
 mod follow;
 mod merge;
+mod mfpt;
 mod models;
 mod output;
 mod simulate;
@@ -32,6 +33,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Basin(a) => basin::run(&a),
         Command::Merge(a) => merge::run(&a),
         Command::Simulate(a) => simulate::run(&a),
+        Command::Mfpt(a) => mfpt::run(&a),
         Command::Design(a) => design::run(&a),
     }
 }

@@ -1,0 +1,363 @@
+//! Walking on random terrain: a random ground slope per step, its counter-based random numbers,
+//! the walk of many walkers and the mean first-passage time (MFPT) of Byl & Tedrake
+//! ("Metastable walking machines", IJRR 28(8), 2009).
+//!
+//! # Convention
+//! Step `k` (k = 1, 2, …) ends when the swing foot lands on the line through the current stance
+//! foot inclined by `s_k` (downhill positive, like every model's `slope`). During step `k` the
+//! walker moves in the frame of that line: it is exactly the model at slope `s_k` (gravity
+//! rotated). Between steps only the frame changes: the model's one absolute angle
+//! ([`Walker::terrain_frame`]: index `a`, sign `σ`) becomes `x[a] + σ (s' − s)` when measured
+//! from the normal of a line inclined `s'` instead of `s`; relative angles and every rate are
+//! unchanged. The walk keeps the post-heel-strike state in the frame of the **mean** slope `s̄`,
+//! so it is Markov in that state alone: a stride on line `s` is the shift into that line's
+//! frame (`x[a] += σ (s − s̄)`), the model's stride at slope `s` from that full state (not on
+//! the model's own section unless `s` equals the previous line's slope), and the shift back.
+//! With `s = s̄` both shifts add an exact zero, so the terrain stride is the ordinary stride
+//! bit for bit.
+//!
+//! # Random numbers
+//! Counter-based: the slope of walker `i` at step `k` is a pure function of `(seed, i, k)`
+//! ([`standard_normal`]), so a walk is the same on any thread count or shard.
+
+use crate::error::LimitError;
+use crate::stride::{StrideMap, StrideOutcome};
+use pdw_hybrid::{run_scalar_with, Integrator, Options};
+use pdw_model::Walker;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Odd constant of the golden ratio (2⁶⁴/φ), the increment of SplitMix64.
+const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// The output function of SplitMix64 (Steele, Lea & Flood, "Fast splittable pseudorandom
+/// number generators", OOPSLA 2014; the variant of Stafford's "Mix13" constants): a bijection of
+/// 64-bit words that changes about half the output bits for each input bit.
+pub fn mix64(z: u64) -> u64 {
+    let z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    let z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// 64 random bits for `(seed, walker, step, stream)`: each coordinate mixed in turn, each with
+/// its own multiple of [`GOLDEN`] added so that swapping two coordinates changes the result.
+pub fn counter_bits(seed: u64, walker: u64, step: u64, stream: u64) -> u64 {
+    let mut h = mix64(seed.wrapping_add(GOLDEN));
+    for (j, v) in [walker, step, stream].into_iter().enumerate() {
+        h = mix64(h ^ v.wrapping_add(GOLDEN.wrapping_mul(j as u64 + 2)));
+    }
+    h
+}
+
+/// A uniform number in the open interval (0, 1) from the top 53 bits of [`counter_bits`]:
+/// `(b + ½) 2⁻⁵³`, never 0 or 1 (so its logarithm is finite).
+pub fn uniform(seed: u64, walker: u64, step: u64, stream: u64) -> f64 {
+    let b = counter_bits(seed, walker, step, stream) >> 11;
+    (b as f64 + 0.5) * (1.0 / (1u64 << 53) as f64)
+}
+
+/// A standard normal number for `(seed, walker, step)` by the Box–Muller transform (Box &
+/// Muller, Ann. Math. Statist. 29, 1958): `√(−2 ln u₁) cos(2π u₂)` with `u₁`, `u₂` the
+/// [`uniform`]s of streams 0 and 1.
+pub fn standard_normal(seed: u64, walker: u64, step: u64) -> f64 {
+    let u1 = uniform(seed, walker, step, 0);
+    let u2 = uniform(seed, walker, step, 1);
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// Ground slopes drawn per step: `s_k = mean + sd ξ_k`, `ξ_k` independent standard normals
+/// ([`standard_normal`] of `(seed, walker, k)`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlopeTerrain {
+    /// Mean slope `s̄` (rad).
+    pub mean: f64,
+    /// Standard deviation `σ` of the slope (rad, ≥ 0).
+    pub sd: f64,
+    /// Seed of the counter-based generator.
+    pub seed: u64,
+}
+
+impl SlopeTerrain {
+    /// The slope of the line walker `walker` lands on at the end of step `step` (1, 2, …).
+    pub fn slope(&self, walker: u64, step: u64) -> f64 {
+        self.mean + self.sd * standard_normal(self.seed, walker, step)
+    }
+}
+
+/// The model at a given slope (the same model with only its slope changed).
+pub type ModelAt<'a> = &'a (dyn Fn(f64) -> Result<Box<dyn Walker>, LimitError> + Sync);
+
+/// One stride on terrain: how it ended and the state after it, in the mean slope's frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainStride {
+    pub outcome: StrideOutcome,
+    /// The full state just after the heel strike (or at the stop), in the mean slope's frame.
+    pub post: Vec<f64>,
+}
+
+/// The stride on terrain of a model (module docs, "Convention").
+pub struct SlopeWalk<'a> {
+    model_at: ModelAt<'a>,
+    mean: f64,
+    absolute: usize,
+    sign: f64,
+    integrator: Options,
+}
+
+impl<'a> SlopeWalk<'a> {
+    /// The walk of the model `model_at` gives around mean slope `mean`, integrated with
+    /// `integrator`; [`LimitError::Model`] when the model has no terrain frame
+    /// ([`Walker::terrain_frame`]).
+    pub fn new(model_at: ModelAt<'a>, mean: f64, integrator: Options) -> Result<Self, LimitError> {
+        integrator.validate()?;
+        let (absolute, sign) = model_at(mean)?.terrain_frame().ok_or(LimitError::Model {
+            param: mean,
+            message: "the model does not walk on random terrain (round feet?)".into(),
+        })?;
+        Ok(Self {
+            model_at,
+            mean,
+            absolute,
+            sign,
+            integrator,
+        })
+    }
+
+    /// The mean slope `s̄`.
+    pub fn mean(&self) -> f64 {
+        self.mean
+    }
+
+    /// A state in the frame of line `from` carried to the frame of line `to`.
+    pub fn shift(&self, x: &mut [f64], from: f64, to: f64) {
+        x[self.absolute] += self.sign * (to - from);
+    }
+
+    /// One stride landing on a line inclined `slope`, from the post-heel-strike full state `x`
+    /// in the mean slope's frame, with a caller-owned integrator (for the model's state
+    /// dimension and this walk's options).
+    pub fn stride(
+        &self,
+        integ: &mut Integrator,
+        x: &[f64],
+        slope: f64,
+    ) -> Result<TerrainStride, LimitError> {
+        let w = (self.model_at)(slope)?;
+        let map = StrideMap::new(w.as_ref(), self.integrator)?;
+        let mut x0 = x.to_vec();
+        self.shift(&mut x0, self.mean, slope);
+        let end = run_scalar_with(integ, map.system(), &map.driver(), &x0)?;
+        let mut post = end.post;
+        self.shift(&mut post, slope, self.mean);
+        Ok(TerrainStride {
+            outcome: end.outcome,
+            post,
+        })
+    }
+
+    /// A fresh integrator for this walk.
+    pub fn integrator(&self, dim: usize) -> Result<Integrator, LimitError> {
+        Ok(Integrator::new(dim, self.integrator)?)
+    }
+
+    /// The integrator options of the strides.
+    pub fn options(&self) -> Options {
+        self.integrator
+    }
+
+    /// The model at slope `slope`.
+    pub fn model(&self, slope: f64) -> Result<Box<dyn Walker>, LimitError> {
+        (self.model_at)(slope)
+    }
+}
+
+/// How one walker's walk ended: the heel strikes completed and, for a fall, how the stride
+/// that did not reach the next heel strike ended (`None`: still walking at the step limit,
+/// censored).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fate {
+    pub steps: usize,
+    pub end: Option<StrideOutcome>,
+}
+
+/// Walker `i` walks from `x0` (mean-slope frame, just after a heel strike) on `terrain` for at
+/// most `max_steps` strides.
+pub fn walk_one(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    i: u64,
+    max_steps: usize,
+) -> Result<Fate, LimitError> {
+    let mut integ = walk.integrator(x0.len())?;
+    let mut x = x0.to_vec();
+    for k in 0..max_steps {
+        let st = walk.stride(&mut integ, &x, terrain.slope(i, k as u64 + 1))?;
+        if !st.outcome.is_ok() {
+            return Ok(Fate {
+                steps: k,
+                end: Some(st.outcome),
+            });
+        }
+        x = st.post;
+    }
+    Ok(Fate {
+        steps: max_steps,
+        end: None,
+    })
+}
+
+/// `walkers` walkers (0, 1, …) from `x0` on `pool`, in walker order; identical for any thread
+/// count (each walker's slopes are its own counter-based draws, each walker runs on one
+/// thread with its own integrator). `progress` gets the number of walkers done.
+pub fn monte_carlo(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    walkers: usize,
+    max_steps: usize,
+    pool: &rayon::ThreadPool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<Fate>, LimitError> {
+    let done = AtomicUsize::new(0);
+    pool.install(|| {
+        (0..walkers)
+            .into_par_iter()
+            .map(|i| {
+                let f = walk_one(walk, terrain, x0, i as u64, max_steps);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                f
+            })
+            .collect()
+    })
+}
+
+/// The Monte Carlo estimate of the mean first-passage time and what it rests on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MfptEstimate {
+    pub walkers: usize,
+    pub falls: usize,
+    /// Walkers still walking at the step limit.
+    pub censored: usize,
+    /// Heel strikes completed by all walkers together, `S`.
+    pub total_steps: u64,
+    /// `S / F` (F falls): the maximum-likelihood MFPT for a constant fall probability per step
+    /// (geometric first-passage time, the metastable regime); infinite without a fall.
+    pub mfpt: f64,
+    /// Its standard error from the Fisher information, `√(S (S + F)) / F^{3/2}`.
+    pub stderr: f64,
+    /// The survival-based (restricted) mean: `Σ_{k=1}^{K} S(k)` = the mean of `min(T, K)`, K the
+    /// step limit; equals the MFPT when no walker is censored.
+    pub restricted_mean: f64,
+    /// Its standard error, the sample standard deviation of `min(T, K)` over `√N`.
+    pub restricted_stderr: f64,
+    /// `survival[k]`: the fraction of walkers that completed at least `k` heel strikes
+    /// (k = 0 … K).
+    pub survival: Vec<f64>,
+    /// Falls by kind (the outcome's name), sorted by name.
+    pub failures: Vec<(String, usize)>,
+}
+
+/// The estimate from the walkers' fates (`max_steps` the step limit K).
+///
+/// With `F` falls among `N` walkers that completed `S` heel strikes in all, a constant fall
+/// probability `p` per stride has the censored geometric likelihood `p^F (1 − p)^S`, maximal at
+/// `p̂ = F/(S + F)`; the MFPT (heel strikes before the fall) `(1 − p)/p` has the MLE `S/F`, and
+/// the observed information `(S + F)³/(F S)` gives the delta-method standard error
+/// `√(S (S + F)) / F^{3/2}` (≈ MFPT/√F).
+pub fn estimate(fates: &[Fate], max_steps: usize) -> MfptEstimate {
+    let n = fates.len();
+    let falls = fates.iter().filter(|f| f.end.is_some()).count();
+    let s: u64 = fates.iter().map(|f| f.steps as u64).sum();
+    let (sf, ff) = (s as f64, falls as f64);
+    let (mfpt, stderr) = if falls == 0 {
+        (f64::INFINITY, f64::INFINITY)
+    } else {
+        (sf / ff, (sf * (sf + ff)).sqrt() / ff.powf(1.5))
+    };
+    let mut alive = vec![0usize; max_steps + 2];
+    for f in fates {
+        alive[f.steps.min(max_steps) + 1] += 1;
+    }
+    // survival[k] = #(T ≥ k) / N: counts of T = j summed from the top
+    let mut survival = vec![0.0; max_steps + 1];
+    let mut acc = 0usize;
+    for k in (0..=max_steps).rev() {
+        acc += alive[k + 1];
+        survival[k] = acc as f64 / n.max(1) as f64;
+    }
+    let (rm, rse) = mean_and_stderr(fates.iter().map(|f| f.steps.min(max_steps) as f64));
+    MfptEstimate {
+        walkers: n,
+        falls,
+        censored: n - falls,
+        total_steps: s,
+        mfpt,
+        stderr,
+        restricted_mean: rm,
+        restricted_stderr: rse,
+        survival,
+        failures: failure_counts(fates),
+    }
+}
+
+/// Sample mean and its standard error (sample standard deviation over √n).
+fn mean_and_stderr(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+    let n = v.clone().count() as f64;
+    if n == 0.0 {
+        return (f64::NAN, f64::NAN);
+    }
+    let mean = v.clone().sum::<f64>() / n;
+    let var = v.map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0).max(1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Falls counted by the outcome's name.
+fn failure_counts(fates: &[Fate]) -> Vec<(String, usize)> {
+    let mut m: BTreeMap<String, usize> = BTreeMap::new();
+    for o in fates.iter().filter_map(|f| f.end) {
+        *m.entry(o.to_string()).or_default() += 1;
+    }
+    m.into_iter().collect()
+}
+
+/// The section states (in the frame of the line each was reached on) of every heel strike of
+/// `walkers` walkers from `x0`, at most `max_steps` each: the set a Markov chain's mesh must
+/// cover ([`crate::markov`]). Projected with the mean slope's model (a section projection does
+/// not depend on the slope).
+pub fn visited(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    walkers: usize,
+    max_steps: usize,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<Vec<f64>>, LimitError> {
+    let base = walk.model(walk.mean())?;
+    let per: Vec<Vec<Vec<f64>>> = pool.install(|| {
+        (0..walkers)
+            .into_par_iter()
+            .map(|i| {
+                let mut integ = walk.integrator(x0.len())?;
+                let mut x = x0.to_vec();
+                let mut out = Vec::new();
+                for k in 0..max_steps {
+                    let s = terrain.slope(i as u64, k as u64 + 1);
+                    let st = walk.stride(&mut integ, &x, s)?;
+                    if !st.outcome.is_ok() {
+                        break;
+                    }
+                    let mut y = st.post.clone();
+                    walk.shift(&mut y, walk.mean(), s);
+                    let mut sec = vec![0.0; base.section_dim()];
+                    base.project(&y, &mut sec);
+                    out.push(sec);
+                    x = st.post;
+                }
+                Ok(out)
+            })
+            .collect::<Result<_, LimitError>>()
+    })?;
+    Ok(per.into_iter().flatten().collect())
+}

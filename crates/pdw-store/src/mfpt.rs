@@ -1,0 +1,231 @@
+//! The mean-first-passage-time file of `pdw-sweep mfpt`: how many steps walkers on random
+//! terrain take before they fall (Byl & Tedrake, "Metastable walking machines", IJRR 2009).
+//!
+//! ```text
+//! /                 attrs: format ("pdw-sweep mfpt v1"), version, command, created, model,
+//!                          params (JSON object of the model's parameters at the mean slope)
+//! /mfpt             attrs: method ("monte carlo"), terrain ("slope"), mean (rad), sd (rad),
+//!                          seed, walkers, max_steps, falls, censored, total_steps, mfpt,
+//!                          stderr (steps / falls and its standard error), restricted_mean,
+//!                          restricted_stderr (mean of min(T, max_steps)), estimator (text),
+//!                          elapsed_s; with the Markov chain (method "monte carlo + markov
+//!                          chain") also chain_* numbers (chain_mfpt_coarse, chain_mfpt_fine,
+//!                          chain_mesh_coarse, …: see `MfptData::chain`)
+//! /mfpt/survival    f64 [max_steps + 1] fraction of walkers that completed at least k steps
+//! /mfpt/failures    u64 [F] falls per kind; attr kinds (JSON list of the F kinds' names)
+//! /mfpt/start       f64 [d] the section state the walkers start from; attr names (JSON list)
+//! ```
+//! Written whole to a temporary sibling and renamed into place.
+
+use std::path::Path;
+
+use hdf5::{File, Group};
+
+use crate::h5util::{
+    get_attr, get_str, open_file, put, set_attr, set_str, write_h5_atomically, At,
+};
+use crate::{time, Result, StoreError};
+
+/// Value of the root attribute `format` of an MFPT file.
+pub const MFPT_FORMAT: &str = "pdw-sweep mfpt v1";
+const KIND: &str = "pdw-sweep mfpt";
+
+/// Everything an MFPT file holds.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct MfptData {
+    pub command: String,
+    pub model: String,
+    /// The model's parameters (JSON object text).
+    pub params: String,
+    /// `"monte carlo"`.
+    pub method: String,
+    /// `"slope"`.
+    pub terrain: String,
+    pub mean: f64,
+    pub sd: f64,
+    pub seed: u64,
+    pub walkers: u64,
+    pub max_steps: u64,
+    pub falls: u64,
+    pub censored: u64,
+    pub total_steps: u64,
+    pub mfpt: f64,
+    pub stderr: f64,
+    pub restricted_mean: f64,
+    pub restricted_stderr: f64,
+    /// How `mfpt` and `stderr` were estimated, in words.
+    pub estimator: String,
+    /// `(max_steps + 1)` survival fractions.
+    pub survival: Vec<f64>,
+    /// Fall kinds and their counts.
+    pub failures: Vec<(String, u64)>,
+    pub start: Vec<f64>,
+    pub start_names: Vec<String>,
+    pub elapsed_s: f64,
+    /// The Markov chain's numbers as `(name, value)`, stored as the attributes `chain_NAME` of
+    /// `/mfpt` (empty without the chain).
+    pub chain: Vec<(String, f64)>,
+}
+
+impl MfptData {
+    /// Checks the counts and the survival curve (from 1, not increasing, in [0, 1]).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(StoreError::invalid("mfpt", m));
+        if self.survival.len() as u64 != self.max_steps + 1 {
+            return bad(format!(
+                "survival has {} values for max_steps {}",
+                self.survival.len(),
+                self.max_steps
+            ));
+        }
+        if self.falls + self.censored != self.walkers
+            || self.failures.iter().map(|f| f.1).sum::<u64>() != self.falls
+        {
+            return bad("falls, censored walkers and fall kinds do not add up".into());
+        }
+        let monotone = self.survival.windows(2).all(|w| w[1] <= w[0]);
+        if !monotone || self.survival.iter().any(|s| !(0.0..=1.0).contains(s)) {
+            return bad("the survival curve must fall from at most 1 to at least 0".into());
+        }
+        if self.start.len() != self.start_names.len() {
+            return bad("start and start_names differ in length".into());
+        }
+        Ok(())
+    }
+}
+
+/// Writes `data` to `path` (refused if it exists, unless `force`).
+pub fn write_mfpt(path: impl AsRef<Path>, force: bool, data: &MfptData) -> Result<()> {
+    let path = path.as_ref();
+    data.validate()?;
+    write_h5_atomically(path, force, |tmp, f| fill(tmp, f, data))
+}
+
+fn json_list(v: &[String]) -> String {
+    serde_json::to_string(v).unwrap_or_default()
+}
+
+fn fill(p: &Path, f: &File, d: &MfptData) -> Result<()> {
+    for (k, v) in [
+        ("format", MFPT_FORMAT),
+        ("version", env!("CARGO_PKG_VERSION")),
+        ("command", &d.command),
+        ("created", &time::now_rfc3339()),
+        ("model", &d.model),
+        ("params", &d.params),
+    ] {
+        set_str(p, f, k, v)?;
+    }
+    let g = f.create_group("mfpt").at(p, "creating /mfpt")?;
+    for (k, v) in [
+        ("method", &d.method),
+        ("terrain", &d.terrain),
+        ("estimator", &d.estimator),
+    ] {
+        set_str(p, &g, k, v)?;
+    }
+    for (k, v) in [
+        ("seed", d.seed),
+        ("walkers", d.walkers),
+        ("max_steps", d.max_steps),
+        ("falls", d.falls),
+        ("censored", d.censored),
+        ("total_steps", d.total_steps),
+    ] {
+        set_attr(p, &g, k, &v)?;
+    }
+    for (k, v) in [
+        ("mean", d.mean),
+        ("sd", d.sd),
+        ("mfpt", d.mfpt),
+        ("stderr", d.stderr),
+        ("restricted_mean", d.restricted_mean),
+        ("restricted_stderr", d.restricted_stderr),
+        ("elapsed_s", d.elapsed_s),
+    ] {
+        set_attr(p, &g, k, &v)?;
+    }
+    for (k, v) in &d.chain {
+        set_attr(p, &g, &format!("chain_{k}"), v)?;
+    }
+    put(p, &g, "survival", d.survival.as_slice())?;
+    let counts: Vec<u64> = d.failures.iter().map(|x| x.1).collect();
+    let kinds: Vec<String> = d.failures.iter().map(|x| x.0.clone()).collect();
+    let fd = put(p, &g, "failures", counts.as_slice())?;
+    set_str(p, &fd, "kinds", &json_list(&kinds))?;
+    let sd = put(p, &g, "start", d.start.as_slice())?;
+    set_str(p, &sd, "names", &json_list(&d.start_names))?;
+    Ok(())
+}
+
+/// Reads an MFPT file.
+pub fn read_mfpt(path: impl AsRef<Path>) -> Result<MfptData> {
+    let p = path.as_ref();
+    let f = open_file(p, false)?;
+    let fmt = get_str(p, KIND, &f, "format")?;
+    if fmt != MFPT_FORMAT {
+        return Err(StoreError::Format {
+            path: p.to_path_buf(),
+            expected: KIND,
+            detail: format!("format is {fmt:?}, expected {MFPT_FORMAT:?}"),
+        });
+    }
+    let g = f.group("mfpt").at(p, "opening /mfpt")?;
+    let mut d = read_group(p, &g)?;
+    let mut names = g.attr_names().at(p, "listing attributes")?;
+    names.sort();
+    for a in names {
+        if let Some(k) = a.strip_prefix("chain_") {
+            d.chain
+                .push((k.to_string(), get_attr::<f64>(p, KIND, &g, &a)?));
+        }
+    }
+    d.command = get_str(p, KIND, &f, "command")?;
+    d.model = get_str(p, KIND, &f, "model")?;
+    d.params = get_str(p, KIND, &f, "params")?;
+    Ok(d)
+}
+
+/// The `/mfpt` group's attributes and datasets.
+fn read_group(p: &Path, g: &Group) -> Result<MfptData> {
+    let json = |text: String, what: &str| -> Result<Vec<String>> {
+        serde_json::from_str(&text).map_err(|e| StoreError::Format {
+            path: p.to_path_buf(),
+            expected: KIND,
+            detail: format!("{what}: {e}"),
+        })
+    };
+    let read = |name: &str| -> Result<hdf5::Dataset> {
+        g.dataset(name).at(p, &format!("opening /mfpt/{name}"))
+    };
+    let (fd, sd) = (read("failures")?, read("start")?);
+    let counts: Vec<u64> = fd.read_raw().at(p, "reading /mfpt/failures")?;
+    let kinds = json(get_str(p, KIND, &fd, "kinds")?, "failure kinds")?;
+    let u = |k: &str| get_attr::<u64>(p, KIND, g, k);
+    let x = |k: &str| get_attr::<f64>(p, KIND, g, k);
+    Ok(MfptData {
+        method: get_str(p, KIND, g, "method")?,
+        terrain: get_str(p, KIND, g, "terrain")?,
+        estimator: get_str(p, KIND, g, "estimator")?,
+        mean: x("mean")?,
+        sd: x("sd")?,
+        seed: u("seed")?,
+        walkers: u("walkers")?,
+        max_steps: u("max_steps")?,
+        falls: u("falls")?,
+        censored: u("censored")?,
+        total_steps: u("total_steps")?,
+        mfpt: x("mfpt")?,
+        stderr: x("stderr")?,
+        restricted_mean: x("restricted_mean")?,
+        restricted_stderr: x("restricted_stderr")?,
+        elapsed_s: x("elapsed_s")?,
+        survival: read("survival")?
+            .read_raw()
+            .at(p, "reading /mfpt/survival")?,
+        failures: kinds.into_iter().zip(counts).collect(),
+        start: sd.read_raw().at(p, "reading /mfpt/start")?,
+        start_names: json(get_str(p, KIND, &sd, "names")?, "start names")?,
+        ..MfptData::default()
+    })
+}

@@ -1,0 +1,334 @@
+//! `pdw-sweep mfpt`: the mean first-passage time on random terrain (steps before a fall) by
+//! Monte Carlo. The request's checks, the model at any slope, the start and the run are
+//! [`pdw::mfpt`]'s; this file parses, shows progress, prints and writes.
+
+use super::basin::progress_bar;
+use super::build_model;
+use crate::args::InputError;
+use crate::cli::MfptArgs;
+use pdw::mfpt::{self, MfptFlags, MfptPlan};
+use pdw::BuiltModel;
+use pdw_limit::terrain::{MfptEstimate, SlopeTerrain};
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// The names of `mfpt`'s options in messages.
+const FLAGS: MfptFlags = MfptFlags {
+    terrain: "--terrain",
+    sd: "--sd",
+    mean: "--mean",
+    walkers: "--walkers",
+    max_steps: "--max-steps",
+};
+
+pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
+    mfpt::check_terrain(&a.terrain, &FLAGS)?;
+    let sd = mfpt::parse_sd(&a.sd, &FLAGS)?;
+    let integrator = super::integrator(&a.integrator, mfpt::default_integrator())?;
+    let mut choice = a.model.clone();
+    if let Some(mean) = &a.mean {
+        // --mean is the model's slope (clap refuses it together with --slope)
+        choice.slope = Some(pdw::input::parse_slope_for(mean, "--mean")?.to_string());
+    }
+    let m = build_model(&choice)?;
+    mfpt::check_model(&m)?;
+    let plan = MfptPlan {
+        terrain: SlopeTerrain {
+            mean: m.slope(),
+            sd,
+            seed: a.seed,
+        },
+        walkers: a.walkers,
+        max_steps: a.max_steps,
+        integrator,
+    };
+    mfpt::check_plan(&plan, &FLAGS)?;
+    let claim = claim_out(a)?;
+    let (x0, section) = mfpt::start(&m)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads)
+        .build()
+        .map_err(|e| InputError(format!("--threads: cannot start the pool: {e}")))?;
+    let pb = progress_bar(
+        a.quiet,
+        a.walkers as u64,
+        "{elapsed_precise} [{wide_bar}] {pos}/{len} walkers  {per_sec}  ETA {eta}",
+    );
+    let t0 = Instant::now();
+    let (_, est) = mfpt::run(&m, &plan, &x0, &pool, &|n| pb.set_position(n as u64))?;
+    let secs = t0.elapsed().as_secs_f64();
+    pb.finish_and_clear();
+    summary(&m, &plan, &section, &est, secs);
+    let chain = match chain_plan(a, &m)? {
+        Some(c) => run_chain(&m, &plan, &c, &x0, &pool)?,
+        None => Vec::new(),
+    };
+    if let (Some(out), Some(_claim)) = (&a.out, claim) {
+        write(out, &m, &plan, &section, &est, secs, chain)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Claims `--out` and its PNG (refused if they exist without `--force`).
+fn claim_out(a: &MfptArgs) -> Result<Option<super::output::Claim>, InputError> {
+    let Some(out) = &a.out else {
+        return Ok(None);
+    };
+    let png = out.with_extension("png");
+    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+        .into_iter()
+        .collect();
+    let outputs = [
+        super::output::Output {
+            flag: "--out",
+            path: out,
+            format: super::output::Format::Hdf5,
+            may_exist: false,
+        },
+        super::output::Output {
+            flag: "--out (its survival PNG)",
+            path: &png,
+            format: super::output::Format::Png,
+            may_exist: false,
+        },
+    ];
+    super::output::claim(&outputs, &inputs, a.force).map(Some)
+}
+
+/// The run's lines: model, terrain and start; the MFPT by both estimators; falls by kind; speed.
+fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate, secs: f64) {
+    let t = plan.terrain;
+    crate::outln!(
+        "model {}  terrain slope: mean {} rad ({:.4}°), sd {} rad ({:.4}°), seed {}",
+        m.info.name,
+        t.mean,
+        t.mean.to_degrees(),
+        t.sd,
+        t.sd.to_degrees(),
+        t.seed
+    );
+    crate::outln!("start: stable gait {section:?} (just after a heel strike)");
+    crate::outln!(
+        "{} walkers, at most {} steps: {} fell, {} still walking (censored); {} steps in all",
+        est.walkers,
+        plan.max_steps,
+        est.falls,
+        est.censored,
+        est.total_steps
+    );
+    if est.falls == 0 {
+        // no fall in S strides: p < 3/S at 95 % confidence (the rule of three), MFPT > S/3 − 1
+        crate::outln!(
+            "MFPT: no fall in {} steps; more than about {} steps at 95 % confidence (rule of \
+             three)",
+            est.total_steps,
+            (est.total_steps / 3).saturating_sub(1)
+        );
+    } else {
+        crate::outln!(
+            "MFPT {:.4} ± {:.4} steps (maximum likelihood, constant fall probability per step: \
+             steps / falls)",
+            est.mfpt,
+            est.stderr
+        );
+    }
+    crate::outln!(
+        "mean of min(T, {}) {:.4} ± {:.4} steps (survival-based, restricted to the step limit)",
+        plan.max_steps,
+        est.restricted_mean,
+        est.restricted_stderr
+    );
+    for (kind, n) in &est.failures {
+        crate::outln!("  {n} {kind}");
+    }
+    let strides = est.total_steps + est.falls as u64;
+    crate::outln!(
+        "{:.1} s: {:.0} walkers/s, {:.0} strides/s",
+        secs,
+        est.walkers as f64 / secs,
+        strides as f64 / secs
+    );
+}
+
+/// The estimator's description stored with the result.
+const ESTIMATOR: &str = "mfpt = total steps / falls: the maximum-likelihood estimate for a \
+                         constant fall probability per step (censored geometric first-passage \
+                         time); stderr = sqrt(S (S + F)) / F^1.5 from the Fisher information";
+
+/// Writes the HDF5 file (with provenance and units) and the survival curve's PNG next to it.
+fn write(
+    out: &std::path::Path,
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    section: &[f64],
+    est: &MfptEstimate,
+    secs: f64,
+    chain: Vec<(String, f64)>,
+) -> anyhow::Result<()> {
+    let t = plan.terrain;
+    let data = pdw_store::MfptData {
+        command: super::command_line(),
+        model: m.info.name.clone(),
+        params: m.params_json().to_string(),
+        method: if chain.is_empty() {
+            "monte carlo"
+        } else {
+            "monte carlo + markov chain"
+        }
+        .into(),
+        terrain: "slope".into(),
+        mean: t.mean,
+        sd: t.sd,
+        seed: t.seed,
+        walkers: est.walkers as u64,
+        max_steps: plan.max_steps as u64,
+        falls: est.falls as u64,
+        censored: est.censored as u64,
+        total_steps: est.total_steps,
+        mfpt: est.mfpt,
+        stderr: est.stderr,
+        restricted_mean: est.restricted_mean,
+        restricted_stderr: est.restricted_stderr,
+        estimator: ESTIMATOR.into(),
+        survival: est.survival.clone(),
+        failures: est
+            .failures
+            .iter()
+            .map(|(k, n)| (k.clone(), *n as u64))
+            .collect(),
+        start: section.to_vec(),
+        start_names: m.info.section_names.clone(),
+        elapsed_s: secs,
+        chain,
+    };
+    // the claim refused an existing file without --force; its placeholder is replaced
+    pdw_store::write_mfpt(out, true, &data)?;
+    let prov = super::provenance(serde_json::json!({
+        "integrator": super::integrator_json(&plan.integrator),
+        "walkers": plan.walkers,
+        "max_steps": plan.max_steps,
+        "gait_newton_tol": mfpt::GAIT_TOL,
+    }));
+    let start_units = super::units_list(&super::section_units(m));
+    pdw_store::annotate(
+        out,
+        &pdw_store::Annotations {
+            provenance: Some(&prov),
+            units: &|p: &str| match p {
+                "mfpt/survival" | "mfpt/failures" => Some("1".into()),
+                "mfpt/start" => Some(start_units.clone()),
+                _ => None,
+            },
+            slice: None,
+            scales: &[],
+        },
+    )?;
+    let curve: Vec<(f64, f64)> = est
+        .survival
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (k as f64, *s))
+        .collect();
+    let title = format!(
+        "{}: survival on random slopes, mean {:.3}°, sd {:.3}°",
+        m.info.name,
+        t.mean.to_degrees(),
+        t.sd.to_degrees()
+    );
+    pdw_store::plot_lines(
+        out.with_extension("png"),
+        &title,
+        "steps k",
+        "fraction still walking after k steps",
+        &[("Monte Carlo".to_string(), curve)],
+        false,
+        // a constant fall probability per step is a straight line on a log axis
+        true,
+    )?;
+    Ok(())
+}
+
+/// The chain's plan from `--chain`, `--mesh`, `--nodes` (checked), or `None` without `--chain`.
+fn chain_plan(a: &MfptArgs, m: &BuiltModel) -> Result<Option<mfpt::ChainPlan>, InputError> {
+    if !a.chain {
+        return Ok(None);
+    }
+    let d = m.info.section_names.len();
+    let default = match d {
+        1 => 200,
+        2 => 60,
+        3 => 12,
+        _ => {
+            return Err(InputError(format!(
+                "--chain: model '{}' has {d} section coordinates; the mesh is built for at \
+                 most 3",
+                m.info.name
+            )))
+        }
+    };
+    let mesh = a.mesh.unwrap_or(default);
+    if mesh < 2 {
+        return Err(InputError(format!("--mesh: {mesh} must be at least 2")));
+    }
+    if !(1..=40).contains(&a.nodes) {
+        return Err(InputError(format!(
+            "--nodes: {} must be between 1 and 40",
+            a.nodes
+        )));
+    }
+    Ok(Some(mfpt::ChainPlan {
+        nodes: a.nodes,
+        mesh,
+        bounds: None,
+    }))
+}
+
+/// The chain at `--mesh` and twice as fine over the box the walkers visit; prints both and
+/// returns the numbers the file keeps.
+fn run_chain(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    c: &mfpt::ChainPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<Vec<(String, f64)>> {
+    let bounds = mfpt::visited_box(m, plan, x0, pool)?;
+    crate::outln!(
+        "Markov chain: {} Gauss-Hermite slope nodes, mesh over {:?} .. {:?} (the walkers' box, \
+         padded)",
+        c.nodes,
+        bounds.0,
+        bounds.1
+    );
+    let mut out = vec![("nodes".to_string(), c.nodes as f64)];
+    for (label, n) in [("coarse", c.mesh), ("fine", 2 * c.mesh)] {
+        let t0 = Instant::now();
+        let fine = mfpt::ChainPlan {
+            mesh: n,
+            ..c.clone()
+        };
+        let r = mfpt::chain(m, plan, &fine, &bounds, x0, pool)?;
+        crate::outln!(
+            "  mesh {n}: MFPT {:.4} steps from the start; lambda {:.10}, 1/(1-lambda)-1 = {:.4} \
+             (quasi-stationary by the solve: {:.4}); {} states, out of mesh {:.2e} per step; \
+             {:.1} s",
+            r.mfpt,
+            r.lambda,
+            r.mfpt_lambda,
+            r.mfpt_quasi_stationary,
+            r.states,
+            r.out_of_mesh,
+            t0.elapsed().as_secs_f64()
+        );
+        for (k, v) in [
+            ("mesh", n as f64),
+            ("mfpt", r.mfpt),
+            ("lambda", r.lambda),
+            ("mfpt_lambda", r.mfpt_lambda),
+            ("out_of_mesh", r.out_of_mesh),
+        ] {
+            out.push((format!("{k}_{label}"), v));
+        }
+    }
+    Ok(out)
+}

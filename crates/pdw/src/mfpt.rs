@@ -1,0 +1,233 @@
+//! The mean first-passage time (MFPT) on random terrain, written once for `pdw-sweep mfpt` (and
+//! the Python package to come): the request's checks, the model at any slope, the walkers'
+//! start (the stable period-one gait of the mean slope, just after a heel strike) and the Monte
+//! Carlo run ([`pdw_limit::terrain`], which documents the convention and the estimator).
+
+use crate::gaits::{model_guesses, no_gait_message, search};
+use crate::input::{self, InputError};
+use crate::model::BuiltModel;
+use pdw_hybrid::Options;
+use pdw_limit::terrain::{self, Fate, MfptEstimate, SlopeTerrain, SlopeWalk};
+use pdw_limit::LimitError;
+use pdw_walkers::Walker;
+
+/// Residual tolerance of the gait the walkers start from.
+pub const GAIT_TOL: f64 = 1e-12;
+
+/// The largest magnitude a Box–Muller draw of [`terrain::standard_normal`] can reach:
+/// `√(−2 ln u)` with `u ≥ 2⁻⁵⁴`, i.e. `√(108 ln 2)` ≈ 8.65.
+pub const MAX_DRAW: f64 = 8.66;
+
+/// The terrains `--terrain` names.
+pub const TERRAINS: &[&str] = &["slope"];
+
+/// A Monte Carlo MFPT run: the terrain, how many walkers, how many steps at most, and the
+/// integrator of the strides.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MfptPlan {
+    pub terrain: SlopeTerrain,
+    pub walkers: usize,
+    pub max_steps: usize,
+    pub integrator: Options,
+}
+
+/// The names a front end gives the options in its messages.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MfptFlags {
+    pub terrain: &'static str,
+    pub sd: &'static str,
+    pub mean: &'static str,
+    pub walkers: &'static str,
+    pub max_steps: &'static str,
+}
+
+/// The default integrator: the basin's (DOP853 at 1e-9, [`pdw_limit::BasinOptions`]), the
+/// per-stride speed and accuracy of a basin's cell.
+pub fn default_integrator() -> Options {
+    pdw_limit::BasinOptions::default_integrator()
+}
+
+/// The terrain's name checked (`slope` only so far).
+pub fn check_terrain(name: &str, flags: &MfptFlags) -> Result<(), InputError> {
+    if TERRAINS.contains(&name) {
+        Ok(())
+    } else {
+        Err(InputError(format!(
+            "{}: '{name}' is not one of {}",
+            flags.terrain,
+            TERRAINS.join(", ")
+        )))
+    }
+}
+
+/// The slope's standard deviation as typed (radians, or `1deg`): finite and ≥ 0.
+pub fn parse_sd(s: &str, flags: &MfptFlags) -> Result<f64, InputError> {
+    let v = input::parse_slope_for(s, flags.sd)?;
+    if v < 0.0 {
+        return Err(InputError(format!(
+            "{}: '{s}' must be >= 0 (a standard deviation)",
+            flags.sd
+        )));
+    }
+    Ok(v)
+}
+
+/// Refuses zero walkers or steps, and a terrain whose slopes could leave (−π/2, π/2) (the mean
+/// plus [`MAX_DRAW`] standard deviations).
+pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> {
+    for (v, flag) in [
+        (plan.walkers, flags.walkers),
+        (plan.max_steps, flags.max_steps),
+    ] {
+        if v == 0 {
+            return Err(InputError(format!("{flag}: 0 must be an integer >= 1")));
+        }
+    }
+    let t = plan.terrain;
+    if t.mean.abs() + MAX_DRAW * t.sd >= std::f64::consts::FRAC_PI_2 {
+        return Err(InputError(format!(
+            "{} {} rad with {} {} rad: slopes up to {MAX_DRAW} standard deviations from the \
+             mean are drawn and must stay within (-pi/2, pi/2) rad",
+            flags.sd, t.sd, flags.mean, t.mean
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses a model that does not walk on random terrain (round feet), naming why.
+pub fn check_model(m: &BuiltModel) -> Result<(), InputError> {
+    if m.walker.terrain_frame().is_some() {
+        return Ok(());
+    }
+    Err(InputError(format!(
+        "model '{}' cannot walk on random terrain yet: random slopes are defined for point feet \
+         (a round foot's contact point rolls along the line); set foot_radius=0",
+        m.info.name
+    )))
+}
+
+/// The model of `m` at any slope: its parameter values with only `slope` replaced, built by
+/// the registry (a model error names the slope).
+pub fn model_at(m: &BuiltModel) -> impl Fn(f64) -> Result<Box<dyn Walker>, LimitError> + Sync + '_ {
+    let values: Vec<f64> = m.params.iter().map(|p| p.1).collect();
+    let index = m.params.iter().position(|p| p.0 == "slope");
+    move |s| {
+        let mut v = values.clone();
+        if let Some(i) = index {
+            v[i] = s;
+        }
+        m.info.build_from(&v).map_err(|e| LimitError::Model {
+            param: s,
+            message: e.to_string(),
+        })
+    }
+}
+
+/// The walkers' first state: the stable period-one gait of `m` (built at the mean slope) from
+/// its own guesses, as the full state just after a heel strike, with its section coordinates.
+pub fn start(m: &BuiltModel) -> Result<(Vec<f64>, Vec<f64>), InputError> {
+    let guesses = model_guesses(m.walker.as_ref());
+    let (found, failed) = search(m, &guesses, GAIT_TOL).map_err(|e| InputError(e.to_string()))?;
+    match found.iter().find(|f| f.fp.stable) {
+        Some(g) => Ok((g.fp.state.clone(), g.fp.section.clone())),
+        None => Err(InputError(format!(
+            "{}; the walkers start from the stable gait of the mean slope",
+            no_gait_message(m, "stable", guesses.len(), &failed)
+        ))),
+    }
+}
+
+/// The Monte Carlo run: every walker from `x0` on its own terrain, and the estimate.
+pub fn run(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(Vec<Fate>, MfptEstimate), LimitError> {
+    let at = model_at(m);
+    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let fates = terrain::monte_carlo(
+        &walk,
+        &plan.terrain,
+        x0,
+        plan.walkers,
+        plan.max_steps,
+        pool,
+        progress,
+    )?;
+    let est = terrain::estimate(&fates, plan.max_steps);
+    Ok((fates, est))
+}
+
+/// A Markov-chain MFPT ([`pdw_limit::markov`]): Gauss–Hermite nodes of the slope, mesh nodes
+/// per section axis, and the box (`None`: the box the Monte Carlo walkers visit, padded).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainPlan {
+    pub nodes: usize,
+    pub mesh: usize,
+    pub bounds: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+/// Walkers and steps of the Monte Carlo pass that finds the visited box, and its padding (a
+/// fraction of each side's range).
+pub const BOX_WALKERS: usize = 200;
+pub const BOX_STEPS: usize = 200;
+pub const BOX_PAD: f64 = 0.1;
+
+/// The box the walkers of `plan` visit (the first [`BOX_WALKERS`] walkers, at most
+/// [`BOX_STEPS`] steps each), padded by [`BOX_PAD`] of its range on each side.
+pub fn visited_box(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
+    let at = model_at(m);
+    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let pts = terrain::visited(&walk, &plan.terrain, x0, BOX_WALKERS, BOX_STEPS, pool)?;
+    let d = m.info.section_names.len();
+    let mut s0 = vec![0.0; d];
+    m.walker.project(x0, &mut s0);
+    let (mut lo, mut hi) = (s0.clone(), s0);
+    for p in &pts {
+        for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
+            *l = l.min(*v);
+            *h = h.max(*v);
+        }
+    }
+    for (l, h) in lo.iter_mut().zip(hi.iter_mut()) {
+        let pad = BOX_PAD * (*h - *l).max(1e-9);
+        *l -= pad;
+        *h += pad;
+    }
+    Ok((lo, hi))
+}
+
+/// The chain's MFPT from `x0` on `chain`'s mesh over `bounds`.
+pub fn chain(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: &ChainPlan,
+    bounds: &(Vec<f64>, Vec<f64>),
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<pdw_limit::markov::ChainResult, LimitError> {
+    use pdw_limit::markov;
+    let at = model_at(m);
+    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let (z, w) = markov::gauss_hermite(chain.nodes);
+    let t = plan.terrain;
+    let slopes: Vec<(f64, f64)> = z
+        .iter()
+        .zip(&w)
+        .map(|(z, w)| (t.mean + t.sd * z, *w))
+        .collect();
+    let mesh = markov::Mesh {
+        lo: bounds.0.clone(),
+        hi: bounds.1.clone(),
+        n: chain.mesh,
+    };
+    let tr = markov::transitions(&walk, &slopes, &mesh, x0, pool)?;
+    Ok(markov::solve_chain(&tr))
+}
