@@ -305,13 +305,18 @@ fn report(
         },
         b.reason
     );
-    crate::outln!(
-        "  gait {:?}, min knee torque {:.4} N m, min normal force {:.3} N, friction needed {:.4}",
-        b.section,
-        b.min_knee_torque,
-        b.min_normal_force,
-        b.max_friction
-    );
+    if b.section.iter().all(|v| v.is_finite()) {
+        let gait: Vec<String> = b.section.iter().map(|v| format!("{v:.6}")).collect();
+        crate::outln!(
+            "  gait ({}), min knee torque {:.4} N m, min normal force {:.3} N, friction needed {:.4}",
+            gait.join(", "),
+            b.min_knee_torque,
+            b.min_normal_force,
+            b.max_friction
+        );
+    } else {
+        crate::outln!("  no gait");
+    }
     if b.min_relative_margin.is_finite() {
         crate::outln!(
             "  smallest relative margin {:.4} (required {})",

@@ -210,6 +210,7 @@ fn write(
         "gait_newton_tol": mfpt::GAIT_TOL,
     }));
     let start_units = super::units_list(&super::section_units(m));
+    let coordinates = m.coordinates_json();
     pdw_store::annotate(
         out,
         &pdw_store::Annotations {
@@ -221,6 +222,7 @@ fn write(
             },
             slice: None,
             scales: &[],
+            coordinates: Some(&coordinates),
         },
     )?;
     let curve: Vec<(f64, f64)> = est
