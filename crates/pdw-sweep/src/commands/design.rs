@@ -307,10 +307,15 @@ fn report(
     );
     if b.section.iter().all(|v| v.is_finite()) {
         let gait: Vec<String> = b.section.iter().map(|v| format!("{v:.6}")).collect();
+        // a model without knees has no knee torque (NaN): the clause is left out
+        let knee = if b.min_knee_torque.is_finite() {
+            format!(", min knee torque {:.4} N m", b.min_knee_torque)
+        } else {
+            String::new()
+        };
         crate::outln!(
-            "  gait ({}), min knee torque {:.4} N m, min normal force {:.3} N, friction needed {:.4}",
+            "  gait ({}){knee}, min normal force {:.3} N, friction needed {:.4}",
             gait.join(", "),
-            b.min_knee_torque,
             b.min_normal_force,
             b.max_friction
         );
