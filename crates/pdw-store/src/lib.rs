@@ -106,7 +106,10 @@ pub use design::{
     DESIGN_FORMAT,
 };
 pub use error::StoreError;
-pub use mfpt::{read_mfpt, write_mfpt, MfptData, MFPT_FORMAT};
+pub use mfpt::{
+    read_mfpt, read_mfpt_curve, write_mfpt, write_mfpt_curve, MfptCurveData, MfptData,
+    MFPT_CURVE_FORMAT, MFPT_FORMAT,
+};
 pub use plot::{
     animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_basin_attractors,
     plot_basin_stability, plot_bifurcation, plot_lines, plot_lines_marked, Frame, MarkerShape,

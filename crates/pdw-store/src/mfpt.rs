@@ -229,3 +229,162 @@ fn read_group(p: &Path, g: &Group) -> Result<MfptData> {
         ..MfptData::default()
     })
 }
+
+/// Value of the root attribute `format` of an MFPT-against-disturbance file.
+pub const MFPT_CURVE_FORMAT: &str = "pdw-sweep mfpt curve v1";
+const CURVE_KIND: &str = "pdw-sweep mfpt curve";
+
+/// The MFPT at each of several slope standard deviations (`pdw-sweep mfpt --sd A:B:N`), one
+/// Monte Carlo run per value with the same seed (the same standard normals scaled by each σ),
+/// and the Markov chain's MFPT at two meshes where it ran (NaN where not):
+///
+/// ```text
+/// /                 attrs: format ("pdw-sweep mfpt curve v1"), version, command, created, model,
+///                          params (JSON object)
+/// /curve            attrs: terrain, mean (rad), seed, walkers, max_steps, estimator,
+///                          chain_mesh_coarse, chain_mesh_fine (0 without the chain)
+/// /curve/sd         f64 [N] the slope standard deviations (rad)
+/// /curve/mfpt, /curve/stderr, /curve/restricted_mean, /curve/chain_mfpt_coarse,
+/// /curve/chain_mfpt_fine       f64 [N]
+/// /curve/falls, /curve/censored, /curve/total_steps       u64 [N]
+/// ```
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct MfptCurveData {
+    pub command: String,
+    pub model: String,
+    pub params: String,
+    pub terrain: String,
+    pub mean: f64,
+    pub seed: u64,
+    pub walkers: u64,
+    pub max_steps: u64,
+    pub estimator: String,
+    pub chain_mesh: [u64; 2],
+    pub sd: Vec<f64>,
+    pub mfpt: Vec<f64>,
+    pub stderr: Vec<f64>,
+    pub restricted_mean: Vec<f64>,
+    pub chain_mfpt_coarse: Vec<f64>,
+    pub chain_mfpt_fine: Vec<f64>,
+    pub falls: Vec<u64>,
+    pub censored: Vec<u64>,
+    pub total_steps: Vec<u64>,
+}
+
+impl MfptCurveData {
+    /// The `f64` columns by name, in file order.
+    fn columns(&self) -> [(&'static str, &Vec<f64>); 6] {
+        [
+            ("sd", &self.sd),
+            ("mfpt", &self.mfpt),
+            ("stderr", &self.stderr),
+            ("restricted_mean", &self.restricted_mean),
+            ("chain_mfpt_coarse", &self.chain_mfpt_coarse),
+            ("chain_mfpt_fine", &self.chain_mfpt_fine),
+        ]
+    }
+
+    /// The count columns by name.
+    fn counts(&self) -> [(&'static str, &Vec<u64>); 3] {
+        [
+            ("falls", &self.falls),
+            ("censored", &self.censored),
+            ("total_steps", &self.total_steps),
+        ]
+    }
+}
+
+/// Writes `data` to `path` (refused if it exists, unless `force`); every column must have one
+/// value per standard deviation.
+pub fn write_mfpt_curve(path: impl AsRef<Path>, force: bool, data: &MfptCurveData) -> Result<()> {
+    let n = data.sd.len();
+    let lens = data.columns().map(|c| c.1.len());
+    let counts = data.counts().map(|c| c.1.len());
+    if n == 0 || lens.iter().chain(&counts).any(|&l| l != n) {
+        return Err(StoreError::invalid(
+            "mfpt curve",
+            "every column needs one value per standard deviation",
+        ));
+    }
+    write_h5_atomically(path.as_ref(), force, |p, f| {
+        for (k, v) in [
+            ("format", MFPT_CURVE_FORMAT),
+            ("version", env!("CARGO_PKG_VERSION")),
+            ("command", &data.command),
+            ("created", &time::now_rfc3339()),
+            ("model", &data.model),
+            ("params", &data.params),
+        ] {
+            set_str(p, f, k, v)?;
+        }
+        let g = f.create_group("curve").at(p, "creating /curve")?;
+        set_str(p, &g, "terrain", &data.terrain)?;
+        set_str(p, &g, "estimator", &data.estimator)?;
+        set_attr(p, &g, "mean", &data.mean)?;
+        for (k, v) in [
+            ("seed", data.seed),
+            ("walkers", data.walkers),
+            ("max_steps", data.max_steps),
+            ("chain_mesh_coarse", data.chain_mesh[0]),
+            ("chain_mesh_fine", data.chain_mesh[1]),
+        ] {
+            set_attr(p, &g, k, &v)?;
+        }
+        for (k, v) in data.columns() {
+            put(p, &g, k, v.as_slice())?;
+        }
+        for (k, v) in data.counts() {
+            put(p, &g, k, v.as_slice())?;
+        }
+        Ok(())
+    })
+}
+
+/// Reads an MFPT-against-disturbance file.
+pub fn read_mfpt_curve(path: impl AsRef<Path>) -> Result<MfptCurveData> {
+    let p = path.as_ref();
+    let f = open_file(p, false)?;
+    let fmt = get_str(p, CURVE_KIND, &f, "format")?;
+    if fmt != MFPT_CURVE_FORMAT {
+        return Err(StoreError::Format {
+            path: p.to_path_buf(),
+            expected: CURVE_KIND,
+            detail: format!("format is {fmt:?}, expected {MFPT_CURVE_FORMAT:?}"),
+        });
+    }
+    let g = f.group("curve").at(p, "opening /curve")?;
+    let f64s = |k: &str| -> Result<Vec<f64>> {
+        g.dataset(k)
+            .at(p, &format!("opening /curve/{k}"))?
+            .read_raw()
+            .at(p, &format!("reading /curve/{k}"))
+    };
+    let u64s = |k: &str| -> Result<Vec<u64>> {
+        g.dataset(k)
+            .at(p, &format!("opening /curve/{k}"))?
+            .read_raw()
+            .at(p, &format!("reading /curve/{k}"))
+    };
+    let u = |k: &str| get_attr::<u64>(p, CURVE_KIND, &g, k);
+    Ok(MfptCurveData {
+        command: get_str(p, CURVE_KIND, &f, "command")?,
+        model: get_str(p, CURVE_KIND, &f, "model")?,
+        params: get_str(p, CURVE_KIND, &f, "params")?,
+        terrain: get_str(p, CURVE_KIND, &g, "terrain")?,
+        estimator: get_str(p, CURVE_KIND, &g, "estimator")?,
+        mean: get_attr::<f64>(p, CURVE_KIND, &g, "mean")?,
+        seed: u("seed")?,
+        walkers: u("walkers")?,
+        max_steps: u("max_steps")?,
+        chain_mesh: [u("chain_mesh_coarse")?, u("chain_mesh_fine")?],
+        sd: f64s("sd")?,
+        mfpt: f64s("mfpt")?,
+        stderr: f64s("stderr")?,
+        restricted_mean: f64s("restricted_mean")?,
+        chain_mfpt_coarse: f64s("chain_mfpt_coarse")?,
+        chain_mfpt_fine: f64s("chain_mfpt_fine")?,
+        falls: u64s("falls")?,
+        censored: u64s("censored")?,
+        total_steps: u64s("total_steps")?,
+    })
+}

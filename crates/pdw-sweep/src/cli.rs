@@ -357,7 +357,8 @@ pub struct MfptArgs {
     /// The terrain: slope (a random ground slope per step, normal around --mean with --sd).
     #[arg(long, default_value = "slope")]
     pub terrain: String,
-    /// Standard deviation of the slope, radians or with a unit (1deg, 0.5°).
+    /// Standard deviation of the slope, radians or with a unit (1deg, 0.5°); or a range A:B:N
+    /// (0.3deg:0.7deg:5) for the MFPT against it (a table, HDF5 and a PNG on a log axis).
     #[arg(long)]
     pub sd: String,
     /// Mean slope, radians or with a unit (3deg). Default: the model's slope (--slope or its

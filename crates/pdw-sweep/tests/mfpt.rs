@@ -95,3 +95,66 @@ fn mfpt_refuses_round_feet_and_a_negative_sd_clearly() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--terrain"), "{}", stderr(&o));
 }
+
+/// `mfpt --sd A:B:N` over the rimless wheel: each value of the curve is exactly the single run
+/// at that standard deviation (same seed), the MFPT falls as the ground gets rougher (the
+/// rimless wheel's closed-form step map loses more walkers per step to larger slope draws), and
+/// the file and its PNG are written.
+#[test]
+fn an_mfpt_curve_is_the_single_runs_at_each_standard_deviation() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("curve.h5");
+    let base = [
+        "mfpt",
+        "--model",
+        "rimless",
+        "--walkers",
+        "200",
+        "--max-steps",
+        "5000",
+        "--seed",
+        "3",
+        "--quiet",
+    ];
+    let mut args = base.to_vec();
+    args.extend(["--sd", "0.4deg:0.6deg:3", "--out", out.to_str().unwrap()]);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.with_extension("png").exists());
+    let c = pdw_store::read_mfpt_curve(&out).unwrap();
+    assert_eq!(c.sd.len(), 3);
+    assert_eq!(c.sd[0], 0.4f64.to_radians());
+    assert_eq!(c.sd[2], 0.6f64.to_radians());
+    for (i, sd) in c.sd.iter().enumerate() {
+        let single = dir.path().join(format!("s{i}.h5"));
+        let sd_text = format!("{sd:?}");
+        let mut args = base.to_vec();
+        args.extend(["--sd", &sd_text, "--out", single.to_str().unwrap()]);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s = pdw_store::read_mfpt(&single).unwrap();
+        assert_eq!(s.sd, *sd);
+        assert_eq!(
+            (s.total_steps, s.falls, s.censored),
+            (c.total_steps[i], c.falls[i], c.censored[i])
+        );
+        assert_eq!(s.mfpt.to_bits(), c.mfpt[i].to_bits());
+        assert!(c.chain_mfpt_coarse[i].is_nan(), "no chain was asked for");
+    }
+    assert!(
+        c.mfpt[0] > c.mfpt[1] && c.mfpt[1] > c.mfpt[2],
+        "MFPT must fall with the slope's spread: {:?}",
+        c.mfpt
+    );
+    for (bad, says) in [
+        ("1deg:0.5deg:3", "below the last"),
+        ("0.5deg:1deg:1", "integer >= 2"),
+        ("0.5deg:1deg", "neither"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend(["--sd", bad]);
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        assert!(stderr(&o).contains(says), "{bad}: {}", stderr(&o));
+    }
+}

@@ -72,6 +72,37 @@ pub fn parse_sd(s: &str, flags: &MfptFlags) -> Result<f64, InputError> {
     Ok(v)
 }
 
+/// `--sd A:B:N`: `N ≥ 2` standard deviations evenly spaced from `A` to `B` (each end in radians
+/// or with a unit, as [`parse_sd`] takes it; `0 ≤ A < B`); a plain `--sd` is one value.
+pub fn parse_sd_values(s: &str, flags: &MfptFlags) -> Result<Vec<f64>, InputError> {
+    let parts: Vec<&str> = s.split(':').collect();
+    match parts.as_slice() {
+        [one] => Ok(vec![parse_sd(one, flags)?]),
+        [a, b, n] => {
+            let (lo, hi) = (parse_sd(a, flags)?, parse_sd(b, flags)?);
+            let n: usize = n.trim().parse().ok().filter(|&n| n >= 2).ok_or_else(|| {
+                InputError(format!(
+                    "{}: '{s}': the count '{n}' must be an integer >= 2",
+                    flags.sd
+                ))
+            })?;
+            if lo >= hi {
+                return Err(InputError(format!(
+                    "{}: '{s}': the first value must be below the last",
+                    flags.sd
+                )));
+            }
+            Ok((0..n)
+                .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+                .collect())
+        }
+        _ => Err(InputError(format!(
+            "{}: '{s}' is neither a standard deviation (1deg) nor a range A:B:N (0.5deg:3deg:11)",
+            flags.sd
+        ))),
+    }
+}
+
 /// Refuses zero walkers or steps, and a terrain whose slopes could leave (−π/2, π/2) (the mean
 /// plus [`MAX_DRAW`] standard deviations).
 pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> {

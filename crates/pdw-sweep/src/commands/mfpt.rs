@@ -23,7 +23,8 @@ const FLAGS: MfptFlags = MfptFlags {
 
 pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     mfpt::check_terrain(&a.terrain, &FLAGS)?;
-    let sd = mfpt::parse_sd(&a.sd, &FLAGS)?;
+    let sds = mfpt::parse_sd_values(&a.sd, &FLAGS)?;
+    let sd = sds[sds.len() - 1];
     let integrator = super::integrator(&a.integrator, mfpt::default_integrator())?;
     let mut choice = a.model.clone();
     if let Some(mean) = &a.mean {
@@ -42,8 +43,12 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
         max_steps: a.max_steps,
         integrator,
     };
+    // the largest standard deviation is checked (the range's last value)
     mfpt::check_plan(&plan, &FLAGS)?;
     let claim = claim_out(a)?;
+    if sds.len() > 1 {
+        return super::mfpt_curve::run(a, &m, &plan, &sds, claim);
+    }
     let (x0, section) = mfpt::start(&m)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads)
@@ -70,7 +75,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
 }
 
 /// Claims `--out` and its PNG (refused if they exist without `--force`).
-fn claim_out(a: &MfptArgs) -> Result<Option<super::output::Claim>, InputError> {
+pub(super) fn claim_out(a: &MfptArgs) -> Result<Option<super::output::Claim>, InputError> {
     let Some(out) = &a.out else {
         return Ok(None);
     };
@@ -86,7 +91,7 @@ fn claim_out(a: &MfptArgs) -> Result<Option<super::output::Claim>, InputError> {
             may_exist: false,
         },
         super::output::Output {
-            flag: "--out (its survival PNG)",
+            flag: "--out (its PNG)",
             path: &png,
             format: super::output::Format::Png,
             may_exist: false,
@@ -151,7 +156,8 @@ fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate,
 }
 
 /// The estimator's description stored with the result.
-const ESTIMATOR: &str = "mfpt = total steps / falls: the maximum-likelihood estimate for a \
+pub(super) const ESTIMATOR: &str =
+    "mfpt = total steps / falls: the maximum-likelihood estimate for a \
                          constant fall probability per step (censored geometric first-passage \
                          time); stderr = sqrt(S (S + F)) / F^1.5 from the Fisher information";
 
@@ -251,7 +257,10 @@ fn write(
 }
 
 /// The chain's plan from `--chain`, `--mesh`, `--nodes` (checked), or `None` without `--chain`.
-fn chain_plan(a: &MfptArgs, m: &BuiltModel) -> Result<Option<mfpt::ChainPlan>, InputError> {
+pub(super) fn chain_plan(
+    a: &MfptArgs,
+    m: &BuiltModel,
+) -> Result<Option<mfpt::ChainPlan>, InputError> {
     if !a.chain {
         return Ok(None);
     }
@@ -287,7 +296,7 @@ fn chain_plan(a: &MfptArgs, m: &BuiltModel) -> Result<Option<mfpt::ChainPlan>, I
 
 /// The chain at `--mesh` and twice as fine over the box the walkers visit; prints both and
 /// returns the numbers the file keeps.
-fn run_chain(
+pub(super) fn run_chain(
     m: &BuiltModel,
     plan: &MfptPlan,
     c: &mfpt::ChainPlan,

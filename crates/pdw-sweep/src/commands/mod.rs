@@ -10,6 +10,7 @@ mod fixedpoint;
 mod follow;
 mod merge;
 mod mfpt;
+mod mfpt_curve;
 mod models;
 mod output;
 mod simulate;
