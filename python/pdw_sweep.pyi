@@ -193,7 +193,10 @@ def mfpt(
     drawn from N(slope, sd²) (`sd` in rad or '1deg'). Returns mfpt and stderr (steps / falls,
     the maximum-likelihood estimate), restricted_mean and restricted_stderr (mean of
     min(T, max_steps)), walkers, falls, censored, total_steps, survival (max_steps + 1,),
-    failures (fall kind → count), start (section state), mean, sd. The same on any `threads`."""
+    failures (fall kind → count), start (section state), mean, sd. The same on any `threads`.
+    With `sd="A:B:N"` (e.g. "0.3deg:0.7deg:5", as `mfpt --sd A:B:N`): one run per standard
+    deviation with the same seed, a dict of arrays sd, mfpt, stderr, restricted_mean, falls,
+    censored, total_steps (one value per σ) and mean."""
     ...
 
 def simulate(

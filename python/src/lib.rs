@@ -1348,8 +1348,69 @@ fn coordinates_dict<'py>(py: Python<'py>, m: &Model) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
+/// `mfpt(..., sd="A:B:N")`: one Monte Carlo run per standard deviation (the same seed: common
+/// random numbers), as `pdw-sweep mfpt --sd A:B:N`; a dict of arrays, one value per σ.
+fn mfpt_curve<'py>(
+    py: Python<'py>,
+    m: &Model,
+    sds: &[f64],
+    (walkers, max_steps, seed, threads): (usize, usize, u64, usize),
+) -> PyResult<Bound<'py, PyDict>> {
+    const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
+        terrain: "terrain",
+        sd: "sd",
+        mean: "slope",
+        walkers: "walkers",
+        max_steps: "max_steps",
+    };
+    pdw::input::check_threads(threads, "threads").map_err(err)?;
+    pdw::mfpt::check_model(m).map_err(err)?;
+    let plan = |sd: f64| pdw::mfpt::MfptPlan {
+        terrain: pdw_limit::terrain::SlopeTerrain {
+            mean: m.slope(),
+            sd,
+            seed,
+        },
+        walkers,
+        max_steps,
+        integrator: pdw::mfpt::default_integrator(),
+    };
+    pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &FLAGS).map_err(err)?;
+    let ests = interruptible(py, || -> PyResult<_> {
+        let (x0, _) = pdw::mfpt::start(m).map_err(err)?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(err)?;
+        sds.iter()
+            .map(|&sd| {
+                pdw::mfpt::run(m, &plan(sd), &x0, &pool, &|_| {})
+                    .map(|r| r.1)
+                    .map_err(err)
+            })
+            .collect::<PyResult<Vec<_>>>()
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("sd", sds.to_vec().into_pyarray(py))?;
+    type Column = fn(&pdw_limit::terrain::MfptEstimate) -> f64;
+    let columns: [(&str, Column); 6] = [
+        ("mfpt", |e| e.mfpt),
+        ("stderr", |e| e.stderr),
+        ("restricted_mean", |e| e.restricted_mean),
+        ("falls", |e| e.falls as f64),
+        ("censored", |e| e.censored as f64),
+        ("total_steps", |e| e.total_steps as f64),
+    ];
+    for (k, f) in columns {
+        d.set_item(k, ests.iter().map(f).collect::<Vec<f64>>().into_pyarray(py))?;
+    }
+    d.set_item("mean", m.slope())?;
+    Ok(d)
+}
+
 /// `mfpt(model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000, seed=0,
 /// threads=2, **params)`: the Monte Carlo of `pdw-sweep mfpt` (the slope is the mean slope).
+/// With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of arrays).
 #[pyfunction]
 #[pyo3(
     signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, **params),
@@ -1375,17 +1436,22 @@ fn mfpt<'py>(
         max_steps: "max_steps",
     };
     pdw::input::check_threads(threads, "threads").map_err(err)?;
-    let sd = match sd {
+    let sds = match sd {
         None => {
             return Err(err(
                 "sd: give the slope's standard deviation (rad, or '1deg')",
             ))
         }
         Some(v) => match v.extract::<f64>() {
-            Ok(x) => pdw::mfpt::parse_sd(&x.to_string(), &FLAGS).map_err(err)?,
-            Err(_) => pdw::mfpt::parse_sd(&v.extract::<String>()?, &FLAGS).map_err(err)?,
+            Ok(x) => pdw::mfpt::parse_sd_values(&x.to_string(), &FLAGS).map_err(err)?,
+            Err(_) => pdw::mfpt::parse_sd_values(&v.extract::<String>()?, &FLAGS).map_err(err)?,
         },
     };
+    if sds.len() > 1 {
+        let m = build_kw(model, slope, params)?;
+        return mfpt_curve(py, &m, &sds, (walkers, max_steps, seed, threads));
+    }
+    let sd = sds[0];
     let m = build_kw(model, slope, params)?;
     pdw::mfpt::check_model(&m).map_err(err)?;
     let plan = pdw::mfpt::MfptPlan {

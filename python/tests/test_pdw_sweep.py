@@ -535,3 +535,16 @@ def test_mfpt_survival_estimator_and_thread_count():
     assert r1["total_steps"] == r["total_steps"]
     with pytest.raises(ValueError, match="sd"):
         pdw.mfpt("rimless", sd="-1deg")
+
+
+def test_mfpt_curve_is_the_single_runs_at_each_sd():
+    c = pdw.mfpt("rimless", sd="0.4deg:0.6deg:3", walkers=150, max_steps=5000, seed=4)
+    assert c["sd"].shape == (3,)
+    assert abs(c["sd"][0] - np.deg2rad(0.4)) < 1e-15 and abs(c["sd"][2] - np.deg2rad(0.6)) < 1e-15
+    for i, sd in enumerate(c["sd"]):
+        r = pdw.mfpt("rimless", sd=float(sd), walkers=150, max_steps=5000, seed=4)
+        assert r["total_steps"] == c["total_steps"][i] and r["falls"] == c["falls"][i]
+        assert r["mfpt"] == c["mfpt"][i]
+    assert c["mfpt"][0] > c["mfpt"][1] > c["mfpt"][2]
+    with pytest.raises(ValueError, match="below the last"):
+        pdw.mfpt("rimless", sd="1deg:0.5deg:3")
