@@ -1348,6 +1348,15 @@ fn coordinates_dict<'py>(py: Python<'py>, m: &Model) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
+/// The names of `mfpt`'s keyword arguments in its messages.
+const MFPT_FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
+    terrain: "terrain",
+    sd: "sd",
+    mean: "slope",
+    walkers: "walkers",
+    max_steps: "max_steps",
+};
+
 /// `mfpt(..., sd="A:B:N")`: one Monte Carlo run per standard deviation (the same seed: common
 /// random numbers), as `pdw-sweep mfpt --sd A:B:N`; a dict of arrays, one value per σ.
 fn mfpt_curve<'py>(
@@ -1356,13 +1365,6 @@ fn mfpt_curve<'py>(
     sds: &[f64],
     (walkers, max_steps, seed, threads): (usize, usize, u64, usize),
 ) -> PyResult<Bound<'py, PyDict>> {
-    const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
-        terrain: "terrain",
-        sd: "sd",
-        mean: "slope",
-        walkers: "walkers",
-        max_steps: "max_steps",
-    };
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     pdw::mfpt::check_model(m).map_err(err)?;
     let plan = |sd: f64| pdw::mfpt::MfptPlan {
@@ -1375,7 +1377,7 @@ fn mfpt_curve<'py>(
         max_steps,
         integrator: pdw::mfpt::default_integrator(),
     };
-    pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &FLAGS).map_err(err)?;
+    pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     let ests = interruptible(py, || -> PyResult<_> {
         let (x0, _) = pdw::mfpt::start(m).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()
@@ -1428,13 +1430,6 @@ fn mfpt<'py>(
     threads: usize,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
-        terrain: "terrain",
-        sd: "sd",
-        mean: "slope",
-        walkers: "walkers",
-        max_steps: "max_steps",
-    };
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let sds = match sd {
         None => {
@@ -1443,8 +1438,10 @@ fn mfpt<'py>(
             ))
         }
         Some(v) => match v.extract::<f64>() {
-            Ok(x) => pdw::mfpt::parse_sd_values(&x.to_string(), &FLAGS).map_err(err)?,
-            Err(_) => pdw::mfpt::parse_sd_values(&v.extract::<String>()?, &FLAGS).map_err(err)?,
+            Ok(x) => pdw::mfpt::parse_sd_values(&x.to_string(), &MFPT_FLAGS).map_err(err)?,
+            Err(_) => {
+                pdw::mfpt::parse_sd_values(&v.extract::<String>()?, &MFPT_FLAGS).map_err(err)?
+            }
         },
     };
     if sds.len() > 1 {
@@ -1464,7 +1461,7 @@ fn mfpt<'py>(
         max_steps,
         integrator: pdw::mfpt::default_integrator(),
     };
-    pdw::mfpt::check_plan(&plan, &FLAGS).map_err(err)?;
+    pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;
     let (est, start) = interruptible(py, || -> PyResult<_> {
         let (x0, section) = pdw::mfpt::start(&m).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()

@@ -209,12 +209,7 @@ fn write(
     };
     // the claim refused an existing file without --force; its placeholder is replaced
     pdw_store::write_mfpt(out, true, &data)?;
-    let prov = super::provenance(serde_json::json!({
-        "integrator": super::integrator_json(&plan.integrator),
-        "walkers": plan.walkers,
-        "max_steps": plan.max_steps,
-        "gait_newton_tol": mfpt::GAIT_TOL,
-    }));
+    let prov = provenance(plan);
     let start_units = super::units_list(&super::section_units(m));
     let coordinates = m.coordinates_json();
     pdw_store::annotate(
@@ -254,6 +249,16 @@ fn write(
         true,
     )?;
     Ok(())
+}
+
+/// The run's options as every MFPT file's provenance records them.
+pub(super) fn provenance(plan: &MfptPlan) -> pdw_store::Provenance {
+    super::provenance(serde_json::json!({
+        "integrator": super::integrator_json(&plan.integrator),
+        "walkers": plan.walkers,
+        "max_steps": plan.max_steps,
+        "gait_newton_tol": mfpt::GAIT_TOL,
+    }))
 }
 
 /// The chain's plan from `--chain`, `--mesh`, `--nodes` (checked), or `None` without `--chain`.

@@ -150,12 +150,7 @@ fn write(
     };
     // the claim refused an existing file without --force; its placeholder is replaced
     pdw_store::write_mfpt_curve(out, true, &data)?;
-    let prov = super::provenance(serde_json::json!({
-        "integrator": super::integrator_json(&plan.integrator),
-        "walkers": plan.walkers,
-        "max_steps": plan.max_steps,
-        "gait_newton_tol": mfpt::GAIT_TOL,
-    }));
+    let prov = super::mfpt::provenance(plan);
     let coordinates = m.coordinates_json();
     pdw_store::annotate(
         out,
