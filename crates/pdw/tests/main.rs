@@ -4,4 +4,5 @@
 mod design;
 mod input;
 mod mfpt;
+mod rimless_chain;
 mod simulate;
