@@ -16,7 +16,11 @@
 //! # Rules
 //! - A landing point outside the mesh's box counts as absorbed (as a fall); the mass that left
 //!   this way per step, weighted by the quasi-stationary distribution, is reported
-//!   ([`ChainResult::out_of_mesh`]) so that a box too small shows.
+//!   ([`ChainResult::out_of_mesh`]) beside the mass that fell ([`ChainResult::fall_per_step`])
+//!   so that a box too small shows: where leaving the box is as likely as falling, the chain's
+//!   MFPT is the time to leave the box, not to fall. [`landing_hull`] widens a box until it
+//!   holds every landing of its own nodes (the rare falls of small σ start from landings far
+//!   outside the box the walkers visit in a short run).
 //! - `(I − Q) m = 1` gives the expected strides until absorption `m` (the failing stride
 //!   included); the MFPT counted in heel strikes from a state is `m − 1`, and from the start
 //!   (the gait of the mean slope on a line of the mean slope) it is `q_start · m` with
@@ -220,6 +224,81 @@ pub fn transitions(
     Ok(t)
 }
 
+/// Slope nodes lighter than this are left out of [`landing_hull`] (their landings may lie
+/// anywhere; the probability they carry per step is below any fall rate the chain resolves).
+pub const HULL_MIN_WEIGHT: f64 = 1e-16;
+
+/// The box `[lo, hi]` widened to hold every landing (not a fall) of the nodes of a coarse mesh
+/// of `per_axis` nodes per axis over it, from every layer onto every slope node of weight at
+/// least [`HULL_MIN_WEIGHT`], repeated on the widened box until a pass widens no side by more
+/// than 1 % of its range (at most `passes` passes). Returns the box and the passes run.
+pub fn landing_hull(
+    walk: &SlopeWalk,
+    slopes: &[(f64, f64)],
+    bounds: (Vec<f64>, Vec<f64>),
+    per_axis: usize,
+    passes: usize,
+    pool: &rayon::ThreadPool,
+) -> Result<((Vec<f64>, Vec<f64>), usize), LimitError> {
+    let (mut lo, mut hi) = bounds;
+    for pass in 1..=passes {
+        let mesh = Mesh {
+            lo: lo.clone(),
+            hi: hi.clone(),
+            n: per_axis.max(2),
+        };
+        let (new_lo, new_hi) = hull_once(walk, slopes, &mesh, pool)?;
+        let grew = (0..lo.len()).any(|a| {
+            let r = hi[a] - lo[a];
+            lo[a] - new_lo[a] > 0.01 * r || new_hi[a] - hi[a] > 0.01 * r
+        });
+        (lo, hi) = (new_lo, new_hi);
+        if !grew {
+            return Ok(((lo, hi), pass));
+        }
+    }
+    Ok(((lo, hi), passes))
+}
+
+/// One pass of [`landing_hull`]: the mesh's box and every landing of its nodes.
+fn hull_once(
+    walk: &SlopeWalk,
+    slopes: &[(f64, f64)],
+    mesh: &Mesh,
+    pool: &rayon::ThreadPool,
+) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
+    let base = walk.model(walk.mean())?;
+    let mut starts = Vec::with_capacity(slopes.len() * mesh.len());
+    for (s, _) in slopes {
+        let w = walk.model(*s)?;
+        for k in 0..mesh.len() {
+            let mut x = vec![0.0; w.dim()];
+            w.lift(&mesh.node(k), &mut x);
+            starts.push((*s, x));
+        }
+    }
+    let (mut lo, mut hi) = (mesh.lo.clone(), mesh.hi.clone());
+    let mut sec = vec![0.0; base.section_dim()];
+    for (s_l, w_l) in slopes {
+        if *w_l < HULL_MIN_WEIGHT {
+            continue;
+        }
+        for post in strides_onto(walk, *s_l, &starts, pool)?
+            .into_iter()
+            .flatten()
+        {
+            base.project(&post, &mut sec);
+            if sec.iter().all(|v| v.is_finite()) {
+                for (a, v) in sec.iter().enumerate() {
+                    lo[a] = lo[a].min(*v);
+                    hi[a] = hi[a].max(*v);
+                }
+            }
+        }
+    }
+    Ok((lo, hi))
+}
+
 /// Every start `(s_from, x)` (full state in the frame of line `s_from`) carried to the frame of
 /// line `s_to` and run one stride of the model at `s_to`, batched: the post-heel-strike state
 /// in `s_to`'s frame, or `None` for a stride that did not reach it.
@@ -288,13 +367,18 @@ pub struct ChainResult {
     pub mfpt: f64,
     /// Dominant eigenvalue of `Q` (power iteration).
     pub lambda: f64,
-    /// `1/(1 − λ) − 1`: the MFPT from the quasi-stationary distribution by the eigenvalue.
+    /// `1/(1 − λ) − 1`: the MFPT from the quasi-stationary distribution by the eigenvalue,
+    /// with `1 − λ = π·(fall + out)` (the probability the quasi-stationary distribution leaves
+    /// per step; equal to `1 − λ` for the eigenvector, and exact where `λ` rounds to 1).
     pub mfpt_lambda: f64,
     /// `π m / Σπ − 1`: the same by the solve.
     pub mfpt_quasi_stationary: f64,
     /// Probability per step of landing outside the mesh, under the quasi-stationary
     /// distribution.
     pub out_of_mesh: f64,
+    /// Probability per step of a fall, under the quasi-stationary distribution
+    /// (`fall_per_step + out_of_mesh = 1 − λ`).
+    pub fall_per_step: f64,
     /// Relative residual of the solve.
     pub residual: f64,
     /// Number of chain states (without the absorbing one).
@@ -368,11 +452,18 @@ fn solve(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
 }
 
 /// The dominant left eigenvector `π` (Σπ = 1) and eigenvalue of `Q` by power iteration from
-/// the uniform vector, until λ changes by less than 1e-13 relative (at most 10⁵ steps).
+/// the uniform vector, until the probability `π·(fall + out)` that `π` leaves per step (which
+/// is `1 − λ`) changes by less than 1e-12 relative (at most 10⁵ steps). Stopping on `λ`
+/// itself would stop too early when `1 − λ` is below `λ`'s rounding.
 fn dominant(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
+    let leave: Vec<f64> = t.fall[..n]
+        .iter()
+        .zip(&t.out[..n])
+        .map(|(f, o)| f + o)
+        .collect();
     let mut pi = vec![1.0 / n as f64; n];
     let mut next = vec![0.0; n];
-    let mut lambda = 0.0;
+    let (mut lambda, mut rate) = (0.0, f64::INFINITY);
     for _ in 0..100_000 {
         vecmat(t, n, &pi, &mut next);
         let l: f64 = next.iter().sum();
@@ -381,8 +472,10 @@ fn dominant(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
         }
         next.iter_mut().for_each(|v| *v /= l);
         std::mem::swap(&mut pi, &mut next);
-        let done = (l - lambda).abs() < 1e-13 * l;
         lambda = l;
+        let r = dot(&pi, &leave);
+        let done = (r - rate).abs() <= 1e-12 * r;
+        rate = r;
         if done {
             break;
         }
@@ -397,12 +490,16 @@ pub fn solve_chain(t: &Transitions) -> ChainResult {
     let start = &t.rows[n];
     let mfpt = start.iter().map(|(j, q)| q * m[*j]).sum();
     let (pi, lambda) = dominant(t, n);
+    // 1 − λ = π·(fall + out) for the normalised eigenvector (the rows of Q, fall and out sum
+    // to 1): computed this way it keeps its digits when 1 − λ nears the rounding of λ.
+    let absorbed = dot(&pi, &t.fall[..n]) + dot(&pi, &t.out[..n]);
     ChainResult {
         mfpt,
         lambda,
-        mfpt_lambda: 1.0 / (1.0 - lambda) - 1.0,
+        mfpt_lambda: 1.0 / absorbed - 1.0,
         mfpt_quasi_stationary: dot(&pi, &m) - 1.0,
         out_of_mesh: dot(&pi, &t.out[..n]),
+        fall_per_step: dot(&pi, &t.fall[..n]),
         residual,
         states: n,
     }

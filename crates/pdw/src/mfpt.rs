@@ -235,6 +235,75 @@ pub fn visited_box(
     Ok((lo, hi))
 }
 
+/// The slope nodes `(s_l, w_l)` of an `n`-point Gauss–Hermite rule for `plan`'s terrain.
+pub fn slope_nodes(plan: &MfptPlan, n: usize) -> Vec<(f64, f64)> {
+    let (z, w) = pdw_limit::markov::gauss_hermite(n);
+    let t = plan.terrain;
+    z.iter()
+        .zip(&w)
+        .map(|(z, w)| (t.mean + t.sd * z, *w))
+        .collect()
+}
+
+/// Nodes per axis of the coarse meshes of [`chain_box`] (by section dimension) and its passes.
+pub const HULL_MESH: [usize; 3] = [40, 10, 5];
+pub const HULL_PASSES: usize = 4;
+
+/// The chain's box and how it was chosen.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainBox {
+    pub bounds: (Vec<f64>, Vec<f64>),
+    /// Widening passes of [`pdw_limit::markov::landing_hull`] (0: the walkers' box kept).
+    pub passes: usize,
+    /// Share of the absorption that was landings outside the walkers' box (on the coarse
+    /// mesh), the reason to widen it.
+    pub out_share: f64,
+}
+
+/// The share of absorption above which the walkers' box is widened ([`chain_box`]).
+pub const OUT_SHARE_MAX: f64 = 0.01;
+
+/// The chain's box: the box the walkers visit ([`visited_box`]); where more than
+/// [`OUT_SHARE_MAX`] of the chain's absorption on it is landings outside it (the rare falls of
+/// a small σ start far outside the box a short run visits), that box widened by
+/// [`pdw_limit::markov::landing_hull`] until it holds the landings of its own nodes on every
+/// slope node. Not widened otherwise: a wider box is a coarser mesh.
+pub fn chain_box(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: &ChainPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<ChainBox, LimitError> {
+    let visited = visited_box(m, plan, x0, pool)?;
+    let r = self::chain(m, plan, chain, &visited, x0, pool)?;
+    let absorbed = r.out_of_mesh + r.fall_per_step;
+    let out_share = if absorbed > 0.0 {
+        r.out_of_mesh / absorbed
+    } else {
+        0.0
+    };
+    if out_share <= OUT_SHARE_MAX {
+        return Ok(ChainBox {
+            bounds: visited,
+            passes: 0,
+            out_share,
+        });
+    }
+    let at = model_at(m);
+    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let d = visited.0.len();
+    let per_axis = HULL_MESH[d.clamp(1, 3) - 1];
+    let slopes = slope_nodes(plan, chain.nodes);
+    let (bounds, passes) =
+        pdw_limit::markov::landing_hull(&walk, &slopes, visited, per_axis, HULL_PASSES, pool)?;
+    Ok(ChainBox {
+        bounds,
+        passes,
+        out_share,
+    })
+}
+
 /// The chain's MFPT from `x0` on `chain`'s mesh over `bounds`.
 pub fn chain(
     m: &BuiltModel,
@@ -247,13 +316,7 @@ pub fn chain(
     use pdw_limit::markov;
     let at = model_at(m);
     let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
-    let (z, w) = markov::gauss_hermite(chain.nodes);
-    let t = plan.terrain;
-    let slopes: Vec<(f64, f64)> = z
-        .iter()
-        .zip(&w)
-        .map(|(z, w)| (t.mean + t.sd * z, *w))
-        .collect();
+    let slopes = slope_nodes(plan, chain.nodes);
     let mesh = markov::Mesh {
         lo: bounds.0.clone(),
         hi: bounds.1.clone(),

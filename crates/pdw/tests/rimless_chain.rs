@@ -141,6 +141,42 @@ impl ClosedChain {
         r
     }
 
+    /// The quasi-stationary MFPT `1/(π·fall) − 1` (heel strikes): `π` the dominant left
+    /// eigenvector of `Q` by power iteration (its convergence is set by the gap to the second
+    /// eigenvalue, not by `1 − λ`, so it reaches MFPTs no iteration on `m = 1 + Q m` can).
+    fn quasi_stationary_mfpt(&self, wheel: &Wheel) -> f64 {
+        let n = self.slopes.len() * self.n_rate;
+        let rows: Vec<Vec<(usize, f64)>> = (0..n)
+            .map(|i| {
+                let (j, k) = (i / self.n_rate, i % self.n_rate);
+                self.row(wheel, self.slopes[j].0, self.lo + k as f64 * self.h)
+            })
+            .collect();
+        let fall: Vec<f64> = rows
+            .iter()
+            .map(|r| (1.0 - r.iter().map(|e| e.1).sum::<f64>()).max(0.0))
+            .collect();
+        let mut pi = vec![1.0 / n as f64; n];
+        let mut last = 0.0;
+        for _ in 0..100_000 {
+            let mut next = vec![0.0; n];
+            for (i, r) in rows.iter().enumerate() {
+                for (j, q) in r {
+                    next[*j] += pi[i] * q;
+                }
+            }
+            let total: f64 = next.iter().sum();
+            next.iter_mut().for_each(|v| *v /= total);
+            pi = next;
+            let rate: f64 = pi.iter().zip(&fall).map(|(p, f)| p * f).sum();
+            if (rate - last).abs() < 1e-9 * rate {
+                break;
+            }
+            last = rate;
+        }
+        1.0 / last - 1.0
+    }
+
     /// MFPT (heel strikes) from the gait `w_star` of the mean slope, on a line of the mean
     /// slope: `m = 1 + Q m` by Gauss–Seidel sweeps until the largest change is 1e-10 of `m`.
     fn mfpt(&self, wheel: &Wheel, w_star: f64) -> f64 {
@@ -230,6 +266,56 @@ fn the_converged_closed_form_chain_agrees_with_the_monte_carlo_walkers() {
         (mc.restricted_mean - n41_fine).abs() < tol,
         "Monte Carlo {} vs closed form {n41_fine} (tol {tol})",
         mc.restricted_mean
+    );
+}
+
+/// At σ = 1° on Byl & Tedrake's 8° slope the walkers of a short run stay in a narrow band, and
+/// a chain meshed over that band measures the time to leave it (its absorption is almost all
+/// landings outside the mesh). The widened box holds every landing: its absorption is falls,
+/// and its quasi-stationary MFPT — near 10¹², far beyond any Monte Carlo — agrees with the
+/// closed-form chain's (power iteration on its own grid) within both meshes' refinement.
+#[test]
+fn the_chains_widened_box_makes_falls_not_box_exits_absorb() {
+    let mean = 8f64.to_radians();
+    let m = pdw::build("rimless", &[("slope".to_string(), mean)]).unwrap();
+    let wheel = Wheel::of(&m);
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let mut plan = plan();
+    plan.terrain.mean = mean;
+    plan.terrain.sd = 1f64.to_radians();
+    let pool = pool();
+    let c = |mesh| mfpt::ChainPlan {
+        nodes: 40,
+        mesh,
+        bounds: None,
+    };
+    let visited = mfpt::visited_box(&m, &plan, &x0, &pool).unwrap();
+    let narrow = mfpt::chain(&m, &plan, &c(200), &visited, &x0, &pool).unwrap();
+    assert!(
+        narrow.out_of_mesh > 10.0 * narrow.fall_per_step,
+        "{narrow:?}"
+    );
+    let cb = mfpt::chain_box(&m, &plan, &c(200), &x0, &pool).unwrap();
+    assert!(cb.passes > 0 && cb.out_share > 0.9, "{cb:?}");
+    let wide = cb.bounds;
+    let run = |n| mfpt::chain(&m, &plan, &c(n), &wide, &x0, &pool).unwrap();
+    let (coarse, fine) = (run(200), run(400));
+    for r in [&coarse, &fine] {
+        assert!(r.out_of_mesh < 1e-6 * r.fall_per_step, "{r:?}");
+    }
+    let closed = |n_rate| {
+        let mut cc = ClosedChain::new(40, n_rate, 0.4, 2.6);
+        cc.slopes = mfpt::slope_nodes(&plan, 40);
+        cc.quasi_stationary_mfpt(&wheel)
+    };
+    let (c1, c2) = (closed(1101), closed(2201));
+    eprintln!("narrow box {narrow:?}\nwide {coarse:?} {fine:?}\nclosed form {c1} (grid/2) {c2}");
+    assert!(fine.mfpt_lambda > 1e10, "{fine:?}");
+    let tol = (fine.mfpt_lambda - coarse.mfpt_lambda).abs() + (c2 - c1).abs();
+    assert!(
+        (fine.mfpt_lambda - c2).abs() < tol,
+        "engine {} vs closed form {c2} (tol {tol})",
+        fine.mfpt_lambda
     );
 }
 

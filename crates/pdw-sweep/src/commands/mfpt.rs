@@ -308,15 +308,29 @@ pub(super) fn run_chain(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<Vec<(String, f64)>> {
-    let bounds = mfpt::visited_box(m, plan, x0, pool)?;
+    let cb = mfpt::chain_box(m, plan, c, x0, pool)?;
+    let bounds = cb.bounds;
+    let how = if cb.passes == 0 {
+        "the walkers' box, padded".to_string()
+    } else {
+        format!(
+            "the walkers' box widened in {} pass{} to hold its nodes' landings: on the walkers' \
+             box {:.1} % of the absorption was landings outside it",
+            cb.passes,
+            if cb.passes == 1 { "" } else { "es" },
+            100.0 * cb.out_share
+        )
+    };
     crate::outln!(
-        "Markov chain: {} Gauss-Hermite slope nodes, mesh over {:?} .. {:?} (the walkers' box, \
-         padded)",
+        "Markov chain: {} Gauss-Hermite slope nodes, mesh over {:?} .. {:?} ({how})",
         c.nodes,
         bounds.0,
-        bounds.1
+        bounds.1,
     );
-    let mut out = vec![("nodes".to_string(), c.nodes as f64)];
+    let mut out = vec![
+        ("nodes".to_string(), c.nodes as f64),
+        ("box_widening_passes".to_string(), cb.passes as f64),
+    ];
     for (label, n) in [("coarse", c.mesh), ("fine", 2 * c.mesh)] {
         let t0 = Instant::now();
         let fine = mfpt::ChainPlan {
@@ -326,25 +340,46 @@ pub(super) fn run_chain(
         let r = mfpt::chain(m, plan, &fine, &bounds, x0, pool)?;
         crate::outln!(
             "  mesh {n}: MFPT {:.4} steps from the start; lambda {:.10}, 1/(1-lambda)-1 = {:.4} \
-             (quasi-stationary by the solve: {:.4}); {} states, out of mesh {:.2e} per step; \
-             {:.1} s",
+             (quasi-stationary by the solve: {:.4}); {} states; per step {:.2e} falls, {:.2e} out \
+             of the mesh; {:.1} s",
             r.mfpt,
             r.lambda,
             r.mfpt_lambda,
             r.mfpt_quasi_stationary,
             r.states,
+            r.fall_per_step,
             r.out_of_mesh,
             t0.elapsed().as_secs_f64()
         );
+        if let Some(w) = box_warning(&r) {
+            crate::outln!("  {w}");
+        }
         for (k, v) in [
             ("mesh", n as f64),
             ("mfpt", r.mfpt),
             ("lambda", r.lambda),
             ("mfpt_lambda", r.mfpt_lambda),
             ("out_of_mesh", r.out_of_mesh),
+            ("fall_per_step", r.fall_per_step),
         ] {
             out.push((format!("{k}_{label}"), v));
         }
     }
     Ok(out)
+}
+
+/// A warning when the chain's absorption is more than 1 % landings outside the mesh rather
+/// than falls: its MFPT is then the time to leave the box, an underestimate of the time to fall.
+pub(super) fn box_warning(r: &pdw_limit::markov::ChainResult) -> Option<String> {
+    let absorbed = r.out_of_mesh + r.fall_per_step;
+    (absorbed > 0.0 && r.out_of_mesh > 0.01 * absorbed).then(|| {
+        format!(
+            "WARNING: {:.1} % of the chain's absorption is landings outside the mesh ({:.2e} per \
+             step against {:.2e} falls): its MFPT is the time to leave the box and \
+             underestimates the time to fall",
+            100.0 * r.out_of_mesh / absorbed,
+            r.out_of_mesh,
+            r.fall_per_step
+        )
+    })
 }
