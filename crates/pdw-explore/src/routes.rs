@@ -60,9 +60,17 @@ async fn blocking<T: Send + 'static>(
         .map_err(|_| ApiError::internal("the computation panicked"))?
 }
 
-/// A JSON body of type `T`, or a 400 saying what is wrong with it.
-fn parse<T: serde::de::DeserializeOwned>(body: &Bytes) -> Result<T, ApiError> {
-    serde_json::from_slice(body).map_err(|e| ApiError::bad_request(format!("request body: {e}")))
+/// A request body as received, or why it was not (too large: 413).
+type Body = Result<Bytes, axum::extract::rejection::BytesRejection>;
+
+/// A JSON body of type `T`, or an error saying what is wrong with it (413 for a body over
+/// [`MAX_BODY`], 400 for one that is not the JSON asked for).
+fn parse<T: serde::de::DeserializeOwned>(body: Body) -> Result<T, ApiError> {
+    let body = body.map_err(|r| ApiError {
+        status: r.status(),
+        message: format!("request body: {} (at most {MAX_BODY} bytes)", r.body_text()),
+    })?;
+    serde_json::from_slice(&body).map_err(|e| ApiError::bad_request(format!("request body: {e}")))
 }
 
 /// A path number, or a 400.
@@ -137,8 +145,8 @@ struct WalkRequest {
 }
 
 /// `POST /api/walk`: the cell's label by the basin engine, the file's label, and the walk.
-async fn walk(State(s): St, body: Bytes) -> ApiResult {
-    let req: WalkRequest = parse(&body)?;
+async fn walk(State(s): St, body: Body) -> ApiResult {
+    let req: WalkRequest = parse(body)?;
     s.entry(req.file)?;
     let v = blocking(move || walk_cell(&s, &req)).await?;
     Ok(Json(v))
@@ -258,8 +266,8 @@ impl RefineRequest {
 
 /// `POST /api/refine`: queues the window (cancelling older ones); `{job}`, or with `wait` the
 /// job's status once finished.
-async fn refine(State(s): St, body: Bytes) -> ApiResult {
-    let req: RefineRequest = parse(&body)?;
+async fn refine(State(s): St, body: Body) -> ApiResult {
+    let req: RefineRequest = parse(body)?;
     req.check()?;
     s.entry(req.file)?;
     let s2 = s.clone();
@@ -368,8 +376,8 @@ struct SaveRequest {
 
 /// `POST /api/save {job}`: the window written as a basin file in the save directory; the
 /// file name is the server's.
-async fn save(State(s): St, body: Bytes) -> ApiResult {
-    let req: SaveRequest = parse(&body)?;
+async fn save(State(s): St, body: Body) -> ApiResult {
+    let req: SaveRequest = parse(body)?;
     let r = s
         .jobs
         .result(req.job)
