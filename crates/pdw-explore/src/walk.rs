@@ -106,6 +106,8 @@ fn f32s(v: &[f64]) -> Vec<f32> {
 /// the model's geometry for drawing.
 pub fn walk_json(r: &Rebuilt, tr: &Trajectory) -> Value {
     let (names, pts, frame) = points(r, tr);
+    // In one fixed frame (constant between impacts) where the model allows, else the model's.
+    let energy = pdw::simulate::fixed_frame_energy(&r.m, tr).or_else(|| tr.energy.clone());
     let events: Vec<Value> = tr
         .events
         .iter()
@@ -128,7 +130,7 @@ pub fn walk_json(r: &Rebuilt, tr: &Trajectory) -> Value {
         "point_names": names,
         "points": pts,
         "frame": frame,
-        "energy": tr.energy.as_deref().map(f32s),
+        "energy": energy.as_deref().map(f32s),
         "forces": forces,
         "events": events,
         "steps_done": tr.steps_done,

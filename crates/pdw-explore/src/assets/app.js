@@ -276,7 +276,7 @@ async function walkCell(c) {
   try {
     const w = await api("/api/walk", req);
     S.walkCell = { row: c.row, col: c.col, job: S.job, slice: S.slice };
-    S.walk = w; S.t = w.walk.t[0]; S.playing = true; S.lastTs = null; S.idx = 0;
+    S.walk = w; S.t = w.walk.t[0]; S.playing = true; S.lastTs = null; S.awaitFirst = true;
     $("outcome").textContent = w.outcome; $("stored").textContent = w.stored;
     const names = w.cell.names;
     $("cellinfo").textContent = `start: ${names.map((n, i) => `${n} = ${fmt(w.cell.state[i])}`).join(", ")}\n` +
@@ -297,6 +297,16 @@ function world(x, y, gam) { // slope frame -> world (X forward, Y up)
   return [x * Math.cos(gam) + y * Math.sin(gam), -x * Math.sin(gam) + y * Math.cos(gam)];
 }
 
+// The walker's size: the farthest body point from the stance foot at the first sample.
+function figureSize(w, P) {
+  if (w.size === undefined) {
+    let m = 0;
+    for (let k = 1; k < P; k++) m = Math.max(m, Math.hypot(w.points[2 * k] - w.points[0], w.points[2 * k + 1] - w.points[1]));
+    w.size = m > 0 ? m : 1;
+  }
+  return w.size;
+}
+
 function drawWalker(i) {
   const w = S.walk.walk, c = $("walker"), ctx = c.getContext("2d");
   ctx.fillStyle = "#fbfbfd"; ctx.fillRect(0, 0, c.width, c.height);
@@ -305,7 +315,7 @@ function drawWalker(i) {
   const gam = w.slope, pts = [];
   for (let k = 0; k < P; k++) pts.push(world(w.points[(i * P + k) * 2], w.points[(i * P + k) * 2 + 1], gam));
   const hipK = Math.max(0, w.point_names.indexOf("hip"));
-  const scale = c.height * 0.55, cx = c.width / 2 - pts[hipK][0] * scale, cy = c.height * 0.82;
+  const scale = c.height * 0.62 / figureSize(w, P), cx = c.width / 2 - pts[hipK][0] * scale, cy = c.height * 0.82;
   const X = (p) => cx + p[0] * scale, Y = (p) => cy - p[1] * scale;
   // the slope: the line y = 0 of the slope frame
   const g0 = world(-50, 0, gam), g1 = world(50, 0, gam);
@@ -403,7 +413,8 @@ function frame(ts) {
   $("frame").textContent = S.frames;
   $("stepcount").textContent = w.step[i];
   $("scrub").value = Math.round(1000 * (S.t - w.t[0]) / ((tEnd - w.t[0]) || 1));
-  if (S.firstFrameMs === null && S.clickT0 !== null) {
+  if (S.awaitFirst) {
+    S.awaitFirst = false;
     S.firstFrameMs = performance.now() - S.clickT0;
     $("latency").textContent = `click to first frame ${S.firstFrameMs.toFixed(0)} ms`;
   }
