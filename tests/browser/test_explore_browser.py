@@ -4,7 +4,8 @@ On basins made by the release binary it clicks a gait cell and a fall cell (thei
 the file's axes), checks that the animation runs and that the outcome shown equals the cells'
 labels in the file, drags a box and checks that the saved window equals `pdw-sweep basin` on
 that box cell for cell (both files read with h5py), and moves a slider and checks that the gait
-point moves. Screenshots and the measured times (click to first animation frame for every
+point moves; on a sweep file it clicks a stable branch point and checks its gait walks.
+Screenshots and the measured times (click to first animation frame for every
 preset, a 400x400 window of the simplest walker) go to experiments/results/explore/.
 
 Skips when chromium or chromedriver is missing, except in CI (CI=true), where that fails.
@@ -62,6 +63,10 @@ def setup():
     for name, args in PRESETS:
         files.append(os.path.join(work, f"{name}.h5"))
         basin(files[-1], args)
+    sweep = os.path.join(work, "sweep.h5")
+    subprocess.run([EXE, "fixedpoint", "--sweep", "slope=0.005:0.018:40", "--out", sweep,
+                    "--png", os.path.join(work, "sweep.png")], check=True, capture_output=True)
+    files.append(sweep)
     server = subprocess.Popen([EXE, "explore", *files, "--port", "0", "--save-dir", work],
                               stdout=subprocess.PIPE, text=True)
     line = server.stdout.readline()
@@ -119,7 +124,8 @@ def at(d, c, px, py):
 
 def show_file(d, index):
     d.execute_script(f"document.getElementById('file').value = '{index}'; showFile({index});")
-    wait(lambda: js(d, f"window.explorer.grid && window.explorer.grid.file === {index}"),
+    wait(lambda: js(d, f"(window.explorer.grid && window.explorer.grid.file === {index}) || "
+                       f"(window.explorer.sweep && window.explorer.sweep.file === {index})"),
          f"file {index} drawn")
 
 
@@ -261,3 +267,26 @@ def test_a_400x400_window_of_the_simplest_walker(setup):
     assert js(d, "window.explorer.grid.nx") == 400
     record("zoom_400x400_simplest_s", round(s, 3))
     print(f"400x400 window of the simplest walker: {s:.2f} s")
+
+
+def test_a_sweep_point_walks_with_its_multipliers(setup):
+    d = setup["driver"]
+    index = len(PRESETS)
+    show_file(d, index)
+    sw = js(d, "window.explorer.sweep")
+    b = sw["branches"][0]
+    k = b["stable"].index(True)
+    xs = [p for br in sw["branches"] for p in br["parameter"]]
+    ys = [s[0] for br in sw["branches"] for s in br["section"]]
+    c, r = plot_rect(d)
+    x0, x1 = min(xs), max(xs)
+    y0, y1 = min(ys), max(ys)
+    mx, my = 0.05 * (x1 - x0), 0.05 * (y1 - y0)
+    px = r["left"] + (b["parameter"][k] - x0 + mx) / (x1 - x0 + 2 * mx) * r["width"]
+    py = r["top"] + r["height"] - (b["section"][k][0] - y0 + my) / (y1 - y0 + 2 * my) * r["height"]
+    at(d, c, px, py).click().perform()
+    wait(lambda: "multipliers" in text(d, "cellinfo"), "the branch point's gait")
+    assert text(d, "outcome").endswith("stable")
+    f0 = int(text(d, "frame"))
+    time.sleep(0.6)
+    assert int(text(d, "frame")) > f0

@@ -17,6 +17,7 @@ pub mod jobs;
 mod routes;
 pub mod save;
 pub mod source;
+pub mod sweep;
 pub mod walk;
 
 pub use error::ApiError;
@@ -69,6 +70,7 @@ pub struct Entry {
     pub path: PathBuf,
     source: OnceLock<Result<Arc<BasinSource>, ApiError>>,
     rebuilt: OnceLock<Result<Arc<Rebuilt>, ApiError>>,
+    sweep: OnceLock<Result<Arc<pdw_store::SweepData>, ApiError>>,
 }
 
 impl Entry {
@@ -76,6 +78,13 @@ impl Entry {
     pub fn source(&self) -> Result<Arc<BasinSource>, ApiError> {
         self.source
             .get_or_init(|| source::load(&self.path).map(Arc::new))
+            .clone()
+    }
+
+    /// The file read as a sweep or continuation file (once).
+    pub fn sweep(&self) -> Result<Arc<pdw_store::SweepData>, ApiError> {
+        self.sweep
+            .get_or_init(|| sweep::load(&self.path).map(Arc::new))
             .clone()
     }
 
@@ -174,6 +183,7 @@ pub fn start(cfg: Config) -> Result<Server, String> {
                 path: p.clone(),
                 source: OnceLock::new(),
                 rebuilt: OnceLock::new(),
+                sweep: OnceLock::new(),
             })
             .collect(),
         jobs: jobs::Jobs::start(pool.clone()),

@@ -37,6 +37,8 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/api/files", get(files))
         .route("/api/basin/{i}", get(basin))
         .route("/api/walk", post(walk))
+        .route("/api/sweep/{i}", get(sweep))
+        .route("/api/gait", post(gait))
         .route("/api/refine", post(refine))
         .route("/api/job/{id}", get(job))
         .route("/api/job/{id}/cancel", post(cancel))
@@ -92,10 +94,12 @@ async fn files(State(s): St) -> ApiResult {
                     .path
                     .file_name()
                     .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-                match e.source() {
-                    Ok(src) => json!({"index": i, "name": name, "kind": "basin",
+                match (e.source(), e.sweep()) {
+                    (Ok(src), _) => json!({"index": i, "name": name, "kind": "basin",
                                       "model": src.data.header.model}),
-                    Err(err) => json!({"index": i, "name": name, "kind": "error",
+                    (Err(_), Ok(sw)) => json!({"index": i, "name": name, "kind": "sweep",
+                                      "model": sw.model}),
+                    (Err(err), Err(_)) => json!({"index": i, "name": name, "kind": "error",
                                        "error": err.message}),
                 }
             })
@@ -125,6 +129,40 @@ async fn basin(State(s): St, Path(i): Path<String>) -> ApiResult {
         v["max_strides"] = json!(h.max_strides);
         v["coordinates"] = src.coordinates.clone();
         Ok(v)
+    })
+    .await?;
+    Ok(Json(v))
+}
+
+/// `GET /api/sweep/{i}`: the branches of sweep file i ([`crate::sweep::to_json`]).
+async fn sweep(State(s): St, Path(i): Path<String>) -> ApiResult {
+    let i = number(&i, "file")? as usize;
+    s.entry(i)?;
+    let v = blocking(move || {
+        let d = s.entry(i)?.sweep()?;
+        let mut v = crate::sweep::to_json(&d);
+        v["file"] = json!(i);
+        Ok(v)
+    })
+    .await?;
+    Ok(Json(v))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GaitRequest {
+    file: usize,
+    branch: usize,
+    point: usize,
+}
+
+/// `POST /api/gait {file, branch, point}`: a branch point's multipliers and a walk of its gait.
+async fn gait(State(s): St, body: Body) -> ApiResult {
+    let req: GaitRequest = parse(body)?;
+    s.entry(req.file)?;
+    let v = blocking(move || {
+        let d = s.entry(req.file)?.sweep()?;
+        crate::sweep::gait(&d, req.branch, req.point)
     })
     .await?;
     Ok(Json(v))
@@ -210,7 +248,7 @@ fn walk_json(
         "stored": stored,
         "strides": res.strides,
         "stored_strides": grid.strides[grid_row * nx + col],
-        "walk": crate::walk::walk_json(r, &tr),
+        "walk": crate::walk::walk_json(&r.m, &tr),
         "ms": t0.elapsed().as_secs_f64() * 1e3,
     }))
 }

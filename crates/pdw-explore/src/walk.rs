@@ -6,6 +6,7 @@
 use crate::error::ApiError;
 use crate::source::Rebuilt;
 use pdw::simulate::{DtOut, SimulateFlags, Start};
+use pdw::BuiltModel;
 use pdw_limit::basin::{classify_cells, CellResult, Outcome};
 use pdw_limit::trajectory::Trajectory;
 use serde_json::{json, Value};
@@ -55,25 +56,34 @@ pub fn outcome_name(r: &Rebuilt, code: u8) -> String {
 /// The walk of `steps` steps from section state `cell` with the cells' integrator, sampled
 /// densely (the default spacing of `simulate`, every event included).
 pub fn walk(r: &Rebuilt, cell: &[f64], steps: usize) -> Result<Trajectory, ApiError> {
-    let m = &r.m;
+    walk_model(&r.m, r.plan.opts.integrator, cell, steps)
+}
+
+/// The walk of `steps` steps of model `m` from section state `cell` with `integrator`.
+pub fn walk_model(
+    m: &BuiltModel,
+    integrator: pdw_hybrid::Options,
+    cell: &[f64],
+    steps: usize,
+) -> Result<Trajectory, ApiError> {
     let w = pdw::simulate::start(m, &Start::State(cell.to_vec()), &FLAGS).map_err(|e| match e {
         pdw::simulate::StartError::Input(e) => ApiError::bad_request(e.0),
         _ => ApiError::internal("the walk has no start"),
     })?;
     let sp = pdw::simulate::spacing(m, &w, DtOut::Default);
-    let opts = pdw::simulate::options_spaced(m, steps, &sp, r.plan.opts.integrator);
+    let opts = pdw::simulate::options_spaced(m, steps, &sp, integrator);
     pdw::simulate::run(m, &w, &opts).map_err(|e| ApiError::internal(e.0))
 }
 
 /// Body points at every sample in one frame of the slope: [`pdw::simulate::positions`], or,
 /// where it leaves them out (round feet), each sample's stance frame moved down the slope by
 /// the step lengths before it (the rolling contact's travel is not added).
-fn points(r: &Rebuilt, tr: &Trajectory) -> (Vec<String>, Vec<f32>, String) {
-    if let Ok(p) = pdw::simulate::positions(&r.m, tr) {
+fn points(m: &BuiltModel, tr: &Trajectory) -> (Vec<String>, Vec<f32>, String) {
+    if let Ok(p) = pdw::simulate::positions(m, tr) {
         let pts = p.points.iter().map(|&v| v as f32).collect();
         return (p.names, pts, "slope".into());
     }
-    let w = r.m.walker.as_ref();
+    let w = m.walker.as_ref();
     let mut offsets = vec![0.0];
     for e in tr.events.iter().filter(|e| e.ends_step) {
         let last = *offsets.last().unwrap_or(&0.0);
@@ -104,10 +114,10 @@ fn f32s(v: &[f64]) -> Vec<f32> {
 
 /// The walk as the page's JSON: samples (t, state, body points, energy, loads), events,
 /// the model's geometry for drawing.
-pub fn walk_json(r: &Rebuilt, tr: &Trajectory) -> Value {
-    let (names, pts, frame) = points(r, tr);
+pub fn walk_json(m: &BuiltModel, tr: &Trajectory) -> Value {
+    let (names, pts, frame) = points(m, tr);
     // In one fixed frame (constant between impacts) where the model allows, else the model's.
-    let energy = pdw::simulate::fixed_frame_energy(&r.m, tr).or_else(|| tr.energy.clone());
+    let energy = pdw::simulate::fixed_frame_energy(m, tr).or_else(|| tr.energy.clone());
     let events: Vec<Value> = tr
         .events
         .iter()
@@ -117,11 +127,11 @@ pub fn walk_json(r: &Rebuilt, tr: &Trajectory) -> Value {
         json!({"normal": f32s(&f.normal), "knee_torque": f32s(&f.knee_torque),
                "friction_required": f32s(&f.friction_required)})
     });
-    let foot_radius =
-        r.m.params
-            .iter()
-            .find(|(n, _)| n == "foot_radius")
-            .map_or(0.0, |p| p.1);
+    let foot_radius = m
+        .params
+        .iter()
+        .find(|(n, _)| n == "foot_radius")
+        .map_or(0.0, |p| p.1);
     json!({
         "t": f32s(&tr.t),
         "state_names": tr.state_names,
@@ -134,7 +144,7 @@ pub fn walk_json(r: &Rebuilt, tr: &Trajectory) -> Value {
         "forces": forces,
         "events": events,
         "steps_done": tr.steps_done,
-        "slope": r.m.slope(),
+        "slope": m.slope(),
         "foot_radius": foot_radius,
         "units": {"time": tr.units.time, "force": tr.units.force, "torque": tr.units.torque,
                   "energy": tr.units.energy},

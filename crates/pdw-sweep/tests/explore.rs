@@ -208,6 +208,62 @@ fn wait_job(addr: &str, id: u64) -> serde_json::Value {
     }
 }
 
+/// A client that disconnects mid-refine leaves the server serving; of 20 rapid refines only
+/// the last computes; save writes the window into the save directory `dir`.
+fn refines_cancel_and_save(a: &str, dir: &Path) {
+    let a = a.to_string();
+    // a client that disconnects while a refine runs: the server goes on serving
+    let mut c = TcpStream::connect(&a).unwrap();
+    let body = r#"{"file": 0, "box": {"x": [0.16, 0.24], "y": [-0.24, -0.16]}, "nx": 300, "ny": 300, "wait": true}"#;
+    write!(
+        c,
+        "POST /api/refine HTTP/1.1\r\nHost: x\r\nContent-Length: {}\r\n\r\n{body}",
+        body.len()
+    )
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    drop(c);
+    let (st, _) = http(&a, "GET", "/api/files", "");
+    assert_eq!(st, 200);
+    let first = wait_job(&a, 1);
+    assert!(["cancelled", "done"].contains(&first["status"].as_str().unwrap()));
+    // 20 rapid refines: only the last computes
+    let (_, before) = http(&a, "GET", "/api/stats", "");
+    let mut ids = Vec::new();
+    for k in 0..20 {
+        let lo = 0.16 + 0.001 * k as f64;
+        let body = format!(
+            r#"{{"file": 0, "box": {{"x": [{lo}, 0.24], "y": [-0.24, -0.16]}}, "nx": 40, "ny": 40}}"#
+        );
+        let (st, j) = http(&a, "POST", "/api/refine", &body);
+        assert_eq!(st, 200, "{j}");
+        ids.push(j["job"].as_u64().unwrap());
+    }
+    let last = wait_job(&a, *ids.last().unwrap());
+    assert_eq!(last["status"], "done");
+    for id in &ids[..19] {
+        assert_eq!(wait_job(&a, *id)["status"], "cancelled", "job {id}");
+    }
+    let (_, after) = http(&a, "GET", "/api/stats", "");
+    let n = |v: &serde_json::Value, k: &str| v[k].as_u64().unwrap();
+    assert_eq!(
+        n(&after, "refines_completed") - n(&before, "refines_completed"),
+        1
+    );
+    // save: the server names the file, in its save directory
+    let (st, j) = http(
+        &a,
+        "POST",
+        "/api/save",
+        &format!(r#"{{"job": {}}}"#, ids[19]),
+    );
+    assert_eq!(st, 200, "{j}");
+    let saved = dir.join(j["saved"].as_str().unwrap());
+    let d = pdw_store::read_basin(&saved).unwrap();
+    assert_eq!(d.header.nx(), 40);
+    assert!(d.complete);
+}
+
 #[test]
 fn the_server_keeps_to_its_rules() {
     let dir = tempfile::tempdir().unwrap();
@@ -257,54 +313,70 @@ fn the_server_keeps_to_its_rules() {
         "x".repeat(40_000)
     );
     error(http(&a, "POST", "/api/walk", &big), 413);
-    // a client that disconnects while a refine runs: the server goes on serving
-    let mut c = TcpStream::connect(&a).unwrap();
-    let body = r#"{"file": 0, "box": {"x": [0.16, 0.24], "y": [-0.24, -0.16]}, "nx": 300, "ny": 300, "wait": true}"#;
-    write!(
-        c,
-        "POST /api/refine HTTP/1.1\r\nHost: x\r\nContent-Length: {}\r\n\r\n{body}",
-        body.len()
-    )
-    .unwrap();
-    std::thread::sleep(Duration::from_millis(200));
-    drop(c);
-    let (st, _) = http(&a, "GET", "/api/files", "");
-    assert_eq!(st, 200);
-    let first = wait_job(&a, 1);
-    assert!(["cancelled", "done"].contains(&first["status"].as_str().unwrap()));
-    // 20 rapid refines: only the last computes
-    let (_, before) = http(&a, "GET", "/api/stats", "");
-    let mut ids = Vec::new();
-    for k in 0..20 {
-        let lo = 0.16 + 0.001 * k as f64;
-        let body = format!(
-            r#"{{"file": 0, "box": {{"x": [{lo}, 0.24], "y": [-0.24, -0.16]}}, "nx": 40, "ny": 40}}"#
-        );
-        let (st, j) = http(&a, "POST", "/api/refine", &body);
-        assert_eq!(st, 200, "{j}");
-        ids.push(j["job"].as_u64().unwrap());
-    }
-    let last = wait_job(&a, *ids.last().unwrap());
-    assert_eq!(last["status"], "done");
-    for id in &ids[..19] {
-        assert_eq!(wait_job(&a, *id)["status"], "cancelled", "job {id}");
-    }
-    let (_, after) = http(&a, "GET", "/api/stats", "");
-    let n = |v: &serde_json::Value, k: &str| v[k].as_u64().unwrap();
-    assert_eq!(
-        n(&after, "refines_completed") - n(&before, "refines_completed"),
-        1
-    );
-    // save: the server names the file, in its save directory
-    let (st, j) = http(
+    refines_cancel_and_save(&a, dir.path());
+}
+
+#[test]
+fn a_sweep_point_walks_its_gait_with_the_files_period() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sweep.h5");
+    let png = dir.path().join("sweep.png");
+    let o = run(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.005:0.012:8",
+        "--out",
+        out.to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let server = pdw_explore::start(pdw_explore::Config::local(vec![out.clone()], 0)).unwrap();
+    let a = server.addr.to_string();
+    let (_, files) = http(&a, "GET", "/api/files", "");
+    assert_eq!(files["files"][0]["kind"], "sweep");
+    let (st, s) = http(&a, "GET", "/api/sweep/0", "");
+    assert_eq!(st, 200, "{s}");
+    let d = pdw_store::read_sweep(&out).unwrap();
+    let b = d
+        .branches
+        .iter()
+        .position(|b| b.stable.iter().any(|s| *s))
+        .unwrap();
+    let i = d.branches[b].stable.iter().position(|s| *s).unwrap();
+    assert_eq!(s["branches"][b]["parameter"][i], d.branches[b].parameter[i]);
+    let (st, g) = http(
         &a,
         "POST",
-        "/api/save",
-        &format!(r#"{{"job": {}}}"#, ids[19]),
+        "/api/gait",
+        &format!(r#"{{"file": 0, "branch": {b}, "point": {i}}}"#),
     );
-    assert_eq!(st, 200, "{j}");
-    let saved = dir.path().join(j["saved"].as_str().unwrap());
-    let d = pdw_store::read_basin(&saved).unwrap();
-    assert_eq!(d.header.nx(), 40);
-    assert!(d.complete);
+    assert_eq!(st, 200, "{g}");
+    // a stable gait walks its periods without falling, each taking the file's period
+    let k = d.branches[b].period_strides as usize;
+    let w = &g["walk"];
+    assert_eq!(w["steps_done"], pdw_explore::sweep::PERIODS_WALKED * k);
+    let ends: Vec<f64> = w["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["ends_step"] == true)
+        .map(|e| e["t"].as_f64().unwrap())
+        .collect();
+    assert!(w["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|e| e["fall"] == false));
+    let t0 = w["t"][0].as_f64().unwrap();
+    let want = pdw_explore::sweep::PERIODS_WALKED as f64 * d.branches[b].period[i];
+    let got = ends[ends.len() - 1] - t0;
+    assert!((got - want).abs() < 1e-6 * want, "{got} vs {want}");
+    let (st, _) = http(
+        &a,
+        "POST",
+        "/api/gait",
+        r#"{"file": 0, "branch": 99, "point": 0}"#,
+    );
+    assert_eq!(st, 404);
 }

@@ -178,7 +178,9 @@ function hover(ev) {
 }
 
 async function showFile(i) {
-  S.file = i; S.job = null; S.slice = 0;
+  S.file = i; S.job = null; S.slice = 0; S.sweep = null;
+  $("refinebox").hidden = false;
+  if (S.files && S.files[i] && S.files[i].kind === "sweep") return showSweep(i);
   try {
     const g = await api(`/api/basin/${i}`);
     S.base = g; setGrid(g);
@@ -264,6 +266,84 @@ function buildSliders(g) {
     el.addEventListener("change", () => refine(currentBox()));
     box.append(lab, el, out);
   }
+}
+
+// ---------- sweep and continuation files ----------
+
+async function showSweep(i) {
+  try {
+    const d = await api(`/api/sweep/${i}`);
+    S.sweep = d; S.grid = null; S.base = null;
+    $("refinebox").hidden = true; $("slicebox").hidden = true;
+    $("model").textContent = `${d.model} walker, ${d.branches.length} branch(es) over ${d.parameter}`;
+    $("readout").textContent = "click a branch point: its multipliers and its gait walking";
+    drawSweep(); showError("");
+  } catch (err) { S.sweep = null; drawSweep(); showError(`file ${i} cannot be shown: ${err.message}`); }
+}
+
+function sweepAxes(d) {
+  let xl = Infinity, xh = -Infinity, yl = Infinity, yh = -Infinity;
+  for (const b of d.branches) b.parameter.forEach((p, k) => {
+    xl = Math.min(xl, p); xh = Math.max(xh, p); yl = Math.min(yl, b.section[k][0]); yh = Math.max(yh, b.section[k][0]);
+  });
+  const pad = (lo, hi) => { const m = 0.05 * ((hi - lo) || 1); return [lo - m, hi + m]; };
+  return { x: { name: d.parameter, units: "", values: pad(xl, xh) }, y: { name: d.section_names[0], units: "", values: pad(yl, yh) } };
+}
+
+function drawSweep() {
+  const c = $("basin"), ctx = c.getContext("2d"), d = S.sweep;
+  ctx.clearRect(0, 0, c.width, c.height);
+  $("legend").innerHTML = "";
+  if (!d) return;
+  const g = sweepAxes(d), { L, T, W, H } = plotRect();
+  ctx.strokeStyle = "#333"; ctx.strokeRect(L, T, W, H);
+  drawAxes(ctx, g, L, T, W, H);
+  const shades = ["#2563eb", "#059669", "#d97706", "#7c3aed", "#dc2626"];
+  d.branches.forEach((b, bi) => {
+    const col = shades[bi % shades.length];
+    b.parameter.forEach((p, k) => {
+      const [px, py] = toPx(g, p, b.section[k][0]);
+      ctx.beginPath(); ctx.arc(px, py, 3, 0, 2 * Math.PI);
+      if (b.stable[k]) { ctx.fillStyle = col; ctx.fill(); } else { ctx.strokeStyle = col; ctx.stroke(); }
+    });
+    const el = document.createElement("span");
+    el.innerHTML = `<span class="sw" style="background:${col}"></span>${b.name} (filled: stable)`;
+    $("legend").appendChild(el);
+  });
+  if (S.sweepPick) {
+    const b = d.branches[S.sweepPick.branch], [px, py] = toPx(g, b.parameter[S.sweepPick.point], b.section[S.sweepPick.point][0]);
+    ctx.strokeStyle = "#111"; ctx.lineWidth = 2; ctx.beginPath(); ctx.arc(px, py, 7, 0, 2 * Math.PI); ctx.stroke(); ctx.lineWidth = 1;
+  }
+  Object.assign(c.dataset, { left: L, top: T, width: W, height: H });
+}
+
+function toPxAxes(g, x, y) {
+  const { L, T, W, H } = plotRect(), [x0, x1] = range(g.x), [y0, y1] = range(g.y);
+  return [L + (x - x0) / (x1 - x0) * W, T + H - (y - y0) / (y1 - y0) * H];
+}
+
+async function pickSweep(ev) {
+  const d = S.sweep, g = sweepAxes(d), r = $("basin").getBoundingClientRect();
+  const mx = ev.clientX - r.left, my = ev.clientY - r.top;
+  let best = null;
+  d.branches.forEach((b, bi) => b.parameter.forEach((p, k) => {
+    const [px, py] = toPxAxes(g, p, b.section[k][0]), dist = Math.hypot(px - mx, py - my);
+    if (!best || dist < best.dist) best = { dist, branch: bi, point: k };
+  }));
+  if (!best || best.dist > 20) return;
+  S.clickT0 = performance.now(); S.firstFrameMs = null;
+  try {
+    const w = await api("/api/gait", { file: S.file, branch: best.branch, point: best.point });
+    S.sweepPick = best; drawSweep();
+    S.walk = w; S.t = w.walk.t[0]; S.playing = true; S.lastTs = null; S.awaitFirst = true;
+    $("outcome").textContent = `${w.branch} ${w.stable ? "stable" : "unstable"}`;
+    $("stored").textContent = `${w.parameter} = ${fmt(w.value)}`;
+    const mult = w.multipliers.map(([re, im]) => `${fmt(re)}${im ? (im > 0 ? " + " : " - ") + fmt(Math.abs(im)) + "i" : ""} (|λ| ${fmt(Math.hypot(re, im))})`);
+    $("cellinfo").textContent = `section: ${w.section_names.map((n, k) => `${n} = ${fmt(w.section[k])}`).join(", ")}\n` +
+      `period ${fmt(w.period)} (${w.period_strides} stride(s)); multipliers: ${mult.join(", ")}`;
+    $("play").disabled = false; $("scrub").disabled = false; $("play").textContent = "pause";
+    showError("");
+  } catch (err) { showError(err.message); }
 }
 
 // ---------- the walk ----------
@@ -430,13 +510,14 @@ function timeScale(w) {
 
 function wire() {
   const c = $("basin");
-  c.addEventListener("mousemove", hover);
+  c.addEventListener("mousemove", (ev) => { if (!S.sweep) hover(ev); });
   c.addEventListener("mousedown", (ev) => {
     const r = c.getBoundingClientRect();
     S.drag = { x0: ev.clientX - r.left, y0: ev.clientY - r.top, x1: ev.clientX - r.left, y1: ev.clientY - r.top, moved: false };
   });
   c.addEventListener("mouseup", (ev) => {
     const d = S.drag; S.drag = null;
+    if (S.sweep) { pickSweep(ev); return; }
     if (!d || !S.grid) return;
     const r = c.getBoundingClientRect();
     d.x1 = ev.clientX - r.left; d.y1 = ev.clientY - r.top;
@@ -471,6 +552,7 @@ async function main() {
   requestAnimationFrame(frame);
   let files;
   try { files = (await api("/api/files")).files; } catch (err) { showError(err.message); return; }
+  S.files = files;
   for (const f of files) {
     const o = document.createElement("option");
     o.value = f.index; o.textContent = `${f.index}: ${f.name}` + (f.kind === "error" ? " (cannot be read)" : ` (${f.model})`);
