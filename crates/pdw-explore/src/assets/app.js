@@ -407,8 +407,12 @@ function drawWalker(i) {
     if (e.t > w.t[i]) break;
     const j = Math.min(sampleAt(e.t), w.t.length - 1);
     const foot = (k) => world(w.points[(j * P + k) * 2], w.points[(j * P + k) * 2 + 1], gam);
-    const p = /knee/.test(e.kind) ? foot(Math.max(0, w.point_names.findIndex((n) => /knee/.test(n)))) : foot(P - 1);
-    ctx.beginPath(); ctx.arc(X(p), Y(p), /knee/.test(e.kind) ? 3 : 4, 0, 2 * Math.PI); ctx.fill();
+    const knee = /knee/.test(e.kind);
+    if (knee && w.t[i] - e.t > 0.25 * timeScale(w)) continue; // a knee strike shows briefly
+    const swingKnee = w.point_names.findIndex((n) => /swing/.test(n) && /knee/.test(n));
+    const p = knee ? foot(Math.max(0, swingKnee)) : foot(P - 1);
+    ctx.fillStyle = knee ? "#f59e0b" : "#dc2626";
+    ctx.beginPath(); ctx.arc(X(p), Y(p), knee ? 6 : 4, 0, 2 * Math.PI); ctx.fill();
   }
   // legs: the body points in order, stance foot to swing foot
   ctx.strokeStyle = "#1f2933"; ctx.lineWidth = 4; ctx.lineCap = "round"; ctx.lineJoin = "round";
