@@ -208,7 +208,7 @@ fn wait_job(addr: &str, id: u64) -> serde_json::Value {
     }
 }
 
-/// A client that disconnects mid-refine leaves the server serving; of 20 rapid refines only
+/// A client that disconnects mid-refine cancels it and leaves the server serving; of 20 rapid refines only
 /// the last computes; save writes the window into the save directory `dir`.
 fn refines_cancel_and_save(a: &str, dir: &Path) {
     let a = a.to_string();
@@ -226,7 +226,8 @@ fn refines_cancel_and_save(a: &str, dir: &Path) {
     let (st, _) = http(&a, "GET", "/api/files", "");
     assert_eq!(st, 200);
     let first = wait_job(&a, 1);
-    assert!(["cancelled", "done"].contains(&first["status"].as_str().unwrap()));
+    // the request's drop guard cancelled it (90 000 cells take over a second on 2 threads)
+    assert_eq!(first["status"], "cancelled", "{first}");
     // 20 rapid refines: only the last computes
     let (_, before) = http(&a, "GET", "/api/stats", "");
     let mut ids = Vec::new();
