@@ -1,7 +1,7 @@
 """Type stubs of the `pdw_sweep` extension (functions and results: python/README.md)."""
 
 import os
-from typing import Any, Optional, Sequence, Tuple, TypedDict, Union
+from typing import Any, List, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -303,6 +303,17 @@ def design(
     status_names, reasons, section (n, 3), cost, basin_fraction, rho, min_normal_force,
     max_friction, min_knee_torque, period, step_length, min_relative_margin, basin_box_stance,
     basin_box_stance_rate, best. Docs: docs/python.md."""
+
+def explore(
+    path: Union[str, "os.PathLike[str]", List[Union[str, "os.PathLike[str]"]]],
+    port: int = 0,
+    save_dir: Union[str, "os.PathLike[str]"] = ".",
+    threads: int = 2,
+) -> str:
+    """Serves the basin file(s) on 127.0.0.1 with the page of `pdw-sweep explore` (click a
+    cell to watch it walk, drag a box to refine) on a background thread and returns the URL;
+    port=0 picks a free port. The server runs until the interpreter exits."""
+    ...
 
 def animate(
     model: str = "simplest",

@@ -25,6 +25,7 @@ use pdw_limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, Strid
 mod animate;
 mod basin_over;
 mod design;
+mod explore;
 mod follow;
 mod linear;
 mod orbit;
@@ -1732,6 +1733,7 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
     m.add_function(wrap_pyfunction!(design::design, m)?)?;
     m.add_function(wrap_pyfunction!(animate::animate, m)?)?;
+    m.add_function(wrap_pyfunction!(explore::explore, m)?)?;
     m.add_function(wrap_pyfunction!(linear::lyapunov, m)?)?;
     Ok(())
 }

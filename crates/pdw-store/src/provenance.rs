@@ -754,3 +754,17 @@ pub fn shard_provenance(shards: &[&Path]) -> Result<Vec<Option<Provenance>>> {
         })
         .collect()
 }
+
+/// What a file says about its own run beyond its header: its `/provenance` (`None` in files
+/// written before it existed) and its root `coordinates` attribute (state name → meaning, a
+/// JSON object text; `None` without one).
+pub fn read_run_description(path: &Path) -> Result<(Option<Provenance>, Option<String>)> {
+    let f = crate::h5util::open_file(path, false)?;
+    let prov = read_provenance(path, &f)?;
+    let coords = if has_attr(&f, "coordinates") {
+        Some(get_str(path, "pdw-sweep file", &f, "coordinates")?)
+    } else {
+        None
+    };
+    Ok((prov, coords))
+}

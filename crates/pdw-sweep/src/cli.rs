@@ -37,6 +37,31 @@ pub enum Command {
     Mfpt(MfptArgs),
     /// Search free design parameters for the most robust physically valid gait (HDF5 + PNG).
     Design(DesignArgs),
+    /// Explore basin files in the browser: click a cell to watch it walk, zoom to refine.
+    Explore(ExploreArgs),
+}
+
+/// `pdw-sweep explore`: the local basin explorer (docs/explore.md).
+#[derive(Args, Debug)]
+pub struct ExploreArgs {
+    /// Basin files to serve (none: the default basin of `pdw-sweep basin`, computed first).
+    pub files: Vec<PathBuf>,
+    /// Port to listen on (0: any free port).
+    #[arg(long, default_value_t = 8737)]
+    pub port: u16,
+    /// Address to listen on instead of the loopback 127.0.0.1 (anyone who can reach it can
+    /// use the server).
+    #[arg(long, value_name = "ADDR")]
+    pub bind: Option<std::net::IpAddr>,
+    /// Open the page in the browser (xdg-open).
+    #[arg(long)]
+    pub open: bool,
+    /// Directory "save" writes refined windows into.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub save_dir: PathBuf,
+    /// Threads of the computing pool.
+    #[arg(long, default_value_t = 2, value_parser = crate::args::parse_threads)]
+    pub threads: usize,
 }
 
 /// Options shared by every command that builds a model.

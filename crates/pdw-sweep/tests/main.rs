@@ -10,6 +10,7 @@ mod clear_cli;
 mod cli;
 mod common;
 mod design;
+mod explore;
 mod follow;
 mod hostile;
 mod lock;
