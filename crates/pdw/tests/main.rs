@@ -2,6 +2,8 @@
 //! walk's setup ([`simulate`]).
 
 mod design;
+mod disturb;
 mod input;
 mod mfpt;
+mod mfpt_step_down;
 mod simulate;

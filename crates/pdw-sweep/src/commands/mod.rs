@@ -6,6 +6,7 @@ mod animate;
 mod basin;
 mod basin_over;
 mod design;
+mod disturb;
 mod fixedpoint;
 mod follow;
 mod merge;
@@ -36,6 +37,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Simulate(a) => simulate::run(&a),
         Command::Mfpt(a) => mfpt::run(&a),
         Command::Design(a) => design::run(&a),
+        Command::Disturb(a) => disturb::run(&a),
     }
 }
 
