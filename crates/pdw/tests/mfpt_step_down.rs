@@ -145,3 +145,28 @@ fn step_height_requests_are_checked() {
     let e = mfpt::check_model_for(&compass, TerrainKind::StepDown).unwrap_err();
     assert!(e.to_string().contains("step_down"), "{e}");
 }
+
+/// The Gauss–Legendre rule of a unit-variance uniform (support ±√3) integrates its moments
+/// `E U^{2j} = 3^j / (2j + 1)` (odd ones 0) exactly for `2j < 2n`, and its weights sum to 1.
+#[test]
+fn gauss_legendre_integrates_the_uniform_moments_exactly() {
+    for n in [1usize, 2, 5, 11, 20] {
+        let (z, w) = pdw_limit::markov::gauss_legendre(n);
+        assert!(z.iter().all(|z| z.abs() < 3f64.sqrt()));
+        assert!(w.iter().all(|w| *w > 0.0));
+        for k in 0..2 * n {
+            let q: f64 = z.iter().zip(&w).map(|(z, w)| w * z.powi(k as i32)).sum();
+            let exact = if k % 2 == 1 {
+                0.0
+            } else {
+                3f64.powi(k as i32 / 2) / (k as f64 + 1.0)
+            };
+            // the size of the terms summed, E|U|^k = 3^{k/2} / (k + 1), bounds the rounding
+            let scale = 3f64.powf(k as f64 / 2.0) / (k as f64 + 1.0);
+            assert!(
+                (q - exact).abs() < 1e-11 * scale.max(1.0),
+                "n {n} k {k}: {q} vs {exact}"
+            );
+        }
+    }
+}
