@@ -186,6 +186,7 @@ def mfpt(
     max_steps: int = 1000,
     seed: int = 0,
     threads: int = 2,
+    terrain: str = "slope",
     **params: float,
 ) -> dict[str, Any]:
     """Mean first-passage time on a random slope per step (`pdw-sweep mfpt`, Monte Carlo):
@@ -196,7 +197,26 @@ def mfpt(
     failures (fall kind → count), start (section state), mean, sd. The same on any `threads`.
     With `sd="A:B:N"` (e.g. "0.3deg:0.7deg:5", as `mfpt --sd A:B:N`): one run per standard
     deviation with the same seed, a dict of arrays sd, mfpt, stderr, restricted_mean, falls,
-    censored, total_steps (one value per σ) and mean."""
+    censored, total_steps (one value per σ) and mean. `terrain="step-down"`: a random foothold
+    height per step instead (`sd` a plain length, the mean the model's `step_down`, a step down
+    positive); both dicts also hold `terrain`."""
+    ...
+
+def disturb(
+    model: str = "simplest",
+    terrain: str = "step-down",
+    once: Optional[float] = None,
+    largest: bool = False,
+    steps: int = 200,
+    tol: float = 1e-5,
+    slope: Optional[Union[float, str]] = None,
+    **params: float,
+) -> dict[str, Any]:
+    """One disturbance from the stable gait (`pdw-sweep disturb`): with `once=d` step 1's
+    foothold is d lower (terrain "slope": its line d rad steeper), then nominal ground; returns
+    fell, steps, fall, deviation (per step, section ∞-norm from the gait), returned_after (first
+    step within 1e-6, or None). With `largest=True` the largest disturbance survived for `steps`
+    steps each way, `(survived, fell)` pairs under down/up (steeper/shallower), to `tol`."""
     ...
 
 def simulate(

@@ -1364,21 +1364,14 @@ fn mfpt_curve<'py>(
     py: Python<'py>,
     m: &Model,
     sds: &[f64],
+    kind: pdw_limit::terrain::TerrainKind,
     (walkers, max_steps, seed, threads): (usize, usize, u64, usize),
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
-    pdw::mfpt::check_model(m).map_err(err)?;
-    let plan = |sd: f64| pdw::mfpt::MfptPlan {
-        terrain: pdw_limit::terrain::SlopeTerrain {
-            mean: m.slope(),
-            sd,
-            seed,
-        },
-        walkers,
-        max_steps,
-        integrator: pdw::mfpt::default_integrator(),
-    };
+    pdw::mfpt::check_model_for(m, kind).map_err(err)?;
+    let plan = |sd: f64| mfpt_plan(m, kind, sd, (walkers, max_steps, seed));
     pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
+    pdw::mfpt::check_heights(m, &plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     let ests = interruptible(py, || -> PyResult<_> {
         let (x0, _) = pdw::mfpt::start(m).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()
@@ -1407,17 +1400,47 @@ fn mfpt_curve<'py>(
     for (k, f) in columns {
         d.set_item(k, ests.iter().map(f).collect::<Vec<f64>>().into_pyarray(py))?;
     }
-    d.set_item("mean", m.slope())?;
+    d.set_item("mean", terrain_mean(m, kind))?;
+    d.set_item("terrain", kind.name())?;
     Ok(d)
 }
 
+/// The terrain's mean: the model's slope, or its `step_down` (0 where it has none).
+fn terrain_mean(m: &Model, kind: pdw_limit::terrain::TerrainKind) -> f64 {
+    let p = kind.param();
+    m.params.iter().find(|q| q.0 == p).map_or(0.0, |q| q.1)
+}
+
+/// The Monte Carlo plan of `mfpt(...)`: the terrain of kind `kind` around the model's own
+/// slope or step down, with standard deviation `sd`.
+fn mfpt_plan(
+    m: &Model,
+    kind: pdw_limit::terrain::TerrainKind,
+    sd: f64,
+    (walkers, max_steps, seed): (usize, usize, u64),
+) -> pdw::mfpt::MfptPlan {
+    pdw::mfpt::MfptPlan {
+        terrain: pdw_limit::terrain::SlopeTerrain {
+            mean: terrain_mean(m, kind),
+            sd,
+            seed,
+            kind,
+        },
+        walkers,
+        max_steps,
+        integrator: pdw::mfpt::default_integrator(),
+    }
+}
+
 /// `mfpt(model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000, seed=0,
-/// threads=2, **params)`: the Monte Carlo of `pdw-sweep mfpt` (the slope is the mean slope).
-/// With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of arrays).
+/// threads=2, terrain="slope", **params)`: the Monte Carlo of `pdw-sweep mfpt` (the slope is
+/// the mean slope; with `terrain="step-down"` the model's `step_down` is the mean step down and
+/// `sd` a plain length). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a
+/// dict of arrays).
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, **params),
-    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, **params)"
+    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", **params),
+    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 fn mfpt<'py>(
@@ -1429,40 +1452,33 @@ fn mfpt<'py>(
     max_steps: usize,
     seed: u64,
     threads: usize,
+    terrain: &str,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
-    let sds = match sd {
-        None => {
-            return Err(err(
-                "sd: give the slope's standard deviation (rad, or '1deg')",
-            ))
-        }
-        Some(v) => match v.extract::<f64>() {
-            Ok(x) => pdw::mfpt::parse_sd_values(&x.to_string(), &MFPT_FLAGS).map_err(err)?,
-            Err(_) => {
-                pdw::mfpt::parse_sd_values(&v.extract::<String>()?, &MFPT_FLAGS).map_err(err)?
-            }
-        },
-    };
+    let kind = pdw::mfpt::check_terrain(terrain, &MFPT_FLAGS).map_err(err)?;
+    let parse = |s: &str| pdw::mfpt::parse_sd_values_for(s, kind, &MFPT_FLAGS).map_err(err);
+    let sds =
+        match sd {
+            None => return Err(err(
+                "sd: give the terrain's standard deviation (slope: rad, or '1deg'; step-down: a \
+                 length)",
+            )),
+            Some(v) => match v.extract::<f64>() {
+                Ok(x) => parse(&x.to_string())?,
+                Err(_) => parse(&v.extract::<String>()?)?,
+            },
+        };
     if sds.len() > 1 {
         let m = build_kw(model, slope, params)?;
-        return mfpt_curve(py, &m, &sds, (walkers, max_steps, seed, threads));
+        return mfpt_curve(py, &m, &sds, kind, (walkers, max_steps, seed, threads));
     }
     let sd = sds[0];
     let m = build_kw(model, slope, params)?;
-    pdw::mfpt::check_model(&m).map_err(err)?;
-    let plan = pdw::mfpt::MfptPlan {
-        terrain: pdw_limit::terrain::SlopeTerrain {
-            mean: m.slope(),
-            sd,
-            seed,
-        },
-        walkers,
-        max_steps,
-        integrator: pdw::mfpt::default_integrator(),
-    };
+    pdw::mfpt::check_model_for(&m, kind).map_err(err)?;
+    let plan = mfpt_plan(&m, kind, sd, (walkers, max_steps, seed));
     pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;
+    pdw::mfpt::check_heights(&m, &plan, &MFPT_FLAGS).map_err(err)?;
     let (est, start) = interruptible(py, || -> PyResult<_> {
         let (x0, section) = pdw::mfpt::start(&m).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()
@@ -1498,6 +1514,73 @@ fn mfpt<'py>(
     }
     d.set_item("failures", f)?;
     d.set_item("start", start)?;
+    d.set_item("terrain", kind.name())?;
+    Ok(d)
+}
+
+/// `disturb(model="simplest", terrain="step-down", once=None, largest=False, steps=200,
+/// tol=1e-5, slope=None, **params)`: `pdw-sweep disturb` — with `once=d` one disturbed step
+/// from the gait (a dict: `fell`, `steps`, `fall`, `deviation` array, `returned_after`); with
+/// `largest=True` the largest disturbance survived each way (a dict of `(survived, fell)`
+/// pairs: `down`/`up` for step heights, `steeper`/`shallower` for slopes).
+#[pyfunction]
+#[pyo3(
+    signature = (model="simplest", terrain="step-down", once=None, largest=false, steps=200, tol=1e-5, slope=None, **params),
+    text_signature = "(model='simplest', terrain='step-down', once=None, largest=False, steps=200, tol=1e-5, slope=None, **params)"
+)]
+#[allow(clippy::too_many_arguments)]
+fn disturb<'py>(
+    py: Python<'py>,
+    model: &str,
+    terrain: &str,
+    once: Option<f64>,
+    largest: bool,
+    steps: usize,
+    tol: f64,
+    slope: Option<&Bound<'py, PyAny>>,
+    params: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    use pdw_limit::terrain::TerrainKind;
+    let kind = pdw::mfpt::check_terrain(terrain, &MFPT_FLAGS).map_err(err)?;
+    let m = build_kw(model, slope, params)?;
+    pdw::disturb::check(&m, kind).map_err(err)?;
+    if steps == 0 {
+        return Err(err("steps: 0 must be an integer >= 1"));
+    }
+    let integ = pdw::mfpt::default_integrator();
+    let d = PyDict::new(py);
+    match (once, largest) {
+        (Some(v), false) => {
+            if !v.is_finite() {
+                return Err(err(format!("once: {v} is not a finite disturbance")));
+            }
+            let r = interruptible(py, || {
+                pdw::disturb::respond(&m, kind, v, steps, integ).map_err(err)
+            })?;
+            d.set_item("fell", !r.survived())?;
+            d.set_item("steps", r.steps)?;
+            d.set_item("fall", r.fall.map(|o| o.to_string()))?;
+            d.set_item("deviation", r.deviation.clone().into_pyarray(py))?;
+            d.set_item("returned_after", r.returned_after)?;
+        }
+        (None, true) => {
+            if !(tol.is_finite() && tol > 0.0) {
+                return Err(err(format!("tol: {tol} must be > 0")));
+            }
+            let (names, limit) = match kind {
+                TerrainKind::Slope => (["steeper", "shallower"], 1.5),
+                TerrainKind::StepDown => (["down", "up"], 1e3),
+            };
+            for (name, sign) in names.into_iter().zip([1.0, -1.0]) {
+                let pair = interruptible(py, || {
+                    pdw::disturb::largest(&m, kind, sign, tol, limit, steps, integ).map_err(err)
+                })?;
+                d.set_item(name, pair)?;
+            }
+        }
+        _ => return Err(err("give once=D or largest=True (one of them)")),
+    }
+    d.set_item("terrain", kind.name())?;
     Ok(d)
 }
 
@@ -1728,6 +1811,7 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(continuation, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(mfpt, m)?)?;
+    m.add_function(wrap_pyfunction!(disturb, m)?)?;
     m.add_function(wrap_pyfunction!(orbit::orbit_diagram, m)?)?;
     m.add_function(wrap_pyfunction!(basin_over::basin_over, m)?)?;
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;

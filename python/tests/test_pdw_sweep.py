@@ -548,3 +548,36 @@ def test_mfpt_curve_is_the_single_runs_at_each_sd():
     assert c["mfpt"][0] > c["mfpt"][1] > c["mfpt"][2]
     with pytest.raises(ValueError, match="below the last"):
         pdw.mfpt("rimless", sd="1deg:0.5deg:3")
+
+
+def test_mfpt_on_step_heights():
+    # stairs without spread: the wheel rolls down its own stairs gait and never falls
+    r0 = pdw.mfpt("rimless", terrain="step-down", sd=0.0, step_down=0.01, walkers=20, max_steps=200)
+    assert r0["terrain"] == "step-down" and r0["mean"] == 0.01
+    assert r0["falls"] == 0 and r0["censored"] == 20
+    r = pdw.mfpt("rimless", terrain="step-down", sd=0.01, walkers=300, max_steps=5000, seed=2)
+    assert r["falls"] + r["censored"] == 300 and r["falls"] > 0
+    assert r["mfpt"] == r["total_steps"] / r["falls"]
+    # a wider spread loses walkers sooner (the same draws, scaled)
+    r2 = pdw.mfpt("rimless", terrain="step-down", sd=0.02, walkers=300, max_steps=5000, seed=2)
+    assert r2["mfpt"] < r["mfpt"]
+    with pytest.raises(ValueError, match="not a height"):
+        pdw.mfpt("rimless", terrain="step-down", sd="1deg")
+    with pytest.raises(ValueError, match="step_down"):
+        pdw.mfpt("compass", terrain="step-down", sd=0.01)
+
+
+def test_disturb_once_and_largest():
+    r = pdw.disturb("rimless", once=-0.01, steps=60)
+    assert not r["fell"] and r["steps"] == 60
+    dev = r["deviation"]
+    # the wheel's multiplier cos² 2α = 1/2 (8 spokes) per step, once the start's offset is gone
+    assert abs(dev[5] / dev[4] - 0.5) < 0.02
+    assert dev[r["returned_after"] - 1] < 1e-6
+    big = pdw.disturb("simplest", largest=True, tol=1e-6, steps=100)
+    ok, fell = big["down"]
+    assert 0 < ok < fell <= ok + 1e-6
+    assert not pdw.disturb("simplest", once=ok, steps=100)["fell"]
+    assert pdw.disturb("simplest", once=fell, steps=100)["fell"]
+    with pytest.raises(ValueError, match="once"):
+        pdw.disturb("rimless")

@@ -62,6 +62,37 @@ pub fn gauss_hermite(n: usize) -> (Vec<f64>, Vec<f64>) {
     (z, w)
 }
 
+/// Nodes `z_i` and weights `w_i` of the `n`-point Gauss–Legendre rule for the uniform
+/// distribution of unit variance, on `[−√3, √3]` (`Σ w_i f(z_i) ≈ E f(U)`, exact for
+/// polynomials of degree < 2n), by Golub & Welsch (Math. Comp. 23, 1969) as
+/// [`gauss_hermite`]: the Jacobi matrix of the Legendre polynomials (zero diagonal,
+/// off-diagonal `k / √(4k² − 1)`, k = 1 … n−1) gives the nodes on `[−1, 1]` (scaled by √3) and
+/// the squared first components of its unit eigenvectors the probability weights. The
+/// quadrature for a terrain whose draws are uniform with the same standard deviation.
+pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut a = vec![0.0; n * n];
+    for k in 1..n {
+        let kf = k as f64;
+        let b = kf / (4.0 * kf * kf - 1.0).sqrt();
+        a[k * n + k - 1] = b;
+        a[(k - 1) * n + k] = b;
+    }
+    let v = jacobi_eigen(&mut a, n);
+    let mut pairs: Vec<(f64, f64)> = (0..n)
+        .map(|i| (3f64.sqrt() * a[i * n + i], v[i] * v[i]))
+        .collect();
+    pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
+    let (mut z, mut w): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
+    for i in 0..n / 2 {
+        let (zi, wi) = (0.5 * (z[n - 1 - i] - z[i]), 0.5 * (w[i] + w[n - 1 - i]));
+        (z[i], z[n - 1 - i], w[i], w[n - 1 - i]) = (-zi, zi, wi, wi);
+    }
+    if n % 2 == 1 {
+        z[n / 2] = 0.0;
+    }
+    (z, w)
+}
+
 /// The cyclic Jacobi eigenvalue method (Jacobi 1846; Golub & Van Loan §8.5) on the symmetric
 /// `n × n` row-major `a`: on return its diagonal holds the eigenvalues; returns the first row
 /// of the eigenvector matrix (component 0 of each unit eigenvector, in diagonal order).

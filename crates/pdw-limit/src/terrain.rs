@@ -16,6 +16,16 @@
 //! With `s = s̄` both shifts add an exact zero, so the terrain stride is the ordinary stride
 //! bit for bit.
 //!
+//! # Step heights
+//! With [`TerrainKind::StepDown`] the ground of step `k` is a line parallel to the model's
+//! slope, `h_k` below the stance foot along the slope normal (a step down positive, up
+//! negative): the model at `step_down = h_k` (its module docs derive the guard and the impact
+//! for the unsymmetric configuration). The dynamics see angles only and every foothold is
+//! measured from the current stance foot, so nothing shifts between steps ([`SlopeWalk::shift`]
+//! adds nothing); the state just after a heel strike onto `h_k` still remembers `h_k` (the
+//! trailing foot is `h_k` above the new stance foot), which the Markov chain's layers carry as
+//! they carry the last slope ([`crate::markov`]).
+//!
 //! # Random numbers
 //! Counter-based: the slope of walker `i` at step `k` is a pure function of `(seed, i, k)`
 //! ([`standard_normal`]), so a walk is the same on any thread count or shard.
@@ -66,20 +76,52 @@ pub fn standard_normal(seed: u64, walker: u64, step: u64) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
-/// Ground slopes drawn per step: `s_k = mean + sd ξ_k`, `ξ_k` independent standard normals
-/// ([`standard_normal`] of `(seed, walker, k)`).
+/// What the terrain draws per step: the landing line's slope, or the foothold's height below
+/// the stance foot (module docs, "Step heights").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TerrainKind {
+    /// A random slope per step (rad, downhill positive).
+    #[default]
+    Slope,
+    /// A random step down per step (model length units, a step down positive).
+    StepDown,
+}
+
+impl TerrainKind {
+    /// The model parameter the terrain sets per step: `slope` or `step_down`.
+    pub fn param(self) -> &'static str {
+        match self {
+            TerrainKind::Slope => "slope",
+            TerrainKind::StepDown => "step_down",
+        }
+    }
+
+    /// The terrain's name in commands and files: `slope` or `step-down`.
+    pub fn name(self) -> &'static str {
+        match self {
+            TerrainKind::Slope => "slope",
+            TerrainKind::StepDown => "step-down",
+        }
+    }
+}
+
+/// Ground slopes (or step heights, [`TerrainKind`]) drawn per step: `s_k = mean + sd ξ_k`,
+/// `ξ_k` independent standard normals ([`standard_normal`] of `(seed, walker, k)`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlopeTerrain {
-    /// Mean slope `s̄` (rad).
+    /// Mean slope `s̄` (rad), or mean step down `h̄`.
     pub mean: f64,
-    /// Standard deviation `σ` of the slope (rad, ≥ 0).
+    /// Standard deviation `σ` of the slope (rad, ≥ 0), or of the step down.
     pub sd: f64,
     /// Seed of the counter-based generator.
     pub seed: u64,
+    /// What is drawn.
+    pub kind: TerrainKind,
 }
 
 impl SlopeTerrain {
-    /// The slope of the line walker `walker` lands on at the end of step `step` (1, 2, …).
+    /// The slope of the line walker `walker` lands on at the end of step `step` (1, 2, …) (or
+    /// the step down of its foothold).
     pub fn slope(&self, walker: u64, step: u64) -> f64 {
         self.mean + self.sd * standard_normal(self.seed, walker, step)
     }
@@ -99,6 +141,7 @@ pub struct TerrainStride {
 /// The stride on terrain of a model (module docs, "Convention").
 pub struct SlopeWalk<'a> {
     model_at: ModelAt<'a>,
+    kind: TerrainKind,
     mean: f64,
     absolute: usize,
     sign: f64,
@@ -110,13 +153,33 @@ impl<'a> SlopeWalk<'a> {
     /// `integrator`; [`LimitError::Model`] when the model has no terrain frame
     /// ([`Walker::terrain_frame`]).
     pub fn new(model_at: ModelAt<'a>, mean: f64, integrator: Options) -> Result<Self, LimitError> {
+        Self::with_kind(model_at, TerrainKind::Slope, mean, integrator)
+    }
+
+    /// The walk on terrain of kind `kind`: `model_at` sets the model's [`TerrainKind::param`]
+    /// (mean `mean`).
+    pub fn with_kind(
+        model_at: ModelAt<'a>,
+        kind: TerrainKind,
+        mean: f64,
+        integrator: Options,
+    ) -> Result<Self, LimitError> {
         integrator.validate()?;
-        let (absolute, sign) = model_at(mean)?.terrain_frame().ok_or(LimitError::Model {
-            param: mean,
-            message: "the model does not walk on random terrain (round feet?)".into(),
-        })?;
+        let frame = model_at(mean)?.terrain_frame();
+        // step heights shift nothing; a slope needs the model's absolute angle
+        let (absolute, sign) = match (kind, frame) {
+            (TerrainKind::StepDown, f) => f.unwrap_or((0, 0.0)),
+            (TerrainKind::Slope, Some(f)) => f,
+            (TerrainKind::Slope, None) => {
+                return Err(LimitError::Model {
+                    param: mean,
+                    message: "the model does not walk on random terrain (round feet?)".into(),
+                })
+            }
+        };
         Ok(Self {
             model_at,
+            kind,
             mean,
             absolute,
             sign,
@@ -129,9 +192,17 @@ impl<'a> SlopeWalk<'a> {
         self.mean
     }
 
-    /// A state in the frame of line `from` carried to the frame of line `to`.
+    /// A state in the frame of line `from` carried to the frame of line `to`; nothing for step
+    /// heights (module docs, "Step heights").
     pub fn shift(&self, x: &mut [f64], from: f64, to: f64) {
-        x[self.absolute] += self.sign * (to - from);
+        if self.kind == TerrainKind::Slope {
+            x[self.absolute] += self.sign * (to - from);
+        }
+    }
+
+    /// What the terrain draws.
+    pub fn kind(&self) -> TerrainKind {
+        self.kind
     }
 
     /// One stride landing on a line inclined `slope`, from the post-heel-strike full state `x`

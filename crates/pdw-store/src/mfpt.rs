@@ -4,7 +4,9 @@
 //! ```text
 //! /                 attrs: format ("pdw-sweep mfpt v1"), version, command, created, model,
 //!                          params (JSON object of the model's parameters at the mean slope)
-//! /mfpt             attrs: method ("monte carlo"), terrain ("slope"), mean (rad), sd (rad),
+//! /mfpt             attrs: method ("monte carlo"), terrain ("slope" or "step-down"),
+//!                          terrain_unit (of mean and sd: "rad" for slopes, the model's length
+//!                          unit for step heights; "rad" when absent), mean, sd,
 //!                          seed, walkers, max_steps, falls, censored, total_steps, mfpt,
 //!                          stderr (steps / falls and its standard error), restricted_mean,
 //!                          restricted_stderr (mean of min(T, max_steps)), estimator (text),
@@ -39,8 +41,10 @@ pub struct MfptData {
     pub params: String,
     /// `"monte carlo"`.
     pub method: String,
-    /// `"slope"`.
+    /// `"slope"` or `"step-down"`.
     pub terrain: String,
+    /// The unit of `mean` and `sd`: `"rad"`, or the model's length unit for step heights.
+    pub terrain_unit: String,
     pub mean: f64,
     pub sd: f64,
     pub seed: u64,
@@ -120,6 +124,7 @@ fn fill(p: &Path, f: &File, d: &MfptData) -> Result<()> {
     for (k, v) in [
         ("method", &d.method),
         ("terrain", &d.terrain),
+        ("terrain_unit", &d.terrain_unit),
         ("estimator", &d.estimator),
     ] {
         set_str(p, &g, k, v)?;
@@ -206,6 +211,7 @@ fn read_group(p: &Path, g: &Group) -> Result<MfptData> {
     Ok(MfptData {
         method: get_str(p, KIND, g, "method")?,
         terrain: get_str(p, KIND, g, "terrain")?,
+        terrain_unit: terrain_unit(p, KIND, g)?,
         estimator: get_str(p, KIND, g, "estimator")?,
         mean: x("mean")?,
         sd: x("sd")?,
@@ -241,9 +247,10 @@ const CURVE_KIND: &str = "pdw-sweep mfpt curve";
 /// ```text
 /// /                 attrs: format ("pdw-sweep mfpt curve v1"), version, command, created, model,
 ///                          params (JSON object)
-/// /curve            attrs: terrain, mean (rad), seed, walkers, max_steps, estimator,
+/// /curve            attrs: terrain, terrain_unit (as in the mfpt file), mean, seed, walkers,
+///                          max_steps, estimator,
 ///                          chain_mesh_coarse, chain_mesh_fine (0 without the chain)
-/// /curve/sd         f64 [N] the slope standard deviations (rad)
+/// /curve/sd         f64 [N] the standard deviations (terrain_unit)
 /// /curve/mfpt, /curve/stderr, /curve/restricted_mean, /curve/chain_mfpt_coarse,
 /// /curve/chain_mfpt_fine       f64 [N]
 /// /curve/falls, /curve/censored, /curve/total_steps       u64 [N]
@@ -254,6 +261,8 @@ pub struct MfptCurveData {
     pub model: String,
     pub params: String,
     pub terrain: String,
+    /// The unit of `mean` and `sd` ([`MfptData::terrain_unit`]).
+    pub terrain_unit: String,
     pub mean: f64,
     pub seed: u64,
     pub walkers: u64,
@@ -319,6 +328,7 @@ pub fn write_mfpt_curve(path: impl AsRef<Path>, force: bool, data: &MfptCurveDat
         }
         let g = f.create_group("curve").at(p, "creating /curve")?;
         set_str(p, &g, "terrain", &data.terrain)?;
+        set_str(p, &g, "terrain_unit", &data.terrain_unit)?;
         set_str(p, &g, "estimator", &data.estimator)?;
         set_attr(p, &g, "mean", &data.mean)?;
         for (k, v) in [
@@ -371,6 +381,7 @@ pub fn read_mfpt_curve(path: impl AsRef<Path>) -> Result<MfptCurveData> {
         model: get_str(p, CURVE_KIND, &f, "model")?,
         params: get_str(p, CURVE_KIND, &f, "params")?,
         terrain: get_str(p, CURVE_KIND, &g, "terrain")?,
+        terrain_unit: terrain_unit(p, CURVE_KIND, &g)?,
         estimator: get_str(p, CURVE_KIND, &g, "estimator")?,
         mean: get_attr::<f64>(p, CURVE_KIND, &g, "mean")?,
         seed: u("seed")?,
@@ -387,4 +398,13 @@ pub fn read_mfpt_curve(path: impl AsRef<Path>) -> Result<MfptCurveData> {
         censored: u64s("censored")?,
         total_steps: u64s("total_steps")?,
     })
+}
+
+/// The `terrain_unit` attribute of `g`, `"rad"` in files written before step heights existed.
+fn terrain_unit(p: &Path, kind: &'static str, g: &Group) -> Result<String> {
+    if g.attr("terrain_unit").is_ok() {
+        get_str(p, kind, g, "terrain_unit")
+    } else {
+        Ok("rad".into())
+    }
 }

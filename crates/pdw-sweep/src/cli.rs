@@ -39,6 +39,9 @@ pub enum Command {
     Design(DesignArgs),
     /// Explore basin files in the browser: click a cell to watch it walk, zoom to refine.
     Explore(ExploreArgs),
+    /// One step of another slope or height from the gait: falls or recovers; or the largest
+    /// such disturbance survived.
+    Disturb(DisturbArgs),
 }
 
 /// `pdw-sweep explore`: the local basin explorer (docs/explore.md).
@@ -62,6 +65,32 @@ pub struct ExploreArgs {
     /// Threads of the computing pool.
     #[arg(long, default_value_t = 2, value_parser = crate::args::parse_threads)]
     pub threads: usize,
+}
+
+#[derive(Args, Debug)]
+pub struct DisturbArgs {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    #[command(flatten)]
+    pub integrator: IntegratorOpts,
+    /// What step 1 changes: step-down (its foothold lies --once lower than nominal, a step down
+    /// positive, model length units) or slope (its landing line is --once steeper, radians or
+    /// 1deg).
+    #[arg(long, default_value = "step-down")]
+    pub terrain: String,
+    /// The disturbance of step 1 (steps 2, 3, … are nominal).
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "largest")]
+    pub once: Option<String>,
+    /// Bisect for the largest disturbance survived, both ways (step down and up, or steeper
+    /// and shallower).
+    #[arg(long, conflicts_with = "once")]
+    pub largest: bool,
+    /// Steps walked after the disturbance counts as surviving it.
+    #[arg(long, default_value_t = 200)]
+    pub steps: usize,
+    /// With --largest: the bisection's tolerance (the disturbance's unit).
+    #[arg(long, default_value_t = 1e-5)]
+    pub tol: f64,
 }
 
 /// Options shared by every command that builds a model.
@@ -379,16 +408,20 @@ pub struct MfptArgs {
     pub model: ModelOpts,
     #[command(flatten)]
     pub integrator: IntegratorOpts,
-    /// The terrain: slope (a random ground slope per step, normal around --mean with --sd).
+    /// The terrain: slope (a random ground slope per step, normal around --mean with --sd), or
+    /// step-down (a random foothold height per step: the next foothold lies h below the stance
+    /// foot, a step down positive, normal around --mean with --sd, model length units).
     #[arg(long, default_value = "slope")]
     pub terrain: String,
-    /// Standard deviation of the slope, radians or with a unit (1deg, 0.5°); or a range A:B:N
-    /// (0.3deg:0.7deg:5) for the MFPT against it (a table, HDF5 and a PNG on a log axis).
+    /// Standard deviation of the slope, radians or with a unit (1deg, 0.5°), or of the step
+    /// down (a plain length); or a range A:B:N (0.3deg:0.7deg:5) for the MFPT against it (a
+    /// table, HDF5 and a PNG on a log axis).
     #[arg(long)]
     pub sd: String,
-    /// Mean slope, radians or with a unit (3deg). Default: the model's slope (--slope or its
-    /// preset).
-    #[arg(long, conflicts_with = "slope")]
+    /// Mean slope, radians or with a unit (3deg) (not with --slope); with --terrain step-down
+    /// the mean step down (a plain length). Default: the model's slope (--slope or its preset),
+    /// or its step_down (0).
+    #[arg(long)]
     pub mean: Option<String>,
     /// Number of walkers.
     #[arg(long, default_value_t = 10000)]

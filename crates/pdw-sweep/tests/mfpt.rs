@@ -15,6 +15,7 @@ fn library(walkers: usize, max_steps: usize) -> pdw_limit::terrain::MfptEstimate
             mean: 0.009,
             sd: 0.1f64.to_radians(),
             seed: 3,
+            kind: pdw_limit::terrain::TerrainKind::Slope,
         },
         walkers,
         max_steps,
@@ -157,4 +158,110 @@ fn an_mfpt_curve_is_the_single_runs_at_each_standard_deviation() {
         assert_eq!(o.status.code(), Some(2), "{bad}");
         assert!(stderr(&o).contains(says), "{bad}: {}", stderr(&o));
     }
+}
+
+/// `mfpt --terrain step-down`: the file says which terrain and in what unit, holds the
+/// library's estimate at the model's `step_down` set by `--mean`, and a step beyond the rimless
+/// wheel's reach is refused by name.
+#[test]
+fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.h5");
+    let o = run(&[
+        "mfpt",
+        "--model",
+        "rimless",
+        "--terrain",
+        "step-down",
+        "--mean",
+        "0.001",
+        "--sd",
+        "0.01",
+        "--walkers",
+        "50",
+        "--max-steps",
+        "500",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let d = pdw_store::read_mfpt(&out).unwrap();
+    assert_eq!(
+        (d.terrain.as_str(), d.terrain_unit.as_str()),
+        ("step-down", "m")
+    );
+    assert_eq!((d.mean, d.sd), (0.001, 0.01));
+    let m = pdw::build("rimless", &[("step_down".to_string(), 0.001)]).unwrap();
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let plan = MfptPlan {
+        terrain: SlopeTerrain {
+            mean: 0.001,
+            sd: 0.01,
+            seed: 0,
+            kind: pdw_limit::terrain::TerrainKind::StepDown,
+        },
+        walkers: 50,
+        max_steps: 500,
+        integrator: mfpt::default_integrator(),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let e = mfpt::run(&m, &plan, &x0, &pool, &|_| {}).unwrap().1;
+    assert_eq!(d.mfpt.to_bits(), e.mfpt.to_bits());
+    assert!(d.params.contains("step_down"));
+    let o = run(&[
+        "mfpt",
+        "--model",
+        "rimless",
+        "--terrain",
+        "step-down",
+        "--sd",
+        "0.2",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("reach"), "{}", stderr(&o));
+    let o = run(&[
+        "mfpt",
+        "--model",
+        "compass",
+        "--terrain",
+        "step-down",
+        "--sd",
+        "0.01",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
+}
+
+/// `disturb`: the library's response printed, and the requests it refuses.
+#[test]
+fn disturb_prints_the_response_and_refuses_what_it_cannot_do() {
+    let o = run(&[
+        "disturb", "--model", "rimless", "--once", "-0.01", "--steps", "60",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let m = pdw::build("rimless", &[]).unwrap();
+    let r = pdw::disturb::respond(
+        &m,
+        pdw_limit::terrain::TerrainKind::StepDown,
+        -0.01,
+        60,
+        mfpt::default_integrator(),
+    )
+    .unwrap();
+    let k = r.returned_after.unwrap();
+    assert!(
+        text.contains(&format!("back within 1e-6 of the gait after {k} steps")),
+        "{text}"
+    );
+    assert!(text.contains("walked all 60 steps"), "{text}");
+    let o = run(&["disturb", "--model", "compass", "--once", "0.01"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
+    let o = run(&["disturb", "--model", "rimless"]);
+    assert!(!o.status.success());
 }

@@ -60,6 +60,19 @@ pub struct StaticParam {
 /// ```
 ///
 /// The model validates the values in its constructor (with its own error messages).
+/// The fingerprint ([`pdw_model::Walker::fingerprint`]) of a closed-form model from its name
+/// and parameters, leaving out `step_down` when it is 0 (level ground), so that a file written
+/// before step heights existed names the same model.
+pub(crate) fn level_fingerprint(name: &str, params: &[(String, f64)]) -> String {
+    let mut s = format!("model = {name}\n");
+    for (n, v) in params {
+        if !(n == "step_down" && *v == 0.0) {
+            s.push_str(&format!("{n} = {v:?}\n"));
+        }
+    }
+    s
+}
+
 macro_rules! closed_params {
     (
         $(#[$meta:meta])*

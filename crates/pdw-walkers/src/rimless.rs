@@ -18,8 +18,21 @@
 //! `θ̇⁺ = cos 2α · θ̇⁻`, and `θ⁺ = θ⁻ − 2α` (`= −α` on the guard). The kinetic energy lost is
 //! `½ l² θ̇⁻² (1 − cos² 2α)`.
 //!
+//! # Step down (random step heights; Schwab & Wisse 2001, Hobbelen & Wisse 2007)
+//! With `step_down = h ≠ 0` the next foothold lies `h` below the contact point along the slope
+//! normal (a step down positive), on a line parallel to the slope. The next spoke's tip is at
+//! height `l (cos θ − cos(θ − 2α)) = −2 l sin α sin(θ − α)`, so it lands at
+//! `θ⁻ = α + asin(h / (2 l sin α))` (guard `θ − θ⁻`; `|h| < 2 l sin α`, the spoke's reach). The
+//! spokes stay `2α` apart, so the impact map is unchanged: `θ⁺ = θ⁻ − 2α`,
+//! `θ̇⁺ = cos 2α · θ̇⁻` (angular momentum about the new contact). The flow sees only angles, so
+//! nothing shifts between steps; the lift of the model with `step_down = h` starts the next step
+//! at `θ⁺ = θ⁻ − 2α` of that `h`. Closed-form step map from `θ⁺` (previous height) to `θ⁻`
+//! (this one): `ω' = cos 2α · √(ω² + 2 (g/l)(cos(θ⁺ + γ) − cos(θ⁻ + γ)))`. Guard 2 stays
+//! `θ + α` (a start rolling backwards; guard 1 ends every walking stride that turns back).
+//!
 //! # Section
-//! Just after a spoke impact, reduced coordinate `θ̇` (the lift sets `θ = −α`). Return map
+//! Just after a spoke impact, reduced coordinate `θ̇` (the lift sets `θ = −α`, or `θ⁺` on a
+//! step). Return map
 //! (Coleman; Tedrake ch. 4): `ω' = cos 2α · √(ω² + 4 (g/l) sin α sin γ)`.
 //!
 //! # Stopping (terminal guards)
@@ -99,6 +112,10 @@ closed_params! {
         l: "m" = 1.0 => "spoke length",
         /// Finite and > 0.
         max_stride_time: "s" = 10.0 => "stride time budget; a longer stride counts as a timeout",
+        /// Finite, `|h| < 2 l sin α` (module docs, "Step down").
+        step_down: "m" = 0.0
+            => "height by which the next spoke's foothold lies below the stance contact, along \
+                the slope normal (a step down positive, a step up negative)",
     }
 }
 
@@ -119,6 +136,11 @@ pub struct Rimless {
     params: RimlessParams,
     /// Half inter-spoke angle α = π/N.
     alpha: f64,
+    /// The stance angle at which the next spoke's tip reaches the foothold `step_down` below:
+    /// `α + asin(h / (2 l sin α))` (`α` on level ground).
+    strike: f64,
+    /// The stance angle just after a spoke impact onto such a foothold, `strike − 2α`.
+    after: f64,
 }
 
 impl Rimless {
@@ -148,6 +170,22 @@ impl Rimless {
             f64::INFINITY,
             "finite and > 0",
         )?;
+        let alpha = PI / p.n_spokes;
+        let reach = 2.0 * l * alpha.sin();
+        if !(p.step_down.is_finite() && p.step_down.abs() < reach) {
+            return Err(WalkerError::InvalidParam {
+                name: "step_down",
+                value: p.step_down,
+                allowed: "a finite height with |step_down| < 2 l sin(pi/n_spokes) (the next \
+                          spoke's reach)",
+            });
+        }
+        let (strike, after) = if p.step_down == 0.0 {
+            (alpha, -alpha)
+        } else {
+            let s = alpha + (p.step_down / reach).asin();
+            (s, s - 2.0 * alpha)
+        };
         Ok(Self {
             params: RimlessParams {
                 slope: gamma,
@@ -155,8 +193,11 @@ impl Rimless {
                 g,
                 l,
                 max_stride_time,
+                step_down: p.step_down,
             },
-            alpha: PI / p.n_spokes,
+            alpha,
+            strike,
+            after,
         })
     }
 
@@ -171,12 +212,29 @@ impl Rimless {
         0.5 * l * l * x[1] * x[1] + g * l * (x[0] + slope).cos()
     }
 
+    /// The stance angles a step runs between: `(θ⁺, θ⁻)`, just after the previous spoke
+    /// impact onto a foothold `step_down` lower and at the next one (`(−α, α)` on level
+    /// ground; module docs, "Step down").
+    pub fn step_angles(&self) -> (f64, f64) {
+        (self.after, self.strike)
+    }
+
     /// Closed-form rolling fixed point `ω* = cot 2α · √(4 (g/l) sin α sin γ)` (Coleman; Tedrake),
     /// or `None` when the rolling gait does not exist (`γ ≤ 0`, `N = 4` (cot 2α = 0 is the
-    /// standing limit) or `ω* ≤ ω₁ = √(2 (g/l)(1 − cos(γ − α)))`).
+    /// standing limit) or `ω* ≤ ω₁ = √(2 (g/l)(1 − cos(γ − α)))`). On stairs (`step_down ≠ 0`)
+    /// the same balance of energy over a step from `θ⁺` to `θ⁻` ([`Rimless::step_angles`]):
+    /// `ω*² = 2 (g/l) D cos² 2α / sin² 2α`, `D = cos(θ⁺ + γ) − cos(θ⁻ + γ)`, and
+    /// `ω₁² = 2 (g/l)(1 − cos(θ⁺ + γ))`.
     pub fn rolling_fixed_point(&self) -> Option<f64> {
         let a = self.alpha;
         let RimlessParams { slope, g, l, .. } = self.params;
+        if self.params.step_down != 0.0 {
+            let (t0, t1) = (self.after + slope, self.strike + slope);
+            let d = t0.cos() - t1.cos();
+            let w = (2.0 * g / l * d).sqrt() / (2.0 * a).tan();
+            let w1 = (2.0 * g / l * (1.0 - t0.cos())).sqrt();
+            return (w.is_finite() && w > w1).then_some(w);
+        }
         if slope <= 0.0 {
             return None;
         }
@@ -201,7 +259,7 @@ impl HybridSystem for Rimless {
     }
     fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
         match k {
-            0 => x[0] - self.alpha,
+            0 => x[0] - self.strike,
             1 => x[1],
             _ => x[0] + self.alpha,
         }
@@ -270,7 +328,7 @@ impl Section for Rimless {
         (0, SPOKE_IMPACT)
     }
     fn lift(&self, s: &[f64], x: &mut [f64]) {
-        x[0] = -self.alpha;
+        x[0] = self.after;
         x[1] = s[0];
     }
     fn project(&self, x: &[f64], s: &mut [f64]) {
@@ -289,6 +347,10 @@ impl Walker for Rimless {
     }
     fn energy(&self, x: &[f64]) -> Option<f64> {
         Some(Self::energy(self, x))
+    }
+    /// Without `step_down` on level ground (files written before it existed match).
+    fn fingerprint(&self) -> String {
+        crate::registry::level_fingerprint(self.name(), &self.param_values())
     }
     fn energy_unit(&self) -> &str {
         "J/kg"
@@ -323,7 +385,12 @@ impl Walker for Rimless {
         self.params.named_values()
     }
     /// Distance between consecutive contact points, `2 l sin α`.
-    fn step_length(&self, _x_pre: &[f64]) -> f64 {
+    /// Onto a step, the distance along the slope `l (sin θ⁻ − sin(θ⁻ − 2α))`.
+    fn step_length(&self, x_pre: &[f64]) -> f64 {
+        if self.params.step_down != 0.0 {
+            let th = x_pre[0];
+            return self.params.l * (th.sin() - (th - 2.0 * self.alpha).sin());
+        }
         2.0 * self.params.l * self.alpha.sin()
     }
     /// Hub at `l (sin θ, cos θ)` above the contact point; spoke `k` points from the hub at angle

@@ -43,6 +43,23 @@
 //! trailing foot's angular momentum about the hip (the new swing foot leaves with no velocity
 //! perpendicular to its leg).
 //!
+//! # Step down (random step heights; Schwab & Wisse 2001, Hobbelen & Wisse 2007)
+//! With `step_down = h ≠ 0` the next foothold lies `h` below the stance foot along the slope
+//! normal (a step down positive, up negative), on a line parallel to the slope. The swing foot
+//! `(sin ψ − sin θ, cos θ − cos ψ)` strikes when its height reaches `−h`: guard
+//! `cos ψ − cos θ − h` rising, admissible with the foot ahead, `sin ψ − sin θ > 0` (at `h = 0`
+//! the old guard `φ − 2θ` and test `θ < 0` run unchanged, bit for bit). The same two
+//! conservation laws give the jump map for the unsymmetric configuration: the hip velocity
+//! keeps its component across the new stance leg (the old swing leg, angle `ψ⁻ = θ⁻ − φ⁻`),
+//! `θ⁺ = θ⁻ − φ⁻`, `θ̇⁺ = cos φ⁻ θ̇⁻`; the legs swap, `φ⁺ = −φ⁻`; and the new swing foot keeps no
+//! velocity across its leg, `ψ̇⁺ = cos φ⁺ θ̇⁺`, so `φ̇⁺ = cos φ⁻ (1 − cos φ⁻) θ̇⁻` (at
+//! `φ⁻ = 2θ⁻` Garcia's map). Energy lost: `½ θ̇⁻² sin² φ⁻`. The dynamics do not see where the
+//! feet are, only the angles, so nothing shifts between steps: the next step's foothold is
+//! measured from the new stance foot. After a strike onto `h` the trailing foot is `h` above the
+//! new stance foot, so the lift of the model with `step_down = h` puts it there:
+//! `ψ = −acos(cos θ − h)` (behind), `φ = θ − ψ`, `φ̇ = (1 − cos φ) θ̇`.
+//! [`Walker::swing_clearance`] stays the height over the stance foot's line.
+//!
 //! # Section
 //! Just after heel strike, reduced coordinates `(θ, θ̇)` in Garcia's convention. Because the jump
 //! map's image satisfies `φ⁺ = 2θ⁺` and, with `cos 2θ⁺ = cos 2θ⁻` and `θ̇⁻ = θ̇⁺ / cos 2θ⁺`,
@@ -112,6 +129,10 @@ closed_params! {
         /// Finite and > 0; the gaits take ≈ 3.1–3.9.
         max_stride_time: "sqrt(l/g)" = 12.0
             => "stride time budget; a longer stride counts as a fall (gait period ≈ 3.9)",
+        /// Finite, in (−1, 1) leg lengths; 0 is level ground (module docs, "Step down").
+        step_down: "l" = 0.0
+            => "height by which the next foothold lies below the stance foot, along the slope \
+                normal (a step down positive, a step up negative)",
     }
 }
 
@@ -206,14 +227,76 @@ fn rhs_block(gamma: f64, th: &[f64], thd: &[f64], ph: &[f64], o1: &mut [f64], o3
 }
 
 /// The guards of [`HybridSystem::guard`] at `(θ, θ̇, φ)` and their rates from
-/// `f = (θ̇, θ̈, φ̇, ·)`: heel strike `φ − 2θ` (rate `φ̇ − 2θ̇`), stance reversal `θ̇` (rate
-/// `θ̈`), hip on the ground behind `θ − π/2` and ahead `θ + π/2` (rate `θ̇`).
+/// `f = (θ̇, θ̈, φ̇, ·)`: heel strike `φ − 2θ` (rate `φ̇ − 2θ̇`) on level ground (`h = 0`) or
+/// [`step_guard`] onto a foothold `h` below, stance reversal `θ̇` (rate `θ̈`), hip on the
+/// ground behind `θ − π/2` and ahead `θ + π/2` (rate `θ̇`).
 #[inline(always)]
-fn guards_and_rates(th: f64, thd: f64, ph: f64, f0: f64, f1: f64, f2: f64) -> ([f64; 4], [f64; 4]) {
+fn guards_and_rates(
+    h: f64,
+    th: f64,
+    thd: f64,
+    ph: f64,
+    f0: f64,
+    f1: f64,
+    f2: f64,
+) -> ([f64; 4], [f64; 4]) {
+    let (g0, r0) = if h == 0.0 {
+        (ph - 2.0 * th, f2 - 2.0 * f0)
+    } else {
+        step_guard(h, th, ph, f0, f2)
+    };
+    ([g0, thd, th - FRAC_PI_2, th + FRAC_PI_2], [r0, f1, f0, f0])
+}
+
+/// The heel-strike guard onto a foothold `h` below the stance foot (module docs, "Step down"):
+/// `cos ψ − cos θ − h` (minus the swing foot's height over the foothold's level, `ψ = θ − φ`)
+/// and its rate `−sin ψ (θ̇ − φ̇) + sin θ θ̇`.
+#[inline(always)]
+fn step_guard(h: f64, th: f64, ph: f64, thd: f64, phd: f64) -> (f64, f64) {
+    let psi = th - ph;
     (
-        [ph - 2.0 * th, thd, th - FRAC_PI_2, th + FRAC_PI_2],
-        [f2 - 2.0 * f0, f1, f0, f0],
+        psi.cos() - th.cos() - h,
+        -psi.sin() * (thd - phd) + th.sin() * thd,
     )
+}
+
+/// The jump map onto a step (module docs, "Step down"): `θ⁺ = θ⁻ − φ⁻`,
+/// `θ̇⁺ = cos φ⁻ θ̇⁻`, `φ⁺ = −φ⁻`, `φ̇⁺ = cos φ⁻ (1 − cos φ⁻) θ̇⁻` — Garcia 1998's map with
+/// the inter-leg angle `φ⁻` in place of `2θ⁻`.
+fn step_reset(x: &[f64], out: &mut [f64]) {
+    let (th, thd, ph) = (x[0], x[1], x[2]);
+    let c = pdw_simd::sincos(ph).1;
+    out[0] = th - ph;
+    out[1] = c * thd;
+    out[2] = -ph;
+    out[3] = c * (1.0 - c) * thd;
+}
+
+/// The derivative of [`step_reset`]: θ⁻, θ̇⁻ and φ⁻ enter.
+fn step_reset_jacobian(x: &[f64], jac: &mut [f64]) {
+    let (thd, ph) = (x[1], x[2]);
+    let (s, c) = pdw_simd::sincos(ph);
+    jac[..16].fill(0.0);
+    jac[0] = 1.0;
+    jac[2] = -1.0;
+    jac[5] = c;
+    jac[6] = -s * thd;
+    jac[10] = -1.0;
+    // d/dφ [c (1 − c)] = −s (1 − c) + c s = s (2c − 1)
+    jac[13] = c * (1.0 - c);
+    jac[14] = s * (2.0 * c - 1.0) * thd;
+}
+
+/// The lift after a heel strike onto a foothold `h` below the previous one (module docs, "Step
+/// down"): the trailing foot is `h` above the new stance foot and behind it, so
+/// `ψ = −acos(cos θ − h)`, `φ = θ − ψ`, and `φ̇ = (1 − cos φ) θ̇` as on level ground.
+fn step_lift(h: f64, s: &[f64], x: &mut [f64]) {
+    let psi = -(s[0].cos() - h).clamp(-1.0, 1.0).acos();
+    let ph = s[0] - psi;
+    x[0] = s[0];
+    x[1] = s[1];
+    x[2] = ph;
+    x[3] = (1.0 - pdw_simd::sincos(ph).1) * s[1];
 }
 
 /// The four columns of a `(lanes × 4)` view as slices, when they are contiguous.
@@ -315,10 +398,18 @@ impl Simplest {
             f64::INFINITY,
             "finite and > 0",
         )?;
+        let step_down = check_open(
+            "step_down",
+            p.step_down,
+            -1.0,
+            1.0,
+            "a finite height in (-1, 1) leg lengths",
+        )?;
         Ok(Self {
             params: SimplestParams {
                 slope: gamma,
                 max_stride_time,
+                step_down,
             },
         })
     }
@@ -435,7 +526,9 @@ impl HybridSystem for Simplest {
     }
 
     fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
+        let h = self.params.step_down;
         match k {
+            0 if h != 0.0 => step_guard(h, x[0], x[2], 0.0, 0.0).0,
             0 => x[2] - 2.0 * x[0],
             1 => x[1],
             2 => x[0] - FRAC_PI_2,
@@ -455,7 +548,8 @@ impl HybridSystem for Simplest {
         g: &mut [f64],
         rate: &mut [f64],
     ) {
-        let (gv, rv) = guards_and_rates(x[0], x[1], x[2], f[0], f[1], f[2]);
+        let h = self.params.step_down;
+        let (gv, rv) = guards_and_rates(h, x[0], x[1], x[2], f[0], f[1], f[2]);
         g[..4].copy_from_slice(&gv);
         rate[..4].copy_from_slice(&rv);
     }
@@ -493,11 +587,12 @@ impl HybridSystem for Simplest {
         };
         let [g0, g1, g2, g3] = gc;
         let [r0, r1, r2, r3] = rc;
+        let h = self.params.step_down;
         pdw_simd::dispatch(
             #[inline(always)]
             || {
                 for l in 0..lanes {
-                    let (gv, rv) = guards_and_rates(th[l], thd[l], ph[l], f0[l], f1[l], f2[l]);
+                    let (gv, rv) = guards_and_rates(h, th[l], thd[l], ph[l], f0[l], f1[l], f2[l]);
                     (g0[l], g1[l], g2[l], g3[l]) = (gv[0], gv[1], gv[2], gv[3]);
                     (r0[l], r1[l], r2[l], r3[l]) = (rv[0], rv[1], rv[2], rv[3]);
                 }
@@ -505,14 +600,21 @@ impl HybridSystem for Simplest {
         );
     }
 
-    /// All four guards are affine in the state.
-    fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
-        true
+    /// All four guards are affine in the state on level ground; the heel strike onto a step is
+    /// not.
+    fn guard_is_linear(&self, _mode: usize, k: usize) -> bool {
+        k != HEEL_STRIKE || self.params.step_down == 0.0
     }
 
     fn admissible(&self, _mode: usize, k: usize, x: &[f64]) -> bool {
-        // Heel strike only with the swing foot ahead of the stance foot (θ < 0); see module docs.
-        k != HEEL_STRIKE || x[0] < 0.0
+        // Heel strike only with the swing foot ahead of the stance foot (θ < 0 on level ground,
+        // sin ψ − sin θ > 0 onto a step); see module docs.
+        k != HEEL_STRIKE
+            || if self.params.step_down == 0.0 {
+                x[0] < 0.0
+            } else {
+                (x[0] - x[2]).sin() - x[0].sin() > 0.0
+            }
     }
 
     fn reset(
@@ -524,6 +626,10 @@ impl HybridSystem for Simplest {
         out: &mut [f64],
     ) -> usize {
         let (th, thd) = (x[0], x[1]);
+        if self.params.step_down != 0.0 {
+            step_reset(x, out);
+            return 0;
+        }
         // pdw-simd's cosine: the same bits with every libm (shards merge across machines).
         let c2 = pdw_simd::sincos(2.0 * th).1;
         out[0] = -th;
@@ -559,11 +665,17 @@ impl HybridSystem for Simplest {
         _ws: &mut Scratch,
         _mode: usize,
         k: usize,
-        _x: &[f64],
+        x: &[f64],
         grad: &mut [f64],
     ) {
         grad[..4].fill(0.0);
         match k {
+            0 if self.params.step_down != 0.0 => {
+                // ∂/∂θ, ∂/∂φ of cos(θ − φ) − cos θ − h
+                let psi = x[0] - x[2];
+                grad[0] = x[0].sin() - psi.sin();
+                grad[2] = psi.sin();
+            }
             0 => {
                 grad[0] = -2.0;
                 grad[2] = 1.0;
@@ -582,6 +694,9 @@ impl HybridSystem for Simplest {
         x: &[f64],
         jac: &mut [f64],
     ) {
+        if self.params.step_down != 0.0 {
+            return step_reset_jacobian(x, jac);
+        }
         let (th, thd) = (x[0], x[1]);
         let (s2, c2) = pdw_simd::sincos(2.0 * th);
         jac[..16].fill(0.0);
@@ -609,6 +724,9 @@ impl Section for Simplest {
         (0, HEEL_STRIKE)
     }
     fn lift(&self, s: &[f64], x: &mut [f64]) {
+        if self.params.step_down != 0.0 {
+            return step_lift(self.params.step_down, s, x);
+        }
         let c2 = pdw_simd::sincos(2.0 * s[0]).1;
         x[0] = s[0];
         x[1] = s[1];
@@ -633,6 +751,10 @@ impl Walker for Simplest {
     }
     fn energy(&self, x: &[f64]) -> Option<f64> {
         Some(Self::energy(self, x))
+    }
+    /// Without `step_down` on level ground (files written before it existed match).
+    fn fingerprint(&self) -> String {
+        crate::registry::level_fingerprint(self.name(), &self.param_values())
     }
     fn energy_unit(&self) -> &str {
         "M g l"
@@ -673,7 +795,11 @@ impl Walker for Simplest {
         self.params.named_values()
     }
     /// Distance between the feet at heel strike, `2 |sin θ⁻|` (leg length 1).
+    /// Onto a step, `|sin ψ⁻ − sin θ⁻|` (the swing foot's distance along the slope).
     fn step_length(&self, x_pre: &[f64]) -> f64 {
+        if self.params.step_down != 0.0 {
+            return ((x_pre[0] - x_pre[2]).sin() - x_pre[0].sin()).abs();
+        }
         2.0 * x_pre[0].sin().abs()
     }
     /// Ground reaction on the stance foot per unit hip weight `M g` (the massless legs carry the
@@ -759,14 +885,22 @@ impl Walker for Simplest {
     /// `Λ_n = θ̇ sin 2θ cos θ` (> 0 for a gait: θ⁻, θ̇⁻ < 0), tangential `Λ_t = θ̇ sin 2θ sin θ`,
     /// friction needed `|tan θ|`, energy lost `½ θ̇² sin² 2θ`. The trailing foot releases; its
     /// separation rate is the rate of the new swing foot's height after the jump map,
-    /// `ḣ⁺ = −sin θ⁺ θ̇⁺ + sin ψ⁺ ψ̇⁺` with `ψ = θ − φ`.
+    /// `ḣ⁺ = −sin θ⁺ θ̇⁺ + sin ψ⁺ ψ̇⁺` with `ψ = θ − φ`. Onto a step the new leg is at
+    /// `e = (sin(φ − θ), cos(φ − θ))` and `2θ` becomes `φ⁻` throughout (module docs, "Step
+    /// down").
     fn impact_report(&self, _mode: usize, guard: usize, x: &[f64]) -> Option<ImpactReport> {
         if guard != HEEL_STRIKE {
             return None;
         }
         let (th, thd) = (x[0], x[1]);
-        let a = thd * (2.0 * th).sin();
-        let (ln, lt) = (a * th.cos(), a * th.sin());
+        // the inter-leg angle: 2θ⁻ on level ground, φ⁻ onto a step (module docs, "Step down")
+        let ph = if self.params.step_down == 0.0 {
+            2.0 * th
+        } else {
+            x[2]
+        };
+        let a = thd * ph.sin();
+        let (ln, lt) = (a * (ph - th).cos(), a * (ph - th).sin());
         let mut post = [0.0; 4];
         self.reset(&mut Scratch::new(), 0, guard, x, &mut post);
         let (psi, psid) = (post[0] - post[2], post[1] - post[3]);

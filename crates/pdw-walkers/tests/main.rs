@@ -14,4 +14,5 @@ mod round_feet;
 mod seed5;
 mod simplest_physics;
 mod simplest_trajectory;
+mod step_down;
 mod units;

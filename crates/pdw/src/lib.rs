@@ -15,6 +15,7 @@ pub mod animate_trajectory;
 pub mod basin;
 pub mod basin_over;
 pub mod design;
+pub mod disturb;
 pub mod follow;
 pub mod gaits;
 pub mod input;

@@ -7,7 +7,7 @@ use crate::gaits::{model_guesses, no_gait_message, search};
 use crate::input::{self, InputError};
 use crate::model::BuiltModel;
 use pdw_hybrid::Options;
-use pdw_limit::terrain::{self, Fate, MfptEstimate, SlopeTerrain, SlopeWalk};
+use pdw_limit::terrain::{self, Fate, MfptEstimate, SlopeTerrain, SlopeWalk, TerrainKind};
 use pdw_limit::LimitError;
 use pdw_walkers::Walker;
 
@@ -19,7 +19,7 @@ pub const GAIT_TOL: f64 = 1e-12;
 pub const MAX_DRAW: f64 = 8.66;
 
 /// The terrains `--terrain` names.
-pub const TERRAINS: &[&str] = &["slope"];
+pub const TERRAINS: &[&str] = &["slope", "step-down"];
 
 /// A Monte Carlo MFPT run: the terrain, how many walkers, how many steps at most, and the
 /// integrator of the strides.
@@ -47,10 +47,12 @@ pub fn default_integrator() -> Options {
     pdw_limit::BasinOptions::default_integrator()
 }
 
-/// The terrain's name checked (`slope` only so far).
-pub fn check_terrain(name: &str, flags: &MfptFlags) -> Result<(), InputError> {
-    if TERRAINS.contains(&name) {
-        Ok(())
+/// The terrain's name checked: `slope` or `step-down` ([`TerrainKind`]).
+pub fn check_terrain(name: &str, flags: &MfptFlags) -> Result<TerrainKind, InputError> {
+    if name == TerrainKind::Slope.name() {
+        Ok(TerrainKind::Slope)
+    } else if name == TerrainKind::StepDown.name() {
+        Ok(TerrainKind::StepDown)
     } else {
         Err(InputError(format!(
             "{}: '{name}' is not one of {}",
@@ -72,14 +74,55 @@ pub fn parse_sd(s: &str, flags: &MfptFlags) -> Result<f64, InputError> {
     Ok(v)
 }
 
+/// A step height's standard deviation as typed: a plain number in the model's length unit,
+/// finite and ≥ 0.
+pub fn parse_height_sd(s: &str, flags: &MfptFlags) -> Result<f64, InputError> {
+    let v = parse_height(s, flags.sd)?;
+    if v < 0.0 {
+        return Err(InputError(format!(
+            "{}: '{s}' must be >= 0 (a standard deviation)",
+            flags.sd
+        )));
+    }
+    Ok(v)
+}
+
+/// A step height as typed: a plain finite number in the model's length unit.
+pub fn parse_height(s: &str, flag: &str) -> Result<f64, InputError> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            InputError(format!(
+                "{flag}: '{s}' is not a height (a plain number in the model's length unit; a \
+                 step down positive)"
+            ))
+        })
+}
+
 /// `--sd A:B:N`: `N ≥ 2` standard deviations evenly spaced from `A` to `B` (each end in radians
 /// or with a unit, as [`parse_sd`] takes it; `0 ≤ A < B`); a plain `--sd` is one value.
 pub fn parse_sd_values(s: &str, flags: &MfptFlags) -> Result<Vec<f64>, InputError> {
+    parse_sd_values_for(s, TerrainKind::Slope, flags)
+}
+
+/// [`parse_sd_values`] for terrain `kind`: step heights' ends are plain lengths
+/// ([`parse_height_sd`]).
+pub fn parse_sd_values_for(
+    s: &str,
+    kind: TerrainKind,
+    flags: &MfptFlags,
+) -> Result<Vec<f64>, InputError> {
+    let one = |v: &str| match kind {
+        TerrainKind::Slope => parse_sd(v, flags),
+        TerrainKind::StepDown => parse_height_sd(v, flags),
+    };
     let parts: Vec<&str> = s.split(':').collect();
     match parts.as_slice() {
-        [one] => Ok(vec![parse_sd(one, flags)?]),
+        [v] => Ok(vec![one(v)?]),
         [a, b, n] => {
-            let (lo, hi) = (parse_sd(a, flags)?, parse_sd(b, flags)?);
+            let (lo, hi) = (one(a)?, one(b)?);
             let n: usize = n.trim().parse().ok().filter(|&n| n >= 2).ok_or_else(|| {
                 InputError(format!(
                     "{}: '{s}': the count '{n}' must be an integer >= 2",
@@ -115,7 +158,8 @@ pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> 
         }
     }
     let t = plan.terrain;
-    if t.mean.abs() + MAX_DRAW * t.sd >= std::f64::consts::FRAC_PI_2 {
+    if t.kind == TerrainKind::Slope && t.mean.abs() + MAX_DRAW * t.sd >= std::f64::consts::FRAC_PI_2
+    {
         return Err(InputError(format!(
             "{} {} rad with {} {} rad: slopes up to {MAX_DRAW} standard deviations from the \
              mean are drawn and must stay within (-pi/2, pi/2) rad",
@@ -123,6 +167,51 @@ pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> 
         )));
     }
     Ok(())
+}
+
+/// Refuses a model that cannot walk on terrain of kind `kind`: round feet on random slopes
+/// ([`check_model`]), a model without a `step_down` parameter on step heights.
+pub fn check_model_for(m: &BuiltModel, kind: TerrainKind) -> Result<(), InputError> {
+    match kind {
+        TerrainKind::Slope => check_model(m),
+        TerrainKind::StepDown if m.params.iter().any(|p| p.0 == "step_down") => Ok(()),
+        TerrainKind::StepDown => Err(InputError(format!(
+            "model '{}' cannot walk on random step heights yet: it has no step_down parameter \
+             (the simplest walker and the rimless wheel have one)",
+            m.info.name
+        ))),
+    }
+}
+
+/// Refuses a step-height terrain whose draws (up to [`MAX_DRAW`] standard deviations from the
+/// mean) the model does not take, with the model's reason (e.g. a step beyond a spoke's reach).
+pub fn check_heights(m: &BuiltModel, plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> {
+    let t = plan.terrain;
+    if t.kind != TerrainKind::StepDown {
+        return Ok(());
+    }
+    let at = model_at_param(m, "step_down");
+    for h in [t.mean - MAX_DRAW * t.sd, t.mean + MAX_DRAW * t.sd] {
+        if let Err(e) = at(h) {
+            return Err(InputError(format!(
+                "{} {} with a mean step down of {}: step heights up to {MAX_DRAW} standard \
+                 deviations from the mean are drawn, and the model refuses {h}: {}",
+                flags.sd,
+                t.sd,
+                t.mean,
+                limit_message(&e)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A model error's message without the parameter value the limit error adds.
+fn limit_message(e: &LimitError) -> String {
+    match e {
+        LimitError::Model { message, .. } => message.clone(),
+        other => other.to_string(),
+    }
 }
 
 /// Refuses a model that does not walk on random terrain (round feet), naming why.
@@ -140,8 +229,16 @@ pub fn check_model(m: &BuiltModel) -> Result<(), InputError> {
 /// The model of `m` at any slope: its parameter values with only `slope` replaced, built by
 /// the registry (a model error names the slope).
 pub fn model_at(m: &BuiltModel) -> impl Fn(f64) -> Result<Box<dyn Walker>, LimitError> + Sync + '_ {
+    model_at_param(m, "slope")
+}
+
+/// The model of `m` with parameter `param` (`slope`, `step_down`) set to any value.
+pub fn model_at_param<'a>(
+    m: &'a BuiltModel,
+    param: &str,
+) -> impl Fn(f64) -> Result<Box<dyn Walker>, LimitError> + Sync + 'a {
     let values: Vec<f64> = m.params.iter().map(|p| p.1).collect();
-    let index = m.params.iter().position(|p| p.0 == "slope");
+    let index = m.params.iter().position(|p| p.0 == param);
     move |s| {
         let mut v = values.clone();
         if let Some(i) = index {
@@ -168,6 +265,14 @@ pub fn start(m: &BuiltModel) -> Result<(Vec<f64>, Vec<f64>), InputError> {
     }
 }
 
+/// The walk of `plan`'s terrain for the model at any value of its terrain parameter.
+pub fn walk_of<'a>(
+    at: &'a (dyn Fn(f64) -> Result<Box<dyn Walker>, LimitError> + Sync),
+    plan: &MfptPlan,
+) -> Result<SlopeWalk<'a>, LimitError> {
+    SlopeWalk::with_kind(at, plan.terrain.kind, plan.terrain.mean, plan.integrator)
+}
+
 /// The Monte Carlo run: every walker from `x0` on its own terrain, and the estimate.
 pub fn run(
     m: &BuiltModel,
@@ -176,8 +281,8 @@ pub fn run(
     pool: &rayon::ThreadPool,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<(Vec<Fate>, MfptEstimate), LimitError> {
-    let at = model_at(m);
-    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let at = model_at_param(m, plan.terrain.kind.param());
+    let walk = walk_of(&at, plan)?;
     let fates = terrain::monte_carlo(
         &walk,
         &plan.terrain,
@@ -214,8 +319,8 @@ pub fn visited_box(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
-    let at = model_at(m);
-    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let at = model_at_param(m, plan.terrain.kind.param());
+    let walk = walk_of(&at, plan)?;
     let pts = terrain::visited(&walk, &plan.terrain, x0, BOX_WALKERS, BOX_STEPS, pool)?;
     let d = m.info.section_names.len();
     let mut s0 = vec![0.0; d];
@@ -235,8 +340,9 @@ pub fn visited_box(
     Ok((lo, hi))
 }
 
-/// The slope nodes `(s_l, w_l)` of an `n`-point Gauss–Hermite rule for `plan`'s terrain.
-pub fn slope_nodes(plan: &MfptPlan, n: usize) -> Vec<(f64, f64)> {
+/// The terrain nodes `(s_l, w_l)` (slopes or step heights) of an `n`-point Gauss–Hermite rule
+/// for `plan`'s terrain.
+pub fn terrain_nodes(plan: &MfptPlan, n: usize) -> Vec<(f64, f64)> {
     let (z, w) = pdw_limit::markov::gauss_hermite(n);
     let t = plan.terrain;
     z.iter()
@@ -290,11 +396,11 @@ pub fn chain_box(
             out_share,
         });
     }
-    let at = model_at(m);
-    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
+    let at = model_at_param(m, plan.terrain.kind.param());
+    let walk = walk_of(&at, plan)?;
     let d = visited.0.len();
     let per_axis = HULL_MESH[d.clamp(1, 3) - 1];
-    let slopes = slope_nodes(plan, chain.nodes);
+    let slopes = terrain_nodes(plan, chain.nodes);
     let (bounds, passes) =
         pdw_limit::markov::landing_hull(&walk, &slopes, visited, per_axis, HULL_PASSES, pool)?;
     Ok(ChainBox {
@@ -314,9 +420,9 @@ pub fn chain(
     pool: &rayon::ThreadPool,
 ) -> Result<pdw_limit::markov::ChainResult, LimitError> {
     use pdw_limit::markov;
-    let at = model_at(m);
-    let walk = SlopeWalk::new(&at, plan.terrain.mean, plan.integrator)?;
-    let slopes = slope_nodes(plan, chain.nodes);
+    let at = model_at_param(m, plan.terrain.kind.param());
+    let walk = walk_of(&at, plan)?;
+    let slopes = terrain_nodes(plan, chain.nodes);
     let mesh = markov::Mesh {
         lo: bounds.0.clone(),
         hi: bounds.1.clone(),

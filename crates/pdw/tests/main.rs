@@ -2,7 +2,9 @@
 //! walk's setup ([`simulate`]).
 
 mod design;
+mod disturb;
 mod input;
 mod mfpt;
+mod mfpt_step_down;
 mod rimless_chain;
 mod simulate;

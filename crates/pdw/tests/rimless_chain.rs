@@ -305,7 +305,7 @@ fn the_chains_widened_box_makes_falls_not_box_exits_absorb() {
     }
     let closed = |n_rate| {
         let mut cc = ClosedChain::new(40, n_rate, 0.4, 2.6);
-        cc.slopes = mfpt::slope_nodes(&plan, 40);
+        cc.slopes = mfpt::terrain_nodes(&plan, 40);
         cc.quasi_stationary_mfpt(&wheel)
     };
     let (c1, c2) = (closed(1101), closed(2201));
@@ -325,6 +325,7 @@ fn plan() -> MfptPlan {
             mean: MEAN,
             sd: SD_DEG.to_radians(),
             seed: 1,
+            kind: pdw_limit::terrain::TerrainKind::Slope,
         },
         walkers: 2000,
         max_steps: 20_000,

@@ -8,7 +8,7 @@ use crate::args::InputError;
 use crate::cli::MfptArgs;
 use pdw::mfpt::{self, MfptFlags, MfptPlan};
 use pdw::BuiltModel;
-use pdw_limit::terrain::{MfptEstimate, SlopeTerrain};
+use pdw_limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -22,22 +22,18 @@ const FLAGS: MfptFlags = MfptFlags {
 };
 
 pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
-    mfpt::check_terrain(&a.terrain, &FLAGS)?;
-    let sds = mfpt::parse_sd_values(&a.sd, &FLAGS)?;
+    let kind = mfpt::check_terrain(&a.terrain, &FLAGS)?;
+    let sds = mfpt::parse_sd_values_for(&a.sd, kind, &FLAGS)?;
     let sd = sds[sds.len() - 1];
     let integrator = super::integrator(&a.integrator, mfpt::default_integrator())?;
-    let mut choice = a.model.clone();
-    if let Some(mean) = &a.mean {
-        // --mean is the model's slope (clap refuses it together with --slope)
-        choice.slope = Some(pdw::input::parse_slope_for(mean, "--mean")?.to_string());
-    }
-    let m = build_model(&choice)?;
-    mfpt::check_model(&m)?;
+    let m = build_model(&model_choice(a, kind)?)?;
+    mfpt::check_model_for(&m, kind)?;
     let plan = MfptPlan {
         terrain: SlopeTerrain {
-            mean: m.slope(),
+            mean: terrain_mean(&m, kind),
             sd,
             seed: a.seed,
+            kind,
         },
         walkers: a.walkers,
         max_steps: a.max_steps,
@@ -45,6 +41,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     };
     // the largest standard deviation is checked (the range's last value)
     mfpt::check_plan(&plan, &FLAGS)?;
+    mfpt::check_heights(&m, &plan, &FLAGS)?;
     let claim = claim_out(a)?;
     if sds.len() > 1 {
         return super::mfpt_curve::run(a, &m, &plan, &sds, claim);
@@ -72,6 +69,70 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
         write(out, &m, &plan, &section, &est, secs, chain)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The model options with `--mean` applied: the model's slope on random slopes (not together
+/// with `--slope`), its `step_down` on random step heights.
+pub(super) fn model_choice(
+    a: &MfptArgs,
+    kind: TerrainKind,
+) -> Result<crate::cli::ModelOpts, InputError> {
+    let mut choice = a.model.clone();
+    let Some(mean) = &a.mean else {
+        return Ok(choice);
+    };
+    match kind {
+        TerrainKind::Slope if a.model.slope.is_some() => {
+            return Err(InputError(
+                "--mean: the mean slope is the model's slope; give --mean or --slope, not both"
+                    .into(),
+            ))
+        }
+        TerrainKind::Slope => {
+            choice.slope = Some(pdw::input::parse_slope_for(mean, "--mean")?.to_string())
+        }
+        TerrainKind::StepDown => {
+            let h = mfpt::parse_height(mean, "--mean")?;
+            choice.set.push(format!("step_down={h:?}"));
+        }
+    }
+    Ok(choice)
+}
+
+/// The terrain's mean: the model's slope, or its step down.
+pub(super) fn terrain_mean(m: &BuiltModel, kind: TerrainKind) -> f64 {
+    let p = kind.param();
+    m.params.iter().find(|q| q.0 == p).map_or(0.0, |q| q.1)
+}
+
+/// The terrain's mean and standard deviation in words: radians and degrees for slopes, the
+/// model's length unit for step heights.
+pub(super) fn terrain_words(m: &BuiltModel, t: &SlopeTerrain) -> String {
+    match t.kind {
+        TerrainKind::Slope => format!(
+            "terrain slope: mean {} rad ({:.4}°), sd {} rad ({:.4}°)",
+            t.mean,
+            t.mean.to_degrees(),
+            t.sd,
+            t.sd.to_degrees()
+        ),
+        TerrainKind::StepDown => {
+            let u = terrain_unit(m, t.kind);
+            format!(
+                "terrain step-down (foothold below the stance foot, a step down positive): \
+                 mean {} {u}, sd {} {u}",
+                t.mean, t.sd
+            )
+        }
+    }
+}
+
+/// The unit of the terrain's mean and standard deviation.
+pub(super) fn terrain_unit(m: &BuiltModel, kind: TerrainKind) -> String {
+    match kind {
+        TerrainKind::Slope => "rad".into(),
+        TerrainKind::StepDown => m.walker.units().length.to_string(),
+    }
 }
 
 /// Claims `--out` and its PNG (refused if they exist without `--force`).
@@ -104,12 +165,9 @@ pub(super) fn claim_out(a: &MfptArgs) -> Result<Option<super::output::Claim>, In
 fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate, secs: f64) {
     let t = plan.terrain;
     crate::outln!(
-        "model {}  terrain slope: mean {} rad ({:.4}°), sd {} rad ({:.4}°), seed {}",
+        "model {}  {}, seed {}",
         m.info.name,
-        t.mean,
-        t.mean.to_degrees(),
-        t.sd,
-        t.sd.to_degrees(),
+        terrain_words(m, &t),
         t.seed
     );
     crate::outln!("start: stable gait {section:?} (just after a heel strike)");
@@ -182,7 +240,8 @@ fn write(
             "monte carlo + markov chain"
         }
         .into(),
-        terrain: "slope".into(),
+        terrain: t.kind.name().into(),
+        terrain_unit: terrain_unit(m, t.kind),
         mean: t.mean,
         sd: t.sd,
         seed: t.seed,
@@ -232,12 +291,21 @@ fn write(
         .enumerate()
         .map(|(k, s)| (k as f64, *s))
         .collect();
-    let title = format!(
-        "{}: survival on random slopes, mean {:.3}°, sd {:.3}°",
-        m.info.name,
-        t.mean.to_degrees(),
-        t.sd.to_degrees()
-    );
+    let title = match t.kind {
+        TerrainKind::Slope => format!(
+            "{}: survival on random slopes, mean {:.3}°, sd {:.3}°",
+            m.info.name,
+            t.mean.to_degrees(),
+            t.sd.to_degrees()
+        ),
+        TerrainKind::StepDown => format!(
+            "{}: survival on random step heights, mean {}, sd {} {}",
+            m.info.name,
+            t.mean,
+            t.sd,
+            terrain_unit(m, t.kind)
+        ),
+    };
     pdw_store::plot_lines(
         out.with_extension("png"),
         &title,
@@ -322,7 +390,7 @@ pub(super) fn run_chain(
         )
     };
     crate::outln!(
-        "Markov chain: {} Gauss-Hermite slope nodes, mesh over {:?} .. {:?} ({how})",
+        "Markov chain: {} Gauss-Hermite nodes of the terrain, mesh over {:?} .. {:?} ({how})",
         c.nodes,
         bounds.0,
         bounds.1,

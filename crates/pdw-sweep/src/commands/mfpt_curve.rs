@@ -9,7 +9,7 @@ use super::output::Claim;
 use crate::cli::MfptArgs;
 use pdw::mfpt::{self, MfptPlan};
 use pdw::BuiltModel;
-use pdw_limit::terrain::{MfptEstimate, SlopeTerrain};
+use pdw_limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -71,12 +71,29 @@ pub(super) fn run(
 /// chain's two meshes.
 fn table(m: &BuiltModel, plan: &MfptPlan, section: &[f64], rows: &[Row], secs: f64) {
     let t = plan.terrain;
+    let (mean, unit2, scale2) = match t.kind {
+        TerrainKind::Slope => (
+            format!(
+                "terrain slope: mean {} rad ({:.4}°)",
+                t.mean,
+                t.mean.to_degrees()
+            ),
+            "sd (deg)".to_string(),
+            1f64.to_degrees(),
+        ),
+        TerrainKind::StepDown => {
+            let u = super::mfpt::terrain_unit(m, t.kind);
+            (
+                format!("terrain step-down: mean {} {u}", t.mean),
+                format!("sd ({u})"),
+                1.0,
+            )
+        }
+    };
     crate::outln!(
-        "model {}  terrain slope: mean {} rad ({:.4}°), seed {}; {} walkers per value, at most \
-         {} steps; start: stable gait ({})",
+        "model {}  {mean}, seed {}; {} walkers per value, at most {} steps; start: stable gait \
+         ({})",
         m.info.name,
-        t.mean,
-        t.mean.to_degrees(),
         t.seed,
         plan.walkers,
         plan.max_steps,
@@ -89,7 +106,7 @@ fn table(m: &BuiltModel, plan: &MfptPlan, section: &[f64], rows: &[Row], secs: f
     crate::outln!(
         "{:>10} {:>10} {:>22} {:>8} {:>9} {:>14} {:>14}",
         "sd (rad)",
-        "sd (deg)",
+        unit2,
         "MFPT ± stderr (steps)",
         "falls",
         "censored",
@@ -105,7 +122,7 @@ fn table(m: &BuiltModel, plan: &MfptPlan, section: &[f64], rows: &[Row], secs: f
         crate::outln!(
             "{:>10.6} {:>10.4} {:>22} {:>8} {:>9} {:>14.3} {:>14.3}",
             r.sd,
-            r.sd.to_degrees(),
+            r.sd * scale2,
             mfpt,
             r.est.falls,
             r.est.censored,
@@ -125,13 +142,15 @@ fn write(
     rows: &[Row],
     mesh: [u64; 2],
 ) -> anyhow::Result<()> {
+    let unit = super::mfpt::terrain_unit(m, plan.terrain.kind);
     let col = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
     let cnt = |f: &dyn Fn(&Row) -> u64| rows.iter().map(f).collect::<Vec<u64>>();
     let data = pdw_store::MfptCurveData {
         command: super::command_line(),
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
-        terrain: "slope".into(),
+        terrain: plan.terrain.kind.name().into(),
+        terrain_unit: unit.clone(),
         mean: plan.terrain.mean,
         seed: plan.terrain.seed,
         walkers: plan.walkers as u64,
@@ -157,7 +176,7 @@ fn write(
         &pdw_store::Annotations {
             provenance: Some(&prov),
             units: &|p: &str| match p {
-                "curve/sd" => Some("rad".into()),
+                "curve/sd" => Some(unit.clone()),
                 "curve/falls" | "curve/censored" => Some("walkers".into()),
                 "curve/mfpt"
                 | "curve/stderr"
@@ -172,12 +191,13 @@ fn write(
             coordinates: Some(&coordinates),
         },
     )?;
+    // slopes in degrees on the axis, heights as they are
+    let axis = |sd: f64| match plan.terrain.kind {
+        TerrainKind::Slope => sd.to_degrees(),
+        TerrainKind::StepDown => sd,
+    };
     let series = |name: String, ys: &[f64]| {
-        let pts = rows
-            .iter()
-            .zip(ys)
-            .map(|(r, y)| (r.sd.to_degrees(), *y))
-            .collect();
+        let pts = rows.iter().zip(ys).map(|(r, y)| (axis(r.sd), *y)).collect();
         (name, pts)
     };
     let mut lines = vec![series("Monte Carlo".into(), &data.mfpt)];
@@ -191,15 +211,27 @@ fn write(
             &data.chain_mfpt_fine,
         ));
     }
-    let title = format!(
-        "{}: mean first-passage time on random slopes, mean {:.3}°",
-        m.info.name,
-        plan.terrain.mean.to_degrees()
-    );
+    let (title, xlabel) = match plan.terrain.kind {
+        TerrainKind::Slope => (
+            format!(
+                "{}: mean first-passage time on random slopes, mean {:.3}°",
+                m.info.name,
+                plan.terrain.mean.to_degrees()
+            ),
+            "slope standard deviation (deg)".to_string(),
+        ),
+        TerrainKind::StepDown => (
+            format!(
+                "{}: mean first-passage time on random step heights, mean {} {unit}",
+                m.info.name, plan.terrain.mean
+            ),
+            format!("step-down standard deviation ({unit})"),
+        ),
+    };
     pdw_store::plot_lines(
         out.with_extension("png"),
         &title,
-        "slope standard deviation (deg)",
+        &xlabel,
         "MFPT (steps before a fall)",
         &lines,
         false,

@@ -6,6 +6,7 @@ mod animate;
 mod basin;
 mod basin_over;
 mod design;
+mod disturb;
 mod explore;
 mod fixedpoint;
 mod follow;
@@ -38,6 +39,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Mfpt(a) => mfpt::run(&a),
         Command::Design(a) => design::run(&a),
         Command::Explore(a) => explore::run(&a),
+        Command::Disturb(a) => disturb::run(&a),
     }
 }
 

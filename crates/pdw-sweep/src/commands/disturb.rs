@@ -1,0 +1,107 @@
+//! `pdw-sweep disturb`: one step of another slope or height from the stable gait, then nominal
+//! ground ([`pdw::disturb`]); or, with `--largest`, the largest such disturbance survived both
+//! ways. This file parses and prints.
+
+use super::build_model;
+use crate::args::InputError;
+use crate::cli::DisturbArgs;
+use pdw::disturb::{self, Response, RETURN_TOL};
+use pdw::BuiltModel;
+use pdw_limit::terrain::TerrainKind;
+use std::process::ExitCode;
+
+/// The names of `disturb`'s options in messages.
+const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
+    terrain: "--terrain",
+    sd: "--once",
+    mean: "--mean",
+    walkers: "--walkers",
+    max_steps: "--steps",
+};
+
+pub fn run(a: &DisturbArgs) -> anyhow::Result<ExitCode> {
+    let kind = pdw::mfpt::check_terrain(&a.terrain, &FLAGS)?;
+    let integrator = super::integrator(&a.integrator, pdw::mfpt::default_integrator())?;
+    let m = build_model(&a.model)?;
+    disturb::check(&m, kind)?;
+    if a.steps == 0 {
+        return Err(InputError("--steps: 0 must be an integer >= 1".into()).into());
+    }
+    let unit = super::mfpt::terrain_unit(&m, kind);
+    crate::outln!(
+        "model {}  nominal {} {} {unit}; one disturbed step, then {} nominal steps at most",
+        m.info.name,
+        kind.param(),
+        disturb::nominal(&m, kind),
+        a.steps - 1
+    );
+    if let Some(once) = &a.once {
+        let d = match kind {
+            TerrainKind::Slope => pdw::input::parse_slope_for(once, "--once")?,
+            TerrainKind::StepDown => pdw::mfpt::parse_height(once, "--once")?,
+        };
+        let r = disturb::respond(&m, kind, d, a.steps, integrator)?;
+        report(&r, &unit);
+        return Ok(ExitCode::SUCCESS);
+    }
+    if !(a.tol.is_finite() && a.tol > 0.0) {
+        return Err(InputError(format!("--tol: {} must be > 0", a.tol)).into());
+    }
+    largest(a, &m, kind, integrator, &unit)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One disturbance's outcome and the deviation's decay.
+fn report(r: &Response, unit: &str) {
+    match r.fall {
+        Some(o) => crate::outln!(
+            "disturbance {} {unit}: fell after {} heel strikes ({o})",
+            r.disturbance,
+            r.steps
+        ),
+        None => crate::outln!(
+            "disturbance {} {unit}: walked all {} steps",
+            r.disturbance,
+            r.steps
+        ),
+    }
+    match r.returned_after {
+        Some(k) => crate::outln!("back within {RETURN_TOL:e} of the gait after {k} steps"),
+        None => crate::outln!("not back within {RETURN_TOL:e} of the gait"),
+    }
+    let shown: Vec<String> = r
+        .deviation
+        .iter()
+        .take(12)
+        .map(|d| format!("{d:.2e}"))
+        .collect();
+    crate::outln!(
+        "deviation from the gait after each step (section, inf-norm): {}{}",
+        shown.join(" "),
+        if r.deviation.len() > 12 { " …" } else { "" }
+    );
+}
+
+/// `--largest`: both signs, bisected to `--tol`.
+fn largest(
+    a: &DisturbArgs,
+    m: &BuiltModel,
+    kind: TerrainKind,
+    integrator: pdw_hybrid::Options,
+    unit: &str,
+) -> anyhow::Result<()> {
+    let (names, limit) = match kind {
+        TerrainKind::Slope => (["steeper", "shallower"], 1.5),
+        TerrainKind::StepDown => (["step down", "step up"], 1e3),
+    };
+    for (name, sign) in names.iter().zip([1.0, -1.0]) {
+        let (ok, fell) = disturb::largest(m, kind, sign, a.tol, limit, a.steps, integrator)?;
+        crate::outln!(
+            "largest {name} survived: {ok:.6e} {unit} (falls at {fell:.6e}; tolerance {:e}, \
+             surviving = {} steps without a fall)",
+            a.tol,
+            a.steps
+        );
+    }
+    Ok(())
+}
