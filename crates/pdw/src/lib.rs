@@ -17,6 +17,7 @@ pub mod basin_over;
 pub mod design;
 pub mod follow;
 pub mod gaits;
+pub mod gsn;
 pub mod input;
 pub mod integrator;
 pub mod linear;

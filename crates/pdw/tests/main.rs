@@ -2,6 +2,7 @@
 //! walk's setup ([`simulate`]).
 
 mod design;
+mod gsn;
 mod input;
 mod mfpt;
 mod simulate;
