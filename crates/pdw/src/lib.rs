@@ -22,6 +22,7 @@ pub mod input;
 pub mod integrator;
 pub mod linear;
 pub mod mfpt;
+pub mod mfpt_over;
 pub mod model;
 pub mod simulate;
 pub mod sweep;

@@ -278,3 +278,24 @@ fn indicator_names_parse_and_bad_ones_are_named() {
     let e = gsn::parse_indicators("speed,speed", "--indicators").unwrap_err();
     assert!(e.0.contains("twice"), "{}", e.0);
 }
+
+/// Spearman's ρ against its closed form `1 − 6 Σ d² / (n (n² − 1))` for distinct ranks, ±1 for
+/// monotone pairs, ties by average ranks, non-finite pairs left out.
+#[test]
+fn spearman_matches_its_closed_form() {
+    use pdw::mfpt_over::spearman;
+    let x = [1.0, 2.0, 3.0, 4.0, 5.0];
+    let y = [2.0, 1.0, 4.0, 3.0, 5.0];
+    // d = (1, −1, 1, −1, 0): Σ d² = 4 → 1 − 24/120 = 0.8
+    assert!((spearman(&x, &y) - 0.8).abs() < 1e-15);
+    assert!((spearman(&x, &[10.0, 5.0, 1.0, 0.5, 0.1]) + 1.0).abs() < 1e-15);
+    assert!((spearman(&x, &x.map(f64::exp)) - 1.0).abs() < 1e-15);
+    let with_nan = [1.0, f64::NAN, 3.0, 4.0, 5.0];
+    assert!(
+        (spearman(&with_nan, &y) - spearman(&[1.0, 3.0, 4.0, 5.0], &[2.0, 4.0, 3.0, 5.0])).abs()
+            < 1e-15
+    );
+    // ties: ranks (1.5, 1.5, 3) against (1, 2, 3): Pearson of the ranks = √3/2
+    assert!((spearman(&[1.0, 1.0, 2.0], &[1.0, 2.0, 3.0]) - 0.75f64.sqrt()).abs() < 1e-15);
+    assert!(spearman(&[1.0, 2.0], &[2.0, 1.0]).is_nan());
+}
