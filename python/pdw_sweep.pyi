@@ -346,3 +346,20 @@ def lyapunov(
     """Finite-time Lyapunov exponents of the stride map (per stride, descending) over `strides`
     strides from section state `state` (default: the stable gait, else the first found), by QR
     iteration of DP along the orbit."""
+
+def mfpt_over(
+    over: str,
+    model: str = "simplest",
+    slope: Optional[Union[float, str]] = None,
+    sd: Optional[Union[float, str]] = None,
+    walkers: int = 1000,
+    max_steps: int = 1000,
+    seed: int = 0,
+    threads: int = 2,
+    **params: float,
+) -> dict[str, Any]:
+    """MFPT and gait sensitivity norm over a model parameter, as `pdw-sweep mfpt --over`
+    (Monte Carlo; the same walkers and seed at every value): param, values, mean (slope at each
+    value), mfpt, stderr, falls, gsn, stable (bool; False where the model has no stable gait,
+    the numbers then NaN) as ndarrays, spearman (rank correlation of gsn and mfpt), sd."""
+    ...

@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::{err, interruptible};
-use pdw::mfpt_over::{self, OverRow};
+use pdw::mfpt_over::{self as over, OverRow};
 use pdw_limit::gsn::Indicator;
 
 /// `mfpt_over(over, model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000,
@@ -62,11 +62,10 @@ pub(crate) fn mfpt_over<'py>(
             .build()
             .map_err(err)?;
         let mut rows = Vec::new();
-        for v in mfpt_over::values(&sw) {
-            let m = mfpt_over::model_with(model, &ov, &sw.name, v).map_err(err)?;
-            let p = mfpt_over::plan_at(&m, &plan, &crate::MFPT_FLAGS).map_err(err)?;
-            let (r, _) =
-                mfpt_over::row(&m, v, &p, &Indicator::DEFAULT, &pool, &|_| {}).map_err(err)?;
+        for v in over::values(&sw) {
+            let m = over::model_with(model, &ov, &sw.name, v).map_err(err)?;
+            let p = over::plan_at(&m, &plan, &crate::MFPT_FLAGS).map_err(err)?;
+            let (r, _) = over::row(&m, v, &p, &Indicator::DEFAULT, &pool, &|_| {}).map_err(err)?;
             rows.push(r);
         }
         Ok(rows)
@@ -91,7 +90,7 @@ pub(crate) fn mfpt_over<'py>(
             .into_pyarray(py),
     )?;
     let (g, mf) = (col(&|r| r.gsn), est(&|e| e.mfpt));
-    d.set_item("spearman", mfpt_over::spearman(&g, &mf))?;
+    d.set_item("spearman", over::spearman(&g, &mf))?;
     d.set_item("sd", sd)?;
     Ok(d)
 }

@@ -133,3 +133,15 @@ def test_gait_sensitivity_of_an_unstable_gait_and_a_bad_indicator_raise():
         pdw.gait_sensitivity("simplest", slope=0.009, guess=[0.1939, -0.2039])
     with pytest.raises(ValueError, match="hop"):
         pdw.gait_sensitivity("simplest", slope=0.009, indicators="step-time,hop")
+
+
+def test_mfpt_over_is_the_single_runs_and_marks_values_without_a_gait():
+    r = pdw.mfpt_over("slope=-0.02:0.06:3", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2)
+    assert list(r["values"]) == [-0.02, 0.02, 0.06]
+    assert list(r["stable"]) == [False, True, True]
+    assert np.isnan(r["mfpt"][0]) and np.isnan(r["gsn"][0])
+    for i in (1, 2):
+        one = pdw.mfpt(model="compass", slope=r["values"][i], sd="1deg", walkers=30, max_steps=200, seed=2)
+        assert one["mfpt"] == r["mfpt"][i]
+        g = pdw.gait_sensitivity("compass", slope=r["values"][i])
+        assert g["norm"] == r["gsn"][i]
