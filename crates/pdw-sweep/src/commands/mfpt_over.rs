@@ -253,16 +253,20 @@ fn plots(
         "{}: MFPT against GSN over {name}, Spearman ρ = {:.3}",
         m.info.name, d.spearman
     );
-    let mut pairs = pts(&d.gsn, &d.mfpt);
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    pdw_store::plot_lines(
+    let marks = pdw_store::Markers {
+        name: format!("one per {name} value"),
+        points: pts(&d.gsn, &d.mfpt),
+        colour: [31, 119, 180],
+        shape: pdw_store::MarkerShape::Circle,
+    };
+    pdw_store::plot_lines_marked(
         gsn_png,
         &title,
         "gait sensitivity norm (step time, step length per rad)",
         "MFPT (steps before a fall)",
-        &[("values of the parameter".to_string(), pairs)],
-        false,
-        true,
+        &[],
+        &[marks],
+        (false, true),
     )?;
     Ok(())
 }
