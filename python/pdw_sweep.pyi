@@ -178,6 +178,22 @@ def continuation(
     multipliers), internal_points (the continuation's own steps). Equal to the CLI's `--json`
     branches."""
 
+def gait_sensitivity(
+    model: str = "simplest",
+    slope: Optional[Union[float, str]] = None,
+    indicators: Optional[Union[str, Sequence[str]]] = None,
+    guess: Optional[Sequence[float]] = None,
+    **params: float,
+) -> dict[str, Any]:
+    """Gait sensitivity norm (Hobbelen & Wisse 2007) of the stable period-one gait (or the gait
+    found from `guess`) against the slope of the next landing line, as `pdw-sweep fixedpoint
+    --gsn`: norm, indicators (names; default step-time, step-length; also speed),
+    per_indicator (ndarray), the linear system x' = A x + B e, g = C x + D e as ndarrays A
+    (n × n), B (n × 1), C (m × n), D (m × 1) with x = (section state, last landing slope),
+    gramian, indicator_values, spectral_radius, fd_error (accuracy of the differences),
+    section, slope. An unstable gait raises ValueError (its norm is infinite)."""
+    ...
+
 def mfpt(
     model: str = "simplest",
     slope: Optional[Union[float, str]] = None,
@@ -361,3 +377,20 @@ def lyapunov(
     """Finite-time Lyapunov exponents of the stride map (per stride, descending) over `strides`
     strides from section state `state` (default: the stable gait, else the first found), by QR
     iteration of DP along the orbit."""
+
+def mfpt_over(
+    over: str,
+    model: str = "simplest",
+    slope: Optional[Union[float, str]] = None,
+    sd: Optional[Union[float, str]] = None,
+    walkers: int = 1000,
+    max_steps: int = 1000,
+    seed: int = 0,
+    threads: int = 2,
+    **params: float,
+) -> dict[str, Any]:
+    """MFPT and gait sensitivity norm over a model parameter, as `pdw-sweep mfpt --over`
+    (Monte Carlo; the same walkers and seed at every value): param, values, mean (slope at each
+    value), mfpt, stderr, falls, gsn, stable (bool; False where the model has no stable gait,
+    the numbers then NaN) as ndarrays, spearman (rank correlation of gsn and mfpt), sd."""
+    ...

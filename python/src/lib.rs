@@ -27,7 +27,9 @@ mod basin_over;
 mod design;
 mod explore;
 mod follow;
+mod gsn;
 mod linear;
+mod mfpt_over;
 mod orbit;
 
 /// Threads of the pool that runs batched strides and basins.
@@ -46,7 +48,7 @@ const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(20);
 /// exception is raised. A computation that ends interrupted without a pending signal here
 /// (the request came from a call in another thread) raises `KeyboardInterrupt` as well, never
 /// a partial result.
-fn interruptible<T, F>(py: Python<'_>, f: F) -> PyResult<T>
+pub(crate) fn interruptible<T, F>(py: Python<'_>, f: F) -> PyResult<T>
 where
     T: Send,
     F: FnOnce() -> PyResult<T> + Send,
@@ -91,7 +93,7 @@ where
     })
 }
 
-fn err(msg: impl std::fmt::Display) -> PyErr {
+pub(crate) fn err(msg: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(msg.to_string())
 }
 
@@ -131,7 +133,7 @@ type Model = pdw::BuiltModel;
 
 /// Parameter overrides from `slope` and the keyword arguments (checked by
 /// [`pdw::model::overrides_from_values`]).
-fn overrides(
+pub(crate) fn overrides(
     slope: Option<f64>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Vec<(String, f64)>> {
@@ -153,7 +155,7 @@ fn overrides(
 
 /// `slope=` as given: a number (rad) or a string with the CLI's `--slope` syntax (`"3deg"`,
 /// `"3°"`, `"0.05"`, `"0.05rad"`; [`pdw::input::parse_slope_for`]).
-fn slope_arg(slope: Option<&Bound<'_, PyAny>>) -> PyResult<Option<f64>> {
+pub(crate) fn slope_arg(slope: Option<&Bound<'_, PyAny>>) -> PyResult<Option<f64>> {
     let Some(s) = slope else {
         return Ok(None);
     };
@@ -252,7 +254,7 @@ fn build(model: &str, ov: &[(String, f64)]) -> PyResult<Model> {
     Ok(m)
 }
 
-fn build_kw(
+pub(crate) fn build_kw(
     model: &str,
     slope: Option<&Bound<'_, PyAny>>,
     params: Option<&Bound<'_, PyDict>>,
@@ -260,7 +262,11 @@ fn build_kw(
     build(model, &overrides(slope_arg(slope)?, params)?)
 }
 
-fn rows_to_array<'py>(py: Python<'py>, v: Vec<f64>, cols: usize) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn rows_to_array<'py>(
+    py: Python<'py>,
+    v: Vec<f64>,
+    cols: usize,
+) -> PyResult<Bound<'py, PyAny>> {
     let rows = v.len().checked_div(cols).unwrap_or(0);
     let a = Array2::from_shape_vec((rows, cols), v).map_err(err)?;
     Ok(a.into_pyarray(py).into_any())
@@ -406,7 +412,7 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
 
 /// Gaits found from `guess` (section coordinates) or the model's own guesses
 /// ([`pdw::gaits`]), with the number of guesses tried.
-fn find_gaits(
+pub(crate) fn find_gaits(
     m: &Model,
     guess: Option<Vec<f64>>,
     tol: f64,
@@ -417,7 +423,7 @@ fn find_gaits(
     Ok((found, failed, n))
 }
 
-fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> PyErr {
+pub(crate) fn no_gait_error(m: &Model, which: &str, n: usize, failed: &[gaits::Failed]) -> PyErr {
     err(pdw::gaits::no_gait_message(m, which, n, failed))
 }
 
@@ -1350,7 +1356,7 @@ fn coordinates_dict<'py>(py: Python<'py>, m: &Model) -> PyResult<Bound<'py, PyDi
 }
 
 /// The names of `mfpt`'s keyword arguments in its messages.
-const MFPT_FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
+pub(crate) const MFPT_FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
     terrain: "terrain",
     sd: "sd",
     mean: "slope",
@@ -1819,5 +1825,7 @@ fn pdw_sweep(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(animate::animate, m)?)?;
     m.add_function(wrap_pyfunction!(explore::explore, m)?)?;
     m.add_function(wrap_pyfunction!(linear::lyapunov, m)?)?;
+    m.add_function(wrap_pyfunction!(gsn::gait_sensitivity, m)?)?;
+    m.add_function(wrap_pyfunction!(mfpt_over::mfpt_over, m)?)?;
     Ok(())
 }

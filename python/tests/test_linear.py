@@ -108,3 +108,40 @@ def test_jacobian_data_equal_the_cli_json():
     assert [i["event"] for i in fp["impacts"]] == [i["event"] for i in lin["impacts"]]
     for a, b in zip(fp["impacts"], lin["impacts"]):
         np.testing.assert_array_equal(a["saltation"], b["saltation"])
+
+
+def test_gait_sensitivity_norm_is_the_impulse_response_of_its_matrices():
+    # the norm from the returned A, B, C, D summed term by term (an independent route to the
+    # Lyapunov solve): ||H_i||^2 = D_i^2 + sum_k (C_i A^(k-1) B)^2
+    r = pdw.gait_sensitivity("simplest", slope=0.009)
+    A, B, C, D = r["A"], r["B"], r["C"], r["D"]
+    assert r["indicators"] == ["step-time", "step-length"]
+    assert A.shape == (3, 3) and B.shape == (3, 1) and C.shape == (2, 3) and D.shape == (2, 1)
+    sums = (D[:, 0] ** 2).copy()
+    v = B.copy()
+    for _ in range(400):
+        sums += (C @ v)[:, 0] ** 2
+        v = A @ v
+    np.testing.assert_allclose(np.sqrt(sums), r["per_indicator"], rtol=1e-10)
+    assert abs(np.sqrt(sums.sum()) - r["norm"]) <= 1e-10 * r["norm"]
+    assert max(abs(np.linalg.eigvals(A))) == pytest.approx(r["spectral_radius"], rel=1e-12)
+    assert r["fd_error"] < 1e-8
+
+
+def test_gait_sensitivity_of_an_unstable_gait_and_a_bad_indicator_raise():
+    with pytest.raises(ValueError, match="unstable"):
+        pdw.gait_sensitivity("simplest", slope=0.009, guess=[0.1939, -0.2039])
+    with pytest.raises(ValueError, match="hop"):
+        pdw.gait_sensitivity("simplest", slope=0.009, indicators="step-time,hop")
+
+
+def test_mfpt_over_is_the_single_runs_and_marks_values_without_a_gait():
+    r = pdw.mfpt_over("slope=-0.02:0.06:3", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2)
+    assert list(r["values"]) == [-0.02, 0.02, 0.06]
+    assert list(r["stable"]) == [False, True, True]
+    assert np.isnan(r["mfpt"][0]) and np.isnan(r["gsn"][0])
+    for i in (1, 2):
+        one = pdw.mfpt(model="compass", slope=r["values"][i], sd="1deg", walkers=30, max_steps=200, seed=2)
+        assert one["mfpt"] == r["mfpt"][i]
+        g = pdw.gait_sensitivity("compass", slope=r["values"][i])
+        assert g["norm"] == r["gsn"][i]

@@ -19,6 +19,7 @@ pub mod error;
 pub mod family;
 pub mod floquet;
 pub mod gaits;
+pub mod gsn;
 pub mod jacobian;
 pub mod markov;
 pub mod metrics;

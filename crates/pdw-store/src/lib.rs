@@ -88,6 +88,7 @@ pub mod design;
 mod error;
 mod h5util;
 pub mod mfpt;
+pub mod mfpt_over;
 pub mod plot;
 pub mod provenance;
 pub mod shard;
@@ -110,6 +111,7 @@ pub use mfpt::{
     read_mfpt, read_mfpt_curve, write_mfpt, write_mfpt_curve, MfptCurveData, MfptData,
     MFPT_CURVE_FORMAT, MFPT_FORMAT,
 };
+pub use mfpt_over::{read_mfpt_over, write_mfpt_over, MfptOverData};
 pub use plot::{
     animate_gif, invalid_reasons, outcome_colours, plot_basin, plot_basin_attractors,
     plot_basin_stability, plot_bifurcation, plot_lines, plot_lines_marked, Frame, MarkerShape,

@@ -178,6 +178,20 @@ pub struct FixedpointArgs {
     /// finite-time Lyapunov exponents of the stride map over 100 strides (docs/cli.md).
     #[arg(long, requires = "json", conflicts_with_all = ["search", "sweep", "follow", "period"])]
     pub jacobian: bool,
+    /// For period-one gaits: the gait sensitivity norm (Hobbelen & Wisse 2007) of each stable
+    /// gait against the slope of the next landing line (random terrain), with each
+    /// indicator's norm; an unstable gait's is infinite (docs/cli.md, "Walking on rough
+    /// ground").
+    #[arg(long, conflicts_with_all = ["search", "sweep", "follow", "period"])]
+    pub gsn: bool,
+    /// With --gsn: the gait indicators, comma separated, of step-time, step-length, speed.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "step-time,step-length",
+        requires = "gsn"
+    )]
+    pub indicators: String,
     /// Find every gait without a guess: Newton from N starting states spread over a box of the
     /// section (a Halton sample; N defaults to 256), and the stride map iterated from each to
     /// see where it goes (a stable gait, a period-K orbit up to K = 8, a fall). Lists every
@@ -456,6 +470,12 @@ pub struct MfptArgs {
     /// With --chain: Gauss–Hermite nodes of the slope distribution.
     #[arg(long, default_value_t = 11, requires = "chain")]
     pub nodes: usize,
+    /// The MFPT over a model parameter, PARAM=A:B:N: at each of the N values the stable gait,
+    /// its MFPT (the same walkers and seed at every value) and its gait sensitivity norm; a
+    /// table, and with --out the file, OUT.png (MFPT against the parameter) and OUT-gsn.png
+    /// (MFPT against the GSN).
+    #[arg(long, value_name = "PARAM=A:B:N")]
+    pub over: Option<String>,
 }
 
 #[derive(Args, Debug)]

@@ -15,6 +15,7 @@ mod follow;
 mod hostile;
 mod lock;
 mod mfpt;
+mod mfpt_over;
 mod resume_model;
 mod search;
 mod self_describing;

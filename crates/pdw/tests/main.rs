@@ -3,6 +3,7 @@
 
 mod design;
 mod disturb;
+mod gsn;
 mod input;
 mod mfpt;
 mod mfpt_step_down;

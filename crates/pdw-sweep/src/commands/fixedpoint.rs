@@ -9,6 +9,7 @@ use pdw_limit::{FixedPoint, LimitError, PeriodicOrbit};
 use std::process::ExitCode;
 
 pub use pdw_limit::gaits::{Found, FoundOrbit};
+use pdw_limit::gsn::{GsnError, Indicator};
 use pdw_limit::Validity;
 
 pub use pdw::gaits::search_with;
@@ -156,6 +157,13 @@ fn run_period_one(
     guesses: &[(String, Vec<f64>)],
     integrator: &pdw_hybrid::Options,
 ) -> anyhow::Result<ExitCode> {
+    let indicators = a
+        .gsn
+        .then(|| pdw::gsn::parse_indicators(&a.indicators, "--indicators"))
+        .transpose()?;
+    if a.gsn {
+        pdw::mfpt::check_model(m)?;
+    }
     let (found, failed) = search_with(m, guesses, a.tol, integrator)?;
     warn_inaccurate(a, m, &found, integrator)?;
     let selected: Vec<&Found> = found
@@ -169,11 +177,20 @@ fn run_period_one(
                 j["fixed_points"][k]["linear"] = linear_json(m, &f.fp.section)?;
             }
         }
+        if let Some(ind) = &indicators {
+            for (k, f) in selected.iter().enumerate() {
+                let r = gsn_of(m, f, ind)?;
+                j["fixed_points"][k]["gsn"] = pdw::gsn::json(ind, &r);
+            }
+        }
         crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     } else {
         print_model_line(m, integrator);
         for f in &selected {
             print_fixed_point(m, &f.fp, &format!("from guess '{}'", f.label));
+            if let Some(ind) = &indicators {
+                print_gsn(ind, &gsn_of(m, f, ind)?);
+            }
         }
     }
     if selected.is_empty() && a.guess.is_none() && m.walker.section_box().is_some() {
@@ -204,6 +221,36 @@ fn run_period_one(
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+type GsnResult = Result<(pdw_limit::gsn::Linearisation, pdw_limit::gsn::Gsn), GsnError>;
+
+/// `--gsn`: the gait sensitivity norm of a gait ([`pdw::gsn`]); an unstable gait's is the
+/// unstable-gait error (reported, not a failure of the run), any other failure is an error.
+fn gsn_of(m: &BuiltModel, f: &Found, ind: &[Indicator]) -> anyhow::Result<GsnResult> {
+    let r = pdw::gsn::gait_sensitivity(m, &f.fp.section, ind, pdw::gsn::default_integrator());
+    match r {
+        Err(GsnError::Limit(e)) => Err(e.into()),
+        r => Ok(r),
+    }
+}
+
+/// The gait sensitivity norm block of the text report.
+fn print_gsn(ind: &[Indicator], r: &GsnResult) {
+    match r {
+        Ok((lin, g)) => {
+            crate::outln!(
+                "  gait sensitivity norm {:>16.10}  (per rad of landing-line slope; \
+                 differences accurate to {:.1e})",
+                g.norm,
+                lin.fd_error
+            );
+            for (i, h) in ind.iter().zip(&g.per_indicator) {
+                crate::outln!("    {:<12} {h:>22.10}", i.name());
+            }
+        }
+        Err(e) => crate::outln!("  gait sensitivity norm: infinite ({e})"),
+    }
 }
 
 /// `--search [N]` (and the fallback when the model's guesses find nothing): every gait in the

@@ -43,6 +43,9 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     mfpt::check_plan(&plan, &FLAGS)?;
     mfpt::check_heights(&m, &plan, &FLAGS)?;
     let claim = claim_out(a)?;
+    if a.over.is_some() {
+        return super::mfpt_over::run(a, &super::choice(&choice), &plan, &FLAGS, claim);
+    }
     if sds.len() > 1 {
         return super::mfpt_curve::run(a, &m, &plan, &sds, claim);
     }

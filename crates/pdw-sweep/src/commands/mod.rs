@@ -13,6 +13,7 @@ mod follow;
 mod merge;
 mod mfpt;
 mod mfpt_curve;
+mod mfpt_over;
 mod models;
 mod output;
 mod simulate;
