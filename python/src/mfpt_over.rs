@@ -51,6 +51,7 @@ pub(crate) fn mfpt_over<'py>(
             mean: 0.0,
             sd,
             seed,
+            kind: pdw_limit::terrain::TerrainKind::Slope,
         },
         walkers,
         max_steps,

@@ -255,6 +255,9 @@ pub fn transitions(
     Ok(t)
 }
 
+/// A box `(lo, hi)` of the section.
+pub type SectionBox = (Vec<f64>, Vec<f64>);
+
 /// Slope nodes lighter than this are left out of [`landing_hull`] (their landings may lie
 /// anywhere; the probability they carry per step is below any fall rate the chain resolves).
 pub const HULL_MIN_WEIGHT: f64 = 1e-16;
@@ -266,11 +269,11 @@ pub const HULL_MIN_WEIGHT: f64 = 1e-16;
 pub fn landing_hull(
     walk: &SlopeWalk,
     slopes: &[(f64, f64)],
-    bounds: (Vec<f64>, Vec<f64>),
+    bounds: SectionBox,
     per_axis: usize,
     passes: usize,
     pool: &rayon::ThreadPool,
-) -> Result<((Vec<f64>, Vec<f64>), usize), LimitError> {
+) -> Result<(SectionBox, usize), LimitError> {
     let (mut lo, mut hi) = bounds;
     for pass in 1..=passes {
         let mesh = Mesh {
@@ -297,7 +300,7 @@ fn hull_once(
     slopes: &[(f64, f64)],
     mesh: &Mesh,
     pool: &rayon::ThreadPool,
-) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
+) -> Result<SectionBox, LimitError> {
     let base = walk.model(walk.mean())?;
     let mut starts = Vec::with_capacity(slopes.len() * mesh.len());
     for (s, _) in slopes {

@@ -160,6 +160,7 @@ fn the_section_walk_is_the_terrain_walk() {
         mean: slope,
         sd: 2f64.to_radians() * 0.1,
         seed: 5,
+        kind: pdw_limit::terrain::TerrainKind::Slope,
     };
     let mut integ = walk.integrator(x0.len()).unwrap();
     for i in 0..20u64 {
@@ -204,6 +205,7 @@ fn the_norm_is_the_indicators_standard_deviation_per_unit_slope_noise() {
         mean: slope,
         sd,
         seed: 11,
+        kind: pdw_limit::terrain::TerrainKind::Slope,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)

@@ -26,7 +26,8 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let sds = mfpt::parse_sd_values_for(&a.sd, kind, &FLAGS)?;
     let sd = sds[sds.len() - 1];
     let integrator = super::integrator(&a.integrator, mfpt::default_integrator())?;
-    let m = build_model(&model_choice(a, kind)?)?;
+    let choice = model_choice(a, kind)?;
+    let m = build_model(&choice)?;
     mfpt::check_model_for(&m, kind)?;
     let plan = MfptPlan {
         terrain: SlopeTerrain {
@@ -44,6 +45,14 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     mfpt::check_heights(&m, &plan, &FLAGS)?;
     let claim = claim_out(a)?;
     if a.over.is_some() {
+        if kind != pdw_limit::terrain::TerrainKind::Slope {
+            return Err(InputError(
+                "--over: runs on random slopes only (its gait sensitivity norm is against the \
+                 landing line's slope); use --terrain slope"
+                    .into(),
+            )
+            .into());
+        }
         return super::mfpt_over::run(a, &super::choice(&choice), &plan, &FLAGS, claim);
     }
     if sds.len() > 1 {
