@@ -41,25 +41,7 @@ use pdw_hybrid::{run_batch_par, BatchOptions, Section};
 /// polynomials (zero diagonal, off-diagonal `√k`, k = 1 … n−1) and the squared first
 /// components of its unit eigenvectors.
 pub fn gauss_hermite(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut a = vec![0.0; n * n];
-    for k in 1..n {
-        let b = (k as f64).sqrt();
-        a[k * n + k - 1] = b;
-        a[(k - 1) * n + k] = b;
-    }
-    let v = jacobi_eigen(&mut a, n);
-    let mut pairs: Vec<(f64, f64)> = (0..n).map(|i| (a[i * n + i], v[i] * v[i])).collect();
-    pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
-    // the rule is symmetric: exact zero and mirrored nodes remove the eigen-solver's last ulps
-    let (mut z, mut w): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
-    for i in 0..n / 2 {
-        let (zi, wi) = (0.5 * (z[n - 1 - i] - z[i]), 0.5 * (w[i] + w[n - 1 - i]));
-        (z[i], z[n - 1 - i], w[i], w[n - 1 - i]) = (-zi, zi, wi, wi);
-    }
-    if n % 2 == 1 {
-        z[n / 2] = 0.0;
-    }
-    (z, w)
+    golub_welsch(n, 1.0, |k| k.sqrt())
 }
 
 /// Nodes `z_i` and weights `w_i` of the `n`-point Gauss–Legendre rule for the uniform
@@ -70,16 +52,23 @@ pub fn gauss_hermite(n: usize) -> (Vec<f64>, Vec<f64>) {
 /// the squared first components of its unit eigenvectors the probability weights. The
 /// quadrature for a terrain whose draws are uniform with the same standard deviation.
 pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    golub_welsch(n, 3f64.sqrt(), |k| k / (4.0 * k * k - 1.0).sqrt())
+}
+
+/// The Golub–Welsch rule of a symmetric weight: the Jacobi matrix with zero diagonal and
+/// off-diagonal `off(k)`, k = 1 … n−1; nodes its eigenvalues times `scale`, weights the squared
+/// first components of its unit eigenvectors. The rule is symmetric, so mirrored nodes and an
+/// exact middle zero remove the eigen-solver's last ulps.
+fn golub_welsch(n: usize, scale: f64, off: impl Fn(f64) -> f64) -> (Vec<f64>, Vec<f64>) {
     let mut a = vec![0.0; n * n];
     for k in 1..n {
-        let kf = k as f64;
-        let b = kf / (4.0 * kf * kf - 1.0).sqrt();
+        let b = off(k as f64);
         a[k * n + k - 1] = b;
         a[(k - 1) * n + k] = b;
     }
     let v = jacobi_eigen(&mut a, n);
     let mut pairs: Vec<(f64, f64)> = (0..n)
-        .map(|i| (3f64.sqrt() * a[i * n + i], v[i] * v[i]))
+        .map(|i| (scale * a[i * n + i], v[i] * v[i]))
         .collect();
     pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
     let (mut z, mut w): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();

@@ -226,8 +226,13 @@ function sliderSet() {
 async function refine(box) {
   const [nx, ny] = resolution();
   const req = { file: S.file, box, nx, ny, slice: S.base.z ? S.slice : 0, set: sliderSet() };
+  // Rapid requests (a slider's every step) may be answered out of order: only the latest one
+  // sent is followed, and a followed job the server cancelled for a newer one is asked again.
+  const seq = (S.refineSeq = (S.refineSeq || 0) + 1);
+  S.refineBox = box; S.userCancel = false;
   try {
     const r = await api("/api/refine", req);
+    if (seq !== S.refineSeq) return;
     S.job = r.job; S.refineT0 = performance.now();
     $("cancel").disabled = false; $("busy").textContent = "computing the window…";
     pollJob(r.job);
@@ -250,6 +255,7 @@ function pollJob(id) {
       $("winstatus").dataset.status = "done";
       S.slice = 0; setGrid(j); $("back").disabled = false; $("save").disabled = false;
     } else if (j.status === "failed") showError(j.error);
+    else if (j.status === "cancelled" && !S.userCancel) refine(S.refineBox);
   }, 60);
 }
 
@@ -542,6 +548,7 @@ function wire() {
   });
   $("speed").addEventListener("change", () => { S.speed = +$("speed").value; });
   $("cancel").addEventListener("click", async () => {
+    S.userCancel = true;
     if (S.job !== null) { try { await api(`/api/job/${S.job}/cancel`, {}); } catch (err) { showError(err.message); } }
   });
   $("back").addEventListener("click", () => { S.job = null; setGrid(S.base); $("back").disabled = true; $("save").disabled = true; $("winstatus").textContent = "showing the file"; });
