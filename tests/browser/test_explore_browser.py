@@ -4,7 +4,9 @@ On basins made by the release binary it clicks a gait cell and a fall cell (thei
 the file's axes), checks that the animation runs and that the outcome shown equals the cells'
 labels in the file, drags a box and checks that the saved window equals `pdw-sweep basin` on
 that box cell for cell (both files read with h5py), and moves a slider and checks that the gait
-point moves; on a sweep file it clicks a stable branch point and checks its gait walks.
+point moves; on a sweep file it clicks a stable branch point and checks its gait walks; on a
+design file it sorts the designs table both ways (checked against the file read with h5py),
+walks a design's gait and clicks a design without a gait for its message.
 Screenshots and the measured times (click to first animation frame for every
 preset, a 400x400 window of the simplest walker) go to experiments/results/explore/.
 
@@ -35,6 +37,10 @@ PRESETS = [
     ("kneed", ["--model", "kneed", "--grid", "21x21"]),
     ("seed5", ["--model", "seed5", "--grid", "21x21"]),
 ]
+# a small design search of the compass over slope and hip mass (about a second); its seeded
+# designs include an uphill slope, where a passive walker has no gait
+DESIGN = ["--model", "compass", "--free", "slope=-0.1:0.06", "--free", "hip_mass=4:16",
+          "--budget", "7", "--init", "6", "--basin-grid", "4", "--max-strides", "10"]
 
 
 def need_browser():
@@ -72,6 +78,10 @@ def setup():
     subprocess.run([EXE, "fixedpoint", "--sweep", "slope=0.005:0.018:40", "--out", sweep,
                     "--png", os.path.join(work, "sweep.png")], check=True, capture_output=True)
     files.append(sweep)
+    design = os.path.join(work, "design.h5")
+    subprocess.run([EXE, "design", *DESIGN, "--out", design, "--png",
+                    os.path.join(work, "design.png"), "--quiet"], check=True, capture_output=True)
+    files.append(design)
     server = subprocess.Popen([EXE, "explore", *files, "--port", "0", "--save-dir", work],
                               stdout=subprocess.PIPE, text=True)
     line = server.stdout.readline()
@@ -295,3 +305,103 @@ def test_a_sweep_point_walks_with_its_multipliers(setup):
     f0 = int(text(d, "frame"))
     time.sleep(0.6)
     assert int(text(d, "frame")) > f0
+
+
+def design_rows(d):
+    """The designs table's rows as the page shows them: lists of cell texts."""
+    return d.execute_script(
+        "return [...document.querySelectorAll('#designs tbody tr')]"
+        ".map((tr) => [...tr.cells].map((c) => c.textContent));")
+
+
+def heading(d, name):
+    """The designs table's heading of column `name` and its index."""
+    for k, th in enumerate(d.find_elements("css selector", "#designs th")):
+        if th.text.split(" [")[0].split(" ")[0] == name:
+            return th, k
+    raise AssertionError(f"no column {name}")
+
+
+def sort_by(d, name, order):
+    """Clicks column `name`'s heading; checks the marker and the rows' order `order`."""
+    th, k = heading(d, name)
+    th.click()
+    th, _ = heading(d, name)
+    assert th.get_attribute("aria-sort") == order
+    assert th.text.endswith("\u25b2" if order == "ascending" else "\u25bc")
+    return [(int(r[0]), r[k]) for r in design_rows(d)]
+
+
+def click_design(d, i):
+    row = d.find_element("css selector", f"#designs tbody tr[data-design='{i}']")
+    row.find_elements("css selector", "td")[0].click()
+
+
+def test_a_design_files_table_sorts_and_its_designs_walk(setup):
+    import h5py
+    import numpy as np
+    d, path = setup["driver"], setup["files"][-1]
+    index = len(setup["files"]) - 1
+    with h5py.File(path) as f:
+        params, status = f["params"][()], f["status"][()]
+        words = [w.replace("_", " ") for w in json.loads(f.attrs["status_names"])]
+        free = json.loads(f.attrs["free_names"])
+    d.execute_script(f"document.getElementById('file').value = '{index}'; showFile({index});")
+    wait(lambda: js(d, f"window.explorer.design && window.explorer.design.file === {index}"),
+         "the designs table")
+    rows = design_rows(d)
+    assert [int(r[0]) for r in rows] == list(range(len(params)))
+    # the status in the words of the search picture's legend
+    _, ks = heading(d, "status")
+    assert [r[ks] for r in rows] == [words[c] for c in status]
+    # a column with empty cells (designs without a gait have no period): empty last both ways
+    for order in ("ascending", "descending"):
+        per = sort_by(d, "period", order)
+        n_empty = sum(1 for _, v in per if v == "")
+        assert all(v == "" for _, v in per[len(per) - n_empty:])
+        vals = [float(v) for _, v in per[:len(per) - n_empty]]
+        assert vals == sorted(vals, reverse=order == "descending")
+    # hip mass: ascending, then descending, as the file's values sort
+    hm = params[:, free.index("hip_mass")]
+    up = sort_by(d, "hip_mass", "ascending")
+    assert [i for i, _ in up] == list(np.argsort(hm, kind="stable"))
+    assert [i for i, _ in up] != list(range(len(hm))), "the file's designs were already sorted"
+    shown = [float(v) for _, v in up]
+    assert shown == sorted(shown)
+    down = sort_by(d, "hip_mass", "descending")
+    assert [i for i, _ in down] == list(np.argsort(-hm, kind="stable"))
+    # a feasible design walks: its gait animates, the design shown is the row clicked
+    i = int(max(np.flatnonzero(status == 0), key=lambda k: hm[k]))
+    t0 = time.time()
+    click_design(d, i)
+    wait(lambda: js(d, f"window.explorer.walk && window.explorer.walk.design === {i} && "
+                       "window.explorer.firstFrameMs !== null"), f"design {i}'s walk")
+    wall_ms = (time.time() - t0) * 1000
+    w = js(d, "window.explorer.walk")
+    assert [w["params"][n] for n in free] == list(params[i])
+    assert text(d, "outcome") == f"{i}: feasible"
+    row = [r for r in design_rows(d) if int(r[0]) == i][0]
+    assert text(d, "stored") == ", ".join(f"{n} = {row[1 + k]}" for k, n in enumerate(free))
+    f0, s0 = int(text(d, "frame")), js(d, "window.explorer.t")
+    time.sleep(0.6)
+    assert int(text(d, "frame")) > f0 and js(d, "window.explorer.t") != s0, "no animation"
+    assert not d.find_element("id", "walkmsg").is_displayed()
+    ms = round(js(d, "window.explorer.firstFrameMs"), 1)
+    record("design_click_to_first_frame_ms", ms)
+    print(f"design click to first frame: {ms} ms (page), {wall_ms:.0f} ms (test's wall clock)")
+    d.execute_script("window.scrollTo(0, 0);")
+    time.sleep(1.0)
+    d.save_screenshot(os.path.join(RESULTS, "design.png"))
+    # every uphill design (slope < 0: a passive walker loses energy at each impact and gains
+    # none from gravity) has no gait; a click on it says so instead of animating
+    uphill = np.flatnonzero(params[:, free.index("slope")] < 0)
+    assert len(uphill) > 0, "the search tried no uphill slope"
+    for k in uphill:
+        assert words[status[k]] == "no gait"
+        click_design(d, int(k))
+        wait(lambda: text(d, "outcome") == f"{k}: no gait", "the no-gait design")
+        assert d.find_element("id", "walkmsg").is_displayed()
+        msg = text(d, "walkmsg")
+        assert f"design {k} has no gait to walk (status no gait" in msg, msg
+        assert js(d, "window.explorer.walk") is None
+        assert text(d, "error") == ""

@@ -11,6 +11,7 @@
 //! two workers; computations run on one rayon pool ([`Config::threads`]) through
 //! `spawn_blocking` and the refine worker ([`jobs`]).
 
+pub mod design;
 pub mod error;
 pub mod grid;
 pub mod jobs;
@@ -71,6 +72,7 @@ pub struct Entry {
     source: OnceLock<Result<Arc<BasinSource>, ApiError>>,
     rebuilt: OnceLock<Result<Arc<Rebuilt>, ApiError>>,
     sweep: OnceLock<Result<Arc<pdw_store::SweepData>, ApiError>>,
+    design: OnceLock<Result<Arc<design::DesignFile>, ApiError>>,
 }
 
 impl Entry {
@@ -85,6 +87,13 @@ impl Entry {
     pub fn sweep(&self) -> Result<Arc<pdw_store::SweepData>, ApiError> {
         self.sweep
             .get_or_init(|| sweep::load(&self.path).map(Arc::new))
+            .clone()
+    }
+
+    /// The file read as a design-search file (once).
+    pub fn design(&self) -> Result<Arc<design::DesignFile>, ApiError> {
+        self.design
+            .get_or_init(|| design::load(&self.path).map(Arc::new))
             .clone()
     }
 
@@ -184,6 +193,7 @@ pub fn start(cfg: Config) -> Result<Server, String> {
                 source: OnceLock::new(),
                 rebuilt: OnceLock::new(),
                 sweep: OnceLock::new(),
+                design: OnceLock::new(),
             })
             .collect(),
         jobs: jobs::Jobs::start(pool.clone()),

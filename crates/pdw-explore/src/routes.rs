@@ -39,6 +39,8 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/api/walk", post(walk))
         .route("/api/sweep/{i}", get(sweep))
         .route("/api/gait", post(gait))
+        .route("/api/design/{i}", get(design))
+        .route("/api/design_walk", post(design_walk))
         .route("/api/refine", post(refine))
         .route("/api/job/{id}", get(job))
         .route("/api/job/{id}/cancel", post(cancel))
@@ -94,19 +96,64 @@ async fn files(State(s): St) -> ApiResult {
                     .path
                     .file_name()
                     .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-                match (e.source(), e.sweep()) {
-                    (Ok(src), _) => json!({"index": i, "name": name, "kind": "basin",
-                                      "model": src.data.header.model}),
-                    (Err(_), Ok(sw)) => json!({"index": i, "name": name, "kind": "sweep",
-                                      "model": sw.model}),
-                    (Err(err), Err(_)) => json!({"index": i, "name": name, "kind": "error",
-                                       "error": err.message}),
-                }
+                file_kind(e, i, name)
             })
             .collect::<Vec<_>>())
     })
     .await?;
     Ok(Json(json!({ "files": list })))
+}
+
+/// File `i`'s list entry: a basin, sweep or design file, or the error reading it as a basin.
+fn file_kind(e: &crate::Entry, i: usize, name: String) -> Value {
+    let err = match e.source() {
+        Ok(src) => {
+            return json!({"index": i, "name": name, "kind": "basin",
+                          "model": src.data.header.model})
+        }
+        Err(err) => err,
+    };
+    if let Ok(sw) = e.sweep() {
+        return json!({"index": i, "name": name, "kind": "sweep", "model": sw.model});
+    }
+    if let Ok(d) = e.design() {
+        let model = crate::design::to_json(&d).map_or(Value::Null, |v| v["model"].clone());
+        return json!({"index": i, "name": name, "kind": "design", "model": model});
+    }
+    json!({"index": i, "name": name, "kind": "error", "error": err.message})
+}
+
+/// `GET /api/design/{i}`: the designs table of design file i ([`crate::design::to_json`]).
+async fn design(State(s): St, Path(i): Path<String>) -> ApiResult {
+    let i = number(&i, "file")? as usize;
+    s.entry(i)?;
+    let v = blocking(move || {
+        let d = s.entry(i)?.design()?;
+        let mut v = crate::design::to_json(&d)?;
+        v["file"] = json!(i);
+        Ok(v)
+    })
+    .await?;
+    Ok(Json(v))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DesignWalkRequest {
+    file: usize,
+    design: usize,
+}
+
+/// `POST /api/design_walk {file, design}`: a design's gait walked ([`crate::design::walk`]).
+async fn design_walk(State(s): St, body: Body) -> ApiResult {
+    let req: DesignWalkRequest = parse(body)?;
+    s.entry(req.file)?;
+    let v = blocking(move || {
+        let d = s.entry(req.file)?.design()?;
+        crate::design::walk(&d.data, req.design)
+    })
+    .await?;
+    Ok(Json(v))
 }
 
 /// `GET /api/basin/{i}`: the basin of file i ([`Grid::to_json`]) with its model.

@@ -381,3 +381,124 @@ fn a_sweep_point_walks_its_gait_with_the_files_period() {
     );
     assert_eq!(st, 404);
 }
+
+/// A small design search in `dir`: compass walkers over the hip mass.
+fn design_file(dir: &Path) -> PathBuf {
+    let out = dir.join("design.h5");
+    let png = dir.join("design.png");
+    let o = run(&[
+        "design",
+        "--model",
+        "compass",
+        "--free",
+        "hip_mass=4:16",
+        "--budget",
+        "4",
+        "--init",
+        "2",
+        "--basin-grid",
+        "4",
+        "--max-strides",
+        "10",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
+/// The ends of the strides of a walk's JSON (times), and whether any event is a fall.
+fn stride_ends(w: &serde_json::Value) -> (Vec<f64>, bool) {
+    let ev = w["events"].as_array().unwrap();
+    let ends = ev
+        .iter()
+        .filter(|e| e["ends_step"] == true)
+        .map(|e| e["t"].as_f64().unwrap())
+        .collect();
+    (ends, ev.iter().any(|e| e["fall"] == true))
+}
+
+#[test]
+fn a_design_files_table_is_the_files_and_a_design_walks_its_gait() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = design_file(dir.path());
+    let cols: Vec<&str> = pdw::design::COLUMNS.to_vec();
+    let d = pdw_store::read_design(&out, &cols).unwrap();
+    // the same search with design 1 recorded as having no gait
+    let mut nog = d.clone();
+    nog.status[1] = pdw_limit::design::status::NO_GAIT;
+    nog.section[1] = [f64::NAN; 3];
+    nog.reasons[1] = "no gait found".into();
+    let out2 = dir.path().join("nogait.h5");
+    pdw_store::write_design(&out2, &nog).unwrap();
+    let server =
+        pdw_explore::start(pdw_explore::Config::local(vec![out.clone(), out2], 0)).unwrap();
+    let a = server.addr.to_string();
+    let (_, files) = http(&a, "GET", "/api/files", "");
+    assert_eq!(files["files"][0]["kind"], "design");
+    assert_eq!(files["files"][0]["model"], "compass");
+    let (st, t) = http(&a, "GET", "/api/design/0", "");
+    assert_eq!(st, 200, "{t}");
+    assert_eq!(t["designs"], d.params.len());
+    let col = |name: &str| {
+        t["columns"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == name)
+            .unwrap_or_else(|| panic!("no column {name} in {t}"))
+            .clone()
+    };
+    let hip: Vec<f64> = d.params.iter().map(|p| p[0]).collect();
+    assert_eq!(col("hip_mass")["values"], serde_json::json!(hip));
+    assert_eq!(
+        col("period")["values"],
+        serde_json::json!(d.column("period").unwrap())
+    );
+    assert_eq!(col("period")["units"], "s");
+    for c in &cols {
+        col(c);
+    }
+    // a feasible design walks its stored gait: each stride takes the stored period
+    let i = d.status.iter().position(|s| *s == 0).unwrap();
+    let (st, g) = http(
+        &a,
+        "POST",
+        "/api/design_walk",
+        &format!(r#"{{"file": 0, "design": {i}}}"#),
+    );
+    assert_eq!(st, 200, "{g}");
+    let w = &g["walk"];
+    assert_eq!(w["steps_done"], pdw_explore::design::STRIDES_WALKED);
+    let (ends, fell) = stride_ends(w);
+    assert!(!fell);
+    let want = d.column("period").unwrap()[i];
+    let got = ends[0] - w["t"][0].as_f64().unwrap();
+    assert!((got - want).abs() < 1e-6 * want, "{got} vs {want}");
+    // a design without a gait: a clear message naming its status and reason
+    let (st, e) = http(
+        &a,
+        "POST",
+        "/api/design_walk",
+        r#"{"file": 1, "design": 1}"#,
+    );
+    assert_eq!(st, 422, "{e}");
+    let msg = e["error"].as_str().unwrap();
+    assert!(
+        msg.contains("no gait") && msg.contains("no gait found"),
+        "{msg}"
+    );
+    let (st, t2) = http(&a, "GET", "/api/design/1", "");
+    assert_eq!(st, 200, "{t2}");
+    assert_eq!(t2["status_words"][1], "no gait");
+    let (st, _) = http(
+        &a,
+        "POST",
+        "/api/design_walk",
+        r#"{"file": 0, "design": 99}"#,
+    );
+    assert_eq!(st, 404);
+}

@@ -23,7 +23,7 @@ async function api(path, body) {
   try { r = await fetch(path, opts); } catch (err) { throw new Error("the server does not answer: " + err); }
   let j;
   try { j = await r.json(); } catch (err) { throw new Error(`${path}: HTTP ${r.status}, not JSON`); }
-  if (!r.ok) throw new Error(j.error || `HTTP ${r.status}`);
+  if (!r.ok) throw Object.assign(new Error(j.error || `HTTP ${r.status}`), { status: r.status });
   return j;
 }
 
@@ -178,9 +178,11 @@ function hover(ev) {
 }
 
 async function showFile(i) {
-  S.file = i; S.job = null; S.slice = 0; S.sweep = null;
-  $("refinebox").hidden = false;
-  if (S.files && S.files[i] && S.files[i].kind === "sweep") return showSweep(i);
+  S.file = i; S.job = null; S.slice = 0; S.sweep = null; S.design = null;
+  $("refinebox").hidden = false; $("basinpanel").hidden = false; $("designbox").hidden = true;
+  const kind = S.files && S.files[i] && S.files[i].kind;
+  if (kind === "sweep") return showSweep(i);
+  if (kind === "design") return showDesign(i);
   try {
     const g = await api(`/api/basin/${i}`);
     S.base = g; setGrid(g);
@@ -341,15 +343,105 @@ async function pickSweep(ev) {
   try {
     const w = await api("/api/gait", { file: S.file, branch: best.branch, point: best.point });
     S.sweepPick = best; drawSweep();
-    S.walk = w; S.t = w.walk.t[0]; S.playing = true; S.lastTs = null; S.awaitFirst = true;
-    $("outcome").textContent = `${w.branch} ${w.stable ? "stable" : "unstable"}`;
-    $("stored").textContent = `${w.parameter} = ${fmt(w.value)}`;
     const mult = w.multipliers.map(([re, im]) => `${fmt(re)}${im ? (im > 0 ? " + " : " - ") + fmt(Math.abs(im)) + "i" : ""} (|λ| ${fmt(Math.hypot(re, im))})`);
-    $("cellinfo").textContent = `section: ${w.section_names.map((n, k) => `${n} = ${fmt(w.section[k])}`).join(", ")}\n` +
-      `period ${fmt(w.period)} (${w.period_strides} stride(s)); multipliers: ${mult.join(", ")}`;
-    $("play").disabled = false; $("scrub").disabled = false; $("play").textContent = "pause";
-    showError("");
+    startWalk(w, `${w.branch} ${w.stable ? "stable" : "unstable"}`, `${w.parameter} = ${fmt(w.value)}`,
+      `section: ${w.section_names.map((n, k) => `${n} = ${fmt(w.section[k])}`).join(", ")}\n` +
+      `period ${fmt(w.period)} (${w.period_strides} stride(s)); multipliers: ${mult.join(", ")}`);
   } catch (err) { showError(err.message); }
+}
+
+// ---------- design files ----------
+
+async function showDesign(i) {
+  try {
+    const d = await api(`/api/design/${i}`);
+    S.design = d; S.grid = null; S.base = null; S.designSort = null; S.designPick = null;
+    $("basinpanel").hidden = true; $("refinebox").hidden = true; $("designbox").hidden = false;
+    const counts = new Map();
+    for (const w of d.status_words) counts.set(w, (counts.get(w) || 0) + 1);
+    $("model").textContent = `${d.model} walker, design search over ${d.free_names.join(", ")} (objective ${d.objective})`;
+    $("designinfo").textContent = `${d.designs} designs: ${[...counts].map(([w, n]) => `${n} ${w}`).join(", ")}. ` +
+      "Click a heading to sort (again: the other way), a row to walk that design's gait.";
+    drawDesigns(); showError("");
+  } catch (err) {
+    S.design = null; $("basinpanel").hidden = true; $("refinebox").hidden = true;
+    showError(`file ${i} cannot be shown: ${err.message}`);
+  }
+}
+
+// The table's columns: the design's index, the free parameters, the status (its codes, shown
+// in the words of the search picture's legend), then every measure and gait coordinate.
+function designColumns(d) {
+  const nf = d.free_names.length;
+  return [
+    { name: "design", units: "", values: d.status.map((_, k) => k) },
+    ...d.columns.slice(0, nf),
+    { name: "status", units: "", values: d.status, words: d.status_words },
+    ...d.columns.slice(nf),
+  ];
+}
+
+// Row order: by the sorted column's numbers (ascending or descending), NaN and empty cells
+// last either way, ties in file order.
+function designOrder(cols, sort) {
+  const idx = cols[0].values.map((_, k) => k);
+  if (!sort) return idx;
+  const v = cols[sort.col].values, bad = (x) => x === null || x === undefined || !isFinite(x);
+  return idx.sort((a, b) => (bad(v[a]) || bad(v[b]) ? bad(v[a]) - bad(v[b]) : sort.dir * (v[a] - v[b])));
+}
+
+function designHeading(c, k) {
+  const th = document.createElement("th"), on = S.designSort && S.designSort.col === k;
+  const up = on && S.designSort.dir > 0;
+  th.append(c.name);
+  if (c.units) { const u = document.createElement("span"); u.className = "units"; u.textContent = ` [${c.units}]`; th.append(u); }
+  if (on) { const m = document.createElement("span"); m.className = "mark"; m.textContent = up ? " ▲" : " ▼"; th.append(m); }
+  th.setAttribute("aria-sort", on ? (up ? "ascending" : "descending") : "none");
+  th.dataset.col = k; th.title = "sort by " + c.name;
+  th.addEventListener("click", () => {
+    S.designSort = on ? { col: k, dir: -S.designSort.dir } : { col: k, dir: 1 };
+    drawDesigns();
+  });
+  return th;
+}
+
+function drawDesigns() {
+  const d = S.design, cols = designColumns(d), t = $("designs");
+  t.replaceChildren();
+  const head = t.createTHead().insertRow();
+  cols.forEach((c, k) => head.appendChild(designHeading(c, k)));
+  const body = t.createTBody();
+  for (const i of designOrder(cols, S.designSort)) {
+    const tr = body.insertRow();
+    tr.dataset.design = i;
+    if (d.reasons[i]) tr.title = d.reasons[i];
+    if (S.designPick === i) tr.className = "picked";
+    for (const c of cols) {
+      const v = c.values[i];
+      tr.insertCell().textContent = c.words ? c.words[i] : v === null || v === undefined ? "" : c.name === "design" ? String(v) : fmt(v);
+    }
+    tr.addEventListener("click", () => pickDesign(i));
+  }
+}
+
+// A row clicked: the design's gait walked by the server (the model rebuilt with its values);
+// a design without a gait gets the server's reason as a message instead of an animation.
+async function pickDesign(i) {
+  const d = S.design, seq = (S.designSeq = (S.designSeq || 0) + 1);
+  S.clickT0 = performance.now(); S.firstFrameMs = null; S.designPick = i; drawDesigns();
+  const labels = ["design", "parameters"], head = `${i}: ${d.status_words[i]}`;
+  const params = d.free_names.map((n, k) => `${n} = ${fmt(d.columns[k].values[i])}`).join(", ");
+  $("busy").textContent = "walking…";
+  try {
+    const w = await api("/api/design_walk", { file: S.file, design: i });
+    if (seq !== S.designSeq) return;
+    const period = d.columns.find((c) => c.name === "period");
+    startWalk(w, head, params, `gait (the file's section state): ${w.section_names.map((n, k) => `${n} = ${fmt(w.section[k])}`).join(", ")}\n` +
+      (period ? `period ${fmt(period.values[i])} ${period.units}; ` : "") + `${w.walk.steps_done} strides walked`, labels);
+  } catch (err) {
+    if (seq !== S.designSeq) return;
+    if (err.status === 422) noWalk(head, params, err.message, labels); else showError(err.message);
+  } finally { if (seq === S.designSeq) $("busy").textContent = ""; }
 }
 
 // ---------- the walk ----------
@@ -362,15 +454,36 @@ async function walkCell(c) {
   try {
     const w = await api("/api/walk", req);
     S.walkCell = { row: c.row, col: c.col, job: S.job, slice: S.slice };
-    S.walk = w; S.t = w.walk.t[0]; S.playing = true; S.lastTs = null; S.awaitFirst = true;
-    $("outcome").textContent = w.outcome; $("stored").textContent = w.stored;
     const names = w.cell.names;
-    $("cellinfo").textContent = `start: ${names.map((n, i) => `${n} = ${fmt(w.cell.state[i])}`).join(", ")}\n` +
-      `the engine labels it ${w.outcome} after ${w.strides} strides (file: ${w.stored}, ${w.stored_strides}); ${w.walk.steps_done} steps walked`;
-    $("play").disabled = false; $("scrub").disabled = false; $("play").textContent = "pause";
-    drawBasin(); showError("");
+    startWalk(w, w.outcome, w.stored, `start: ${names.map((n, i) => `${n} = ${fmt(w.cell.state[i])}`).join(", ")}\n` +
+      `the engine labels it ${w.outcome} after ${w.strides} strides (file: ${w.stored}, ${w.stored_strides}); ${w.walk.steps_done} steps walked`);
+    drawBasin();
   } catch (err) { showError(err.message); }
   $("busy").textContent = "";
+}
+
+// Starts the animation and the time plots of a walk answer (`w.walk` as /api/walk gives it),
+// with the texts of the outcome row (`labels`: the two headings) and of the info line.
+function startWalk(w, outcome, stored, info, labels = ["outcome", "file label"]) {
+  S.walk = w; S.t = w.walk.t[0]; S.playing = true; S.lastTs = null; S.awaitFirst = true;
+  $("outcomelabel").textContent = labels[0]; $("storedlabel").textContent = labels[1];
+  $("outcome").textContent = outcome; $("stored").textContent = stored; $("cellinfo").textContent = info;
+  $("walkmsg").hidden = true;
+  $("play").disabled = false; $("scrub").disabled = false; $("play").textContent = "pause";
+  showError("");
+}
+
+// No walk to show: the animation stops, the canvases are cleared and `msg` says why.
+function noWalk(outcome, stored, msg, labels) {
+  S.walk = null; S.awaitFirst = false;
+  $("outcomelabel").textContent = labels[0]; $("storedlabel").textContent = labels[1];
+  $("outcome").textContent = outcome; $("stored").textContent = stored; $("cellinfo").textContent = "";
+  $("walkmsg").textContent = msg; $("walkmsg").hidden = false;
+  $("play").disabled = true; $("scrub").disabled = true;
+  const c = $("walker"), ctx = c.getContext("2d");
+  ctx.fillStyle = "#fbfbfd"; ctx.fillRect(0, 0, c.width, c.height);
+  ctx.fillStyle = "#374151"; ctx.font = "14px DejaVu Sans, sans-serif"; ctx.fillText("nothing to walk: " + msg, 14, 28, c.width - 28);
+  $("plots").getContext("2d").clearRect(0, 0, $("plots").width, $("plots").height);
 }
 
 function sampleAt(t) {
