@@ -28,6 +28,7 @@ pub mod orbit;
 pub mod periodic;
 pub mod resources;
 pub mod scan;
+pub mod section_frame;
 pub mod stride;
 pub mod sweep;
 pub mod terrain;

@@ -14,6 +14,10 @@
 //! lands at `(σ', l)`.
 //!
 //! # Rules
+//! - The mesh is regular in an affine frame of the section ([`Frame`]): the caller's box in
+//!   section coordinates ([`Frame::identity`]) or along the principal axes of the states the
+//!   walkers visit ([`Frame::principal`], [`crate::section_frame`]), so that a band of visited
+//!   states oblique to the axes gets the nodes.
 //! - A landing point outside the mesh's box counts as absorbed (as a fall); the mass that left
 //!   this way per step, weighted by the quasi-stationary distribution, is reported
 //!   ([`ChainResult::out_of_mesh`]) beside the mass that fell ([`ChainResult::fall_per_step`])
@@ -32,6 +36,7 @@
 //!   distribution `π` — a check of both.
 
 use crate::error::LimitError;
+pub use crate::section_frame::{Frame, SectionBox};
 use crate::terrain::SlopeWalk;
 use pdw_hybrid::{run_batch_par, BatchOptions, Section};
 
@@ -86,6 +91,13 @@ fn golub_welsch(n: usize, scale: f64, off: impl Fn(f64) -> f64) -> (Vec<f64>, Ve
 /// `n × n` row-major `a`: on return its diagonal holds the eigenvalues; returns the first row
 /// of the eigenvector matrix (component 0 of each unit eigenvector, in diagonal order).
 fn jacobi_eigen(a: &mut [f64], n: usize) -> Vec<f64> {
+    let v = jacobi_vectors(a, n);
+    (0..n).map(|i| v[i]).collect()
+}
+
+/// [`jacobi_eigen`]'s whole eigenvector matrix: row-major `n × n`, column `j` the unit
+/// eigenvector of the eigenvalue left in `a[j][j]`.
+pub(crate) fn jacobi_vectors(a: &mut [f64], n: usize) -> Vec<f64> {
     let mut v = vec![0.0; n * n];
     for i in 0..n {
         v[i * n + i] = 1.0;
@@ -104,7 +116,7 @@ fn jacobi_eigen(a: &mut [f64], n: usize) -> Vec<f64> {
             }
         }
     }
-    (0..n).map(|i| v[i]).collect()
+    v
 }
 
 /// One Jacobi rotation annihilating `a[p][q]` (and `a[q][p]`), accumulated into `v`.
@@ -135,13 +147,15 @@ fn rotate(a: &mut [f64], v: &mut [f64], n: usize, p: usize, q: usize) {
     }
 }
 
-/// A regular grid of `n` nodes per axis over the box `[lo, hi]` (`n ≥ 2`), nodes numbered
-/// with the first axis fastest.
+/// A regular grid of `n` nodes per axis over the box `[lo, hi]` (`n ≥ 2`) of the frame
+/// coordinates of `frame` ([`Frame::identity`]: the section's own), nodes numbered with the
+/// first axis fastest.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
     pub lo: Vec<f64>,
     pub hi: Vec<f64>,
     pub n: usize,
+    pub frame: Frame,
 }
 
 impl Mesh {
@@ -155,24 +169,27 @@ impl Mesh {
         false
     }
 
-    /// The coordinates of node `idx`.
+    /// The section coordinates of node `idx`.
     pub fn node(&self, mut idx: usize) -> Vec<f64> {
-        (0..self.lo.len())
+        let u: Vec<f64> = (0..self.lo.len())
             .map(|a| {
                 let i = idx % self.n;
                 idx /= self.n;
                 self.lo[a] + (self.hi[a] - self.lo[a]) * i as f64 / (self.n - 1) as f64
             })
-            .collect()
+            .collect();
+        self.frame.from_frame(&u)
     }
 
-    /// The multilinear weights of point `p` on the `2^d` nodes of its cell (weights ≥ 0,
-    /// summing to 1); `None` outside the box or for a non-finite point.
+    /// The multilinear weights (in frame coordinates) of the section point `p` on the `2^d`
+    /// nodes of its cell (weights ≥ 0, summing to 1); `None` outside the box or for a
+    /// non-finite point.
     pub fn weights(&self, p: &[f64]) -> Option<Vec<(usize, f64)>> {
         let d = self.lo.len();
         let mut base = Vec::with_capacity(d);
         let top = (self.n - 1) as f64;
-        for ((pa, lo), hi) in p.iter().zip(&self.lo).zip(&self.hi) {
+        let u = self.frame.to_frame(p);
+        for ((pa, lo), hi) in u.iter().zip(&self.lo).zip(&self.hi) {
             let u = (pa - lo) / (hi - lo) * top;
             // false for NaN too
             if !(0.0..=top).contains(&u) {
@@ -244,20 +261,19 @@ pub fn transitions(
     Ok(t)
 }
 
-/// A box `(lo, hi)` of the section.
-pub type SectionBox = (Vec<f64>, Vec<f64>);
-
 /// Slope nodes lighter than this are left out of [`landing_hull`] (their landings may lie
 /// anywhere; the probability they carry per step is below any fall rate the chain resolves).
 pub const HULL_MIN_WEIGHT: f64 = 1e-16;
 
-/// The box `[lo, hi]` widened to hold every landing (not a fall) of the nodes of a coarse mesh
-/// of `per_axis` nodes per axis over it, from every layer onto every slope node of weight at
-/// least [`HULL_MIN_WEIGHT`], repeated on the widened box until a pass widens no side by more
-/// than 1 % of its range (at most `passes` passes). Returns the box and the passes run.
+/// The box `[lo, hi]` (coordinates of `frame`) widened to hold every landing (not a fall) of
+/// the nodes of a coarse mesh of `per_axis` nodes per axis over it, from every layer onto every
+/// slope node of weight at least [`HULL_MIN_WEIGHT`], repeated on the widened box until a pass
+/// widens no side by more than 1 % of its range (at most `passes` passes). Returns the box and
+/// the passes run.
 pub fn landing_hull(
     walk: &SlopeWalk,
     slopes: &[(f64, f64)],
+    frame: &Frame,
     bounds: SectionBox,
     per_axis: usize,
     passes: usize,
@@ -269,6 +285,7 @@ pub fn landing_hull(
             lo: lo.clone(),
             hi: hi.clone(),
             n: per_axis.max(2),
+            frame: frame.clone(),
         };
         let (new_lo, new_hi) = hull_once(walk, slopes, &mesh, pool)?;
         let grew = (0..lo.len()).any(|a| {
@@ -312,7 +329,7 @@ fn hull_once(
         {
             base.project(&post, &mut sec);
             if sec.iter().all(|v| v.is_finite()) {
-                for (a, v) in sec.iter().enumerate() {
+                for (a, v) in mesh.frame.to_frame(&sec).iter().enumerate() {
                     lo[a] = lo[a].min(*v);
                     hi[a] = hi[a].max(*v);
                 }

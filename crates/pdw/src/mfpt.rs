@@ -7,6 +7,7 @@ use crate::gaits::{model_guesses, no_gait_message, search};
 use crate::input::{self, InputError};
 use crate::model::BuiltModel;
 use pdw_hybrid::Options;
+use pdw_limit::markov::{ChainResult, Frame, SectionBox};
 use pdw_limit::terrain::{self, Fate, MfptEstimate, SlopeTerrain, SlopeWalk, TerrainKind};
 use pdw_limit::LimitError;
 use pdw_walkers::Walker;
@@ -311,33 +312,57 @@ pub const BOX_WALKERS: usize = 200;
 pub const BOX_STEPS: usize = 200;
 pub const BOX_PAD: f64 = 0.1;
 
-/// The box the walkers of `plan` visit (the first [`BOX_WALKERS`] walkers, at most
-/// [`BOX_STEPS`] steps each), padded by [`BOX_PAD`] of its range on each side.
+/// The section states the walkers of `plan` visit (the first [`BOX_WALKERS`] walkers, at most
+/// [`BOX_STEPS`] steps each) and the start's section state.
+pub fn visited_points(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<(Vec<Vec<f64>>, Vec<f64>), LimitError> {
+    let at = model_at_param(m, plan.terrain.kind.param());
+    let walk = walk_of(&at, plan)?;
+    let pts = terrain::visited(&walk, &plan.terrain, x0, BOX_WALKERS, BOX_STEPS, pool)?;
+    let mut s0 = vec![0.0; m.info.section_names.len()];
+    m.walker.project(x0, &mut s0);
+    Ok((pts, s0))
+}
+
+/// The box (section coordinates) the walkers of `plan` visit ([`visited_points`]), padded by
+/// [`BOX_PAD`] of its range on each side.
 pub fn visited_box(
     m: &BuiltModel,
     plan: &MfptPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
-    let at = model_at_param(m, plan.terrain.kind.param());
-    let walk = walk_of(&at, plan)?;
-    let pts = terrain::visited(&walk, &plan.terrain, x0, BOX_WALKERS, BOX_STEPS, pool)?;
-    let d = m.info.section_names.len();
-    let mut s0 = vec![0.0; d];
-    m.walker.project(x0, &mut s0);
-    let (mut lo, mut hi) = (s0.clone(), s0);
-    for p in &pts {
-        for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(p) {
-            *l = l.min(*v);
-            *h = h.max(*v);
-        }
-    }
+    let (pts, s0) = visited_points(m, plan, x0, pool)?;
+    Ok(padded(Frame::identity(s0.len()).bounds(&pts, &s0)))
+}
+
+/// The walkers' principal frame ([`Frame::principal`] of the points [`visited_points`]
+/// returns) and the box they fill in it, padded by [`BOX_PAD`] of its range on each side.
+pub fn visited_frame(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<(Frame, SectionBox), LimitError> {
+    let (mut pts, s0) = visited_points(m, plan, x0, pool)?;
+    pts.push(s0.clone());
+    let frame = Frame::principal(&pts, s0.len());
+    let bounds = padded(frame.bounds(&pts, &frame.to_frame(&s0)));
+    Ok((frame, bounds))
+}
+
+/// `(lo, hi)` padded by [`BOX_PAD`] of its range on each side.
+fn padded((mut lo, mut hi): SectionBox) -> SectionBox {
     for (l, h) in lo.iter_mut().zip(hi.iter_mut()) {
         let pad = BOX_PAD * (*h - *l).max(1e-9);
         *l -= pad;
         *h += pad;
     }
-    Ok((lo, hi))
+    (lo, hi)
 }
 
 /// The terrain nodes `(s_l, w_l)` (slopes or step heights) of an `n`-point Gauss–Hermite rule
@@ -358,7 +383,10 @@ pub const HULL_PASSES: usize = 4;
 /// The chain's box and how it was chosen.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ChainBox {
-    pub bounds: (Vec<f64>, Vec<f64>),
+    /// The frame the mesh is regular in: the walkers' principal axes ([`visited_frame`]).
+    pub frame: Frame,
+    /// The mesh's box, in `frame`'s coordinates.
+    pub bounds: SectionBox,
     /// Widening passes of [`pdw_limit::markov::landing_hull`] (0: the walkers' box kept).
     pub passes: usize,
     /// Share of the absorption that was landings outside the walkers' box (on the coarse
@@ -366,10 +394,17 @@ pub struct ChainBox {
     pub out_share: f64,
 }
 
-/// The share of absorption above which the walkers' box is widened ([`chain_box`]).
-pub const OUT_SHARE_MAX: f64 = 0.01;
+/// The share of absorption above which the walkers' box is widened ([`chain_box`]): box exits
+/// below it bias the MFPT by less than the mesh-refinement tolerance [`REFINEMENT_MAX`], while
+/// widening costs resolution — the widened box holds the landings of every node, also of the
+/// nodes about to fall, which fling far (the compass at 3°, σ = 0.2°: 1.0 % box exits on the
+/// walkers' box; widened 4 passes, the chain gave 8.4 / 28 steps at mesh 12 / 24 against
+/// 45 / 93 unwidened and the walkers' 137).
+pub const OUT_SHARE_MAX: f64 = REFINEMENT_MAX;
 
-/// The chain's box: the box the walkers visit ([`visited_box`]); where more than
+/// The chain's box: the box the walkers visit along their principal axes ([`visited_frame`]:
+/// the states walkers visit often lie along an oblique band, see
+/// [`pdw_limit::section_frame`]); where more than
 /// [`OUT_SHARE_MAX`] of the chain's absorption on it is landings outside it (the rare falls of
 /// a small σ start far outside the box a short run visits), that box widened by
 /// [`pdw_limit::markov::landing_hull`] until it holds the landings of its own nodes on every
@@ -381,8 +416,8 @@ pub fn chain_box(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<ChainBox, LimitError> {
-    let visited = visited_box(m, plan, x0, pool)?;
-    let r = self::chain(m, plan, chain, &visited, x0, pool)?;
+    let (frame, visited) = visited_frame(m, plan, x0, pool)?;
+    let r = chain_in(m, plan, chain, &frame, &visited, x0, pool)?;
     let absorbed = r.out_of_mesh + r.fall_per_step;
     let out_share = if absorbed > 0.0 {
         r.out_of_mesh / absorbed
@@ -391,6 +426,7 @@ pub fn chain_box(
     };
     if out_share <= OUT_SHARE_MAX {
         return Ok(ChainBox {
+            frame,
             bounds: visited,
             passes: 0,
             out_share,
@@ -401,21 +437,43 @@ pub fn chain_box(
     let d = visited.0.len();
     let per_axis = HULL_MESH[d.clamp(1, 3) - 1];
     let slopes = terrain_nodes(plan, chain.nodes);
-    let (bounds, passes) =
-        pdw_limit::markov::landing_hull(&walk, &slopes, visited, per_axis, HULL_PASSES, pool)?;
+    let (bounds, passes) = pdw_limit::markov::landing_hull(
+        &walk,
+        &slopes,
+        &frame,
+        visited,
+        per_axis,
+        HULL_PASSES,
+        pool,
+    )?;
     Ok(ChainBox {
+        frame,
         bounds,
         passes,
         out_share,
     })
 }
 
-/// The chain's MFPT from `x0` on `chain`'s mesh over `bounds`.
+/// The chain's MFPT from `x0` on `chain`'s mesh over `bounds` (section coordinates).
 pub fn chain(
     m: &BuiltModel,
     plan: &MfptPlan,
     chain: &ChainPlan,
     bounds: &(Vec<f64>, Vec<f64>),
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<pdw_limit::markov::ChainResult, LimitError> {
+    let frame = Frame::identity(bounds.0.len());
+    chain_in(m, plan, chain, &frame, bounds, x0, pool)
+}
+
+/// The chain's MFPT from `x0` on `chain`'s mesh over `bounds`, a box of `frame`'s coordinates.
+pub fn chain_in(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: &ChainPlan,
+    frame: &Frame,
+    bounds: &SectionBox,
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<pdw_limit::markov::ChainResult, LimitError> {
@@ -427,7 +485,47 @@ pub fn chain(
         lo: bounds.0.clone(),
         hi: bounds.1.clone(),
         n: chain.mesh,
+        frame: frame.clone(),
     };
     let tr = markov::transitions(&walk, &slopes, &mesh, x0, pool)?;
     Ok(markov::solve_chain(&tr))
+}
+
+/// Relative change of the chain's MFPT between two meshes above which [`refinement_warning`]
+/// warns.
+pub const REFINEMENT_MAX: f64 = 0.1;
+
+/// `|fine − coarse| / max(fine, coarse)` of the two meshes' MFPTs (0 where both are 0, 1
+/// where one is not finite).
+pub fn refinement_change(coarse: &ChainResult, fine: &ChainResult) -> f64 {
+    let (a, b) = (coarse.mfpt, fine.mfpt);
+    if !(a.is_finite() && b.is_finite()) {
+        return 1.0;
+    }
+    let top = a.abs().max(b.abs());
+    if top == 0.0 {
+        0.0
+    } else {
+        (a - b).abs() / top
+    }
+}
+
+/// A warning when the chain's MFPT changes by more than [`REFINEMENT_MAX`] from the mesh of
+/// `n` nodes per axis to the finer one: the mesh does not resolve where the walkers fall (a
+/// basin thinner than the mesh spacing hands probability to falling nodes by interpolation),
+/// and the chain's number is not an answer.
+pub fn refinement_warning(coarse: &ChainResult, fine: &ChainResult, n: usize) -> Option<String> {
+    let c = refinement_change(coarse, fine);
+    (c > REFINEMENT_MAX).then(|| {
+        format!(
+            "WARNING: the chain's MFPT changed by {:.0} % from mesh {n} to mesh {} ({:.4e} to \
+             {:.4e}): not converged in the mesh — the mesh does not resolve where the walkers \
+             fall, and neither number is the MFPT; refine --mesh until two meshes agree, or use \
+             the Monte Carlo",
+            100.0 * c,
+            2 * n,
+            coarse.mfpt,
+            fine.mfpt
+        )
+    })
 }

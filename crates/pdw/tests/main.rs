@@ -1,6 +1,7 @@
 //! The library's tests, one binary: the value syntaxes of the front ends ([`input`]) and the
 //! walk's setup ([`simulate`]).
 
+mod chain_frame;
 mod design;
 mod disturb;
 mod gsn;

@@ -389,7 +389,6 @@ pub(super) fn run_chain(
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<Vec<(String, f64)>> {
     let cb = mfpt::chain_box(m, plan, c, x0, pool)?;
-    let bounds = cb.bounds;
     let how = if cb.passes == 0 {
         "the walkers' box, padded".to_string()
     } else {
@@ -402,22 +401,22 @@ pub(super) fn run_chain(
         )
     };
     crate::outln!(
-        "Markov chain: {} Gauss-Hermite nodes of the terrain, mesh over {:?} .. {:?} ({how})",
+        "Markov chain: {} Gauss-Hermite nodes of the terrain, mesh over {} ({how})",
         c.nodes,
-        bounds.0,
-        bounds.1,
+        mesh_box_text(&cb)
     );
     let mut out = vec![
         ("nodes".to_string(), c.nodes as f64),
         ("box_widening_passes".to_string(), cb.passes as f64),
     ];
+    let mut results = Vec::with_capacity(2);
     for (label, n) in [("coarse", c.mesh), ("fine", 2 * c.mesh)] {
         let t0 = Instant::now();
         let fine = mfpt::ChainPlan {
             mesh: n,
             ..c.clone()
         };
-        let r = mfpt::chain(m, plan, &fine, &bounds, x0, pool)?;
+        let r = mfpt::chain_in(m, plan, &fine, &cb.frame, &cb.bounds, x0, pool)?;
         crate::outln!(
             "  mesh {n}: MFPT {:.4} steps from the start; lambda {:.10}, 1/(1-lambda)-1 = {:.4} \
              (quasi-stationary by the solve: {:.4}); {} states; per step {:.2e} falls, {:.2e} out \
@@ -444,8 +443,28 @@ pub(super) fn run_chain(
         ] {
             out.push((format!("{k}_{label}"), v));
         }
+        results.push(r);
+    }
+    let change = mfpt::refinement_change(&results[0], &results[1]);
+    out.push(("refinement_change".to_string(), change));
+    if let Some(w) = mfpt::refinement_warning(&results[0], &results[1], c.mesh) {
+        crate::outln!("  {w}");
     }
     Ok(out)
+}
+
+/// The chain's mesh box for the report: `lo .. hi` in section coordinates, or, along the
+/// walkers' principal axes, the parallelogram's corner and edges.
+fn mesh_box_text(cb: &mfpt::ChainBox) -> String {
+    if cb.frame.is_identity() {
+        return format!("{:?} .. {:?}", cb.bounds.0, cb.bounds.1);
+    }
+    let (corner, edges) = cb.frame.edges(&cb.bounds);
+    let edges: Vec<String> = edges.iter().map(|e| format!("{e:?}")).collect();
+    format!(
+        "the walkers' principal axes: the parallelogram from {corner:?} along {}",
+        edges.join(" and ")
+    )
 }
 
 /// A warning when the chain's absorption is more than 1 % landings outside the mesh rather
