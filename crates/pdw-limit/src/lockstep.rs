@@ -439,9 +439,13 @@ pub fn monte_carlo_lockstep(
     let model = walk.model(walk.mean())?;
     let sys = LineFrame::new(model.as_ref(), walk.mean())?;
     if x0.len() != sys.d {
-        return Err(LimitError::SectionDim {
-            expected: sys.d,
-            got: x0.len(),
+        return Err(LimitError::Model {
+            param: walk.mean(),
+            message: format!(
+                "the walkers' start state has {} components, the model's state {}",
+                x0.len(),
+                sys.d
+            ),
         });
     }
     let driver = WalkDriver {
