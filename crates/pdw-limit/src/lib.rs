@@ -21,6 +21,7 @@ pub mod floquet;
 pub mod gaits;
 pub mod gsn;
 pub mod jacobian;
+pub mod lockstep;
 pub mod markov;
 pub mod metrics;
 pub mod newton;

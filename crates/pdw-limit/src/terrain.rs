@@ -31,6 +31,7 @@
 //! ([`standard_normal`]), so a walk is the same on any thread count or shard.
 
 use crate::error::LimitError;
+use crate::lockstep::{monte_carlo_lockstep, Lockstep};
 use crate::stride::{StrideMap, StrideOutcome};
 use pdw_hybrid::{run_scalar_with, Integrator, Options};
 use pdw_model::Walker;
@@ -280,9 +281,31 @@ pub fn walk_one(
 }
 
 /// `walkers` walkers (0, 1, …) from `x0` on `pool`, in walker order; identical for any thread
-/// count (each walker's slopes are its own counter-based draws, each walker runs on one
-/// thread with its own integrator). `progress` gets the number of walkers done.
+/// count, lane count and chunk size (each walker's slopes are its own counter-based draws).
+/// Random slopes run in batched lockstep ([`crate::lockstep`], lanes and chunks of
+/// [`Lockstep::for_pool`]); step heights run one walker at a time
+/// ([`monte_carlo_scalar`]). `progress` gets the number of walkers done.
 pub fn monte_carlo(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    walkers: usize,
+    max_steps: usize,
+    pool: &rayon::ThreadPool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<Fate>, LimitError> {
+    if terrain.kind == TerrainKind::StepDown || walk.kind() == TerrainKind::StepDown {
+        return monte_carlo_scalar(walk, terrain, x0, walkers, max_steps, pool, progress);
+    }
+    let batch = Lockstep::for_pool(walkers, pool.current_num_threads());
+    monte_carlo_lockstep(walk, terrain, x0, walkers, max_steps, pool, batch, progress)
+}
+
+/// The scalar walk: each walker on one thread with its own integrator, each stride
+/// [`SlopeWalk::stride`] (the model at the line's slope, the shifts of the module docs) — the
+/// walk of step heights, and the reference of the lockstep walk. Identical for any thread
+/// count; `progress` gets the number of walkers done.
+pub fn monte_carlo_scalar(
     walk: &SlopeWalk,
     terrain: &SlopeTerrain,
     x0: &[f64],

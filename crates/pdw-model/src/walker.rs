@@ -110,6 +110,19 @@ pub trait Walker: Section {
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         None
     }
+    /// [`HybridSystem::admissible`](pdw_hybrid::HybridSystem::admissible) of the same model
+    /// on another slope: whether a crossing of guard `k` of `mode` at `x` counts for the model
+    /// with its slope parameter set to `slope` (every other parameter its own). A guard that
+    /// measures the walker against the ground line sees no slope; one that measures it against
+    /// gravity does (e.g. a stance leg that turns back while it is still behind the vertical).
+    /// The lockstep walk on random terrain ([`terrain_frame`](Walker::terrain_frame)) runs
+    /// every walker on the model of the mean slope and asks this for the slope of its own line.
+    /// Default: [`admissible`](pdw_hybrid::HybridSystem::admissible), for models whose
+    /// admissibility does not depend on the slope.
+    fn admissible_on_slope(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {
+        let _ = slope;
+        self.admissible(mode, k, x)
+    }
     /// The fully resolved model, one `key = value` line per quantity that determines its
     /// dynamics (floats in shortest round-trip form, so equal text means bit-equal values).
     /// Files that can be continued store it and refuse to continue under a different model,

@@ -849,6 +849,29 @@ impl ChainWalker {
         }
     }
 
+    /// [`HybridSystem::admissible`] for the model at slope `slope`: only `stance_reverses`
+    /// ("while `q₀ > γ`", the stance leg behind the vertical) sees the slope; every other
+    /// condition measures the walker against the ground line.
+    fn admissible_at(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        let twin = k != 0 && k == self.twin_guard(mode);
+        let base = match (free, self.base_guard(mode, k)) {
+            (true, 0) => true,
+            (true, 1) => self.swing_foot(x)[0] > 0.0,
+            (false, 0) => {
+                let qh = x[self.m];
+                self.swing_foot(x)[0] > 0.0 && (2.0 * self.stance_angle(x) + qh).abs() < qh.abs()
+            }
+            (_, k) if k == lead => x[0] > slope,
+            _ => true,
+        };
+        if !base || self.base_guard(mode, k) != 0 {
+            return base;
+        }
+        self.stance_knee_buckles(mode, x) == twin
+    }
+
     /// The impact of the reset of `mode` (the knee strike in the free mode, the heel strike in
     /// the locked mode) at the pre-impact state `x`, on the floating chain (module docs).
     fn impact_problem(&self, mode: usize, x: &[f64]) -> ImpactProblem {
@@ -1315,23 +1338,7 @@ impl HybridSystem for ChainWalker {
     /// stance knee locked, its twin (a fall) where it releases one
     /// ([`ChainWalker::stance_knee_buckles`]); both need the impact guard's own conditions.
     fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
-        let free = self.free_knee.is_some() && mode == FREE;
-        let lead = if free { 2 } else { 1 };
-        let twin = k != 0 && k == self.twin_guard(mode);
-        let base = match (free, self.base_guard(mode, k)) {
-            (true, 0) => true,
-            (true, 1) => self.swing_foot(x)[0] > 0.0,
-            (false, 0) => {
-                let qh = x[self.m];
-                self.swing_foot(x)[0] > 0.0 && (2.0 * self.stance_angle(x) + qh).abs() < qh.abs()
-            }
-            (_, k) if k == lead => x[0] > self.r.slope,
-            _ => true,
-        };
-        if !base || self.base_guard(mode, k) != 0 {
-            return base;
-        }
-        self.stance_knee_buckles(mode, x) == twin
+        self.admissible_at(mode, k, x, self.r.slope)
     }
 
     fn reset(&self, ws: &mut Scratch, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
@@ -1645,6 +1652,10 @@ impl Walker for ChainWalker {
     /// change of line is not a rotation about the contact point.
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         (self.radius == 0.0).then_some((0, 1.0))
+    }
+    /// `stance_reverses` counts while `q₀ > slope` ([`ChainWalker::admissible_at`]).
+    fn admissible_on_slope(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {
+        self.admissible_at(mode, k, x, slope)
     }
     fn name(&self) -> &str {
         &self.spec.name

@@ -7,6 +7,7 @@ mod disturb;
 mod gsn;
 mod input;
 mod mfpt;
+mod mfpt_lockstep;
 mod mfpt_step_down;
 mod rimless_chain;
 mod simulate;

@@ -1,0 +1,107 @@
+//! The Monte Carlo MFPT of the compass gait (Goswami preset, 3°) on random slopes (σ = 0.1°,
+//! seed 1), 200 walkers × at most 50 steps on a 2-thread pool, from its stable period-one gait
+//! (DOP853 at 1e-9, the basin's integrator), against the basin of the same model:
+//! - `mfpt/compass_lockstep`: the walkers as lanes of the batched engine
+//!   (`pdw_limit::lockstep`, as `pdw-sweep mfpt` runs them);
+//! - `mfpt/compass_scalar`: one walker at a time per thread, the model rebuilt at each line's
+//!   slope (`terrain::monte_carlo_scalar`, the reference walk);
+//! - `mfpt/compass_basin`: the compass basin on a 41 × 41 grid of (θ, θ̇) around the gait
+//!   (engine defaults), for the strides-per-second ratio.
+//!
+//! Each reports strides per second (`Throughput::Elements`, the strides counted at setup and
+//! printed).
+//!
+//! Run: `cargo bench -p pdw-benches --bench mfpt`.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use pdw_hybrid::Options;
+use pdw_limit::lockstep::{monte_carlo_lockstep, Lockstep};
+use pdw_limit::terrain::{self, Fate, SlopeTerrain, SlopeWalk, TerrainKind};
+use pdw_limit::{
+    classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem, LimitError,
+    NewtonOptions, Outcome, StrideMap,
+};
+use pdw_walkers::Walker;
+
+const SLOPE: f64 = 0.05235987755982988;
+const WALKERS: usize = 200;
+const STEPS: usize = 50;
+
+fn strides(f: &[Fate]) -> u64 {
+    f.iter()
+        .map(|f| f.steps as u64 + u64::from(f.end.is_some()))
+        .sum()
+}
+
+fn mfpt(c: &mut Criterion) {
+    let walker = pdw_walkers::build("compass", &[("slope", SLOPE)]).expect("registry model");
+    let map = StrideMap::new(walker.as_ref(), Options::dop853(1e-14)).expect("valid options");
+    let fp = walker
+        .gait_guesses()
+        .iter()
+        .filter_map(|g| find_fixed_point(&map, &g.section, &NewtonOptions::default()).ok())
+        .find(|fp| fp.stable)
+        .expect("the stable gait");
+    let at = |s: f64| -> Result<Box<dyn Walker>, LimitError> {
+        pdw_walkers::build("compass", &[("slope", s)]).map_err(|e| LimitError::Model {
+            param: s,
+            message: e.to_string(),
+        })
+    };
+    let walk =
+        SlopeWalk::new(&at, SLOPE, BasinOptions::default_integrator()).expect("terrain walk");
+    let t = SlopeTerrain {
+        mean: SLOPE,
+        sd: 0.1f64.to_radians(),
+        seed: 1,
+        kind: TerrainKind::Slope,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("thread pool");
+    let x0 = fp.state.clone();
+    let lockstep = || {
+        let batch = Lockstep::for_pool(WALKERS, 2);
+        monte_carlo_lockstep(&walk, &t, &x0, WALKERS, STEPS, &pool, batch, &|_| {})
+            .expect("lockstep walk")
+    };
+    let scalar = || {
+        terrain::monte_carlo_scalar(&walk, &t, &x0, WALKERS, STEPS, &pool, &|_| {})
+            .expect("scalar walk")
+    };
+    let fall = Outcome::of_fall;
+    let problem = BasinProblem::new(walker.as_ref(), fp.section.clone(), &fall);
+    let (th, thd) = (fp.section[0], fp.section[1]);
+    let cells = grid_cells(
+        &fp.section,
+        0,
+        &linspace(th - 0.1, th + 0.1, 41),
+        1,
+        &linspace(thd - 0.3, thd + 0.3, 41),
+    );
+    let opts = BasinOptions::default();
+    let basin = || classify_cells(&problem, &cells, &opts, &pool, &|_| {}).expect("basin");
+    let n_lock = strides(&lockstep());
+    let n_scalar = strides(&scalar());
+    let n_basin: u64 = basin().iter().map(|c| u64::from(c.strides)).sum();
+    eprintln!("strides: lockstep {n_lock}, scalar {n_scalar}, basin {n_basin}");
+    let mut group = c.benchmark_group("mfpt");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(8));
+    group.throughput(Throughput::Elements(n_lock));
+    group.bench_function("compass_lockstep", |b| b.iter(|| black_box(lockstep())));
+    group.throughput(Throughput::Elements(n_scalar));
+    group.bench_function("compass_scalar", |b| b.iter(|| black_box(scalar())));
+    group.throughput(Throughput::Elements(n_basin));
+    group.bench_function("compass_basin", |b| b.iter(|| black_box(basin())));
+    group.finish();
+}
+
+criterion_group!(benches, mfpt);
+criterion_main!(benches);
