@@ -27,7 +27,7 @@
 
 use crate::error::LimitError;
 use crate::stride::{StrideOutcome, MAX_EVENTS_PER_STRIDE};
-use pdw_hybrid::{GuardKind, Integrator, Options, StopReason};
+use pdw_hybrid::{GuardKind, Integrator, Options, Scratch, StopReason};
 use pdw_model::Walker;
 
 /// Why a trajectory could not be started.
@@ -301,6 +301,8 @@ struct Recorder<'a> {
     max_samples: usize,
     /// A sample was refused: the walk is over the bound.
     full: bool,
+    /// The model's scratch, reused by every sample.
+    ws: Scratch,
 }
 
 impl Recorder<'_> {
@@ -314,10 +316,17 @@ impl Recorder<'_> {
         tr.x.extend_from_slice(x);
         tr.mode.push(mode as u32);
         tr.step.push(step as u32);
-        if let Some(e) = self.energy.then(|| self.w.energy(x)).flatten() {
+        if let Some(e) = self
+            .energy
+            .then(|| self.w.energy_in(&mut self.ws, x))
+            .flatten()
+        {
             tr.energy.get_or_insert_with(Vec::new).push(e);
         }
-        match (self.forces_ok, self.w.constraint_forces(mode, x)) {
+        match (
+            self.forces_ok,
+            self.w.constraint_forces_in(&mut self.ws, mode, x),
+        ) {
             (true, Some(cf)) => {
                 let f = tr.forces.get_or_insert_with(ForceSeries::default);
                 f.normal.push(cf.normal);
@@ -331,7 +340,7 @@ impl Recorder<'_> {
                 tr.forces = None;
             }
         }
-        match (self.flags_ok, self.w.step_flags(mode, x)) {
+        match (self.flags_ok, self.w.step_flags_in(&mut self.ws, mode, x)) {
             (true, Some(fl)) => {
                 let bit = |on: bool, b: u8| if on { b } else { 0 };
                 let bits = bit(fl.normal_force_negative, FLAG_NORMAL_NEGATIVE)
@@ -388,6 +397,7 @@ pub fn simulate(
         flags_ok: true,
         max_samples: opts.max_samples.max(1),
         full: false,
+        ws: Scratch::new(),
     };
     let mut integ = Integrator::new(d, opts.integrator).map_err(LimitError::from)?;
     let (mut t, mut x, mut mode) = (0.0, x0.to_vec(), w.section_mode());

@@ -3,7 +3,7 @@
 //! impact impulses for validity, energy, natural scales and units.
 
 use crate::validity::{ClearanceRule, ConstraintForces, ImpactReport, Scales, StepFlags};
-use pdw_hybrid::Section;
+use pdw_hybrid::{Scratch, Section};
 use std::borrow::Cow;
 
 /// A starting point for a fixed-point search on the section.
@@ -65,6 +65,26 @@ pub trait Walker: Section {
     /// the model defines it; conserved between impacts.
     fn energy(&self, _x: &[f64]) -> Option<f64> {
         None
+    }
+    /// [`Walker::constraint_forces`] in the caller's scratch `ws`: a model whose kernel needs
+    /// workspaces takes them from `ws` (filled on the first call), so that sampling a
+    /// trajectory allocates nothing per sample. The same numbers as the call without `ws`.
+    fn constraint_forces_in(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+    ) -> Option<ConstraintForces> {
+        self.constraint_forces(mode, x)
+    }
+    /// [`Walker::step_flags`] in the caller's scratch `ws` (see
+    /// [`Walker::constraint_forces_in`]).
+    fn step_flags_in(&self, _ws: &mut Scratch, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        self.step_flags(mode, x)
+    }
+    /// [`Walker::energy`] in the caller's scratch `ws` (see [`Walker::constraint_forces_in`]).
+    fn energy_in(&self, _ws: &mut Scratch, x: &[f64]) -> Option<f64> {
+        self.energy(x)
     }
     /// Unit of [`Walker::energy`], e.g. `"J"`, `"M g l"`.
     fn energy_unit(&self) -> &str {

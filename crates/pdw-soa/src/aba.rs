@@ -44,6 +44,7 @@ pub fn aba(
 
 /// Backward and forward articulated-body passes over a workspace filled by `kin_pass`.
 /// `locked`: optional mask of locked joints (pseudo joints, seed §3.4), which get `q̈ = 0`.
+/// The one-lane instance of [`aba_recursion`]; also keeps `P_k`, `z_k` and `A_k` in `ws`.
 pub(crate) fn aba_passes(
     chain: &Chain,
     ws: &mut Workspace,
@@ -52,95 +53,266 @@ pub(crate) fn aba_passes(
     locked: Option<&[bool]>,
     qdd: &mut [f64],
 ) {
-    let n = chain.dof();
-    let mut cp = [0.0; 6];
-    let mut cz = match f_tip {
+    let cz = match f_tip {
         Some(ft) => spatial::force_transport(&ft, ws.tip_d[0], ws.tip_d[1]),
         None => [0.0; 3],
     };
+    let mut lane = OneLane {
+        ws,
+        tau,
+        qdd,
+        cp: [0.0; 6],
+        cz,
+        ap: chain.base_acc,
+    };
+    aba_recursion(chain, locked, &mut lane);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The articulated-body recursion, written once over where the lanes live.
+// ---------------------------------------------------------------------------------------------
+
+/// Joint kinds of one articulated-body step, as the const parameter of the lane loops (one
+/// monomorphised copy per kind, no branch in the lane loop).
+pub(crate) const REV: u8 = 0;
+/// Prismatic joint (see [`REV`]).
+pub(crate) const PRI: u8 = 1;
+/// Locked joint, a pseudo joint of seed §3.4 (see [`REV`]).
+pub(crate) const LOCKED: u8 = 2;
+
+/// Where the lanes of one articulated-body recursion live (one lane of a [`Workspace`], a
+/// block of lanes in the columns of a [`crate::BatchWorkspace`], stack arrays): each step
+/// hands its link's quantities, as one slice per quantity over its lanes, to [`lanes_back`] or
+/// [`lanes_fwd`]. The carries `(P⁺, z⁺)` and `A` start at their base values (`0`,
+/// `Φ_{t,n}ᵀ F_t`; `a_b`) before [`aba_recursion`] runs.
+pub(crate) trait AbaLanes {
+    /// Backward step of link `k` (rotational inertia `j`, mass `m`) for every lane.
+    fn back<const K: u8>(&mut self, k: usize, j: f64, m: f64);
+    /// Forward step of link `k` for every lane, writing its `q̈_k`.
+    fn fwd<const K: u8>(&mut self, k: usize);
+}
+
+/// The two articulated-body passes (module documentation; Rodriguez, Jain & Kreutz-Delgado
+/// 1991): tip → base over [`AbaLanes::back`], base → tip over [`AbaLanes::fwd`], each link's
+/// step chosen by its joint kind (locked joints from `locked`).
+#[inline(always)]
+pub(crate) fn aba_recursion<S: AbaLanes>(chain: &Chain, locked: Option<&[bool]>, s: &mut S) {
+    let n = chain.dof();
+    let kind = |k: usize| {
+        if locked.is_some_and(|m| m[k]) {
+            LOCKED
+        } else if chain.prismatic[k] {
+            PRI
+        } else {
+            REV
+        }
+    };
     for k in (0..n).rev() {
-        let link = &chain.links[k];
-        let is_locked = match locked {
-            Some(mask) => mask[k],
-            None => false,
-        };
-        let back = if is_locked {
-            spatial::aba_back_locked(
-                &cp,
-                &cz,
-                chain.j_joint[k],
-                link.mass,
-                ws.cy[k],
-                ws.cz[k],
-                ws.by[k],
-                ws.bz[k],
-                ws.ay[k],
-                ws.az[k],
-                ws.dy[k],
-                ws.dz[k],
-            )
-        } else if chain.prismatic[k] {
-            spatial::aba_back_pri(
-                &cp,
-                &cz,
-                chain.j_joint[k],
-                link.mass,
-                ws.cy[k],
-                ws.cz[k],
-                ws.by[k],
-                ws.bz[k],
-                ws.ay[k],
-                ws.az[k],
-                ws.hy[k],
-                ws.hz[k],
-                tau[k],
-                ws.dy[k],
-                ws.dz[k],
-            )
-        } else {
-            spatial::aba_back_rev(
-                &cp,
-                &cz,
-                chain.j_joint[k],
-                link.mass,
-                ws.cy[k],
-                ws.cz[k],
-                ws.by[k],
-                ws.bz[k],
-                ws.ay[k],
-                ws.az[k],
-                tau[k],
-                ws.dy[k],
-                ws.dz[k],
-            )
-        };
-        ws.g[k] = back.g;
-        ws.nu[k] = back.nu;
-        ws.p[k] = back.p;
-        ws.z[k] = back.z;
-        cp = back.cp;
-        cz = back.cz;
+        let (j, m) = (chain.j_joint[k], chain.links[k].mass);
+        match kind(k) {
+            LOCKED => s.back::<LOCKED>(k, j, m),
+            PRI => s.back::<PRI>(k, j, m),
+            _ => s.back::<REV>(k, j, m),
+        }
     }
-    let mut ap = chain.base_acc;
     for k in 0..n {
-        let is_locked = match locked {
-            Some(mask) => mask[k],
-            None => false,
+        match kind(k) {
+            LOCKED => s.fwd::<LOCKED>(k),
+            PRI => s.fwd::<PRI>(k),
+            _ => s.fwd::<REV>(k),
+        }
+    }
+}
+
+// The lane loops take every stream as its own slice parameter so that each is a distinct
+// `noalias` parameter (kept as alias scopes when inlined): the loop vectoriser then needs no
+// runtime overlap checks between the ~25 streams. They are inlined into the per-instruction-set
+// copies made by `pdw_simd::dispatch` for the batched instance.
+
+/// Backward step of joint kind `K` over all lanes: reads the link quantities and the carries
+/// `(p0..p5, z0..z2)`, writes the gain `g`, `ν`, the new carries, and hands each lane's full
+/// step to `keep` (lane index, step). A locked joint writes `g = 0`, `ν = 0`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn lanes_back<const K: u8>(
+    j: f64,
+    m: f64,
+    tk: &[f64],
+    [cy, cz, by, bz, ay, az, hy, hz, dy, dz]: [&[f64]; 10],
+    g0: &mut [f64],
+    g1: &mut [f64],
+    g2: &mut [f64],
+    nu: &mut [f64],
+    p0: &mut [f64],
+    p1: &mut [f64],
+    p2: &mut [f64],
+    p3: &mut [f64],
+    p4: &mut [f64],
+    p5: &mut [f64],
+    z0: &mut [f64],
+    z1: &mut [f64],
+    z2: &mut [f64],
+    mut keep: impl FnMut(usize, &spatial::AbaBack),
+) {
+    let bl = tk.len();
+    let (cy, cz, by, bz, ay, az) = (
+        &cy[..bl],
+        &cz[..bl],
+        &by[..bl],
+        &bz[..bl],
+        &ay[..bl],
+        &az[..bl],
+    );
+    let (hy, hz, dy, dz) = (&hy[..bl], &hz[..bl], &dy[..bl], &dz[..bl]);
+    let (g0, g1, g2, nu) = (&mut g0[..bl], &mut g1[..bl], &mut g2[..bl], &mut nu[..bl]);
+    let (p0, p1, p2) = (&mut p0[..bl], &mut p1[..bl], &mut p2[..bl]);
+    let (p3, p4, p5) = (&mut p3[..bl], &mut p4[..bl], &mut p5[..bl]);
+    let (z0, z1, z2) = (&mut z0[..bl], &mut z1[..bl], &mut z2[..bl]);
+    for l in 0..bl {
+        let cp = [p0[l], p1[l], p2[l], p3[l], p4[l], p5[l]];
+        let czc = [z0[l], z1[l], z2[l]];
+        let (cy, cz, by, bz, ay, az) = (cy[l], cz[l], by[l], bz[l], ay[l], az[l]);
+        let r = match K {
+            REV => {
+                spatial::aba_back_rev(&cp, &czc, j, m, cy, cz, by, bz, ay, az, tk[l], dy[l], dz[l])
+            }
+            PRI => spatial::aba_back_pri(
+                &cp, &czc, j, m, cy, cz, by, bz, ay, az, hy[l], hz[l], tk[l], dy[l], dz[l],
+            ),
+            _ => spatial::aba_back_locked(&cp, &czc, j, m, cy, cz, by, bz, ay, az, dy[l], dz[l]),
         };
-        let (qk, a) = if is_locked {
-            let ab = spatial::motion_transport(&ap, ws.dy[k], ws.dz[k]);
-            (0.0, [ab[0], ab[1] + ws.ay[k], ab[2] + ws.az[k]])
-        } else if chain.prismatic[k] {
-            spatial::aba_fwd_pri(
-                &ap, &ws.g[k], ws.nu[k], ws.ay[k], ws.az[k], ws.hy[k], ws.hz[k], ws.dy[k], ws.dz[k],
-            )
-        } else {
-            spatial::aba_fwd_rev(
-                &ap, ws.g[k][1], ws.g[k][2], ws.nu[k], ws.ay[k], ws.az[k], ws.dy[k], ws.dz[k],
-            )
+        g0[l] = r.g[0];
+        g1[l] = r.g[1];
+        g2[l] = r.g[2];
+        nu[l] = r.nu;
+        [p0[l], p1[l], p2[l], p3[l], p4[l], p5[l]] = r.cp;
+        [z0[l], z1[l], z2[l]] = r.cz;
+        keep(l, &r);
+    }
+}
+
+/// Forward step of joint kind `K` over all lanes: from the carried `A` (`a0..a2`), the gain,
+/// `ν` and the link quantities, writes `q̈_k` to `out` and the new `A`; a locked joint gives
+/// `q̈ = 0` and `A = Φ A_p + a`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn lanes_fwd<const K: u8>(
+    [g0, g1, g2, nu]: [&[f64]; 4],
+    [ay, az, hy, hz, dy, dz]: [&[f64]; 6],
+    out: &mut [f64],
+    a0: &mut [f64],
+    a1: &mut [f64],
+    a2: &mut [f64],
+) {
+    let bl = out.len();
+    let (g0, g1, g2, nu) = (&g0[..bl], &g1[..bl], &g2[..bl], &nu[..bl]);
+    let (ay, az, hy, hz, dy, dz) = (
+        &ay[..bl],
+        &az[..bl],
+        &hy[..bl],
+        &hz[..bl],
+        &dy[..bl],
+        &dz[..bl],
+    );
+    let (a0, a1, a2) = (&mut a0[..bl], &mut a1[..bl], &mut a2[..bl]);
+    for l in 0..bl {
+        let ap = [a0[l], a1[l], a2[l]];
+        let (qk, a) = match K {
+            REV => spatial::aba_fwd_rev(&ap, g1[l], g2[l], nu[l], ay[l], az[l], dy[l], dz[l]),
+            PRI => spatial::aba_fwd_pri(
+                &ap,
+                &[g0[l], g1[l], g2[l]],
+                nu[l],
+                ay[l],
+                az[l],
+                hy[l],
+                hz[l],
+                dy[l],
+                dz[l],
+            ),
+            _ => {
+                let ab = spatial::motion_transport(&ap, dy[l], dz[l]);
+                (0.0, [ab[0], ab[1] + ay[l], ab[2] + az[l]])
+            }
         };
-        qdd[k] = qk;
-        ws.acc[k] = a;
-        ap = a;
+        out[l] = qk;
+        [a0[l], a1[l], a2[l]] = a;
+    }
+}
+
+/// One lane in a [`Workspace`]: the carries are locals, `P_k`, `z_k`, the gains and `A_k` are
+/// kept in the workspace for the callers that read them (pseudo joints, closed chains).
+struct OneLane<'a> {
+    ws: &'a mut Workspace,
+    tau: &'a [f64],
+    qdd: &'a mut [f64],
+    cp: spatial::Sym3,
+    cz: [f64; 3],
+    ap: [f64; 3],
+}
+
+impl AbaLanes for OneLane<'_> {
+    #[inline(always)]
+    fn back<const K: u8>(&mut self, k: usize, j: f64, m: f64) {
+        let ws = &mut *self.ws;
+        let link = [
+            &ws.cy[k..k + 1],
+            &ws.cz[k..k + 1],
+            &ws.by[k..k + 1],
+            &ws.bz[k..k + 1],
+            &ws.ay[k..k + 1],
+            &ws.az[k..k + 1],
+            &ws.hy[k..k + 1],
+            &ws.hz[k..k + 1],
+            &ws.dy[k..k + 1],
+            &ws.dz[k..k + 1],
+        ];
+        let [g0, g1, g2] = &mut ws.g[k];
+        let [p0, p1, p2, p3, p4, p5] = &mut self.cp;
+        let [z0, z1, z2] = &mut self.cz;
+        let (pk, zk) = (&mut ws.p[k], &mut ws.z[k]);
+        let m1 = std::slice::from_mut;
+        lanes_back::<K>(
+            j,
+            m,
+            &self.tau[k..k + 1],
+            link,
+            m1(g0),
+            m1(g1),
+            m1(g2),
+            m1(&mut ws.nu[k]),
+            m1(p0),
+            m1(p1),
+            m1(p2),
+            m1(p3),
+            m1(p4),
+            m1(p5),
+            m1(z0),
+            m1(z1),
+            m1(z2),
+            |_, r| {
+                *pk = r.p;
+                *zk = r.z;
+            },
+        );
+    }
+
+    #[inline(always)]
+    fn fwd<const K: u8>(&mut self, k: usize) {
+        let ws = &mut *self.ws;
+        let [g0, g1, g2] = &ws.g[k];
+        let gain = [g0, g1, g2, &ws.nu[k]].map(std::slice::from_ref);
+        let link = [
+            &ws.ay[k..k + 1],
+            &ws.az[k..k + 1],
+            &ws.hy[k..k + 1],
+            &ws.hz[k..k + 1],
+            &ws.dy[k..k + 1],
+            &ws.dz[k..k + 1],
+        ];
+        let [a0, a1, a2] = &mut self.ap;
+        let m1 = std::slice::from_mut;
+        lanes_fwd::<K>(gain, link, &mut self.qdd[k..k + 1], m1(a0), m1(a1), m1(a2));
+        ws.acc[k] = self.ap;
     }
 }

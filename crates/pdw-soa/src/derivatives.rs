@@ -55,6 +55,7 @@ use faer::dyn_stack::MemStack;
 use faer::linalg::cholesky::llt;
 use faer::{Conj, MatMut, Par};
 
+use crate::aba::{aba_recursion, lanes_back, lanes_fwd, AbaLanes};
 use crate::chain::Chain;
 use crate::dual::{Dual, Scalar};
 use crate::error::{check_len, SoaError};
@@ -195,54 +196,79 @@ pub(crate) fn positions<T: Scalar>(n: usize, kin: &Kin<T>) -> (Vec8<[T; 2]>, [T;
     (p, [y + kin.tip_d[0], z + kin.tip_d[1]])
 }
 
-/// The kernel's articulated-body passes (crate::aba::aba_passes, no tip force) on `f64` stack
-/// arrays: the same step functions in the same order, hence the same bits.
+/// The kernel's articulated-body recursion ([`crate::aba::aba_recursion`], no tip force) on
+/// `f64` stack arrays: the same loops and step functions, hence the same bits.
 fn aba_value(chain: &Chain, kin: &Kin<f64>, tau: &[f64], locked: &[bool], qdd: &mut [f64]) {
-    let n = chain.dof();
-    let mut g = [[0.0; 3]; MAX_DOF];
-    let mut nu = [0.0; MAX_DOF];
-    let mut cp = [0.0; 6];
-    let mut cz = [0.0; 3];
-    for k in (0..n).rev() {
-        let link = &chain.links[k];
-        let (j, m) = (chain.j_joint[k], link.mass);
-        let (dy, dz) = (kin.dy[k], kin.dz[k]);
-        let back = if locked[k] {
-            spatial::aba_back_locked(
-                &cp, &cz, j, m, kin.cy[k], kin.cz[k], kin.by[k], kin.bz[k], kin.ay[k], kin.az[k],
-                dy, dz,
-            )
-        } else if chain.prismatic[k] {
-            spatial::aba_back_pri(
-                &cp, &cz, j, m, kin.cy[k], kin.cz[k], kin.by[k], kin.bz[k], kin.ay[k], kin.az[k],
-                kin.hy[k], kin.hz[k], tau[k], dy, dz,
-            )
-        } else {
-            spatial::aba_back_rev(
-                &cp, &cz, j, m, kin.cy[k], kin.cz[k], kin.by[k], kin.bz[k], kin.ay[k], kin.az[k],
-                tau[k], dy, dz,
-            )
-        };
-        g[k] = back.g;
-        nu[k] = back.nu;
-        cp = back.cp;
-        cz = back.cz;
+    let mut lane = StackLane {
+        kin,
+        tau,
+        qdd,
+        g: [[0.0; 3]; MAX_DOF],
+        nu: [0.0; MAX_DOF],
+        cp: [0.0; 6],
+        cz: [0.0; 3],
+        ap: chain.base_acc,
+    };
+    aba_recursion(chain, Some(locked), &mut lane);
+}
+
+/// One lane of the articulated-body recursion over the stack arrays of [`Kin`].
+struct StackLane<'a> {
+    kin: &'a Kin<f64>,
+    tau: &'a [f64],
+    qdd: &'a mut [f64],
+    g: Vec8<[f64; 3]>,
+    nu: Vec8<f64>,
+    cp: [f64; 6],
+    cz: [f64; 3],
+    ap: [f64; 3],
+}
+
+impl AbaLanes for StackLane<'_> {
+    #[inline(always)]
+    fn back<const K: u8>(&mut self, k: usize, j: f64, m: f64) {
+        let kin = self.kin;
+        let link = [
+            &kin.cy, &kin.cz, &kin.by, &kin.bz, &kin.ay, &kin.az, &kin.hy, &kin.hz, &kin.dy,
+            &kin.dz,
+        ]
+        .map(|v| std::slice::from_ref(&v[k]));
+        let [g0, g1, g2] = &mut self.g[k];
+        let [p0, p1, p2, p3, p4, p5] = &mut self.cp;
+        let [z0, z1, z2] = &mut self.cz;
+        let m1 = std::slice::from_mut;
+        lanes_back::<K>(
+            j,
+            m,
+            &self.tau[k..k + 1],
+            link,
+            m1(g0),
+            m1(g1),
+            m1(g2),
+            m1(&mut self.nu[k]),
+            m1(p0),
+            m1(p1),
+            m1(p2),
+            m1(p3),
+            m1(p4),
+            m1(p5),
+            m1(z0),
+            m1(z1),
+            m1(z2),
+            |_, _| {},
+        );
     }
-    let mut ap = chain.base_acc;
-    for k in 0..n {
-        let (dy, dz) = (kin.dy[k], kin.dz[k]);
-        let (qk, a) = if locked[k] {
-            let ab = spatial::motion_transport(&ap, dy, dz);
-            (0.0, [ab[0], ab[1] + kin.ay[k], ab[2] + kin.az[k]])
-        } else if chain.prismatic[k] {
-            spatial::aba_fwd_pri(
-                &ap, &g[k], nu[k], kin.ay[k], kin.az[k], kin.hy[k], kin.hz[k], dy, dz,
-            )
-        } else {
-            spatial::aba_fwd_rev(&ap, g[k][1], g[k][2], nu[k], kin.ay[k], kin.az[k], dy, dz)
-        };
-        qdd[k] = qk;
-        ap = a;
+
+    #[inline(always)]
+    fn fwd<const K: u8>(&mut self, k: usize) {
+        let kin = self.kin;
+        let [g0, g1, g2] = &self.g[k];
+        let gain = [g0, g1, g2, &self.nu[k]].map(std::slice::from_ref);
+        let link = [&kin.ay, &kin.az, &kin.hy, &kin.hz, &kin.dy, &kin.dz]
+            .map(|v| std::slice::from_ref(&v[k]));
+        let [a0, a1, a2] = &mut self.ap;
+        let m1 = std::slice::from_mut;
+        lanes_fwd::<K>(gain, link, &mut self.qdd[k..k + 1], m1(a0), m1(a1), m1(a2));
     }
 }
 

@@ -1810,13 +1810,29 @@ impl Walker for ChainWalker {
         })
     }
     fn constraint_forces(&self, mode: usize, x: &[f64]) -> Option<ConstraintForces> {
-        Some(self.constraint_forces_ws(&mut Scratch::new(), mode, x))
+        self.constraint_forces_in(&mut Scratch::new(), mode, x)
     }
     fn step_flags(&self, mode: usize, x: &[f64]) -> Option<StepFlags> {
-        Some(self.check_state_ws(&mut Scratch::new(), mode, x))
+        self.step_flags_in(&mut Scratch::new(), mode, x)
     }
     /// `T + V` by the kernel's `total_energy` (potential zero at the stance foot).
     fn energy(&self, x: &[f64]) -> Option<f64> {
+        self.energy_in(&mut Scratch::new(), x)
+    }
+    fn constraint_forces_in(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+    ) -> Option<ConstraintForces> {
+        Some(self.constraint_forces_ws(ws, mode, x))
+    }
+    fn step_flags_in(&self, ws: &mut Scratch, mode: usize, x: &[f64]) -> Option<StepFlags> {
+        Some(self.check_state_ws(ws, mode, x))
+    }
+    /// `T + V` by the kernel's `total_energy` in the scratch's workspaces.
+    fn energy_in(&self, ws: &mut Scratch, x: &[f64]) -> Option<f64> {
+        let s = self.scratch(ws);
         let n = self.n;
         if self.radius > 0.0 {
             // the floating chain at the rolling base (y = −r q₀, ż = 0): the potential counts
@@ -1827,11 +1843,10 @@ impl Walker for ChainWalker {
             qd[0] = -self.radius * x[n];
             q[2..n + 2].copy_from_slice(&x[..n]);
             qd[2..n + 2].copy_from_slice(&x[n..2 * n]);
-            let mut ws = Workspace::new(&self.floating);
-            return pdw_soa::total_energy(&self.floating, &mut ws, &q[..n + 2], &qd[..n + 2]).ok();
+            return pdw_soa::total_energy(&self.floating, &mut s.fws, &q[..n + 2], &qd[..n + 2])
+                .ok();
         }
-        let mut ws = Workspace::new(&self.chain);
-        pdw_soa::total_energy(&self.chain, &mut ws, &x[..self.n], &x[self.n..2 * self.n]).ok()
+        pdw_soa::total_energy(&self.chain, &mut s.ws, &x[..n], &x[n..2 * n]).ok()
     }
     /// The spec's energy unit: J for SI specs (mass × length² / time² in the spec's units).
     fn energy_unit(&self) -> &str {

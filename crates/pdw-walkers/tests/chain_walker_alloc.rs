@@ -1,9 +1,11 @@
 //! The chain walker allocates nothing per right-hand side (scalar or batched), flow Jacobian,
-//! guard, guard gradient, reset or reset Jacobian once its scratch is filled. (One test in this
+//! guard, guard gradient, reset, reset Jacobian or trajectory sample (constraint forces, step
+//! flags, energy) once its scratch is filled. (One test in this
 //! binary: the allocation counter is global.)
 
 use faer::Mat;
 use pdw_hybrid::{HybridSystem, Scratch};
+use pdw_model::Walker;
 mod chain_common;
 
 use chain_common::{all_presets, random_state};
@@ -44,9 +46,9 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
             .collect();
         let mut dx = Mat::<f64>::zeros(lanes, d);
         let (mut f, mut jac, mut out) = (vec![0.0; d], vec![0.0; d * d], vec![0.0; d]);
-        let mut counts = [0usize; 7];
-        let mut run = |ws: &mut Scratch, counts: &mut [usize; 7]| {
-            let tick = |i: usize, c: &mut [usize; 7], before: usize| {
+        let mut counts = [0usize; 8];
+        let mut run = |ws: &mut Scratch, counts: &mut [usize; 8]| {
+            let tick = |i: usize, c: &mut [usize; 8], before: usize| {
                 c[i] += ALLOCS.load(Ordering::SeqCst) - before;
             };
             for &m in &modes {
@@ -73,15 +75,36 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
                     let b = ALLOCS.load(Ordering::SeqCst);
                     w.guard_gradient(ws, m, 0, s, &mut g[..d]);
                     tick(6, counts, b);
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let sample = (
+                        w.constraint_forces_in(ws, m, s),
+                        w.step_flags_in(ws, m, s),
+                        w.energy_in(ws, s),
+                    );
+                    tick(7, counts, b);
+                    assert!(sample.0.is_some() && sample.1.is_some() && sample.2.is_some());
                 }
             }
         };
-        run(&mut ws, &mut [0; 7]); // fills the scratch
+        run(&mut ws, &mut [0; 8]); // fills the scratch
         run(&mut ws, &mut counts);
         assert_eq!(
-            counts, [0; 7],
+            counts, [0; 8],
             "{name}: allocations in [flow_batch, flow, flow_jacobian, guard, reset, \
-             reset_jacobian, guard_gradient]"
+             reset_jacobian, guard_gradient, trajectory sample]"
         );
+        // the reused scratch carries nothing from one sample to the next: the same bits as a
+        // fresh scratch per call
+        for &m in &modes {
+            for s in &states[m][..4] {
+                assert_eq!(
+                    w.constraint_forces_in(&mut ws, m, s),
+                    w.constraint_forces(m, s)
+                );
+                assert_eq!(w.step_flags_in(&mut ws, m, s), w.step_flags(m, s));
+                let bits = |e: Option<f64>| e.map(f64::to_bits);
+                assert_eq!(bits(w.energy_in(&mut ws, s)), bits(w.energy(s)), "{name}");
+            }
+        }
     }
 }
