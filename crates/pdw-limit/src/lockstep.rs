@@ -37,12 +37,12 @@
 //! ([`crate::terrain::monte_carlo_scalar`]).
 
 use crate::error::LimitError;
-use crate::stride::{StrideOutcome, MAX_EVENTS_PER_STRIDE};
+use crate::stride::{StrideOutcome, StrideStop, MAX_EVENTS_PER_STRIDE};
 use crate::terrain::{Fate, SlopeTerrain, SlopeWalk, TerrainKind};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{
-    run_batch_par, BatchOptions, Control, GuardKind, GuardSpec, HybridSystem, LaneDriver, Scratch,
-    Section, StopReason,
+    run_batch_par, BatchOptions, Control, GuardSpec, HybridSystem, LaneDriver, Scratch, Section,
+    StopReason,
 };
 use pdw_model::Walker;
 
@@ -331,40 +331,34 @@ impl<'a> LaneDriver<dyn Section + 'a> for WalkDriver<'_> {
         t: f64,
         x: &mut [f64],
     ) -> Control {
-        let outcome = match stop {
-            StopReason::Guard { guard } => match sys.guards(mode)[guard].kind {
-                GuardKind::Reset => {
-                    let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
-                    if (mode, guard) == self.section_guard {
-                        x.copy_from_slice(&lane.buf);
-                        lane.steps += 1;
-                        if lane.steps >= self.max_steps {
-                            return Control::Finish;
-                        }
-                        x[x.len() - 1] = self.terrain.slope(*item, lane.steps as u64 + 1);
-                        (lane.events, lane.t0) = (0, t);
-                        return Control::Continue {
-                            mode: self.start_mode,
-                            t_end: t + self.t_max,
-                        };
+        let outcome = match StrideStop::of(stop, sys.guards(mode)) {
+            StrideStop::Reset { guard } => {
+                let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
+                if (mode, guard) == self.section_guard {
+                    x.copy_from_slice(&lane.buf);
+                    lane.steps += 1;
+                    if lane.steps >= self.max_steps {
+                        return Control::Finish;
                     }
-                    if lane.events >= MAX_EVENTS_PER_STRIDE {
-                        StrideOutcome::TooManyEvents
-                    } else {
-                        lane.events += 1;
-                        x.copy_from_slice(&lane.buf);
-                        return Control::Continue {
-                            mode: new_mode,
-                            t_end: lane.t0 + self.t_max,
-                        };
-                    }
+                    x[x.len() - 1] = self.terrain.slope(*item, lane.steps as u64 + 1);
+                    (lane.events, lane.t0) = (0, t);
+                    return Control::Continue {
+                        mode: self.start_mode,
+                        t_end: t + self.t_max,
+                    };
                 }
-                GuardKind::Terminal(kind) => StrideOutcome::Fall { kind, guard },
-            },
-            StopReason::EndTime => StrideOutcome::Timeout,
-            StopReason::NonFinite => StrideOutcome::NonFinite,
-            StopReason::StepTooSmall => StrideOutcome::StepTooSmall,
-            StopReason::MaxSteps => StrideOutcome::MaxSteps,
+                if lane.events >= MAX_EVENTS_PER_STRIDE {
+                    StrideOutcome::TooManyEvents
+                } else {
+                    lane.events += 1;
+                    x.copy_from_slice(&lane.buf);
+                    return Control::Continue {
+                        mode: new_mode,
+                        t_end: lane.t0 + self.t_max,
+                    };
+                }
+            }
+            StrideStop::End(outcome) => outcome,
         };
         lane.end = Some(outcome);
         Control::Finish

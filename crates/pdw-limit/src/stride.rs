@@ -15,7 +15,7 @@
 use crate::error::LimitError;
 use pdw_hybrid::{
     run_batch, run_batch_par, run_scalar_with, BatchOptions, Control, FallKind, GuardKind,
-    HybridSystem, Integrator, LaneDriver, Options, Scratch, Section, StopReason,
+    GuardSpec, HybridSystem, Integrator, LaneDriver, Options, Scratch, Section, StopReason,
 };
 use std::fmt;
 
@@ -40,6 +40,35 @@ pub enum StrideOutcome {
     MaxSteps,
     /// More than [`MAX_EVENTS_PER_STRIDE`] intermediate resets.
     TooManyEvents,
+}
+
+/// What a stride does at a stop of its integration: apply the reset guard `guard` (the stride
+/// goes on, or ends at the section), or end with an outcome. One mapping for every driver of
+/// strides (the stride map, trajectories, the lockstep walkers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StrideStop {
+    /// A reset guard fired: the driver applies the reset.
+    Reset { guard: usize },
+    /// The stride ends: a terminal guard (a fall) or the integrator stopped.
+    End(StrideOutcome),
+}
+
+impl StrideStop {
+    /// The meaning of `stop` in a mode whose guards are `guards`: a terminal guard is a fall of
+    /// its kind, the integrator's own stops are [`StrideOutcome::Timeout`],
+    /// [`StrideOutcome::NonFinite`], [`StrideOutcome::StepTooSmall`], [`StrideOutcome::MaxSteps`].
+    pub fn of(stop: StopReason, guards: &[GuardSpec]) -> Self {
+        StrideStop::End(match stop {
+            StopReason::Guard { guard } => match guards[guard].kind {
+                GuardKind::Reset => return StrideStop::Reset { guard },
+                GuardKind::Terminal(kind) => StrideOutcome::Fall { kind, guard },
+            },
+            StopReason::EndTime => StrideOutcome::Timeout,
+            StopReason::NonFinite => StrideOutcome::NonFinite,
+            StopReason::StepTooSmall => StrideOutcome::StepTooSmall,
+            StopReason::MaxSteps => StrideOutcome::MaxSteps,
+        })
+    }
 }
 
 impl StrideOutcome {
@@ -129,31 +158,25 @@ impl<H: HybridSystem + ?Sized> LaneDriver<H> for EventDriver {
         _t: f64,
         x: &mut [f64],
     ) -> Control {
-        let outcome = match stop {
-            StopReason::Guard { guard } => match sys.guards(mode)[guard].kind {
-                GuardKind::Reset => {
-                    let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
-                    if (mode, guard) == self.section_guard {
-                        lane.pre = x.to_vec();
-                        x.copy_from_slice(&lane.buf);
-                        StrideOutcome::Ok
-                    } else if lane.events >= MAX_EVENTS_PER_STRIDE {
-                        StrideOutcome::TooManyEvents
-                    } else {
-                        lane.events += 1;
-                        x.copy_from_slice(&lane.buf);
-                        return Control::Continue {
-                            mode: new_mode,
-                            t_end: self.t_max,
-                        };
-                    }
+        let outcome = match StrideStop::of(stop, sys.guards(mode)) {
+            StrideStop::Reset { guard } => {
+                let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
+                if (mode, guard) == self.section_guard {
+                    lane.pre = x.to_vec();
+                    x.copy_from_slice(&lane.buf);
+                    StrideOutcome::Ok
+                } else if lane.events >= MAX_EVENTS_PER_STRIDE {
+                    StrideOutcome::TooManyEvents
+                } else {
+                    lane.events += 1;
+                    x.copy_from_slice(&lane.buf);
+                    return Control::Continue {
+                        mode: new_mode,
+                        t_end: self.t_max,
+                    };
                 }
-                GuardKind::Terminal(kind) => StrideOutcome::Fall { kind, guard },
-            },
-            StopReason::EndTime => StrideOutcome::Timeout,
-            StopReason::NonFinite => StrideOutcome::NonFinite,
-            StopReason::StepTooSmall => StrideOutcome::StepTooSmall,
-            StopReason::MaxSteps => StrideOutcome::MaxSteps,
+            }
+            StrideStop::End(outcome) => outcome,
         };
         if lane.pre.is_empty() {
             lane.pre = x.to_vec();

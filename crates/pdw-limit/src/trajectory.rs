@@ -26,8 +26,8 @@
 //! how (a [`StrideOutcome`], [`StrideOutcome::Ok`] when all `N` steps were completed).
 
 use crate::error::LimitError;
-use crate::stride::{StrideOutcome, MAX_EVENTS_PER_STRIDE};
-use pdw_hybrid::{GuardKind, Integrator, Options, Scratch, StopReason};
+use crate::stride::{StrideOutcome, StrideStop, MAX_EVENTS_PER_STRIDE};
+use pdw_hybrid::{Integrator, Options, Scratch, StopReason};
 use pdw_model::Walker;
 
 /// Why a trajectory could not be started.
@@ -468,70 +468,63 @@ pub fn simulate(
                     steps: opts.steps,
                 });
             }
-            let outcome = match stop {
-                StopReason::Guard { guard } => {
+            let outcome = match StrideStop::of(stop, w.guards(mode)) {
+                StrideStop::Reset { guard } => {
                     let spec = w.guards(mode)[guard];
-                    match spec.kind {
-                        GuardKind::Reset => {
-                            let new_mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
-                            let ends_step = (mode, guard) == w.section_guard();
-                            if sample_events && rec.tr.t.last() != Some(&t) {
-                                rec.push(t, &x, mode, step);
-                            }
-                            rec.tr.events.push(TrajectoryEvent {
-                                t,
-                                step,
-                                kind: spec.name.to_string(),
-                                ends_step,
-                                fall: false,
-                                guard,
-                                mode_before: mode,
-                                mode_after: new_mode,
-                                pre: x.clone(),
-                                post: buf.clone(),
-                            });
-                            x.copy_from_slice(&buf);
-                            mode = new_mode;
-                            if ends_step {
-                                rec.tr.steps_done = step + 1;
-                                w.project(&x, &mut s);
-                                rec.tr.section.extend_from_slice(&s);
-                                if opts.dt_out.is_none() || sample_events {
-                                    rec.push(t, &x, mode, step + 1);
-                                }
-                                continue 'steps;
-                            }
-                            if opts.dt_out.is_none() || sample_events {
-                                rec.push(t, &x, mode, step);
-                            }
-                            events += 1;
-                            if events > MAX_EVENTS_PER_STRIDE {
-                                StrideOutcome::TooManyEvents
-                            } else {
-                                continue;
-                            }
+                    let new_mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
+                    let ends_step = (mode, guard) == w.section_guard();
+                    if sample_events && rec.tr.t.last() != Some(&t) {
+                        rec.push(t, &x, mode, step);
+                    }
+                    rec.tr.events.push(TrajectoryEvent {
+                        t,
+                        step,
+                        kind: spec.name.to_string(),
+                        ends_step,
+                        fall: false,
+                        guard,
+                        mode_before: mode,
+                        mode_after: new_mode,
+                        pre: x.clone(),
+                        post: buf.clone(),
+                    });
+                    x.copy_from_slice(&buf);
+                    mode = new_mode;
+                    if ends_step {
+                        rec.tr.steps_done = step + 1;
+                        w.project(&x, &mut s);
+                        rec.tr.section.extend_from_slice(&s);
+                        if opts.dt_out.is_none() || sample_events {
+                            rec.push(t, &x, mode, step + 1);
                         }
-                        GuardKind::Terminal(fall) => {
-                            rec.tr.events.push(TrajectoryEvent {
-                                t,
-                                step,
-                                kind: fall.name().to_string(),
-                                ends_step: false,
-                                fall: true,
-                                guard,
-                                mode_before: mode,
-                                mode_after: mode,
-                                pre: x.clone(),
-                                post: x.clone(),
-                            });
-                            StrideOutcome::Fall { kind: fall, guard }
-                        }
+                        continue 'steps;
+                    }
+                    if opts.dt_out.is_none() || sample_events {
+                        rec.push(t, &x, mode, step);
+                    }
+                    events += 1;
+                    if events > MAX_EVENTS_PER_STRIDE {
+                        StrideOutcome::TooManyEvents
+                    } else {
+                        continue;
                     }
                 }
-                StopReason::EndTime => StrideOutcome::Timeout,
-                StopReason::NonFinite => StrideOutcome::NonFinite,
-                StopReason::StepTooSmall => StrideOutcome::StepTooSmall,
-                StopReason::MaxSteps => StrideOutcome::MaxSteps,
+                StrideStop::End(StrideOutcome::Fall { kind: fall, guard }) => {
+                    rec.tr.events.push(TrajectoryEvent {
+                        t,
+                        step,
+                        kind: fall.name().to_string(),
+                        ends_step: false,
+                        fall: true,
+                        guard,
+                        mode_before: mode,
+                        mode_after: mode,
+                        pre: x.clone(),
+                        post: x.clone(),
+                    });
+                    StrideOutcome::Fall { kind: fall, guard }
+                }
+                StrideStop::End(outcome) => outcome,
             };
             if opts.dt_out.is_some() && rec.tr.t.last() != Some(&t) {
                 // The stop point closes the series.
