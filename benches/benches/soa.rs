@@ -114,7 +114,7 @@ fn scalar(c: &mut Criterion) {
 }
 
 fn batched(c: &mut Criterion) {
-    for n in [2usize, 5] {
+    for n in [2usize, 3, 5, 8, 12] {
         let mut group = c.benchmark_group(format!("soa_batch_aba_n{n}"));
         let mut rng = ChaCha8Rng::seed_from_u64(SEED + 1000 + n as u64);
         let chain = random_chain(&mut rng, n);
