@@ -8,27 +8,8 @@ use crate::error::ApiError;
 use crate::jobs::Refined;
 use crate::source::BasinSource;
 use pdw_limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
-use pdw_limit::OrbitValidity;
-use pdw_store::{Attractor, BasinHeader, BasinMetrics, BasinWriter, OrbitCheck};
+use pdw_store::{Attractor, BasinHeader, BasinMetrics, BasinWriter};
 use std::path::{Path, PathBuf};
-
-/// An attractor in the file's plain form (as `pdw-sweep basin` stores it).
-fn store_attractor(a: &pdw_limit::Attractor) -> Attractor {
-    Attractor {
-        name: a.name.clone(),
-        period_strides: a.period_k as u32,
-        period_time: a.period_time,
-        section: a.points.clone(),
-        multipliers: a.multipliers.iter().map(|l| (l.re, l.im)).collect(),
-        validity: match &a.validity {
-            OrbitValidity::Unchecked => OrbitCheck::Unchecked,
-            OrbitValidity::Valid => OrbitCheck::Valid,
-            OrbitValidity::Invalid(r) => {
-                OrbitCheck::Invalid(r.iter().map(|s| s.to_string()).collect())
-            }
-        },
-    }
-}
 
 /// The header of window `w`: the run's model, integrator and options, the window's grid.
 fn header(src: &BasinSource, w: &Refined) -> BasinHeader {
@@ -150,7 +131,7 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
         .set
         .attractors
         .iter()
-        .map(store_attractor)
+        .map(pdw::basin::store_attractor)
         .collect();
     writer.finish(&metrics, &attractors).map_err(failed)?;
     pdw_store::annotate(

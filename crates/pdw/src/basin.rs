@@ -456,3 +456,25 @@ pub fn slow_attractors(set: &AttractorSet, max_strides: u16) -> Vec<SlowAttracto
         })
         .collect()
 }
+
+/// An attractor in a basin file's plain form (as `pdw-sweep basin` and the explorer's saved
+/// windows store it): `period_strides` 0 and no multipliers for a chaotic one, whose `section` is
+/// a sample of points on it.
+pub fn store_attractor(a: &Attractor) -> pdw_store::Attractor {
+    use pdw_limit::OrbitValidity;
+    use pdw_store::OrbitCheck;
+    pdw_store::Attractor {
+        name: a.name.clone(),
+        period_strides: a.period_k as u32,
+        period_time: a.period_time,
+        section: a.points.clone(),
+        multipliers: a.multipliers.iter().map(|l| (l.re, l.im)).collect(),
+        validity: match &a.validity {
+            OrbitValidity::Unchecked => OrbitCheck::Unchecked,
+            OrbitValidity::Valid => OrbitCheck::Valid,
+            OrbitValidity::Invalid(r) => {
+                OrbitCheck::Invalid(r.iter().map(|s| s.to_string()).collect())
+            }
+        },
+    }
+}

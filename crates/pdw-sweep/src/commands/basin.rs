@@ -14,14 +14,14 @@ use crate::args::{self, InputError};
 use crate::cli::BasinArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::basin::{AxisFlags, BasinPlan, BasinRequest};
-use pdw_limit::attractors::{Attractor as LimitAttractor, DiscoveryOptions};
+use pdw_limit::attractors::DiscoveryOptions;
 use pdw_limit::basin::{
     basin_metrics_slices, classify_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX,
 };
 use pdw_limit::{AttractorSet, OrbitValidity};
 use pdw_store::{
     plot_basin_attractors, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter,
-    OrbitCheck, ShardSpec, StoreError, ZAxis, BLOCK_ROWS,
+    ShardSpec, StoreError, ZAxis, BLOCK_ROWS,
 };
 use pdw_walkers::ModelInfo;
 use std::io::IsTerminal;
@@ -762,7 +762,11 @@ fn write_results(
 ) -> anyhow::Result<()> {
     let (nx, ny) = p.req.grid;
     let nz = p.req.z.as_ref().map_or(1, |(_, n)| *n);
-    let attractors: Vec<Attractor> = set.attractors.iter().map(store_attractor).collect();
+    let attractors: Vec<Attractor> = set
+        .attractors
+        .iter()
+        .map(pdw::basin::store_attractor)
+        .collect();
     let legend = set.legend();
     let out_metrics = if p.shard.is_none() {
         let outcome = writer.read_outcome()?;
@@ -882,25 +886,6 @@ pub(super) fn slice_view(
         z.values.len()
     );
     Ok((view, label))
-}
-
-/// An attractor in the file's plain form (`period_strides` 0 and no multipliers for a chaotic
-/// one, whose `section` is a sample of points on it).
-pub fn store_attractor(a: &LimitAttractor) -> Attractor {
-    Attractor {
-        name: a.name.clone(),
-        period_strides: a.period_k as u32,
-        period_time: a.period_time,
-        section: a.points.clone(),
-        multipliers: a.multipliers.iter().map(|l| (l.re, l.im)).collect(),
-        validity: match &a.validity {
-            OrbitValidity::Unchecked => OrbitCheck::Unchecked,
-            OrbitValidity::Valid => OrbitCheck::Valid,
-            OrbitValidity::Invalid(r) => {
-                OrbitCheck::Invalid(r.iter().map(|s| s.to_string()).collect())
-            }
-        },
-    }
 }
 
 /// The slice of the section the grid lies on: every coordinate but the two axes, at its
