@@ -249,6 +249,41 @@ impl Jacobian for FixedPointProblem<'_, '_> {
 /// `F(s)` as `Vec<f64>`, cost `‖F‖∞`.
 pub type NewtonState = IterState<Vec<f64>, (), Mat<f64>, (), Vec<f64>, f64>;
 
+/// What an argmin run of [`Newton`] left: its iterations, the termination's text, the solver's
+/// residual history and the best (else the last) iterate, `guess` when there is none.
+pub(crate) struct RunEnd {
+    pub iterations: u64,
+    /// The solver's own convergence test passed.
+    pub converged: bool,
+    pub termination: String,
+    pub history: Vec<f64>,
+    pub last: Vec<f64>,
+}
+
+impl RunEnd {
+    /// The end of run `res`, started from `guess`.
+    pub(crate) fn of<O>(
+        res: &argmin::core::OptimizationResult<O, Newton, NewtonState>,
+        guess: &[f64],
+    ) -> Self {
+        let state = res.state();
+        RunEnd {
+            iterations: state.get_iter(),
+            converged: state.get_termination_reason() == Some(&TerminationReason::SolverConverged),
+            termination: state
+                .get_termination_reason()
+                .map(|r| r.text().to_string())
+                .unwrap_or_else(|| "not terminated".into()),
+            history: res.solver().history.clone(),
+            last: state
+                .get_best_param()
+                .or(state.get_param())
+                .cloned()
+                .unwrap_or_else(|| guess.to_vec()),
+        }
+    }
+}
+
 /// Damped Newton solver for square systems (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Newton {
@@ -443,18 +478,13 @@ pub fn find_fixed_point(
             });
         }
     };
-    let state = res.state();
-    let mut iterations = state.get_iter();
-    let termination = state
-        .get_termination_reason()
-        .map(|r| r.text().to_string())
-        .unwrap_or_else(|| "not terminated".into());
-    let mut history = res.solver().history.clone();
-    let mut last = state
-        .get_best_param()
-        .or(state.get_param())
-        .cloned()
-        .unwrap_or_else(|| guess.to_vec());
+    let RunEnd {
+        mut iterations,
+        converged,
+        termination,
+        mut history,
+        mut last,
+    } = RunEnd::of(&res, guess);
     // The iterates collapsed towards the standing state s = 0 (a level floor has no gait).
     let shrunk = norm_inf(&last) < 0.25 * norm_inf(guess);
     let collapsed =
@@ -491,7 +521,6 @@ pub fn find_fixed_point(
     // exceed `tol`, chord steps on the plain map with the DP kept at the last iterate finish
     // the job.
     // Only after the solver converged: an iteration limit stays a failure.
-    let converged = state.get_termination_reason() == Some(&TerminationReason::SolverConverged);
     if let Some(dp) = res
         .problem
         .problem

@@ -21,10 +21,12 @@ use crate::error::LimitError;
 use crate::floquet::{is_stable, multipliers, Multiplier};
 use crate::jacobian::{dp_finite_difference, dp_variational_with};
 use crate::metrics::GaitMetrics;
-use crate::newton::{chord_polish, residual_scale, DpMethod, KeptJacobian, Newton, NewtonOptions};
+use crate::newton::{
+    chord_polish, residual_scale, DpMethod, KeptJacobian, Newton, NewtonOptions, RunEnd,
+};
 use crate::stride::StrideMap;
 use crate::variational::ErrorControl;
-use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, TerminationReason};
+use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator};
 use faer::Mat;
 
 /// The argmin problem `F(s) = P^K(s) − s` with Jacobian `DP^K(s) − I`.
@@ -271,24 +273,18 @@ pub fn find_periodic_orbit(
             })
         }
     };
-    let state = res.state();
-    let mut iterations = state.get_iter();
-    let termination = state
-        .get_termination_reason()
-        .map(|r| r.text().to_string())
-        .unwrap_or_else(|| "not terminated".into());
-    let mut history = res.solver().history.clone();
-    let mut last = state
-        .get_best_param()
-        .or(state.get_param())
-        .cloned()
-        .unwrap_or_else(|| guess.to_vec());
+    let RunEnd {
+        mut iterations,
+        converged,
+        termination,
+        mut history,
+        mut last,
+    } = RunEnd::of(&res, guess);
     // Independent check on the plain stride map, with fresh integrators; chord steps on it
     // where the solver's (variational) map differs from it by more than tol (see
     // `crate::newton`).
     let mut orbit_end = integrate_orbit(map, &last, k)?;
     let mut residual = dist_inf(&orbit_end.0[k], &orbit_end.0[0]);
-    let converged = state.get_termination_reason() == Some(&TerminationReason::SolverConverged);
     if let Some(dpk) = res
         .problem
         .problem
