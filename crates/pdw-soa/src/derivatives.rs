@@ -55,7 +55,7 @@ use faer::dyn_stack::MemStack;
 use faer::linalg::cholesky::llt;
 use faer::{Conj, MatMut, Par};
 
-use crate::aba::{aba_recursion, lanes_back, lanes_fwd, AbaLanes};
+use crate::aba::{aba_recursion, one_lane_back, one_lane_fwd, AbaLanes};
 use crate::chain::Chain;
 use crate::dual::{Dual, Scalar};
 use crate::error::{check_len, SoaError};
@@ -232,43 +232,24 @@ impl AbaLanes for StackLane<'_> {
             &kin.cy, &kin.cz, &kin.by, &kin.bz, &kin.ay, &kin.az, &kin.hy, &kin.hz, &kin.dy,
             &kin.dz,
         ]
-        .map(|v| std::slice::from_ref(&v[k]));
-        let [g0, g1, g2] = &mut self.g[k];
-        let [p0, p1, p2, p3, p4, p5] = &mut self.cp;
-        let [z0, z1, z2] = &mut self.cz;
-        let m1 = std::slice::from_mut;
-        lanes_back::<K>(
+        .map(|v| &v[k]);
+        let gain = (&mut self.g[k], &mut self.nu[k]);
+        one_lane_back::<K>(
             j,
             m,
-            &self.tau[k..k + 1],
+            self.tau[k],
             link,
-            m1(g0),
-            m1(g1),
-            m1(g2),
-            m1(&mut self.nu[k]),
-            m1(p0),
-            m1(p1),
-            m1(p2),
-            m1(p3),
-            m1(p4),
-            m1(p5),
-            m1(z0),
-            m1(z1),
-            m1(z2),
-            |_, _| {},
+            gain,
+            (&mut self.cp, &mut self.cz),
+            |_| {},
         );
     }
 
     #[inline(always)]
     fn fwd<const K: u8>(&mut self, k: usize) {
         let kin = self.kin;
-        let [g0, g1, g2] = &self.g[k];
-        let gain = [g0, g1, g2, &self.nu[k]].map(std::slice::from_ref);
-        let link = [&kin.ay, &kin.az, &kin.hy, &kin.hz, &kin.dy, &kin.dz]
-            .map(|v| std::slice::from_ref(&v[k]));
-        let [a0, a1, a2] = &mut self.ap;
-        let m1 = std::slice::from_mut;
-        lanes_fwd::<K>(gain, link, &mut self.qdd[k..k + 1], m1(a0), m1(a1), m1(a2));
+        let link = [&kin.ay, &kin.az, &kin.hy, &kin.hz, &kin.dy, &kin.dz].map(|v| &v[k]);
+        self.qdd[k] = one_lane_fwd::<K>(&self.g[k], self.nu[k], link, &mut self.ap);
     }
 }
 
