@@ -60,6 +60,7 @@ use crate::chain::Chain;
 use crate::dual::{Dual, Scalar};
 use crate::error::{check_len, SoaError};
 use crate::spatial;
+use crate::workspace::{kin_recursion, lanes_tip, one_lane_kin, KinLanes, KinLink};
 
 /// Largest number of joints the derivative routines accept.
 pub const MAX_DOF: usize = 8;
@@ -89,59 +90,71 @@ pub(crate) struct Kin<T> {
     pub(crate) tip_d: [T; 2],
 }
 
-/// Link angles, levers, world COM offsets, prismatic axes, rates and bias terms, base to tip,
-/// by the same step functions and in the same order as the kernel's first pass.
+/// Link angles, levers, world COM offsets, prismatic axes, rates and bias terms, base to tip:
+/// the stack instance of the kernel's kinematic pass ([`kin_recursion`]) on any [`Scalar`].
 /// `qd = None` means zero joint rates. `q` (and `qd`) have length `chain.dof() ≤ MAX_DOF`.
 pub(crate) fn kin<T: Scalar>(chain: &Chain, q: &[T], qd: Option<&[T]>) -> Kin<T> {
     let zero = T::cst(0.0);
-    let mut out = Kin {
-        w: [zero; MAX_DOF],
-        dy: [zero; MAX_DOF],
-        dz: [zero; MAX_DOF],
-        hy: [zero; MAX_DOF],
-        hz: [zero; MAX_DOF],
-        cy: [zero; MAX_DOF],
-        cz: [zero; MAX_DOF],
-        ay: [zero; MAX_DOF],
-        az: [zero; MAX_DOF],
-        by: [zero; MAX_DOF],
-        bz: [zero; MAX_DOF],
-        tip_d: [zero; 2],
+    let mut lanes = StackKin {
+        out: Kin {
+            w: [zero; MAX_DOF],
+            dy: [zero; MAX_DOF],
+            dz: [zero; MAX_DOF],
+            hy: [zero; MAX_DOF],
+            hz: [zero; MAX_DOF],
+            cy: [zero; MAX_DOF],
+            cz: [zero; MAX_DOF],
+            ay: [zero; MAX_DOF],
+            az: [zero; MAX_DOF],
+            by: [zero; MAX_DOF],
+            bz: [zero; MAX_DOF],
+            tip_d: [zero; 2],
+        },
+        q,
+        qd,
+        prev: [zero, zero, T::cst(1.0), zero],
     };
-    let (mut thp, mut sp, mut cp, mut wp) = (T::cst(0.0), T::cst(0.0), T::cst(1.0), T::cst(0.0));
-    let (mut lyp, mut lzp) = (T::cst(0.0), T::cst(0.0));
-    for k in 0..chain.dof() {
-        let link = &chain.links[k];
-        let qk = q[k];
-        let qdk = match qd {
-            Some(v) => v[k],
-            None => T::cst(0.0),
-        };
-        let (comy, comz) = (T::cst(link.com[0]), T::cst(link.com[1]));
-        let (th, s, c, w, ay, az);
-        if chain.prismatic[k] {
-            let u = chain.axis[k];
-            let (dy, dz, hy, hz, cy, cz) =
-                spatial::geom_pri(sp, cp, lyp, lzp, T::cst(u[0]), T::cst(u[1]), qk, comy, comz);
-            (w, ay, az) = spatial::vel_pri(wp, qdk, dy, dz, hy, hz);
-            (th, s, c) = (thp, sp, cp);
-            (
-                out.dy[k], out.dz[k], out.hy[k], out.hz[k], out.cy[k], out.cz[k],
-            ) = (dy, dz, hy, hz, cy, cz);
-        } else {
-            th = thp + qk;
-            (s, c) = th.sin_cos();
-            let (dy, dz, cy, cz) = spatial::geom_rev(sp, cp, lyp, lzp, s, c, comy, comz);
-            (w, ay, az) = spatial::vel_rev(wp, qdk, dy, dz);
-            (out.dy[k], out.dz[k], out.cy[k], out.cz[k]) = (dy, dz, cy, cz);
-        }
-        let (by, bz) = spatial::force_bias(T::cst(link.mass), w, out.cy[k], out.cz[k]);
-        (out.w[k], out.ay[k], out.az[k], out.by[k], out.bz[k]) = (w, ay, az, by, bz);
-        (thp, sp, cp, wp) = (th, s, c, w);
-        (lyp, lzp) = (T::cst(link.to_next[0]), T::cst(link.to_next[1]));
+    kin_recursion(chain, &mut lanes);
+    lanes.out
+}
+
+/// One lane of the kinematic pass into the stack arrays of [`Kin`], the previous link's
+/// `θ, sin, cos, ω` carried in `prev`.
+struct StackKin<'a, T> {
+    out: Kin<T>,
+    q: &'a [T],
+    qd: Option<&'a [T]>,
+    prev: [T; 4],
+}
+
+impl<T: Scalar> KinLanes for StackKin<'_, T> {
+    #[inline(always)]
+    fn link<const PRI: bool>(&mut self, k: usize, c: &KinLink) {
+        let o = &mut self.out;
+        let qdk = self.qd.map_or(T::cst(0.0), |v| v[k]);
+        let out = [
+            &mut o.dy[k],
+            &mut o.dz[k],
+            &mut o.hy[k],
+            &mut o.hz[k],
+            &mut o.cy[k],
+            &mut o.cz[k],
+            &mut o.w[k],
+            &mut o.ay[k],
+            &mut o.az[k],
+            &mut o.by[k],
+            &mut o.bz[k],
+        ];
+        self.prev = one_lane_kin::<T, PRI>(c, self.prev, (self.q[k], qdk), out);
     }
-    out.tip_d = [cp * lyp - sp * lzp, sp * lyp + cp * lzp];
-    out
+
+    #[inline(always)]
+    fn tip(&mut self, lp: [f64; 2]) {
+        let [_, sp, cp, _] = self.prev;
+        let [ty, tz] = &mut self.out.tip_d;
+        let (one, m1) = (std::slice::from_ref, std::slice::from_mut);
+        lanes_tip(lp, one(&sp), one(&cp), m1(ty), m1(tz));
+    }
 }
 
 /// RNEA acceleration and force passes (no tip force) over `kin`, with base acceleration `a0`:
