@@ -59,6 +59,7 @@ use crate::aba::{aba_recursion, one_lane_back, one_lane_fwd, AbaLanes};
 use crate::chain::Chain;
 use crate::dual::{Dual, Scalar};
 use crate::error::{check_len, SoaError};
+use crate::rnea::{one_lane_rnea_back, one_lane_rnea_fwd, rnea_recursion, RneaLanes};
 use crate::spatial;
 use crate::workspace::{kin_recursion, lanes_tip, one_lane_kin, KinLanes, KinLink};
 
@@ -158,42 +159,56 @@ impl<T: Scalar> KinLanes for StackKin<'_, T> {
 }
 
 /// RNEA acceleration and force passes (no tip force) over `kin`, with base acceleration `a0`:
-/// `tau = ID(q, q̇, q̈)`.
+/// `tau = ID(q, q̇, q̈)`; the stack instance of the kernel's [`rnea_recursion`].
 fn rnea_passes<T: Scalar>(chain: &Chain, kin: &Kin<T>, a0: [T; 3], qdd: &[T], tau: &mut [T]) {
-    let n = chain.dof();
     let zero = T::cst(0.0);
-    let mut acc = [[zero; 3]; MAX_DOF];
-    let mut ap = a0;
-    for k in 0..n {
-        let a = if chain.prismatic[k] {
-            spatial::rnea_fwd_pri(
-                &ap, qdd[k], kin.ay[k], kin.az[k], kin.hy[k], kin.hz[k], kin.dy[k], kin.dz[k],
-            )
-        } else {
-            spatial::rnea_fwd_rev(&ap, qdd[k], kin.ay[k], kin.az[k], kin.dy[k], kin.dz[k])
-        };
-        acc[k] = a;
-        ap = a;
+    let mut lane = StackRnea {
+        kin,
+        qdd,
+        tau,
+        acc: [[zero; 3]; MAX_DOF],
+        ap: a0,
+        cf: [zero; 3],
+    };
+    rnea_recursion(chain, &mut lane);
+}
+
+/// One lane of RNEA over the stack arrays of [`Kin`].
+struct StackRnea<'a, T> {
+    kin: &'a Kin<T>,
+    qdd: &'a [T],
+    tau: &'a mut [T],
+    acc: Vec8<[T; 3]>,
+    ap: [T; 3],
+    cf: [T; 3],
+}
+
+impl<T: Scalar> RneaLanes for StackRnea<'_, T> {
+    #[inline(always)]
+    fn fwd<const PRI: bool>(&mut self, k: usize) {
+        let kin = self.kin;
+        let link = [
+            &self.qdd[k],
+            &kin.ay[k],
+            &kin.az[k],
+            &kin.hy[k],
+            &kin.hz[k],
+            &kin.dy[k],
+            &kin.dz[k],
+        ];
+        one_lane_rnea_fwd::<T, PRI>(link, &mut self.ap);
+        self.acc[k] = self.ap;
     }
-    let mut cf = [zero; 3];
-    for k in (0..n).rev() {
-        let link = &chain.links[k];
-        let f = spatial::rnea_back(
-            &cf,
-            &acc[k],
-            T::cst(chain.j_joint[k]),
-            T::cst(link.mass),
-            kin.cy[k],
-            kin.cz[k],
-            kin.by[k],
-            kin.bz[k],
-        );
-        tau[k] = if chain.prismatic[k] {
-            kin.hy[k] * f[1] + kin.hz[k] * f[2]
-        } else {
-            f[0]
-        };
-        cf = spatial::force_transport(&f, kin.dy[k], kin.dz[k]);
+
+    #[inline(always)]
+    fn back<const PRI: bool>(&mut self, k: usize, j: f64, m: f64) {
+        let kin = self.kin;
+        let [a0, a1, a2] = &self.acc[k];
+        let link = [
+            a0, a1, a2, &kin.cy[k], &kin.cz[k], &kin.by[k], &kin.bz[k], &kin.dy[k], &kin.dz[k],
+            &kin.hy[k], &kin.hz[k],
+        ];
+        (self.tau[k], _) = one_lane_rnea_back::<T, PRI>(j, m, link, &mut self.cf);
     }
 }
 
