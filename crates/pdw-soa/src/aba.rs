@@ -240,6 +240,70 @@ pub(crate) fn lanes_fwd<const K: u8>(
     }
 }
 
+/// The backward step of joint kind `K` for one lane ([`lanes_back`] over slices of length 1):
+/// `link` holds the link's `c_y, c_z, b_y, b_z, a_y, a_z, h_y, h_z, d_y, d_z`, `gain` receives
+/// `(G_k, ν_k)`, `carry` is `(P⁺, z⁺)`; `keep` sees the full step.
+#[inline(always)]
+pub(crate) fn one_lane_back<const K: u8>(
+    j: f64,
+    m: f64,
+    tau_k: f64,
+    link: [&f64; 10],
+    (g, nu): (&mut [f64; 3], &mut f64),
+    (cp, cz): (&mut spatial::Sym3, &mut [f64; 3]),
+    mut keep: impl FnMut(&spatial::AbaBack),
+) {
+    let [g0, g1, g2] = g;
+    let [p0, p1, p2, p3, p4, p5] = cp;
+    let [z0, z1, z2] = cz;
+    let m1 = std::slice::from_mut;
+    lanes_back::<K>(
+        j,
+        m,
+        std::slice::from_ref(&tau_k),
+        link.map(std::slice::from_ref),
+        m1(g0),
+        m1(g1),
+        m1(g2),
+        m1(nu),
+        m1(p0),
+        m1(p1),
+        m1(p2),
+        m1(p3),
+        m1(p4),
+        m1(p5),
+        m1(z0),
+        m1(z1),
+        m1(z2),
+        |_, r| keep(r),
+    );
+}
+
+/// The forward step of joint kind `K` for one lane ([`lanes_fwd`] over slices of length 1):
+/// `link` holds `a_y, a_z, h_y, h_z, d_y, d_z`, `ap` the carried `A`; returns `q̈_k`.
+#[inline(always)]
+pub(crate) fn one_lane_fwd<const K: u8>(
+    g: &[f64; 3],
+    nu: f64,
+    link: [&f64; 6],
+    ap: &mut [f64; 3],
+) -> f64 {
+    let [g0, g1, g2] = g;
+    let gain = [g0, g1, g2, &nu].map(std::slice::from_ref);
+    let [a0, a1, a2] = ap;
+    let m1 = std::slice::from_mut;
+    let mut qk = 0.0;
+    lanes_fwd::<K>(
+        gain,
+        link.map(std::slice::from_ref),
+        m1(&mut qk),
+        m1(a0),
+        m1(a1),
+        m1(a2),
+    );
+    qk
+}
+
 /// One lane in a [`Workspace`]: the carries are locals, `P_k`, `z_k`, the gains and `A_k` are
 /// kept in the workspace for the callers that read them (pseudo joints, closed chains).
 struct OneLane<'a> {
@@ -256,63 +320,23 @@ impl AbaLanes for OneLane<'_> {
     fn back<const K: u8>(&mut self, k: usize, j: f64, m: f64) {
         let ws = &mut *self.ws;
         let link = [
-            &ws.cy[k..k + 1],
-            &ws.cz[k..k + 1],
-            &ws.by[k..k + 1],
-            &ws.bz[k..k + 1],
-            &ws.ay[k..k + 1],
-            &ws.az[k..k + 1],
-            &ws.hy[k..k + 1],
-            &ws.hz[k..k + 1],
-            &ws.dy[k..k + 1],
-            &ws.dz[k..k + 1],
-        ];
-        let [g0, g1, g2] = &mut ws.g[k];
-        let [p0, p1, p2, p3, p4, p5] = &mut self.cp;
-        let [z0, z1, z2] = &mut self.cz;
+            &ws.cy, &ws.cz, &ws.by, &ws.bz, &ws.ay, &ws.az, &ws.hy, &ws.hz, &ws.dy, &ws.dz,
+        ]
+        .map(|v| &v[k]);
         let (pk, zk) = (&mut ws.p[k], &mut ws.z[k]);
-        let m1 = std::slice::from_mut;
-        lanes_back::<K>(
-            j,
-            m,
-            &self.tau[k..k + 1],
-            link,
-            m1(g0),
-            m1(g1),
-            m1(g2),
-            m1(&mut ws.nu[k]),
-            m1(p0),
-            m1(p1),
-            m1(p2),
-            m1(p3),
-            m1(p4),
-            m1(p5),
-            m1(z0),
-            m1(z1),
-            m1(z2),
-            |_, r| {
-                *pk = r.p;
-                *zk = r.z;
-            },
-        );
+        let carry = (&mut self.cp, &mut self.cz);
+        let gain = (&mut ws.g[k], &mut ws.nu[k]);
+        one_lane_back::<K>(j, m, self.tau[k], link, gain, carry, |r| {
+            *pk = r.p;
+            *zk = r.z;
+        });
     }
 
     #[inline(always)]
     fn fwd<const K: u8>(&mut self, k: usize) {
         let ws = &mut *self.ws;
-        let [g0, g1, g2] = &ws.g[k];
-        let gain = [g0, g1, g2, &ws.nu[k]].map(std::slice::from_ref);
-        let link = [
-            &ws.ay[k..k + 1],
-            &ws.az[k..k + 1],
-            &ws.hy[k..k + 1],
-            &ws.hz[k..k + 1],
-            &ws.dy[k..k + 1],
-            &ws.dz[k..k + 1],
-        ];
-        let [a0, a1, a2] = &mut self.ap;
-        let m1 = std::slice::from_mut;
-        lanes_fwd::<K>(gain, link, &mut self.qdd[k..k + 1], m1(a0), m1(a1), m1(a2));
+        let link = [&ws.ay, &ws.az, &ws.hy, &ws.hz, &ws.dy, &ws.dz].map(|v| &v[k]);
+        self.qdd[k] = one_lane_fwd::<K>(&ws.g[k], ws.nu[k], link, &mut self.ap);
         ws.acc[k] = self.ap;
     }
 }

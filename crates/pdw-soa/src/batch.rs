@@ -12,7 +12,7 @@ use faer::{Mat, MatRef};
 
 use crate::chain::Chain;
 use crate::error::{check_shape, SoaError};
-use crate::spatial;
+use crate::workspace::{kin_recursion, lanes_angles, lanes_kin, lanes_tip, KinLanes, KinLink};
 
 /// Lanes per block of the batched kernels.
 pub const BLOCK: usize = 256;
@@ -187,7 +187,8 @@ pub(crate) fn col(m: MatRef<'_, f64>, k: usize) -> &[f64] {
     }
 }
 
-/// Batched pass 1 for lanes `l0 .. l0 + bl`: identical arithmetic to the scalar `kin_pass`.
+/// Batched pass 1 for lanes `l0 .. l0 + bl`: the block instance of
+/// [`crate::workspace::kin_recursion`], the same arithmetic as the scalar `kin_pass`.
 #[inline(always)]
 pub(crate) fn batch_kin_pass(
     chain: &Chain,
@@ -197,228 +198,83 @@ pub(crate) fn batch_kin_pass(
     l0: usize,
     bl: usize,
 ) {
-    let n = chain.dof();
-    for k in 0..n {
-        let link = &chain.links[k];
-        let qk = &col(q, k)[l0..l0 + bl];
-        let qdk = &col(qd, k)[l0..l0 + bl];
-        let (lyp, lzp) = if k == 0 {
-            (0.0, 0.0)
-        } else {
-            (chain.links[k - 1].to_next[0], chain.links[k - 1].to_next[1])
-        };
-        let (comy, comz) = (link.com[0], link.com[1]);
-        // angles, sin, cos
+    kin_recursion(chain, &mut KinBlock { bw, q, qd, l0, bl });
+}
+
+/// A block of lanes `l0..l0 + bl` of pass 1 in the columns of a [`BatchWorkspace`].
+struct KinBlock<'a, 'm> {
+    bw: &'a mut BatchWorkspace,
+    q: MatRef<'m, f64>,
+    qd: MatRef<'m, f64>,
+    l0: usize,
+    bl: usize,
+}
+
+/// Column `k − 1` of `c` (or `base` for `k = 0`) and column `k`, over the first `bl` rows.
+#[inline(always)]
+fn prev_cur<'a>(
+    c: &'a mut Cols,
+    base: &'a [f64],
+    k: usize,
+    bl: usize,
+) -> (&'a [f64], &'a mut [f64]) {
+    if k == 0 {
+        (&base[..bl], &mut c.col_mut(0)[..bl])
+    } else {
+        let (a, b) = c.prev_cur(k);
+        (&a[..bl], &mut b[..bl])
+    }
+}
+
+impl KinLanes for KinBlock<'_, '_> {
+    #[inline(always)]
+    fn link<const PRI: bool>(&mut self, k: usize, kl: &KinLink) {
+        let (bw, l0, bl) = (&mut *self.bw, self.l0, self.bl);
+        let qk = &col(self.q, k)[l0..l0 + bl];
+        let qdk = &col(self.qd, k)[l0..l0 + bl];
         {
-            let (thp, th) = if k == 0 {
-                (&bw.zeros[..bl], &mut bw.theta.col_mut(0)[..bl])
-            } else {
-                let (a, b) = bw.theta.prev_cur(k);
-                (&a[..bl], &mut b[..bl])
-            };
-            if chain.prismatic[k] {
-                th.copy_from_slice(thp);
-            } else {
-                for l in 0..bl {
-                    th[l] = thp[l] + qk[l];
-                }
-            }
+            let (thp, th) = prev_cur(&mut bw.theta, &bw.zeros, k, bl);
+            let (sp, s) = prev_cur(&mut bw.s, &bw.zeros, k, bl);
+            let (cp, c) = prev_cur(&mut bw.c, &bw.ones, k, bl);
+            lanes_angles::<f64, PRI>([thp, sp, cp, qk], th, s, c);
         }
-        if chain.prismatic[k] {
-            if k == 0 {
-                bw.s.col_mut(0)[..bl].copy_from_slice(&bw.zeros[..bl]);
-                bw.c.col_mut(0)[..bl].copy_from_slice(&bw.ones[..bl]);
-            } else {
-                let (a, b) = bw.s.prev_cur(k);
-                b[..bl].copy_from_slice(&a[..bl]);
-                let (a, b) = bw.c.prev_cur(k);
-                b[..bl].copy_from_slice(&a[..bl]);
-            }
-        } else {
-            let th = &bw.theta.col(k)[..bl];
-            let (sv, cv) = (&mut bw.s.col_mut(k)[..bl], &mut bw.c.col_mut(k)[..bl]);
-            // s and c live in different buffers
-            sincos_into(th, sv, cv);
-        }
-        // geometry and velocity biases
         let (sp, cp): (&[f64], &[f64]) = if k == 0 {
             (&bw.zeros[..bl], &bw.ones[..bl])
         } else {
             (&bw.s.col(k - 1)[..bl], &bw.c.col(k - 1)[..bl])
         };
-        // w is written at column k while column k−1 is read: split.
-        let (wp, w) = if k == 0 {
-            (&bw.zeros[..bl], &mut bw.w.col_mut(0)[..bl])
-        } else {
-            let (a, b) = bw.w.prev_cur(k);
-            (&a[..bl], &mut b[..bl])
-        };
+        let (wp, w) = prev_cur(&mut bw.w, &bw.zeros, k, bl);
         let s = &bw.s.col(k)[..bl];
         let c = &bw.c.col(k)[..bl];
-        let dy = &mut bw.dy.col_mut(k)[..bl];
-        let dz = &mut bw.dz.col_mut(k)[..bl];
-        let hy = &mut bw.hy.col_mut(k)[..bl];
-        let hz = &mut bw.hz.col_mut(k)[..bl];
-        let cy = &mut bw.cy.col_mut(k)[..bl];
-        let cz = &mut bw.cz.col_mut(k)[..bl];
-        let ay = &mut bw.ay.col_mut(k)[..bl];
-        let az = &mut bw.az.col_mut(k)[..bl];
-        let by = &mut bw.by.col_mut(k)[..bl];
-        let bz = &mut bw.bz.col_mut(k)[..bl];
-        let m = link.mass;
-        if chain.prismatic[k] {
-            let u = chain.axis[k];
-            lanes_kin_pri(
-                m, lyp, lzp, u, comy, comz, sp, cp, wp, qk, qdk, dy, dz, hy, hz, cy, cz, w, ay, az,
-                by, bz,
-            );
-        } else {
-            lanes_kin_rev(
-                m, lyp, lzp, comy, comz, sp, cp, s, c, wp, qdk, dy, dz, hy, hz, cy, cz, w, ay, az,
-                by, bz,
-            );
-        }
+        let [dy, dz, hy, hz, cy, cz, ay, az, by, bz] = [
+            &mut bw.dy, &mut bw.dz, &mut bw.hy, &mut bw.hz, &mut bw.cy, &mut bw.cz, &mut bw.ay,
+            &mut bw.az, &mut bw.by, &mut bw.bz,
+        ]
+        .map(|c| &mut c.col_mut(k)[..bl]);
+        lanes_kin::<f64, PRI>(
+            kl,
+            [sp, cp, s, c, wp, qk, qdk],
+            dy,
+            dz,
+            hy,
+            hz,
+            cy,
+            cz,
+            w,
+            ay,
+            az,
+            by,
+            bz,
+        );
     }
-    // tip lever
-    let last = &chain.links[n - 1];
-    let (lyp, lzp) = (last.to_next[0], last.to_next[1]);
-    let sp = &bw.s.col(n - 1)[..bl];
-    let cp = &bw.c.col(n - 1)[..bl];
-    let [ty, tz] = bw.tip.all_mut::<2>();
-    let (ty, tz) = (&mut ty[..bl], &mut tz[..bl]);
-    for l in 0..bl {
-        ty[l] = cp[l] * lyp - sp[l] * lzp;
-        tz[l] = sp[l] * lyp + cp[l] * lzp;
-    }
-}
 
-#[inline(always)]
-fn sincos_into(th: &[f64], s: &mut [f64], c: &mut [f64]) {
-    spatial::sincos_slice(th, s, c);
-}
-
-// Lane loops as functions with distinct `noalias` slice parameters (see batch_aba.rs).
-
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn lanes_kin_rev(
-    m: f64,
-    lyp: f64,
-    lzp: f64,
-    comy: f64,
-    comz: f64,
-    sp: &[f64],
-    cp: &[f64],
-    s: &[f64],
-    c: &[f64],
-    wp: &[f64],
-    qdk: &[f64],
-    dy: &mut [f64],
-    dz: &mut [f64],
-    hy: &mut [f64],
-    hz: &mut [f64],
-    cy: &mut [f64],
-    cz: &mut [f64],
-    w: &mut [f64],
-    ay: &mut [f64],
-    az: &mut [f64],
-    by: &mut [f64],
-    bz: &mut [f64],
-) {
-    let bl = qdk.len();
-    let (sp, cp, s, c, wp) = (&sp[..bl], &cp[..bl], &s[..bl], &c[..bl], &wp[..bl]);
-    let (dy, dz, hy, hz, cy, cz) = (
-        &mut dy[..bl],
-        &mut dz[..bl],
-        &mut hy[..bl],
-        &mut hz[..bl],
-        &mut cy[..bl],
-        &mut cz[..bl],
-    );
-    let (w, ay, az, by, bz) = (
-        &mut w[..bl],
-        &mut ay[..bl],
-        &mut az[..bl],
-        &mut by[..bl],
-        &mut bz[..bl],
-    );
-    for l in 0..bl {
-        let (dyl, dzl, cyl, czl) =
-            spatial::geom_rev(sp[l], cp[l], lyp, lzp, s[l], c[l], comy, comz);
-        let (wl, ayl, azl) = spatial::vel_rev(wp[l], qdk[l], dyl, dzl);
-        let (byl, bzl) = spatial::force_bias(m, wl, cyl, czl);
-        dy[l] = dyl;
-        dz[l] = dzl;
-        hy[l] = 0.0;
-        hz[l] = 0.0;
-        cy[l] = cyl;
-        cz[l] = czl;
-        w[l] = wl;
-        ay[l] = ayl;
-        az[l] = azl;
-        by[l] = byl;
-        bz[l] = bzl;
-    }
-}
-
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn lanes_kin_pri(
-    m: f64,
-    lyp: f64,
-    lzp: f64,
-    u: [f64; 2],
-    comy: f64,
-    comz: f64,
-    sp: &[f64],
-    cp: &[f64],
-    wp: &[f64],
-    qk: &[f64],
-    qdk: &[f64],
-    dy: &mut [f64],
-    dz: &mut [f64],
-    hy: &mut [f64],
-    hz: &mut [f64],
-    cy: &mut [f64],
-    cz: &mut [f64],
-    w: &mut [f64],
-    ay: &mut [f64],
-    az: &mut [f64],
-    by: &mut [f64],
-    bz: &mut [f64],
-) {
-    let bl = qdk.len();
-    let (sp, cp, wp, qk) = (&sp[..bl], &cp[..bl], &wp[..bl], &qk[..bl]);
-    let (dy, dz, hy, hz, cy, cz) = (
-        &mut dy[..bl],
-        &mut dz[..bl],
-        &mut hy[..bl],
-        &mut hz[..bl],
-        &mut cy[..bl],
-        &mut cz[..bl],
-    );
-    let (w, ay, az, by, bz) = (
-        &mut w[..bl],
-        &mut ay[..bl],
-        &mut az[..bl],
-        &mut by[..bl],
-        &mut bz[..bl],
-    );
-    for l in 0..bl {
-        let (dyl, dzl, hyl, hzl, cyl, czl) =
-            spatial::geom_pri(sp[l], cp[l], lyp, lzp, u[0], u[1], qk[l], comy, comz);
-        let (wl, ayl, azl) = spatial::vel_pri(wp[l], qdk[l], dyl, dzl, hyl, hzl);
-        let (byl, bzl) = spatial::force_bias(m, wl, cyl, czl);
-        dy[l] = dyl;
-        dz[l] = dzl;
-        hy[l] = hyl;
-        hz[l] = hzl;
-        cy[l] = cyl;
-        cz[l] = czl;
-        w[l] = wl;
-        ay[l] = ayl;
-        az[l] = azl;
-        by[l] = byl;
-        bz[l] = bzl;
+    #[inline(always)]
+    fn tip(&mut self, lp: [f64; 2]) {
+        let (bw, bl) = (&mut *self.bw, self.bl);
+        let n = bw.n;
+        let sp = &bw.s.col(n - 1)[..bl];
+        let cp = &bw.c.col(n - 1)[..bl];
+        let [ty, tz] = bw.tip.all_mut::<2>();
+        lanes_tip(lp, sp, cp, &mut ty[..bl], tz);
     }
 }

@@ -6,6 +6,7 @@ use faer::Mat;
 use crate::batch::{batch_kin_pass, check_batch, BatchWorkspace};
 use crate::chain::Chain;
 use crate::error::{check_len, SoaError};
+use crate::rnea::{lanes_rnea_back, lanes_rnea_fwd, rnea_recursion, RneaLanes};
 use crate::spatial;
 
 /// Batched inverse dynamics `τ = 𝓜 q̈ + C + Jᵀ F_t` for every lane.
@@ -35,109 +36,82 @@ pub fn batch_rnea(
     while l0 < lanes {
         let bl = bw.block.min(lanes - l0);
         batch_kin_pass(chain, bw, q.as_ref(), qd.as_ref(), l0, bl);
-        // forward accelerations
-        let ab = chain.base_acc;
-        for k in 0..n {
-            let qk = &qdd.col_as_slice(k)[l0..l0 + bl];
-            let ay = &bw.ay.col(k)[..bl];
-            let az = &bw.az.col(k)[..bl];
-            let dy = &bw.dy.col(k)[..bl];
-            let dz = &bw.dz.col(k)[..bl];
-            let hy = &bw.hy.col(k)[..bl];
-            let hz = &bw.hz.col(k)[..bl];
-            let prism = chain.prismatic[k];
-            for (col, base) in [
-                (&mut bw.a0, ab[0]),
-                (&mut bw.a1, ab[1]),
-                (&mut bw.a2, ab[2]),
-            ] {
-                // column k starts as Φ-independent copy of the previous acceleration
-                if k == 0 {
-                    col.col_mut(0)[..bl].fill(base);
-                } else {
-                    let (p, c) = col.prev_cur(k);
-                    c[..bl].copy_from_slice(&p[..bl]);
-                }
-            }
-            let a0 = &mut bw.a0.col_mut(k)[..bl];
-            let a1 = &mut bw.a1.col_mut(k)[..bl];
-            let a2 = &mut bw.a2.col_mut(k)[..bl];
-            for l in 0..bl {
-                let ap = [a0[l], a1[l], a2[l]];
-                let a = if prism {
-                    spatial::rnea_fwd_pri(&ap, qk[l], ay[l], az[l], hy[l], hz[l], dy[l], dz[l])
-                } else {
-                    spatial::rnea_fwd_rev(&ap, qk[l], ay[l], az[l], dy[l], dz[l])
-                };
-                a0[l] = a[0];
-                a1[l] = a[1];
-                a2[l] = a[2];
-            }
-        }
-        // backward forces
-        {
-            let [f0, f1, f2] = bw.carry_a.all_mut::<3>();
-            match f_tip {
-                Some(ft) => {
-                    let ty = bw.tip.col(0);
-                    let tz = bw.tip.col(1);
-                    for l in 0..bl {
-                        let i = l0 + l;
-                        let f = [ft[(i, 0)], ft[(i, 1)], ft[(i, 2)]];
-                        let c = spatial::force_transport(&f, ty[l], tz[l]);
-                        f0[l] = c[0];
-                        f1[l] = c[1];
-                        f2[l] = c[2];
-                    }
-                }
-                None => {
-                    f0[..bl].fill(0.0);
-                    f1[..bl].fill(0.0);
-                    f2[..bl].fill(0.0);
-                }
-            }
-        }
-        for k in (0..n).rev() {
-            let link = &chain.links[k];
-            let (j, m) = (chain.j_joint[k], link.mass);
-            let out = &mut tau.col_as_slice_mut(k)[l0..l0 + bl];
-            let a0 = &bw.a0.col(k)[..bl];
-            let a1 = &bw.a1.col(k)[..bl];
-            let a2 = &bw.a2.col(k)[..bl];
-            let cy = &bw.cy.col(k)[..bl];
-            let cz = &bw.cz.col(k)[..bl];
-            let by = &bw.by.col(k)[..bl];
-            let bz = &bw.bz.col(k)[..bl];
-            let dy = &bw.dy.col(k)[..bl];
-            let dz = &bw.dz.col(k)[..bl];
-            let hy = &bw.hy.col(k)[..bl];
-            let hz = &bw.hz.col(k)[..bl];
-            let prism = chain.prismatic[k];
-            let [f0, f1, f2] = bw.carry_a.all_mut::<3>();
-            let (f0, f1, f2) = (&mut f0[..bl], &mut f1[..bl], &mut f2[..bl]);
-            for l in 0..bl {
-                let f = spatial::rnea_back(
-                    &[f0[l], f1[l], f2[l]],
-                    &[a0[l], a1[l], a2[l]],
-                    j,
-                    m,
-                    cy[l],
-                    cz[l],
-                    by[l],
-                    bz[l],
-                );
-                out[l] = if prism {
-                    hy[l] * f[1] + hz[l] * f[2]
-                } else {
-                    f[0]
-                };
-                let c = spatial::force_transport(&f, dy[l], dz[l]);
-                f0[l] = c[0];
-                f1[l] = c[1];
-                f2[l] = c[2];
-            }
-        }
+        start_force(bw, f_tip, l0, bl);
+        let mut block = Block {
+            bw: &mut *bw,
+            qdd,
+            tau: &mut *tau,
+            base_acc: chain.base_acc,
+            l0,
+            bl,
+        };
+        rnea_recursion(chain, &mut block);
         l0 += bl;
     }
     Ok(())
+}
+
+/// The force carry's base value `Φ_{t,n}ᵀ F_t` (or 0) for lanes `l0..l0 + bl`.
+fn start_force(bw: &mut BatchWorkspace, f_tip: Option<&Mat<f64>>, l0: usize, bl: usize) {
+    let [f0, f1, f2] = bw.carry_a.all_mut::<3>();
+    match f_tip {
+        Some(ft) => {
+            let ty = bw.tip.col(0);
+            let tz = bw.tip.col(1);
+            for l in 0..bl {
+                let i = l0 + l;
+                let f = [ft[(i, 0)], ft[(i, 1)], ft[(i, 2)]];
+                [f0[l], f1[l], f2[l]] = spatial::force_transport(&f, ty[l], tz[l]);
+            }
+        }
+        None => {
+            f0[..bl].fill(0.0);
+            f1[..bl].fill(0.0);
+            f2[..bl].fill(0.0);
+        }
+    }
+}
+
+/// A block of lanes `l0..l0 + bl` in the columns of a [`BatchWorkspace`]: `A_k` in the columns
+/// `a0..a2`, the force carry in `carry_a`.
+struct Block<'a, 'm> {
+    bw: &'a mut BatchWorkspace,
+    qdd: &'m Mat<f64>,
+    tau: &'m mut Mat<f64>,
+    base_acc: [f64; 3],
+    l0: usize,
+    bl: usize,
+}
+
+impl RneaLanes for Block<'_, '_> {
+    #[inline(always)]
+    fn fwd<const PRI: bool>(&mut self, k: usize) {
+        let (bw, l0, bl) = (&mut *self.bw, self.l0, self.bl);
+        let qk = &self.qdd.col_as_slice(k)[l0..l0 + bl];
+        let link = [&bw.ay, &bw.az, &bw.hy, &bw.hz, &bw.dy, &bw.dz].map(|c| &c.col(k)[..bl]);
+        let [ay, az, hy, hz, dy, dz] = link;
+        let [a0, a1, a2] = [(&mut bw.a0, 0), (&mut bw.a1, 1), (&mut bw.a2, 2)].map(|(col, i)| {
+            // column k starts as a copy of the previous acceleration (or the base's)
+            if k == 0 {
+                col.col_mut(0)[..bl].fill(self.base_acc[i]);
+            } else {
+                let (p, c) = col.prev_cur(k);
+                c[..bl].copy_from_slice(&p[..bl]);
+            }
+            &mut col.col_mut(k)[..bl]
+        });
+        lanes_rnea_fwd::<f64, PRI>([qk, ay, az, hy, hz, dy, dz], a0, a1, a2);
+    }
+
+    #[inline(always)]
+    fn back<const PRI: bool>(&mut self, k: usize, j: f64, m: f64) {
+        let (bw, l0, bl) = (&mut *self.bw, self.l0, self.bl);
+        let out = &mut self.tau.col_as_slice_mut(k)[l0..l0 + bl];
+        let link = [
+            &bw.a0, &bw.a1, &bw.a2, &bw.cy, &bw.cz, &bw.by, &bw.bz, &bw.dy, &bw.dz, &bw.hy, &bw.hz,
+        ]
+        .map(|c| &c.col(k)[..bl]);
+        let [f0, f1, f2] = bw.carry_a.all_mut::<3>();
+        lanes_rnea_back::<f64, PRI>(j, m, link, out, f0, f1, f2, |_, _| {});
+    }
 }

@@ -43,6 +43,14 @@ pub trait Scalar:
     fn sin_cos(self) -> (Self, Self);
     /// The value (the real part of a dual number).
     fn re(self) -> f64;
+    /// `(sin, cos)` of every element of `x` into `s` and `c` (same length), each element as
+    /// [`Scalar::sin_cos`] gives it.
+    #[inline(always)]
+    fn sin_cos_lanes(x: &[Self], s: &mut [Self], c: &mut [Self]) {
+        for ((x, s), c) in x.iter().zip(s.iter_mut()).zip(c.iter_mut()) {
+            (*s, *c) = x.sin_cos();
+        }
+    }
 }
 
 impl Scalar for f64 {
@@ -53,6 +61,10 @@ impl Scalar for f64 {
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
         spatial::sincos(self)
+    }
+    #[inline(always)]
+    fn sin_cos_lanes(x: &[f64], s: &mut [f64], c: &mut [f64]) {
+        spatial::sincos_slice(x, s, c);
     }
     #[inline(always)]
     fn re(self) -> f64 {

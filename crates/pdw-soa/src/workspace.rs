@@ -5,6 +5,7 @@ use faer::linalg::cholesky::llt;
 use faer::{Mat, Par};
 
 use crate::chain::Chain;
+use crate::dual::Scalar;
 use crate::error::{check_len, SoaError};
 use crate::spatial::{self, Sym3};
 
@@ -149,6 +150,7 @@ impl Workspace {
 
 /// Pass 1: link angles, levers, world COM offsets, prismatic axes, angular rates and the
 /// velocity-dependent bias terms, base to tip. `qd = None` means zero joint rates.
+/// The one-lane instance of [`kin_recursion`].
 pub(crate) fn kin_pass(
     chain: &Chain,
     ws: &mut Workspace,
@@ -161,62 +163,246 @@ pub(crate) fn kin_pass(
     if let Some(qd) = qd {
         check_len("qd", n, qd.len())?;
     }
-    let (mut thp, mut sp, mut cp, mut wp) = (0.0, 0.0, 1.0, 0.0);
-    let (mut lyp, mut lzp) = (0.0, 0.0);
+    kin_recursion(chain, &mut WsKin { ws, q, qd });
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// The kinematic pass, written once over where the lanes live and over the scalar.
+// ---------------------------------------------------------------------------------------------
+
+/// The constants of link `k` in pass 1: mass `m`, the previous link's lever to this joint `lp`
+/// (`0` for the first), the local COM offset and the prismatic axis (parent frame).
+#[derive(Clone, Copy)]
+pub(crate) struct KinLink {
+    pub(crate) m: f64,
+    pub(crate) lp: [f64; 2],
+    pub(crate) com: [f64; 2],
+    pub(crate) u: [f64; 2],
+}
+
+/// Where the lanes of one kinematic pass live (one lane of a [`Workspace`], a block of lanes in
+/// the columns of a [`crate::BatchWorkspace`], stack arrays of any [`Scalar`]): each link's step
+/// hands its quantities, one slice per quantity over its lanes, to [`lanes_angles`] and
+/// [`lanes_kin`], the tip's to [`lanes_tip`].
+pub(crate) trait KinLanes {
+    /// Step of link `k` (prismatic joint if `PRI`) for every lane.
+    fn link<const PRI: bool>(&mut self, k: usize, c: &KinLink);
+    /// The tip lever `R_{n−1} l` of the last link's `l = to_next_{n−1}` for every lane.
+    fn tip(&mut self, lp: [f64; 2]);
+}
+
+/// The kinematic pass (seed §3.3: Φ, H and the bias terms of eq. 3.13–3.14), base to tip over
+/// [`KinLanes::link`], then the tip lever.
+#[inline(always)]
+pub(crate) fn kin_recursion<S: KinLanes>(chain: &Chain, s: &mut S) {
+    let n = chain.dof();
+    let mut lp = [0.0, 0.0];
     for k in 0..n {
         let link = &chain.links[k];
-        let qk = q[k];
-        let qdk = match qd {
-            Some(v) => v[k],
-            None => 0.0,
+        let c = KinLink {
+            m: link.mass,
+            lp,
+            com: link.com,
+            u: chain.axis[k],
         };
-        let (w, ay, az);
         if chain.prismatic[k] {
-            let u = chain.axis[k];
-            let (dy, dz, hy, hz, cy, cz) =
-                spatial::geom_pri(sp, cp, lyp, lzp, u[0], u[1], qk, link.com[0], link.com[1]);
-            (w, ay, az) = spatial::vel_pri(wp, qdk, dy, dz, hy, hz);
-            ws.theta[k] = thp;
-            ws.s[k] = sp;
-            ws.c[k] = cp;
-            ws.dy[k] = dy;
-            ws.dz[k] = dz;
-            ws.hy[k] = hy;
-            ws.hz[k] = hz;
-            ws.cy[k] = cy;
-            ws.cz[k] = cz;
+            s.link::<true>(k, &c);
         } else {
-            let th = thp + qk;
-            let (s, c) = spatial::sincos(th);
-            let (dy, dz, cy, cz) =
-                spatial::geom_rev(sp, cp, lyp, lzp, s, c, link.com[0], link.com[1]);
-            (w, ay, az) = spatial::vel_rev(wp, qdk, dy, dz);
-            ws.theta[k] = th;
-            ws.s[k] = s;
-            ws.c[k] = c;
-            ws.dy[k] = dy;
-            ws.dz[k] = dz;
-            ws.hy[k] = 0.0;
-            ws.hz[k] = 0.0;
-            ws.cy[k] = cy;
-            ws.cz[k] = cz;
+            s.link::<false>(k, &c);
         }
-        let (by, bz) = spatial::force_bias(link.mass, w, ws.cy[k], ws.cz[k]);
-        ws.w[k] = w;
-        ws.ay[k] = ay;
-        ws.az[k] = az;
-        ws.by[k] = by;
-        ws.bz[k] = bz;
-        thp = ws.theta[k];
-        sp = ws.s[k];
-        cp = ws.c[k];
-        wp = w;
-        lyp = link.to_next[0];
-        lzp = link.to_next[1];
+        lp = link.to_next;
     }
-    // tip lever: R_{n−1} · to_next_{n−1}
-    ws.tip_d = [cp * lyp - sp * lzp, sp * lyp + cp * lzp];
-    Ok(())
+    s.tip(lp);
+}
+
+/// Angles of link `k` over all lanes: `θ = θ_p + q` then `(sin θ, cos θ)` for a revolute
+/// joint; a prismatic joint keeps `θ_p` and its sine and cosine. Inputs `θ_p, sin θ_p, cos θ_p,
+/// q`.
+#[inline(always)]
+pub(crate) fn lanes_angles<T: Scalar, const PRI: bool>(
+    [thp, sp, cp, qk]: [&[T]; 4],
+    th: &mut [T],
+    s: &mut [T],
+    c: &mut [T],
+) {
+    let bl = th.len();
+    let (s, c) = (&mut s[..bl], &mut c[..bl]);
+    if PRI {
+        th.copy_from_slice(&thp[..bl]);
+        s.copy_from_slice(&sp[..bl]);
+        c.copy_from_slice(&cp[..bl]);
+    } else {
+        let (thp, qk) = (&thp[..bl], &qk[..bl]);
+        for l in 0..bl {
+            th[l] = thp[l] + qk[l];
+        }
+        T::sin_cos_lanes(th, s, c);
+    }
+}
+
+// The lane loops take every output stream as its own slice parameter (distinct `noalias`
+// parameters: no runtime overlap checks in the vectorised loop; see aba.rs).
+
+/// Geometry, rate and biases of link `k` over all lanes (joint kind `PRI`): from the previous
+/// link's `sin, cos, ω` (`sp, cp, wp`), this link's `sin, cos` (`s, c`), `q` and `q̇`, writes
+/// the lever `d`, the axis `h` (`0` for a revolute joint), the COM offset `c`, `ω` and the
+/// biases `a`, `b` (seed eq. 3.13–3.14).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn lanes_kin<T: Scalar, const PRI: bool>(
+    kl: &KinLink,
+    [sp, cp, s, c, wp, qk, qdk]: [&[T]; 7],
+    dy: &mut [T],
+    dz: &mut [T],
+    hy: &mut [T],
+    hz: &mut [T],
+    cy: &mut [T],
+    cz: &mut [T],
+    w: &mut [T],
+    ay: &mut [T],
+    az: &mut [T],
+    by: &mut [T],
+    bz: &mut [T],
+) {
+    let bl = dy.len();
+    let (sp, cp, wp, qdk) = (&sp[..bl], &cp[..bl], &wp[..bl], &qdk[..bl]);
+    let (dz, hy, hz) = (&mut dz[..bl], &mut hy[..bl], &mut hz[..bl]);
+    let (cy, cz, w) = (&mut cy[..bl], &mut cz[..bl], &mut w[..bl]);
+    let (ay, az, by, bz) = (&mut ay[..bl], &mut az[..bl], &mut by[..bl], &mut bz[..bl]);
+    let m = T::cst(kl.m);
+    let (lyp, lzp) = (T::cst(kl.lp[0]), T::cst(kl.lp[1]));
+    let (comy, comz) = (T::cst(kl.com[0]), T::cst(kl.com[1]));
+    if PRI {
+        let qk = &qk[..bl];
+        let (uy, uz) = (T::cst(kl.u[0]), T::cst(kl.u[1]));
+        for l in 0..bl {
+            let (dyl, dzl, hyl, hzl, cyl, czl) =
+                spatial::geom_pri(sp[l], cp[l], lyp, lzp, uy, uz, qk[l], comy, comz);
+            let (wl, ayl, azl) = spatial::vel_pri(wp[l], qdk[l], dyl, dzl, hyl, hzl);
+            let (byl, bzl) = spatial::force_bias(m, wl, cyl, czl);
+            (dy[l], dz[l], hy[l], hz[l], cy[l], cz[l]) = (dyl, dzl, hyl, hzl, cyl, czl);
+            (w[l], ay[l], az[l], by[l], bz[l]) = (wl, ayl, azl, byl, bzl);
+        }
+    } else {
+        let (s, c) = (&s[..bl], &c[..bl]);
+        let zero = T::cst(0.0);
+        for l in 0..bl {
+            let (dyl, dzl, cyl, czl) =
+                spatial::geom_rev(sp[l], cp[l], lyp, lzp, s[l], c[l], comy, comz);
+            let (wl, ayl, azl) = spatial::vel_rev(wp[l], qdk[l], dyl, dzl);
+            let (byl, bzl) = spatial::force_bias(m, wl, cyl, czl);
+            (dy[l], dz[l], hy[l], hz[l], cy[l], cz[l]) = (dyl, dzl, zero, zero, cyl, czl);
+            (w[l], ay[l], az[l], by[l], bz[l]) = (wl, ayl, azl, byl, bzl);
+        }
+    }
+}
+
+/// The tip lever `R_{n−1} l = [c l_y − s l_z, s l_y + c l_z]` over all lanes from the last
+/// link's `sin, cos`.
+#[inline(always)]
+pub(crate) fn lanes_tip<T: Scalar>(lp: [f64; 2], sp: &[T], cp: &[T], ty: &mut [T], tz: &mut [T]) {
+    let bl = ty.len();
+    let (sp, cp, tz) = (&sp[..bl], &cp[..bl], &mut tz[..bl]);
+    let (lyp, lzp) = (T::cst(lp[0]), T::cst(lp[1]));
+    for l in 0..bl {
+        ty[l] = cp[l] * lyp - sp[l] * lzp;
+        tz[l] = sp[l] * lyp + cp[l] * lzp;
+    }
+}
+
+/// One lane of the kinematic pass for any [`Scalar`], with the previous link's
+/// `θ, sin, cos, ω` carried in `prev`: writes link `k`'s angles to `ang` and the rest through
+/// [`lanes_kin`] into `out` (`d_y, d_z, h_y, h_z, c_y, c_z, ω, a_y, a_z, b_y, b_z`); returns the
+/// new carry.
+#[inline(always)]
+pub(crate) fn one_lane_kin<T: Scalar, const PRI: bool>(
+    kl: &KinLink,
+    prev: [T; 4],
+    (qk, qdk): (T, T),
+    out: [&mut T; 11],
+) -> [T; 4] {
+    let [thp, sp, cp, wp] = prev;
+    let (mut th, mut s, mut c) = (thp, sp, cp);
+    let one = std::slice::from_ref;
+    let m1 = std::slice::from_mut;
+    lanes_angles::<T, PRI>(
+        [one(&thp), one(&sp), one(&cp), one(&qk)],
+        m1(&mut th),
+        m1(&mut s),
+        m1(&mut c),
+    );
+    let [dy, dz, hy, hz, cy, cz, w, ay, az, by, bz] = out;
+    lanes_kin::<T, PRI>(
+        kl,
+        [
+            one(&sp),
+            one(&cp),
+            one(&s),
+            one(&c),
+            one(&wp),
+            one(&qk),
+            one(&qdk),
+        ],
+        m1(dy),
+        m1(dz),
+        m1(hy),
+        m1(hz),
+        m1(cy),
+        m1(cz),
+        m1(&mut *w),
+        m1(ay),
+        m1(az),
+        m1(by),
+        m1(bz),
+    );
+    [th, s, c, *w]
+}
+
+/// One lane in a [`Workspace`] (every quantity kept per link).
+struct WsKin<'a> {
+    ws: &'a mut Workspace,
+    q: &'a [f64],
+    qd: Option<&'a [f64]>,
+}
+
+impl KinLanes for WsKin<'_> {
+    #[inline(always)]
+    fn link<const PRI: bool>(&mut self, k: usize, c: &KinLink) {
+        let ws = &mut *self.ws;
+        let prev = match k {
+            0 => [0.0, 0.0, 1.0, 0.0],
+            _ => [ws.theta[k - 1], ws.s[k - 1], ws.c[k - 1], ws.w[k - 1]],
+        };
+        let qdk = self.qd.map_or(0.0, |v| v[k]);
+        let out = [
+            &mut ws.dy[k],
+            &mut ws.dz[k],
+            &mut ws.hy[k],
+            &mut ws.hz[k],
+            &mut ws.cy[k],
+            &mut ws.cz[k],
+            &mut ws.w[k],
+            &mut ws.ay[k],
+            &mut ws.az[k],
+            &mut ws.by[k],
+            &mut ws.bz[k],
+        ];
+        let [th, s, c, _] = one_lane_kin::<f64, PRI>(c, prev, (self.q[k], qdk), out);
+        (ws.theta[k], ws.s[k], ws.c[k]) = (th, s, c);
+    }
+
+    #[inline(always)]
+    fn tip(&mut self, lp: [f64; 2]) {
+        let ws = &mut *self.ws;
+        let (sp, cp) = match ws.n {
+            0 => (0.0, 1.0),
+            n => (ws.s[n - 1], ws.c[n - 1]),
+        };
+        let [ty, tz] = &mut ws.tip_d;
+        let (one, m1) = (std::slice::from_ref, std::slice::from_mut);
+        lanes_tip(lp, one(&sp), one(&cp), m1(ty), m1(tz));
+    }
 }
 
 impl std::fmt::Debug for Workspace {
