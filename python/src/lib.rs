@@ -1362,6 +1362,7 @@ pub(crate) const MFPT_FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
     mean: "slope",
     walkers: "walkers",
     max_steps: "max_steps",
+    dist: "dist",
 };
 
 /// `mfpt(..., sd="A:B:N")`: one Monte Carlo run per standard deviation (the same seed: common
@@ -1431,6 +1432,7 @@ fn mfpt_plan(
             sd,
             seed,
             kind,
+            dist: Default::default(),
         },
         walkers,
         max_steps,

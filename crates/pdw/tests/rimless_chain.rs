@@ -326,6 +326,7 @@ fn plan() -> MfptPlan {
             sd: SD_DEG.to_radians(),
             seed: 1,
             kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers: 2000,
         max_steps: 20_000,
