@@ -203,6 +203,10 @@ def mfpt(
     seed: int = 0,
     threads: int = 2,
     terrain: str = "slope",
+    chain: bool = False,
+    mesh: Optional[int] = None,
+    nodes: Optional[int] = None,
+    dist: str = "normal",
     **params: float,
 ) -> dict[str, Any]:
     """Mean first-passage time on a random slope per step (`pdw-sweep mfpt`, Monte Carlo):
@@ -215,7 +219,12 @@ def mfpt(
     deviation with the same seed, a dict of arrays sd, mfpt, stderr, restricted_mean, falls,
     censored, total_steps (one value per σ) and mean. `terrain="step-down"`: a random foothold
     height per step instead (`sd` a plain length, the mean the model's `step_down`, a step down
-    positive); both dicts also hold `terrain`."""
+    positive); both dicts also hold `terrain`. `dist`: the draws' distribution ("normal",
+    "uniform" of unit variance, "file:PATH" of values), in words as `dist`. `chain=True` (one
+    sd) adds `chain`: the Markov chain at mesh and 2 mesh (arrays of two: mesh, mfpt, lambda,
+    mfpt_lambda, mfpt_quasi_stationary, fall_per_step, out_of_mesh, states), refinement_change,
+    warning (None when converged), nodes, quadrature, box (corner, edges, widening_passes,
+    out_share)."""
     ...
 
 def disturb(

@@ -58,6 +58,7 @@ fn mfpt(c: &mut Criterion) {
         sd: 0.1f64.to_radians(),
         seed: 1,
         kind: TerrainKind::Slope,
+        dist: Default::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)

@@ -1362,6 +1362,7 @@ pub(crate) const MFPT_FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
     mean: "slope",
     walkers: "walkers",
     max_steps: "max_steps",
+    dist: "dist",
 };
 
 /// `mfpt(..., sd="A:B:N")`: one Monte Carlo run per standard deviation (the same seed: common
@@ -1370,12 +1371,15 @@ fn mfpt_curve<'py>(
     py: Python<'py>,
     m: &Model,
     sds: &[f64],
-    kind: pdw_limit::terrain::TerrainKind,
+    (kind, dist): (
+        pdw_limit::terrain::TerrainKind,
+        &pdw_limit::terrain::TerrainDist,
+    ),
     (walkers, max_steps, seed, threads): (usize, usize, u64, usize),
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     pdw::mfpt::check_model_for(m, kind).map_err(err)?;
-    let plan = |sd: f64| mfpt_plan(m, kind, sd, (walkers, max_steps, seed));
+    let plan = |sd: f64| mfpt_plan(m, (kind, dist), sd, (walkers, max_steps, seed));
     pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(m, &plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     let ests = interruptible(py, || -> PyResult<_> {
@@ -1408,6 +1412,7 @@ fn mfpt_curve<'py>(
     }
     d.set_item("mean", terrain_mean(m, kind))?;
     d.set_item("terrain", kind.name())?;
+    d.set_item("dist", pdw::mfpt::dist_words(dist))?;
     Ok(d)
 }
 
@@ -1421,7 +1426,10 @@ fn terrain_mean(m: &Model, kind: pdw_limit::terrain::TerrainKind) -> f64 {
 /// slope or step down, with standard deviation `sd`.
 fn mfpt_plan(
     m: &Model,
-    kind: pdw_limit::terrain::TerrainKind,
+    (kind, dist): (
+        pdw_limit::terrain::TerrainKind,
+        &pdw_limit::terrain::TerrainDist,
+    ),
     sd: f64,
     (walkers, max_steps, seed): (usize, usize, u64),
 ) -> pdw::mfpt::MfptPlan {
@@ -1431,6 +1439,7 @@ fn mfpt_plan(
             sd,
             seed,
             kind,
+            dist: dist.clone(),
         },
         walkers,
         max_steps,
@@ -1438,15 +1447,25 @@ fn mfpt_plan(
     }
 }
 
+/// The names of the chain's keyword arguments in `mfpt`'s messages.
+const CHAIN_FLAGS: pdw::mfpt::ChainFlags = pdw::mfpt::ChainFlags {
+    chain: "chain",
+    mesh: "mesh",
+    nodes: "nodes",
+};
+
 /// `mfpt(model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000, seed=0,
-/// threads=2, terrain="slope", **params)`: the Monte Carlo of `pdw-sweep mfpt` (the slope is
-/// the mean slope; with `terrain="step-down"` the model's `step_down` is the mean step down and
-/// `sd` a plain length). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a
-/// dict of arrays).
+/// threads=2, terrain="slope", chain=False, mesh=None, nodes=None, dist="normal", **params)`:
+/// the Monte Carlo of `pdw-sweep mfpt` (the slope is the mean slope; with
+/// `terrain="step-down"` the model's `step_down` is the mean step down and `sd` a plain
+/// length; `dist` the distribution of the standardised draws: `normal`, `uniform`,
+/// `file:PATH`). With `chain=True` also the Markov chain at `mesh` and `2 mesh` nodes per axis
+/// (`chain_dict`). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of
+/// arrays; without the chain).
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", **params),
-    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', **params)"
+    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", **params),
+    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 fn mfpt<'py>(
@@ -1459,41 +1478,88 @@ fn mfpt<'py>(
     seed: u64,
     threads: usize,
     terrain: &str,
+    chain: bool,
+    mesh: Option<usize>,
+    nodes: Option<usize>,
+    dist: &str,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let kind = pdw::mfpt::check_terrain(terrain, &MFPT_FLAGS).map_err(err)?;
-    let parse = |s: &str| pdw::mfpt::parse_sd_values_for(s, kind, &MFPT_FLAGS).map_err(err);
-    let sds =
-        match sd {
-            None => return Err(err(
-                "sd: give the terrain's standard deviation (slope: rad, or '1deg'; step-down: a \
-                 length)",
-            )),
-            Some(v) => match v.extract::<f64>() {
-                Ok(x) => parse(&x.to_string())?,
-                Err(_) => parse(&v.extract::<String>()?)?,
-            },
-        };
-    if sds.len() > 1 {
-        let m = build_kw(model, slope, params)?;
-        return mfpt_curve(py, &m, &sds, kind, (walkers, max_steps, seed, threads));
+    let dist = pdw::mfpt::parse_dist(dist, &MFPT_FLAGS).map_err(err)?;
+    if !chain && (mesh.is_some() || nodes.is_some()) {
+        return Err(err("mesh, nodes: set only with chain=True"));
     }
-    let sd = sds[0];
+    let sds = mfpt_sds(sd, kind)?;
     let m = build_kw(model, slope, params)?;
+    if sds.len() > 1 {
+        if chain {
+            return Err(err(
+                "chain: runs at one sd; give sd a single value, not a range A:B:N",
+            ));
+        }
+        return mfpt_curve(
+            py,
+            &m,
+            &sds,
+            (kind, &dist),
+            (walkers, max_steps, seed, threads),
+        );
+    }
     pdw::mfpt::check_model_for(&m, kind).map_err(err)?;
-    let plan = mfpt_plan(&m, kind, sd, (walkers, max_steps, seed));
+    let plan = mfpt_plan(&m, (kind, &dist), sds[0], (walkers, max_steps, seed));
     pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(&m, &plan, &MFPT_FLAGS).map_err(err)?;
-    let (est, start) = interruptible(py, || -> PyResult<_> {
+    let chain_plan = if chain {
+        Some(pdw::mfpt::check_chain(&m, mesh, nodes, &CHAIN_FLAGS).map_err(err)?)
+    } else {
+        None
+    };
+    let (est, start, pair) = interruptible(py, || -> PyResult<_> {
         let (x0, section) = pdw::mfpt::start(&m).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(err)?;
         let (_, est) = pdw::mfpt::run(&m, &plan, &x0, &pool, &|_| {}).map_err(err)?;
-        Ok((est, section))
+        let pair = match &chain_plan {
+            Some(c) => Some(pdw::mfpt::chain_pair(&m, &plan, c, &x0, &pool).map_err(err)?),
+            None => None,
+        };
+        Ok((est, section, pair))
     })?;
+    let d = estimate_dict(py, &est, &plan)?;
+    d.set_item("start", start)?;
+    if let (Some(c), Some(pair)) = (&chain_plan, &pair) {
+        d.set_item("chain", chain_dict(py, &plan, c, pair)?)?;
+    }
+    Ok(d)
+}
+
+/// `sd` of `mfpt(...)`: a number or a string, one value or a range `A:B:N`.
+fn mfpt_sds(
+    sd: Option<&Bound<'_, PyAny>>,
+    kind: pdw_limit::terrain::TerrainKind,
+) -> PyResult<Vec<f64>> {
+    let parse = |s: &str| pdw::mfpt::parse_sd_values_for(s, kind, &MFPT_FLAGS).map_err(err);
+    match sd {
+        None => Err(err(
+            "sd: give the terrain's standard deviation (slope: rad, or '1deg'; step-down: a \
+             length)",
+        )),
+        Some(v) => match v.extract::<f64>() {
+            Ok(x) => parse(&x.to_string()),
+            Err(_) => parse(&v.extract::<String>()?),
+        },
+    }
+}
+
+/// The Monte Carlo estimate of `mfpt(...)` as a dict.
+fn estimate_dict<'py>(
+    py: Python<'py>,
+    est: &pdw_limit::terrain::MfptEstimate,
+    plan: &pdw::mfpt::MfptPlan,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     for (k, v) in [
         ("mfpt", est.mfpt),
@@ -1501,7 +1567,7 @@ fn mfpt<'py>(
         ("restricted_mean", est.restricted_mean),
         ("restricted_stderr", est.restricted_stderr),
         ("mean", plan.terrain.mean),
-        ("sd", sd),
+        ("sd", plan.terrain.sd),
     ] {
         d.set_item(k, v)?;
     }
@@ -1519,8 +1585,61 @@ fn mfpt<'py>(
         f.set_item(k, n)?;
     }
     d.set_item("failures", f)?;
-    d.set_item("start", start)?;
-    d.set_item("terrain", kind.name())?;
+    d.set_item("terrain", plan.terrain.kind.name())?;
+    d.set_item("dist", pdw::mfpt::dist_words(&plan.terrain.dist))?;
+    Ok(d)
+}
+
+/// The chain's results as `mfpt(..., chain=True)["chain"]`: per mesh (arrays of two: `mesh`,
+/// `mfpt`, `lambda`, `mfpt_lambda` = 1/(1 − λ) − 1, `mfpt_quasi_stationary`, `fall_per_step`,
+/// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged), `nodes`,
+/// `quadrature`, and `box`: `corner`, `edges` (rows), `widening_passes`, `out_share`.
+fn chain_dict<'py>(
+    py: Python<'py>,
+    plan: &pdw::mfpt::MfptPlan,
+    c: &pdw::mfpt::ChainPlan,
+    pair: &pdw::mfpt::ChainPair,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    type Column = fn(&pdw_limit::markov::ChainResult) -> f64;
+    let columns: [(&str, Column); 7] = [
+        ("mfpt", |r| r.mfpt),
+        ("lambda", |r| r.lambda),
+        ("mfpt_lambda", |r| r.mfpt_lambda),
+        ("mfpt_quasi_stationary", |r| r.mfpt_quasi_stationary),
+        ("fall_per_step", |r| r.fall_per_step),
+        ("out_of_mesh", |r| r.out_of_mesh),
+        ("states", |r| r.states as f64),
+    ];
+    for (k, f) in columns {
+        d.set_item(
+            k,
+            pair.results
+                .iter()
+                .map(f)
+                .collect::<Vec<f64>>()
+                .into_pyarray(py),
+        )?;
+    }
+    d.set_item(
+        "mesh",
+        vec![c.mesh as u64, 2 * c.mesh as u64].into_pyarray(py),
+    )?;
+    d.set_item("refinement_change", pair.change)?;
+    d.set_item("warning", pair.warning.clone())?;
+    d.set_item("nodes", c.nodes)?;
+    d.set_item("quadrature", pdw::mfpt::quadrature_name(&plan.terrain.dist))?;
+    let cb = &pair.chain_box;
+    let (corner, edges) = cb.frame.edges(&cb.bounds);
+    let b = PyDict::new(py);
+    b.set_item("corner", corner.into_pyarray(py))?;
+    let flat: Vec<f64> = edges.iter().flatten().copied().collect();
+    let n = edges.len();
+    let edges = Array2::from_shape_vec((n, n), flat).map_err(err)?;
+    b.set_item("edges", edges.into_pyarray(py))?;
+    b.set_item("widening_passes", cb.passes)?;
+    b.set_item("out_share", cb.out_share)?;
+    d.set_item("box", b)?;
     Ok(d)
 }
 

@@ -52,6 +52,7 @@ pub(crate) fn mfpt_over<'py>(
             sd,
             seed,
             kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers,
         max_steps,

@@ -567,6 +567,55 @@ def test_mfpt_on_step_heights():
         pdw.mfpt("compass", terrain="step-down", sd=0.01)
 
 
+def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
+    r = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True, mesh=100)
+    c = r["chain"]
+    assert r["censored"] == 0 and r["dist"] == "normal"
+    assert list(c["mesh"]) == [100, 200] and c["nodes"] == 11 and c["quadrature"] == "Gauss-Hermite"
+    # the second method: the fine mesh's chain within 3 Monte Carlo standard errors plus the
+    # mesh change
+    tol = 3 * r["restricted_stderr"] + abs(c["mfpt"][1] - c["mfpt"][0])
+    assert abs(c["mfpt"][1] - r["restricted_mean"]) < tol
+    # the eigenvalue check: 1/(1 - lambda) - 1 is the quasi-stationary MFPT of the solve
+    assert np.allclose(c["mfpt_lambda"], 1 / (1 - c["lambda"]) - 1, rtol=1e-9)
+    assert np.allclose(c["mfpt_lambda"], c["mfpt_quasi_stationary"], rtol=1e-6)
+    change = abs(c["mfpt"][1] - c["mfpt"][0]) / max(c["mfpt"])
+    assert abs(c["refinement_change"] - change) < 1e-12
+    assert (c["warning"] is None) == (change <= 0.1)
+    # the box: a corner and one edge per section axis
+    assert c["box"]["corner"].shape == (1,) and c["box"]["edges"].shape == (1, 1)
+    assert c["box"]["corner"][0] < r["start"][0] < c["box"]["corner"][0] + c["box"]["edges"][0, 0]
+
+
+def test_mfpt_uniform_and_file_distributions():
+    u = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1, dist="uniform")
+    n = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1)
+    # bounded draws of the same spread make the wheel fall less often than normal ones
+    assert u["dist"].startswith("uniform") and u["mfpt"] > n["mfpt"]
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "xi.txt")
+        with open(path, "w") as f:
+            f.write("# two values\n-1\n1\n")
+        r = pdw.mfpt("rimless", sd="1deg", walkers=200, max_steps=1000, seed=1, dist="file:" + path)
+        assert r["dist"].startswith("file:" + path) and r["falls"] > 0
+        with open(path, "w") as f:
+            f.write("# nothing\n")
+        with pytest.raises(ValueError, match="holds no value"):
+            pdw.mfpt("rimless", sd="1deg", dist="file:" + path)
+    with pytest.raises(ValueError, match="dist: 'cauchy' is not one of"):
+        pdw.mfpt("rimless", sd="1deg", dist="cauchy")
+    with pytest.raises(ValueError, match="cannot read"):
+        pdw.mfpt("rimless", sd="1deg", dist="file:/no/such/file")
+    with pytest.raises(ValueError, match="mesh, nodes: set only with chain=True"):
+        pdw.mfpt("rimless", sd="1deg", mesh=10)
+    with pytest.raises(ValueError, match="mesh: 1 must be at least 2"):
+        pdw.mfpt("rimless", sd="1deg", chain=True, mesh=1)
+    with pytest.raises(ValueError, match="nodes: 41 must be between 1 and 40"):
+        pdw.mfpt("rimless", sd="1deg", chain=True, nodes=41)
+    with pytest.raises(ValueError, match="chain: runs at one sd"):
+        pdw.mfpt("rimless", sd="0.4deg:0.6deg:3", chain=True)
+
+
 def test_disturb_once_and_largest():
     r = pdw.disturb("rimless", once=-0.01, steps=60)
     assert not r["fell"] and r["steps"] == 60

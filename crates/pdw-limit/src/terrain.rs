@@ -28,7 +28,8 @@
 //!
 //! # Random numbers
 //! Counter-based: the slope of walker `i` at step `k` is a pure function of `(seed, i, k)`
-//! ([`standard_normal`]), so a walk is the same on any thread count or shard.
+//! ([`standard_normal`], [`standard_uniform`], [`pick`] for a list of values:
+//! [`TerrainDist`]), so a walk is the same on any thread count or shard.
 
 use crate::error::LimitError;
 use crate::lockstep::{monte_carlo_lockstep, Lockstep};
@@ -106,9 +107,140 @@ impl TerrainKind {
     }
 }
 
+/// The distribution of the terrain's standardised draws `ξ_k` ([`SlopeTerrain`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum TerrainDist {
+    /// Standard normal ([`standard_normal`]); the chain's quadrature is Gauss–Hermite.
+    #[default]
+    Normal,
+    /// Uniform on `[−√3, √3]`: mean 0, variance 1, so `sd` stays the standard deviation
+    /// ([`standard_uniform`]); the chain's quadrature is Gauss–Legendre.
+    Uniform,
+    /// The empirical distribution of a list of values (a file's): each step draws one of them
+    /// with equal probability ([`pick`]), `sd` scales them as given.
+    Values(ValuesDist),
+}
+
+/// A list of values to draw from and where it came from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ValuesDist {
+    /// Where the values came from (a file's path), for the record.
+    pub source: String,
+    /// The values, finite, at least one.
+    pub values: std::sync::Arc<[f64]>,
+}
+
+impl TerrainDist {
+    /// The empirical distribution of `values` from `source`; `Err` names why not (no value, a
+    /// value that is not finite).
+    pub fn values(source: &str, values: Vec<f64>) -> Result<Self, String> {
+        if values.is_empty() {
+            return Err(format!("{source}: holds no value"));
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(format!(
+                "{source}: value {} is {} (not finite)",
+                i + 1,
+                values[i]
+            ));
+        }
+        Ok(TerrainDist::Values(ValuesDist {
+            source: source.to_string(),
+            values: values.into(),
+        }))
+    }
+
+    /// The name in commands and files: `normal`, `uniform`, `file:PATH`.
+    pub fn name(&self) -> String {
+        match self {
+            TerrainDist::Normal => "normal".into(),
+            TerrainDist::Uniform => "uniform".into(),
+            TerrainDist::Values(v) => format!("file:{}", v.source),
+        }
+    }
+
+    /// The standardised draw `ξ` of walker `walker` at step `step`.
+    pub fn draw(&self, seed: u64, walker: u64, step: u64) -> f64 {
+        match self {
+            TerrainDist::Normal => standard_normal(seed, walker, step),
+            TerrainDist::Uniform => standard_uniform(seed, walker, step),
+            TerrainDist::Values(v) => v.values[pick(seed, walker, step, v.values.len())],
+        }
+    }
+
+    /// The largest `|ξ|` a draw can take: [`MAX_NORMAL_DRAW`], `√3`, the largest `|value|`.
+    pub fn max_abs(&self) -> f64 {
+        match self {
+            TerrainDist::Normal => MAX_NORMAL_DRAW,
+            TerrainDist::Uniform => 3f64.sqrt(),
+            TerrainDist::Values(v) => v.values.iter().fold(0.0, |m, x| m.max(x.abs())),
+        }
+    }
+
+    /// An `n`-point quadrature `(ξ_l, w_l)` of the distribution (weights summing to 1): the
+    /// Gauss–Hermite rule for the normal, Gauss–Legendre for the uniform
+    /// ([`crate::markov::gauss_hermite`], [`crate::markov::gauss_legendre`]), and for values
+    /// their empirical distribution ([`empirical_nodes`]).
+    pub fn quadrature(&self, n: usize) -> (Vec<f64>, Vec<f64>) {
+        match self {
+            TerrainDist::Normal => crate::markov::gauss_hermite(n),
+            TerrainDist::Uniform => crate::markov::gauss_legendre(n),
+            TerrainDist::Values(v) => empirical_nodes(&v.values, n),
+        }
+    }
+}
+
+/// The largest magnitude a Box–Muller draw of [`standard_normal`] can reach: `√(−2 ln u)` with
+/// `u ≥ 2⁻⁵⁴`, i.e. `√(108 ln 2)` ≈ 8.65.
+pub const MAX_NORMAL_DRAW: f64 = 8.66;
+
+/// A uniform number of mean 0 and variance 1 for `(seed, walker, step)`: `√3 (2u − 1)` with
+/// `u` the [`uniform`] of stream 0, in the open interval `(−√3, √3)`.
+pub fn standard_uniform(seed: u64, walker: u64, step: u64) -> f64 {
+    3f64.sqrt() * (2.0 * uniform(seed, walker, step, 0) - 1.0)
+}
+
+/// An index in `0 … n−1` for `(seed, walker, step)`, each with probability `n⁻¹ (1 ± n 2⁻⁶⁴)`:
+/// the high word of the 128-bit product of [`counter_bits`] (stream 0) and `n` (Lemire, "Fast
+/// random integer generation in an interval", ACM TOMACS 29(1), 2019, without its rejection).
+pub fn pick(seed: u64, walker: u64, step: u64, n: usize) -> usize {
+    let b = counter_bits(seed, walker, step, 0) as u128;
+    ((b * n as u128) >> 64) as usize
+}
+
+/// The chain's quadrature of the empirical distribution of `values` with at most `n` nodes:
+/// its distinct values weighted by their frequencies when there are at most `n` of them; else
+/// the sorted values cut into `n` bins of (nearly) equal count, bin `j` holding the values of
+/// sorted positions `⌊j m / n⌋ … ⌊(j+1) m / n⌋ − 1` (m values), each bin represented by its
+/// mean and weighted by its share of the values (the mean of the distribution is kept
+/// exactly; its spread within a bin is lost).
+pub fn empirical_nodes(values: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let m = v.len() as f64;
+    let mut distinct: Vec<(f64, usize)> = Vec::new();
+    for &x in &v {
+        match distinct.last_mut() {
+            Some(last) if last.0 == x => last.1 += 1,
+            _ => distinct.push((x, 1)),
+        }
+    }
+    if distinct.len() <= n {
+        return distinct.iter().map(|&(x, c)| (x, c as f64 / m)).unzip();
+    }
+    (0..n)
+        .map(|j| {
+            let bin = &v[j * v.len() / n..(j + 1) * v.len() / n];
+            let mean = bin.iter().sum::<f64>() / bin.len() as f64;
+            (mean, bin.len() as f64 / m)
+        })
+        .unzip()
+}
+
 /// Ground slopes (or step heights, [`TerrainKind`]) drawn per step: `s_k = mean + sd ξ_k`,
-/// `ξ_k` independent standard normals ([`standard_normal`] of `(seed, walker, k)`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// `ξ_k` independent draws of `dist` ([`TerrainDist::draw`] of `(seed, walker, k)`; standard
+/// normals by default).
+#[derive(Clone, Debug, PartialEq)]
 pub struct SlopeTerrain {
     /// Mean slope `s̄` (rad), or mean step down `h̄`.
     pub mean: f64,
@@ -118,13 +250,15 @@ pub struct SlopeTerrain {
     pub seed: u64,
     /// What is drawn.
     pub kind: TerrainKind,
+    /// The distribution of the standardised draws `ξ_k`.
+    pub dist: TerrainDist,
 }
 
 impl SlopeTerrain {
     /// The slope of the line walker `walker` lands on at the end of step `step` (1, 2, …) (or
     /// the step down of its foothold).
     pub fn slope(&self, walker: u64, step: u64) -> f64 {
-        self.mean + self.sd * standard_normal(self.seed, walker, step)
+        self.mean + self.sd * self.dist.draw(self.seed, walker, step)
     }
 }
 

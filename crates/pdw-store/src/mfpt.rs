@@ -6,7 +6,10 @@
 //!                          params (JSON object of the model's parameters at the mean slope)
 //! /mfpt             attrs: method ("monte carlo"), terrain ("slope" or "step-down"),
 //!                          terrain_unit (of mean and sd: "rad" for slopes, the model's length
-//!                          unit for step heights; "rad" when absent), mean, sd,
+//!                          unit for step heights; "rad" when absent), distribution (of the
+//!                          standardised draws ξ, slope = mean + sd ξ: "normal", "uniform on
+//!                          [-sqrt 3, sqrt 3] (variance 1)" or "file:PATH (…)" with the file's
+//!                          count, mean and sd; "normal" when absent), mean, sd,
 //!                          seed, walkers, max_steps, falls, censored, total_steps, mfpt,
 //!                          stderr (steps / falls and its standard error), restricted_mean,
 //!                          restricted_stderr (mean of min(T, max_steps)), estimator (text),
@@ -43,6 +46,8 @@ pub struct MfptData {
     pub method: String,
     /// `"slope"` or `"step-down"`.
     pub terrain: String,
+    /// The distribution of the standardised draws, in words (module docs).
+    pub distribution: String,
     /// The unit of `mean` and `sd`: `"rad"`, or the model's length unit for step heights.
     pub terrain_unit: String,
     pub mean: f64,
@@ -124,6 +129,7 @@ fn fill(p: &Path, f: &File, d: &MfptData) -> Result<()> {
     for (k, v) in [
         ("method", &d.method),
         ("terrain", &d.terrain),
+        ("distribution", &d.distribution),
         ("terrain_unit", &d.terrain_unit),
         ("estimator", &d.estimator),
     ] {
@@ -211,6 +217,7 @@ fn read_group(p: &Path, g: &Group) -> Result<MfptData> {
     Ok(MfptData {
         method: get_str(p, KIND, g, "method")?,
         terrain: get_str(p, KIND, g, "terrain")?,
+        distribution: distribution(p, KIND, g)?,
         terrain_unit: terrain_unit(p, KIND, g)?,
         estimator: get_str(p, KIND, g, "estimator")?,
         mean: x("mean")?,
@@ -247,7 +254,8 @@ const CURVE_KIND: &str = "pdw-sweep mfpt curve";
 /// ```text
 /// /                 attrs: format ("pdw-sweep mfpt curve v1"), version, command, created, model,
 ///                          params (JSON object)
-/// /curve            attrs: terrain, terrain_unit (as in the mfpt file), mean, seed, walkers,
+/// /curve            attrs: terrain, terrain_unit, distribution (as in the mfpt file), mean,
+///                          seed, walkers,
 ///                          max_steps, estimator,
 ///                          chain_mesh_coarse, chain_mesh_fine (0 without the chain)
 /// /curve/sd         f64 [N] the standard deviations (terrain_unit)
@@ -261,6 +269,8 @@ pub struct MfptCurveData {
     pub model: String,
     pub params: String,
     pub terrain: String,
+    /// [`MfptData::distribution`].
+    pub distribution: String,
     /// The unit of `mean` and `sd` ([`MfptData::terrain_unit`]).
     pub terrain_unit: String,
     pub mean: f64,
@@ -329,6 +339,7 @@ pub fn write_mfpt_curve(path: impl AsRef<Path>, force: bool, data: &MfptCurveDat
         let g = f.create_group("curve").at(p, "creating /curve")?;
         set_str(p, &g, "terrain", &data.terrain)?;
         set_str(p, &g, "terrain_unit", &data.terrain_unit)?;
+        set_str(p, &g, "distribution", &data.distribution)?;
         set_str(p, &g, "estimator", &data.estimator)?;
         set_attr(p, &g, "mean", &data.mean)?;
         for (k, v) in [
@@ -382,6 +393,7 @@ pub fn read_mfpt_curve(path: impl AsRef<Path>) -> Result<MfptCurveData> {
         params: get_str(p, CURVE_KIND, &f, "params")?,
         terrain: get_str(p, CURVE_KIND, &g, "terrain")?,
         terrain_unit: terrain_unit(p, CURVE_KIND, &g)?,
+        distribution: distribution(p, CURVE_KIND, &g)?,
         estimator: get_str(p, CURVE_KIND, &g, "estimator")?,
         mean: get_attr::<f64>(p, CURVE_KIND, &g, "mean")?,
         seed: u("seed")?,
@@ -401,6 +413,15 @@ pub fn read_mfpt_curve(path: impl AsRef<Path>) -> Result<MfptCurveData> {
 }
 
 /// The `terrain_unit` attribute of `g`, `"rad"` in files written before step heights existed.
+/// The `distribution` attribute of `g`, `"normal"` in files written before it was recorded.
+pub(crate) fn distribution(p: &Path, kind: &'static str, g: &Group) -> Result<String> {
+    if g.attr("distribution").is_ok() {
+        get_str(p, kind, g, "distribution")
+    } else {
+        Ok("normal".into())
+    }
+}
+
 fn terrain_unit(p: &Path, kind: &'static str, g: &Group) -> Result<String> {
     if g.attr("terrain_unit").is_ok() {
         get_str(p, kind, g, "terrain_unit")

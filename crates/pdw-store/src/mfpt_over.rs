@@ -4,7 +4,8 @@
 //! ```text
 //! /              attrs: format ("pdw-sweep mfpt over v1"), version, command, created, model,
 //!                       params (JSON object of the model's parameters at the first value)
-//! /over          attrs: param (the parameter's name), terrain ("slope"), sd (rad), seed,
+//! /over          attrs: param (the parameter's name), terrain ("slope"), distribution (as in
+//!                       the mfpt file), sd (rad), seed,
 //!                       walkers, max_steps, estimator, indicators (of the norm, comma
 //!                       separated), chain_mesh_coarse, chain_mesh_fine (0 without the chain),
 //!                       spearman (rank correlation of GSN and MFPT over the values with both)
@@ -37,6 +38,8 @@ pub struct MfptOverData {
     pub params: String,
     pub param: String,
     pub terrain: String,
+    /// The distribution of the standardised draws ([`crate::MfptData::distribution`]).
+    pub distribution: String,
     pub sd: f64,
     pub seed: u64,
     pub walkers: u64,
@@ -112,6 +115,7 @@ pub fn write_mfpt_over(path: impl AsRef<Path>, force: bool, data: &MfptOverData)
         for (k, v) in [
             ("param", &data.param),
             ("terrain", &data.terrain),
+            ("distribution", &data.distribution),
             ("estimator", &data.estimator),
             ("indicators", &data.indicators),
         ] {
@@ -171,6 +175,7 @@ pub fn read_mfpt_over(path: impl AsRef<Path>) -> Result<MfptOverData> {
         params: get_str(p, KIND, &f, "params")?,
         param: s("param")?,
         terrain: s("terrain")?,
+        distribution: crate::mfpt::distribution(p, KIND, &g)?,
         estimator: s("estimator")?,
         indicators: s("indicators")?,
         sd: get_attr::<f64>(p, KIND, &g, "sd")?,

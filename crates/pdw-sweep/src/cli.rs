@@ -432,6 +432,12 @@ pub struct MfptArgs {
     /// table, HDF5 and a PNG on a log axis).
     #[arg(long)]
     pub sd: String,
+    /// Distribution of the standardised draws ξ (slope or step down = mean + sd ξ): normal,
+    /// uniform (on [−√3, √3], variance 1, so --sd stays the standard deviation) or file:PATH
+    /// (a text file of ξ values, one per line, '#' comments; each step draws one with equal
+    /// probability).
+    #[arg(long, default_value = "normal")]
+    pub dist: String,
     /// Mean slope, radians or with a unit (3deg) (not with --slope); with --terrain step-down
     /// the mean step down (a plain length). Default: the model's slope (--slope or its preset),
     /// or its step_down (0).

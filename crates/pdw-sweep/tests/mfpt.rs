@@ -16,6 +16,7 @@ fn library(walkers: usize, max_steps: usize) -> pdw_limit::terrain::MfptEstimate
             sd: 0.1f64.to_radians(),
             seed: 3,
             kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers,
         max_steps,
@@ -200,6 +201,7 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
             sd: 0.01,
             seed: 0,
             kind: pdw_limit::terrain::TerrainKind::StepDown,
+            dist: Default::default(),
         },
         walkers: 50,
         max_steps: 500,
@@ -264,4 +266,60 @@ fn disturb_prints_the_response_and_refuses_what_it_cannot_do() {
     assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
     let o = run(&["disturb", "--model", "rimless"]);
     assert!(!o.status.success());
+}
+
+#[test]
+fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("u.h5");
+    let o = run(&[
+        "mfpt",
+        "--model",
+        "rimless",
+        "--sd",
+        "0.5deg",
+        "--dist",
+        "uniform",
+        "--walkers",
+        "40",
+        "--max-steps",
+        "200",
+        "--seed",
+        "2",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("draws uniform on [-sqrt 3, sqrt 3]"));
+    let d = pdw_store::read_mfpt(&out).unwrap();
+    assert!(d.distribution.starts_with("uniform"), "{}", d.distribution);
+    // the library's walk on the same uniform draws
+    let m = pdw::build("rimless", &[]).unwrap();
+    let (x0, _) = pdw::mfpt::start(&m).unwrap();
+    let plan = MfptPlan {
+        terrain: SlopeTerrain {
+            mean: d.mean,
+            sd: 0.5f64.to_radians(),
+            seed: 2,
+            kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: pdw_limit::terrain::TerrainDist::Uniform,
+        },
+        walkers: 40,
+        max_steps: 200,
+        integrator: pdw::mfpt::default_integrator(),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let (_, e) = pdw::mfpt::run(&m, &plan, &x0, &pool, &|_| {}).unwrap();
+    assert_eq!(d.survival, e.survival);
+    let o = run(&["mfpt", "--sd", "1deg", "--dist", "cauchy"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--dist: 'cauchy' is not one of normal, uniform, file:PATH"),
+        "{}",
+        stderr(&o)
+    );
 }

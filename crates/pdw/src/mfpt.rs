@@ -8,7 +8,9 @@ use crate::input::{self, InputError};
 use crate::model::BuiltModel;
 use pdw_hybrid::Options;
 use pdw_limit::markov::{ChainResult, Frame, SectionBox};
-use pdw_limit::terrain::{self, Fate, MfptEstimate, SlopeTerrain, SlopeWalk, TerrainKind};
+use pdw_limit::terrain::{
+    self, Fate, MfptEstimate, SlopeTerrain, SlopeWalk, TerrainDist, TerrainKind,
+};
 use pdw_limit::LimitError;
 use pdw_walkers::Walker;
 
@@ -16,15 +18,19 @@ use pdw_walkers::Walker;
 pub const GAIT_TOL: f64 = 1e-12;
 
 /// The largest magnitude a Box–Muller draw of [`terrain::standard_normal`] can reach:
-/// `√(−2 ln u)` with `u ≥ 2⁻⁵⁴`, i.e. `√(108 ln 2)` ≈ 8.65.
-pub const MAX_DRAW: f64 = 8.66;
+/// `√(−2 ln u)` with `u ≥ 2⁻⁵⁴`, i.e. `√(108 ln 2)` ≈ 8.65 ([`TerrainDist::max_abs`] of the
+/// other distributions).
+pub const MAX_DRAW: f64 = terrain::MAX_NORMAL_DRAW;
+
+/// The distributions `--dist` names (besides `file:PATH`).
+pub const DISTS: &[&str] = &["normal", "uniform", "file:PATH"];
 
 /// The terrains `--terrain` names.
 pub const TERRAINS: &[&str] = &["slope", "step-down"];
 
 /// A Monte Carlo MFPT run: the terrain, how many walkers, how many steps at most, and the
 /// integrator of the strides.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MfptPlan {
     pub terrain: SlopeTerrain,
     pub walkers: usize,
@@ -40,6 +46,7 @@ pub struct MfptFlags {
     pub mean: &'static str,
     pub walkers: &'static str,
     pub max_steps: &'static str,
+    pub dist: &'static str,
 }
 
 /// The default integrator: the basin's (DOP853 at 1e-9, [`pdw_limit::BasinOptions`]), the
@@ -61,6 +68,49 @@ pub fn check_terrain(name: &str, flags: &MfptFlags) -> Result<TerrainKind, Input
             TERRAINS.join(", ")
         )))
     }
+}
+
+/// The terrain distribution as typed: `normal`, `uniform` or `file:PATH` ([`TerrainDist`];
+/// a file is read by [`read_values`]).
+pub fn parse_dist(s: &str, flags: &MfptFlags) -> Result<TerrainDist, InputError> {
+    match s.trim() {
+        "normal" => Ok(TerrainDist::Normal),
+        "uniform" => Ok(TerrainDist::Uniform),
+        t => match t.strip_prefix("file:") {
+            Some(path) if !path.is_empty() => read_values(path, flags),
+            _ => Err(InputError(format!(
+                "{}: '{s}' is not one of {}",
+                flags.dist,
+                DISTS.join(", ")
+            ))),
+        },
+    }
+}
+
+/// The values of a distribution file: one number per line, blank lines and everything after
+/// a `#` ignored; at least one value, every value finite.
+pub fn read_values(path: &str, flags: &MfptFlags) -> Result<TerrainDist, InputError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError(format!("{}: cannot read '{path}': {e}", flags.dist)))?;
+    let mut values = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let v = line.split('#').next().unwrap_or("").trim();
+        if v.is_empty() {
+            continue;
+        }
+        match v.parse::<f64>() {
+            Ok(x) if x.is_finite() => values.push(x),
+            _ => {
+                return Err(InputError(format!(
+                    "{}: '{path}' line {}: '{v}' is not a finite number (one value per line, \
+                     '#' starts a comment)",
+                    flags.dist,
+                    i + 1
+                )))
+            }
+        }
+    }
+    TerrainDist::values(path, values).map_err(|e| InputError(format!("{}: {e}", flags.dist)))
 }
 
 /// The slope's standard deviation as typed (radians, or `1deg`): finite and ≥ 0.
@@ -158,13 +208,18 @@ pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> 
             return Err(InputError(format!("{flag}: 0 must be an integer >= 1")));
         }
     }
-    let t = plan.terrain;
-    if t.kind == TerrainKind::Slope && t.mean.abs() + MAX_DRAW * t.sd >= std::f64::consts::FRAC_PI_2
-    {
+    let t = &plan.terrain;
+    let reach = t.dist.max_abs();
+    if t.kind == TerrainKind::Slope && t.mean.abs() + reach * t.sd >= std::f64::consts::FRAC_PI_2 {
         return Err(InputError(format!(
-            "{} {} rad with {} {} rad: slopes up to {MAX_DRAW} standard deviations from the \
-             mean are drawn and must stay within (-pi/2, pi/2) rad",
-            flags.sd, t.sd, flags.mean, t.mean
+            "{} {} rad with {} {} rad: slopes up to {reach} standard deviations from the mean \
+             are drawn ({} {}) and must stay within (-pi/2, pi/2) rad",
+            flags.sd,
+            t.sd,
+            flags.mean,
+            t.mean,
+            flags.dist,
+            t.dist.name()
         )));
     }
     Ok(())
@@ -187,15 +242,16 @@ pub fn check_model_for(m: &BuiltModel, kind: TerrainKind) -> Result<(), InputErr
 /// Refuses a step-height terrain whose draws (up to [`MAX_DRAW`] standard deviations from the
 /// mean) the model does not take, with the model's reason (e.g. a step beyond a spoke's reach).
 pub fn check_heights(m: &BuiltModel, plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> {
-    let t = plan.terrain;
+    let t = &plan.terrain;
     if t.kind != TerrainKind::StepDown {
         return Ok(());
     }
     let at = model_at_param(m, "step_down");
-    for h in [t.mean - MAX_DRAW * t.sd, t.mean + MAX_DRAW * t.sd] {
+    let reach = t.dist.max_abs();
+    for h in [t.mean - reach * t.sd, t.mean + reach * t.sd] {
         if let Err(e) = at(h) {
             return Err(InputError(format!(
-                "{} {} with a mean step down of {}: step heights up to {MAX_DRAW} standard \
+                "{} {} with a mean step down of {}: step heights up to {reach} standard \
                  deviations from the mean are drawn, and the model refuses {h}: {}",
                 flags.sd,
                 t.sd,
@@ -365,11 +421,12 @@ fn padded((mut lo, mut hi): SectionBox) -> SectionBox {
     (lo, hi)
 }
 
-/// The terrain nodes `(s_l, w_l)` (slopes or step heights) of an `n`-point Gauss–Hermite rule
-/// for `plan`'s terrain.
+/// The terrain nodes `(s_l, w_l)` (slopes or step heights) of an `n`-point quadrature of
+/// `plan`'s terrain distribution ([`TerrainDist::quadrature`]: Gauss–Hermite for normals,
+/// Gauss–Legendre for uniforms, a list's empirical distribution).
 pub fn terrain_nodes(plan: &MfptPlan, n: usize) -> Vec<(f64, f64)> {
-    let (z, w) = pdw_limit::markov::gauss_hermite(n);
-    let t = plan.terrain;
+    let t = &plan.terrain;
+    let (z, w) = t.dist.quadrature(n);
     z.iter()
         .zip(&w)
         .map(|(z, w)| (t.mean + t.sd * z, *w))
@@ -527,5 +584,126 @@ pub fn refinement_warning(coarse: &ChainResult, fine: &ChainResult, n: usize) ->
             coarse.mfpt,
             fine.mfpt
         )
+    })
+}
+
+/// The terrain distribution in words, for reports and files: its name, and for a list of
+/// values how many there are, their mean and standard deviation.
+pub fn dist_words(d: &TerrainDist) -> String {
+    match d {
+        TerrainDist::Normal => "normal".into(),
+        TerrainDist::Uniform => "uniform on [-sqrt 3, sqrt 3] (variance 1)".into(),
+        TerrainDist::Values(v) => {
+            let n = v.values.len() as f64;
+            let mean = v.values.iter().sum::<f64>() / n;
+            let var = v.values.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+            format!(
+                "{} ({} values, mean {mean:.6}, sd {:.6}; each step draws one with equal \
+                 probability, scaled by sd)",
+                d.name(),
+                v.values.len(),
+                var.sqrt()
+            )
+        }
+    }
+}
+
+/// The name of the chain's quadrature of `d` ([`TerrainDist::quadrature`]).
+pub fn quadrature_name(d: &TerrainDist) -> &'static str {
+    match d {
+        TerrainDist::Normal => "Gauss-Hermite",
+        TerrainDist::Uniform => "Gauss-Legendre",
+        TerrainDist::Values(_) => "empirical",
+    }
+}
+
+/// The names a front end gives the chain's options in its messages.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChainFlags {
+    pub chain: &'static str,
+    pub mesh: &'static str,
+    pub nodes: &'static str,
+}
+
+/// Default quadrature nodes of the chain.
+pub const DEFAULT_NODES: usize = 11;
+
+/// The chain's plan for `m`, checked: `mesh` nodes per axis (default by the section's
+/// dimension: 200, 60, 12; at least 2), `nodes` quadrature nodes (1 … 40, default
+/// [`DEFAULT_NODES`]); refused for a section of more than 3 coordinates.
+pub fn check_chain(
+    m: &BuiltModel,
+    mesh: Option<usize>,
+    nodes: Option<usize>,
+    flags: &ChainFlags,
+) -> Result<ChainPlan, InputError> {
+    let d = m.info.section_names.len();
+    let default = match d {
+        1 => 200,
+        2 => 60,
+        3 => 12,
+        _ => {
+            return Err(InputError(format!(
+                "{}: model '{}' has {d} section coordinates; the mesh is built for at most 3",
+                flags.chain, m.info.name
+            )))
+        }
+    };
+    let mesh = mesh.unwrap_or(default);
+    if mesh < 2 {
+        return Err(InputError(format!(
+            "{}: {mesh} must be at least 2",
+            flags.mesh
+        )));
+    }
+    let nodes = nodes.unwrap_or(DEFAULT_NODES);
+    if !(1..=40).contains(&nodes) {
+        return Err(InputError(format!(
+            "{}: {nodes} must be between 1 and 40",
+            flags.nodes
+        )));
+    }
+    Ok(ChainPlan {
+        nodes,
+        mesh,
+        bounds: None,
+    })
+}
+
+/// The chain at `chain.mesh` and at twice as many nodes per axis over one box ([`chain_box`]),
+/// with the relative change between them and its warning ([`refinement_warning`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainPair {
+    pub chain_box: ChainBox,
+    /// The coarse mesh's and the fine mesh's results.
+    pub results: [ChainResult; 2],
+    pub change: f64,
+    pub warning: Option<String>,
+}
+
+/// The chain of `chain` at its mesh and twice as fine, from `x0` ([`ChainPair`]).
+pub fn chain_pair(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: &ChainPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<ChainPair, LimitError> {
+    let cb = chain_box(m, plan, chain, x0, pool)?;
+    let at = |n: usize| {
+        let c = ChainPlan {
+            mesh: n,
+            ..chain.clone()
+        };
+        chain_in(m, plan, &c, &cb.frame, &cb.bounds, x0, pool)
+    };
+    let results = [at(chain.mesh)?, at(2 * chain.mesh)?];
+    let change = refinement_change(&results[0], &results[1]);
+    let warning = refinement_warning(&results[0], &results[1], chain.mesh);
+    Ok(ChainPair {
+        chain_box: cb,
+        results,
+        change,
+        warning,
     })
 }

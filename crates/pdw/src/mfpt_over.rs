@@ -79,9 +79,9 @@ pub fn plan_at(m: &BuiltModel, plan: &MfptPlan, flags: &MfptFlags) -> Result<Mfp
     let p = MfptPlan {
         terrain: SlopeTerrain {
             mean: m.slope(),
-            ..plan.terrain
+            ..plan.terrain.clone()
         },
-        ..*plan
+        ..plan.clone()
     };
     mfpt::check_plan(&p, flags)?;
     Ok(p)

@@ -23,6 +23,7 @@ fn the_principal_axes_mesh_resolves_the_simplest_walkers_band_where_the_axis_box
             sd: 0.04_f64.to_radians(),
             seed: 1,
             kind: TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers: 4000,
         max_steps: 1000,

@@ -161,6 +161,7 @@ fn the_section_walk_is_the_terrain_walk() {
         sd: 2f64.to_radians() * 0.1,
         seed: 5,
         kind: pdw_limit::terrain::TerrainKind::Slope,
+        dist: Default::default(),
     };
     let mut integ = walk.integrator(x0.len()).unwrap();
     for i in 0..20u64 {
@@ -206,6 +207,7 @@ fn the_norm_is_the_indicators_standard_deviation_per_unit_slope_noise() {
         sd,
         seed: 11,
         kind: pdw_limit::terrain::TerrainKind::Slope,
+        dist: Default::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)

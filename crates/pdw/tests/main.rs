@@ -11,3 +11,4 @@ mod mfpt_lockstep;
 mod mfpt_step_down;
 mod rimless_chain;
 mod simulate;
+mod terrain_dist;

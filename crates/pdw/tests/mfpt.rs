@@ -14,6 +14,7 @@ const FLAGS: MfptFlags = MfptFlags {
     mean: "--mean",
     walkers: "--walkers",
     max_steps: "--max-steps",
+    dist: "--dist",
 };
 
 fn model(name: &str, slope: f64) -> pdw::BuiltModel {
@@ -182,6 +183,7 @@ fn the_walk_is_the_same_on_one_and_on_two_threads() {
             sd: 0.0005,
             seed: 5,
             kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers: 24,
         max_steps: 40,
@@ -280,6 +282,7 @@ fn round_feet_and_bad_requests_are_refused_with_clear_messages() {
             sd,
             seed: 0,
             kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers,
         max_steps: 10,
@@ -341,6 +344,7 @@ fn the_markov_chain_agrees_with_the_monte_carlo_walkers() {
             sd: 0.5f64.to_radians(),
             seed: 1,
             kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers: 2000,
         max_steps: 20_000,

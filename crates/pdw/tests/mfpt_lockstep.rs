@@ -24,6 +24,7 @@ fn terrain(mean: f64, sd: f64) -> SlopeTerrain {
         sd,
         seed: 11,
         kind: TerrainKind::Slope,
+        dist: Default::default(),
     }
 }
 
@@ -156,6 +157,7 @@ fn step_heights_walk_one_by_one_and_the_lockstep_walk_refuses_them() {
         sd: 0.01,
         seed: 3,
         kind: TerrainKind::StepDown,
+        dist: Default::default(),
     };
     let (x0, _) = mfpt::start(&m).unwrap();
     let p = pool(2);

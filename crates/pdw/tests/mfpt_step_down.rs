@@ -11,6 +11,7 @@ const FLAGS: MfptFlags = MfptFlags {
     mean: "--mean",
     walkers: "--walkers",
     max_steps: "--max-steps",
+    dist: "--dist",
 };
 
 const GAMMA: f64 = 0.08;
@@ -31,6 +32,7 @@ fn plan(mean: f64, sd: f64, walkers: usize, max_steps: usize) -> MfptPlan {
             sd,
             seed: 7,
             kind: TerrainKind::StepDown,
+            dist: Default::default(),
         },
         walkers,
         max_steps,

@@ -326,6 +326,7 @@ fn plan() -> MfptPlan {
             sd: SD_DEG.to_radians(),
             seed: 1,
             kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
         },
         walkers: 2000,
         max_steps: 20_000,
@@ -338,4 +339,113 @@ fn pool() -> rayon::ThreadPool {
         .num_threads(2)
         .build()
         .unwrap()
+}
+
+/// The plan of [`plan`] with the standardised draws of `dist` and standard deviation `sd`.
+fn plan_with(dist: pdw_limit::terrain::TerrainDist, sd: f64, walkers: usize) -> MfptPlan {
+    let mut p = plan();
+    p.terrain.dist = dist;
+    p.terrain.sd = sd;
+    p.walkers = walkers;
+    p
+}
+
+/// The engine's chain at `mesh` and `2 mesh` over the walkers' box (11 quadrature nodes).
+fn engine_pair(m: &pdw::BuiltModel, plan: &MfptPlan, x0: &[f64], mesh: usize) -> (f64, f64) {
+    let c = mfpt::ChainPlan {
+        nodes: 11,
+        mesh,
+        bounds: None,
+    };
+    let pair = mfpt::chain_pair(m, plan, &c, x0, &pool()).unwrap();
+    (pair.results[0].mfpt, pair.results[1].mfpt)
+}
+
+/// On uniform slopes (σ = 0.5°, half-width √3 σ) the engine's chain on its Gauss–Legendre
+/// nodes and the closed-form chain on 41 of them agree with 2000 Monte Carlo walkers within 3
+/// standard errors plus each chain's own mesh change.
+#[test]
+fn the_chain_on_uniform_slopes_agrees_with_the_monte_carlo_walkers() {
+    let m = pdw::build("rimless", &[("slope".to_string(), MEAN)]).unwrap();
+    let wheel = Wheel::of(&m);
+    let (x0, s0) = mfpt::start(&m).unwrap();
+    let plan = plan_with(
+        pdw_limit::terrain::TerrainDist::Uniform,
+        SD_DEG.to_radians(),
+        2000,
+    );
+    let (_, mc) = mfpt::run(&m, &plan, &x0, &pool(), &|_| {}).unwrap();
+    assert_eq!(mc.censored, 0);
+    let (coarse, fine) = engine_pair(&m, &plan, &x0, 200);
+    let closed = |n_rate| {
+        let mut cc = ClosedChain::new(41, n_rate, 0.5, 1.8);
+        cc.slopes = mfpt::terrain_nodes(&plan, 41);
+        cc.mfpt(&wheel, s0[0])
+    };
+    let (c1, c2) = (closed(651), closed(1301));
+    eprintln!(
+        "uniform: Monte Carlo {} ± {}; engine {coarse} / {fine}; closed form {c1} / {c2}",
+        mc.restricted_mean, mc.restricted_stderr
+    );
+    for (chain, own) in [(fine, (fine - coarse).abs()), (c2, (c2 - c1).abs())] {
+        let tol = 3.0 * mc.restricted_stderr + own;
+        assert!(
+            (mc.restricted_mean - chain).abs() < tol,
+            "Monte Carlo {} vs chain {chain} (tol {tol})",
+            mc.restricted_mean
+        );
+    }
+}
+
+/// A file of the values −1 and +1 is the two-point distribution: its quadrature is those two
+/// slopes with weight ½ each, the engine's chain on it matches a closed-form chain built on
+/// the two slopes directly, and both agree with 4000 Monte Carlo walkers that draw from the
+/// file within 3 standard errors plus the meshes' changes.
+#[test]
+fn a_file_of_minus_one_and_one_is_the_two_point_distribution() {
+    let path = std::env::temp_dir().join(format!("pdw-two-point-{}.txt", std::process::id()));
+    std::fs::write(&path, "# two values\n-1\n1 # up\n\n").unwrap();
+    let flags = mfpt::MfptFlags {
+        terrain: "--terrain",
+        sd: "--sd",
+        mean: "--mean",
+        walkers: "--walkers",
+        max_steps: "--max-steps",
+        dist: "--dist",
+    };
+    let dist = mfpt::parse_dist(&format!("file:{}", path.display()), &flags).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let sd = 1f64.to_radians();
+    let plan = plan_with(dist, sd, 4000);
+    assert_eq!(
+        mfpt::terrain_nodes(&plan, 11),
+        vec![(MEAN - sd, 0.5), (MEAN + sd, 0.5)]
+    );
+    let m = pdw::build("rimless", &[("slope".to_string(), MEAN)]).unwrap();
+    let wheel = Wheel::of(&m);
+    let (x0, s0) = mfpt::start(&m).unwrap();
+    let (_, mc) = mfpt::run(&m, &plan, &x0, &pool(), &|_| {}).unwrap();
+    assert_eq!(mc.censored, 0);
+    let (coarse, fine) = engine_pair(&m, &plan, &x0, 200);
+    let closed = |n_rate| {
+        let mut cc = ClosedChain::new(1, n_rate, 0.3, 2.2);
+        cc.slopes = vec![(MEAN - sd, 0.5), (MEAN + sd, 0.5)];
+        cc.mfpt(&wheel, s0[0])
+    };
+    let (c1, c2) = (closed(1901), closed(3801));
+    eprintln!(
+        "two points: Monte Carlo {} ± {}; engine {coarse} / {fine}; closed form {c1} / {c2}",
+        mc.restricted_mean, mc.restricted_stderr
+    );
+    let own = (fine - coarse).abs() + (c2 - c1).abs();
+    assert!(
+        (fine - c2).abs() < own.max(1e-3 * c2),
+        "engine {fine} vs {c2}"
+    );
+    let tol = 3.0 * mc.restricted_stderr + own;
+    assert!(
+        (mc.restricted_mean - c2).abs() < tol,
+        "Monte Carlo {} vs closed form {c2} (tol {tol})",
+        mc.restricted_mean
+    );
 }

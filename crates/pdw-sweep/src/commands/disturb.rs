@@ -17,6 +17,7 @@ const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
     mean: "--mean",
     walkers: "--walkers",
     max_steps: "--steps",
+    dist: "--dist",
 };
 
 pub fn run(a: &DisturbArgs) -> anyhow::Result<ExitCode> {

@@ -19,12 +19,14 @@ const FLAGS: MfptFlags = MfptFlags {
     mean: "--mean",
     walkers: "--walkers",
     max_steps: "--max-steps",
+    dist: "--dist",
 };
 
 pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let kind = mfpt::check_terrain(&a.terrain, &FLAGS)?;
     let sds = mfpt::parse_sd_values_for(&a.sd, kind, &FLAGS)?;
     let sd = sds[sds.len() - 1];
+    let dist = mfpt::parse_dist(&a.dist, &FLAGS)?;
     let integrator = super::integrator(&a.integrator, mfpt::default_integrator())?;
     let choice = model_choice(a, kind)?;
     let m = build_model(&choice)?;
@@ -35,6 +37,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
             sd,
             seed: a.seed,
             kind,
+            dist,
         },
         walkers: a.walkers,
         max_steps: a.max_steps,
@@ -175,12 +178,13 @@ pub(super) fn claim_out(a: &MfptArgs) -> Result<Option<super::output::Claim>, In
 
 /// The run's lines: model, terrain and start; the MFPT by both estimators; falls by kind; speed.
 fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate, secs: f64) {
-    let t = plan.terrain;
+    let t = &plan.terrain;
     crate::outln!(
-        "model {}  {}, seed {}",
+        "model {}  {}, seed {}; draws {}",
         m.info.name,
-        terrain_words(m, &t),
-        t.seed
+        terrain_words(m, t),
+        t.seed,
+        mfpt::dist_words(&t.dist)
     );
     crate::outln!("start: stable gait {section:?} (just after a heel strike)");
     crate::outln!(
@@ -241,7 +245,7 @@ fn write(
     secs: f64,
     chain: Vec<(String, f64)>,
 ) -> anyhow::Result<()> {
-    let t = plan.terrain;
+    let t = &plan.terrain;
     let data = pdw_store::MfptData {
         command: super::command_line(),
         model: m.info.name.clone(),
@@ -253,6 +257,7 @@ fn write(
         }
         .into(),
         terrain: t.kind.name().into(),
+        distribution: mfpt::dist_words(&t.dist),
         terrain_unit: terrain_unit(m, t.kind),
         mean: t.mean,
         sd: t.sd,
@@ -349,34 +354,12 @@ pub(super) fn chain_plan(
     if !a.chain {
         return Ok(None);
     }
-    let d = m.info.section_names.len();
-    let default = match d {
-        1 => 200,
-        2 => 60,
-        3 => 12,
-        _ => {
-            return Err(InputError(format!(
-                "--chain: model '{}' has {d} section coordinates; the mesh is built for at \
-                 most 3",
-                m.info.name
-            )))
-        }
+    let flags = mfpt::ChainFlags {
+        chain: "--chain",
+        mesh: "--mesh",
+        nodes: "--nodes",
     };
-    let mesh = a.mesh.unwrap_or(default);
-    if mesh < 2 {
-        return Err(InputError(format!("--mesh: {mesh} must be at least 2")));
-    }
-    if !(1..=40).contains(&a.nodes) {
-        return Err(InputError(format!(
-            "--nodes: {} must be between 1 and 40",
-            a.nodes
-        )));
-    }
-    Ok(Some(mfpt::ChainPlan {
-        nodes: a.nodes,
-        mesh,
-        bounds: None,
-    }))
+    mfpt::check_chain(m, a.mesh, Some(a.nodes), &flags).map(Some)
 }
 
 /// The chain at `--mesh` and twice as fine over the box the walkers visit; prints both and
@@ -401,8 +384,9 @@ pub(super) fn run_chain(
         )
     };
     crate::outln!(
-        "Markov chain: {} Gauss-Hermite nodes of the terrain, mesh over {} ({how})",
+        "Markov chain: {} {} nodes of the terrain, mesh over {} ({how})",
         c.nodes,
+        mfpt::quadrature_name(&plan.terrain.dist),
         mesh_box_text(&cb)
     );
     let mut out = vec![

@@ -43,8 +43,11 @@ pub(super) fn run(
     let mut rows = Vec::with_capacity(sds.len());
     for (i, &sd) in sds.iter().enumerate() {
         let p = MfptPlan {
-            terrain: SlopeTerrain { sd, ..plan.terrain },
-            ..*plan
+            terrain: SlopeTerrain {
+                sd,
+                ..plan.terrain.clone()
+            },
+            ..plan.clone()
         };
         let done = (i * a.walkers) as u64;
         let (_, est) = mfpt::run(m, &p, &x0, &pool, &|n| pb.set_position(done + n as u64))?;
@@ -70,7 +73,7 @@ pub(super) fn run(
 /// The curve as a table: σ, the MFPT with its standard error, falls and censored walkers, the
 /// chain's two meshes.
 fn table(m: &BuiltModel, plan: &MfptPlan, section: &[f64], rows: &[Row], secs: f64) {
-    let t = plan.terrain;
+    let t = &plan.terrain;
     let (mean, unit2, scale2) = match t.kind {
         TerrainKind::Slope => (
             format!(
@@ -91,10 +94,11 @@ fn table(m: &BuiltModel, plan: &MfptPlan, section: &[f64], rows: &[Row], secs: f
         }
     };
     crate::outln!(
-        "model {}  {mean}, seed {}; {} walkers per value, at most {} steps; start: stable gait \
-         ({})",
+        "model {}  {mean}, seed {}, draws {}; {} walkers per value, at most {} steps; start: \
+         stable gait ({})",
         m.info.name,
         t.seed,
+        mfpt::dist_words(&t.dist),
         plan.walkers,
         plan.max_steps,
         section
@@ -150,6 +154,7 @@ fn write(
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
         terrain: plan.terrain.kind.name().into(),
+        distribution: mfpt::dist_words(&plan.terrain.dist),
         terrain_unit: unit.clone(),
         mean: plan.terrain.mean,
         seed: plan.terrain.seed,

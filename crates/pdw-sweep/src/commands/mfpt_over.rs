@@ -79,13 +79,14 @@ fn mfpt_of(r: &OverRow) -> f64 {
 
 /// The table: value, mean slope, MFPT ± stderr, falls, the chain, the GSN (or why none).
 fn table(name: &str, plan: &MfptPlan, rows: &[OverRow], rho: f64, secs: f64) {
-    let t = plan.terrain;
+    let t = &plan.terrain;
     crate::outln!(
-        "mfpt over {name}: terrain slope sd {} rad ({:.4}°), seed {}; {} walkers per value, at \
-         most {} steps; gait sensitivity norm of step time and step length per rad",
+        "mfpt over {name}: terrain slope sd {} rad ({:.4}°), seed {}, draws {}; {} walkers per \
+         value, at most {} steps; gait sensitivity norm of step time and step length per rad",
         t.sd,
         t.sd.to_degrees(),
         t.seed,
+        pdw::mfpt::dist_words(&t.dist),
         plan.walkers,
         plan.max_steps
     );
@@ -164,6 +165,7 @@ fn write(
         params: m.params_json().to_string(),
         param: name.to_string(),
         terrain: "slope".into(),
+        distribution: pdw::mfpt::dist_words(&plan.terrain.dist),
         sd: plan.terrain.sd,
         seed: plan.terrain.seed,
         walkers: plan.walkers as u64,
