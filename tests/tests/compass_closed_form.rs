@@ -609,3 +609,98 @@ fn short_period_unstable_gait_of_goswami_agrees_with_the_closed_form() {
         .fold(0.0, f64::max);
     assert!(dm <= 1e-10, "{:?} vs {:?}", a.multipliers, b.multipliers);
 }
+
+/// Goswami's compass with `step_down = h` (chain walker module docs, "Step down").
+fn stepping(p: &Gp, h: f64) -> ChainWalker {
+    presets::compass(&[
+        ("leg_mass", p.leg_mass),
+        ("hip_mass", p.hip_mass),
+        ("a", p.a),
+        ("b", p.b),
+        ("slope", p.slope),
+        ("gravity", p.gravity),
+        ("step_down", h),
+    ])
+    .unwrap()
+}
+
+/// Goswami's kinetic energy `½ ω̇ᵀ M(θ) ω̇` (the `M` of [`accel`]) of a state in the chain
+/// walker's coordinates, the stance foot at rest.
+fn kinetic(p: &Gp, x: &[f64]) -> f64 {
+    let (m, mh, a, b) = (p.leg_mass, p.hip_mass, p.a, p.b);
+    let l = a + b;
+    let cd = (-x[1]).cos();
+    let (w_s, w_ns) = (x[2], x[2] + x[3]);
+    let mm = [
+        [m * b * b, -m * l * b * cd],
+        [-m * l * b * cd, (mh + m) * l * l + m * a * a],
+    ];
+    let w = [w_ns, w_s];
+    0.5 * (0..2)
+        .map(|i| (0..2).map(|j| w[i] * mm[i][j] * w[j]).sum::<f64>())
+        .sum::<f64>()
+}
+
+/// A stride of the compass with a step down `h` from the level gait: at the heel strike the
+/// swing foot is `h` below the stance foot by the closed-form geometry ([`swing_foot`]), the
+/// state after it is Goswami's impact map ([`impact`]) of the configuration at contact, and the
+/// walker's energy drops by the closed form's kinetic-energy loss (the potential measured from
+/// the new stance foot, `M g⃗·p` lower with `p` the new foothold).
+#[test]
+fn heel_strike_onto_a_step_lands_h_below_and_loses_the_closed_form_energy() {
+    let p = GOSWAMI;
+    let (_, level) = models(&p);
+    let s = fixed_point(&level, &level.gait_guesses()[0].section).section;
+    for h in [0.02, 0.005, -0.002] {
+        let cw = stepping(&p, h);
+        let map = StrideMap::new(&cw, Options::dop853(1e-12)).unwrap();
+        let st = map.stride(&s).unwrap();
+        assert!(st.outcome.is_ok(), "h {h}: {:?}", st.outcome);
+        let pre = &st.pre_event;
+        let foot = swing_foot(&p, pre);
+        assert!(
+            (foot[1] + h).abs() <= 1e-10 && foot[0] > 0.0,
+            "h {h}: swing foot {foot:?}"
+        );
+        let post = impact(&p, pre);
+        let d = max_abs_diff(&post, &st.post_event);
+        assert!(d <= 1e-11, "h {h}: impact {post:?} vs {:?}", st.post_event);
+        let mass = 2.0 * p.leg_mass + p.hip_mass;
+        let g_dot_p = p.gravity * (p.slope.sin() * foot[0] - p.slope.cos() * foot[1]);
+        let e = |x: &[f64]| cw.energy(x).unwrap();
+        let lost = e(pre) - e(&st.post_event) + mass * g_dot_p;
+        let closed = kinetic(&p, pre) - kinetic(&p, &post);
+        eprintln!("h {h}: energy lost {lost:.12e} J, closed form {closed:.12e} J");
+        assert!(
+            closed > 0.0 && (lost - closed).abs() <= 1e-9 * closed.max(1.0),
+            "h {h}"
+        );
+    }
+}
+
+/// The compass's fixed point with a constant step down `h` tends continuously (linearly) to the
+/// level gait as `h → 0`, and a step down changes the gait (its stride differs from level).
+#[test]
+fn fixed_point_on_a_constant_step_down_tends_to_the_level_gait() {
+    let p = GOSWAMI;
+    let (_, level) = models(&p);
+    let s0 = fixed_point(&level, &level.gait_guesses()[0].section).section;
+    let dist = |h: f64| max_abs_diff(&fixed_point(&stepping(&p, h), &s0).section, &s0);
+    let (d1, d2, d3) = (dist(1e-3), dist(1e-4), dist(1e-5));
+    eprintln!("|s*(h) − s*(0)|: h 1e-3 {d1:.3e}, 1e-4 {d2:.3e}, 1e-5 {d3:.3e}");
+    assert!(d1 > 0.0 && d2 > 0.0 && d3 > 0.0);
+    // linear in h: each tenfold smaller step moves the gait about ten times less
+    for (big, small) in [(d1, d2), (d2, d3)] {
+        let ratio = big / small;
+        assert!((5.0..20.0).contains(&ratio), "ratio {ratio}");
+    }
+}
+
+/// A step of a leg length or more is refused with a message naming `step_down`.
+#[test]
+fn a_step_beyond_a_leg_is_refused() {
+    for h in [1.0, -1.5] {
+        let e = presets::compass(&[("step_down", h)]).unwrap_err();
+        assert!(e.to_string().contains("step_down"), "{e}");
+    }
+}

@@ -97,6 +97,24 @@
 //! from `ID_F` too. Energy counts the arc centre's travel. `r = 0` runs the point-foot code
 //! unchanged.
 //!
+//! # Step down (random step heights; Schwab & Wisse 2001, Hobbelen & Wisse 2007)
+//! With `step_down = h ≠ 0` the next foothold lies `h` below the stance foot along the slope
+//! normal (a step down positive, up negative), on a line parallel to the slope — the simplest
+//! walker's convention. Both swing-foot guards (`heel_strike`, `foot_strike_knee_bent` and
+//! their twins) measure the foot's height over that line, `z + h`, `z` the height over the
+//! stance foot's line; `heel_strike` is admissible with the swing foot ahead (the heel-strike
+//! factor above tells a level-ground strike from the mid-stance crossing of `z = 0`, which a
+//! foothold `h ≠ 0` away does not have). The impacts are unchanged in form: they depend on the
+//! configuration at contact only. The dynamics see angles only, and every angle stays measured
+//! from the slope normal, so the next step starts from the new stance foot with nothing
+//! shifted. After a strike onto `h` the straight trailing leg's foot is `h` above the new
+//! stance foot, so the lift of the model with `step_down = h` puts it there:
+//! `ψ = −acos(cos q₀ − h/L)` (behind), `q_m = ψ − q₀`, `L` the leg length
+//! ([`ChainWalker::trailing_leg_angle`]); at `h = 0` the level-ground lift and guards run
+//! unchanged, bit for bit. [`Walker::swing_clearance`] measures a swing foot ahead of the
+//! stance foot from the foothold's line when `h > 0` (a step down is not a scuff). Round feet
+//! and a height of a leg length or more are refused.
+//!
 //! # Section
 //! Just after heel strike, every knee straight: `q = (s₀, 0…, −2s₀, 0…)`,
 //! `q̇ = (s₁, 0…, s₂, 0…)`; reduced coordinates `(q₀, q̇₀, q̇_m)` (`"stance"`, `"stance_rate"`,
@@ -289,6 +307,7 @@ impl ChainWalker {
             });
         }
         let n = 2 * m;
+        check_step_down(&spec, &r)?;
         let mut table = spec.param_table();
         table.values = values.to_vec();
         let mut links = Vec::with_capacity(n);
@@ -558,6 +577,28 @@ impl ChainWalker {
             z_out[l0..l0 + w].copy_from_slice(&z[..w]);
             r_out[l0..l0 + w].copy_from_slice(&zr[..w]);
             l0 += w;
+        }
+    }
+
+    /// A swing-foot height over the stance foot's line as the height over the next foothold,
+    /// `z + h` (module docs, "Step down"); `z` itself on level ground (`h = 0`, bit for bit).
+    #[inline(always)]
+    fn above_foothold(&self, z: f64) -> f64 {
+        let h = self.r.step_down;
+        if h == 0.0 {
+            z
+        } else {
+            z + h
+        }
+    }
+
+    /// [`ChainWalker::above_foothold`] on every lane's height.
+    fn above_foothold_lanes(&self, z: &mut [f64]) {
+        let h = self.r.step_down;
+        if h != 0.0 {
+            for v in z {
+                *v += h;
+            }
         }
     }
 
@@ -831,6 +872,15 @@ impl ImpactProblem {
 }
 
 impl ChainWalker {
+    /// The absolute angle `ψ` of the straight trailing leg just after a heel strike onto a
+    /// foothold `h` below, when the new stance leg's angle is `q₀`: the trailing foot is `h`
+    /// above the new stance foot, `L cos q₀ − L cos ψ = h`, behind it: `ψ = −acos(cos q₀ − h/L)`
+    /// (module docs, "Step down"; the simplest walker's lift with leg length `L`).
+    pub fn trailing_leg_angle(&self, q0: f64) -> f64 {
+        let l = self.leg_length;
+        -(q0.cos() - self.r.step_down / l).clamp(-1.0, 1.0).acos()
+    }
+
     /// Index of the twin of the impact guard 0 in `mode` (a fall on the same surface).
     fn twin_guard(&self, mode: usize) -> usize {
         if self.free_knee.is_some() && mode == FREE {
@@ -859,6 +909,7 @@ impl ChainWalker {
         let base = match (free, self.base_guard(mode, k)) {
             (true, 0) => true,
             (true, 1) => self.swing_foot(x)[0] > 0.0,
+            (false, 0) if self.r.step_down != 0.0 => self.swing_foot(x)[0] > 0.0,
             (false, 0) => {
                 let qh = x[self.m];
                 self.swing_foot(x)[0] > 0.0 && (2.0 * self.stance_angle(x) + qh).abs() < qh.abs()
@@ -1138,6 +1189,30 @@ impl ChainWalker {
     }
 }
 
+/// Refuses a step down the walker cannot take: round feet (their contact point rolls along
+/// the line, module docs "Step down") and a height of a leg length or more (the swing foot
+/// never reaches a foothold that far below, nor the trailing foot one that far above).
+fn check_step_down(spec: &WalkerSpec, r: &Resolved) -> Result<(), WalkerError> {
+    let h = r.step_down;
+    if h == 0.0 {
+        return Ok(());
+    }
+    let leg: f64 = r.segments.iter().map(|s| s[0]).sum();
+    let rule = if r.foot_radius > 0.0 {
+        "0 with round feet (foot_radius > 0): step heights are defined for point feet".to_string()
+    } else if h.abs() >= leg {
+        format!("a height within (-{leg}, {leg}), less than one leg length")
+    } else {
+        return Ok(());
+    };
+    Err(WalkerError::InvalidSpec {
+        source_name: spec.name.clone(),
+        field: "parameters.step_down".into(),
+        value: h.to_string(),
+        rule,
+    })
+}
+
 /// A link with a point mass `mp` added at `p` (link frame): composite mass, COM and inertia
 /// about the new COM (parallel-axis theorem).
 fn add_point_mass(l: Link, mp: f64, p: [f64; 2]) -> Link {
@@ -1207,10 +1282,13 @@ impl HybridSystem for ChainWalker {
         };
         match (free, k) {
             (true, 0) => column(self.free_knee.unwrap_or(0), out, 0.0),
-            (_, k) if k < lead => pdw_simd::dispatch(
-                #[inline(always)]
-                || self.foot_height_lanes(x, out),
-            ),
+            (_, k) if k < lead => {
+                pdw_simd::dispatch(
+                    #[inline(always)]
+                    || self.foot_height_lanes(x, out),
+                );
+                self.above_foothold_lanes(&mut out[..lanes]);
+            }
             (_, k) => match k - lead {
                 0 => column(n, out, 0.0),
                 1 => column(0, out, -FRAC_PI_2),
@@ -1241,7 +1319,10 @@ impl HybridSystem for ChainWalker {
                     let j = self.free_knee.unwrap_or(0);
                     (x[j], f[j])
                 }
-                (_, k) if k < lead => self.foot_height_and_rate(x, f),
+                (_, k) if k < lead => {
+                    let (z, zr) = self.foot_height_and_rate(x, f);
+                    (self.above_foothold(z), zr)
+                }
                 (_, k) => match k - lead {
                     0 => (x[n], f[n]),
                     1 => (x[0] - FRAC_PI_2, f[0]),
@@ -1294,10 +1375,13 @@ impl HybridSystem for ChainWalker {
             };
             match (free, self.base_guard(mode, k)) {
                 (true, 0) => copy(self.free_knee.unwrap_or(0), None),
-                (_, k) if k < lead => pdw_simd::dispatch(
-                    #[inline(always)]
-                    || self.foot_height_rate_lanes(&xc[..n], &fc[..n], lanes, gk, rk),
-                ),
+                (_, k) if k < lead => {
+                    pdw_simd::dispatch(
+                        #[inline(always)]
+                        || self.foot_height_rate_lanes(&xc[..n], &fc[..n], lanes, gk, rk),
+                    );
+                    self.above_foothold_lanes(&mut gk[..lanes]);
+                }
                 (_, k) => match k - lead {
                     0 => copy(n, None),
                     1 => copy(0, Some(-FRAC_PI_2)),
@@ -1325,7 +1409,7 @@ impl HybridSystem for ChainWalker {
         let lead = if free { 2 } else { 1 };
         match (free, k) {
             (true, 0) => x[self.free_knee.unwrap_or(0)],
-            (_, k) if k < lead => self.swing_foot(x)[1],
+            (_, k) if k < lead => self.above_foothold(self.swing_foot(x)[1]),
             (_, k) => match k - lead {
                 0 => x[n],
                 1 => x[0] - FRAC_PI_2,
@@ -1625,7 +1709,11 @@ impl Section for ChainWalker {
         let (m, n) = (self.m, self.n);
         x[..2 * n].fill(0.0);
         x[0] = s[0];
-        x[m] = -2.0 * s[0];
+        x[m] = if self.r.step_down == 0.0 {
+            -2.0 * s[0]
+        } else {
+            self.trailing_leg_angle(s[0]) - s[0]
+        };
         x[n] = s[1];
         x[n + m] = s[2];
         if let (Some(fk), Some(_)) = (self.free_knee, self.trailing_free) {
@@ -1690,6 +1778,10 @@ impl Walker for ChainWalker {
              max_stride_time = {:?}\nhip_mass = {:?}\nfoot_radius = {:?}\n",
             self.spec.name, r.slope, r.gravity, r.max_stride_time, r.hip_mass, r.foot_radius
         );
+        // level ground names the model as before step heights existed
+        if r.step_down != 0.0 {
+            s.push_str(&format!("step_down = {:?}\n", r.step_down));
+        }
         for (k, g) in r.segments.iter().enumerate() {
             let [l, m, c, cn, i] = *g;
             s.push_str(&format!(
@@ -1886,8 +1978,12 @@ impl Walker for ChainWalker {
     /// Height of the swing foot's lowest point above the slope: with round feet both arc
     /// centres are `r` above their feet's lowest points (the stance one on the slope), so it is
     /// the height of the chain's tip over its root, as for point feet.
+    /// With a step down (`h > 0`) the ground ahead of the stance foot is the foothold's line
+    /// `h` lower (module docs, "Step down"), so a swing foot ahead is measured from there.
     fn swing_clearance(&self, _mode: usize, x: &[f64]) -> Option<f64> {
-        Some(self.swing_foot(x)[1])
+        let [y, z] = self.swing_foot(x);
+        let h = self.r.step_down;
+        Some(if h > 0.0 && y > 0.0 { z + h } else { z })
     }
     /// Walkers with knees must clear the ground over the whole swing; straight-legged ones
     /// (the compass gait) keep the point-foot literature's mid-stance convention.

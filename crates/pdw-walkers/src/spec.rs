@@ -37,8 +37,8 @@
 //! source = "…"
 //! ```
 //!
-//! The parameters `slope` (rad), `gravity` and `max_stride_time` always exist (defaults: slope
-//! required, 9.81, 5.0); a spec sets their defaults, units and descriptions in `[parameters]`
+//! The parameters `slope` (rad), `gravity`, `max_stride_time` and `step_down` always exist
+//! (defaults: slope required, 9.81, 5.0, 0 — the chain walker's module docs, "Step down"); a spec sets their defaults, units and descriptions in `[parameters]`
 //! like any other parameter. A parameter's value is in its `unit`, converted into the spec's
 //! base unit by the table of [`crate::units`] (`{ value = 3, unit = "deg" }` is 3° in rad,
 //! `{ value = 50, unit = "cm" }` 0.5 m in an SI spec; `L`, `M`, `T` and `1` are taken as is).
@@ -168,7 +168,8 @@ pub struct WalkerSpec {
     /// Where the preset's values come from.
     #[serde(default)]
     pub source: String,
-    /// Named parameters (`--set NAME=V`); `slope`, `gravity`, `max_stride_time` always exist.
+    /// Named parameters (`--set NAME=V`); `slope`, `gravity`, `max_stride_time`, `step_down`
+    /// always exist.
     #[serde(default)]
     pub parameters: BTreeMap<String, ParamDef>,
     /// Hip point mass (≥ 0), carried by the stance leg's top segment at its upper end.
@@ -192,7 +193,7 @@ pub struct WalkerSpec {
 }
 
 /// Parameters every chain walker has, with their defaults when a spec does not set them.
-pub(crate) const BUILTIN_PARAMS: [(&str, f64, &str, &str); 3] = [
+pub(crate) const BUILTIN_PARAMS: [(&str, f64, &str, &str); 4] = [
     ("slope", f64::NAN, "rad", "slope angle γ"),
     ("gravity", 9.81, "m/s^2", "gravitational acceleration g"),
     (
@@ -200,6 +201,13 @@ pub(crate) const BUILTIN_PARAMS: [(&str, f64, &str, &str); 3] = [
         5.0,
         "s",
         "stride time budget; a longer stride counts as a fall",
+    ),
+    (
+        "step_down",
+        0.0,
+        "m",
+        "height of the next foothold below the stance foot, normal to the slope (negative: a \
+         step up)",
     ),
 ];
 
@@ -228,6 +236,8 @@ pub struct Resolved {
     pub slope: f64,
     pub gravity: f64,
     pub max_stride_time: f64,
+    /// Height of the next foothold below the stance foot, normal to the slope (0: level).
+    pub step_down: f64,
     pub hip_mass: f64,
     /// Radius of the round feet (0: point feet).
     pub foot_radius: f64,
@@ -612,6 +622,7 @@ impl WalkerSpec {
             slope,
             gravity,
             max_stride_time,
+            step_down: get("step_down"),
             hip_mass,
             foot_radius,
             segments,

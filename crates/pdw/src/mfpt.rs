@@ -233,7 +233,7 @@ pub fn check_model_for(m: &BuiltModel, kind: TerrainKind) -> Result<(), InputErr
         TerrainKind::StepDown if m.params.iter().any(|p| p.0 == "step_down") => Ok(()),
         TerrainKind::StepDown => Err(InputError(format!(
             "model '{}' cannot walk on random step heights yet: it has no step_down parameter \
-             (the simplest walker and the rimless wheel have one)",
+             (the built-in models and every walker spec have one)",
             m.info.name
         ))),
     }
