@@ -563,8 +563,11 @@ def test_mfpt_on_step_heights():
     assert r2["mfpt"] < r["mfpt"]
     with pytest.raises(ValueError, match="not a height"):
         pdw.mfpt("rimless", terrain="step-down", sd="1deg")
+    # the compass walks on step heights; draws beyond its 1 m legs are refused
+    rc = pdw.mfpt("compass", terrain="step-down", sd=0.002, walkers=20, max_steps=30)
+    assert rc["falls"] + rc["censored"] == 20
     with pytest.raises(ValueError, match="step_down"):
-        pdw.mfpt("compass", terrain="step-down", sd=0.01)
+        pdw.mfpt("compass", terrain="step-down", sd=0.2)
 
 
 def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():

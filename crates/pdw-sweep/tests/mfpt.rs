@@ -225,6 +225,8 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("reach"), "{}", stderr(&o));
+    // The compass walks on step heights; a spread whose draws reach beyond its 1 m legs is
+    // refused, naming the parameter.
     let o = run(&[
         "mfpt",
         "--model",
@@ -232,7 +234,22 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
         "--terrain",
         "step-down",
         "--sd",
-        "0.01",
+        "0.002",
+        "--walkers",
+        "20",
+        "--max-steps",
+        "30",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(&[
+        "mfpt",
+        "--model",
+        "compass",
+        "--terrain",
+        "step-down",
+        "--sd",
+        "0.2",
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
@@ -261,7 +278,7 @@ fn disturb_prints_the_response_and_refuses_what_it_cannot_do() {
         "{text}"
     );
     assert!(text.contains("walked all 60 steps"), "{text}");
-    let o = run(&["disturb", "--model", "compass", "--once", "0.01"]);
+    let o = run(&["disturb", "--model", "compass", "--once", "1.5"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
     let o = run(&["disturb", "--model", "rimless"]);
