@@ -90,8 +90,10 @@ fn points(m: &BuiltModel, tr: &Trajectory) -> (Vec<String>, Vec<f32>, String) {
         offsets.push(last + w.step_length(&e.pre));
     }
     let (mut names, mut pts) = (Vec::new(), Vec::new());
+    // one kernel scratch for every sample
+    let mut ws = pdw_hybrid::Scratch::new();
     for i in 0..tr.len() {
-        let Some(b) = w.body_points(tr.state(i)) else {
+        let Some(b) = w.body_points_in(&mut ws, tr.state(i)) else {
             return (Vec::new(), Vec::new(), "none".into());
         };
         let dx = offsets

@@ -82,6 +82,13 @@ pub trait Walker: Section {
     fn step_flags_in(&self, _ws: &mut Scratch, mode: usize, x: &[f64]) -> Option<StepFlags> {
         self.step_flags(mode, x)
     }
+    /// [`Walker::body_points`] in the caller's scratch `ws` (see
+    /// [`Walker::constraint_forces_in`]): a model whose kernel needs a workspace takes it from
+    /// `ws` instead of building one per call. Only the returned [`BodyPoints`] (its points and
+    /// names) is allocated.
+    fn body_points_in(&self, _ws: &mut Scratch, x: &[f64]) -> Option<BodyPoints> {
+        self.body_points(x)
+    }
     /// [`Walker::energy`] in the caller's scratch `ws` (see [`Walker::constraint_forces_in`]).
     fn energy_in(&self, _ws: &mut Scratch, x: &[f64]) -> Option<f64> {
         self.energy(x)

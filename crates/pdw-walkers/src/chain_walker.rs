@@ -1872,11 +1872,16 @@ impl Walker for ChainWalker {
     /// round feet the chain's root is the stance arc centre, `r` above the contact point at
     /// the origin (as in [`Walker::pose`]), and the feet are the arc centres.
     fn body_points(&self, x: &[f64]) -> Option<BodyPoints> {
-        let mut ws = Workspace::new(&self.chain);
-        pdw_soa::forward_kinematics(&self.chain, &mut ws, &x[..self.n]).ok()?;
+        self.body_points_in(&mut Scratch::new(), x)
+    }
+    /// [`Walker::body_points`] with the kinematics in the scratch's kernel workspace.
+    fn body_points_in(&self, ws: &mut Scratch, x: &[f64]) -> Option<BodyPoints> {
+        let ws = &mut self.scratch(ws).ws;
+        pdw_soa::forward_kinematics(&self.chain, ws, &x[..self.n]).ok()?;
         let r = self.radius;
         let up = |p: [f64; 2]| [p[0], p[1] + r];
-        let mut points: Vec<[f64; 2]> = ws.joint_positions().iter().copied().map(up).collect();
+        let mut points = Vec::with_capacity(self.n + 1);
+        points.extend(ws.joint_positions().iter().copied().map(up));
         points.push(up(ws.tip_position()));
         let mut names = Vec::with_capacity(self.n + 1);
         names.push("stance_foot".to_string());

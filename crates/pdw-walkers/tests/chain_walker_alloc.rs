@@ -1,6 +1,6 @@
 //! The chain walker allocates nothing per right-hand side (scalar or batched), flow Jacobian,
 //! guard, guard gradient, reset, reset Jacobian or trajectory sample (constraint forces, step
-//! flags, energy) once its scratch is filled. (One test in this
+//! flags, energy) once its scratch is filled; body points allocate only the value they return. (One test in this
 //! binary: the allocation counter is global.)
 
 use faer::Mat;
@@ -92,6 +92,32 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
             counts, [0; 8],
             "{name}: allocations in [flow_batch, flow, flow_jacobian, guard, reset, \
              reset_jacobian, guard_gradient, trajectory sample]"
+        );
+        // body points: the kinematics run in the scratch's workspace; only the returned value
+        // allocates (its point list, its name list and one string per name), while the call
+        // without a scratch also builds a kernel workspace
+        let x = &states[0][0];
+        let b = ALLOCS.load(Ordering::SeqCst);
+        let bp = w
+            .body_points_in(&mut ws, x)
+            .expect("chain walkers give body points");
+        let used = ALLOCS.load(Ordering::SeqCst) - b;
+        assert_eq!(
+            used,
+            2 + bp.names.len(),
+            "{name}: body_points_in allocations"
+        );
+        let b = ALLOCS.load(Ordering::SeqCst);
+        let fresh = w.body_points(x).expect("chain walkers give body points");
+        let used_fresh = ALLOCS.load(Ordering::SeqCst) - b;
+        assert!(used_fresh > used + 10, "{name}: {used_fresh} vs {used}");
+        assert_eq!(fresh.names, bp.names);
+        let bits = |p: &[[f64; 2]]| p.iter().map(|v| v.map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&fresh.points), bits(&bp.points), "{name}");
+        assert_eq!(
+            fresh.com.map(f64::to_bits),
+            bp.com.map(f64::to_bits),
+            "{name}"
         );
         // the reused scratch carries nothing from one sample to the next: the same bits as a
         // fresh scratch per call

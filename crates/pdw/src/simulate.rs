@@ -427,13 +427,15 @@ pub fn positions(m: &BuiltModel, tr: &Trajectory) -> Result<Positions, String> {
         );
     }
     let none = || "left out: the model gives no body points".to_string();
-    let first = w.body_points(tr.state(0)).ok_or_else(none)?;
+    // one kernel scratch for every sample
+    let mut ws = pdw_hybrid::Scratch::new();
+    let first = w.body_points_in(&mut ws, tr.state(0)).ok_or_else(none)?;
     let offsets = stance_offsets(m, tr);
     let n = tr.len();
     let np = first.names.len();
     let (mut points, mut com) = (Vec::with_capacity(n * np * 2), Vec::with_capacity(n * 2));
     for i in 0..n {
-        let b = w.body_points(tr.state(i)).ok_or_else(none)?;
+        let b = w.body_points_in(&mut ws, tr.state(i)).ok_or_else(none)?;
         let dx = offsets
             .get(tr.step[i] as usize)
             .or(offsets.last())
