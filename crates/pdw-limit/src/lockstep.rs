@@ -32,9 +32,25 @@
 //! [`pdw_hybrid::batch`]): a walker's fate is the same however the walk is run.
 //!
 //! # Step heights
-//! The random step heights ([`TerrainKind::StepDown`]) change the model's heel-strike guard
-//! itself (a foothold below the stance foot), not a frame; their walk stays the scalar one
-//! ([`crate::terrain::monte_carlo_scalar`]).
+//! A random step height ([`TerrainKind::StepDown`]) changes no frame: the model at
+//! `step_down = h` has the flow of the model at the mean height `h̄` (the dynamics see angles
+//! only; module docs of [`crate::terrain`], "Step heights"), and only its guards, their
+//! admissibility and its impacts see the foothold. So a lane integrates the model of `h̄` with
+//! the height `h` of its walker's next foothold appended as one more constant component
+//! ([`StepFrame`]), and its guards, admissibility and impacts are the model's at `h`
+//! ([`Walker::step_height`], [`StepHeight`]: the model's own methods, which the model itself
+//! calls at its `step_down`, so that they are the scalar walk's bit for bit); an impact keeps
+//! `h`, and the heel strike that ends a stride writes the walker's next draw there. The
+//! simplest walker's heel strike onto a step is not affine in the state, so the lanes sample
+//! it as the scalar walk does at `h ≠ 0` (unless every height is the mean, `σ = 0`, where the
+//! model of `h̄` answers). The walk agrees with the scalar one
+//! ([`crate::terrain::monte_carlo_scalar`], the reference of the tests) up to the arithmetic
+//! of the batched flow (step sizes and the order of a lane's sums), not bit for bit; the
+//! draws, the counting of heel strikes, censoring and fall kinds are the same
+//! (`WalkDriver` drives both terrains). A model without the hook walks step heights one walker
+//! at a time: the rimless wheel and the chain walkers have it; the simplest walker implements
+//! [`StepHeight`] but does not offer it yet (its lockstep walk on heights disagreed with the
+//! scalar one beyond the flow's rounding).
 
 use crate::error::LimitError;
 use crate::stride::{StrideOutcome, StrideStop, MAX_EVENTS_PER_STRIDE};
@@ -44,7 +60,7 @@ use pdw_hybrid::{
     run_batch_par, BatchOptions, Control, GuardSpec, HybridSystem, LaneDriver, Scratch, Section,
     StopReason,
 };
-use pdw_model::Walker;
+use pdw_model::{StepHeight, Walker};
 
 /// Lanes of one lockstep batch by default (the basin's).
 pub const LANES: usize = 256;
@@ -273,6 +289,229 @@ impl Section for LineFrame<'_> {
     }
 }
 
+/// The model of the mean step height as a system of every height (module docs, "Step
+/// heights"): state `(x, h)`, `x` the model's state, `h` the height of the walker's next
+/// foothold (constant along the flow).
+pub struct StepFrame<'a> {
+    model: &'a dyn Walker,
+    heights: &'a dyn StepHeight,
+    /// The model's own (the mean) height `h̄`.
+    mean: f64,
+    /// Every lane at the model's own height (`σ = 0`): the model's linearity of its guards.
+    fixed: bool,
+    d: usize,
+}
+
+/// The model's scratch and one lane's copies for the lane-by-lane guards.
+struct StepScratch {
+    inner: Scratch,
+    /// One lane's state, flow, guards and rates `(d, d, n_guards, n_guards)`.
+    x: Vec<f64>,
+    f: Vec<f64>,
+    g: Vec<f64>,
+    rate: Vec<f64>,
+}
+
+impl<'a> StepFrame<'a> {
+    /// The system of `model` (the model at the mean height `mean`), whose heights are all its
+    /// own when `fixed`; [`LimitError::Model`] when the model has no [`Walker::step_height`].
+    pub fn new(model: &'a dyn Walker, mean: f64, fixed: bool) -> Result<Self, LimitError> {
+        let heights = model.step_height().ok_or_else(|| LimitError::Model {
+            param: mean,
+            message: "the model does not walk on random step heights in lockstep".into(),
+        })?;
+        Ok(Self {
+            model,
+            heights,
+            mean,
+            fixed,
+            d: model.dim(),
+        })
+    }
+
+    fn scratch<'s>(&self, ws: &'s mut Scratch) -> &'s mut StepScratch {
+        let d = self.d;
+        ws.get_or_init(
+            || StepScratch {
+                inner: Scratch::new(),
+                x: vec![0.0; d],
+                f: vec![0.0; d],
+                g: Vec::new(),
+                rate: Vec::new(),
+            },
+            |s| s.x.len() == d,
+        )
+    }
+}
+
+impl HybridSystem for StepFrame<'_> {
+    fn dim(&self) -> usize {
+        self.d + 1
+    }
+
+    /// The model's: the height component is constant and never enters the step-size control.
+    fn error_dim(&self) -> usize {
+        self.model.error_dim().clamp(1, self.d)
+    }
+
+    fn n_modes(&self) -> usize {
+        self.model.n_modes()
+    }
+
+    fn guards(&self, mode: usize) -> &[GuardSpec] {
+        self.model.guards(mode)
+    }
+
+    fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+        let s = self.scratch(ws);
+        self.model
+            .flow(&mut s.inner, mode, &x[..self.d], &mut dx[..self.d]);
+        dx[self.d] = 0.0;
+    }
+
+    fn flow_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        mut dx: MatMut<'_, f64>,
+    ) {
+        let d = self.d;
+        let s = self.scratch(ws);
+        self.model.flow_batch(
+            &mut s.inner,
+            mode,
+            x.subcols(0, d),
+            faer::reborrow::ReborrowMut::rb_mut(&mut dx).subcols_mut(0, d),
+        );
+        for l in 0..x.nrows() {
+            dx[(l, d)] = 0.0;
+        }
+    }
+
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        let s = self.scratch(ws);
+        self.heights
+            .guard_at(&mut s.inner, mode, k, &x[..self.d], x[self.d])
+    }
+
+    fn guards_with_rates(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        let s = self.scratch(ws);
+        let d = self.d;
+        self.heights
+            .guards_with_rates_at(&mut s.inner, mode, &x[..d], &f[..d], g, rate, x[d]);
+    }
+
+    /// Lane by lane: each lane's guards at its own height (the expressions of
+    /// `guards_with_rates`).
+    fn guards_with_rates_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        f: MatRef<'_, f64>,
+        mut g: MatMut<'_, f64>,
+        mut rate: MatMut<'_, f64>,
+    ) {
+        let (d, ng) = (self.d, g.ncols());
+        let StepScratch {
+            inner,
+            x: xi,
+            f: fi,
+            g: gi,
+            rate: ri,
+        } = self.scratch(ws);
+        gi.resize(ng, 0.0);
+        ri.resize(ng, 0.0);
+        for l in 0..x.nrows() {
+            for j in 0..d {
+                xi[j] = x[(l, j)];
+                fi[j] = f[(l, j)];
+            }
+            self.heights
+                .guards_with_rates_at(inner, mode, xi, fi, gi, ri, x[(l, d)]);
+            for k in 0..ng {
+                g[(l, k)] = gi[k];
+                rate[(l, k)] = ri[k];
+            }
+        }
+    }
+
+    /// The model's where every height is its own; else affine only if affine at every height.
+    fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        if self.fixed {
+            self.model.guard_is_linear(mode, k)
+        } else {
+            self.heights.guard_is_linear_at_every_height(mode, k)
+        }
+    }
+
+    fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
+        self.heights.admissible_at(mode, k, &x[..self.d], x[self.d])
+    }
+
+    fn guard_tolerance(&self, mode: usize, k: usize) -> f64 {
+        self.model.guard_tolerance(mode, k)
+    }
+
+    /// The model's impact at the lane's height; the height component is kept.
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        let s = self.scratch(ws);
+        let d = self.d;
+        let next = self
+            .heights
+            .reset_at(&mut s.inner, mode, k, &x[..d], &mut out[..d], x[d]);
+        out[d] = x[d];
+        next
+    }
+
+    /// The model's gradient at the lane's height; a guard's change with the height itself is
+    /// not a change along the flow (the height is constant), so `∂g/∂h` is left 0.
+    fn guard_gradient(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], grad: &mut [f64]) {
+        let s = self.scratch(ws);
+        let d = self.d;
+        self.heights
+            .guard_gradient_at(&mut s.inner, mode, k, &x[..d], &mut grad[..d], x[d]);
+        grad[d] = 0.0;
+    }
+}
+
+pdw_hybrid::integrate_through_dyn!(StepFrame<'_>);
+
+impl Section for StepFrame<'_> {
+    fn section_dim(&self) -> usize {
+        self.model.section_dim()
+    }
+    fn section_names(&self) -> &[&'static str] {
+        self.model.section_names()
+    }
+    fn section_mode(&self) -> usize {
+        self.model.section_mode()
+    }
+    fn section_guard(&self) -> (usize, usize) {
+        self.model.section_guard()
+    }
+    /// The model's lift at its own (the mean) height.
+    fn lift(&self, s: &[f64], x: &mut [f64]) {
+        self.model.lift(s, &mut x[..self.d]);
+        x[self.d] = self.mean;
+    }
+    fn project(&self, x: &[f64], s: &mut [f64]) {
+        self.model.project(&x[..self.d], s);
+    }
+    fn max_stride_time(&self) -> f64 {
+        self.model.max_stride_time()
+    }
+}
+
 /// Lane driver of the walk: an item is a walker's index; its lane runs the walker's strides
 /// one after another until it falls or completes `max_steps`.
 struct WalkDriver<'t> {
@@ -399,10 +638,11 @@ impl Lockstep {
 }
 
 /// `walkers` walkers (0, 1, …) from `x0` (full state just after a heel strike, in the mean
-/// slope's frame) on random slopes, in lockstep (module docs), at most `max_steps` strides
-/// each; fates in walker order, identical for any thread count, lane count and chunk size.
-/// `progress` gets the number of walkers done. Step heights: [`LimitError::Model`] (their walk
-/// is the scalar one).
+/// slope's frame) on random slopes or step heights, in lockstep (module docs), at most
+/// `max_steps` strides each; fates in walker order, identical for any thread count, lane count
+/// and chunk size. `progress` gets the number of walkers done. Step heights need the model's
+/// [`Walker::step_height`] and a model at both ends of the heights' range (the mean ±
+/// [`crate::terrain::TerrainDist::max_abs`] standard deviations); else [`LimitError::Model`].
 #[allow(clippy::too_many_arguments)]
 pub fn monte_carlo_lockstep(
     walk: &SlopeWalk,
@@ -414,11 +654,14 @@ pub fn monte_carlo_lockstep(
     batch: Lockstep,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Vec<Fate>, LimitError> {
-    if terrain.kind != TerrainKind::Slope || walk.kind() != TerrainKind::Slope {
+    if terrain.kind != walk.kind() {
         return Err(LimitError::Model {
             param: terrain.mean,
-            message: "the lockstep walk runs random slopes only (step heights walk one by one)"
-                .into(),
+            message: format!(
+                "the terrain draws a {} per step, the walk is on random {}s",
+                terrain.kind.param(),
+                walk.kind().param()
+            ),
         });
     }
     if max_steps == 0 {
@@ -431,38 +674,54 @@ pub fn monte_carlo_lockstep(
         ]);
     }
     let model = walk.model(walk.mean())?;
-    let sys = LineFrame::new(model.as_ref(), walk.mean())?;
-    if x0.len() != sys.d {
-        return Err(LimitError::Model {
-            param: walk.mean(),
-            message: format!(
-                "the walkers' start state has {} components, the model's state {}",
-                x0.len(),
-                sys.d
-            ),
-        });
+    check_start(x0, model.dim(), walk.mean())?;
+    let run = |sys: &dyn Section| {
+        let driver = WalkDriver {
+            terrain,
+            x0,
+            max_steps,
+            section_guard: sys.section_guard(),
+            start_mode: sys.section_mode(),
+            t_max: sys.max_stride_time(),
+        };
+        let items: Vec<u64> = (0..walkers as u64).collect();
+        let opts = BatchOptions {
+            lanes: batch.lanes,
+            integrator: walk.options(),
+        };
+        run_batch_par(sys, &driver, &items, &opts, pool, batch.chunk, progress)
+    };
+    Ok(match terrain.kind {
+        TerrainKind::Slope => run(&LineFrame::new(model.as_ref(), walk.mean())?)?,
+        TerrainKind::StepDown => {
+            check_heights(walk, terrain)?;
+            let fixed = terrain.sd == 0.0;
+            run(&StepFrame::new(model.as_ref(), walk.mean(), fixed)?)?
+        }
+    })
+}
+
+/// [`LimitError::Model`] unless the walkers' start state has the model's `d` components.
+fn check_start(x0: &[f64], d: usize, mean: f64) -> Result<(), LimitError> {
+    if x0.len() == d {
+        return Ok(());
     }
-    let driver = WalkDriver {
-        terrain,
-        x0,
-        max_steps,
-        section_guard: sys.section_guard(),
-        start_mode: sys.section_mode(),
-        t_max: sys.max_stride_time(),
-    };
-    let items: Vec<u64> = (0..walkers as u64).collect();
-    let opts = BatchOptions {
-        lanes: batch.lanes,
-        integrator: walk.options(),
-    };
-    let sys: &dyn Section = &sys;
-    Ok(run_batch_par(
-        sys,
-        &driver,
-        &items,
-        &opts,
-        pool,
-        batch.chunk,
-        progress,
-    )?)
+    Err(LimitError::Model {
+        param: mean,
+        message: format!(
+            "the walkers' start state has {} components, the model's state {d}",
+            x0.len()
+        ),
+    })
+}
+
+/// The model's error for a height at either end of the range the terrain draws from (the
+/// lockstep lanes evaluate the model's guards at any height in it without building the model
+/// there).
+fn check_heights(walk: &SlopeWalk, terrain: &SlopeTerrain) -> Result<(), LimitError> {
+    let reach = terrain.dist.max_abs() * terrain.sd;
+    for h in [terrain.mean - reach, terrain.mean + reach] {
+        walk.model(h)?;
+    }
+    Ok(())
 }

@@ -416,9 +416,9 @@ pub fn walk_one(
 
 /// `walkers` walkers (0, 1, …) from `x0` on `pool`, in walker order; identical for any thread
 /// count, lane count and chunk size (each walker's slopes are its own counter-based draws).
-/// Random slopes run in batched lockstep ([`crate::lockstep`], lanes and chunks of
-/// [`Lockstep::for_pool`]); step heights run one walker at a time
-/// ([`monte_carlo_scalar`]). `progress` gets the number of walkers done.
+/// Both terrains run in batched lockstep ([`crate::lockstep`], lanes and chunks of
+/// [`Lockstep::for_pool`]); step heights on a model without [`Walker::step_height`] run one
+/// walker at a time ([`monte_carlo_scalar`]). `progress` gets the number of walkers done.
 pub fn monte_carlo(
     walk: &SlopeWalk,
     terrain: &SlopeTerrain,
@@ -428,7 +428,8 @@ pub fn monte_carlo(
     pool: &rayon::ThreadPool,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Vec<Fate>, LimitError> {
-    if terrain.kind == TerrainKind::StepDown || walk.kind() == TerrainKind::StepDown {
+    let steps = terrain.kind == TerrainKind::StepDown || walk.kind() == TerrainKind::StepDown;
+    if steps && walk.model(walk.mean())?.step_height().is_none() {
         return monte_carlo_scalar(walk, terrain, x0, walkers, max_steps, pool, progress);
     }
     let batch = Lockstep::for_pool(walkers, pool.current_num_threads());
@@ -436,8 +437,8 @@ pub fn monte_carlo(
 }
 
 /// The scalar walk: each walker on one thread with its own integrator, each stride
-/// [`SlopeWalk::stride`] (the model at the line's slope, the shifts of the module docs) — the
-/// walk of step heights, and the reference of the lockstep walk. Identical for any thread
+/// [`SlopeWalk::stride`] (the model at the line's slope or step height, the shifts of the
+/// module docs) — the reference of the lockstep walk. Identical for any thread
 /// count; `progress` gets the number of walkers done.
 pub fn monte_carlo_scalar(
     walk: &SlopeWalk,

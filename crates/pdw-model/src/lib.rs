@@ -14,4 +14,4 @@ pub mod walker;
 pub use validity::{
     ClearanceRule, ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
 };
-pub use walker::{BodyPoints, GaitGuess, ModelUnits, Pose, Walker};
+pub use walker::{BodyPoints, GaitGuess, ModelUnits, Pose, StepHeight, Walker};

@@ -150,6 +150,12 @@ pub trait Walker: Section {
         let _ = slope;
         self.admissible(mode, k, x)
     }
+    /// The model's guards, their admissibility and its impacts at any step height (random step
+    /// heights, [`StepHeight`]); `None` (the default): the model does not walk on random step
+    /// heights in lockstep.
+    fn step_height(&self) -> Option<&dyn StepHeight> {
+        None
+    }
     /// The fully resolved model, one `key = value` line per quantity that determines its
     /// dynamics (floats in shortest round-trip form, so equal text means bit-equal values).
     /// Files that can be continued store it and refuse to continue under a different model,
@@ -162,6 +168,59 @@ pub trait Walker: Section {
         }
         s
     }
+}
+
+/// What a model with a `step_down` parameter (the next foothold `h` below the stance foot along
+/// the slope normal, a step down positive) computes at another height `h` than its own, for the
+/// lockstep walk on random step heights: every walker runs on one model and carries the height
+/// of its next foothold beside its state. Each method is the model's own
+/// [`HybridSystem`](pdw_hybrid::HybridSystem) method of the same name (without `_at`) for the
+/// model with `step_down = h` and every other parameter its own — bit for bit: the model's
+/// methods are these at its own `step_down`. The flow does not see the foothold (the dynamics
+/// see angles only), so only guards, admissibility and impacts are here.
+pub trait StepHeight: Sync {
+    /// [`HybridSystem::guard`](pdw_hybrid::HybridSystem::guard) at step height `h`.
+    fn guard_at(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], h: f64) -> f64;
+    /// [`HybridSystem::guards_with_rates`](pdw_hybrid::HybridSystem::guards_with_rates) at
+    /// step height `h`.
+    #[allow(clippy::too_many_arguments)]
+    fn guards_with_rates_at(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+        h: f64,
+    );
+    /// [`HybridSystem::guard_gradient`](pdw_hybrid::HybridSystem::guard_gradient) at step
+    /// height `h`.
+    fn guard_gradient_at(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        grad: &mut [f64],
+        h: f64,
+    );
+    /// [`HybridSystem::admissible`](pdw_hybrid::HybridSystem::admissible) at step height `h`.
+    fn admissible_at(&self, mode: usize, k: usize, x: &[f64], h: f64) -> bool;
+    /// [`HybridSystem::reset`](pdw_hybrid::HybridSystem::reset) at step height `h`.
+    fn reset_at(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        out: &mut [f64],
+        h: f64,
+    ) -> usize;
+    /// Whether guard `k` of `mode` is affine in the state at every step height
+    /// ([`HybridSystem::guard_is_linear`](pdw_hybrid::HybridSystem::guard_is_linear) for all
+    /// `h`).
+    fn guard_is_linear_at_every_height(&self, mode: usize, k: usize) -> bool;
 }
 
 /// A drawing of the walker in the slope frame: `x` along the slope (downhill positive), `y`

@@ -130,7 +130,7 @@ use crate::validity::{
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{MatMut, MatRef};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
-use pdw_model::{BodyPoints, GaitGuess, Pose, Walker};
+use pdw_model::{BodyPoints, GaitGuess, Pose, StepHeight, Walker};
 use pdw_soa::{BatchWorkspace, Chain, ChainBuilder, Link, Workspace};
 use std::f64::consts::FRAC_PI_2;
 
@@ -580,11 +580,11 @@ impl ChainWalker {
         }
     }
 
-    /// A swing-foot height over the stance foot's line as the height over the next foothold,
-    /// `z + h` (module docs, "Step down"); `z` itself on level ground (`h = 0`, bit for bit).
+    /// A swing-foot height over the stance foot's line as the height over the next foothold
+    /// `h` below, `z + h` (module docs, "Step down"); `z` itself on level ground (`h = 0`, bit
+    /// for bit).
     #[inline(always)]
-    fn above_foothold(&self, z: f64) -> f64 {
-        let h = self.r.step_down;
+    fn above_foothold(z: f64, h: f64) -> f64 {
         if h == 0.0 {
             z
         } else {
@@ -899,17 +899,17 @@ impl ChainWalker {
         }
     }
 
-    /// [`HybridSystem::admissible`] for the model at slope `slope`: only `stance_reverses`
+    /// [`HybridSystem::admissible`] for the model at slope `slope` and step height `h`: only `stance_reverses`
     /// ("while `q₀ > γ`", the stance leg behind the vertical) sees the slope; every other
     /// condition measures the walker against the ground line.
-    fn admissible_at(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {
+    fn admissible_on(&self, mode: usize, k: usize, x: &[f64], slope: f64, h: f64) -> bool {
         let free = self.free_knee.is_some() && mode == FREE;
         let lead = if free { 2 } else { 1 };
         let twin = k != 0 && k == self.twin_guard(mode);
         let base = match (free, self.base_guard(mode, k)) {
             (true, 0) => true,
             (true, 1) => self.swing_foot(x)[0] > 0.0,
-            (false, 0) if self.r.step_down != 0.0 => self.swing_foot(x)[0] > 0.0,
+            (false, 0) if h != 0.0 => self.swing_foot(x)[0] > 0.0,
             (false, 0) => {
                 let qh = x[self.m];
                 self.swing_foot(x)[0] > 0.0 && (2.0 * self.stance_angle(x) + qh).abs() < qh.abs()
@@ -1302,34 +1302,14 @@ impl HybridSystem for ChainWalker {
     /// angle (rate `q̇₀`); `f = (q̇, q̈)`.
     fn guards_with_rates(
         &self,
-        _ws: &mut Scratch,
+        ws: &mut Scratch,
         mode: usize,
         x: &[f64],
         f: &[f64],
         g: &mut [f64],
         rate: &mut [f64],
     ) {
-        let n = self.n;
-        let free = self.free_knee.is_some() && mode == FREE;
-        let lead = if free { 2 } else { 1 };
-        let ng = self.guards(mode).len();
-        for k in 0..ng {
-            (g[k], rate[k]) = match (free, self.base_guard(mode, k)) {
-                (true, 0) => {
-                    let j = self.free_knee.unwrap_or(0);
-                    (x[j], f[j])
-                }
-                (_, k) if k < lead => {
-                    let (z, zr) = self.foot_height_and_rate(x, f);
-                    (self.above_foothold(z), zr)
-                }
-                (_, k) => match k - lead {
-                    0 => (x[n], f[n]),
-                    1 => (x[0] - FRAC_PI_2, f[0]),
-                    _ => (x[0] + FRAC_PI_2, f[0]),
-                },
-            };
-        }
+        self.guards_with_rates_at(ws, mode, x, f, g, rate, self.r.step_down);
     }
 
     /// [`HybridSystem::guards_with_rates`] over all lanes: columns of `x` and `f` directly, the
@@ -1402,27 +1382,15 @@ impl HybridSystem for ChainWalker {
         !(k < lead && !(lead == 2 && k == 0))
     }
 
-    fn guard(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
-        let k = self.base_guard(mode, k);
-        let n = self.n;
-        let free = self.free_knee.is_some() && mode == FREE;
-        let lead = if free { 2 } else { 1 };
-        match (free, k) {
-            (true, 0) => x[self.free_knee.unwrap_or(0)],
-            (_, k) if k < lead => self.above_foothold(self.swing_foot(x)[1]),
-            (_, k) => match k - lead {
-                0 => x[n],
-                1 => x[0] - FRAC_PI_2,
-                _ => x[0] + FRAC_PI_2,
-            },
-        }
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        self.guard_at(ws, mode, k, x, self.r.step_down)
     }
 
     /// The impact guard (0) counts where the impact's complementarity problem keeps every
     /// stance knee locked, its twin (a fall) where it releases one
     /// ([`ChainWalker::stance_knee_buckles`]); both need the impact guard's own conditions.
     fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
-        self.admissible_at(mode, k, x, self.r.slope)
+        self.admissible_on(mode, k, x, self.r.slope, self.r.step_down)
     }
 
     fn reset(&self, ws: &mut Scratch, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
@@ -1692,6 +1660,93 @@ impl HybridSystem for ChainWalker {
     }
 }
 
+/// The chain walker at any step height (module docs, "Step down"): the swing-foot guards
+/// measure the foot's height over the foothold's line and the heel strike's admissibility
+/// drops the level-ground factor; the impacts, the gradients (`h` is a constant) and the lift
+/// of the trailing leg (not part of a stride) do not see it.
+impl StepHeight for ChainWalker {
+    fn guard_at(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64], h: f64) -> f64 {
+        let k = self.base_guard(mode, k);
+        let n = self.n;
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        match (free, k) {
+            (true, 0) => x[self.free_knee.unwrap_or(0)],
+            (_, k) if k < lead => Self::above_foothold(self.swing_foot(x)[1], h),
+            (_, k) => match k - lead {
+                0 => x[n],
+                1 => x[0] - FRAC_PI_2,
+                _ => x[0] + FRAC_PI_2,
+            },
+        }
+    }
+
+    fn guards_with_rates_at(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+        h: f64,
+    ) {
+        let n = self.n;
+        let free = self.free_knee.is_some() && mode == FREE;
+        let lead = if free { 2 } else { 1 };
+        let ng = self.guards(mode).len();
+        for k in 0..ng {
+            (g[k], rate[k]) = match (free, self.base_guard(mode, k)) {
+                (true, 0) => {
+                    let j = self.free_knee.unwrap_or(0);
+                    (x[j], f[j])
+                }
+                (_, k) if k < lead => {
+                    let (z, zr) = self.foot_height_and_rate(x, f);
+                    (Self::above_foothold(z, h), zr)
+                }
+                (_, k) => match k - lead {
+                    0 => (x[n], f[n]),
+                    1 => (x[0] - FRAC_PI_2, f[0]),
+                    _ => (x[0] + FRAC_PI_2, f[0]),
+                },
+            };
+        }
+    }
+
+    fn guard_gradient_at(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        grad: &mut [f64],
+        _h: f64,
+    ) {
+        self.guard_gradient(ws, mode, k, x, grad)
+    }
+
+    fn admissible_at(&self, mode: usize, k: usize, x: &[f64], h: f64) -> bool {
+        self.admissible_on(mode, k, x, self.r.slope, h)
+    }
+
+    fn reset_at(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        out: &mut [f64],
+        _h: f64,
+    ) -> usize {
+        self.reset(ws, mode, k, x, out)
+    }
+
+    fn guard_is_linear_at_every_height(&self, mode: usize, k: usize) -> bool {
+        self.guard_is_linear(mode, k)
+    }
+}
+
 impl Section for ChainWalker {
     fn section_dim(&self) -> usize {
         section_names_of(&self.r).len()
@@ -1741,9 +1796,13 @@ impl Walker for ChainWalker {
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         (self.radius == 0.0).then_some((0, 1.0))
     }
-    /// `stance_reverses` counts while `q₀ > slope` ([`ChainWalker::admissible_at`]).
+    /// Point feet: round feet are refused on step heights (module docs, "Step down").
+    fn step_height(&self) -> Option<&dyn StepHeight> {
+        (self.radius == 0.0).then_some(self as &dyn StepHeight)
+    }
+    /// `stance_reverses` counts while `q₀ > slope` ([`ChainWalker::admissible_on`]).
     fn admissible_on_slope(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {
-        self.admissible_at(mode, k, x, slope)
+        self.admissible_on(mode, k, x, slope, self.r.step_down)
     }
     fn name(&self) -> &str {
         &self.spec.name

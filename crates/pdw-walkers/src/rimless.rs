@@ -71,7 +71,7 @@ use crate::error::{check_open, WalkerError};
 use crate::registry::{closed_params, ClosedInfo};
 use crate::validity::{ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
-use pdw_model::{BodyPoints, GaitGuess, ModelUnits, Pose, Walker};
+use pdw_model::{BodyPoints, GaitGuess, ModelUnits, Pose, StepHeight, Walker};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Guard index of the spoke impact.
@@ -180,11 +180,11 @@ impl Rimless {
                           spoke's reach)",
             });
         }
-        let (strike, after) = if p.step_down == 0.0 {
-            (alpha, -alpha)
+        let strike = strike_angle(alpha, p.l, p.step_down);
+        let after = if p.step_down == 0.0 {
+            -alpha
         } else {
-            let s = alpha + (p.step_down / reach).asin();
-            (s, s - 2.0 * alpha)
+            strike - 2.0 * alpha
         };
         Ok(Self {
             params: RimlessParams {
@@ -244,6 +244,87 @@ impl Rimless {
     }
 }
 
+/// The stance angle at which the next spoke's tip reaches a foothold `h` below the contact
+/// point (module docs, "Step down"): `α + asin(h / (2 l sin α))`, `α` on level ground.
+fn strike_angle(alpha: f64, l: f64, h: f64) -> f64 {
+    if h == 0.0 {
+        alpha
+    } else {
+        alpha + (h / (2.0 * l * alpha.sin())).asin()
+    }
+}
+
+impl Rimless {
+    /// The guards with the spoke impact at stance angle `strike`.
+    fn guard_with_strike(&self, k: usize, x: &[f64], strike: f64) -> f64 {
+        match k {
+            0 => x[0] - strike,
+            1 => x[1],
+            _ => x[0] + self.alpha,
+        }
+    }
+}
+
+/// The rimless wheel at any step height: only the spoke impact's angle
+/// ([`Rimless::step_angles`]) sees the foothold; the impact map, the gradients and the
+/// admissibility do not.
+impl StepHeight for Rimless {
+    fn guard_at(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64], h: f64) -> f64 {
+        let strike = if k == SPOKE_IMPACT {
+            strike_angle(self.alpha, self.params.l, h)
+        } else {
+            self.strike
+        };
+        self.guard_with_strike(k, x, strike)
+    }
+    /// The default of [`HybridSystem::guards_with_rates`] (the model's): the guards, rates
+    /// unknown (`+∞`).
+    fn guards_with_rates_at(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        x: &[f64],
+        _f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+        h: f64,
+    ) {
+        let strike = strike_angle(self.alpha, self.params.l, h);
+        for (k, (gk, rk)) in g.iter_mut().zip(rate.iter_mut()).enumerate() {
+            *gk = self.guard_with_strike(k, x, strike);
+            *rk = f64::INFINITY;
+        }
+    }
+    fn guard_gradient_at(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        grad: &mut [f64],
+        _h: f64,
+    ) {
+        self.guard_gradient(ws, mode, k, x, grad)
+    }
+    fn admissible_at(&self, mode: usize, k: usize, x: &[f64], _h: f64) -> bool {
+        self.admissible(mode, k, x)
+    }
+    fn reset_at(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        k: usize,
+        x: &[f64],
+        out: &mut [f64],
+        _h: f64,
+    ) -> usize {
+        self.reset(ws, mode, k, x, out)
+    }
+    fn guard_is_linear_at_every_height(&self, mode: usize, k: usize) -> bool {
+        self.guard_is_linear(mode, k)
+    }
+}
+
 pdw_hybrid::integrate_concretely!(Rimless);
 impl HybridSystem for Rimless {
     fn dim(&self) -> usize {
@@ -258,11 +339,7 @@ impl HybridSystem for Rimless {
         dx[1] = g / l * (x[0] + slope).sin();
     }
     fn guard(&self, _ws: &mut Scratch, _mode: usize, k: usize, x: &[f64]) -> f64 {
-        match k {
-            0 => x[0] - self.strike,
-            1 => x[1],
-            _ => x[0] + self.alpha,
-        }
+        self.guard_with_strike(k, x, self.strike)
     }
     fn reset(
         &self,
@@ -344,6 +421,9 @@ impl Walker for Rimless {
     /// `θ + γ` (module docs): θ changes by `−(s' − s)`.
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         Some((0, -1.0))
+    }
+    fn step_height(&self) -> Option<&dyn StepHeight> {
+        Some(self)
     }
     fn energy(&self, x: &[f64]) -> Option<f64> {
         Some(Self::energy(self, x))

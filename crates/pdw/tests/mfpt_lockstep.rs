@@ -1,7 +1,8 @@
-//! The lockstep Monte Carlo walk on random slopes (pdw-limit's `lockstep`): a walker's fate
-//! does not depend on the thread count, the lane count or the chunk size, and the walk agrees
-//! with the independent scalar walk (the model rebuilt at each line's slope, one stride at a
-//! time) — the same fates for nearly every walker, the same MFPT within its standard error.
+//! The lockstep Monte Carlo walk on random slopes and step heights (pdw-limit's `lockstep`): a
+//! walker's fate does not depend on the thread count, the lane count or the chunk size, and the
+//! walk agrees with the independent scalar walk (the model rebuilt at each line's slope or
+//! step height, one stride at a time) — the same fates for nearly every walker, the same MFPT
+//! within its standard error, the same fall kinds.
 
 use pdw::mfpt;
 use pdw_limit::lockstep::{monte_carlo_lockstep, Lockstep};
@@ -146,8 +147,130 @@ fn the_lockstep_walk_agrees_with_the_scalar_walk_on_every_model() {
     }
 }
 
+/// The walkers' fates on random step heights (mean `mean`, standard deviation `sd`, model at
+/// slope `slope`): in lockstep with `batch` on `threads` threads (`None`: the scalar walk).
+#[allow(clippy::too_many_arguments)]
+fn on_heights(
+    m: &pdw::BuiltModel,
+    mean: f64,
+    sd: f64,
+    walkers: usize,
+    steps: usize,
+    threads: usize,
+    batch: Option<Lockstep>,
+) -> Vec<Fate> {
+    let at = mfpt::model_at_param(m, "step_down");
+    let walk =
+        SlopeWalk::with_kind(&at, TerrainKind::StepDown, mean, mfpt::default_integrator()).unwrap();
+    let t = SlopeTerrain {
+        mean,
+        sd,
+        seed: 3,
+        kind: TerrainKind::StepDown,
+        dist: Default::default(),
+    };
+    let (x0, _) = mfpt::start(m).unwrap();
+    let p = pool(threads);
+    match batch {
+        Some(b) => monte_carlo_lockstep(&walk, &t, &x0, walkers, steps, &p, b, &|_| {}),
+        None => terrain::monte_carlo_scalar(&walk, &t, &x0, walkers, steps, &p, &|_| {}),
+    }
+    .unwrap()
+}
+
+/// Models on random step heights: name, slope, mean and standard deviation of the height,
+/// walkers, step limit.
+const HEIGHT_CASES: [(&str, f64, f64, f64, usize, usize); 2] = [
+    ("compass", 0.05235987755982988, 0.0, 0.004, 2000, 100),
+    ("rimless", 0.08, 0.0, 0.03, 2000, 200),
+];
+
 #[test]
-fn step_heights_walk_one_by_one_and_the_lockstep_walk_refuses_them() {
+fn on_step_heights_a_walkers_fate_is_the_same_for_any_thread_count_and_lane_count() {
+    for (name, slope, mean, sd, _, _) in HEIGHT_CASES {
+        let m = model(name, slope);
+        // MFPTs of about 13 and 4 steps: ten steps leave some walking and make some fall
+        let (walkers, steps) = (96, 10);
+        let reference = on_heights(
+            &m,
+            mean,
+            sd,
+            walkers,
+            steps,
+            1,
+            Some(Lockstep { lanes: 1, chunk: 1 }),
+        );
+        assert!(reference.iter().any(|f| f.end.is_some()), "{name}");
+        assert!(reference.iter().any(|f| f.end.is_none()), "{name}");
+        for (threads, lanes, chunk) in [(2, 1, 1), (1, 8, 3), (2, 64, 5)] {
+            let f = on_heights(
+                &m,
+                mean,
+                sd,
+                walkers,
+                steps,
+                threads,
+                Some(Lockstep { lanes, chunk }),
+            );
+            assert_eq!(
+                f, reference,
+                "{name}: {threads} threads, {lanes} lanes, chunk {chunk}"
+            );
+        }
+    }
+}
+
+#[test]
+fn on_step_heights_the_lockstep_walk_agrees_with_the_scalar_walk() {
+    for (name, slope, mean, sd, walkers, steps) in HEIGHT_CASES {
+        let m = model(name, slope);
+        let scalar = on_heights(&m, mean, sd, walkers, steps, 2, None);
+        let lock = on_heights(
+            &m,
+            mean,
+            sd,
+            walkers,
+            steps,
+            2,
+            Some(Lockstep::for_pool(walkers, 2)),
+        );
+        let (n_diff, max_steps_diff) = differences(&scalar, &lock);
+        let (es, el) = (
+            terrain::estimate(&scalar, steps),
+            terrain::estimate(&lock, steps),
+        );
+        println!(
+            "{name} on heights: {n_diff} of {walkers} fates differ (largest step difference \
+             {max_steps_diff}); MFPT scalar {:.4} ± {:.4}, lockstep {:.4} ± {:.4}; falls {} / {}; \
+             kinds {:?} / {:?}",
+            es.mfpt, es.stderr, el.mfpt, el.stderr, es.falls, el.falls, es.failures, el.failures
+        );
+        assert!(
+            es.falls > walkers / 10,
+            "{name}: the terrain makes walkers fall"
+        );
+        assert!(
+            n_diff * 100 <= walkers,
+            "{name}: {n_diff} of {walkers} fates differ"
+        );
+        assert!(
+            (es.mfpt - el.mfpt).abs() < es.stderr.min(el.stderr),
+            "{name}: MFPT {} ± {} against {} ± {}",
+            es.mfpt,
+            es.stderr,
+            el.mfpt,
+            el.stderr
+        );
+        // the same kinds of fall
+        let kinds = |e: &terrain::MfptEstimate| -> Vec<String> {
+            e.failures.iter().map(|f| f.0.clone()).collect()
+        };
+        assert_eq!(kinds(&es), kinds(&el), "{name}: fall kinds");
+    }
+}
+
+#[test]
+fn step_heights_run_in_lockstep_and_the_walk_refuses_a_terrain_of_the_other_kind() {
     let m = pdw::build("rimless", &[("slope".to_string(), 0.08)]).unwrap();
     let at = mfpt::model_at_param(&m, "step_down");
     let walk =
@@ -161,10 +284,35 @@ fn step_heights_walk_one_by_one_and_the_lockstep_walk_refuses_them() {
     };
     let (x0, _) = mfpt::start(&m).unwrap();
     let p = pool(2);
-    let e = monte_carlo_lockstep(&walk, &t, &x0, 4, 5, &p, Lockstep::for_pool(4, 2), &|_| {});
-    assert!(e.unwrap_err().to_string().contains("step heights"));
-    // `monte_carlo` runs them on the scalar walk
+    // `monte_carlo` runs step heights in lockstep
     let a = terrain::monte_carlo(&walk, &t, &x0, 16, 20, &p, &|_| {}).unwrap();
-    let b = terrain::monte_carlo_scalar(&walk, &t, &x0, 16, 20, &p, &|_| {}).unwrap();
+    let b = monte_carlo_lockstep(
+        &walk,
+        &t,
+        &x0,
+        16,
+        20,
+        &p,
+        Lockstep::for_pool(16, 2),
+        &|_| {},
+    )
+    .unwrap();
     assert_eq!(a, b);
+    // a slope terrain on a walk of step heights is refused, naming both
+    let slopes = SlopeTerrain {
+        kind: TerrainKind::Slope,
+        ..t
+    };
+    let e = monte_carlo_lockstep(
+        &walk,
+        &slopes,
+        &x0,
+        4,
+        5,
+        &p,
+        Lockstep::for_pool(4, 2),
+        &|_| {},
+    );
+    let e = e.unwrap_err().to_string();
+    assert!(e.contains("slope") && e.contains("step_down"), "{e}");
 }
