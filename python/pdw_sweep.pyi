@@ -396,10 +396,12 @@ def mfpt_over(
     max_steps: int = 1000,
     seed: int = 0,
     threads: int = 2,
+    dist: str = "normal",
     **params: float,
 ) -> dict[str, Any]:
     """MFPT and gait sensitivity norm over a model parameter, as `pdw-sweep mfpt --over`
     (Monte Carlo; the same walkers and seed at every value): param, values, mean (slope at each
     value), mfpt, stderr, falls, gsn, stable (bool; False where the model has no stable gait,
-    the numbers then NaN) as ndarrays, spearman (rank correlation of gsn and mfpt), sd."""
+    the numbers then NaN) as ndarrays, spearman (rank correlation of gsn and mfpt), sd, dist
+    (the draws' distribution in words; `dist` as `mfpt`'s: normal, uniform, file:PATH)."""
     ...

@@ -10,13 +10,14 @@ use pdw::mfpt_over::{self as over, OverRow};
 use pdw_limit::gsn::Indicator;
 
 /// `mfpt_over(over, model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000,
-/// seed=0, threads=2, **params)`: at each value of `over` ("hip_mass=4:16:7") the stable gait's
-/// MFPT (the same walkers and seed at every value) and GSN; values without a stable gait have
-/// `stable` False and NaN.
+/// seed=0, threads=2, dist="normal", **params)`: at each value of `over` ("hip_mass=4:16:7")
+/// the stable gait's MFPT (the same walkers and seed at every value) and GSN; values without a
+/// stable gait have `stable` False and NaN. `dist`: the standardised draws' distribution, as
+/// `mfpt`'s (`normal`, `uniform`, `file:PATH`).
 #[pyfunction]
 #[pyo3(
-    signature = (over, model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, **params),
-    text_signature = "(over, model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, **params)"
+    signature = (over, model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, dist="normal", **params),
+    text_signature = "(over, model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, dist='normal', **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn mfpt_over<'py>(
@@ -29,9 +30,11 @@ pub(crate) fn mfpt_over<'py>(
     max_steps: usize,
     seed: u64,
     threads: usize,
+    dist: &str,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
+    let dist = pdw::mfpt::parse_dist(dist, &crate::MFPT_FLAGS).map_err(err)?;
     let sw = pdw::input::parse_range_count(over, "over").map_err(err)?;
     let sd = match sd {
         None => {
@@ -52,7 +55,7 @@ pub(crate) fn mfpt_over<'py>(
             sd,
             seed,
             kind: pdw_limit::terrain::TerrainKind::Slope,
-            dist: Default::default(),
+            dist,
         },
         walkers,
         max_steps,
@@ -94,5 +97,6 @@ pub(crate) fn mfpt_over<'py>(
     let (g, mf) = (col(&|r| r.gsn), est(&|e| e.mfpt));
     d.set_item("spearman", over::spearman(&g, &mf))?;
     d.set_item("sd", sd)?;
+    d.set_item("dist", pdw::mfpt::dist_words(&plan.terrain.dist))?;
     Ok(d)
 }

@@ -135,6 +135,23 @@ def test_gait_sensitivity_of_an_unstable_gait_and_a_bad_indicator_raise():
         pdw.gait_sensitivity("simplest", slope=0.009, indicators="step-time,hop")
 
 
+def test_mfpt_over_draws_from_the_named_distribution_as_the_single_runs_do(tmp_path):
+    r = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2, dist="uniform")
+    normal = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2)
+    assert r["dist"].startswith("uniform") and normal["dist"].startswith("normal")
+    assert list(r["mfpt"]) != list(normal["mfpt"])
+    values = tmp_path / "xi.txt"
+    values.write_text("# two slopes\n-1\n1\n")
+    f = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2, dist=f"file:{values}")
+    for i in (0, 1):
+        one = pdw.mfpt(model="compass", slope=r["values"][i], sd="1deg", walkers=30, max_steps=200, seed=2, dist="uniform")
+        assert one["mfpt"] == r["mfpt"][i]
+        one = pdw.mfpt(model="compass", slope=f["values"][i], sd="1deg", walkers=30, max_steps=200, seed=2, dist=f"file:{values}")
+        assert one["mfpt"] == f["mfpt"][i]
+    with pytest.raises(ValueError, match="dist"):
+        pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, dist="cauchy")
+
+
 def test_mfpt_over_is_the_single_runs_and_marks_values_without_a_gait():
     r = pdw.mfpt_over("slope=-0.02:0.06:3", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2)
     assert list(r["values"]) == [-0.02, 0.02, 0.06]
