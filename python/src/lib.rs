@@ -1452,6 +1452,7 @@ const CHAIN_FLAGS: pdw::mfpt::ChainFlags = pdw::mfpt::ChainFlags {
     chain: "chain",
     mesh: "mesh",
     nodes: "nodes",
+    section: "chain_section",
 };
 
 /// `mfpt(model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000, seed=0,
@@ -1460,12 +1461,12 @@ const CHAIN_FLAGS: pdw::mfpt::ChainFlags = pdw::mfpt::ChainFlags {
 /// `terrain="step-down"` the model's `step_down` is the mean step down and `sd` a plain
 /// length; `dist` the distribution of the standardised draws: `normal`, `uniform`,
 /// `file:PATH`). With `chain=True` also the Markov chain at `mesh` and `2 mesh` nodes per axis
-/// (`chain_dict`). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of
+/// (`chain_dict`), on the section `chain_section` (`landing`, or `mid-stance`: no layers). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of
 /// arrays; without the chain).
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", **params),
-    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', **params)"
+    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", chain_section="landing", **params),
+    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', chain_section='landing', **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 fn mfpt<'py>(
@@ -1482,10 +1483,13 @@ fn mfpt<'py>(
     mesh: Option<usize>,
     nodes: Option<usize>,
     dist: &str,
+    chain_section: &str,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let kind = pdw::mfpt::check_terrain(terrain, &MFPT_FLAGS).map_err(err)?;
+    let section =
+        pdw::mfpt::ChainSection::parse(chain_section, CHAIN_FLAGS.section).map_err(err)?;
     let dist = pdw::mfpt::parse_dist(dist, &MFPT_FLAGS).map_err(err)?;
     if !chain && (mesh.is_some() || nodes.is_some()) {
         return Err(err("mesh, nodes: set only with chain=True"));
@@ -1511,7 +1515,7 @@ fn mfpt<'py>(
     pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(&m, &plan, &MFPT_FLAGS).map_err(err)?;
     let chain_plan = if chain {
-        Some(pdw::mfpt::check_chain(&m, mesh, nodes, &CHAIN_FLAGS).map_err(err)?)
+        Some(pdw::mfpt::check_chain(&m, mesh, nodes, section, &CHAIN_FLAGS).map_err(err)?)
     } else {
         None
     };
@@ -1628,6 +1632,7 @@ fn chain_dict<'py>(
     d.set_item("refinement_change", pair.change)?;
     d.set_item("warning", pair.warning.clone())?;
     d.set_item("nodes", c.nodes)?;
+    d.set_item("section", c.section.name())?;
     d.set_item("quadrature", pdw::mfpt::quadrature_name(&plan.terrain.dist))?;
     let cb = &pair.chain_box;
     let (corner, edges) = cb.frame.edges(&cb.bounds);

@@ -24,6 +24,7 @@ pub mod jacobian;
 pub mod lockstep;
 pub mod markov;
 pub mod metrics;
+pub mod mid_stance;
 pub mod newton;
 pub mod orbit;
 pub mod periodic;

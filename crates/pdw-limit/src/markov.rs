@@ -223,6 +223,11 @@ pub struct Transitions {
     pub rows: Vec<Vec<(usize, f64)>>,
     pub fall: Vec<f64>,
     pub out: Vec<f64>,
+    /// The expected heel strikes of each transition, where a transition is not one stride
+    /// from heel strike to heel strike (the mid-stance chain, [`crate::mid_stance`]: a walker
+    /// may land and then fall). `None`: every transition that stays in the mesh is one heel
+    /// strike and every absorption none (module docs, "Rules").
+    pub strikes: Option<Vec<f64>>,
 }
 
 /// The chain on `mesh` for the walk `walk` with slope nodes `slopes` (`(s_l, w_l)`, the
@@ -251,6 +256,7 @@ pub fn transitions(
         rows: vec![Vec::new(); starts.len()],
         fall: vec![0.0; starts.len()],
         out: vec![0.0; starts.len()],
+        strikes: None,
     };
     for (l, (s_l, w_l)) in slopes.iter().enumerate() {
         let landed = strides_onto(walk, *s_l, &starts, pool)?;
@@ -279,6 +285,23 @@ pub fn landing_hull(
     passes: usize,
     pool: &rayon::ThreadPool,
 ) -> Result<(SectionBox, usize), LimitError> {
+    widen_box(frame, bounds, per_axis, passes, &|mesh| {
+        layered_landings(walk, slopes, mesh, pool)
+    })
+}
+
+/// Every landing (section coordinates) of the nodes of a mesh, for [`widen_box`].
+pub type Landings<'a> = dyn Fn(&Mesh) -> Result<Vec<Vec<f64>>, LimitError> + 'a;
+
+/// The loop of [`landing_hull`] for any chain: `landings(mesh)` gives every landing (section
+/// coordinates) of the nodes of a mesh.
+pub fn widen_box(
+    frame: &Frame,
+    bounds: SectionBox,
+    per_axis: usize,
+    passes: usize,
+    landings: &Landings,
+) -> Result<(SectionBox, usize), LimitError> {
     let (mut lo, mut hi) = bounds;
     for pass in 1..=passes {
         let mesh = Mesh {
@@ -287,7 +310,15 @@ pub fn landing_hull(
             n: per_axis.max(2),
             frame: frame.clone(),
         };
-        let (new_lo, new_hi) = hull_once(walk, slopes, &mesh, pool)?;
+        let (mut new_lo, mut new_hi) = (lo.clone(), hi.clone());
+        for sec in landings(&mesh)? {
+            if sec.iter().all(|v| v.is_finite()) {
+                for (a, v) in frame.to_frame(&sec).iter().enumerate() {
+                    new_lo[a] = new_lo[a].min(*v);
+                    new_hi[a] = new_hi[a].max(*v);
+                }
+            }
+        }
         let grew = (0..lo.len()).any(|a| {
             let r = hi[a] - lo[a];
             lo[a] - new_lo[a] > 0.01 * r || new_hi[a] - hi[a] > 0.01 * r
@@ -300,13 +331,14 @@ pub fn landing_hull(
     Ok(((lo, hi), passes))
 }
 
-/// One pass of [`landing_hull`]: the mesh's box and every landing of its nodes.
-fn hull_once(
+/// Every landing (section coordinates) of the mesh's nodes, from every layer onto every slope
+/// node of weight at least [`HULL_MIN_WEIGHT`].
+fn layered_landings(
     walk: &SlopeWalk,
     slopes: &[(f64, f64)],
     mesh: &Mesh,
     pool: &rayon::ThreadPool,
-) -> Result<SectionBox, LimitError> {
+) -> Result<Vec<Vec<f64>>, LimitError> {
     let base = walk.model(walk.mean())?;
     let mut starts = Vec::with_capacity(slopes.len() * mesh.len());
     for (s, _) in slopes {
@@ -317,8 +349,7 @@ fn hull_once(
             starts.push((*s, x));
         }
     }
-    let (mut lo, mut hi) = (mesh.lo.clone(), mesh.hi.clone());
-    let mut sec = vec![0.0; base.section_dim()];
+    let mut out = Vec::new();
     for (s_l, w_l) in slopes {
         if *w_l < HULL_MIN_WEIGHT {
             continue;
@@ -327,16 +358,12 @@ fn hull_once(
             .into_iter()
             .flatten()
         {
+            let mut sec = vec![0.0; base.section_dim()];
             base.project(&post, &mut sec);
-            if sec.iter().all(|v| v.is_finite()) {
-                for (a, v) in mesh.frame.to_frame(&sec).iter().enumerate() {
-                    lo[a] = lo[a].min(*v);
-                    hi[a] = hi[a].max(*v);
-                }
-            }
+            out.push(sec);
         }
     }
-    Ok((lo, hi))
+    Ok(out)
 }
 
 /// Every start `(s_from, x)` (full state in the frame of line `s_from`) carried to the frame of
@@ -446,15 +473,14 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Solves `(I − Q) m = 1` by BiCGSTAB; returns `m` and the relative residual reached.
-fn solve(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
+/// Solves `(I − Q) m = b` by BiCGSTAB; returns `m` and the relative residual reached.
+fn solve(t: &Transitions, n: usize, b: Vec<f64>) -> (Vec<f64>, f64) {
     let apply = |x: &[f64], y: &mut [f64]| {
         matvec(t, n, x, y);
         for (yi, xi) in y.iter_mut().zip(x) {
             *yi = xi - *yi;
         }
     };
-    let b = vec![1.0; n];
     let bn = dot(&b, &b).sqrt();
     let mut x = vec![0.0; n];
     let mut r = b.clone();
@@ -474,6 +500,15 @@ fn solve(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
         alpha = rho / dot(&r0, &v);
         for ((sk, rk), vk) in s.iter_mut().zip(&r).zip(&v) {
             *sk = rk - alpha * vk;
+        }
+        // converged at the half step (exactly, in a small system): `t = A s` would be zero
+        // and `ω = t·s / t·t` undefined
+        if dot(&s, &s).sqrt() / bn < 1e-12 {
+            for (xk, pk) in x.iter_mut().zip(&p) {
+                *xk += alpha * pk;
+            }
+            res = dot(&s, &s).sqrt() / bn;
+            break;
         }
         apply(&s, &mut tt);
         omega = dot(&tt, &s) / dot(&tt, &tt);
@@ -523,10 +558,14 @@ fn dominant(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
     (pi, lambda)
 }
 
-/// The MFPT from the chain (module docs, "Rules").
+/// The MFPT from the chain (module docs, "Rules"; with [`Transitions::strikes`],
+/// [`solve_strikes`]).
 pub fn solve_chain(t: &Transitions) -> ChainResult {
+    if let Some(r) = &t.strikes {
+        return solve_strikes(t, r);
+    }
     let n = t.rows.len() - 1;
-    let (m, residual) = solve(t, n);
+    let (m, residual) = solve(t, n, vec![1.0; n]);
     let start = &t.rows[n];
     let mfpt = start.iter().map(|(j, q)| q * m[*j]).sum();
     let (pi, lambda) = dominant(t, n);
@@ -540,6 +579,28 @@ pub fn solve_chain(t: &Transitions) -> ChainResult {
         mfpt_quasi_stationary: dot(&pi, &m) - 1.0,
         out_of_mesh: dot(&pi, &t.out[..n]),
         fall_per_step: dot(&pi, &t.fall[..n]),
+        residual,
+        states: n,
+    }
+}
+
+/// The MFPT of a chain whose transitions carry `r`, their expected heel strikes: the heel
+/// strikes until absorption `m` solve `(I − Q) m = r` (a first-step analysis: `m = r + Q m`),
+/// from the start `r_start + q_start · m`; from the quasi-stationary distribution `π m`, which
+/// for the eigenvector (`π Q = λ π`) is `π·r / (1 − λ)` — the check by the eigenvalue.
+pub fn solve_strikes(t: &Transitions, r: &[f64]) -> ChainResult {
+    let n = t.rows.len() - 1;
+    let (m, residual) = solve(t, n, r[..n].to_vec());
+    let mfpt = r[n] + t.rows[n].iter().map(|(j, q)| q * m[*j]).sum::<f64>();
+    let (pi, lambda) = dominant(t, n);
+    let (fall, out) = (dot(&pi, &t.fall[..n]), dot(&pi, &t.out[..n]));
+    ChainResult {
+        mfpt,
+        lambda,
+        mfpt_lambda: dot(&pi, &r[..n]) / (fall + out),
+        mfpt_quasi_stationary: dot(&pi, &m),
+        out_of_mesh: out,
+        fall_per_step: fall,
         residual,
         states: n,
     }

@@ -470,12 +470,17 @@ pub struct MfptArgs {
     #[arg(long)]
     pub chain: bool,
     /// With --chain: mesh nodes per section axis (the finer mesh has twice as many). Default:
-    /// 200 for one section coordinate, 60 for two, 12 for three.
+    /// 200 for one section coordinate, 60 for two, 12 for three (24 at mid-stance).
     #[arg(long, requires = "chain")]
     pub mesh: Option<usize>,
     /// With --chain: Gauss–Hermite nodes of the slope distribution.
     #[arg(long, default_value_t = 11, requires = "chain")]
     pub nodes: usize,
+    /// With --chain: the section the chain's states lie on: `landing` (just after heel strike,
+    /// one mesh layer per terrain node) or `mid-stance` (the stance leg vertical, no layers:
+    /// the compass gait's chain at a fraction of the strides; one-mode models only).
+    #[arg(long, default_value = "landing", requires = "chain")]
+    pub chain_section: String,
     /// The MFPT over a model parameter, PARAM=A:B:N: at each of the N values the stable gait,
     /// its MFPT (the same walkers and seed at every value) and its gait sensitivity norm; a
     /// table, and with --out the file, OUT.png (MFPT against the parameter) and OUT-gsn.png

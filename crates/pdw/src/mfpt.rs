@@ -8,6 +8,7 @@ use crate::input::{self, InputError};
 use crate::model::BuiltModel;
 use pdw_hybrid::Options;
 use pdw_limit::markov::{ChainResult, Frame, SectionBox};
+use pdw_limit::mid_stance;
 use pdw_limit::terrain::{
     self, Fate, MfptEstimate, SlopeTerrain, SlopeWalk, TerrainDist, TerrainKind,
 };
@@ -360,6 +361,44 @@ pub struct ChainPlan {
     pub nodes: usize,
     pub mesh: usize,
     pub bounds: Option<(Vec<f64>, Vec<f64>)>,
+    pub section: ChainSection,
+}
+
+/// The section the chain's states lie on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ChainSection {
+    /// Just after a heel strike, one layer of the mesh per terrain node (the state remembers
+    /// the line it landed on; [`pdw_limit::markov`]).
+    #[default]
+    Landing,
+    /// At mid-stance, the stance leg vertical: one mesh, no layers
+    /// ([`pdw_limit::mid_stance`]); one-mode models only.
+    MidStance,
+}
+
+impl ChainSection {
+    /// The names `--chain-section` takes.
+    pub const NAMES: &'static [&'static str] = &["landing", "mid-stance"];
+
+    /// The section's name in commands and files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ChainSection::Landing => "landing",
+            ChainSection::MidStance => "mid-stance",
+        }
+    }
+
+    /// The section named `s` ([`ChainSection::NAMES`]), or an error naming `flag`.
+    pub fn parse(s: &str, flag: &str) -> Result<Self, InputError> {
+        match s.trim() {
+            "landing" => Ok(ChainSection::Landing),
+            "mid-stance" => Ok(ChainSection::MidStance),
+            t => Err(InputError(format!(
+                "{flag}: '{t}' is not one of {}",
+                Self::NAMES.join(", ")
+            ))),
+        }
+    }
 }
 
 /// Walkers and steps of the Monte Carlo pass that finds the visited box, and its padding (a
@@ -408,6 +447,38 @@ pub fn visited_frame(
     pts.push(s0.clone());
     let frame = Frame::principal(&pts, s0.len());
     let bounds = padded(frame.bounds(&pts, &frame.to_frame(&s0)));
+    Ok((frame, bounds))
+}
+
+/// The walkers' principal frame and padded box on the mid-stance section
+/// ([`pdw_limit::mid_stance::visited`]: the first [`BOX_WALKERS`] walkers, at most
+/// [`BOX_STEPS`] transitions each, from the start's first mid-stance).
+pub fn mid_stance_frame(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<(Frame, SectionBox), LimitError> {
+    let at = model_at_param(m, plan.terrain.kind.param());
+    let walk = walk_of(&at, plan)?;
+    let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+    let pts = mid_stance::visited(
+        &walk,
+        &plan.terrain,
+        x0,
+        sense,
+        BOX_WALKERS,
+        BOX_STEPS,
+        pool,
+    )?;
+    let Some(first) = pts.first() else {
+        return Err(LimitError::Model {
+            param: plan.terrain.mean,
+            message: "the start falls before its first mid-stance".into(),
+        });
+    };
+    let frame = Frame::principal(&pts, first.len());
+    let bounds = padded(frame.bounds(&pts, &frame.to_frame(first)));
     Ok((frame, bounds))
 }
 
@@ -473,7 +544,10 @@ pub fn chain_box(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<ChainBox, LimitError> {
-    let (frame, visited) = visited_frame(m, plan, x0, pool)?;
+    let (frame, visited) = match chain.section {
+        ChainSection::Landing => visited_frame(m, plan, x0, pool)?,
+        ChainSection::MidStance => mid_stance_frame(m, plan, x0, pool)?,
+    };
     let r = chain_in(m, plan, chain, &frame, &visited, x0, pool)?;
     let absorbed = r.out_of_mesh + r.fall_per_step;
     let out_share = if absorbed > 0.0 {
@@ -494,15 +568,23 @@ pub fn chain_box(
     let d = visited.0.len();
     let per_axis = HULL_MESH[d.clamp(1, 3) - 1];
     let slopes = terrain_nodes(plan, chain.nodes);
-    let (bounds, passes) = pdw_limit::markov::landing_hull(
-        &walk,
-        &slopes,
-        &frame,
-        visited,
-        per_axis,
-        HULL_PASSES,
-        pool,
-    )?;
+    let (bounds, passes) = match chain.section {
+        ChainSection::Landing => pdw_limit::markov::landing_hull(
+            &walk,
+            &slopes,
+            &frame,
+            visited,
+            per_axis,
+            HULL_PASSES,
+            pool,
+        )?,
+        ChainSection::MidStance => {
+            let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+            pdw_limit::markov::widen_box(&frame, visited, per_axis, HULL_PASSES, &|mesh| {
+                mid_stance::landings(&walk, &slopes, mesh, sense, pool)
+            })?
+        }
+    };
     Ok(ChainBox {
         frame,
         bounds,
@@ -544,7 +626,13 @@ pub fn chain_in(
         n: chain.mesh,
         frame: frame.clone(),
     };
-    let tr = markov::transitions(&walk, &slopes, &mesh, x0, pool)?;
+    let tr = match chain.section {
+        ChainSection::Landing => markov::transitions(&walk, &slopes, &mesh, x0, pool)?,
+        ChainSection::MidStance => {
+            let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+            mid_stance::transitions(&walk, &slopes, &mesh, x0, sense, pool)?
+        }
+    };
     Ok(markov::solve_chain(&tr))
 }
 
@@ -623,29 +711,45 @@ pub struct ChainFlags {
     pub chain: &'static str,
     pub mesh: &'static str,
     pub nodes: &'static str,
+    pub section: &'static str,
 }
 
 /// Default quadrature nodes of the chain.
 pub const DEFAULT_NODES: usize = 11;
 
-/// The chain's plan for `m`, checked: `mesh` nodes per axis (default by the section's
-/// dimension: 200, 60, 12; at least 2), `nodes` quadrature nodes (1 … 40, default
-/// [`DEFAULT_NODES`]); refused for a section of more than 3 coordinates.
+/// The chain's plan for `m` on `section`, checked: `mesh` nodes per axis (default by the
+/// section's dimension: 200, 60, 12 just after heel strike; 200, 60, 24 at mid-stance, which
+/// has no layers; at least 2), `nodes` quadrature nodes (1 … 40, default [`DEFAULT_NODES`]);
+/// refused for a section of more than 3 coordinates, and at mid-stance for a model without it
+/// ([`pdw_limit::mid_stance::unsupported`]).
 pub fn check_chain(
     m: &BuiltModel,
     mesh: Option<usize>,
     nodes: Option<usize>,
+    section: ChainSection,
     flags: &ChainFlags,
 ) -> Result<ChainPlan, InputError> {
-    let d = m.info.section_names.len();
-    let default = match d {
-        1 => 200,
-        2 => 60,
-        3 => 12,
+    let d = match section {
+        ChainSection::Landing => m.info.section_names.len(),
+        ChainSection::MidStance => {
+            if let Some(why) = pdw_limit::mid_stance::unsupported(m.walker.as_ref()) {
+                return Err(InputError(format!("{}: {why}", flags.section)));
+            }
+            m.walker.dim() - 1
+        }
+    };
+    let default = match (d, section) {
+        (1, _) => 200,
+        (2, _) => 60,
+        (3, ChainSection::Landing) => 12,
+        (3, ChainSection::MidStance) => 24,
         _ => {
             return Err(InputError(format!(
-                "{}: model '{}' has {d} section coordinates; the mesh is built for at most 3",
-                flags.chain, m.info.name
+                "{}: model '{}' has {d} coordinates on the {} section; the mesh is built for at \
+                 most 3",
+                flags.chain,
+                m.info.name,
+                section.name()
             )))
         }
     };
@@ -667,6 +771,7 @@ pub fn check_chain(
         nodes,
         mesh,
         bounds: None,
+        section,
     })
 }
 

@@ -2,6 +2,7 @@
 //! walk's setup ([`simulate`]).
 
 mod chain_frame;
+mod chain_mid_stance;
 mod design;
 mod disturb;
 mod gsn;

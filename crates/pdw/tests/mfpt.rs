@@ -366,6 +366,7 @@ fn the_markov_chain_agrees_with_the_monte_carlo_walkers() {
             nodes: 11,
             mesh,
             bounds: None,
+            section: Default::default(),
         };
         mfpt::chain(&m, &plan, &c, &bounds, &x0, &pool).unwrap()
     };

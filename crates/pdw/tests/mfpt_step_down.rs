@@ -110,6 +110,7 @@ fn the_step_height_chain_agrees_with_the_monte_carlo() {
             nodes: 11,
             mesh,
             bounds: None,
+            section: Default::default(),
         };
         mfpt::chain(&m, &p, &c, &bounds, &x0, &pool).unwrap()
     };

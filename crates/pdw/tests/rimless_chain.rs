@@ -226,6 +226,7 @@ fn the_engines_markov_chain_of_the_rimless_wheel_matches_the_closed_form_chain()
             nodes: 11,
             mesh,
             bounds: None,
+            section: Default::default(),
         };
         mfpt::chain(&m, &plan, &c, &bounds, &x0, &pool)
             .unwrap()
@@ -238,6 +239,77 @@ fn the_engines_markov_chain_of_the_rimless_wheel_matches_the_closed_form_chain()
         (finer - fine).abs() < tol,
         "engine {finer} vs closed form {fine} (tol {tol})"
     );
+}
+
+/// The chain on the mid-stance section (no layers; [`pdw_limit::mid_stance`]) against the
+/// closed-form chain on the same 11-node quadrature, which is meshed just after heel strike:
+/// the same discrete-terrain walk seen at another instant of the stride, so both converge to
+/// one MFPT. Both converge slowly (linear interpolation across where the wheel starts to roll
+/// back): the closed form gives 114.54, 115.25, 115.43 on 2601, 5201, 10401 rates, the
+/// mid-stance chain 116.06, 115.82, 115.55 on meshes of 200, 800, 3200; so the finest of each
+/// are compared, within both meshes' refinement differences.
+#[test]
+fn the_mid_stance_chain_of_the_rimless_wheel_matches_the_closed_form_chain() {
+    let m = pdw::build("rimless", &[("slope".to_string(), MEAN)]).unwrap();
+    let wheel = Wheel::of(&m);
+    let (x0, s0) = mfpt::start(&m).unwrap();
+    let (lo, hi) = (0.5, 1.8);
+    let fine = ClosedChain::new(11, 10401, lo, hi).mfpt(&wheel, s0[0]);
+    let half = ClosedChain::new(11, 5201, lo, hi).mfpt(&wheel, s0[0]);
+    let c = mfpt::ChainPlan {
+        nodes: 11,
+        mesh: 1600,
+        bounds: None,
+        section: mfpt::ChainSection::MidStance,
+    };
+    let pair = mfpt::chain_pair(&m, &plan(), &c, &x0, &pool()).unwrap();
+    let (coarse, finer) = (pair.results[0].mfpt, pair.results[1].mfpt);
+    eprintln!("closed form {fine} (h×2: {half}); mid-stance {finer} (mesh/2: {coarse})");
+    let tol = (finer - coarse).abs() + (fine - half).abs();
+    assert!(
+        (finer - fine).abs() < tol,
+        "mid-stance {finer} vs closed form {fine} (tol {tol})"
+    );
+}
+
+/// Where the mid-stance chain fails, visibly: Byl & Tedrake's 8° slope at σ = 1° (40 nodes,
+/// the extreme ones near 0° and 16°). At mid-stance the hub's rate has no floor but zero, and
+/// the wheels that barely pass the top on the flattest nodes land ever closer to it: the
+/// widening passes end with landings still below the box, so box exits are a visible share of
+/// the absorption (the front ends' box warning) and the quasi-stationary MFPT falls short of
+/// the closed-form chain's ≈ 8·10¹¹ — the section just after heel strike, whose rates are
+/// bounded below by the impact, holds every landing (the test above it).
+#[test]
+fn the_mid_stance_chain_reports_the_landings_its_box_cannot_hold() {
+    let mean = 8f64.to_radians();
+    let m = pdw::build("rimless", &[("slope".to_string(), mean)]).unwrap();
+    let wheel = Wheel::of(&m);
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let mut plan = plan();
+    plan.terrain.mean = mean;
+    plan.terrain.sd = 1f64.to_radians();
+    let c = mfpt::ChainPlan {
+        nodes: 40,
+        mesh: 200,
+        bounds: None,
+        section: mfpt::ChainSection::MidStance,
+    };
+    let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool()).unwrap();
+    assert_eq!(
+        pair.chain_box.passes,
+        mfpt::HULL_PASSES,
+        "{:?}",
+        pair.chain_box
+    );
+    let mut cc = ClosedChain::new(40, 2201, 0.4, 2.6);
+    cc.slopes = mfpt::terrain_nodes(&plan, 40);
+    let closed = cc.quasi_stationary_mfpt(&wheel);
+    for r in &pair.results {
+        let absorbed = r.out_of_mesh + r.fall_per_step;
+        assert!(r.out_of_mesh > 0.01 * absorbed, "{r:?}");
+        assert!(r.mfpt_lambda < closed, "{r:?} vs closed form {closed}");
+        assert!(r.mfpt_lambda > 1e10, "{r:?}");
+    }
 }
 
 /// Gauss–Hermite quadrature converges slowly here (the next stride's value jumps where the
@@ -288,6 +360,7 @@ fn the_chains_widened_box_makes_falls_not_box_exits_absorb() {
         nodes: 40,
         mesh,
         bounds: None,
+        section: Default::default(),
     };
     let visited = mfpt::visited_box(&m, &plan, &x0, &pool).unwrap();
     let narrow = mfpt::chain(&m, &plan, &c(200), &visited, &x0, &pool).unwrap();
@@ -356,6 +429,7 @@ fn engine_pair(m: &pdw::BuiltModel, plan: &MfptPlan, x0: &[f64], mesh: usize) ->
         nodes: 11,
         mesh,
         bounds: None,
+        section: Default::default(),
     };
     let pair = mfpt::chain_pair(m, plan, &c, x0, &pool()).unwrap();
     (pair.results[0].mfpt, pair.results[1].mfpt)

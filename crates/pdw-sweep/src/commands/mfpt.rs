@@ -76,12 +76,15 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let secs = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
     summary(&m, &plan, &section, &est, secs);
-    let chain = match chain_plan(a, &m)? {
-        Some(c) => run_chain(&m, &plan, &c, &x0, &pool)?,
-        None => Vec::new(),
+    let (chain, method) = match chain_plan(a, &m)? {
+        Some(c) => (
+            run_chain(&m, &plan, &c, &x0, &pool)?,
+            method_of(Some(c.section)),
+        ),
+        None => (Vec::new(), method_of(None)),
     };
     if let (Some(out), Some(_claim)) = (&a.out, claim) {
-        write(out, &m, &plan, &section, &est, secs, chain)?;
+        write(out, &m, &plan, &section, &est, secs, (chain, method))?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -235,6 +238,17 @@ pub(super) const ESTIMATOR: &str =
                          constant fall probability per step (censored geometric first-passage \
                          time); stderr = sqrt(S (S + F)) / F^1.5 from the Fisher information";
 
+/// The file's `method`: the Monte Carlo, and the chain on its section where it ran.
+fn method_of(chain: Option<mfpt::ChainSection>) -> &'static str {
+    match chain {
+        None => "monte carlo",
+        Some(mfpt::ChainSection::Landing) => "monte carlo + markov chain",
+        Some(mfpt::ChainSection::MidStance) => {
+            "monte carlo + markov chain on the mid-stance section"
+        }
+    }
+}
+
 /// Writes the HDF5 file (with provenance and units) and the survival curve's PNG next to it.
 fn write(
     out: &std::path::Path,
@@ -243,19 +257,14 @@ fn write(
     section: &[f64],
     est: &MfptEstimate,
     secs: f64,
-    chain: Vec<(String, f64)>,
+    (chain, method): (Vec<(String, f64)>, &str),
 ) -> anyhow::Result<()> {
     let t = &plan.terrain;
     let data = pdw_store::MfptData {
         command: super::command_line(),
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
-        method: if chain.is_empty() {
-            "monte carlo"
-        } else {
-            "monte carlo + markov chain"
-        }
-        .into(),
+        method: method.into(),
         terrain: t.kind.name().into(),
         distribution: mfpt::dist_words(&t.dist),
         terrain_unit: terrain_unit(m, t.kind),
@@ -358,8 +367,10 @@ pub(super) fn chain_plan(
         chain: "--chain",
         mesh: "--mesh",
         nodes: "--nodes",
+        section: "--chain-section",
     };
-    mfpt::check_chain(m, a.mesh, Some(a.nodes), &flags).map(Some)
+    let section = mfpt::ChainSection::parse(&a.chain_section, flags.section)?;
+    mfpt::check_chain(m, a.mesh, Some(a.nodes), section, &flags).map(Some)
 }
 
 /// The chain at `--mesh` and twice as fine over the box the walkers visit; prints both and
@@ -384,14 +395,19 @@ pub(super) fn run_chain(
         )
     };
     crate::outln!(
-        "Markov chain: {} {} nodes of the terrain, mesh over {} ({how})",
+        "Markov chain: {} {} nodes of the terrain, {} section, mesh over {} ({how})",
         c.nodes,
         mfpt::quadrature_name(&plan.terrain.dist),
+        c.section.name(),
         mesh_box_text(&cb)
     );
     let mut out = vec![
         ("nodes".to_string(), c.nodes as f64),
         ("box_widening_passes".to_string(), cb.passes as f64),
+        (
+            "mid_stance".to_string(),
+            f64::from(u8::from(c.section == mfpt::ChainSection::MidStance)),
+        ),
     ];
     let mut results = Vec::with_capacity(2);
     for (label, n) in [("coarse", c.mesh), ("fine", 2 * c.mesh)] {

@@ -1,0 +1,504 @@
+//! The Markov chain of random terrain on a section at **mid-stance** — the stance leg along
+//! gravity's vertical — where the walker's state does not remember the line it last landed on.
+//!
+//! # Why a second section
+//! Just after a heel strike the walker's state remembers the line it landed on (both feet are
+//! on it): the chain of [`crate::markov`] carries that line as a layer per quadrature node, so a
+//! section of `d` coordinates with `N` terrain nodes has `N` layers of `n^d` states and each
+//! state is mapped onto `N` nodes — `N² n^d` strides. At the instant the stance leg passes the
+//! vertical no foot is on a line the walk chose: the configuration is measured from gravity, the
+//! landing line of the stride ahead is not drawn yet and the last one is forgotten. The state
+//! there — every relative angle and every rate; the one absolute angle ([`Walker::terrain_frame`])
+//! is fixed by the section — is the whole Markov state: `n^d` states, `N n^d` strides (the
+//! compass gait: 3 coordinates, the same as just after a heel strike, without the layers).
+//!
+//! # The map
+//! From mid-stance the walker of terrain value `v` (the landing line's slope, or the
+//! foothold's height) walks to its heel strike on `v`, swaps legs and walks on to the next
+//! mid-stance, all in the frame of line `v` (where the stance leg is vertical at
+//! `x_a = σ s_v`, `x_a` the absolute angle, `σ` its sign and `s_v` the model's slope: the angle
+//! from gravity's vertical is `x_a − σ s_v`, module docs of [`crate::terrain`]). [`MidStance`]
+//! is the model with one more guard, `g = ρ (x_a − σ s_v)` rising through zero (`ρ = ±1`, the
+//! sense in which the stance leg sweeps), admissible only after a heel strike, and one more
+//! state component that counts the heel strikes. The heel strikes of each transition are the
+//! chain's reward: a walker that lands and then rolls back before the vertical has completed
+//! one more step than one that falls before landing.
+//!
+//! # What it assumes
+//! Between a heel strike and the next mid-stance the walk of [`crate::terrain`] already moves in
+//! the frame of the next line; here it stays in the frame of the line just landed on. Only
+//! guards that measure the walker against the line could tell the two apart in that half
+//! stride: the heel strike (admissible with the swing foot ahead, which it is not before
+//! mid-stance) and the hip reaching the line (a fall either way). The chain walkers' and the
+//! rimless wheel's other falls are measured from gravity. The tests compare the chain with the
+//! Monte Carlo walk that has no such assumption.
+//!
+//! # Which models
+//! Models of one mode with a terrain frame: the compass gait (and point-foot chain walkers
+//! without free knees), the rimless wheel, the simplest walker. A walker whose knee unlocks
+//! during the stride may pass the vertical in either mode: its state there is not one
+//! section's, and [`MidStance::new`] refuses it.
+
+use crate::error::LimitError;
+use crate::markov::{Mesh, Transitions};
+use crate::stride::{EventDriver, StrideOutcome};
+use crate::terrain::{SlopeTerrain, SlopeWalk};
+use faer::{MatMut, MatRef};
+use pdw_hybrid::{
+    run_batch_par, run_scalar_with, BatchOptions, Crossing, GuardKind, GuardSpec, HybridSystem,
+    Integrator, Scratch,
+};
+use pdw_model::Walker;
+use rayon::prelude::*;
+
+/// The mid-stance guard: the stance leg's angle from gravity's vertical, rising through zero.
+pub const MID_STANCE: GuardSpec = GuardSpec {
+    name: "mid_stance",
+    crossing: Crossing::Rising,
+    kind: GuardKind::Reset,
+};
+
+/// A one-mode model with the mid-stance guard appended (module docs, "The map"): state
+/// `(x, p)`, `x` the model's state in the frame of the model's own line, `p` the heel strikes
+/// so far (constant along the flow).
+pub struct MidStance<'a> {
+    model: &'a dyn Walker,
+    /// Index of the model's absolute angle and where it is vertical, `σ s`.
+    absolute: usize,
+    vertical: f64,
+    /// `ρ`: the guard is `ρ (x_a − σ s)`.
+    sense: f64,
+    /// The model's heel strike `(mode, guard)`: its section guard.
+    heel: (usize, usize),
+    guards: Vec<GuardSpec>,
+    d: usize,
+}
+
+/// The model's slope parameter (`slope` in its parameter table).
+fn slope_of(model: &dyn Walker) -> Result<f64, LimitError> {
+    model
+        .param_values()
+        .iter()
+        .find(|(n, _)| n == "slope")
+        .map(|(_, v)| *v)
+        .ok_or_else(|| LimitError::Model {
+            param: f64::NAN,
+            message: format!("model '{}' has no slope parameter", model.name()),
+        })
+}
+
+/// Why a model has no mid-stance section, or `None` when it has one.
+pub fn unsupported(model: &dyn Walker) -> Option<String> {
+    if model.terrain_frame().is_none() {
+        return Some(format!(
+            "model '{}' does not walk on random terrain (round feet?)",
+            model.name()
+        ));
+    }
+    if model.n_modes() != 1 {
+        return Some(format!(
+            "model '{}' has {} modes (a knee that unlocks): it may pass the vertical in either, \
+             so mid-stance is not one section; use the section just after heel strike",
+            model.name(),
+            model.n_modes()
+        ));
+    }
+    slope_of(model).err().map(|e| e.to_string())
+}
+
+impl<'a> MidStance<'a> {
+    /// The mid-stance system of `model`, the stance leg sweeping in the sense `sense` (±1,
+    /// [`sweep_sense`]); [`LimitError::Model`] for a model without the section
+    /// ([`unsupported`]).
+    pub fn new(model: &'a dyn Walker, sense: f64) -> Result<Self, LimitError> {
+        if let Some(message) = unsupported(model) {
+            return Err(LimitError::Model {
+                param: f64::NAN,
+                message,
+            });
+        }
+        let (absolute, sign) = model.terrain_frame().unwrap_or((0, 1.0));
+        let mut guards = model.guards(0).to_vec();
+        guards.push(MID_STANCE);
+        Ok(Self {
+            model,
+            absolute,
+            vertical: sign * slope_of(model)?,
+            sense,
+            heel: model.section_guard(),
+            guards,
+            d: model.dim(),
+        })
+    }
+
+    /// Coordinates of the section: every state component but the absolute angle.
+    pub fn section_dim(&self) -> usize {
+        self.d - 1
+    }
+
+    /// The section point of a full state `(x, p)` on the section.
+    pub fn project(&self, x: &[f64]) -> Vec<f64> {
+        (0..self.d)
+            .filter(|&j| j != self.absolute)
+            .map(|j| x[j])
+            .collect()
+    }
+
+    /// The full state at the section point `s`, stance leg vertical, with `p` heel strikes.
+    pub fn lift(&self, s: &[f64], p: f64) -> Vec<f64> {
+        let mut x = Vec::with_capacity(self.d + 1);
+        let mut it = s.iter();
+        for j in 0..self.d {
+            x.push(if j == self.absolute {
+                self.vertical
+            } else {
+                *it.next().unwrap_or(&f64::NAN)
+            });
+        }
+        x.push(p);
+        x
+    }
+
+    /// The driver of one transition: from mid-stance to the next mid-stance guard.
+    pub fn driver(&self) -> EventDriver {
+        EventDriver {
+            section_guard: (0, self.guards.len() - 1),
+            start_mode: 0,
+            t_max: self.model.max_stride_time(),
+        }
+    }
+
+    fn n_model(&self) -> usize {
+        self.guards.len() - 1
+    }
+
+    fn mid(&self, x: &[f64]) -> f64 {
+        self.sense * (x[self.absolute] - self.vertical)
+    }
+}
+
+/// `ρ` for the walk that starts at `x0` (just after a heel strike on the model's own line):
+/// the sense from the start's angle to the vertical; [`LimitError::Model`] when the start's
+/// stance leg is already vertical.
+pub fn sweep_sense(model: &dyn Walker, x0: &[f64]) -> Result<f64, LimitError> {
+    let (a, sign) = model.terrain_frame().unwrap_or((0, 1.0));
+    let from_vertical = x0[a] - sign * slope_of(model)?;
+    if from_vertical == 0.0 || !from_vertical.is_finite() {
+        return Err(LimitError::Model {
+            param: f64::NAN,
+            message: "the start's stance leg is vertical just after heel strike".into(),
+        });
+    }
+    Ok(-from_vertical.signum())
+}
+
+impl HybridSystem for MidStance<'_> {
+    fn dim(&self) -> usize {
+        self.d + 1
+    }
+
+    /// The model's: the heel-strike count never enters the step-size control.
+    fn error_dim(&self) -> usize {
+        self.model.error_dim().clamp(1, self.d)
+    }
+
+    fn guards(&self, _mode: usize) -> &[GuardSpec] {
+        &self.guards
+    }
+
+    fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
+        self.model.flow(ws, mode, &x[..self.d], &mut dx[..self.d]);
+        dx[self.d] = 0.0;
+    }
+
+    fn flow_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        mut dx: MatMut<'_, f64>,
+    ) {
+        let d = self.d;
+        self.model.flow_batch(
+            ws,
+            mode,
+            x.subcols(0, d),
+            faer::reborrow::ReborrowMut::rb_mut(&mut dx).subcols_mut(0, d),
+        );
+        for l in 0..x.nrows() {
+            dx[(l, d)] = 0.0;
+        }
+    }
+
+    fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
+        if k < self.n_model() {
+            self.model.guard(ws, mode, k, &x[..self.d])
+        } else {
+            self.mid(x)
+        }
+    }
+
+    fn guards_with_rates(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        let (d, n) = (self.d, self.n_model());
+        self.model
+            .guards_with_rates(ws, mode, &x[..d], &f[..d], &mut g[..n], &mut rate[..n]);
+        g[n] = self.mid(x);
+        rate[n] = self.sense * f[self.absolute];
+    }
+
+    fn guards_with_rates_batch(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: MatRef<'_, f64>,
+        f: MatRef<'_, f64>,
+        mut g: MatMut<'_, f64>,
+        mut rate: MatMut<'_, f64>,
+    ) {
+        use faer::reborrow::ReborrowMut;
+        let (d, n, a) = (self.d, self.n_model(), self.absolute);
+        self.model.guards_with_rates_batch(
+            ws,
+            mode,
+            x.subcols(0, d),
+            f.subcols(0, d),
+            g.rb_mut().subcols_mut(0, n),
+            rate.rb_mut().subcols_mut(0, n),
+        );
+        for l in 0..x.nrows() {
+            g[(l, n)] = self.sense * (x[(l, a)] - self.vertical);
+            rate[(l, n)] = self.sense * f[(l, a)];
+        }
+    }
+
+    fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        k >= self.n_model() || self.model.guard_is_linear(mode, k)
+    }
+
+    /// The model's; the mid-stance guard only after a heel strike.
+    fn admissible(&self, mode: usize, k: usize, x: &[f64]) -> bool {
+        if k < self.n_model() {
+            self.model.admissible(mode, k, &x[..self.d])
+        } else {
+            x[self.d] >= 0.5
+        }
+    }
+
+    fn guard_tolerance(&self, mode: usize, k: usize) -> f64 {
+        if k < self.n_model() {
+            self.model.guard_tolerance(mode, k)
+        } else {
+            1e-12
+        }
+    }
+
+    /// The model's reset (a heel strike adds one to the count); the mid-stance guard changes
+    /// nothing.
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
+        let d = self.d;
+        if k >= self.n_model() {
+            out.copy_from_slice(x);
+            return mode;
+        }
+        let next = self.model.reset(ws, mode, k, &x[..d], &mut out[..d]);
+        out[d] = x[d] + f64::from(u8::from((mode, k) == self.heel));
+        next
+    }
+
+    fn guard_gradient(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], grad: &mut [f64]) {
+        let d = self.d;
+        grad.fill(0.0);
+        if k < self.n_model() {
+            self.model
+                .guard_gradient(ws, mode, k, &x[..d], &mut grad[..d]);
+        } else {
+            grad[self.absolute] = self.sense;
+        }
+    }
+}
+
+pdw_hybrid::integrate_through_dyn!(MidStance<'_>);
+
+/// Where one transition from mid-stance ended: the next mid-stance's section point (`None`: a
+/// fall, or an integration that failed), and the heel strikes on the way.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Landing {
+    pub point: Option<Vec<f64>>,
+    pub strikes: f64,
+}
+
+fn landing(sys: &MidStance, outcome: &StrideOutcome, post: &[f64]) -> Landing {
+    let strikes = post[sys.d];
+    Landing {
+        point: outcome.is_ok().then(|| sys.project(post)),
+        strikes: if strikes.is_finite() { strikes } else { 0.0 },
+    }
+}
+
+/// Every section point of `starts` (mid-stance) walked on terrain value `v` to the next
+/// mid-stance, batched on `pool`.
+pub fn map_onto(
+    walk: &SlopeWalk,
+    v: f64,
+    sense: f64,
+    starts: &[Vec<f64>],
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<Landing>, LimitError> {
+    let w = walk.model(v)?;
+    let sys = MidStance::new(w.as_ref(), sense)?;
+    let items: Vec<Vec<f64>> = starts.iter().map(|s| sys.lift(s, 0.0)).collect();
+    let opts = BatchOptions {
+        lanes: 256,
+        integrator: walk.options(),
+    };
+    let ends = run_batch_par(&sys, &sys.driver(), &items, &opts, pool, 1024, &|_| {})?;
+    Ok(ends
+        .iter()
+        .map(|e| landing(&sys, &e.outcome, &e.post))
+        .collect())
+}
+
+/// The start `x0` (just after a heel strike on the mean line, in its frame) walked to its
+/// first mid-stance on the model of the mean terrain: the heel strikes counted are those after
+/// the start (none on a walk that passes the vertical before landing again).
+pub fn first_mid_stance(walk: &SlopeWalk, sense: f64, x0: &[f64]) -> Result<Landing, LimitError> {
+    let w = walk.model(walk.mean())?;
+    let sys = MidStance::new(w.as_ref(), sense)?;
+    let mut integ = Integrator::new(sys.d + 1, walk.options())?;
+    let mut x = x0.to_vec();
+    x.push(1.0);
+    let end = run_scalar_with(&mut integ, &sys, &sys.driver(), &x)?;
+    let mut l = landing(&sys, &end.outcome, &end.post);
+    l.strikes -= 1.0;
+    Ok(l)
+}
+
+/// The chain on `mesh` (a mesh of the mid-stance section) for `walk` with terrain nodes
+/// `nodes` (`(v_l, w_l)`), the start `x0`'s row last ([`first_mid_stance`], no terrain drawn):
+/// the transitions with their expected heel strikes ([`Transitions::strikes`]).
+pub fn transitions(
+    walk: &SlopeWalk,
+    nodes: &[(f64, f64)],
+    mesh: &Mesh,
+    x0: &[f64],
+    sense: f64,
+    pool: &rayon::ThreadPool,
+) -> Result<Transitions, LimitError> {
+    let starts: Vec<Vec<f64>> = (0..mesh.len()).map(|k| mesh.node(k)).collect();
+    let n = starts.len();
+    let mut t = Transitions {
+        rows: vec![Vec::new(); n + 1],
+        fall: vec![0.0; n + 1],
+        out: vec![0.0; n + 1],
+        strikes: Some(vec![0.0; n + 1]),
+    };
+    for (v, w) in nodes {
+        for (i, l) in map_onto(walk, *v, sense, &starts, pool)?
+            .into_iter()
+            .enumerate()
+        {
+            add(&mut t, i, *w, l, mesh);
+        }
+    }
+    let first = first_mid_stance(walk, sense, x0)?;
+    add(&mut t, n, 1.0, first, mesh);
+    Ok(t)
+}
+
+/// Row `i`'s transition of probability `w` ending at `l`.
+fn add(t: &mut Transitions, i: usize, w: f64, l: Landing, mesh: &Mesh) {
+    if let Some(s) = t.strikes.as_mut() {
+        s[i] += w * l.strikes;
+    }
+    match l.point.map(|p| mesh.weights(&p)) {
+        Some(Some(ws)) => t.rows[i].extend(ws.into_iter().map(|(k, q)| (k, w * q))),
+        Some(None) => t.out[i] += w,
+        None => t.fall[i] += w,
+    }
+}
+
+/// Every landing (not a fall) of the nodes of `mesh` onto the terrain nodes `nodes` of weight
+/// at least [`crate::markov::HULL_MIN_WEIGHT`], in section coordinates.
+pub fn landings(
+    walk: &SlopeWalk,
+    nodes: &[(f64, f64)],
+    mesh: &Mesh,
+    sense: f64,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<Vec<f64>>, LimitError> {
+    let starts: Vec<Vec<f64>> = (0..mesh.len()).map(|k| mesh.node(k)).collect();
+    let mut out = Vec::new();
+    for (v, w) in nodes {
+        if *w < crate::markov::HULL_MIN_WEIGHT {
+            continue;
+        }
+        let ls = map_onto(walk, *v, sense, &starts, pool)?;
+        out.extend(ls.into_iter().filter_map(|l| l.point));
+    }
+    Ok(out)
+}
+
+/// The mid-stance section points of `walkers` walkers of `terrain` (their own draws, as the
+/// Monte Carlo walk's), at most `max_steps` transitions each, from `x0`'s first mid-stance:
+/// the states the walkers visit, one walker at a time per thread.
+pub fn visited(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    sense: f64,
+    walkers: usize,
+    max_steps: usize,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<Vec<f64>>, LimitError> {
+    let Some(first) = first_mid_stance(walk, sense, x0)?.point else {
+        return Ok(Vec::new());
+    };
+    let per: Vec<Vec<Vec<f64>>> = pool.install(|| {
+        (0..walkers)
+            .into_par_iter()
+            .map(|i| walk_visits(walk, terrain, &first, sense, i as u64, max_steps))
+            .collect::<Result<_, LimitError>>()
+    })?;
+    let mut pts = vec![first];
+    pts.extend(per.into_iter().flatten());
+    Ok(pts)
+}
+
+/// Walker `i`'s mid-stance points from `first`.
+fn walk_visits(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    first: &[f64],
+    sense: f64,
+    i: u64,
+    max_steps: usize,
+) -> Result<Vec<Vec<f64>>, LimitError> {
+    let mut integ: Option<Integrator> = None;
+    let mut s = first.to_vec();
+    let mut out = Vec::new();
+    for k in 0..max_steps {
+        let w = walk.model(terrain.slope(i, k as u64 + 1))?;
+        let sys = MidStance::new(w.as_ref(), sense)?;
+        let integ = match integ.as_mut() {
+            Some(g) => g,
+            None => integ.insert(Integrator::new(sys.d + 1, walk.options())?),
+        };
+        let end = run_scalar_with(integ, &sys, &sys.driver(), &sys.lift(&s, 0.0))?;
+        match landing(&sys, &end.outcome, &end.post).point {
+            Some(p) => {
+                out.push(p.clone());
+                s = p;
+            }
+            None => break,
+        }
+    }
+    Ok(out)
+}

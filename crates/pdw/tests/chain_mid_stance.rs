@@ -1,0 +1,181 @@
+//! The Markov chain on the mid-stance section ([`pdw_limit::mid_stance`]): its map against the
+//! stride map's fixed point, its heel-strike count against a first-step analysis done by
+//! hand, its MFPT against the Monte Carlo walkers (which count heel strikes one stride at a
+//! time, without a section), and its refusals.
+
+use pdw::mfpt::{self, ChainFlags, ChainPlan, ChainSection, MfptPlan};
+use pdw_limit::markov::{solve_chain, Transitions};
+use pdw_limit::mid_stance;
+use pdw_limit::terrain::{SlopeTerrain, SlopeWalk, TerrainKind};
+
+fn pool() -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap()
+}
+
+fn plan(kind: TerrainKind, mean: f64, sd: f64, walkers: usize) -> MfptPlan {
+    MfptPlan {
+        terrain: SlopeTerrain {
+            mean,
+            sd,
+            seed: 3,
+            kind,
+            dist: Default::default(),
+        },
+        walkers,
+        max_steps: 20_000,
+        integrator: mfpt::default_integrator(),
+    }
+}
+
+fn mid(mesh: usize, nodes: usize) -> ChainPlan {
+    ChainPlan {
+        nodes,
+        mesh,
+        bounds: None,
+        section: ChainSection::MidStance,
+    }
+}
+
+/// On ground of one slope the walk from the gait's first mid-stance returns to it after one
+/// heel strike: the mid-stance map's fixed point is the stride map's (found by Newton on the
+/// section just after heel strike), to the integrator's accuracy.
+#[test]
+fn the_gaits_mid_stance_is_a_fixed_point_of_the_mid_stance_map() {
+    for (name, slope) in [("compass", 0.05), ("rimless", 0.08), ("simplest", 0.009)] {
+        let m = pdw::build(name, &[("slope".to_string(), slope)]).unwrap();
+        let (x0, _) = mfpt::start(&m).unwrap();
+        let p = plan(TerrainKind::Slope, slope, 0.0, 1);
+        let at = mfpt::model_at_param(&m, "slope");
+        let walk: SlopeWalk = mfpt::walk_of(&at, &p).unwrap();
+        let sense = mid_stance::sweep_sense(m.walker.as_ref(), &x0).unwrap();
+        let first = mid_stance::first_mid_stance(&walk, sense, &x0).unwrap();
+        assert_eq!(first.strikes, 0.0, "{name}");
+        let point = first.point.unwrap();
+        let next = mid_stance::map_onto(&walk, slope, sense, std::slice::from_ref(&point), &pool())
+            .unwrap();
+        assert_eq!(next[0].strikes, 1.0, "{name}");
+        let back = next[0].point.as_ref().unwrap();
+        let err = back
+            .iter()
+            .zip(&point)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-8, "{name}: {point:?} -> {back:?}");
+        // the section drops the absolute angle: one coordinate fewer than the state
+        assert_eq!(point.len(), m.walker.dim() - 1, "{name}");
+    }
+}
+
+/// A two-state chain by hand: from state 0 the walker lands back in 0 with probability `a`
+/// (one heel strike), lands and then falls with probability `b` (one heel strike) and falls
+/// before landing with `1 − a − b` (none): the heel strikes `m₀` solve `m₀ = a (1 + m₀) + b`,
+/// `m₀ = (a + b)/(1 − a)`; from the start (no heel strike, lands in 0) the MFPT is `m₀`.
+#[test]
+fn the_heel_strikes_of_a_chain_are_its_first_step_analysis() {
+    let (a, b) = (0.9, 0.04);
+    let t = Transitions {
+        rows: vec![vec![(0, a)], vec![(0, 1.0)]],
+        fall: vec![1.0 - a, 0.0],
+        out: vec![0.0, 0.0],
+        strikes: Some(vec![a + b, 0.0]),
+    };
+    let r = solve_chain(&t);
+    let m0 = (a + b) / (1.0 - a);
+    assert!((r.mfpt - m0).abs() < 1e-10 * m0, "{r:?} vs {m0}");
+    assert!((r.mfpt_quasi_stationary - m0).abs() < 1e-10 * m0, "{r:?}");
+    assert!((r.mfpt_lambda - m0).abs() < 1e-10 * m0, "{r:?}");
+    assert!((r.lambda - a).abs() < 1e-12, "{r:?}");
+}
+
+/// The chain against `walkers` Monte Carlo walkers of `p`: within 3 standard errors plus the
+/// chain's own change from its mesh to twice as fine; the solve and the eigenvalue agree.
+fn agrees_with_the_walkers(m: &pdw::BuiltModel, p: &MfptPlan, mesh: usize, nodes: usize) {
+    let pool = pool();
+    let (x0, _) = mfpt::start(m).unwrap();
+    let (_, mc) = mfpt::run(m, p, &x0, &pool, &|_| {}).unwrap();
+    assert_eq!(mc.censored, 0, "{mc:?}");
+    let pair = mfpt::chain_pair(m, p, &mid(mesh, nodes), &x0, &pool).unwrap();
+    let [coarse, fine] = &pair.results;
+    eprintln!(
+        "{}: Monte Carlo {} ± {}; mid-stance chain {} (mesh/2 {}), box {:?}",
+        m.info.name,
+        mc.restricted_mean,
+        mc.restricted_stderr,
+        fine.mfpt,
+        coarse.mfpt,
+        pair.chain_box
+    );
+    let tol = 3.0 * mc.restricted_stderr + (fine.mfpt - coarse.mfpt).abs();
+    assert!(
+        (fine.mfpt - mc.restricted_mean).abs() < tol,
+        "chain {} vs Monte Carlo {} ± {} (tol {tol})",
+        fine.mfpt,
+        mc.restricted_mean,
+        mc.restricted_stderr
+    );
+    for r in [coarse, fine] {
+        assert!(r.residual < 1e-10, "{r:?}");
+        let rel = (r.mfpt_lambda - r.mfpt_quasi_stationary).abs() / r.mfpt_lambda;
+        assert!(rel < 1e-6, "{r:?}");
+    }
+}
+
+/// The rimless wheel at σ = 2° on its 0.08 rad slope: a few steps, so counting the heel strike
+/// of a wheel that lands and then rolls back (every rimless fall) matters at the walkers'
+/// resolution; and at σ = 0.5°, ≈ 120 steps.
+#[test]
+fn the_rimless_mid_stance_chain_agrees_with_the_walkers_on_random_slopes() {
+    let m = pdw::build("rimless", &[("slope".to_string(), 0.08)]).unwrap();
+    for sd_deg in [2.0f64, 0.5] {
+        let p = plan(TerrainKind::Slope, 0.08, sd_deg.to_radians(), 2000);
+        agrees_with_the_walkers(&m, &p, 200, 11);
+    }
+}
+
+/// The rimless wheel on random step heights (σ = 0.01 l): the mid-stance section is the same
+/// for every foothold height.
+#[test]
+fn the_rimless_mid_stance_chain_agrees_with_the_walkers_on_step_heights() {
+    let m = pdw::build(
+        "rimless",
+        &[("slope".to_string(), 0.08), ("step_down".to_string(), 0.0)],
+    )
+    .unwrap();
+    let p = plan(TerrainKind::StepDown, 0.0, 0.01, 2000);
+    agrees_with_the_walkers(&m, &p, 200, 11);
+}
+
+/// The mid-stance section is refused with the reason for a walker whose knee unlocks, and a
+/// section name that is not one is refused by name.
+#[test]
+fn the_mid_stance_section_is_refused_where_it_is_not_one() {
+    let flags = ChainFlags {
+        chain: "--chain",
+        mesh: "--mesh",
+        nodes: "--nodes",
+        section: "--chain-section",
+    };
+    let kneed = pdw::build("kneed", &[]).unwrap();
+    let e = mfpt::check_chain(&kneed, None, None, ChainSection::MidStance, &flags).unwrap_err();
+    assert!(
+        e.0.starts_with("--chain-section: ") && e.0.contains("modes"),
+        "{}",
+        e.0
+    );
+    // the landing section of the same walker is accepted or refused for its own reasons only
+    if let Err(e) = mfpt::check_chain(&kneed, None, None, ChainSection::Landing, &flags) {
+        assert!(!e.0.contains("modes"), "{}", e.0);
+    }
+    let e = ChainSection::parse("midstance", "--chain-section").unwrap_err();
+    assert!(
+        e.0.contains("'midstance'") && e.0.contains("landing, mid-stance"),
+        "{}",
+        e.0
+    );
+    let compass = pdw::build("compass", &[]).unwrap();
+    let c = mfpt::check_chain(&compass, None, None, ChainSection::MidStance, &flags).unwrap();
+    assert_eq!((c.mesh, c.section), (24, ChainSection::MidStance));
+}
