@@ -8,6 +8,13 @@
 //! - `mfpt/compass_basin`: the compass basin on a 41 × 41 grid of (θ, θ̇) around the gait
 //!   (engine defaults), for the strides-per-second ratio.
 //!
+//! - `mfpt/compass_chain_mid_stance`: the transitions of the Markov chain on the mid-stance
+//!   section (`pdw_limit::mid_stance`), a 12³ mesh around the gait's mid-stance point × 11
+//!   Gauss–Hermite nodes (σ = 0.1°): 19 009 strides;
+//! - `mfpt/compass_chain_landing`: the chain just after heel strike (`pdw_limit::markov`), a 6³
+//!   mesh around the gait's section point, one layer per node: 11 × 216 × 11 + 11 = 26 147
+//!   strides.
+//!
 //! Each reports strides per second (`Throughput::Elements`, the strides counted at setup and
 //! printed).
 //!
@@ -24,6 +31,7 @@ use pdw_limit::{
     classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem, LimitError,
     NewtonOptions, Outcome, StrideMap,
 };
+use pdw_limit::{markov, mid_stance};
 use pdw_walkers::Walker;
 
 const SLOPE: f64 = 0.05235987755982988;
@@ -101,7 +109,62 @@ fn mfpt(c: &mut Criterion) {
     group.bench_function("compass_scalar", |b| b.iter(|| black_box(scalar())));
     group.throughput(Throughput::Elements(n_basin));
     group.bench_function("compass_basin", |b| b.iter(|| black_box(basin())));
+    chains(
+        &mut group,
+        walker.as_ref(),
+        &walk,
+        &t,
+        &x0,
+        &fp.section,
+        &pool,
+    );
     group.finish();
+}
+
+/// A mesh of `n` nodes per axis over `centre ± half`.
+fn mesh_around(centre: &[f64], half: &[f64], n: usize) -> markov::Mesh {
+    markov::Mesh {
+        lo: centre.iter().zip(half).map(|(c, h)| c - h).collect(),
+        hi: centre.iter().zip(half).map(|(c, h)| c + h).collect(),
+        n,
+        frame: markov::Frame::identity(centre.len()),
+    }
+}
+
+/// The two chains' transitions (module docs).
+fn chains(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    walker: &dyn Walker,
+    walk: &SlopeWalk,
+    t: &SlopeTerrain,
+    x0: &[f64],
+    section: &[f64],
+    pool: &rayon::ThreadPool,
+) {
+    let (z, w) = markov::gauss_hermite(11);
+    let nodes: Vec<(f64, f64)> = z
+        .iter()
+        .zip(&w)
+        .map(|(z, w)| (t.mean + t.sd * z, *w))
+        .collect();
+    let sense = mid_stance::sweep_sense(walker, x0).expect("the gait leans back");
+    let first = mid_stance::first_mid_stance(walk, sense, x0)
+        .expect("first mid-stance")
+        .point
+        .expect("the gait reaches mid-stance");
+    let mid_mesh = mesh_around(&first, &[0.05, 0.05, 0.05], 12);
+    let mid = || {
+        mid_stance::transitions(walk, &nodes, &mid_mesh, x0, sense, pool).expect("mid-stance chain")
+    };
+    let land_mesh = mesh_around(section, &[0.01, 0.05, 0.05], 6);
+    let land = || markov::transitions(walk, &nodes, &land_mesh, x0, pool).expect("layered chain");
+    let n_mid = (mid_mesh.len() * nodes.len() + 1) as u64;
+    let n_land = (nodes.len() * land_mesh.len() * nodes.len() + nodes.len()) as u64;
+    eprintln!("chain strides: mid-stance {n_mid}, landing {n_land}");
+    group.throughput(Throughput::Elements(n_mid));
+    group.bench_function("compass_chain_mid_stance", |b| b.iter(|| black_box(mid())));
+    group.throughput(Throughput::Elements(n_land));
+    group.bench_function("compass_chain_landing", |b| b.iter(|| black_box(land())));
 }
 
 criterion_group!(benches, mfpt);

@@ -590,6 +590,27 @@ def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
     assert c["box"]["corner"][0] < r["start"][0] < c["box"]["corner"][0] + c["box"]["edges"][0, 0]
 
 
+def test_mfpt_chain_at_mid_stance_agrees_with_the_landing_chain_and_the_walkers():
+    kw = dict(sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True, mesh=200)
+    land = pdw.mfpt("rimless", **kw)
+    mid = pdw.mfpt("rimless", chain_section="mid-stance", **kw)
+    a, b = land["chain"], mid["chain"]
+    assert a["section"] == "landing" and b["section"] == "mid-stance"
+    # the same walkers; the mid-stance chain has no layer per node: 11 times fewer states
+    assert mid["restricted_mean"] == land["restricted_mean"]
+    assert list(a["states"]) == [11 * 200, 11 * 400] and list(b["states"]) == [200, 400]
+    # the second section against the first and against the walkers, each within the meshes'
+    # changes (plus 3 standard errors for the walkers)
+    tol = abs(a["mfpt"][1] - a["mfpt"][0]) + abs(b["mfpt"][1] - b["mfpt"][0])
+    assert abs(a["mfpt"][1] - b["mfpt"][1]) < tol + 0.02 * a["mfpt"][1]
+    assert abs(b["mfpt"][1] - mid["restricted_mean"]) < 3 * mid["restricted_stderr"] + tol
+    assert np.allclose(b["mfpt_lambda"], b["mfpt_quasi_stationary"], rtol=1e-6)
+    with pytest.raises(ValueError, match="chain_section: 'middle' is not one of landing, mid-stance"):
+        pdw.mfpt("rimless", sd="1deg", chain=True, chain_section="middle")
+    with pytest.raises(ValueError, match="chain_section: model 'kneed' has 2 modes"):
+        pdw.mfpt("kneed", sd="0.1deg", chain=True, chain_section="mid-stance")
+
+
 def test_mfpt_uniform_and_file_distributions():
     u = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1, dist="uniform")
     n = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1)

@@ -49,8 +49,9 @@
 //! draws, the counting of heel strikes, censoring and fall kinds are the same
 //! (`WalkDriver` drives both terrains). A model without the hook walks step heights one walker
 //! at a time: the rimless wheel and the chain walkers have it; the simplest walker implements
-//! [`StepHeight`] but does not offer it yet (its lockstep walk on heights disagreed with the
-//! scalar one beyond the flow's rounding).
+//! [`StepHeight`] but does not offer it yet: its strikes onto a step down just after
+//! mid-stance can be narrower than the event detection's samples, and the two walks miss
+//! different ones (they agree walker for walker at a capped step; docs/cli.md).
 
 use crate::error::LimitError;
 use crate::stride::{StrideOutcome, StrideStop, MAX_EVENTS_PER_STRIDE};
