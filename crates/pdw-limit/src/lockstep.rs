@@ -70,6 +70,44 @@ pub const LANES: usize = 256;
 /// share the walkers evenly however long each walks (and the progress bar moves).
 pub const CHUNK: usize = 16;
 
+/// The flow of a system whose state is `model`'s followed by components constant along the
+/// flow (a line's slope, a foothold's height, a count): the model's flow on its own
+/// components, zero on the others.
+pub(crate) fn flow_with_constants(
+    model: &dyn Walker,
+    ws: &mut Scratch,
+    mode: usize,
+    x: &[f64],
+    dx: &mut [f64],
+) {
+    let d = model.dim();
+    model.flow(ws, mode, &x[..d], &mut dx[..d]);
+    dx[d..].fill(0.0);
+}
+
+/// [`flow_with_constants`] over lanes: the model's batched flow on its columns, zero columns
+/// after them.
+pub(crate) fn flow_batch_with_constants(
+    model: &dyn Walker,
+    ws: &mut Scratch,
+    mode: usize,
+    x: MatRef<'_, f64>,
+    mut dx: MatMut<'_, f64>,
+) {
+    let d = model.dim();
+    model.flow_batch(
+        ws,
+        mode,
+        x.subcols(0, d),
+        faer::reborrow::ReborrowMut::rb_mut(&mut dx).subcols_mut(0, d),
+    );
+    for j in d..x.ncols() {
+        for l in 0..x.nrows() {
+            dx[(l, j)] = 0.0;
+        }
+    }
+}
+
 /// The model of the mean slope as a system of every line (module docs, "One model for every
 /// slope"): state `(z, s)`, `z` the model's state in the mean slope's frame, `s` the slope of
 /// the walker's current line (constant along the flow).
@@ -146,30 +184,11 @@ impl HybridSystem for LineFrame<'_> {
     }
 
     fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
-        let s = self.scratch(ws);
-        self.model
-            .flow(&mut s.inner, mode, &x[..self.d], &mut dx[..self.d]);
-        dx[self.d] = 0.0;
+        flow_with_constants(self.model, &mut self.scratch(ws).inner, mode, x, dx);
     }
 
-    fn flow_batch(
-        &self,
-        ws: &mut Scratch,
-        mode: usize,
-        x: MatRef<'_, f64>,
-        mut dx: MatMut<'_, f64>,
-    ) {
-        let d = self.d;
-        let s = self.scratch(ws);
-        self.model.flow_batch(
-            &mut s.inner,
-            mode,
-            x.subcols(0, d),
-            faer::reborrow::ReborrowMut::rb_mut(&mut dx).subcols_mut(0, d),
-        );
-        for l in 0..x.nrows() {
-            dx[(l, d)] = 0.0;
-        }
+    fn flow_batch(&self, ws: &mut Scratch, mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
+        flow_batch_with_constants(self.model, &mut self.scratch(ws).inner, mode, x, dx);
     }
 
     fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {
@@ -364,30 +383,11 @@ impl HybridSystem for StepFrame<'_> {
     }
 
     fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
-        let s = self.scratch(ws);
-        self.model
-            .flow(&mut s.inner, mode, &x[..self.d], &mut dx[..self.d]);
-        dx[self.d] = 0.0;
+        flow_with_constants(self.model, &mut self.scratch(ws).inner, mode, x, dx);
     }
 
-    fn flow_batch(
-        &self,
-        ws: &mut Scratch,
-        mode: usize,
-        x: MatRef<'_, f64>,
-        mut dx: MatMut<'_, f64>,
-    ) {
-        let d = self.d;
-        let s = self.scratch(ws);
-        self.model.flow_batch(
-            &mut s.inner,
-            mode,
-            x.subcols(0, d),
-            faer::reborrow::ReborrowMut::rb_mut(&mut dx).subcols_mut(0, d),
-        );
-        for l in 0..x.nrows() {
-            dx[(l, d)] = 0.0;
-        }
+    fn flow_batch(&self, ws: &mut Scratch, mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
+        flow_batch_with_constants(self.model, &mut self.scratch(ws).inner, mode, x, dx);
     }
 
     fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {

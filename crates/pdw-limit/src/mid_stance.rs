@@ -40,6 +40,7 @@
 //! section's, and [`MidStance::new`] refuses it.
 
 use crate::error::LimitError;
+use crate::lockstep::{flow_batch_with_constants, flow_with_constants};
 use crate::markov::{Mesh, Transitions};
 use crate::stride::{EventDriver, StrideOutcome};
 use crate::terrain::{SlopeTerrain, SlopeWalk};
@@ -207,27 +208,11 @@ impl HybridSystem for MidStance<'_> {
     }
 
     fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
-        self.model.flow(ws, mode, &x[..self.d], &mut dx[..self.d]);
-        dx[self.d] = 0.0;
+        flow_with_constants(self.model, ws, mode, x, dx);
     }
 
-    fn flow_batch(
-        &self,
-        ws: &mut Scratch,
-        mode: usize,
-        x: MatRef<'_, f64>,
-        mut dx: MatMut<'_, f64>,
-    ) {
-        let d = self.d;
-        self.model.flow_batch(
-            ws,
-            mode,
-            x.subcols(0, d),
-            faer::reborrow::ReborrowMut::rb_mut(&mut dx).subcols_mut(0, d),
-        );
-        for l in 0..x.nrows() {
-            dx[(l, d)] = 0.0;
-        }
+    fn flow_batch(&self, ws: &mut Scratch, mode: usize, x: MatRef<'_, f64>, dx: MatMut<'_, f64>) {
+        flow_batch_with_constants(self.model, ws, mode, x, dx);
     }
 
     fn guard(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64]) -> f64 {

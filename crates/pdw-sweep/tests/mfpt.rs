@@ -340,3 +340,94 @@ fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
         stderr(&o)
     );
 }
+
+/// `--chain --chain-section mid-stance`: the file names the section in its method and keeps the
+/// chain's numbers, which are the library's mid-stance chain (the same box and meshes); a
+/// section that is not one, and a walker whose knee unlocks, are refused by flag.
+#[test]
+fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.h5");
+    let o = run(&[
+        "mfpt",
+        "--model",
+        "rimless",
+        "--sd",
+        "0.5deg",
+        "--walkers",
+        "50",
+        "--seed",
+        "1",
+        "--chain",
+        "--chain-section",
+        "mid-stance",
+        "--mesh",
+        "50",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(text.contains("mid-stance section"), "{text}");
+    let d = pdw_store::read_mfpt(&out).unwrap();
+    assert_eq!(
+        d.method,
+        "monte carlo + markov chain on the mid-stance section"
+    );
+    let get = |k: &str| d.chain.iter().find(|c| c.0 == k).map(|c| c.1);
+    assert_eq!(get("mid_stance"), Some(1.0));
+    let m = pdw::build("rimless", &[]).unwrap();
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let plan = MfptPlan {
+        terrain: SlopeTerrain {
+            mean: m.params.iter().find(|p| p.0 == "slope").unwrap().1,
+            sd: 0.5f64.to_radians(),
+            seed: 1,
+            kind: pdw_limit::terrain::TerrainKind::Slope,
+            dist: Default::default(),
+        },
+        walkers: 50,
+        max_steps: 1000,
+        integrator: mfpt::default_integrator(),
+    };
+    let c = mfpt::ChainPlan {
+        nodes: 11,
+        mesh: 50,
+        bounds: None,
+        section: mfpt::ChainSection::MidStance,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool).unwrap();
+    assert_eq!(get("mfpt_coarse"), Some(pair.results[0].mfpt));
+    assert_eq!(get("mfpt_fine"), Some(pair.results[1].mfpt));
+    let o = run(&[
+        "mfpt",
+        "--sd",
+        "1deg",
+        "--chain",
+        "--chain-section",
+        "middle",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--chain-section: 'middle' is not one of landing, mid-stance"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(&[
+        "mfpt",
+        "--model",
+        "kneed",
+        "--sd",
+        "0.1deg",
+        "--chain",
+        "--chain-section",
+        "mid-stance",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("has 2 modes"), "{}", stderr(&o));
+}

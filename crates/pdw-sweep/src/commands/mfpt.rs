@@ -46,6 +46,8 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     // the largest standard deviation is checked (the range's last value)
     mfpt::check_plan(&plan, &FLAGS)?;
     mfpt::check_heights(&m, &plan, &FLAGS)?;
+    // the chain's request is checked before any walker walks
+    let chain = chain_plan(a, &m)?;
     let claim = claim_out(a)?;
     if a.over.is_some() {
         if kind != pdw_limit::terrain::TerrainKind::Slope {
@@ -76,7 +78,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let secs = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
     summary(&m, &plan, &section, &est, secs);
-    let (chain, method) = match chain_plan(a, &m)? {
+    let (chain, method) = match chain {
         Some(c) => (
             run_chain(&m, &plan, &c, &x0, &pool)?,
             method_of(Some(c.section)),
