@@ -1597,7 +1597,8 @@ fn estimate_dict<'py>(
 /// The chain's results as `mfpt(..., chain=True)["chain"]`: per mesh (arrays of two: `mesh`,
 /// `mfpt`, `lambda`, `mfpt_lambda` = 1/(1 − λ) − 1, `mfpt_quasi_stationary`, `fall_per_step`,
 /// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged), `nodes`,
-/// `quadrature`, `section` (`landing` or `mid-stance`), and `box`: `corner`, `edges` (rows), `widening_passes`, `out_share`.
+/// `quadrature`, `section` (`landing` or `mid-stance`), and `box`: `corner`, `edges` (rows),
+/// `widening_passes`, `out_share`.
 fn chain_dict<'py>(
     py: Python<'py>,
     plan: &pdw::mfpt::MfptPlan,

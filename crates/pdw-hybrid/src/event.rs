@@ -21,11 +21,16 @@
 //! the pre-crossing side and the right value is on the post-crossing side or zero (`Rising`:
 //! `g_a < 0 ≤ g_b`; `Falling`: `g_a > 0 ≥ g_b`; `Either`: one of the two). Sampling the
 //! interior catches a step that straddles two sign changes (the guard dips across zero and
-//! back, ends on the same side) as long as the dip spans one of the five sub-intervals; two
-//! crossings inside one sub-interval of length h/5 are not resolved, and a dip shallower than
-//! the Hermite interpolation error (O(h⁴), about the local error tolerance) can be missed by the
-//! detection — a grazing contact of that depth is below the resolution of the integration
-//! anyway.
+//! back, ends on the same side) as long as the dip spans one of the five sub-intervals. A
+//! window narrower than that — both crossings between two samples — is found where the model
+//! gives the guard's rates: when no sample shows a crossing, the guard is also evaluated at each
+//! interior extremum of its cubic from end values and rates that comes within the margin of the
+//! crossing side (`probe_extrema`), and a crossing from the sample before that extremum to it is
+//! refined like the others (the simplest walker's swing foot reaching a lower foothold for a few
+//! hundredths of a stride on a step of 0.4). Without rates such a window is not resolved, and a
+//! dip shallower than the Hermite interpolation error (O(h⁴), about the local error tolerance)
+//! can be missed by the detection — a grazing contact of that depth is below the resolution of
+//! the integration anyway.
 //!
 //! **Confirmation and refinement.** If any sub-interval shows a crossing, the method's own dense
 //! output is built (RK4: the Hermite cubic itself; DOPRI5: Shampine's 4th-order continuous
@@ -940,7 +945,12 @@ fn locate_flagged<S: HybridSystem + ?Sized>(
         let g = &sc.gv[k * M..(k + 1) * M];
         (0..M - 1).any(|i| crosses(guards[k].crossing, g[i], g[i + 1]))
     });
-    if !any {
+    let probe = if any {
+        None
+    } else {
+        probe_extrema(sys, method, mode, st, l, h, sc, &mut gathered)
+    };
+    if !any && probe.is_none() {
         store_end(st);
         return None;
     }
@@ -1046,10 +1056,120 @@ fn locate_flagged<S: HybridSystem + ?Sized>(
             }
         }
     }
+    if let (None, Some((k, i, theta_b))) = (best, probe) {
+        // the window between two samples that only the cubic's extremum showed, on the dense
+        // output
+        let (theta_a, ga) = (i as f64 * inv, gv[k * M + i]);
+        dense.eval(theta_b, xs);
+        let gb = sys.guard(model, mode, k, xs);
+        if crosses(guards[k].crossing, ga, gb) {
+            let root = refine(
+                sys,
+                model,
+                mode,
+                k,
+                &dense,
+                t_scale,
+                (theta_a, ga),
+                (theta_b, gb),
+                xr,
+            );
+            if sys.admissible(mode, k, xr) {
+                best = Some((k, root));
+                xbest.copy_from_slice(xr);
+            }
+        }
+    }
     if best.is_none() {
         store_end(st);
     }
     best
+}
+
+/// The stationary points in `(0, 1)` of the cubic with Bernstein coefficients `b`: the roots
+/// of `p'(θ)/3 = (a − 2b + c) θ² + 2 (b − a) θ + a`, `a, b, c` the differences of `b`.
+fn cubic_extrema(b: [f64; 4]) -> [Option<f64>; 2] {
+    let (a, m, c) = (b[1] - b[0], b[2] - b[1], b[3] - b[2]);
+    let (qa, qb, qc) = (a - 2.0 * m + c, 2.0 * (m - a), a);
+    let inside = |t: f64| (t > 0.0 && t < 1.0).then_some(t);
+    if qa.abs() <= 1e-14 * (qb.abs() + qc.abs()) {
+        return [(qb != 0.0).then(|| -qc / qb).and_then(inside), None];
+    }
+    let disc = qb * qb - 4.0 * qa * qc;
+    if disc.is_nan() || disc < 0.0 {
+        return [None, None];
+    }
+    let r = disc.sqrt();
+    [
+        inside((-qb - r) / (2.0 * qa)),
+        inside((-qb + r) / (2.0 * qa)),
+    ]
+}
+
+/// On a flagged step whose samples show no crossing: does a guard cross and cross back between
+/// two samples? The guard's cubic from its end values and rates (the curve the samples of an
+/// affine guard lie on, within [`may_cross`]'s margin of a nonlinear one) has its extrema at
+/// `θ*`; where one lies on the post-crossing side within that margin, the guard is evaluated
+/// there (its cubic, or the guard on the state's Hermite interpolant), and a crossing from the
+/// sample left of `θ*` to `θ*` is a window the five sub-intervals missed: the simplest walker's
+/// swing foot reaching a lower foothold for a few hundredths of a stride. Returns the earliest
+/// such window `(guard, index of its left sample, θ*)`. A guard without rates is not probed.
+#[allow(clippy::too_many_arguments)]
+fn probe_extrema<S: HybridSystem + ?Sized>(
+    sys: &S,
+    method: Method,
+    mode: usize,
+    st: &Store,
+    l: usize,
+    h: f64,
+    sc: &mut EventScratch,
+    gathered: &mut bool,
+) -> Option<(usize, usize, f64)> {
+    let guards = sys.guards(mode);
+    let inv = 1.0 / (N_SAMPLES + 1) as f64;
+    let third = 1.0 / 3.0;
+    let mut found: Option<(usize, usize, f64)> = None;
+    for (k, spec) in guards.iter().enumerate() {
+        let i0 = k * st.stride + l;
+        let (g0, g1, r0, r1) = (st.g[i0], st.g1[i0], st.gr[i0], st.r1[i0]);
+        if st.cand[l] & guard_bit(k) == 0 || !(r0.is_finite() && r1.is_finite()) {
+            continue;
+        }
+        let (_, _, margin) = hull_and_margin(g0, g1, r0, r1, h);
+        let b = [g0, g0 + h * r0 * third, g1 - h * r1 * third, g1];
+        for theta in cubic_extrema(b).into_iter().flatten() {
+            if found.is_some_and(|f| f.2 <= theta) {
+                continue;
+            }
+            let p = hermite_point(hermite_basis(theta), g0, g1, r0, r1, h);
+            let near = match spec.crossing {
+                Crossing::Rising => p + margin >= 0.0,
+                Crossing::Falling => p - margin <= 0.0,
+                Crossing::Either => true,
+            };
+            if !near {
+                continue;
+            }
+            let g = if sys.guard_is_linear(mode, k) {
+                p
+            } else {
+                if !*gathered {
+                    gather_ends(st, l, method, sc);
+                    *gathered = true;
+                }
+                let c = hermite_basis(theta);
+                for j in 0..sc.xs.len() {
+                    sc.xs[j] = hermite_point(c, sc.x0[j], sc.x1[j], sc.f0[j], sc.f1[j], h);
+                }
+                sys.guard(&mut sc.model, mode, k, &sc.xs)
+            };
+            let i = ((theta / inv) as usize).min(N_SAMPLES);
+            if crosses(spec.crossing, sc.gv[k * M + i], g) {
+                found = Some((k, i, theta));
+            }
+        }
+    }
+    found
 }
 
 #[cfg(test)]

@@ -327,3 +327,108 @@ fn end_time_on_a_guard_surface_is_not_a_missed_event() {
         assert!((t - PI / 2.0).abs() < 1e-10, "{:?}: t = {t}", opts.method);
     }
 }
+
+/// The oscillator's guard `g = q − level` with its exact rate along the flow (`ġ = p`),
+/// declared affine or not.
+struct RatedLevel {
+    level: f64,
+    linear: bool,
+    guards: [pdw_hybrid::GuardSpec; 1],
+}
+
+impl RatedLevel {
+    fn new(level: f64, linear: bool) -> Self {
+        Self {
+            level,
+            linear,
+            guards: [pdw_hybrid::GuardSpec {
+                name: "q_level",
+                crossing: Crossing::Rising,
+                kind: pdw_hybrid::GuardKind::Reset,
+            }],
+        }
+    }
+}
+
+pdw_hybrid::integrate_through_dyn!(RatedLevel);
+impl HybridSystem for RatedLevel {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn guards(&self, _mode: usize) -> &[pdw_hybrid::GuardSpec] {
+        &self.guards
+    }
+    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
+        dx[0] = x[1];
+        dx[1] = -x[0];
+    }
+    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, x: &[f64]) -> f64 {
+        x[0] - self.level
+    }
+    fn guards_with_rates(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        g[0] = x[0] - self.level;
+        rate[0] = f[0];
+    }
+    fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
+        self.linear
+    }
+    fn reset(
+        &self,
+        _ws: &mut Scratch,
+        mode: usize,
+        _k: usize,
+        x: &[f64],
+        out: &mut [f64],
+    ) -> usize {
+        out.copy_from_slice(x);
+        mode
+    }
+}
+
+/// `q = sin t` passes above 0.9999 only for `|t − π/2| < 0.0141`: inside the one step
+/// [1.3, 1.7] that window lies between the samples at t = 1.54 and 1.62 (h/5 = 0.08 apart),
+/// which both stay below the level, as do the step's ends. With the guard's rates the cubic
+/// through its end values and rates peaks at 0.99995 near π/2, the probe at that extremum shows
+/// the crossing and the root is asin 0.9999 to the dense output's accuracy — for a guard
+/// declared affine (its cubic) and one that is not (the guard on the interpolated state).
+/// Without rates nothing tells the step's interior apart, and the window is missed: the
+/// limit the module docs state.
+#[test]
+fn a_window_between_two_samples_is_found_at_the_guards_extremum() {
+    let t0 = 1.3f64;
+    let opts = Options {
+        h_init: Some(0.4),
+        h_max: 0.4,
+        ..Options::dop853(1e3)
+    };
+    for i in 0..=5 {
+        assert!((t0 + 0.08 * i as f64).sin() < 0.9999);
+    }
+    let exact = 0.9999f64.asin();
+    for linear in [true, false] {
+        let sys = RatedLevel::new(0.9999, linear);
+        let mut x = [t0.sin(), t0.cos()];
+        let (r, t) = run(&sys, opts, t0, &mut x, 1.7);
+        assert_eq!(r, StopReason::Guard { guard: 0 }, "linear {linear}");
+        assert!(
+            (t - exact).abs() < 1e-6,
+            "linear {linear}: t = {t}, exact {exact}"
+        );
+    }
+    let osc = Oscillator::new(&[(0.9999, Crossing::Rising, None)]);
+    let mut x = [t0.sin(), t0.cos()];
+    let (r, _) = run(&osc, opts, t0, &mut x, 1.7);
+    assert_eq!(
+        r,
+        StopReason::EndTime,
+        "without rates the window is not seen"
+    );
+}

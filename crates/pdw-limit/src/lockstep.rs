@@ -48,10 +48,9 @@
 //! of the batched flow (step sizes and the order of a lane's sums), not bit for bit; the
 //! draws, the counting of heel strikes, censoring and fall kinds are the same
 //! (`WalkDriver` drives both terrains). A model without the hook walks step heights one walker
-//! at a time: the rimless wheel and the chain walkers have it; the simplest walker implements
-//! [`StepHeight`] but does not offer it yet: its strikes onto a step down just after
-//! mid-stance can be narrower than the event detection's samples, and the two walks miss
-//! different ones (they agree walker for walker at a capped step; docs/cli.md).
+//! at a time; every shipped model has it (the simplest walker since the event detection finds
+//! its strikes onto a step down just after mid-stance, which can be narrower than the five
+//! sub-intervals of a step: both walks used to miss different ones; docs/cli.md).
 
 use crate::error::LimitError;
 use crate::stride::{StrideOutcome, StrideStop, MAX_EVENTS_PER_STRIDE};

@@ -788,14 +788,11 @@ impl Walker for Simplest {
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         Some((0, 1.0))
     }
-    /// Not yet offered to the lockstep walk: on a step down a slow stride's swing foot can reach
-    /// the lower foothold just after mid-stance for a few hundredths of a time unit, narrower
-    /// than the event detection's samples at the default steps; the walk one walker at a time
-    /// and the lockstep miss different such strikes (a few per cent of the fates differ; both
-    /// agree walker for walker at a step of 0.01, docs/cli.md). It stays one walker at a time
-    /// until the detection resolves those windows.
+    /// Its strikes onto a step down just after mid-stance can last a few hundredths of a time
+    /// unit; the event detection finds them at the extremum of the guard's cubic
+    /// (`pdw_hybrid::event`), so the lockstep walk and the walk one walker at a time agree.
     fn step_height(&self) -> Option<&dyn StepHeight> {
-        None
+        Some(self)
     }
     fn energy(&self, x: &[f64]) -> Option<f64> {
         Some(Self::energy(self, x))

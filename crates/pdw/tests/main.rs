@@ -10,6 +10,7 @@ mod input;
 mod mfpt;
 mod mfpt_lockstep;
 mod mfpt_step_down;
+mod missed_events;
 mod rimless_chain;
 mod simulate;
 mod terrain_dist;
