@@ -328,71 +328,6 @@ fn end_time_on_a_guard_surface_is_not_a_missed_event() {
     }
 }
 
-/// The oscillator's guard `g = q − level` with its exact rate along the flow (`ġ = p`),
-/// declared affine or not.
-struct RatedLevel {
-    level: f64,
-    linear: bool,
-    guards: [pdw_hybrid::GuardSpec; 1],
-}
-
-impl RatedLevel {
-    fn new(level: f64, linear: bool) -> Self {
-        Self {
-            level,
-            linear,
-            guards: [pdw_hybrid::GuardSpec {
-                name: "q_level",
-                crossing: Crossing::Rising,
-                kind: pdw_hybrid::GuardKind::Reset,
-            }],
-        }
-    }
-}
-
-pdw_hybrid::integrate_through_dyn!(RatedLevel);
-impl HybridSystem for RatedLevel {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn guards(&self, _mode: usize) -> &[pdw_hybrid::GuardSpec] {
-        &self.guards
-    }
-    fn flow(&self, _ws: &mut Scratch, _mode: usize, x: &[f64], dx: &mut [f64]) {
-        dx[0] = x[1];
-        dx[1] = -x[0];
-    }
-    fn guard(&self, _ws: &mut Scratch, _mode: usize, _k: usize, x: &[f64]) -> f64 {
-        x[0] - self.level
-    }
-    fn guards_with_rates(
-        &self,
-        _ws: &mut Scratch,
-        _mode: usize,
-        x: &[f64],
-        f: &[f64],
-        g: &mut [f64],
-        rate: &mut [f64],
-    ) {
-        g[0] = x[0] - self.level;
-        rate[0] = f[0];
-    }
-    fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
-        self.linear
-    }
-    fn reset(
-        &self,
-        _ws: &mut Scratch,
-        mode: usize,
-        _k: usize,
-        x: &[f64],
-        out: &mut [f64],
-    ) -> usize {
-        out.copy_from_slice(x);
-        mode
-    }
-}
-
 /// `q = sin t` passes above 0.9999 only for `|t − π/2| < 0.0141`: inside the one step
 /// [1.3, 1.7] that window lies between the samples at t = 1.54 and 1.62 (h/5 = 0.08 apart),
 /// which both stay below the level, as do the step's ends. With the guard's rates the cubic
@@ -414,7 +349,7 @@ fn a_window_between_two_samples_is_found_at_the_guards_extremum() {
     }
     let exact = 0.9999f64.asin();
     for linear in [true, false] {
-        let sys = RatedLevel::new(0.9999, linear);
+        let sys = Oscillator::new(&[(0.9999, Crossing::Rising, None)]).with_rates(linear);
         let mut x = [t0.sin(), t0.cos()];
         let (r, t) = run(&sys, opts, t0, &mut x, 1.7);
         assert_eq!(r, StopReason::Guard { guard: 0 }, "linear {linear}");

@@ -11,6 +11,9 @@ pub struct Oscillator {
     pub levels: Vec<f64>,
     /// `Some(s)`: guard k admissible only if `s·p > 0`.
     pub admit_sign: Vec<Option<f64>>,
+    /// `Some(linear)`: the guards give their exact rates `ġ = p` and are declared affine or
+    /// not; `None`: no rates (the default `+∞`, every step sampled).
+    pub rates: Option<bool>,
 }
 
 impl Oscillator {
@@ -26,7 +29,13 @@ impl Oscillator {
                 .collect(),
             levels: spec.iter().map(|s| s.0).collect(),
             admit_sign: spec.iter().map(|s| s.2).collect(),
+            rates: None,
         }
+    }
+    /// The same guards with their exact rates, declared affine when `linear`.
+    pub fn with_rates(mut self, linear: bool) -> Self {
+        self.rates = Some(linear);
+        self
     }
     pub fn exact(q0: f64, p0: f64, t: f64) -> [f64; 2] {
         [q0 * t.cos() + p0 * t.sin(), -q0 * t.sin() + p0 * t.cos()]
@@ -50,6 +59,27 @@ impl HybridSystem for Oscillator {
     }
     fn admissible(&self, _mode: usize, k: usize, x: &[f64]) -> bool {
         self.admit_sign[k].is_none_or(|s| s * x[1] > 0.0)
+    }
+    fn guards_with_rates(
+        &self,
+        _ws: &mut Scratch,
+        _mode: usize,
+        x: &[f64],
+        f: &[f64],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        for (k, (gk, rk)) in g.iter_mut().zip(rate.iter_mut()).enumerate() {
+            *gk = x[0] - self.levels[k];
+            *rk = if self.rates.is_some() {
+                f[0]
+            } else {
+                f64::INFINITY
+            };
+        }
+    }
+    fn guard_is_linear(&self, _mode: usize, _k: usize) -> bool {
+        self.rates == Some(true)
     }
     fn reset(
         &self,
