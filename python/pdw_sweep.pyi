@@ -207,6 +207,8 @@ def mfpt(
     mesh: Optional[int] = None,
     nodes: Optional[int] = None,
     dist: str = "normal",
+    chain_section: str = "landing",
+    chain_mesh: str = "grid",
     **params: float,
 ) -> dict[str, Any]:
     """Mean first-passage time on a random slope per step (`pdw-sweep mfpt`, Monte Carlo):
@@ -224,7 +226,10 @@ def mfpt(
     sd) adds `chain`: the Markov chain at mesh and 2 mesh (arrays of two: mesh, mfpt, lambda,
     mfpt_lambda, mfpt_quasi_stationary, fall_per_step, out_of_mesh, states), refinement_change,
     warning (None when converged), nodes, quadrature, box (corner, edges, widening_passes,
-    out_share)."""
+    out_share), section (`chain_section`: "landing", or "mid-stance": no layers, one-mode
+    models), layout (`chain_mesh`: "grid", or "cloud": the visited mid-stance states thinned to
+    the grid's spacing and closed under their landings, with cloud: cell, seeds, nodes, passes
+    per mesh)."""
     ...
 
 def disturb(

@@ -1461,12 +1461,14 @@ const CHAIN_FLAGS: pdw::mfpt::ChainFlags = pdw::mfpt::ChainFlags {
 /// `terrain="step-down"` the model's `step_down` is the mean step down and `sd` a plain
 /// length; `dist` the distribution of the standardised draws: `normal`, `uniform`,
 /// `file:PATH`). With `chain=True` also the Markov chain at `mesh` and `2 mesh` nodes per axis
-/// (`chain_dict`), on the section `chain_section` (`landing`, or `mid-stance`: no layers). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of
+/// (`chain_dict`), on the section `chain_section` (`landing`, or `mid-stance`: no layers), its
+/// nodes laid out as `chain_mesh` says (`grid`, or `cloud`: the visited states thinned to the
+/// grid's spacing, mid-stance only). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of
 /// arrays; without the chain).
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", chain_section="landing", **params),
-    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', chain_section='landing', **params)"
+    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", chain_section="landing", chain_mesh="grid", **params),
+    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', chain_section='landing', chain_mesh='grid', **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 fn mfpt<'py>(
@@ -1484,6 +1486,7 @@ fn mfpt<'py>(
     nodes: Option<usize>,
     dist: &str,
     chain_section: &str,
+    chain_mesh: &str,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
@@ -1515,7 +1518,8 @@ fn mfpt<'py>(
     pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(&m, &plan, &MFPT_FLAGS).map_err(err)?;
     let chain_plan = if chain {
-        Some(pdw::mfpt::check_chain(&m, mesh, nodes, section, &CHAIN_FLAGS).map_err(err)?)
+        let c = pdw::mfpt::check_chain(&m, mesh, nodes, section, &CHAIN_FLAGS).map_err(err)?;
+        Some(pdw::mfpt::check_layout(c, chain_mesh, "chain_mesh").map_err(err)?)
     } else {
         None
     };
@@ -1597,8 +1601,9 @@ fn estimate_dict<'py>(
 /// The chain's results as `mfpt(..., chain=True)["chain"]`: per mesh (arrays of two: `mesh`,
 /// `mfpt`, `lambda`, `mfpt_lambda` = 1/(1 − λ) − 1, `mfpt_quasi_stationary`, `fall_per_step`,
 /// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged), `nodes`,
-/// `quadrature`, `section` (`landing` or `mid-stance`), and `box`: `corner`, `edges` (rows),
-/// `widening_passes`, `out_share`.
+/// `quadrature`, `section` (`landing` or `mid-stance`), `layout` (`grid` or `cloud`), and
+/// `box`: `corner`, `edges` (rows), `widening_passes`, `out_share`; on a cloud also `cloud`
+/// (arrays of two: `cell`, `seeds`, `nodes`, `passes`).
 fn chain_dict<'py>(
     py: Python<'py>,
     plan: &pdw::mfpt::MfptPlan,
@@ -1646,6 +1651,28 @@ fn chain_dict<'py>(
     b.set_item("widening_passes", cb.passes)?;
     b.set_item("out_share", cb.out_share)?;
     d.set_item("box", b)?;
+    d.set_item("layout", c.layout.name())?;
+    if let Some(cl) = &pair.clouds {
+        let cd = PyDict::new(py);
+        cd.set_item(
+            "cell",
+            cl.iter()
+                .map(|s| s.cell)
+                .collect::<Vec<f64>>()
+                .into_pyarray(py),
+        )?;
+        type Count = fn(&pdw::mfpt::CloudStats) -> usize;
+        let counts: [(&str, Count); 3] = [
+            ("seeds", |s| s.seeds),
+            ("nodes", |s| s.nodes),
+            ("passes", |s| s.passes),
+        ];
+        for (k, f) in counts {
+            let v: Vec<u64> = cl.iter().map(|s| f(s) as u64).collect();
+            cd.set_item(k, v.into_pyarray(py))?;
+        }
+        d.set_item("cloud", cd)?;
+    }
     Ok(d)
 }
 

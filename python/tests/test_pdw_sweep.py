@@ -605,6 +605,18 @@ def test_mfpt_chain_at_mid_stance_agrees_with_the_landing_chain_and_the_walkers(
     assert abs(a["mfpt"][1] - b["mfpt"][1]) < tol + 0.02 * a["mfpt"][1]
     assert abs(b["mfpt"][1] - mid["restricted_mean"]) < 3 * mid["restricted_stderr"] + tol
     assert np.allclose(b["mfpt_lambda"], b["mfpt_quasi_stationary"], rtol=1e-6)
+    # the cloud of the same section: its nodes the visited hub rates at the grid's spacing
+    cl = pdw.mfpt("rimless", chain_section="mid-stance", chain_mesh="cloud", **kw)["chain"]
+    assert cl["layout"] == "cloud" and b["layout"] == "grid" and "cloud" not in b
+    assert list(cl["states"]) == list(cl["cloud"]["nodes"])
+    assert (cl["cloud"]["nodes"] >= cl["cloud"]["seeds"]).all()
+    assert cl["cloud"]["cell"][1] == pytest.approx(cl["cloud"]["cell"][0] * 199 / 399)
+    tol_c = tol + abs(cl["mfpt"][1] - cl["mfpt"][0])
+    assert abs(cl["mfpt"][1] - b["mfpt"][1]) < tol_c + 0.02 * b["mfpt"][1]
+    with pytest.raises(ValueError, match="chain_mesh: a cloud is built on the mid-stance section only"):
+        pdw.mfpt("rimless", sd="1deg", chain=True, chain_mesh="cloud")
+    with pytest.raises(ValueError, match="chain_mesh: 'mesh' is not one of grid, cloud"):
+        pdw.mfpt("rimless", sd="1deg", chain=True, chain_section="mid-stance", chain_mesh="mesh")
     with pytest.raises(ValueError, match="chain_section: 'middle' is not one of landing, mid-stance"):
         pdw.mfpt("rimless", sd="1deg", chain=True, chain_section="middle")
     with pytest.raises(ValueError, match="chain_section: model 'kneed' has 2 modes"):

@@ -12,6 +12,7 @@
 
 pub mod attractors;
 pub mod basin;
+pub mod cloud;
 pub mod codim2;
 pub mod continuation;
 pub mod design;

@@ -39,6 +39,7 @@
 //! during the stride may pass the vertical in either mode: its state there is not one
 //! section's, and [`MidStance::new`] refuses it.
 
+use crate::cloud::Cloud;
 use crate::error::LimitError;
 use crate::lockstep::{flow_batch_with_constants, flow_with_constants};
 use crate::markov::{Mesh, Transitions};
@@ -398,16 +399,120 @@ pub fn transitions(
     Ok(t)
 }
 
-/// Row `i`'s transition of probability `w` ending at `l`.
+/// Row `i`'s transition of probability `w` ending at `l`, spread over the mesh's nodes.
 fn add(t: &mut Transitions, i: usize, w: f64, l: Landing, mesh: &Mesh) {
+    let spread = l.point.as_ref().map(|p| mesh.weights(p));
+    add_spread(t, i, w, l.strikes, spread);
+}
+
+/// Row `i`'s transition of probability `w` with `strikes` heel strikes: `spread` the landing's
+/// weights on the nodes (`Some(None)`: outside them; `None`: a fall).
+fn add_spread(
+    t: &mut Transitions,
+    i: usize,
+    w: f64,
+    strikes: f64,
+    spread: Option<Option<Vec<(usize, f64)>>>,
+) {
     if let Some(s) = t.strikes.as_mut() {
-        s[i] += w * l.strikes;
+        s[i] += w * strikes;
     }
-    match l.point.map(|p| mesh.weights(&p)) {
+    match spread {
         Some(Some(ws)) => t.rows[i].extend(ws.into_iter().map(|(k, q)| (k, w * q))),
         Some(None) => t.out[i] += w,
         None => t.fall[i] += w,
     }
+}
+
+/// The chain on a cloud ([`cloud_transitions`]) and how its closure went.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CloudChain {
+    pub transitions: Transitions,
+    /// Nodes before the closure (the visited states thinned) and after it.
+    pub seeds: usize,
+    pub nodes: usize,
+    /// Closure passes that added nodes.
+    pub passes: usize,
+}
+
+/// The chain on `cloud` (its nodes mid-stance section points, [`crate::cloud`]) for `walk`
+/// with terrain nodes `nodes`, as [`transitions`], with the cloud's closure: after its nodes
+/// are mapped, every landing (on a terrain node of weight at least
+/// [`crate::markov::HULL_MIN_WEIGHT`]) outside the cloud is offered as a node
+/// ([`Cloud::add`]) and the new nodes are mapped in turn, at most `passes` times or until no
+/// landing is outside. What is still outside after the last pass is the chain's
+/// [`Transitions::out`].
+pub fn cloud_transitions(
+    walk: &SlopeWalk,
+    nodes: &[(f64, f64)],
+    cloud: &mut Cloud,
+    x0: &[f64],
+    sense: f64,
+    passes: usize,
+    pool: &rayon::ThreadPool,
+) -> Result<CloudChain, LimitError> {
+    let seeds = cloud.len();
+    let mut land: Vec<Vec<Landing>> = vec![Vec::new(); nodes.len()];
+    let (mut mapped, mut run) = (0, 0);
+    loop {
+        let new: Vec<Vec<f64>> = (mapped..cloud.len())
+            .map(|k| cloud.node(k).to_vec())
+            .collect();
+        for (l, (v, _)) in nodes.iter().enumerate() {
+            land[l].extend(map_onto(walk, *v, sense, &new, pool)?);
+        }
+        if run == passes {
+            break;
+        }
+        // a point offered is a node or lies in a node's cube (within REACH cells in d ≤ 3):
+        // only the new nodes' landings can be outside
+        let c: &Cloud = cloud;
+        let outside: Vec<Vec<f64>> = pool.install(|| {
+            nodes
+                .iter()
+                .zip(&land)
+                .filter(|((_, w), _)| *w >= crate::markov::HULL_MIN_WEIGHT)
+                .flat_map(|(_, ls)| &ls[mapped..])
+                .filter_map(|l| l.point.as_ref())
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .filter(|p| c.weights(p).is_none())
+                .cloned()
+                .collect()
+        });
+        mapped = cloud.len();
+        if cloud.add(&outside) == 0 {
+            break;
+        }
+        run += 1;
+    }
+    let n = cloud.len();
+    let mut t = Transitions {
+        rows: vec![Vec::new(); n + 1],
+        fall: vec![0.0; n + 1],
+        out: vec![0.0; n + 1],
+        strikes: Some(vec![0.0; n + 1]),
+    };
+    let c: &Cloud = cloud;
+    for ((_, w), ls) in nodes.iter().zip(land) {
+        let spread: Vec<_> = pool.install(|| {
+            ls.par_iter()
+                .map(|l| l.point.as_ref().map(|p| c.weights(p)))
+                .collect()
+        });
+        for (i, (l, s)) in ls.into_iter().zip(spread).enumerate() {
+            add_spread(&mut t, i, *w, l.strikes, s);
+        }
+    }
+    let first = first_mid_stance(walk, sense, x0)?;
+    let spread = first.point.as_ref().map(|p| c.weights(p));
+    add_spread(&mut t, n, 1.0, first.strikes, spread);
+    Ok(CloudChain {
+        transitions: t,
+        seeds,
+        nodes: n,
+        passes: run,
+    })
 }
 
 /// Every landing (not a fall) of the nodes of `mesh` onto the terrain nodes `nodes` of weight

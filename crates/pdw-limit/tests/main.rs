@@ -5,6 +5,7 @@
 //! (`--test limit_walkers`), so that this crate depends on no model catalogue.
 
 mod branch_grid;
+mod cloud;
 mod continuation_closed_form;
 mod continuation_maps;
 mod internals;

@@ -481,6 +481,12 @@ pub struct MfptArgs {
     /// the compass gait's chain at a fraction of the strides; one-mode models only).
     #[arg(long, default_value = "landing", requires = "chain")]
     pub chain_section: String,
+    /// With --chain: where the chain's nodes lie: `grid` (a regular grid over the box the
+    /// walkers visit) or `cloud` (the states the walkers visit, thinned to the grid's spacing
+    /// and closed under their own landings: the nodes follow a thin visited set; mid-stance
+    /// section only).
+    #[arg(long, default_value = "grid", requires = "chain")]
+    pub chain_mesh: String,
     /// The MFPT over a model parameter, PARAM=A:B:N: at each of the N values the stable gait,
     /// its MFPT (the same walkers and seed at every value) and its gait sensitivity norm; a
     /// table, and with --out the file, OUT.png (MFPT against the parameter) and OUT-gsn.png

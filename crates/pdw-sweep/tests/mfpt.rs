@@ -341,42 +341,12 @@ fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
     );
 }
 
-/// `--chain --chain-section mid-stance`: the file names the section in its method and keeps the
-/// chain's numbers, which are the library's mid-stance chain (the same box and meshes); a
-/// section that is not one, and a walker whose knee unlocks, are refused by flag.
+/// `--chain --chain-section mid-stance`, on a grid and on a cloud (`--chain-mesh`): the file
+/// names the section and the layout in its method and keeps the chain's numbers, which are the
+/// library's mid-stance chain (the same box or cloud, the same meshes); a section that is not
+/// one, a cloud on the other section, and a walker whose knee unlocks, are refused by flag.
 #[test]
 fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("m.h5");
-    let o = run(&[
-        "mfpt",
-        "--model",
-        "rimless",
-        "--sd",
-        "0.5deg",
-        "--walkers",
-        "50",
-        "--seed",
-        "1",
-        "--chain",
-        "--chain-section",
-        "mid-stance",
-        "--mesh",
-        "50",
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(text.contains("mid-stance section"), "{text}");
-    let d = pdw_store::read_mfpt(&out).unwrap();
-    assert_eq!(
-        d.method,
-        "monte carlo + markov chain on the mid-stance section"
-    );
-    let get = |k: &str| d.chain.iter().find(|c| c.0 == k).map(|c| c.1);
-    assert_eq!(get("mid_stance"), Some(1.0));
     let m = pdw::build("rimless", &[]).unwrap();
     let (x0, _) = mfpt::start(&m).unwrap();
     let plan = MfptPlan {
@@ -391,19 +361,80 @@ fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
         max_steps: 1000,
         integrator: mfpt::default_integrator(),
     };
-    let c = mfpt::ChainPlan {
-        nodes: 11,
-        mesh: 50,
-        bounds: None,
-        section: mfpt::ChainSection::MidStance,
-    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
         .unwrap();
-    let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool).unwrap();
-    assert_eq!(get("mfpt_coarse"), Some(pair.results[0].mfpt));
-    assert_eq!(get("mfpt_fine"), Some(pair.results[1].mfpt));
+    let dir = tempfile::tempdir().unwrap();
+    for (layout, method) in [
+        (
+            mfpt::ChainMesh::Grid,
+            "monte carlo + markov chain on the mid-stance section",
+        ),
+        (
+            mfpt::ChainMesh::Cloud,
+            "monte carlo + markov chain on a cloud of the mid-stance section",
+        ),
+    ] {
+        let out = dir.path().join(format!("{}.h5", layout.name()));
+        let o = run(&[
+            "mfpt",
+            "--model",
+            "rimless",
+            "--sd",
+            "0.5deg",
+            "--walkers",
+            "50",
+            "--seed",
+            "1",
+            "--chain",
+            "--chain-section",
+            "mid-stance",
+            "--chain-mesh",
+            layout.name(),
+            "--mesh",
+            "50",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(text.contains("mid-stance section"), "{text}");
+        let d = pdw_store::read_mfpt(&out).unwrap();
+        assert_eq!(d.method, method);
+        let get = |k: &str| d.chain.iter().find(|c| c.0 == k).map(|c| c.1);
+        assert_eq!(get("mid_stance"), Some(1.0));
+        let c = mfpt::ChainPlan {
+            nodes: 11,
+            mesh: 50,
+            bounds: None,
+            section: mfpt::ChainSection::MidStance,
+            layout,
+        };
+        let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool).unwrap();
+        assert_eq!(get("mfpt_coarse"), Some(pair.results[0].mfpt));
+        assert_eq!(get("mfpt_fine"), Some(pair.results[1].mfpt));
+        match &pair.clouds {
+            Some([coarse, fine]) => {
+                assert_eq!(get("cloud"), Some(1.0));
+                assert_eq!(get("cloud_seeds_coarse"), Some(coarse.seeds as f64));
+                assert_eq!(get("cloud_cell_fine"), Some(fine.cell));
+                assert!(
+                    text.contains(&format!("{} nodes after", fine.nodes)),
+                    "{text}"
+                );
+            }
+            None => assert_eq!(get("cloud"), None),
+        }
+    }
+    let o = run(&["mfpt", "--sd", "1deg", "--chain", "--chain-mesh", "cloud"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--chain-mesh: a cloud is built on the mid-stance section only"),
+        "{}",
+        stderr(&o)
+    );
     let o = run(&[
         "mfpt",
         "--sd",

@@ -362,6 +362,55 @@ pub struct ChainPlan {
     pub mesh: usize,
     pub bounds: Option<(Vec<f64>, Vec<f64>)>,
     pub section: ChainSection,
+    pub layout: ChainMesh,
+}
+
+/// Where the chain's nodes lie.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ChainMesh {
+    /// A regular grid over the box the walkers visit ([`pdw_limit::markov::Mesh`]).
+    #[default]
+    Grid,
+    /// The visited states thinned to the grid's spacing, closed under the chain's own landings
+    /// ([`pdw_limit::cloud`]); mid-stance section only.
+    Cloud,
+}
+
+impl ChainMesh {
+    /// The names `--chain-mesh` takes.
+    pub const NAMES: &'static [&'static str] = &["grid", "cloud"];
+
+    /// The layout's name in commands and files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ChainMesh::Grid => "grid",
+            ChainMesh::Cloud => "cloud",
+        }
+    }
+}
+
+/// `plan` with its nodes laid out as `name` says ([`ChainMesh::NAMES`]), or an error naming
+/// `flag`: a name not in the list, or a cloud on the section just after heel strike (its
+/// layers would need one cloud per terrain node; the cloud is built for the mid-stance
+/// section).
+pub fn check_layout(plan: ChainPlan, name: &str, flag: &str) -> Result<ChainPlan, InputError> {
+    let layout = match name.trim() {
+        "grid" => ChainMesh::Grid,
+        "cloud" => ChainMesh::Cloud,
+        t => {
+            return Err(InputError(format!(
+                "{flag}: '{t}' is not one of {}",
+                ChainMesh::NAMES.join(", ")
+            )))
+        }
+    };
+    if layout == ChainMesh::Cloud && plan.section != ChainSection::MidStance {
+        return Err(InputError(format!(
+            "{flag}: a cloud is built on the mid-stance section only; add the section \
+             mid-stance, or use the grid"
+        )));
+    }
+    Ok(ChainPlan { layout, ..plan })
 }
 
 /// The section the chain's states lie on.
@@ -772,6 +821,7 @@ pub fn check_chain(
         mesh,
         bounds: None,
         section,
+        layout: ChainMesh::Grid,
     })
 }
 
@@ -784,6 +834,111 @@ pub struct ChainPair {
     pub results: [ChainResult; 2],
     pub change: f64,
     pub warning: Option<String>,
+    /// On a cloud ([`ChainMesh::Cloud`]): the coarse and the fine cloud's closure.
+    pub clouds: Option<[CloudStats; 2]>,
+}
+
+/// How a cloud of the chain was built ([`pdw_limit::mid_stance::cloud_transitions`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CloudStats {
+    /// Nodes per axis of the grid whose spacing the cloud has, and that spacing (standard
+    /// deviations of the visited states).
+    pub mesh: usize,
+    pub cell: f64,
+    /// The visited states thinned, the nodes after the closure, and its passes that added
+    /// nodes.
+    pub seeds: usize,
+    pub nodes: usize,
+    pub passes: usize,
+    /// Seconds to build and solve this cloud's chain (the visited states' walk not included).
+    pub secs: f64,
+}
+
+/// Walkers and transitions of the Monte Carlo pass whose mid-stance states seed a cloud.
+pub const CLOUD_WALKERS: usize = 200;
+pub const CLOUD_STEPS: usize = 500;
+/// Closure passes of a cloud at most.
+pub const CLOUD_PASSES: usize = 8;
+
+/// The chain on two clouds of the mid-stance section: the states the first [`CLOUD_WALKERS`]
+/// walkers visit (at most [`CLOUD_STEPS`] transitions each) thinned to the spacing of a grid
+/// of `chain.mesh` and of twice as many nodes per axis, each closed under its landings in at
+/// most [`CLOUD_PASSES`] passes ([`pdw_limit::mid_stance::cloud_transitions`]). The pair's box
+/// is the visited states' principal frame and padded box, for the report.
+pub fn cloud_pair(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: &ChainPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> Result<ChainPair, LimitError> {
+    let at = model_at_param(m, plan.terrain.kind.param());
+    let walk = walk_of(&at, plan)?;
+    let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+    let pts = mid_stance::visited(
+        &walk,
+        &plan.terrain,
+        x0,
+        sense,
+        CLOUD_WALKERS,
+        CLOUD_STEPS,
+        pool,
+    )?;
+    let Some(first) = pts.first() else {
+        return Err(LimitError::Model {
+            param: plan.terrain.mean,
+            message: "the start falls before its first mid-stance".into(),
+        });
+    };
+    let frame = Frame::principal(&pts, first.len());
+    let bounds = padded(frame.bounds(&pts, &frame.to_frame(first)));
+    let slopes = terrain_nodes(plan, chain.nodes);
+    let run = |n: usize| -> Result<(ChainResult, CloudStats), LimitError> {
+        let t0 = std::time::Instant::now();
+        let mut cloud = pdw_limit::cloud::Cloud::thinned(&pts, n)?;
+        let cc = mid_stance::cloud_transitions(
+            &walk,
+            &slopes,
+            &mut cloud,
+            x0,
+            sense,
+            CLOUD_PASSES,
+            pool,
+        )?;
+        let stats = CloudStats {
+            mesh: n,
+            cell: cloud.cell(),
+            seeds: cc.seeds,
+            nodes: cc.nodes,
+            passes: cc.passes,
+            secs: 0.0,
+        };
+        let r = pdw_limit::markov::solve_chain(&cc.transitions);
+        Ok((
+            r,
+            CloudStats {
+                secs: t0.elapsed().as_secs_f64(),
+                ..stats
+            },
+        ))
+    };
+    let (coarse, c0) = run(chain.mesh)?;
+    let (fine, c1) = run(2 * chain.mesh)?;
+    let results = [coarse, fine];
+    let change = refinement_change(&results[0], &results[1]);
+    let warning = refinement_warning(&results[0], &results[1], chain.mesh);
+    Ok(ChainPair {
+        chain_box: ChainBox {
+            frame,
+            bounds,
+            passes: 0,
+            out_share: 0.0,
+        },
+        results,
+        change,
+        warning,
+        clouds: Some([c0, c1]),
+    })
 }
 
 /// The chain of `chain` at its mesh and twice as fine, from `x0` ([`ChainPair`]).
@@ -794,6 +949,9 @@ pub fn chain_pair(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<ChainPair, LimitError> {
+    if chain.layout == ChainMesh::Cloud {
+        return cloud_pair(m, plan, chain, x0, pool);
+    }
     let cb = chain_box(m, plan, chain, x0, pool)?;
     let at = |n: usize| {
         let c = ChainPlan {
@@ -810,5 +968,6 @@ pub fn chain_pair(
         results,
         change,
         warning,
+        clouds: None,
     })
 }

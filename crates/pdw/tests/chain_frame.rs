@@ -39,6 +39,7 @@ fn the_principal_axes_mesh_resolves_the_simplest_walkers_band_where_the_axis_box
         mesh,
         bounds: None,
         section: Default::default(),
+        layout: Default::default(),
     };
 
     // the axis-aligned box of the visited states: not converged, and the check says so

@@ -367,6 +367,7 @@ fn the_markov_chain_agrees_with_the_monte_carlo_walkers() {
             mesh,
             bounds: None,
             section: Default::default(),
+            layout: Default::default(),
         };
         mfpt::chain(&m, &plan, &c, &bounds, &x0, &pool).unwrap()
     };

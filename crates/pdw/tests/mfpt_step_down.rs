@@ -111,6 +111,7 @@ fn the_step_height_chain_agrees_with_the_monte_carlo() {
             mesh,
             bounds: None,
             section: Default::default(),
+            layout: Default::default(),
         };
         mfpt::chain(&m, &p, &c, &bounds, &x0, &pool).unwrap()
     };

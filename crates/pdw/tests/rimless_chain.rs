@@ -227,6 +227,7 @@ fn the_engines_markov_chain_of_the_rimless_wheel_matches_the_closed_form_chain()
             mesh,
             bounds: None,
             section: Default::default(),
+            layout: Default::default(),
         };
         mfpt::chain(&m, &plan, &c, &bounds, &x0, &pool)
             .unwrap()
@@ -261,6 +262,7 @@ fn the_mid_stance_chain_of_the_rimless_wheel_matches_the_closed_form_chain() {
         mesh: 1600,
         bounds: None,
         section: mfpt::ChainSection::MidStance,
+        layout: Default::default(),
     };
     let pair = mfpt::chain_pair(&m, &plan(), &c, &x0, &pool()).unwrap();
     let (coarse, finer) = (pair.results[0].mfpt, pair.results[1].mfpt);
@@ -293,6 +295,7 @@ fn the_mid_stance_chain_reports_the_landings_its_box_cannot_hold() {
         mesh: 200,
         bounds: None,
         section: mfpt::ChainSection::MidStance,
+        layout: Default::default(),
     };
     let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool()).unwrap();
     assert_eq!(
@@ -361,6 +364,7 @@ fn the_chains_widened_box_makes_falls_not_box_exits_absorb() {
         mesh,
         bounds: None,
         section: Default::default(),
+        layout: Default::default(),
     };
     let visited = mfpt::visited_box(&m, &plan, &x0, &pool).unwrap();
     let narrow = mfpt::chain(&m, &plan, &c(200), &visited, &x0, &pool).unwrap();
@@ -430,6 +434,7 @@ fn engine_pair(m: &pdw::BuiltModel, plan: &MfptPlan, x0: &[f64], mesh: usize) ->
         mesh,
         bounds: None,
         section: Default::default(),
+        layout: Default::default(),
     };
     let pair = mfpt::chain_pair(m, plan, &c, x0, &pool()).unwrap();
     (pair.results[0].mfpt, pair.results[1].mfpt)

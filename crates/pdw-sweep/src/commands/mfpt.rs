@@ -81,7 +81,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let (chain, method) = match chain {
         Some(c) => (
             run_chain(&m, &plan, &c, &x0, &pool)?,
-            method_of(Some(c.section)),
+            method_of(Some((c.section, c.layout))),
         ),
         None => (Vec::new(), method_of(None)),
     };
@@ -241,12 +241,16 @@ pub(super) const ESTIMATOR: &str =
                          time); stderr = sqrt(S (S + F)) / F^1.5 from the Fisher information";
 
 /// The file's `method`: the Monte Carlo, and the chain on its section where it ran.
-fn method_of(chain: Option<mfpt::ChainSection>) -> &'static str {
+fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>) -> &'static str {
+    use mfpt::{ChainMesh, ChainSection};
     match chain {
         None => "monte carlo",
-        Some(mfpt::ChainSection::Landing) => "monte carlo + markov chain",
-        Some(mfpt::ChainSection::MidStance) => {
+        Some((ChainSection::Landing, _)) => "monte carlo + markov chain",
+        Some((ChainSection::MidStance, ChainMesh::Grid)) => {
             "monte carlo + markov chain on the mid-stance section"
+        }
+        Some((ChainSection::MidStance, ChainMesh::Cloud)) => {
+            "monte carlo + markov chain on a cloud of the mid-stance section"
         }
     }
 }
@@ -372,7 +376,8 @@ pub(super) fn chain_plan(
         section: "--chain-section",
     };
     let section = mfpt::ChainSection::parse(&a.chain_section, flags.section)?;
-    mfpt::check_chain(m, a.mesh, Some(a.nodes), section, &flags).map(Some)
+    let c = mfpt::check_chain(m, a.mesh, Some(a.nodes), section, &flags)?;
+    mfpt::check_layout(c, &a.chain_mesh, "--chain-mesh").map(Some)
 }
 
 /// The chain at `--mesh` and twice as fine over the box the walkers visit; prints both and
@@ -384,6 +389,9 @@ pub(super) fn run_chain(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<Vec<(String, f64)>> {
+    if c.layout == mfpt::ChainMesh::Cloud {
+        return run_cloud(m, plan, c, x0, pool);
+    }
     let cb = mfpt::chain_box(m, plan, c, x0, pool)?;
     let how = if cb.passes == 0 {
         "the walkers' box, padded".to_string()
@@ -419,37 +427,112 @@ pub(super) fn run_chain(
             ..c.clone()
         };
         let r = mfpt::chain_in(m, plan, &fine, &cb.frame, &cb.bounds, x0, pool)?;
-        crate::outln!(
-            "  mesh {n}: MFPT {:.4} steps from the start; lambda {:.10}, 1/(1-lambda)-1 = {:.4} \
-             (quasi-stationary by the solve: {:.4}); {} states; per step {:.2e} falls, {:.2e} out \
-             of the mesh; {:.1} s",
-            r.mfpt,
-            r.lambda,
-            r.mfpt_lambda,
-            r.mfpt_quasi_stationary,
-            r.states,
-            r.fall_per_step,
-            r.out_of_mesh,
-            t0.elapsed().as_secs_f64()
-        );
-        if let Some(w) = box_warning(&r) {
-            crate::outln!("  {w}");
-        }
-        for (k, v) in [
-            ("mesh", n as f64),
-            ("mfpt", r.mfpt),
-            ("lambda", r.lambda),
-            ("mfpt_lambda", r.mfpt_lambda),
-            ("out_of_mesh", r.out_of_mesh),
-            ("fall_per_step", r.fall_per_step),
-        ] {
-            out.push((format!("{k}_{label}"), v));
-        }
+        let secs = t0.elapsed().as_secs_f64();
+        report_mesh(&r, (n, secs), label, &format!("{secs:.1} s"), &mut out);
         results.push(r);
     }
     let change = mfpt::refinement_change(&results[0], &results[1]);
     out.push(("refinement_change".to_string(), change));
     if let Some(w) = mfpt::refinement_warning(&results[0], &results[1], c.mesh) {
+        crate::outln!("  {w}");
+    }
+    Ok(out)
+}
+
+/// One mesh's result (mesh `n`, built and solved in `secs`) printed (`how`: what else to say
+/// of it) and its numbers added to `out` with the suffix `label`.
+fn report_mesh(
+    r: &pdw_limit::markov::ChainResult,
+    (n, secs): (usize, f64),
+    label: &str,
+    how: &str,
+    out: &mut Vec<(String, f64)>,
+) {
+    crate::outln!(
+        "  mesh {n}: MFPT {:.4} steps from the start; lambda {:.10}, 1/(1-lambda)-1 = {:.4} \
+         (quasi-stationary by the solve: {:.4}); {} states; per step {:.2e} falls, {:.2e} out \
+         of the mesh; {how}",
+        r.mfpt,
+        r.lambda,
+        r.mfpt_lambda,
+        r.mfpt_quasi_stationary,
+        r.states,
+        r.fall_per_step,
+        r.out_of_mesh,
+    );
+    if let Some(w) = box_warning(r) {
+        crate::outln!("  {w}");
+    }
+    for (k, v) in [
+        ("mesh", n as f64),
+        ("mfpt", r.mfpt),
+        ("lambda", r.lambda),
+        ("mfpt_lambda", r.mfpt_lambda),
+        ("out_of_mesh", r.out_of_mesh),
+        ("fall_per_step", r.fall_per_step),
+        ("secs", secs),
+    ] {
+        out.push((format!("{k}_{label}"), v));
+    }
+}
+
+/// The chain on two clouds of the mid-stance section ([`mfpt::cloud_pair`]); prints both and
+/// returns the numbers the file keeps (those of the grid, and each cloud's closure).
+fn run_cloud(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    c: &mfpt::ChainPlan,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<Vec<(String, f64)>> {
+    crate::outln!(
+        "Markov chain: {} {} nodes of the terrain, mid-stance section, on a cloud: the states \
+         the first {} walkers visit (at most {} transitions each) thinned to the spacing of \
+         mesh {} and {}, closed under their landings (at most {} passes)",
+        c.nodes,
+        mfpt::quadrature_name(&plan.terrain.dist),
+        mfpt::CLOUD_WALKERS,
+        mfpt::CLOUD_STEPS,
+        c.mesh,
+        2 * c.mesh,
+        mfpt::CLOUD_PASSES
+    );
+    let t0 = Instant::now();
+    let pair = mfpt::cloud_pair(m, plan, c, x0, pool)?;
+    let mut out = vec![
+        ("nodes".to_string(), c.nodes as f64),
+        ("box_widening_passes".to_string(), 0.0),
+        ("mid_stance".to_string(), 1.0),
+        ("cloud".to_string(), 1.0),
+    ];
+    let clouds = pair.clouds.as_ref().map(|c| c.to_vec()).unwrap_or_default();
+    for ((r, label), s) in pair.results.iter().zip(["coarse", "fine"]).zip(&clouds) {
+        let how = format!(
+            "{} visited states thinned at a spacing of {:.3} standard deviations, {} nodes after \
+             {} closure pass{}; {:.1} s",
+            s.seeds,
+            s.cell,
+            s.nodes,
+            s.passes,
+            if s.passes == 1 { "" } else { "es" },
+            s.secs
+        );
+        report_mesh(r, (s.mesh, s.secs), label, &how, &mut out);
+        for (k, v) in [
+            ("cloud_cell", s.cell),
+            ("cloud_seeds", s.seeds as f64),
+            ("cloud_passes", s.passes as f64),
+            ("cloud_nodes", s.nodes as f64),
+        ] {
+            out.push((format!("{k}_{label}"), v));
+        }
+    }
+    crate::outln!(
+        "  the chain in all (the visited states and both clouds): {:.1} s",
+        t0.elapsed().as_secs_f64()
+    );
+    out.push(("refinement_change".to_string(), pair.change));
+    if let Some(w) = &pair.warning {
         crate::outln!("  {w}");
     }
     Ok(out)
