@@ -13,7 +13,11 @@
 //!   Gauss–Hermite nodes (σ = 0.1°): 19 009 strides;
 //! - `mfpt/compass_chain_landing`: the chain just after heel strike (`pdw_limit::markov`), a 6³
 //!   mesh around the gait's section point, one layer per node: 11 × 216 × 11 + 11 = 26 147
-//!   strides.
+//!   strides;
+//! - `mfpt/compass_chain_cloud`: the chain on a cloud of the mid-stance section
+//!   (`pdw_limit::cloud`): the mid-stance states of 50 walkers × at most 50 transitions
+//!   thinned to the spacing of a 12-node grid and closed under their landings (at most 8
+//!   passes), 11 nodes, and the solve; the strides counted on a first run and printed.
 //!
 //! Each reports strides per second (`Throughput::Elements`, the strides counted at setup and
 //! printed).
@@ -165,6 +169,22 @@ fn chains(
     group.bench_function("compass_chain_mid_stance", |b| b.iter(|| black_box(mid())));
     group.throughput(Throughput::Elements(n_land));
     group.bench_function("compass_chain_landing", |b| b.iter(|| black_box(land())));
+    let visited = mid_stance::visited(walk, t, x0, sense, 50, 50, pool).expect("visited states");
+    let seeds = pdw_limit::cloud::Cloud::thinned(&visited, 12).expect("a cloud");
+    let cloud = || {
+        let mut c = seeds.clone();
+        let cc = mid_stance::cloud_transitions(walk, &nodes, &mut c, x0, sense, 8, pool)
+            .expect("cloud chain");
+        (markov::solve_chain(&cc.transitions), cc.nodes)
+    };
+    let n_cloud = (cloud().1 * nodes.len() + 1) as u64;
+    eprintln!(
+        "cloud chain strides: {n_cloud} ({} seeds of {} visited states)",
+        seeds.len(),
+        visited.len()
+    );
+    group.throughput(Throughput::Elements(n_cloud));
+    group.bench_function("compass_chain_cloud", |b| b.iter(|| black_box(cloud())));
 }
 
 criterion_group!(benches, mfpt);

@@ -508,18 +508,24 @@ pub fn mid_stance_frame(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<(Frame, SectionBox), LimitError> {
+    let (_, frame, bounds) = mid_stance_points(m, plan, x0, (BOX_WALKERS, BOX_STEPS), pool)?;
+    Ok((frame, bounds))
+}
+
+/// The mid-stance states of the first `walkers` walkers of `plan` (at most `steps` transitions
+/// each, from the start's first mid-stance, which comes first), their principal frame and
+/// their box in it, padded by [`BOX_PAD`].
+pub fn mid_stance_points(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    x0: &[f64],
+    (walkers, steps): (usize, usize),
+    pool: &rayon::ThreadPool,
+) -> Result<(Vec<Vec<f64>>, Frame, SectionBox), LimitError> {
     let at = model_at_param(m, plan.terrain.kind.param());
     let walk = walk_of(&at, plan)?;
     let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
-    let pts = mid_stance::visited(
-        &walk,
-        &plan.terrain,
-        x0,
-        sense,
-        BOX_WALKERS,
-        BOX_STEPS,
-        pool,
-    )?;
+    let pts = mid_stance::visited(&walk, &plan.terrain, x0, sense, walkers, steps, pool)?;
     let Some(first) = pts.first() else {
         return Err(LimitError::Model {
             param: plan.terrain.mean,
@@ -528,7 +534,7 @@ pub fn mid_stance_frame(
     };
     let frame = Frame::principal(&pts, first.len());
     let bounds = padded(frame.bounds(&pts, &frame.to_frame(first)));
-    Ok((frame, bounds))
+    Ok((pts, frame, bounds))
 }
 
 /// `(lo, hi)` padded by [`BOX_PAD`] of its range on each side.
@@ -875,23 +881,7 @@ pub fn cloud_pair(
     let at = model_at_param(m, plan.terrain.kind.param());
     let walk = walk_of(&at, plan)?;
     let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
-    let pts = mid_stance::visited(
-        &walk,
-        &plan.terrain,
-        x0,
-        sense,
-        CLOUD_WALKERS,
-        CLOUD_STEPS,
-        pool,
-    )?;
-    let Some(first) = pts.first() else {
-        return Err(LimitError::Model {
-            param: plan.terrain.mean,
-            message: "the start falls before its first mid-stance".into(),
-        });
-    };
-    let frame = Frame::principal(&pts, first.len());
-    let bounds = padded(frame.bounds(&pts, &frame.to_frame(first)));
+    let (pts, frame, bounds) = mid_stance_points(m, plan, x0, (CLOUD_WALKERS, CLOUD_STEPS), pool)?;
     let slopes = terrain_nodes(plan, chain.nodes);
     let run = |n: usize| -> Result<(ChainResult, CloudStats), LimitError> {
         let t0 = std::time::Instant::now();
