@@ -209,6 +209,7 @@ def mfpt(
     dist: str = "normal",
     chain_section: str = "landing",
     chain_mesh: str = "grid",
+    stride_map: str = "auto",
     **params: float,
 ) -> dict[str, Any]:
     """Mean first-passage time on a random slope per step (`pdw-sweep mfpt`, Monte Carlo):
@@ -229,7 +230,9 @@ def mfpt(
     out_share), section (`chain_section`: "landing", or "mid-stance": no layers, one-mode
     models), layout (`chain_mesh`: "grid", or "cloud": the visited mid-stance states thinned to
     the grid's spacing and closed under their landings, with cloud: cell, seeds, nodes, passes
-    per mesh)."""
+    per mesh). `stride_map`: "auto" (the walkers' strides in closed form where the model has
+    one — the rimless wheel — integrated otherwise), "closed-form" or "integrated"; both dicts
+    hold `stride_map`, which ran ("closed form" or "integrated")."""
     ...
 
 def disturb(

@@ -19,6 +19,12 @@
 //!   thinned to the spacing of a 12-node grid and closed under their landings (at most 8
 //!   passes), 11 nodes, and the solve; the strides counted on a first run and printed.
 //!
+//! - `mfpt/rimless_closed_form` and `mfpt/rimless_lockstep`: Byl & Tedrake's rimless wheel (8
+//!   spokes, 8°, σ = 2°, seed 1), 200 walkers × at most 500 steps from its rolling gait, in
+//!   closed form (`terrain::monte_carlo_closed_form`, `pdw-sweep mfpt`'s default for the wheel)
+//!   and integrated in lockstep (`--stride-map integrated`): the same fates, the ratio of the
+//!   two stride maps.
+//!
 //! Each reports strides per second (`Throughput::Elements`, the strides counted at setup and
 //! printed).
 //!
@@ -122,7 +128,61 @@ fn mfpt(c: &mut Criterion) {
         &fp.section,
         &pool,
     );
+    rimless(&mut group, &pool);
     group.finish();
+}
+
+/// The rimless wheel's walk in closed form and integrated in lockstep (module docs).
+fn rimless(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    pool: &rayon::ThreadPool,
+) {
+    let slope = 8f64.to_radians();
+    let (walkers, steps) = (200, 500);
+    let at = |s: f64| -> Result<Box<dyn Walker>, LimitError> {
+        pdw_walkers::build("rimless", &[("slope", s)]).map_err(|e| LimitError::Model {
+            param: s,
+            message: e.to_string(),
+        })
+    };
+    let wheel = at(slope).expect("registry model");
+    let map = StrideMap::new(wheel.as_ref(), Options::dop853(1e-14)).expect("valid options");
+    let fp = wheel
+        .gait_guesses()
+        .iter()
+        .filter_map(|g| find_fixed_point(&map, &g.section, &NewtonOptions::default()).ok())
+        .find(|fp| fp.stable)
+        .expect("the rolling gait");
+    let walk =
+        SlopeWalk::new(&at, slope, BasinOptions::default_integrator()).expect("terrain walk");
+    let t = SlopeTerrain {
+        mean: slope,
+        sd: 2f64.to_radians(),
+        seed: 1,
+        kind: TerrainKind::Slope,
+        dist: Default::default(),
+    };
+    let x0 = fp.state.clone();
+    let closed = || {
+        terrain::monte_carlo_closed_form(&walk, &t, &x0, walkers, steps, pool, &|_| {})
+            .expect("closed-form walk")
+    };
+    let lockstep = || {
+        let batch = Lockstep::for_pool(walkers, 2);
+        monte_carlo_lockstep(&walk, &t, &x0, walkers, steps, pool, batch, &|_| {})
+            .expect("lockstep walk")
+    };
+    let (a, b) = (closed(), lockstep());
+    let same = a.iter().zip(&b).filter(|(x, y)| x == y).count();
+    eprintln!(
+        "rimless strides: closed form {}, lockstep {}; {same} of {walkers} fates the same",
+        strides(&a),
+        strides(&b)
+    );
+    group.throughput(Throughput::Elements(strides(&a)));
+    group.bench_function("rimless_closed_form", |b| b.iter(|| black_box(closed())));
+    group.throughput(Throughput::Elements(strides(&b)));
+    group.bench_function("rimless_lockstep", |b| b.iter(|| black_box(lockstep())));
 }
 
 /// A mesh of `n` nodes per axis over `centre ± half`.

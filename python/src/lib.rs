@@ -1376,10 +1376,11 @@ fn mfpt_curve<'py>(
         &pdw_limit::terrain::TerrainDist,
     ),
     (walkers, max_steps, seed, threads): (usize, usize, u64, usize),
+    stride_map: pdw::mfpt::StrideMap,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     pdw::mfpt::check_model_for(m, kind).map_err(err)?;
-    let plan = |sd: f64| mfpt_plan(m, (kind, dist), sd, (walkers, max_steps, seed));
+    let plan = |sd: f64| mfpt_plan(m, (kind, dist), sd, (walkers, max_steps, seed), stride_map);
     pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(m, &plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     let ests = interruptible(py, || -> PyResult<_> {
@@ -1411,6 +1412,7 @@ fn mfpt_curve<'py>(
         d.set_item(k, ests.iter().map(f).collect::<Vec<f64>>().into_pyarray(py))?;
     }
     d.set_item("mean", terrain_mean(m, kind))?;
+    d.set_item("stride_map", stride_map.describe(m))?;
     d.set_item("terrain", kind.name())?;
     d.set_item("dist", pdw::mfpt::dist_words(dist))?;
     Ok(d)
@@ -1432,6 +1434,7 @@ fn mfpt_plan(
     ),
     sd: f64,
     (walkers, max_steps, seed): (usize, usize, u64),
+    stride_map: pdw::mfpt::StrideMap,
 ) -> pdw::mfpt::MfptPlan {
     pdw::mfpt::MfptPlan {
         terrain: pdw_limit::terrain::SlopeTerrain {
@@ -1444,6 +1447,7 @@ fn mfpt_plan(
         walkers,
         max_steps,
         integrator: pdw::mfpt::default_integrator(),
+        stride_map,
     }
 }
 
@@ -1463,12 +1467,14 @@ const CHAIN_FLAGS: pdw::mfpt::ChainFlags = pdw::mfpt::ChainFlags {
 /// `file:PATH`). With `chain=True` also the Markov chain at `mesh` and `2 mesh` nodes per axis
 /// (`chain_dict`), on the section `chain_section` (`landing`, or `mid-stance`: no layers), its
 /// nodes laid out as `chain_mesh` says (`grid`, or `cloud`: the visited states thinned to the
-/// grid's spacing, mid-stance only). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of
+/// grid's spacing, mid-stance only). `stride_map`: `auto` (in closed form where the model has
+/// one, the rimless wheel; integrated otherwise), `closed-form` or `integrated` (the
+/// `"stride_map"` key says which ran). With `sd="A:B:N"` the curve of `mfpt --sd A:B:N` (one run per σ, a dict of
 /// arrays; without the chain).
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", chain_section="landing", chain_mesh="grid", **params),
-    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', chain_section='landing', chain_mesh='grid', **params)"
+    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", chain_section="landing", chain_mesh="grid", stride_map="auto", **params),
+    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', chain_section='landing', chain_mesh='grid', stride_map='auto', **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 fn mfpt<'py>(
@@ -1487,10 +1493,12 @@ fn mfpt<'py>(
     dist: &str,
     chain_section: &str,
     chain_mesh: &str,
+    stride_map: &str,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     let kind = pdw::mfpt::check_terrain(terrain, &MFPT_FLAGS).map_err(err)?;
+    let stride_map = pdw::mfpt::StrideMap::parse(stride_map, "stride_map").map_err(err)?;
     let section =
         pdw::mfpt::ChainSection::parse(chain_section, CHAIN_FLAGS.section).map_err(err)?;
     let dist = pdw::mfpt::parse_dist(dist, &MFPT_FLAGS).map_err(err)?;
@@ -1499,6 +1507,7 @@ fn mfpt<'py>(
     }
     let sds = mfpt_sds(sd, kind)?;
     let m = build_kw(model, slope, params)?;
+    stride_map.closed_form(&m, "stride_map").map_err(err)?;
     if sds.len() > 1 {
         if chain {
             return Err(err(
@@ -1511,10 +1520,17 @@ fn mfpt<'py>(
             &sds,
             (kind, &dist),
             (walkers, max_steps, seed, threads),
+            stride_map,
         );
     }
     pdw::mfpt::check_model_for(&m, kind).map_err(err)?;
-    let plan = mfpt_plan(&m, (kind, &dist), sds[0], (walkers, max_steps, seed));
+    let plan = mfpt_plan(
+        &m,
+        (kind, &dist),
+        sds[0],
+        (walkers, max_steps, seed),
+        stride_map,
+    );
     pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(&m, &plan, &MFPT_FLAGS).map_err(err)?;
     let chain_plan = if chain {
@@ -1538,6 +1554,7 @@ fn mfpt<'py>(
     })?;
     let d = estimate_dict(py, &est, &plan)?;
     d.set_item("start", start)?;
+    d.set_item("stride_map", plan.stride_map.describe(&m))?;
     if let (Some(c), Some(pair)) = (&chain_plan, &pair) {
         d.set_item("chain", chain_dict(py, &plan, c, pair)?)?;
     }

@@ -60,6 +60,7 @@ pub(crate) fn mfpt_over<'py>(
         walkers,
         max_steps,
         integrator: pdw::mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let rows = interruptible(py, || -> PyResult<Vec<OverRow>> {
         let pool = rayon::ThreadPoolBuilder::new()

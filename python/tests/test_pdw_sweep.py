@@ -623,6 +623,22 @@ def test_mfpt_chain_at_mid_stance_agrees_with_the_landing_chain_and_the_walkers(
         pdw.mfpt("kneed", sd="0.1deg", chain=True, chain_section="mid-stance")
 
 
+def test_mfpt_stride_map():
+    kw = dict(sd="2deg", slope="8deg", walkers=200, max_steps=500, seed=4)
+    auto = pdw.mfpt("rimless", **kw)
+    integrated = pdw.mfpt("rimless", stride_map="integrated", **kw)
+    assert auto["stride_map"] == "closed form" and integrated["stride_map"] == "integrated"
+    # the closed form and the integrator walk the same walkers to the same fates here
+    assert auto["falls"] > 0 and (auto["survival"] == integrated["survival"]).all()
+    curve = pdw.mfpt("rimless", **{**kw, "sd": "1deg:2deg:2"})
+    assert curve["stride_map"] == "closed form" and curve["mfpt"][1] == auto["mfpt"]
+    assert pdw.mfpt("compass", sd="0.1deg", walkers=4, max_steps=5)["stride_map"] == "integrated"
+    with pytest.raises(ValueError, match="stride_map: the model compass has no stride map in closed form"):
+        pdw.mfpt("compass", sd="0.1deg", stride_map="closed-form")
+    with pytest.raises(ValueError, match="stride_map: 'exact' is not one of auto, closed-form, integrated"):
+        pdw.mfpt("rimless", sd="1deg", stride_map="exact")
+
+
 def test_mfpt_uniform_and_file_distributions():
     u = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1, dist="uniform")
     n = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1)

@@ -654,16 +654,8 @@ pub fn monte_carlo_lockstep(
     batch: Lockstep,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Vec<Fate>, LimitError> {
-    if terrain.kind != walk.kind() {
-        return Err(LimitError::Model {
-            param: terrain.mean,
-            message: format!(
-                "the terrain draws a {} per step, the walk is on random {}s",
-                terrain.kind.param(),
-                walk.kind().param()
-            ),
-        });
-    }
+    let model = walk.model(walk.mean())?;
+    check_walk(walk, terrain, x0, model.as_ref())?;
     if max_steps == 0 {
         return Ok(vec![
             Fate {
@@ -673,8 +665,6 @@ pub fn monte_carlo_lockstep(
             walkers
         ]);
     }
-    let model = walk.model(walk.mean())?;
-    check_start(x0, model.dim(), walk.mean())?;
     let run = |sys: &dyn Section| {
         let driver = WalkDriver {
             terrain,
@@ -694,11 +684,36 @@ pub fn monte_carlo_lockstep(
     Ok(match terrain.kind {
         TerrainKind::Slope => run(&LineFrame::new(model.as_ref(), walk.mean())?)?,
         TerrainKind::StepDown => {
-            check_heights(walk, terrain)?;
             let fixed = terrain.sd == 0.0;
             run(&StepFrame::new(model.as_ref(), walk.mean(), fixed)?)?
         }
     })
+}
+
+/// [`LimitError::Model`] unless the walk and the terrain draw the same quantity, the
+/// walkers' start state has the model's components and, on step heights, the model exists at
+/// both ends of the heights' range ([`check_heights`]).
+pub(crate) fn check_walk(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    model: &dyn Walker,
+) -> Result<(), LimitError> {
+    if terrain.kind != walk.kind() {
+        return Err(LimitError::Model {
+            param: terrain.mean,
+            message: format!(
+                "the terrain draws a {} per step, the walk is on random {}s",
+                terrain.kind.param(),
+                walk.kind().param()
+            ),
+        });
+    }
+    check_start(x0, model.dim(), walk.mean())?;
+    if terrain.kind == TerrainKind::StepDown {
+        check_heights(walk, terrain)?;
+    }
+    Ok(())
 }
 
 /// [`LimitError::Model`] unless the walkers' start state has the model's `d` components.

@@ -33,9 +33,9 @@
 
 use crate::error::LimitError;
 use crate::lockstep::{monte_carlo_lockstep, Lockstep};
-use crate::stride::{StrideMap, StrideOutcome};
-use pdw_hybrid::{run_scalar_with, Integrator, Options};
-use pdw_model::Walker;
+use crate::stride::{StrideMap, StrideOutcome, StrideStop};
+use pdw_hybrid::{run_scalar_with, Integrator, Options, StopReason};
+use pdw_model::{ClosedEnd, Ground, Walker};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -457,6 +457,94 @@ pub fn monte_carlo_scalar(
                 let f = walk_one(walk, terrain, x0, i as u64, max_steps);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1);
                 f
+            })
+            .collect()
+    })
+}
+
+/// The walk in closed form ([`Walker::closed_stride`]): each walker one stride after another
+/// on one thread, each stride the model's [`ClosedStride::stride_on`] on the ground of its
+/// draw, between the shifts of [`SlopeWalk::stride`] (module docs, "Convention"); a stride
+/// whose start the closed form does not cover ([`ClosedEnd::Outside`]) is integrated
+/// ([`SlopeWalk::stride`]). No tolerance, so it differs from the integrated walks only where
+/// a stride lands within their tolerance of a fall (or creeps past the stride time budget,
+/// [`ClosedStride`]). Walkers in walker order, identical for any thread count; `progress`
+/// gets the number of walkers done. [`LimitError::Model`] when the model has no closed form,
+/// or for a step height outside the model's range (as [`monte_carlo`]).
+pub fn monte_carlo_closed_form(
+    walk: &SlopeWalk,
+    terrain: &SlopeTerrain,
+    x0: &[f64],
+    walkers: usize,
+    max_steps: usize,
+    pool: &rayon::ThreadPool,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<Fate>, LimitError> {
+    let model = walk.model(walk.mean())?;
+    let no_form = || LimitError::Model {
+        param: walk.mean(),
+        message: format!(
+            "the model {} has no stride map in closed form (integrate its strides)",
+            model.name()
+        ),
+    };
+    let closed = model.closed_stride().ok_or_else(no_form)?;
+    crate::lockstep::check_walk(walk, terrain, x0, model.as_ref())?;
+    let guards = model.guards(model.section_mode());
+    let done = AtomicUsize::new(0);
+    pool.install(|| {
+        (0..walkers)
+            .into_par_iter()
+            .with_min_len(16)
+            .map(|i| {
+                let mut x = x0.to_vec();
+                let (mut y, mut out) = (x.clone(), x.clone());
+                let mut integ = None;
+                let mut fate = Fate {
+                    steps: max_steps,
+                    end: None,
+                };
+                for k in 0..max_steps {
+                    let s = terrain.slope(i as u64, k as u64 + 1);
+                    let ground = match walk.kind() {
+                        TerrainKind::Slope => Ground::Slope(s),
+                        TerrainKind::StepDown => Ground::StepDown(s),
+                    };
+                    y.copy_from_slice(&x);
+                    walk.shift(&mut y, walk.mean(), s);
+                    let end = match closed.stride_on(ground, &y, &mut out) {
+                        ClosedEnd::Landed => {
+                            walk.shift(&mut out, s, walk.mean());
+                            std::mem::swap(&mut x, &mut out);
+                            continue;
+                        }
+                        ClosedEnd::Terminal { guard } => {
+                            match StrideStop::of(StopReason::Guard { guard }, guards) {
+                                StrideStop::End(o) => o,
+                                StrideStop::Reset { .. } => StrideOutcome::TooManyEvents,
+                            }
+                        }
+                        ClosedEnd::Outside => {
+                            let integ = match &mut integ {
+                                Some(g) => g,
+                                None => integ.insert(walk.integrator(x.len())?),
+                            };
+                            let st = walk.stride(integ, &x, s)?;
+                            if st.outcome.is_ok() {
+                                x = st.post;
+                                continue;
+                            }
+                            st.outcome
+                        }
+                    };
+                    fate = Fate {
+                        steps: k,
+                        end: Some(end),
+                    };
+                    break;
+                }
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                Ok(fate)
             })
             .collect()
     })

@@ -14,4 +14,6 @@ pub mod walker;
 pub use validity::{
     ClearanceRule, ConstraintForces, ImpactReport, ImpulseEntry, ImpulseKind, Scales, StepFlags,
 };
-pub use walker::{BodyPoints, GaitGuess, ModelUnits, Pose, StepHeight, Walker};
+pub use walker::{
+    BodyPoints, ClosedEnd, ClosedStride, GaitGuess, Ground, ModelUnits, Pose, StepHeight, Walker,
+};

@@ -156,6 +156,11 @@ pub trait Walker: Section {
     fn step_height(&self) -> Option<&dyn StepHeight> {
         None
     }
+    /// The model's stride map in closed form on any ground ([`ClosedStride`]); `None` (the
+    /// default): its strides are integrated.
+    fn closed_stride(&self) -> Option<&dyn ClosedStride> {
+        None
+    }
     /// The fully resolved model, one `key = value` line per quantity that determines its
     /// dynamics (floats in shortest round-trip form, so equal text means bit-equal values).
     /// Files that can be continued store it and refuse to continue under a different model,
@@ -221,6 +226,40 @@ pub trait StepHeight: Sync {
     /// ([`HybridSystem::guard_is_linear`](pdw_hybrid::HybridSystem::guard_is_linear) for all
     /// `h`).
     fn guard_is_linear_at_every_height(&self, mode: usize, k: usize) -> bool;
+}
+
+/// The ground of one stride of [`ClosedStride::stride_on`]: the model with its `slope` or its
+/// `step_down` set to a value, every other parameter its own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ground {
+    /// The line the stride lands on is inclined by this slope (rad, downhill positive).
+    Slope(f64),
+    /// The foothold lies this far below the stance foot along the slope normal.
+    StepDown(f64),
+}
+
+/// How a stride in closed form ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClosedEnd {
+    /// It reached the section: the state just after the impact is written.
+    Landed,
+    /// The flow reaches the model's terminal guard `guard` (of the section's mode) first.
+    Terminal { guard: usize },
+    /// The closed form does not cover this start (the caller integrates the stride).
+    Outside,
+}
+
+/// A stride map in closed form: the same stride as the integrated stride map of the model on
+/// that ground (the flow from just after an impact to the next section event, and its reset),
+/// without a tolerance — e.g. the rimless wheel's, from conservation of energy along the flow
+/// and of angular momentum through the impact (Coleman; Byl & Tedrake 2009 walk it on random
+/// slopes). It has no stride time budget: a stride that creeps over a maximum of the potential
+/// more slowly than the budget allows completes here and times out when integrated.
+pub trait ClosedStride: Sync {
+    /// The stride of the model on `ground` from the full state `x` (just after an impact, in
+    /// the section's mode, in the frame of that model), the full state just after the impact
+    /// that ends it written to `out` when it [`ClosedEnd::Landed`].
+    fn stride_on(&self, ground: Ground, x: &[f64], out: &mut [f64]) -> ClosedEnd;
 }
 
 /// A drawing of the walker in the slope frame: `x` along the slope (downhill positive), `y`

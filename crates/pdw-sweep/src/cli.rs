@@ -443,6 +443,11 @@ pub struct MfptArgs {
     /// or its step_down (0).
     #[arg(long)]
     pub mean: Option<String>,
+    /// How the walkers' strides are computed: auto (in closed form where the model has one —
+    /// the rimless wheel, from conservation of energy and angular momentum — integrated
+    /// otherwise), closed-form, or integrated (the integrator options, in batched lockstep).
+    #[arg(long, default_value = "auto")]
+    pub stride_map: String,
     /// Number of walkers.
     #[arg(long, default_value_t = 10000)]
     pub walkers: usize,

@@ -21,6 +21,7 @@ fn library(walkers: usize, max_steps: usize) -> pdw_limit::terrain::MfptEstimate
         walkers,
         max_steps,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -206,6 +207,7 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
         walkers: 50,
         max_steps: 500,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
@@ -325,6 +327,7 @@ fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
         walkers: 40,
         max_steps: 200,
         integrator: pdw::mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
@@ -360,6 +363,7 @@ fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
         walkers: 50,
         max_steps: 1000,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
@@ -461,4 +465,79 @@ fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("has 2 modes"), "{}", stderr(&o));
+}
+
+/// `--stride-map`: the rimless wheel walks in closed form by default and says so in the file's
+/// provenance and its report; `integrated` walks the same walkers with the integrator (the same
+/// fates here); a model without a closed form and an unknown name are refused.
+#[test]
+fn the_stride_map_is_chosen_recorded_and_refused_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let go = |map: &str, out: &std::path::Path| {
+        let o = run(&[
+            "mfpt",
+            "--model",
+            "rimless",
+            "--sd",
+            "2deg",
+            "--set",
+            "slope=8deg",
+            "--walkers",
+            "40",
+            "--max-steps",
+            "200",
+            "--seed",
+            "2",
+            "--stride-map",
+            map,
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{map}: {}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        let f = h5_open(out).unwrap();
+        let options = f
+            .group("provenance")
+            .unwrap()
+            .attr("options")
+            .unwrap()
+            .read_scalar::<hdf5::types::VarLenUnicode>()
+            .unwrap()
+            .to_string();
+        let v: serde_json::Value = serde_json::from_str(&options).unwrap();
+        (
+            text,
+            v["stride_map"].clone(),
+            pdw_store::read_mfpt(out).unwrap(),
+        )
+    };
+    let (text, map, auto) = go("auto", &dir.path().join("a.h5"));
+    assert!(text.contains("(closed form strides)"), "{text}");
+    assert_eq!(map, "closed form");
+    let (_, map, closed) = go("closed-form", &dir.path().join("c.h5"));
+    assert_eq!(map, "closed form");
+    assert_eq!(closed.survival, auto.survival);
+    let (text, map, integrated) = go("integrated", &dir.path().join("i.h5"));
+    assert!(text.contains("(integrated strides)"), "{text}");
+    assert_eq!(map, "integrated");
+    assert_eq!(integrated.survival, auto.survival);
+    assert!(auto.falls > 0, "the test needs falls");
+
+    for (args, says) in [
+        (
+            vec!["--model", "compass", "--stride-map", "closed-form"],
+            "--stride-map: the model compass has no stride map in closed form",
+        ),
+        (
+            vec!["--model", "rimless", "--stride-map", "exact"],
+            "--stride-map: 'exact' is not one of auto, closed-form, integrated",
+        ),
+    ] {
+        let mut a = vec!["mfpt", "--sd", "1deg", "--walkers", "2"];
+        a.extend(args);
+        let o = run(&a);
+        assert_eq!(o.status.code(), Some(2), "{a:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{a:?}: {}", stderr(&o));
+    }
 }

@@ -71,7 +71,9 @@ use crate::error::{check_open, WalkerError};
 use crate::registry::{closed_params, ClosedInfo};
 use crate::validity::{ConstraintForces, ImpactReport, Scales, StepFlags};
 use pdw_hybrid::{Crossing, FallKind, GuardKind, GuardSpec, HybridSystem, Scratch, Section};
-use pdw_model::{BodyPoints, GaitGuess, ModelUnits, Pose, StepHeight, Walker};
+use pdw_model::{
+    BodyPoints, ClosedEnd, ClosedStride, GaitGuess, Ground, ModelUnits, Pose, StepHeight, Walker,
+};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Guard index of the spoke impact.
@@ -325,6 +327,47 @@ impl StepHeight for Rimless {
     }
 }
 
+/// The rimless wheel's stride in closed form (module docs, "Flow", "Spoke impact", "Step
+/// down"): along the flow the energy `½ θ̇² + (g/l) cos(θ + γ)` (per `l²` and unit mass) is
+/// conserved, so from `(θ₀, θ̇₀)`, `θ̇₀ > 0`, the wheel reaches the strike angle `θ⁻` iff
+/// `θ̇²(θ) = θ̇₀² + 2 (g/l)(cos(θ₀ + γ) − cos(θ + γ))` stays positive on `[θ₀, θ⁻]` — its least
+/// value is at the hub's top `θ = −γ` when that lies in the interval, else at an end — and
+/// then lands with `θ̇⁻ = √θ̇²(θ⁻)`, `θ⁺ = θ⁻ − 2α`, `θ̇⁺ = cos 2α · θ̇⁻` (the reset). Otherwise
+/// `θ̇` falls through zero first: guard 1 (rolls back). Differences of cosines are taken as
+/// products of sines, `cos a − cos b = 2 sin((a + b)/2) sin((b − a)/2)`, so that a small
+/// energy difference keeps its digits. A start with `θ̇₀ ≤ 0` or past the strike angle is
+/// [`ClosedEnd::Outside`] (the integrated stride decides it: guard 2, or a turn over the top).
+impl ClosedStride for Rimless {
+    fn stride_on(&self, ground: Ground, x: &[f64], out: &mut [f64]) -> ClosedEnd {
+        let RimlessParams { slope, g, l, .. } = self.params;
+        let (gamma, strike) = match ground {
+            Ground::Slope(s) => (s, self.strike),
+            Ground::StepDown(h) => (slope, strike_angle(self.alpha, l, h)),
+        };
+        let (t0, w0) = (x[0], x[1]);
+        if !(w0 > 0.0 && t0 < strike) {
+            return ClosedEnd::Outside;
+        }
+        let k = g / l;
+        let (a, b) = (t0 + gamma, strike + gamma);
+        // ½ of the drop of θ̇² from θ₀ to θ, per g/l: cos(θ + γ) − cos(θ₀ + γ) ≥ its value at
+        // the top (1 − cos a) when −γ lies between them, at the strike otherwise
+        let rise = |c: f64| 2.0 * ((c + a) / 2.0).sin() * ((a - c) / 2.0).sin();
+        let worst = if a <= 0.0 && b >= 0.0 {
+            2.0 * (a / 2.0).sin().powi(2)
+        } else {
+            rise(b).max(0.0)
+        };
+        if w0 * w0 - 2.0 * k * worst <= 0.0 {
+            return ClosedEnd::Terminal { guard: 1 };
+        }
+        let w1 = (w0 * w0 - 2.0 * k * rise(b)).sqrt();
+        out[0] = strike - 2.0 * self.alpha;
+        out[1] = (2.0 * self.alpha).cos() * w1;
+        ClosedEnd::Landed
+    }
+}
+
 pdw_hybrid::integrate_concretely!(Rimless);
 impl HybridSystem for Rimless {
     fn dim(&self) -> usize {
@@ -423,6 +466,9 @@ impl Walker for Rimless {
         Some((0, -1.0))
     }
     fn step_height(&self) -> Option<&dyn StepHeight> {
+        Some(self)
+    }
+    fn closed_stride(&self) -> Option<&dyn ClosedStride> {
         Some(self)
     }
     fn energy(&self, x: &[f64]) -> Option<f64> {

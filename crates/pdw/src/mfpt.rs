@@ -29,14 +29,71 @@ pub const DISTS: &[&str] = &["normal", "uniform", "file:PATH"];
 /// The terrains `--terrain` names.
 pub const TERRAINS: &[&str] = &["slope", "step-down"];
 
-/// A Monte Carlo MFPT run: the terrain, how many walkers, how many steps at most, and the
-/// integrator of the strides.
+/// A Monte Carlo MFPT run: the terrain, how many walkers, how many steps at most, the
+/// integrator of the strides and whether they are integrated at all.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MfptPlan {
     pub terrain: SlopeTerrain,
     pub walkers: usize,
     pub max_steps: usize,
     pub integrator: Options,
+    pub stride_map: StrideMap,
+}
+
+/// How the Monte Carlo walkers' strides are computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StrideMap {
+    /// In closed form where the model has one ([`Walker::closed_stride`]: the rimless wheel),
+    /// integrated otherwise.
+    #[default]
+    Auto,
+    /// In closed form ([`terrain::monte_carlo_closed_form`]); refused for a model without one.
+    ClosedForm,
+    /// Integrated with [`MfptPlan::integrator`], in batched lockstep ([`terrain::monte_carlo`]).
+    Integrated,
+}
+
+/// The stride maps `--stride-map` names.
+pub const STRIDE_MAPS: &[&str] = &["auto", "closed-form", "integrated"];
+
+impl StrideMap {
+    /// The stride map as typed: `auto`, `closed-form` or `integrated`.
+    pub fn parse(s: &str, flag: &str) -> Result<Self, InputError> {
+        match s.trim() {
+            "auto" => Ok(StrideMap::Auto),
+            "closed-form" => Ok(StrideMap::ClosedForm),
+            "integrated" => Ok(StrideMap::Integrated),
+            t => Err(InputError(format!(
+                "{flag}: '{t}' is not one of {}",
+                STRIDE_MAPS.join(", ")
+            ))),
+        }
+    }
+
+    /// Whether the strides of `m` are taken in closed form; [`InputError`] for
+    /// [`StrideMap::ClosedForm`] on a model without one.
+    pub fn closed_form(self, m: &BuiltModel, flag: &str) -> Result<bool, InputError> {
+        let has = m.walker.closed_stride().is_some();
+        match self {
+            StrideMap::Auto => Ok(has),
+            StrideMap::Integrated => Ok(false),
+            StrideMap::ClosedForm if has => Ok(true),
+            StrideMap::ClosedForm => Err(InputError(format!(
+                "{flag}: the model {} has no stride map in closed form (only the rimless \
+                 wheel has); use auto or integrated",
+                m.walker.name()
+            ))),
+        }
+    }
+
+    /// How the strides of `m` were computed, for reports and files: `closed form` or
+    /// `integrated`.
+    pub fn describe(self, m: &BuiltModel) -> &'static str {
+        match self.closed_form(m, "") {
+            Ok(true) => "closed form",
+            _ => "integrated",
+        }
+    }
 }
 
 /// The names a front end gives the options in its messages.
@@ -341,7 +398,19 @@ pub fn run(
 ) -> Result<(Vec<Fate>, MfptEstimate), LimitError> {
     let at = model_at_param(m, plan.terrain.kind.param());
     let walk = walk_of(&at, plan)?;
-    let fates = terrain::monte_carlo(
+    let closed = plan
+        .stride_map
+        .closed_form(m, "stride map")
+        .map_err(|e| LimitError::Model {
+            param: plan.terrain.mean,
+            message: e.0,
+        })?;
+    let mc = if closed {
+        terrain::monte_carlo_closed_form
+    } else {
+        terrain::monte_carlo
+    };
+    let fates = mc(
         &walk,
         &plan.terrain,
         x0,

@@ -28,6 +28,7 @@ fn the_principal_axes_mesh_resolves_the_simplest_walkers_band_where_the_axis_box
         walkers: 4000,
         max_steps: 1000,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let pool = pool();
     let (_, mc) = mfpt::run(&m, &plan, &x0, &pool, &|_| {}).unwrap();

@@ -27,6 +27,7 @@ fn plan(kind: TerrainKind, mean: f64, sd: f64, walkers: usize) -> MfptPlan {
         walkers,
         max_steps: 20_000,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     }
 }
 

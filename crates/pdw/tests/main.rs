@@ -8,6 +8,7 @@ mod disturb;
 mod gsn;
 mod input;
 mod mfpt;
+mod mfpt_closed_form;
 mod mfpt_lockstep;
 mod mfpt_step_down;
 mod missed_events;

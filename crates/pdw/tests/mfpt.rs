@@ -188,6 +188,7 @@ fn the_walk_is_the_same_on_one_and_on_two_threads() {
         walkers: 24,
         max_steps: 40,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let pool = |n| {
         rayon::ThreadPoolBuilder::new()
@@ -287,6 +288,7 @@ fn round_feet_and_bad_requests_are_refused_with_clear_messages() {
         walkers,
         max_steps: 10,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     assert!(mfpt::check_plan(&plan(0.2, 10), &FLAGS)
         .unwrap_err()
@@ -349,6 +351,7 @@ fn the_markov_chain_agrees_with_the_monte_carlo_walkers() {
         walkers: 2000,
         max_steps: 20_000,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)

@@ -37,6 +37,7 @@ fn plan(mean: f64, sd: f64, walkers: usize, max_steps: usize) -> MfptPlan {
         walkers,
         max_steps,
         integrator: mfpt::default_integrator(),
+        stride_map: Default::default(),
     }
 }
 

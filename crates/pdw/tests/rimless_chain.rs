@@ -408,6 +408,9 @@ fn plan() -> MfptPlan {
         walkers: 2000,
         max_steps: 20_000,
         integrator: mfpt::default_integrator(),
+        // the walkers integrate their strides: the closed-form chain here checks the engine's
+        // integrated walk (its own closed form is checked in `mfpt_closed_form`)
+        stride_map: mfpt::StrideMap::Integrated,
     }
 }
 

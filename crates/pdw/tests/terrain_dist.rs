@@ -103,6 +103,7 @@ fn uniform_and_list_walks_are_the_same_on_any_thread_count() {
             walkers: 24,
             max_steps: 40,
             integrator: mfpt::default_integrator(),
+            stride_map: Default::default(),
         };
         let (f1, e1) = mfpt::run(&m, &plan, &x0, &pool(1), &|_| {}).unwrap();
         let (f2, e2) = mfpt::run(&m, &plan, &x0, &pool(2), &|_| {}).unwrap();

@@ -6,7 +6,7 @@ use super::basin::progress_bar;
 use super::build_model;
 use crate::args::InputError;
 use crate::cli::MfptArgs;
-use pdw::mfpt::{self, MfptFlags, MfptPlan};
+use pdw::mfpt::{self, MfptFlags, MfptPlan, StrideMap};
 use pdw::BuiltModel;
 use pdw_limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use std::process::ExitCode;
@@ -31,6 +31,8 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let choice = model_choice(a, kind)?;
     let m = build_model(&choice)?;
     mfpt::check_model_for(&m, kind)?;
+    let stride_map = StrideMap::parse(&a.stride_map, "--stride-map")?;
+    stride_map.closed_form(&m, "--stride-map")?;
     let plan = MfptPlan {
         terrain: SlopeTerrain {
             mean: terrain_mean(&m, kind),
@@ -42,6 +44,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
         walkers: a.walkers,
         max_steps: a.max_steps,
         integrator,
+        stride_map,
     };
     // the largest standard deviation is checked (the range's last value)
     mfpt::check_plan(&plan, &FLAGS)?;
@@ -227,10 +230,11 @@ fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate,
     }
     let strides = est.total_steps + est.falls as u64;
     crate::outln!(
-        "{:.1} s: {:.0} walkers/s, {:.0} strides/s",
+        "{:.1} s: {:.0} walkers/s, {:.0} strides/s ({} strides)",
         secs,
         est.walkers as f64 / secs,
-        strides as f64 / secs
+        strides as f64 / secs,
+        plan.stride_map.describe(m)
     );
 }
 
@@ -300,7 +304,7 @@ fn write(
     };
     // the claim refused an existing file without --force; its placeholder is replaced
     pdw_store::write_mfpt(out, true, &data)?;
-    let prov = provenance(plan);
+    let prov = provenance(m, plan);
     let start_units = super::units_list(&super::section_units(m));
     let coordinates = m.coordinates_json();
     pdw_store::annotate(
@@ -352,8 +356,9 @@ fn write(
 }
 
 /// The run's options as every MFPT file's provenance records them.
-pub(super) fn provenance(plan: &MfptPlan) -> pdw_store::Provenance {
+pub(super) fn provenance(m: &BuiltModel, plan: &MfptPlan) -> pdw_store::Provenance {
     super::provenance(serde_json::json!({
+        "stride_map": plan.stride_map.describe(m),
         "integrator": super::integrator_json(&plan.integrator),
         "walkers": plan.walkers,
         "max_steps": plan.max_steps,

@@ -174,7 +174,7 @@ fn write(
     };
     // the claim refused an existing file without --force; its placeholder is replaced
     pdw_store::write_mfpt_curve(out, true, &data)?;
-    let prov = super::mfpt::provenance(plan);
+    let prov = super::mfpt::provenance(m, plan);
     let coordinates = m.coordinates_json();
     pdw_store::annotate(
         out,

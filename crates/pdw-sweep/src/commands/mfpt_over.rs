@@ -194,7 +194,7 @@ fn write(
 
 /// Provenance, units and coordinates of the file.
 fn annotate(out: &std::path::Path, m: &pdw::BuiltModel, plan: &MfptPlan) -> anyhow::Result<()> {
-    let prov = super::mfpt::provenance(plan);
+    let prov = super::mfpt::provenance(m, plan);
     let coordinates = m.coordinates_json();
     pdw_store::annotate(
         out,
