@@ -495,7 +495,9 @@ pub fn monte_carlo_closed_form(
     pool.install(|| {
         (0..walkers)
             .into_par_iter()
-            .with_min_len(16)
+            // one walker per task: walkers' lengths are geometric, and a long one left at the
+            // end of a chunk of short ones would keep the other thread idle
+            .with_max_len(1)
             .map(|i| {
                 let mut x = x0.to_vec();
                 let (mut y, mut out) = (x.clone(), x.clone());

@@ -143,6 +143,11 @@ pub const FLOATING_BASE_MASS: f64 = 1e-30;
 /// Largest number of segments per leg.
 pub const MAX_SEGMENTS: usize = 3;
 
+// The kernel's exact derivatives take chains of at most `MAX_DOF` joints; the longest chain a
+// spec can ask for is the floating chain of heel strikes and round feet (two prismatic base
+// joints, then both legs), so no spec meets that cap.
+const _: () = assert!(2 + 2 * MAX_SEGMENTS <= pdw_soa::derivatives::MAX_DOF);
+
 const SECTION_NAMES: [&str; 4] = ["stance", "stance_rate", "hip_rate", "swing_knee_rate"];
 
 /// The section coordinates of a chain walker resolved as `r`: `(stance, stance_rate,
