@@ -54,21 +54,31 @@ fn strides(f: &[Fate]) -> u64 {
         .sum()
 }
 
-fn mfpt(c: &mut Criterion) {
-    let walker = pdw_walkers::build("compass", &[("slope", SLOPE)]).expect("registry model");
-    let map = StrideMap::new(walker.as_ref(), Options::dop853(1e-14)).expect("valid options");
-    let fp = walker
+/// The registry model `name` at any slope.
+fn model_at(name: &'static str) -> impl Fn(f64) -> Result<Box<dyn Walker>, LimitError> + Sync {
+    move |s| {
+        pdw_walkers::build(name, &[("slope", s)]).map_err(|e| LimitError::Model {
+            param: s,
+            message: e.to_string(),
+        })
+    }
+}
+
+/// The model's stable period-one gait from its own guesses.
+fn stable_gait(walker: &dyn Walker) -> pdw_limit::FixedPoint {
+    let map = StrideMap::new(walker, Options::dop853(1e-14)).expect("valid options");
+    walker
         .gait_guesses()
         .iter()
         .filter_map(|g| find_fixed_point(&map, &g.section, &NewtonOptions::default()).ok())
         .find(|fp| fp.stable)
-        .expect("the stable gait");
-    let at = |s: f64| -> Result<Box<dyn Walker>, LimitError> {
-        pdw_walkers::build("compass", &[("slope", s)]).map_err(|e| LimitError::Model {
-            param: s,
-            message: e.to_string(),
-        })
-    };
+        .expect("the stable gait")
+}
+
+fn mfpt(c: &mut Criterion) {
+    let at = model_at("compass");
+    let walker = at(SLOPE).expect("registry model");
+    let fp = stable_gait(walker.as_ref());
     let walk =
         SlopeWalk::new(&at, SLOPE, BasinOptions::default_integrator()).expect("terrain walk");
     let t = SlopeTerrain {
@@ -139,20 +149,8 @@ fn rimless(
 ) {
     let slope = 8f64.to_radians();
     let (walkers, steps) = (200, 500);
-    let at = |s: f64| -> Result<Box<dyn Walker>, LimitError> {
-        pdw_walkers::build("rimless", &[("slope", s)]).map_err(|e| LimitError::Model {
-            param: s,
-            message: e.to_string(),
-        })
-    };
-    let wheel = at(slope).expect("registry model");
-    let map = StrideMap::new(wheel.as_ref(), Options::dop853(1e-14)).expect("valid options");
-    let fp = wheel
-        .gait_guesses()
-        .iter()
-        .filter_map(|g| find_fixed_point(&map, &g.section, &NewtonOptions::default()).ok())
-        .find(|fp| fp.stable)
-        .expect("the rolling gait");
+    let at = model_at("rimless");
+    let fp = stable_gait(at(slope).expect("registry model").as_ref());
     let walk =
         SlopeWalk::new(&at, slope, BasinOptions::default_integrator()).expect("terrain walk");
     let t = SlopeTerrain {
