@@ -523,6 +523,8 @@ pub fn monte_carlo_closed_form(
                         ClosedEnd::Terminal { guard } => {
                             match StrideStop::of(StopReason::Guard { guard }, guards) {
                                 StrideStop::End(o) => o,
+                                // a closed form naming a reset guard is a model's bug:
+                                // reported as the stride that did not end, not hidden
                                 StrideStop::Reset { .. } => StrideOutcome::TooManyEvents,
                             }
                         }

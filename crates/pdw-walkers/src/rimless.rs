@@ -350,8 +350,9 @@ impl ClosedStride for Rimless {
         }
         let k = g / l;
         let (a, b) = (t0 + gamma, strike + gamma);
-        // ½ of the drop of θ̇² from θ₀ to θ, per g/l: cos(θ + γ) − cos(θ₀ + γ) ≥ its value at
-        // the top (1 − cos a) when −γ lies between them, at the strike otherwise
+        // θ̇² drops by 2 (g/l) rise(θ + γ) from θ₀ to θ, rise(c) = cos c − cos a: most at the
+        // top (rise = 1 − cos a = 2 sin²(a/2)) when −γ lies between θ₀ and the strike, else at
+        // the strike or not at all
         let rise = |c: f64| 2.0 * ((c + a) / 2.0).sin() * ((a - c) / 2.0).sin();
         let worst = if a <= 0.0 && b >= 0.0 {
             2.0 * (a / 2.0).sin().powi(2)
