@@ -159,7 +159,7 @@ fn fill(p: &Path, f: &File, d: &MfptData) -> Result<()> {
     for (k, v) in &d.chain {
         set_attr(p, &g, &format!("chain_{k}"), v)?;
     }
-    put(p, &g, "survival", d.survival.as_slice())?;
+    put_curve(p, &g, "survival", &d.survival)?;
     let counts: Vec<u64> = d.failures.iter().map(|x| x.1).collect();
     let kinds: Vec<String> = d.failures.iter().map(|x| x.0.clone()).collect();
     let fd = put(p, &g, "failures", counts.as_slice())?;
@@ -167,6 +167,29 @@ fn fill(p: &Path, f: &File, d: &MfptData) -> Result<()> {
     let sd = put(p, &g, "start", d.start.as_slice())?;
     set_str(p, &sd, "names", &json_list(&d.start_names))?;
     Ok(())
+}
+
+/// Values per chunk of a long curve ([`put_curve`]).
+const CURVE_CHUNK: usize = 1 << 16;
+
+/// Deflate level of a long curve (the basin's, [`crate::basin`]).
+const CURVE_DEFLATE: u8 = 4;
+
+/// A survival curve as a 1-D dataset: contiguous up to [`CURVE_CHUNK`] values, else chunked,
+/// byte-shuffled and deflated — a curve of a long walk (`--max-steps` 2·10⁶: 16 MB raw) holds
+/// long runs of equal fractions `k / walkers`, which compress to a small part of that. Readers
+/// see the same values either way (HDF5 undoes the filters).
+fn put_curve(p: &Path, g: &hdf5::Group, name: &str, v: &[f64]) -> Result<hdf5::Dataset> {
+    if v.len() <= CURVE_CHUNK {
+        return put(p, g, name, v);
+    }
+    g.new_dataset_builder()
+        .chunk(CURVE_CHUNK)
+        .shuffle()
+        .deflate(CURVE_DEFLATE)
+        .with_data(v)
+        .create(name)
+        .at(p, &format!("writing {}/{name}", g.name()))
 }
 
 /// Reads an MFPT file.

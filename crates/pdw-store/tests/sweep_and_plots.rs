@@ -658,3 +658,51 @@ fn status_markers_appear_where_their_designs_lie() {
         );
     }
 }
+
+/// A long walk's survival curve (two million steps, 16 MB as raw doubles) is stored chunked and
+/// deflated: the file is a small part of that, and reads back the same values.
+#[test]
+fn a_long_survival_curve_is_compressed_and_reads_back_exactly() {
+    let (walkers, max_steps) = (1000u64, 2_000_000u64);
+    // walker i falls after 2000 (i + 1) steps: survival(k) = #(T ≥ k) / N in steps of 1/N
+    let survival: Vec<f64> = (0..=max_steps)
+        .map(|k| (walkers - (k.saturating_sub(1) / 2000).min(walkers)) as f64 / walkers as f64)
+        .collect();
+    let data = pdw_store::MfptData {
+        command: "pdw-sweep mfpt --model rimless --sd 1.25deg --max-steps 2000000".into(),
+        model: "rimless".into(),
+        params: "{}".into(),
+        method: "monte carlo".into(),
+        terrain: "slope".into(),
+        distribution: "normal".into(),
+        terrain_unit: "rad".into(),
+        mean: 0.14,
+        sd: 0.02,
+        seed: 1,
+        walkers,
+        max_steps,
+        falls: walkers,
+        censored: 0,
+        total_steps: 1,
+        mfpt: 1.0,
+        stderr: 0.1,
+        restricted_mean: 1.0,
+        restricted_stderr: 0.1,
+        estimator: "steps / falls".into(),
+        survival: survival.clone(),
+        failures: vec![("rolls back".into(), walkers)],
+        start: vec![1.4],
+        start_names: vec!["thetadot".into()],
+        elapsed_s: 1.0,
+        chain: vec![],
+    };
+    data.validate().unwrap();
+    let dir = scratch("longsurvival");
+    let path = dir.join("long.h5");
+    pdw_store::write_mfpt(&path, false, &data).unwrap();
+    let bytes = std::fs::metadata(&path).unwrap().len();
+    eprintln!("{bytes} bytes for {} survival values", survival.len());
+    assert!(bytes < 2_000_000, "{bytes} bytes for a 16 MB curve");
+    let back = pdw_store::read_mfpt(&path).unwrap();
+    assert_eq!(back.survival, survival);
+}
