@@ -964,22 +964,16 @@ pub fn cloud_pair(
             CLOUD_PASSES,
             pool,
         )?;
+        let r = pdw_limit::markov::solve_chain(&cc.transitions);
         let stats = CloudStats {
             mesh: n,
             cell: cloud.cell(),
             seeds: cc.seeds,
             nodes: cc.nodes,
             passes: cc.passes,
-            secs: 0.0,
+            secs: t0.elapsed().as_secs_f64(),
         };
-        let r = pdw_limit::markov::solve_chain(&cc.transitions);
-        Ok((
-            r,
-            CloudStats {
-                secs: t0.elapsed().as_secs_f64(),
-                ..stats
-            },
-        ))
+        Ok((r, stats))
     };
     let (coarse, c0) = run(chain.mesh)?;
     let (fine, c1) = run(2 * chain.mesh)?;
