@@ -315,6 +315,16 @@ pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
     if rw { b.open_rw(path) } else { b.open(path) }.at(path, "opening the file")
 }
 
+/// Opens an existing file as HDF5's `File::open` / `File::open_rw` would, but with HDF5's own
+/// file locking off (see [`open_file`] for why); `action` names the step in an error. For the
+/// small annotation and provenance reads and writes, which need no chunk cache.
+pub(crate) fn open_unlocked(path: &Path, rw: bool, action: &'static str) -> Result<hdf5::File> {
+    no_close_at_exit();
+    let mut b = hdf5::File::with_options();
+    b.with_fapl(|p| p.file_locking(false));
+    if rw { b.open_rw(path) } else { b.open(path) }.at(path, action)
+}
+
 /// Locks an existing file for writing ([`OutputLock`]); a file another process is writing is
 /// refused.
 pub(crate) fn lock_existing(path: &Path) -> Result<OutputLock> {

@@ -41,7 +41,7 @@ use hdf5_sys::h5p::H5P_DEFAULT;
 use hdf5_sys::h5r::{hobj_ref_t, H5R_type_t, H5Rcreate};
 use hdf5_sys::{h5a, h5s, h5t};
 
-use crate::h5util::{get_str, has_attr, set_attr, set_str, At};
+use crate::h5util::{get_str, has_attr, open_unlocked, set_attr, set_str, At};
 use crate::{time, Result, StoreError};
 
 /// The git commit the crate was built from (`"unknown"` without git), with `-dirty` when the
@@ -167,7 +167,7 @@ pub struct Annotations<'a> {
 
 /// Opens `path` for writing and annotates it (see [`annotate_file`]).
 pub fn annotate(path: &Path, a: &Annotations<'_>) -> Result<()> {
-    let f = File::open_rw(path).at(path, "opening for annotation")?;
+    let f = open_unlocked(path, true, "opening for annotation")?;
     annotate_file(path, &f, a)?;
     f.flush().at(path, "flushing")?;
     f.close().at(path, "closing")
@@ -298,7 +298,7 @@ pub fn copy_shard_provenance(path: &Path, file: &File, shards: &[&Path]) -> Resu
     let g = group_at(path, file, "provenance", "creating /provenance")?;
     let sg = group_at(path, &g, "shards", "creating /provenance/shards")?;
     for (i, sp) in shards.iter().enumerate() {
-        let sf = File::open(sp).at(sp, "opening a shard")?;
+        let sf = open_unlocked(sp, false, "opening a shard")?;
         let name = format!("{i:03}");
         let dst = group_at(path, &sg, &name, "creating a shard entry")?;
         set_str(path, &dst, "file", &sp.display().to_string())?;
@@ -327,7 +327,7 @@ pub fn copy_shard_provenance(path: &Path, file: &File, shards: &[&Path]) -> Resu
 /// `file`, the root `coordinates` and `/slice` (a merged basin describes itself as its shards
 /// did).
 pub fn copy_units_and_slice(path: &Path, file: &File, src: &Path) -> Result<()> {
-    let sf = File::open(src).at(src, "opening a shard")?;
+    let sf = open_unlocked(src, false, "opening a shard")?;
     for ds in dataset_paths(src, &sf)? {
         let (Ok(s), Ok(d)) = (sf.dataset(&ds), file.dataset(&ds)) else {
             continue;
@@ -593,7 +593,7 @@ pub fn attach_scales(path: &Path, file: &File, scales: &[ScaleAttach]) -> Result
 /// `/provenance/shards/NNN`, the units and slice of the first shard, and the grid's dimension
 /// scales.
 pub fn annotate_merged(out: &Path, shards: &[&Path], p: &Provenance) -> Result<()> {
-    let f = File::open_rw(out).at(out, "opening for annotation")?;
+    let f = open_unlocked(out, true, "opening for annotation")?;
     write_provenance(out, &f, p)?;
     copy_shard_provenance(out, &f, shards)?;
     if let Some(first) = shards.first() {
@@ -659,7 +659,7 @@ pub fn write_slice_view(
     z_value: f64,
     outcome: ndarray::ArrayView2<'_, u8>,
 ) -> Result<()> {
-    let f = File::open_rw(path).at(path, "opening for the slice")?;
+    let f = open_unlocked(path, true, "opening for the slice")?;
     let g = group_at(path, &f, "slice", "creating /slice")?;
     set_str(path, &g, "z", z_name)?;
     set_attr(path, &g, "z_index", &(z_index as u64))?;
@@ -687,7 +687,7 @@ pub fn write_slice_view(
 /// The z-slice recorded by [`write_slice_view`]: `(z, z_index, z_value)`, `None` for a 2-D
 /// basin.
 pub fn read_slice_view(path: &Path) -> Result<Option<(String, usize, f64)>> {
-    let f = File::open(path).at(path, "opening")?;
+    let f = open_unlocked(path, false, "opening")?;
     let Ok(g) = f.group("slice") else {
         return Ok(None);
     };
@@ -704,7 +704,7 @@ pub fn read_slice_view(path: &Path) -> Result<Option<(String, usize, f64)>> {
 
 /// The slice of a basin file (`None` for files written before `/slice` existed).
 pub fn read_slice(path: &Path) -> Result<Option<Slice>> {
-    let f = File::open(path).at(path, "opening")?;
+    let f = open_unlocked(path, false, "opening")?;
     let Ok(g) = f.group("slice") else {
         return Ok(None);
     };
@@ -735,7 +735,7 @@ pub fn read_slice(path: &Path) -> Result<Option<Slice>> {
 
 /// The `units` attribute of dataset `ds` of the file at `path` (`None` without one).
 pub fn read_units(path: &Path, ds: &str) -> Result<Option<String>> {
-    let f = File::open(path).at(path, "opening")?;
+    let f = open_unlocked(path, false, "opening")?;
     let d = f.dataset(ds).at(path, "opening a dataset")?;
     if has_attr(&d, "units") {
         get_str(path, "pdw-sweep file", &d, "units").map(Some)

@@ -197,6 +197,47 @@ fn a_file_being_written_is_not_truncated_by_a_second_writer() {
     drop(w);
 }
 
+/// HDF5 opens files without close-on-exec, so a child process started by another thread while
+/// a file is open inherits its descriptor and, with it, the descriptor's `flock`. Every open of
+/// this crate turns HDF5's own locking off, so such a left-over lock (held here by the test
+/// itself) stops neither annotating, nor reading a file back.
+#[test]
+fn a_lock_left_on_a_finished_file_stops_neither_annotation_nor_reading() {
+    let dir = scratch("inherited-lock");
+    let p = dir.join("basin.h5");
+    let h = header(20, 32);
+    complete_file(&p, &h);
+    let held = std::fs::File::open(&p).unwrap();
+    held.lock().unwrap();
+    let units = |ds: &str| (ds == "basin/outcome").then(|| "1".to_string());
+    pdw_store::annotate(
+        &p,
+        &pdw_store::Annotations {
+            provenance: None,
+            units: &units,
+            slice: None,
+            scales: &[],
+            coordinates: None,
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        pdw_store::provenance::read_units(&p, "basin/outcome").unwrap(),
+        Some("1".to_string())
+    );
+    assert!(pdw_store::provenance::read_slice(&p).unwrap().is_none());
+    assert!(pdw_store::provenance::read_slice_view(&p)
+        .unwrap()
+        .is_none());
+    assert!(read_basin(&p).unwrap().complete);
+    // HDF5's own locking, as the library opens by default, is what such a lock stops.
+    let locked = hdf5::File::with_options()
+        .with_fapl(|f| f.file_locking(true))
+        .open_rw(&p);
+    assert!(locked.is_err(), "the left-over lock is held");
+    held.unlock().unwrap();
+}
+
 #[test]
 fn non_regular_outputs_are_refused() {
     let dir = scratch("fifo");
