@@ -42,6 +42,36 @@ pub fn aba(
     Ok(())
 }
 
+/// Forward dynamics of a passive chain with locked joints: `q̈ = 𝓜⁻¹ (−C)` with `τ = 0`, no tip
+/// force and the joints in `locked` held at `q̈ = 0` (pseudo joints, seed §3.4, eq. 3.18–3.23).
+///
+/// The one-lane instance of [`crate::batch_aba_view`] with `tau = None`, `f_tip = None` and
+/// the same mask (the same recursion over a [`Workspace`], hence the same bits per lane), for
+/// callers that evaluate one state at a time: the batched kernel's per-call set-up of column
+/// blocks costs several times this call at one lane. Unlike [`crate::pseudo_joint_dynamics`]
+/// it computes no locking torques and takes the mask as `n` booleans. No allocation.
+///
+/// - `q`, `qd`, `locked`, `qdd`: length `n`; `qdd` is exactly `0.0` at locked joints.
+pub fn aba_masked(
+    chain: &Chain,
+    ws: &mut Workspace,
+    q: &[f64],
+    qd: &[f64],
+    locked: &[bool],
+    qdd: &mut [f64],
+) -> Result<(), SoaError> {
+    let n = chain.dof();
+    check_len("locked", n, locked.len())?;
+    check_len("qdd", n, qdd.len())?;
+    kin_pass(chain, ws, q, Some(qd))?;
+    // the zero torques live in the workspace's scratch vector (taken out for the borrow)
+    let mut zeros = std::mem::take(&mut ws.tmp);
+    zeros.fill(0.0);
+    aba_passes(chain, ws, &zeros, None, Some(locked), qdd);
+    ws.tmp = zeros;
+    Ok(())
+}
+
 /// Backward and forward articulated-body passes over a workspace filled by `kin_pass`.
 /// `locked`: optional mask of locked joints (pseudo joints, seed §3.4), which get `q̈ = 0`.
 /// The one-lane instance of [`aba_recursion`]; also keeps `P_k`, `z_k` and `A_k` in `ws`.

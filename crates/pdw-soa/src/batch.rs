@@ -94,10 +94,8 @@ pub struct BatchWorkspace {
     pub(crate) a0: Cols,
     pub(crate) a1: Cols,
     pub(crate) a2: Cols,
-    /// carries between links: articulated inertia (block × 6), bias force (block × 3),
-    /// acceleration / force (block × 3)
-    pub(crate) carry_p: Cols,
-    pub(crate) carry_z: Cols,
+    /// the RNEA's carry between links: acceleration, then force (block × 3); the
+    /// articulated-body recursion keeps its carries in registers (`batch_aba`'s chunks)
     pub(crate) carry_a: Cols,
     /// base values: zeros and ones (block × 1)
     pub(crate) zeros: Vec<f64>,
@@ -136,8 +134,6 @@ impl BatchWorkspace {
             a0: per(),
             a1: per(),
             a2: per(),
-            carry_p: Cols::new(b, 6),
-            carry_z: Cols::new(b, 3),
             carry_a: Cols::new(b, 3),
             zeros: vec![0.0; b],
             ones: vec![1.0; b],

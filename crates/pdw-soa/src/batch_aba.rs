@@ -93,15 +93,15 @@ pub fn batch_aba_view(
             while l0 < lanes {
                 let bl = bw.block.min(lanes - l0);
                 batch_kin_pass(chain, bw, q, qd, l0, bl);
-                start_carries(chain, bw, f_tip, l0, bl);
-                let mut block = Block {
-                    bw: &mut *bw,
-                    tau,
-                    qdd: qdd.rb_mut(),
-                    l0,
-                    bl,
-                };
-                aba_recursion(chain, locked, &mut block);
+                // the recursion over 8 lanes at a time, its carries in registers; the last
+                // lanes of the block one at a time (each lane the same arithmetic)
+                let full = bl - bl % WIDTH;
+                for b0 in (0..full).step_by(WIDTH) {
+                    chunk::<WIDTH>(chain, bw, tau, f_tip, locked, qdd.rb_mut(), l0, b0);
+                }
+                for b0 in full..bl {
+                    chunk::<1>(chain, bw, tau, f_tip, locked, qdd.rb_mut(), l0, b0);
+                }
                 l0 += bl;
             }
         },
@@ -109,76 +109,96 @@ pub fn batch_aba_view(
     Ok(())
 }
 
-/// Base values of the carries for lanes `l0..l0 + bl`: `P⁺ = 0`, `z⁺ = Φ_{t,n}ᵀ F_t` (or 0),
-/// `A = a_b`.
+/// Lanes of one [`Chunk`] of the full width: 8 doubles, one AVX-512 register per quantity.
+const WIDTH: usize = 8;
+
+/// The articulated-body recursion ([`aba_recursion`]) for the `W` lanes `l0 + b0 ..` of a block
+/// whose pass 1 is in `bw` (at rows `b0..b0 + W`). The carries start at their base values
+/// (`P⁺ = 0`, `z⁺ = Φ_{t,n}ᵀ F_t` or 0, `A = a_b`) and stay in the chunk's arrays (registers
+/// once inlined) from link to link instead of going through the workspace's columns.
 #[inline(always)]
-fn start_carries(
+#[allow(clippy::too_many_arguments)]
+fn chunk<const W: usize>(
     chain: &Chain,
     bw: &mut BatchWorkspace,
+    tau: Option<MatRef<'_, f64>>,
     f_tip: Option<MatRef<'_, f64>>,
+    locked: Option<&[bool]>,
+    qdd: MatMut<'_, f64>,
     l0: usize,
-    bl: usize,
+    b0: usize,
 ) {
-    for col in bw.carry_p.all_mut::<6>() {
-        col[..bl].fill(0.0);
-    }
-    let [z0, z1, z2] = bw.carry_z.all_mut::<3>();
-    match f_tip {
-        Some(ft) => {
-            let (f0, f1, f2) = (
-                &col(ft, 0)[l0..l0 + bl],
-                &col(ft, 1)[l0..l0 + bl],
-                &col(ft, 2)[l0..l0 + bl],
-            );
-            let ty = &bw.tip.col(0)[..bl];
-            let tz = &bw.tip.col(1)[..bl];
-            for l in 0..bl {
-                let z = spatial::force_transport(&[f0[l], f1[l], f2[l]], ty[l], tz[l]);
-                z0[l] = z[0];
-                z1[l] = z[1];
-                z2[l] = z[2];
-            }
-        }
-        None => {
-            z0[..bl].fill(0.0);
-            z1[..bl].fill(0.0);
-            z2[..bl].fill(0.0);
+    let a = l0 + b0;
+    let mut cz = [[0.0; W]; 3];
+    if let Some(ft) = f_tip {
+        let (ty, tz) = (&bw.tip.col(0)[b0..b0 + W], &bw.tip.col(1)[b0..b0 + W]);
+        let (f0, f1, f2) = (
+            &col(ft, 0)[a..a + W],
+            &col(ft, 1)[a..a + W],
+            &col(ft, 2)[a..a + W],
+        );
+        for l in 0..W {
+            let z = spatial::force_transport(&[f0[l], f1[l], f2[l]], ty[l], tz[l]);
+            cz[0][l] = z[0];
+            cz[1][l] = z[1];
+            cz[2][l] = z[2];
         }
     }
     let ab = chain.base_acc;
-    let [a0, a1, a2] = bw.carry_a.all_mut::<3>();
-    a0[..bl].fill(ab[0]);
-    a1[..bl].fill(ab[1]);
-    a2[..bl].fill(ab[2]);
+    let mut c = Chunk::<W> {
+        bw,
+        tau,
+        qdd,
+        a,
+        b0,
+        cp: [[0.0; W]; 6],
+        cz,
+        ca: [[ab[0]; W], [ab[1]; W], [ab[2]; W]],
+    };
+    aba_recursion(chain, locked, &mut c);
 }
 
-/// A block of lanes `l0..l0 + bl` in the columns of a [`BatchWorkspace`].
-struct Block<'a, 'm> {
+/// `W` lanes of a block: the link quantities and gains in the columns of a [`BatchWorkspace`]
+/// (rows `b0..b0 + W`), the carries `(P⁺, z⁺)` and `A` in arrays.
+struct Chunk<'a, 'm, const W: usize> {
     bw: &'a mut BatchWorkspace,
     tau: Option<MatRef<'m, f64>>,
     qdd: MatMut<'m, f64>,
-    l0: usize,
-    bl: usize,
+    /// first lane of the chunk in the call's matrices
+    a: usize,
+    /// first row of the chunk in the workspace's columns
+    b0: usize,
+    cp: [[f64; W]; 6],
+    cz: [[f64; W]; 3],
+    ca: [[f64; W]; 3],
 }
 
-impl AbaLanes for Block<'_, '_> {
+impl<const W: usize> AbaLanes for Chunk<'_, '_, W> {
     #[inline(always)]
     fn back<const K: u8>(&mut self, k: usize, j: f64, m: f64) {
-        let (bw, l0, bl) = (&mut *self.bw, self.l0, self.bl);
+        let (bw, a, r) = (&mut *self.bw, self.a, self.b0..self.b0 + W);
         let tk = match self.tau {
-            Some(t) => &col(t, k)[l0..l0 + bl],
-            None => &bw.zeros[..bl],
+            Some(t) => &col(t, k)[a..a + W],
+            None => &bw.zeros[..W],
         };
         let link = [
-            &bw.cy, &bw.cz, &bw.by, &bw.bz, &bw.ay, &bw.az, &bw.hy, &bw.hz, &bw.dy, &bw.dz,
-        ]
-        .map(|c| &c.col(k)[..bl]);
-        let g0 = &mut bw.g0.col_mut(k)[..bl];
-        let g1 = &mut bw.g1.col_mut(k)[..bl];
-        let g2 = &mut bw.g2.col_mut(k)[..bl];
-        let nu = &mut bw.nu.col_mut(k)[..bl];
-        let [p0, p1, p2, p3, p4, p5] = bw.carry_p.all_mut::<6>();
-        let [z0, z1, z2] = bw.carry_z.all_mut::<3>();
+            &bw.cy.col(k)[r.clone()],
+            &bw.cz.col(k)[r.clone()],
+            &bw.by.col(k)[r.clone()],
+            &bw.bz.col(k)[r.clone()],
+            &bw.ay.col(k)[r.clone()],
+            &bw.az.col(k)[r.clone()],
+            &bw.hy.col(k)[r.clone()],
+            &bw.hz.col(k)[r.clone()],
+            &bw.dy.col(k)[r.clone()],
+            &bw.dz.col(k)[r.clone()],
+        ];
+        let g0 = &mut bw.g0.col_mut(k)[r.clone()];
+        let g1 = &mut bw.g1.col_mut(k)[r.clone()];
+        let g2 = &mut bw.g2.col_mut(k)[r.clone()];
+        let nu = &mut bw.nu.col_mut(k)[r];
+        let [p0, p1, p2, p3, p4, p5] = &mut self.cp;
+        let [z0, z1, z2] = &mut self.cz;
         lanes_back::<K>(
             j,
             m,
@@ -203,15 +223,27 @@ impl AbaLanes for Block<'_, '_> {
 
     #[inline(always)]
     fn fwd<const K: u8>(&mut self, k: usize) {
-        let (bw, l0, bl) = (&mut *self.bw, self.l0, self.bl);
+        let (bw, a, r) = (&*self.bw, self.a, self.b0..self.b0 + W);
         let out = match self.qdd.rb_mut().col_mut(k).try_as_col_major_mut() {
-            Some(c) => &mut c.as_slice_mut()[l0..l0 + bl],
+            Some(c) => &mut c.as_slice_mut()[a..a + W],
             // unreachable: `batch_aba_view` checked the columns
             None => return,
         };
-        let gain = [&bw.g0, &bw.g1, &bw.g2, &bw.nu].map(|c| &c.col(k)[..bl]);
-        let link = [&bw.ay, &bw.az, &bw.hy, &bw.hz, &bw.dy, &bw.dz].map(|c| &c.col(k)[..bl]);
-        let [a0, a1, a2] = bw.carry_a.all_mut::<3>();
+        let gain = [
+            &bw.g0.col(k)[r.clone()],
+            &bw.g1.col(k)[r.clone()],
+            &bw.g2.col(k)[r.clone()],
+            &bw.nu.col(k)[r.clone()],
+        ];
+        let link = [
+            &bw.ay.col(k)[r.clone()],
+            &bw.az.col(k)[r.clone()],
+            &bw.hy.col(k)[r.clone()],
+            &bw.hz.col(k)[r.clone()],
+            &bw.dy.col(k)[r.clone()],
+            &bw.dz.col(k)[r],
+        ];
+        let [a0, a1, a2] = &mut self.ca;
         lanes_fwd::<K>(gain, link, out, a0, a1, a2);
     }
 }

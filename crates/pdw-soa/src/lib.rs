@@ -42,7 +42,7 @@ pub mod spatial;
 pub mod unilateral;
 pub mod workspace;
 
-pub use aba::aba;
+pub use aba::{aba, aba_masked};
 pub use batch::BatchWorkspace;
 pub use batch_aba::{batch_aba, batch_aba_view};
 pub use batch_rnea::batch_rnea;

@@ -89,6 +89,19 @@ fn batched_kernels_reject_wrong_shapes() {
         matches!(e, SoaError::DimensionMismatch { what: "f_tip", .. }),
         "{e}"
     );
+    // the one-lane masked entry checks its lengths too
+    let mut ws = Workspace::new(&chain);
+    let (q, mut qdd) = ([0.1; 3], [0.0; 3]);
+    let e = aba_masked(&chain, &mut ws, &q, &q, &[false; 2], &mut qdd).unwrap_err();
+    assert!(
+        matches!(e, SoaError::DimensionMismatch { what: "locked", .. }),
+        "{e}"
+    );
+    let e = aba_masked(&chain, &mut ws, &q, &q[..2], &[false; 3], &mut qdd).unwrap_err();
+    assert!(
+        matches!(e, SoaError::DimensionMismatch { what: "qd", .. }),
+        "{e}"
+    );
 }
 
 /// The batched pseudo-joint path (locked joints welded in the articulated-body recursion) on
@@ -135,11 +148,19 @@ fn batched_locked_joints_on_views_equal_scalar_pseudo_joints_bit_for_bit() {
                         &mut lock,
                     )
                     .unwrap();
+                    // and the one-lane entry the walkers' single-state flow calls
+                    let mut one = vec![f64::NAN; n];
+                    aba_masked(&chain, &mut ws, &xl[..n], &xl[n..], &mask, &mut one).unwrap();
                     for k in 0..n {
                         assert_eq!(
                             dx[(l, n + k)].to_bits(),
                             qdd[k].to_bits(),
                             "n={n} lanes={lanes} locked={locked:?} lane {l} joint {k}"
+                        );
+                        assert_eq!(
+                            one[k].to_bits(),
+                            qdd[k].to_bits(),
+                            "aba_masked: n={n} locked={locked:?} lane {l} joint {k}"
                         );
                     }
                 }

@@ -996,6 +996,12 @@ impl ChainWalker {
     /// solution (the reset then reports the failure).
     pub fn stance_knee_buckles(&self, mode: usize, x: &[f64]) -> bool {
         let p = self.impact_problem(mode, x);
+        let stance_knee =
+            |i: usize| matches!(p.roles[i], Role::StanceKnee(_) | Role::NewStanceKnee(_));
+        if !(0..p.len).any(stance_knee) {
+            // no stance knee in the problem (a compass gait): none can buckle, no solve needed
+            return false;
+        }
         let nf = self.n + 2;
         let mut v = [0.0; FMAX];
         match pdw_soa::unilateral_impact(
@@ -1007,10 +1013,7 @@ impl ChainWalker {
             &mut v[..nf],
             None,
         ) {
-            Ok(sol) => (0..p.len).any(|i| {
-                matches!(p.roles[i], Role::StanceKnee(_) | Role::NewStanceKnee(_))
-                    && !sol.items[i].active
-            }),
+            Ok(sol) => (0..p.len).any(|i| stance_knee(i) && !sol.items[i].active),
             Err(_) => false,
         }
     }
@@ -1253,9 +1256,30 @@ impl HybridSystem for ChainWalker {
         }
     }
 
-    /// One lane of [`HybridSystem::flow_batch`] (the same kernel call, the same bits).
+    /// One lane of [`HybridSystem::flow_batch`]: with point feet the one-lane instance of the
+    /// same recursion ([`pdw_soa::aba_masked`] in the scalar workspace: the same bits, without
+    /// the batched kernel's per-call block set-up, which costs several times a one-lane call;
+    /// event location and dense output evaluate one lane at a time).
     fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
-        let d = 2 * self.n;
+        let n = self.n;
+        let d = 2 * n;
+        if self.radius <= 0.0 {
+            let s = self.scratch(ws);
+            dx[..n].copy_from_slice(&x[n..d]);
+            let (q, qd) = x[..d].split_at(n);
+            let r = pdw_soa::aba_masked(
+                &self.chain,
+                &mut s.ws,
+                q,
+                qd,
+                &self.masks[mode],
+                &mut dx[n..d],
+            );
+            if r.is_err() {
+                dx[..d].fill(f64::NAN);
+            }
+            return;
+        }
         let xv = MatRef::from_column_major_slice(&x[..d], 1, d);
         let dxv = MatMut::from_column_major_slice_mut(&mut dx[..d], 1, d);
         self.flow_views(ws, mode, xv, dxv);
