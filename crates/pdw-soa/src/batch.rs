@@ -84,12 +84,6 @@ pub struct BatchWorkspace {
     pub(crate) bz: Cols,
     /// tip lever (block × 2)
     pub(crate) tip: Cols,
-    // --- articulated-body backward pass, each (block × n) ---
-    /// gain G_k components and ν_k
-    pub(crate) g0: Cols,
-    pub(crate) g1: Cols,
-    pub(crate) g2: Cols,
-    pub(crate) nu: Cols,
     // --- RNEA forward pass: spatial accelerations A_k, each (block × n) ---
     pub(crate) a0: Cols,
     pub(crate) a1: Cols,
@@ -100,6 +94,40 @@ pub struct BatchWorkspace {
     /// base values: zeros and ones (block × 1)
     pub(crate) zeros: Vec<f64>,
     pub(crate) ones: Vec<f64>,
+    /// the articulated-body recursion's pass 1 and gains for one chunk of [`WIDTH`] lanes,
+    /// one entry per link (`batch_aba`)
+    pub(crate) lc: Vec<LinkChunk>,
+    /// the tip lever of the chunk's lanes
+    pub(crate) ctip: [[f64; WIDTH]; 2],
+}
+
+/// Lanes of one chunk of the batched articulated-body recursion: 8 doubles, one AVX-512
+/// register per quantity.
+pub(crate) const WIDTH: usize = 8;
+
+/// One link's quantities for the lanes of a chunk, side by side: every stream of the recursion
+/// at a fixed offset from one base (no pointer per stream to keep in a register), in L1 for
+/// any chain a spec can build.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct LinkChunk {
+    pub(crate) theta: [f64; WIDTH],
+    pub(crate) s: [f64; WIDTH],
+    pub(crate) c: [f64; WIDTH],
+    pub(crate) w: [f64; WIDTH],
+    pub(crate) dy: [f64; WIDTH],
+    pub(crate) dz: [f64; WIDTH],
+    pub(crate) hy: [f64; WIDTH],
+    pub(crate) hz: [f64; WIDTH],
+    pub(crate) cy: [f64; WIDTH],
+    pub(crate) cz: [f64; WIDTH],
+    pub(crate) ay: [f64; WIDTH],
+    pub(crate) az: [f64; WIDTH],
+    pub(crate) by: [f64; WIDTH],
+    pub(crate) bz: [f64; WIDTH],
+    pub(crate) g0: [f64; WIDTH],
+    pub(crate) g1: [f64; WIDTH],
+    pub(crate) g2: [f64; WIDTH],
+    pub(crate) nu: [f64; WIDTH],
 }
 
 impl BatchWorkspace {
@@ -127,16 +155,14 @@ impl BatchWorkspace {
             by: per(),
             bz: per(),
             tip: Cols::new(b, 2),
-            g0: per(),
-            g1: per(),
-            g2: per(),
-            nu: per(),
             a0: per(),
             a1: per(),
             a2: per(),
             carry_a: Cols::new(b, 3),
             zeros: vec![0.0; b],
             ones: vec![1.0; b],
+            lc: vec![LinkChunk::default(); n],
+            ctip: [[0.0; WIDTH]; 2],
         }
     }
     /// Lane count this workspace was sized for.

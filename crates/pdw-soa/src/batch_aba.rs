@@ -5,10 +5,11 @@ use faer::reborrow::ReborrowMut;
 use faer::{Mat, MatMut, MatRef};
 
 use crate::aba::{aba_recursion, lanes_back, lanes_fwd, AbaLanes};
-use crate::batch::{batch_kin_pass, check_batch, check_view, col, BatchWorkspace};
+use crate::batch::{check_batch, check_view, col, BatchWorkspace, LinkChunk, WIDTH};
 use crate::chain::Chain;
 use crate::error::{check_len, SoaError};
 use crate::spatial;
+use crate::workspace::{kin_recursion, lanes_angles, lanes_kin, lanes_tip, KinLanes, KinLink};
 
 /// Batched forward dynamics `q̈ = 𝓜⁻¹ (τ − C − Jᵀ F_t)` for every lane.
 ///
@@ -89,49 +90,51 @@ pub fn batch_aba_view(
     pdw_simd::dispatch(
         #[inline(always)]
         || {
-            let mut l0 = 0;
-            while l0 < lanes {
-                let bl = bw.block.min(lanes - l0);
-                batch_kin_pass(chain, bw, q, qd, l0, bl);
-                // the recursion over 8 lanes at a time, its carries in registers; the last
-                // lanes of the block one at a time (each lane the same arithmetic)
-                let full = bl - bl % WIDTH;
-                for b0 in (0..full).step_by(WIDTH) {
-                    chunk::<WIDTH>(chain, bw, tau, f_tip, locked, qdd.rb_mut(), l0, b0);
-                }
-                for b0 in full..bl {
-                    chunk::<1>(chain, bw, tau, f_tip, locked, qdd.rb_mut(), l0, b0);
-                }
-                l0 += bl;
+            // 8 lanes at a time, pass 1 and the recursion per chunk in the chunk's link
+            // buffers and the carries in registers; the last lanes one at a time (each lane
+            // the same arithmetic)
+            let full = lanes - lanes % WIDTH;
+            for a in (0..full).step_by(WIDTH) {
+                chunk::<WIDTH>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
+            }
+            for a in full..lanes {
+                chunk::<1>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
             }
         },
     );
     Ok(())
 }
 
-/// Lanes of one [`Chunk`] of the full width: 8 doubles, one AVX-512 register per quantity.
-const WIDTH: usize = 8;
-
-/// The articulated-body recursion ([`aba_recursion`]) for the `W` lanes `l0 + b0 ..` of a block
-/// whose pass 1 is in `bw` (at rows `b0..b0 + W`). The carries start at their base values
-/// (`P⁺ = 0`, `z⁺ = Φ_{t,n}ᵀ F_t` or 0, `A = a_b`) and stay in the chunk's arrays (registers
-/// once inlined) from link to link instead of going through the workspace's columns.
+/// Pass 1 ([`kin_recursion`]) and the articulated-body recursion ([`aba_recursion`]) for the
+/// `W ≤ WIDTH` lanes `a..a + W` of the call, in the workspace's chunk buffers. The carries
+/// start at their base values (`P⁺ = 0`, `z⁺ = Φ_{t,n}ᵀ F_t` or 0, `A = a_b`) and stay in the
+/// chunk's arrays (registers once inlined) from link to link.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn chunk<const W: usize>(
     chain: &Chain,
     bw: &mut BatchWorkspace,
+    q: MatRef<'_, f64>,
+    qd: MatRef<'_, f64>,
     tau: Option<MatRef<'_, f64>>,
     f_tip: Option<MatRef<'_, f64>>,
     locked: Option<&[bool]>,
     qdd: MatMut<'_, f64>,
-    l0: usize,
-    b0: usize,
+    a: usize,
 ) {
-    let a = l0 + b0;
+    kin_recursion(
+        chain,
+        &mut KinChunk::<W> {
+            lc: &mut bw.lc,
+            tip: &mut bw.ctip,
+            q,
+            qd,
+            a,
+        },
+    );
     let mut cz = [[0.0; W]; 3];
     if let Some(ft) = f_tip {
-        let (ty, tz) = (&bw.tip.col(0)[b0..b0 + W], &bw.tip.col(1)[b0..b0 + W]);
+        let (ty, tz) = (&bw.ctip[0], &bw.ctip[1]);
         let (f0, f1, f2) = (
             &col(ft, 0)[a..a + W],
             &col(ft, 1)[a..a + W],
@@ -146,11 +149,10 @@ fn chunk<const W: usize>(
     }
     let ab = chain.base_acc;
     let mut c = Chunk::<W> {
-        bw,
+        lc: &mut bw.lc,
         tau,
         qdd,
         a,
-        b0,
         cp: [[0.0; W]; 6],
         cz,
         ca: [[ab[0]; W], [ab[1]; W], [ab[2]; W]],
@@ -158,16 +160,82 @@ fn chunk<const W: usize>(
     aba_recursion(chain, locked, &mut c);
 }
 
-/// `W` lanes of a block: the link quantities and gains in the columns of a [`BatchWorkspace`]
-/// (rows `b0..b0 + W`), the carries `(P⁺, z⁺)` and `A` in arrays.
+const ZEROS: [f64; WIDTH] = [0.0; WIDTH];
+const ONES: [f64; WIDTH] = [1.0; WIDTH];
+
+/// Pass 1 of `W` lanes into the chunk's link buffers (the chunk instance of
+/// [`kin_recursion`], the arithmetic of the scalar `kin_pass`).
+struct KinChunk<'a, 'm, const W: usize> {
+    lc: &'a mut [LinkChunk],
+    tip: &'a mut [[f64; WIDTH]; 2],
+    q: MatRef<'m, f64>,
+    qd: MatRef<'m, f64>,
+    a: usize,
+}
+
+impl<const W: usize> KinLanes for KinChunk<'_, '_, W> {
+    #[inline(always)]
+    fn link<const PRI: bool>(&mut self, k: usize, kl: &KinLink) {
+        let a = self.a;
+        let qk = &col(self.q, k)[a..a + W];
+        let qdk = &col(self.qd, k)[a..a + W];
+        let (before, rest) = self.lc.split_at_mut(k);
+        let LinkChunk {
+            theta,
+            s,
+            c,
+            w,
+            dy,
+            dz,
+            hy,
+            hz,
+            cy,
+            cz,
+            ay,
+            az,
+            by,
+            bz,
+            ..
+        } = &mut rest[0];
+        let (thp, sp, cp, wp) = match before.last() {
+            Some(p) => (&p.theta, &p.s, &p.c, &p.w),
+            None => (&ZEROS, &ZEROS, &ONES, &ZEROS),
+        };
+        let (thp, sp, cp, wp) = (&thp[..W], &sp[..W], &cp[..W], &wp[..W]);
+        lanes_angles::<f64, PRI>([thp, sp, cp, qk], &mut theta[..W], &mut s[..W], &mut c[..W]);
+        lanes_kin::<f64, PRI>(
+            kl,
+            [sp, cp, &s[..W], &c[..W], wp, qk, qdk],
+            &mut dy[..W],
+            &mut dz[..W],
+            &mut hy[..W],
+            &mut hz[..W],
+            &mut cy[..W],
+            &mut cz[..W],
+            &mut w[..W],
+            &mut ay[..W],
+            &mut az[..W],
+            &mut by[..W],
+            &mut bz[..W],
+        );
+    }
+
+    #[inline(always)]
+    fn tip(&mut self, lp: [f64; 2]) {
+        let last = &self.lc[self.lc.len() - 1];
+        let [ty, tz] = &mut *self.tip;
+        lanes_tip(lp, &last.s[..W], &last.c[..W], &mut ty[..W], &mut tz[..W]);
+    }
+}
+
+/// `W` lanes: the link quantities and gains in the chunk's link buffers, the carries
+/// `(P⁺, z⁺)` and `A` in arrays.
 struct Chunk<'a, 'm, const W: usize> {
-    bw: &'a mut BatchWorkspace,
+    lc: &'a mut [LinkChunk],
     tau: Option<MatRef<'m, f64>>,
     qdd: MatMut<'m, f64>,
     /// first lane of the chunk in the call's matrices
     a: usize,
-    /// first row of the chunk in the workspace's columns
-    b0: usize,
     cp: [[f64; W]; 6],
     cz: [[f64; W]; 3],
     ca: [[f64; W]; 3],
@@ -176,27 +244,40 @@ struct Chunk<'a, 'm, const W: usize> {
 impl<const W: usize> AbaLanes for Chunk<'_, '_, W> {
     #[inline(always)]
     fn back<const K: u8>(&mut self, k: usize, j: f64, m: f64) {
-        let (bw, a, r) = (&mut *self.bw, self.a, self.b0..self.b0 + W);
+        let a = self.a;
         let tk = match self.tau {
             Some(t) => &col(t, k)[a..a + W],
-            None => &bw.zeros[..W],
+            None => &ZEROS[..W],
         };
+        let LinkChunk {
+            cy,
+            cz,
+            by,
+            bz,
+            ay,
+            az,
+            hy,
+            hz,
+            dy,
+            dz,
+            g0,
+            g1,
+            g2,
+            nu,
+            ..
+        } = &mut self.lc[k];
         let link = [
-            &bw.cy.col(k)[r.clone()],
-            &bw.cz.col(k)[r.clone()],
-            &bw.by.col(k)[r.clone()],
-            &bw.bz.col(k)[r.clone()],
-            &bw.ay.col(k)[r.clone()],
-            &bw.az.col(k)[r.clone()],
-            &bw.hy.col(k)[r.clone()],
-            &bw.hz.col(k)[r.clone()],
-            &bw.dy.col(k)[r.clone()],
-            &bw.dz.col(k)[r.clone()],
+            &cy[..W],
+            &cz[..W],
+            &by[..W],
+            &bz[..W],
+            &ay[..W],
+            &az[..W],
+            &hy[..W],
+            &hz[..W],
+            &dy[..W],
+            &dz[..W],
         ];
-        let g0 = &mut bw.g0.col_mut(k)[r.clone()];
-        let g1 = &mut bw.g1.col_mut(k)[r.clone()];
-        let g2 = &mut bw.g2.col_mut(k)[r.clone()];
-        let nu = &mut bw.nu.col_mut(k)[r];
         let [p0, p1, p2, p3, p4, p5] = &mut self.cp;
         let [z0, z1, z2] = &mut self.cz;
         lanes_back::<K>(
@@ -204,10 +285,10 @@ impl<const W: usize> AbaLanes for Chunk<'_, '_, W> {
             m,
             tk,
             link,
-            g0,
-            g1,
-            g2,
-            nu,
+            &mut g0[..W],
+            &mut g1[..W],
+            &mut g2[..W],
+            &mut nu[..W],
             p0,
             p1,
             p2,
@@ -223,25 +304,21 @@ impl<const W: usize> AbaLanes for Chunk<'_, '_, W> {
 
     #[inline(always)]
     fn fwd<const K: u8>(&mut self, k: usize) {
-        let (bw, a, r) = (&*self.bw, self.a, self.b0..self.b0 + W);
+        let a = self.a;
         let out = match self.qdd.rb_mut().col_mut(k).try_as_col_major_mut() {
             Some(c) => &mut c.as_slice_mut()[a..a + W],
             // unreachable: `batch_aba_view` checked the columns
             None => return,
         };
-        let gain = [
-            &bw.g0.col(k)[r.clone()],
-            &bw.g1.col(k)[r.clone()],
-            &bw.g2.col(k)[r.clone()],
-            &bw.nu.col(k)[r.clone()],
-        ];
+        let l = &self.lc[k];
+        let gain = [&l.g0[..W], &l.g1[..W], &l.g2[..W], &l.nu[..W]];
         let link = [
-            &bw.ay.col(k)[r.clone()],
-            &bw.az.col(k)[r.clone()],
-            &bw.hy.col(k)[r.clone()],
-            &bw.hz.col(k)[r.clone()],
-            &bw.dy.col(k)[r.clone()],
-            &bw.dz.col(k)[r],
+            &l.ay[..W],
+            &l.az[..W],
+            &l.hy[..W],
+            &l.hz[..W],
+            &l.dy[..W],
+            &l.dz[..W],
         ];
         let [a0, a1, a2] = &mut self.ca;
         lanes_fwd::<K>(gain, link, out, a0, a1, a2);
