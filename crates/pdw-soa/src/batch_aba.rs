@@ -90,15 +90,22 @@ pub fn batch_aba_view(
     pdw_simd::dispatch(
         #[inline(always)]
         || {
-            // 8 lanes at a time, pass 1 and the recursion per chunk in the chunk's link
-            // buffers and the carries in registers; the last lanes one at a time (each lane
-            // the same arithmetic)
-            let full = lanes - lanes % WIDTH;
-            for a in (0..full).step_by(WIDTH) {
+            // WIDTH lanes at a time (two AVX-512 registers per quantity: two independent
+            // dependency chains in flight), pass 1 and the recursion per chunk in the chunk's
+            // link buffers, the carries in registers; then 8 lanes, then one at a time (each
+            // lane the same arithmetic)
+            let mut a = 0;
+            while lanes - a >= WIDTH {
                 chunk::<WIDTH>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
+                a += WIDTH;
             }
-            for a in full..lanes {
+            if lanes - a >= HALF {
+                chunk::<HALF>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
+                a += HALF;
+            }
+            while a < lanes {
                 chunk::<1>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
+                a += 1;
             }
         },
     );
@@ -161,6 +168,8 @@ fn chunk<const W: usize>(
 }
 
 const ZEROS: [f64; WIDTH] = [0.0; WIDTH];
+/// The chunk after the last full one, when 8 or more lanes are left.
+const HALF: usize = WIDTH / 2;
 const ONES: [f64; WIDTH] = [1.0; WIDTH];
 
 /// Pass 1 of `W` lanes into the chunk's link buffers (the chunk instance of
