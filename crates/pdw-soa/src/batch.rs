@@ -1,9 +1,11 @@
 //! Batched (structure-of-arrays) evaluation: many independent states of one chain at once.
 //!
 //! Inputs and outputs are faer matrices of shape `(lanes × n)`, one column per joint, lanes
-//! contiguous in each column ([`faer::Mat::col_as_slice`]). The kernels process the lanes in
-//! blocks of at most [`BLOCK`] (so the per-link scratch stays in cache), and within a block loop
-//! over links outside and lanes inside, so that the inner loops vectorise. Each lane performs
+//! contiguous in each column ([`faer::Mat::col_as_slice`]). The RNEA and the kinematic pass
+//! process the lanes in blocks of at most [`BLOCK`] (so the per-link scratch stays in cache), and
+//! within a block loop over links outside and lanes inside, so that the inner loops vectorise;
+//! the articulated-body recursion takes 16 lanes at a time through all links (`WIDTH`,
+//! `LinkChunk`), its carries in registers. Each lane performs
 //! exactly the arithmetic of the scalar kernel (the same per-link step functions of
 //! [`crate::spatial`], the same sin/cos routine), so every lane equals the scalar result bit for
 //! bit. No allocation happens per call.

@@ -52,13 +52,13 @@ pub fn batch_aba(
 /// the scalar [`crate::pseudo_joint_dynamics`] does.
 ///
 /// - `q`, `qd`: `(lanes × n)` views with contiguous columns (e.g. column ranges of a state
-///   matrix `(lanes × 2n)`); any lane count (processed in blocks of the workspace's block size);
+///   matrix `(lanes × 2n)`); any lane count (processed 16 lanes at a time, then 8, then one by one);
 /// - `tau`: `(lanes × n)` applied torques or `None` for zero (a passive walker);
 /// - `f_tip`: optional `(lanes × 3)` tip force on the environment;
 /// - `locked`: mask of length `n` (the same joints locked in every lane) or `None`;
 /// - `qdd`: output `(lanes × n)`, exactly `0.0` at locked joints.
 ///
-/// Each lane equals the one-lane call bit for bit, whatever the lane count or block.
+/// Each lane equals the one-lane call bit for bit, whatever the lane count.
 #[allow(clippy::too_many_arguments)]
 pub fn batch_aba_view(
     chain: &Chain,
