@@ -47,9 +47,9 @@ pub fn aba(
 ///
 /// The one-lane instance of [`crate::batch_aba_view`] with `tau = None`, `f_tip = None` and
 /// the same mask (the same recursion over a [`Workspace`], hence the same bits per lane), for
-/// callers that evaluate one state at a time: the batched kernel's per-call set-up of column
-/// blocks costs several times this call at one lane. Unlike [`crate::pseudo_joint_dynamics`]
-/// it computes no locking torques and takes the mask as `n` booleans. No allocation.
+/// callers that evaluate one state at a time and hold it as a slice, not a matrix. Unlike
+/// [`crate::pseudo_joint_dynamics`] it computes no locking torques and takes the mask as `n`
+/// booleans. No allocation.
 ///
 /// - `q`, `qd`, `locked`, `qdd`: length `n`; `qdd` is exactly `0.0` at locked joints.
 pub fn aba_masked(

@@ -99,8 +99,6 @@ pub struct BatchWorkspace {
     /// the articulated-body recursion's pass 1 and gains for one chunk of [`WIDTH`] lanes,
     /// one entry per link (`batch_aba`)
     pub(crate) lc: Vec<LinkChunk>,
-    /// the tip lever of the chunk's lanes
-    pub(crate) ctip: [[f64; WIDTH]; 2],
 }
 
 /// Lanes of one chunk of the batched articulated-body recursion: 16 doubles, two AVX-512
@@ -166,7 +164,6 @@ impl BatchWorkspace {
             zeros: vec![0.0; b],
             ones: vec![1.0; b],
             lc: vec![LinkChunk::default(); n],
-            ctip: [[0.0; WIDTH]; 2],
         }
     }
     /// Lane count this workspace was sized for.

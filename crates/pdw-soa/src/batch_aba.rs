@@ -129,11 +129,12 @@ fn chunk<const W: usize>(
     qdd: MatMut<'_, f64>,
     a: usize,
 ) {
+    let mut tip = [[0.0; WIDTH]; 2];
     kin_recursion(
         chain,
         &mut KinChunk::<W> {
             lc: &mut bw.lc,
-            tip: &mut bw.ctip,
+            tip: &mut tip,
             q,
             qd,
             a,
@@ -141,7 +142,7 @@ fn chunk<const W: usize>(
     );
     let mut cz = [[0.0; W]; 3];
     if let Some(ft) = f_tip {
-        let (ty, tz) = (&bw.ctip[0], &bw.ctip[1]);
+        let [ty, tz] = &tip;
         let (f0, f1, f2) = (
             &col(ft, 0)[a..a + W],
             &col(ft, 1)[a..a + W],
@@ -167,9 +168,10 @@ fn chunk<const W: usize>(
     aba_recursion(chain, locked, &mut c);
 }
 
-const ZEROS: [f64; WIDTH] = [0.0; WIDTH];
 /// The chunk after the last full one, when 8 or more lanes are left.
 const HALF: usize = WIDTH / 2;
+/// The base values of pass 1's carries (`θ`, `sin θ`, `ω` before the first link; `cos θ`).
+const ZEROS: [f64; WIDTH] = [0.0; WIDTH];
 const ONES: [f64; WIDTH] = [1.0; WIDTH];
 
 /// Pass 1 of `W` lanes into the chunk's link buffers (the chunk instance of

@@ -1258,8 +1258,8 @@ impl HybridSystem for ChainWalker {
 
     /// One lane of [`HybridSystem::flow_batch`]: with point feet the one-lane instance of the
     /// same recursion ([`pdw_soa::aba_masked`] in the scalar workspace: the same bits, without
-    /// the batched kernel's per-call block set-up, which costs several times a one-lane call;
-    /// event location and dense output evaluate one lane at a time).
+    /// wrapping the state in matrix views and the batched call's shape checks; event location
+    /// and dense output evaluate one lane at a time).
     fn flow(&self, ws: &mut Scratch, mode: usize, x: &[f64], dx: &mut [f64]) {
         let n = self.n;
         let d = 2 * n;
