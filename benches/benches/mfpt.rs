@@ -209,7 +209,7 @@ fn chains(
         .zip(&w)
         .map(|(z, w)| (t.mean + t.sd * z, *w))
         .collect();
-    let sense = mid_stance::sweep_sense(walker, x0).expect("the gait leans back");
+    let sense = mid_stance::sweep_sense(walker, walk.kind(), x0).expect("the gait leans back");
     let first = mid_stance::first_mid_stance(walk, sense, x0)
         .expect("first mid-stance")
         .point

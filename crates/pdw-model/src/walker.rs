@@ -137,6 +137,24 @@ pub trait Walker: Section {
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         None
     }
+    /// `(index, sign)` of the state's one absolute angle, measured from the normal of the line
+    /// the stance foot stands on: the stance leg is along gravity's vertical where
+    /// `x[index] = sign·slope` (the mid-stance section of random terrain). Default:
+    /// [`terrain_frame`](Walker::terrain_frame)'s. A model may have this angle without
+    /// walking on random slopes: a round foot's angle is measured from its line as a point
+    /// foot's is, but a change of line is not a rotation about its contact point, so round feet
+    /// have this and no terrain frame (they walk on step heights, whose lines are parallel).
+    fn absolute_angle(&self) -> Option<(usize, f64)> {
+        self.terrain_frame()
+    }
+    /// Index of the angle between the legs whose zero is the swing foot passing the stance
+    /// foot (straight legs of equal length, one mode): from there on the next foothold's
+    /// height decides the heel strike, so the Markov chain of random step heights takes its
+    /// section there (pdw-limit's `mid_stance`). `None` (the default): no swing leg, or legs
+    /// that are not straight throughout the stride.
+    fn legs_together(&self) -> Option<usize> {
+        None
+    }
     /// [`HybridSystem::admissible`](pdw_hybrid::HybridSystem::admissible) of the same model
     /// on another slope: whether a crossing of guard `k` of `mode` at `x` counts for the model
     /// with its slope parameter set to `slope` (every other parameter its own). A guard that

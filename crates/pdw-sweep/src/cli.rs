@@ -482,8 +482,9 @@ pub struct MfptArgs {
     #[arg(long, default_value_t = 11, requires = "chain")]
     pub nodes: usize,
     /// With --chain: the section the chain's states lie on: `landing` (just after heel strike,
-    /// one mesh layer per terrain node) or `mid-stance` (the stance leg vertical, no layers:
-    /// the compass gait's chain at a fraction of the strides; one-mode models only).
+    /// one mesh layer per terrain node) or `mid-stance` (the stance leg vertical — on step
+    /// heights the legs together, where the next height starts to matter — no layers: the
+    /// compass gait's chain at a fraction of the strides; one-mode models only).
     #[arg(long, default_value = "landing", requires = "chain")]
     pub chain_section: String,
     /// With --chain: where the chain's nodes lie: `grid` (a regular grid over the box the

@@ -109,11 +109,18 @@
 //! from the slope normal, so the next step starts from the new stance foot with nothing
 //! shifted. After a strike onto `h` the straight trailing leg's foot is `h` above the new
 //! stance foot, so the lift of the model with `step_down = h` puts it there:
-//! `ψ = −acos(cos q₀ − h/L)` (behind), `q_m = ψ − q₀`, `L` the leg length
+//! `ψ = −acos(cos q₀ − h/ℓ)` (behind), `q_m = ψ − q₀`, `ℓ` the leg length
 //! ([`ChainWalker::trailing_leg_angle`]); at `h = 0` the level-ground lift and guards run
 //! unchanged, bit for bit. [`Walker::swing_clearance`] measures a swing foot ahead of the
-//! stance foot from the foothold's line when `h > 0` (a step down is not a scuff). Round feet
-//! and a height of a leg length or more are refused.
+//! stance foot from the foothold's line when `h > 0` (a step down is not a scuff).
+//!
+//! Round feet take steps the same way, because both lines are parallel: every arc centre
+//! stands `r` above the line its foot touches, so the swing arc's lowest point is `z + h` above
+//! the foothold's line with `z` the height of the swing arc centre over the stance arc centre
+//! (the level-ground guard's `z`); the impact's rows (the new contact point `r` below the swing
+//! arc centre at rest, the trailing contact released) have the same directions on either
+//! line; and the lift's `ℓ` is the length from the hip to the arc centre, `L − r` (the trailing
+//! arc centre is `h` above the new stance arc centre). A height of `ℓ` or more is refused.
 //!
 //! # Section
 //! Just after heel strike, every knee straight: `q = (s₀, 0…, −2s₀, 0…)`,
@@ -879,10 +886,13 @@ impl ImpactProblem {
 impl ChainWalker {
     /// The absolute angle `ψ` of the straight trailing leg just after a heel strike onto a
     /// foothold `h` below, when the new stance leg's angle is `q₀`: the trailing foot is `h`
-    /// above the new stance foot, `L cos q₀ − L cos ψ = h`, behind it: `ψ = −acos(cos q₀ − h/L)`
-    /// (module docs, "Step down"; the simplest walker's lift with leg length `L`).
+    /// above the new stance foot, `ℓ cos q₀ − ℓ cos ψ = h`, behind it: `ψ = −acos(cos q₀ − h/ℓ)`
+    /// (module docs, "Step down"; the simplest walker's lift). `ℓ` is the length from the hip
+    /// to the point that stays a fixed height above the ground: the foot (`ℓ = L`, the leg
+    /// length) for point feet, the foot's arc centre (`ℓ = L − r`) for round feet, whose arc
+    /// centres both stand `r` above their lines.
     pub fn trailing_leg_angle(&self, q0: f64) -> f64 {
-        let l = self.leg_length;
+        let l = self.leg_length - self.radius;
         -(q0.cos() - self.r.step_down / l).clamp(-1.0, 1.0).acos()
     }
 
@@ -1197,17 +1207,21 @@ impl ChainWalker {
     }
 }
 
-/// Refuses a step down the walker cannot take: round feet (their contact point rolls along
-/// the line, module docs "Step down") and a height of a leg length or more (the swing foot
-/// never reaches a foothold that far below, nor the trailing foot one that far above).
+/// Refuses a step down the walker cannot take: a height of the hip's reach or more — a leg
+/// length for point feet, the length from the hip to the foot's arc centre (`L − r`) for round
+/// feet (module docs, "Step down": the swing foot never reaches a foothold that far below, nor
+/// the trailing foot one that far above).
 fn check_step_down(spec: &WalkerSpec, r: &Resolved) -> Result<(), WalkerError> {
     let h = r.step_down;
     if h == 0.0 {
         return Ok(());
     }
-    let leg: f64 = r.segments.iter().map(|s| s[0]).sum();
-    let rule = if r.foot_radius > 0.0 {
-        "0 with round feet (foot_radius > 0): step heights are defined for point feet".to_string()
+    let leg: f64 = r.segments.iter().map(|s| s[0]).sum::<f64>() - r.foot_radius;
+    let rule = if h.abs() >= leg && r.foot_radius > 0.0 {
+        format!(
+            "a height within (-{leg}, {leg}), less than the length from the hip to the foot's \
+             arc centre (leg length − foot_radius)"
+        )
     } else if h.abs() >= leg {
         format!("a height within (-{leg}, {leg}), less than one leg length")
     } else {
@@ -1825,9 +1839,19 @@ impl Walker for ChainWalker {
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         (self.radius == 0.0).then_some((0, 1.0))
     }
-    /// Point feet: round feet are refused on step heights (module docs, "Step down").
+    /// `q₀`, from the slope normal for point and round feet alike.
+    fn absolute_angle(&self) -> Option<(usize, f64)> {
+        Some((0, 1.0))
+    }
+    /// The hip angle `q_m` of a walker whose knees stay locked (one mode): both legs straight
+    /// and equally long, so the feet (or the arc centres, `r` above each foot) are level at
+    /// `q_m = 0`.
+    fn legs_together(&self) -> Option<usize> {
+        (self.masks.len() == 1).then_some(self.m)
+    }
+    /// Point and round feet (module docs, "Step down").
     fn step_height(&self) -> Option<&dyn StepHeight> {
-        (self.radius == 0.0).then_some(self as &dyn StepHeight)
+        Some(self as &dyn StepHeight)
     }
     /// `stance_reverses` counts while `q₀ > slope` ([`ChainWalker::admissible_on`]).
     fn admissible_on_slope(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {

@@ -788,6 +788,11 @@ impl Walker for Simplest {
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         Some((0, 1.0))
     }
+    /// `φ = θ − ψ`: the swing foot passes the stance foot at `φ = 0` (module docs, "Step down":
+    /// ahead means `sin ψ − sin θ > 0`).
+    fn legs_together(&self) -> Option<usize> {
+        Some(2)
+    }
     /// Its strikes onto a step down just after mid-stance can last a few hundredths of a time
     /// unit; the event detection finds them at the extremum of the guard's cubic
     /// (`pdw_hybrid::event`), so the lockstep walk and the walk one walker at a time agree.

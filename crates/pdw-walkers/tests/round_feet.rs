@@ -446,3 +446,83 @@ fn a_radius_off_the_lowest_segment_is_refused_naming_the_field() {
         "{e}"
     );
 }
+
+/// Round feet on a step (`step_down = h`), checked against plane geometry written here: every
+/// arc centre stands `r` above the line its foot touches, so with straight legs of length `L`
+/// the hip-to-centre length is `ℓ = L − r`, and (stance centre at the origin, angles from the
+/// slope normal, positive with the foot downhill of the hip) the hip is at
+/// `(−ℓ sin q₀, ℓ cos q₀)` and the other centre at the hip plus `(ℓ sin ψ, −ℓ cos ψ)`.
+/// - The lift just after a strike onto `h` puts the trailing foot behind, touching the line
+///   `h` above the new stance foot's: its centre `h` above the stance centre.
+/// - Before the strike, a swing foot ahead whose arc touches the foothold `h` below (its centre
+///   `h` below the stance centre) is on the heel-strike guard's zero, and the strike is
+///   admissible; raised by δ it is δ above the zero.
+/// - A step of `ℓ` or more is refused, naming the rule; the point foot keeps its rule.
+#[test]
+fn round_feet_take_steps_where_plane_geometry_puts_them() {
+    let l_leg = 1.0; // the compass preset: a + b
+    for r in [0.0, 0.1] {
+        let base = with_radius(&presets::compass(&[]).unwrap(), r);
+        let ell = l_leg - r;
+        for h in [0.05, -0.05, -0.2] {
+            let values: Vec<f64> = base
+                .param_values()
+                .into_iter()
+                .map(|(n, v)| if n == "step_down" { h } else { v })
+                .collect();
+            let w = ChainWalker::new(base.spec().clone(), &values).unwrap();
+            // just after the strike: the trailing centre h above the stance centre, behind it
+            let q0 = 0.7;
+            let mut x = vec![0.0; w.dim()];
+            pdw_hybrid::Section::lift(&w, &[q0, -1.0, 0.7], &mut x);
+            let psi = x[0] + x[1];
+            let rel = [
+                -ell * q0.sin() + ell * psi.sin(),
+                ell * q0.cos() - ell * psi.cos(),
+            ];
+            assert!((rel[1] - h).abs() < 1e-14, "r {r}, h {h}: {rel:?}");
+            assert!(rel[0] < 0.0, "r {r}, h {h}: the trailing foot is behind");
+            let model = w.swing_foot(&x);
+            assert!(
+                (model[0] - rel[0]).abs() < 1e-14 && (model[1] - rel[1]).abs() < 1e-14,
+                "r {r}: {model:?} against {rel:?}"
+            );
+            // before the strike: the swing arc on the foothold h below, ahead
+            let q0: f64 = -0.4;
+            let psi = (q0.cos() + h / ell).acos();
+            let mut x = vec![0.0; w.dim()];
+            x[0] = q0;
+            x[1] = psi - q0;
+            let mut ws = Scratch::new();
+            let g = w.guard(&mut ws, 0, 0, &x);
+            assert!(g.abs() < 1e-14, "r {r}, h {h}: guard {g}");
+            assert!(w.admissible(0, 0, &x), "r {r}, h {h}");
+            let d = 1e-3;
+            let psi = (q0.cos() + (h - d) / ell).acos();
+            x[1] = psi - q0;
+            let g = w.guard(&mut ws, 0, 0, &x);
+            assert!(
+                (g - d).abs() < 1e-12,
+                "r {r}, h {h}: raised by {d}, guard {g}"
+            );
+        }
+        let values: Vec<f64> = base
+            .param_values()
+            .into_iter()
+            .map(|(n, v)| if n == "step_down" { ell } else { v })
+            .collect();
+        let e = match ChainWalker::new(base.spec().clone(), &values) {
+            Ok(_) => panic!("r {r}: a step of the hip's reach is taken"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("step_down"), "{e}");
+        assert!(
+            e.contains(if r > 0.0 {
+                "arc centre"
+            } else {
+                "one leg length"
+            }),
+            "{e}"
+        );
+    }
+}

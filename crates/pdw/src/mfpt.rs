@@ -593,7 +593,7 @@ pub fn mid_stance_points(
 ) -> Result<(Vec<Vec<f64>>, Frame, SectionBox), LimitError> {
     let at = model_at_param(m, plan.terrain.kind.param());
     let walk = walk_of(&at, plan)?;
-    let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+    let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), walk.kind(), x0)?;
     let pts = mid_stance::visited(&walk, &plan.terrain, x0, sense, walkers, steps, pool)?;
     let Some(first) = pts.first() else {
         return Err(LimitError::Model {
@@ -703,7 +703,8 @@ pub fn chain_box(
             pool,
         )?,
         ChainSection::MidStance => {
-            let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+            let sense =
+                mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), walk.kind(), x0)?;
             pdw_limit::markov::widen_box(&frame, visited, per_axis, HULL_PASSES, &|mesh| {
                 mid_stance::landings(&walk, &slopes, mesh, sense, pool)
             })?
@@ -753,7 +754,8 @@ pub fn chain_in(
     let tr = match chain.section {
         ChainSection::Landing => markov::transitions(&walk, &slopes, &mesh, x0, pool)?,
         ChainSection::MidStance => {
-            let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+            let sense =
+                mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), walk.kind(), x0)?;
             mid_stance::transitions(&walk, &slopes, &mesh, x0, sense, pool)?
         }
     };
@@ -949,7 +951,7 @@ pub fn cloud_pair(
 ) -> Result<ChainPair, LimitError> {
     let at = model_at_param(m, plan.terrain.kind.param());
     let walk = walk_of(&at, plan)?;
-    let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), x0)?;
+    let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), walk.kind(), x0)?;
     let (pts, frame, bounds) = mid_stance_points(m, plan, x0, (CLOUD_WALKERS, CLOUD_STEPS), pool)?;
     let slopes = terrain_nodes(plan, chain.nodes);
     let run = |n: usize| -> Result<(ChainResult, CloudStats), LimitError> {

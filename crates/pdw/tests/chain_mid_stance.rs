@@ -52,7 +52,7 @@ fn the_gaits_mid_stance_is_a_fixed_point_of_the_mid_stance_map() {
         let p = plan(TerrainKind::Slope, slope, 0.0, 1);
         let at = mfpt::model_at_param(&m, "slope");
         let walk: SlopeWalk = mfpt::walk_of(&at, &p).unwrap();
-        let sense = mid_stance::sweep_sense(m.walker.as_ref(), &x0).unwrap();
+        let sense = mid_stance::sweep_sense(m.walker.as_ref(), TerrainKind::Slope, &x0).unwrap();
         let first = mid_stance::first_mid_stance(&walk, sense, &x0).unwrap();
         assert_eq!(first.strikes, 0.0, "{name}");
         let point = first.point.unwrap();
@@ -191,9 +191,9 @@ fn cloud_agrees_with_the_walkers(m: &pdw::BuiltModel, p: &MfptPlan, mesh: usize,
     let (x0, _) = mfpt::start(m).unwrap();
     let (_, mc) = mfpt::run(m, p, &x0, &pool, &|_| {}).unwrap();
     assert_eq!(mc.censored, 0, "{mc:?}");
-    let at = mfpt::model_at_param(m, "slope");
+    let at = mfpt::model_at_param(m, p.terrain.kind.param());
     let walk = mfpt::walk_of(&at, p).unwrap();
-    let sense = mid_stance::sweep_sense(m.walker.as_ref(), &x0).unwrap();
+    let sense = mid_stance::sweep_sense(m.walker.as_ref(), p.terrain.kind, &x0).unwrap();
     let (visited, _, _) =
         mfpt::mid_stance_points(m, p, &x0, (mfpt::CLOUD_WALKERS, mfpt::CLOUD_STEPS), &pool)
             .unwrap();
@@ -260,5 +260,30 @@ fn on_a_cloud_the_compass_chain_agrees_with_the_walkers() {
 fn on_a_cloud_the_simplest_walkers_chain_agrees_with_the_walkers() {
     let m = pdw::build("simplest", &[("slope".to_string(), 0.009)]).unwrap();
     let p = plan(TerrainKind::Slope, 0.009, 0.04f64.to_radians(), 20_000);
+    cloud_agrees_with_the_walkers(&m, &p, 120, 20);
+}
+
+/// Where the swing foot passes the stance foot before the stance leg is vertical (the compass
+/// gait: legs together about 0.04 s earlier), the next foothold's height decides from there on
+/// whether the swing foot strikes: a section at the vertical walked that stretch on the last
+/// height and missed the walkers (16.4 steps against 13.38 ± 0.22). On step heights the section
+/// is the legs together ([`mid_stance::plane`]), and the chain on a cloud at the spacing of a
+/// 120-node grid agrees with 2000 walkers (13.35; at the spacing of 60, 11.4: the legs-together
+/// set needs the finer cloud).
+#[test]
+fn on_step_heights_the_legs_together_chain_agrees_with_the_walkers() {
+    let m = pdw::build("compass", &[]).unwrap();
+    let x0 = mfpt::start(&m).unwrap().0;
+    assert_eq!(
+        mid_stance::plane(m.walker.as_ref(), TerrainKind::StepDown).unwrap(),
+        (1, 0.0),
+        "the hip angle at 0"
+    );
+    assert_eq!(
+        mid_stance::sweep_sense(m.walker.as_ref(), TerrainKind::StepDown, &x0).unwrap(),
+        1.0,
+        "the hip angle rises from the trailing leg's"
+    );
+    let p = plan(TerrainKind::StepDown, 0.0, 0.004, 2000);
     cloud_agrees_with_the_walkers(&m, &p, 120, 20);
 }

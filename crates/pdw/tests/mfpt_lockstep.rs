@@ -326,3 +326,53 @@ fn step_heights_run_in_lockstep_and_the_walk_refuses_a_terrain_of_the_other_kind
     let e = e.unwrap_err().to_string();
     assert!(e.contains("slope") && e.contains("step_down"), "{e}");
 }
+
+/// Round feet on random step heights: the compass of Goswami et al. with arc feet of a tenth
+/// of its leg. The lockstep walk (the mean model's guards, admissibility and impact at each
+/// lane's height) against the scalar walk (the model rebuilt with `step_down` at each drawn
+/// height), as for the point-foot models above.
+#[test]
+fn on_step_heights_round_feet_walk_in_lockstep_as_in_the_scalar_walk() {
+    let text = pdw_walkers::registry::preset_text("compass").unwrap();
+    let round = text.replacen("[parameters]", "foot_radius = 0.1\n\n[parameters]", 1);
+    let dir = std::env::temp_dir().join(format!("pdw-round-lockstep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("round.toml");
+    std::fs::write(&path, round).unwrap();
+    let m = pdw::build(path.to_str().unwrap(), &[]).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let (walkers, steps) = (1000, 200);
+    let scalar = on_heights(&m, 0.0, 0.004, walkers, steps, 2, None);
+    let lock = on_heights(
+        &m,
+        0.0,
+        0.004,
+        walkers,
+        steps,
+        2,
+        Some(Lockstep::for_pool(walkers, 2)),
+    );
+    let (n_diff, _) = differences(&scalar, &lock);
+    let (es, el) = (
+        terrain::estimate(&scalar, steps),
+        terrain::estimate(&lock, steps),
+    );
+    println!(
+        "round compass on heights: {n_diff} of {walkers} fates differ; MFPT scalar {:.4} ± {:.4}, \
+         lockstep {:.4} ± {:.4}",
+        es.mfpt, es.stderr, el.mfpt, el.stderr
+    );
+    assert!(es.falls > walkers / 2, "the terrain makes walkers fall");
+    assert!(
+        n_diff * 100 <= walkers,
+        "{n_diff} of {walkers} fates differ"
+    );
+    assert!(
+        (es.mfpt - el.mfpt).abs() < es.stderr.min(el.stderr),
+        "MFPT {} ± {} against {} ± {}",
+        es.mfpt,
+        es.stderr,
+        el.mfpt,
+        el.stderr
+    );
+}
