@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -568,6 +569,18 @@ def test_mfpt_on_step_heights():
     assert rc["falls"] + rc["censored"] == 20
     with pytest.raises(ValueError, match="step_down"):
         pdw.mfpt("compass", terrain="step-down", sd=0.2)
+
+
+def test_round_feet_walk_on_step_heights_not_on_slopes(tmp_path):
+    # the compass preset (models/compass.toml) with arc feet of a tenth of its leg
+    spec = tmp_path / "round.toml"
+    text = (Path(__file__).resolve().parents[2] / "models" / "compass.toml").read_text()
+    spec.write_text(text.replace("[parameters]", "foot_radius = 0.1\n\n[parameters]", 1))
+    r = pdw.mfpt(str(spec), terrain="step-down", sd=0.004, walkers=300, max_steps=2000, seed=3)
+    assert r["falls"] + r["censored"] == 300 and r["falls"] > 150
+    assert r["mfpt"] == r["total_steps"] / r["falls"]
+    with pytest.raises(ValueError, match="foot_radius"):
+        pdw.mfpt(str(spec), sd="0.2deg", walkers=2)
 
 
 def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():

@@ -89,6 +89,9 @@ fn the_mfpt_file_holds_the_library_estimate_with_units_and_provenance() {
     );
 }
 
+/// Round feet walk on random step heights, not on random slopes (exit 2 naming `foot_radius`);
+/// on step heights their chain at mid-stance lies at the legs together, and the file says so;
+/// a negative `--sd` and an unknown terrain are refused.
 #[test]
 fn mfpt_refuses_round_feet_and_a_negative_sd_clearly() {
     let o = run(&["mfpt", "--sd=-1deg", "--walkers", "2"]);
@@ -97,6 +100,47 @@ fn mfpt_refuses_round_feet_and_a_negative_sd_clearly() {
     let o = run(&["mfpt", "--sd", "1deg", "--terrain", "height"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--terrain"), "{}", stderr(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let text = pdw_walkers::registry::preset_text("compass").unwrap();
+    let spec = dir.path().join("round.toml");
+    std::fs::write(
+        &spec,
+        text.replacen("[parameters]", "foot_radius = 0.1\n\n[parameters]", 1),
+    )
+    .unwrap();
+    let spec = spec.to_str().unwrap();
+    let o = run(&["mfpt", "--model", spec, "--sd", "0.2deg", "--walkers", "2"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("foot_radius"), "{}", stderr(&o));
+    let out = dir.path().join("steps.h5");
+    let o = run(&[
+        "mfpt",
+        "--model",
+        spec,
+        "--terrain",
+        "step-down",
+        "--sd",
+        "0.004",
+        "--walkers",
+        "200",
+        "--seed",
+        "1",
+        "--chain",
+        "--chain-section",
+        "mid-stance",
+        "--mesh",
+        "6",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let d = pdw_store::read_mfpt(&out).unwrap();
+    assert_eq!(
+        d.method,
+        "monte carlo + markov chain on the mid-stance section at the legs together"
+    );
+    assert!(d.falls > 100, "{}", d.falls);
 }
 
 /// `mfpt --sd A:B:N` over the rimless wheel: each value of the curve is exactly the single run

@@ -84,9 +84,9 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let (chain, method) = match chain {
         Some(c) => (
             run_chain(&m, &plan, &c, &x0, &pool)?,
-            method_of(Some((c.section, c.layout))),
+            method_of(Some((c.section, c.layout)), legs_together(&m, &plan)),
         ),
-        None => (Vec::new(), method_of(None)),
+        None => (Vec::new(), method_of(None, false)),
     };
     if let (Some(out), Some(_claim)) = (&a.out, claim) {
         write(out, &m, &plan, &section, &est, secs, (chain, method))?;
@@ -244,19 +244,33 @@ pub(super) const ESTIMATOR: &str =
                          constant fall probability per step (censored geometric first-passage \
                          time); stderr = sqrt(S (S + F)) / F^1.5 from the Fisher information";
 
-/// The file's `method`: the Monte Carlo, and the chain on its section where it ran.
-fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>) -> &'static str {
+/// The file's `method`: the Monte Carlo, and the chain on its section where it ran; `legs`:
+/// the mid-stance section is the legs together (step heights on a model with legs,
+/// `pdw_limit::mid_stance::plane`).
+fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>, legs: bool) -> &'static str {
     use mfpt::{ChainMesh, ChainSection};
-    match chain {
-        None => "monte carlo",
-        Some((ChainSection::Landing, _)) => "monte carlo + markov chain",
-        Some((ChainSection::MidStance, ChainMesh::Grid)) => {
+    match (chain, legs) {
+        (None, _) => "monte carlo",
+        (Some((ChainSection::Landing, _)), _) => "monte carlo + markov chain",
+        (Some((ChainSection::MidStance, ChainMesh::Grid)), false) => {
             "monte carlo + markov chain on the mid-stance section"
         }
-        Some((ChainSection::MidStance, ChainMesh::Cloud)) => {
+        (Some((ChainSection::MidStance, ChainMesh::Cloud)), false) => {
             "monte carlo + markov chain on a cloud of the mid-stance section"
         }
+        (Some((ChainSection::MidStance, ChainMesh::Grid)), true) => {
+            "monte carlo + markov chain on the mid-stance section at the legs together"
+        }
+        (Some((ChainSection::MidStance, ChainMesh::Cloud)), true) => {
+            "monte carlo + markov chain on a cloud of the mid-stance section at the legs together"
+        }
     }
+}
+
+/// Whether the chain's mid-stance section is the legs together for `m` on `plan`'s terrain.
+fn legs_together(m: &BuiltModel, plan: &mfpt::MfptPlan) -> bool {
+    plan.terrain.kind == pdw_limit::terrain::TerrainKind::StepDown
+        && m.walker.legs_together().is_some()
 }
 
 /// Writes the HDF5 file (with provenance and units) and the survival curve's PNG next to it.
@@ -491,11 +505,16 @@ fn run_cloud(
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<Vec<(String, f64)>> {
     crate::outln!(
-        "Markov chain: {} {} nodes of the terrain, mid-stance section, on a cloud: the states \
+        "Markov chain: {} {} nodes of the terrain, mid-stance section{}, on a cloud: the states \
          the first {} walkers visit (at most {} transitions each) thinned to the spacing of \
          mesh {} and {}, closed under their landings (at most {} passes)",
         c.nodes,
         mfpt::quadrature_name(&plan.terrain.dist),
+        if legs_together(m, plan) {
+            " at the legs together (step heights: the next height matters from there)"
+        } else {
+            ""
+        },
         mfpt::CLOUD_WALKERS,
         mfpt::CLOUD_STEPS,
         c.mesh,
