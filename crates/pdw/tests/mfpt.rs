@@ -253,21 +253,30 @@ fn the_estimator_recovers_a_known_geometric_mfpt() {
     );
 }
 
-#[test]
-fn round_feet_and_bad_requests_are_refused_with_clear_messages() {
+/// The compass preset with round feet of radius 0.1 (a tenth of its leg), built from a spec
+/// file written for it.
+pub fn round_compass() -> pdw::BuiltModel {
     let text = pdw_walkers::registry::preset_text("compass").unwrap();
     let round = text.replacen("[parameters]", "foot_radius = 0.1\n\n[parameters]", 1);
-    let dir = std::env::temp_dir().join(format!("pdw-mfpt-{}", std::process::id()));
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("pdw-round-{}-{k}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("round.toml");
     std::fs::write(&path, round).unwrap();
     let m = pdw::build(path.to_str().unwrap(), &[]).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    m
+}
+
+#[test]
+fn round_feet_and_bad_requests_are_refused_with_clear_messages() {
+    let m = round_compass();
     let e = mfpt::check_model(&m).unwrap_err().to_string();
     assert!(e.contains("point feet") && e.contains("foot_radius"), "{e}");
     let at = mfpt::model_at(&m);
     let walk = SlopeWalk::new(&at, 0.05, mfpt::default_integrator());
     assert!(matches!(walk, Err(LimitError::Model { .. })));
-    std::fs::remove_dir_all(&dir).ok();
     assert!(mfpt::parse_sd("-1deg", &FLAGS)
         .unwrap_err()
         .0

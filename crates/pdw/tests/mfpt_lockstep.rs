@@ -233,50 +233,63 @@ fn on_step_heights_the_lockstep_walk_agrees_with_the_scalar_walk() {
     for (name, slope, mean, sd, walkers, steps) in
         HEIGHT_CASES.into_iter().chain(HEIGHT_AGREEMENT_EXTRA)
     {
-        let m = model(name, slope);
-        let scalar = on_heights(&m, mean, sd, walkers, steps, 2, None);
-        let lock = on_heights(
-            &m,
-            mean,
-            sd,
-            walkers,
-            steps,
-            2,
-            Some(Lockstep::for_pool(walkers, 2)),
-        );
-        let (n_diff, max_steps_diff) = differences(&scalar, &lock);
-        let (es, el) = (
-            terrain::estimate(&scalar, steps),
-            terrain::estimate(&lock, steps),
-        );
-        println!(
-            "{name} on heights: {n_diff} of {walkers} fates differ (largest step difference \
-             {max_steps_diff}); MFPT scalar {:.4} ± {:.4}, lockstep {:.4} ± {:.4}; falls {} / {}; \
-             kinds {:?} / {:?}",
-            es.mfpt, es.stderr, el.mfpt, el.stderr, es.falls, el.falls, es.failures, el.failures
-        );
-        assert!(
-            es.falls > walkers / 10,
-            "{name}: the terrain makes walkers fall"
-        );
-        assert!(
-            n_diff * 100 <= walkers,
-            "{name}: {n_diff} of {walkers} fates differ"
-        );
-        assert!(
-            (es.mfpt - el.mfpt).abs() < es.stderr.min(el.stderr),
-            "{name}: MFPT {} ± {} against {} ± {}",
-            es.mfpt,
-            es.stderr,
-            el.mfpt,
-            el.stderr
-        );
-        // the same kinds of fall
-        let kinds = |e: &terrain::MfptEstimate| -> Vec<String> {
-            e.failures.iter().map(|f| f.0.clone()).collect()
-        };
-        assert_eq!(kinds(&es), kinds(&el), "{name}: fall kinds");
+        heights_agree(name, &model(name, slope), mean, sd, walkers, steps);
     }
+}
+
+/// The scalar and the lockstep walk of `m` on random step heights: at most 1 % of the fates
+/// differ, the MFPTs within the smaller standard error, the same kinds of fall, and the
+/// terrain makes more than a tenth of the walkers fall.
+fn heights_agree(
+    name: &str,
+    m: &pdw::BuiltModel,
+    mean: f64,
+    sd: f64,
+    walkers: usize,
+    steps: usize,
+) {
+    let scalar = on_heights(m, mean, sd, walkers, steps, 2, None);
+    let lock = on_heights(
+        m,
+        mean,
+        sd,
+        walkers,
+        steps,
+        2,
+        Some(Lockstep::for_pool(walkers, 2)),
+    );
+    let (n_diff, max_steps_diff) = differences(&scalar, &lock);
+    let (es, el) = (
+        terrain::estimate(&scalar, steps),
+        terrain::estimate(&lock, steps),
+    );
+    println!(
+        "{name} on heights: {n_diff} of {walkers} fates differ (largest step difference \
+         {max_steps_diff}); MFPT scalar {:.4} ± {:.4}, lockstep {:.4} ± {:.4}; falls {} / {}; \
+         kinds {:?} / {:?}",
+        es.mfpt, es.stderr, el.mfpt, el.stderr, es.falls, el.falls, es.failures, el.failures
+    );
+    assert!(
+        es.falls > walkers / 10,
+        "{name}: the terrain makes walkers fall"
+    );
+    assert!(
+        n_diff * 100 <= walkers,
+        "{name}: {n_diff} of {walkers} fates differ"
+    );
+    assert!(
+        (es.mfpt - el.mfpt).abs() < es.stderr.min(el.stderr),
+        "{name}: MFPT {} ± {} against {} ± {}",
+        es.mfpt,
+        es.stderr,
+        el.mfpt,
+        el.stderr
+    );
+    // the same kinds of fall
+    let kinds = |e: &terrain::MfptEstimate| -> Vec<String> {
+        e.failures.iter().map(|f| f.0.clone()).collect()
+    };
+    assert_eq!(kinds(&es), kinds(&el), "{name}: fall kinds");
 }
 
 #[test]
@@ -333,46 +346,6 @@ fn step_heights_run_in_lockstep_and_the_walk_refuses_a_terrain_of_the_other_kind
 /// height), as for the point-foot models above.
 #[test]
 fn on_step_heights_round_feet_walk_in_lockstep_as_in_the_scalar_walk() {
-    let text = pdw_walkers::registry::preset_text("compass").unwrap();
-    let round = text.replacen("[parameters]", "foot_radius = 0.1\n\n[parameters]", 1);
-    let dir = std::env::temp_dir().join(format!("pdw-round-lockstep-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("round.toml");
-    std::fs::write(&path, round).unwrap();
-    let m = pdw::build(path.to_str().unwrap(), &[]).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
-    let (walkers, steps) = (1000, 200);
-    let scalar = on_heights(&m, 0.0, 0.004, walkers, steps, 2, None);
-    let lock = on_heights(
-        &m,
-        0.0,
-        0.004,
-        walkers,
-        steps,
-        2,
-        Some(Lockstep::for_pool(walkers, 2)),
-    );
-    let (n_diff, _) = differences(&scalar, &lock);
-    let (es, el) = (
-        terrain::estimate(&scalar, steps),
-        terrain::estimate(&lock, steps),
-    );
-    println!(
-        "round compass on heights: {n_diff} of {walkers} fates differ; MFPT scalar {:.4} ± {:.4}, \
-         lockstep {:.4} ± {:.4}",
-        es.mfpt, es.stderr, el.mfpt, el.stderr
-    );
-    assert!(es.falls > walkers / 2, "the terrain makes walkers fall");
-    assert!(
-        n_diff * 100 <= walkers,
-        "{n_diff} of {walkers} fates differ"
-    );
-    assert!(
-        (es.mfpt - el.mfpt).abs() < es.stderr.min(el.stderr),
-        "MFPT {} ± {} against {} ± {}",
-        es.mfpt,
-        es.stderr,
-        el.mfpt,
-        el.stderr
-    );
+    let m = crate::mfpt::round_compass();
+    heights_agree("compass with round feet", &m, 0.0, 0.004, 1000, 200);
 }
