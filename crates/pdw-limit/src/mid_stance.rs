@@ -28,8 +28,12 @@
 //! Between a heel strike and the next mid-stance the walk of [`crate::terrain`] already moves in
 //! the frame of the next line; here it stays in the frame of the line just landed on. Only
 //! guards that measure the walker against the line could tell the two apart in that half
-//! stride: the heel strike (admissible with the swing foot ahead, which it is not before
-//! mid-stance) and the hip reaching the line (a fall either way). The chain walkers' and the
+//! stride: the heel strike and the hip reaching the line (a fall either way). On slopes the
+//! heel strike is not admissible before mid-stance: a chain walker's needs the heel-strike
+//! factor `|2θ_s + q_m| < |q_m|` (false with the legs together), the simplest walker's `θ < 0`
+//! (past its vertical `θ = γ`). The swing foot alone is already ahead before mid-stance in the
+//! compass gait and the simplest walker — which is why step heights, whose heel strike needs no
+//! more than that, take another section (below). The chain walkers' and the
 //! rimless wheel's other falls are measured from gravity. The tests compare the chain with the
 //! Monte Carlo walk that has no such assumption.
 //!
