@@ -4,7 +4,7 @@
 //! provenance and `coordinates`); a shard reads as its part (rows it does not own are
 //! `not_computed`). The run is rebuilt the way `pdw-sweep basin` builds it: the model by name
 //! with the file's parameters ([`pdw::build`]), the integrator from the provenance's
-//! `integrator` object through [`pdw::integrator`] on the basin's default, the stride budget,
+//! `integrator` object through [`pdw::integrator()`] on the basin's default, the stride budget,
 //! the axes and the fixed coordinates from the header, then the same [`BasinPlan`], gait search
 //! and attractor discovery. Discovery seeds are fixed, so the attractors and the legend come
 //! out as the file's; [`rebuild`] checks that (and the grid values, bit for bit) and refuses a
@@ -99,7 +99,7 @@ pub fn model(h: &BasinHeader, extra: &[(String, f64)]) -> Result<BuiltModel, Api
 }
 
 /// The cells' integrator from the provenance's `integrator` object, through the CLI's route
-/// ([`pdw::integrator`] on [`BasinOptions::default_integrator`]).
+/// ([`pdw::integrator()`] on [`BasinOptions::default_integrator`]).
 pub fn integrator(options: &serde_json::Value) -> Result<pdw_hybrid::Options, ApiError> {
     let j = &options["integrator"];
     let method = j["method"].as_str().ok_or_else(|| {

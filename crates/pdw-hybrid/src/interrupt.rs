@@ -3,7 +3,7 @@
 //! Computation polls one flag instead of threading a token through every layer. Once
 //! [`request`] has been called:
 //! - [`run_scalar_with`](crate::run_scalar_with), [`run_batch`](crate::run_batch) and
-//!   [`run_batch_par`](crate::run_batch_par) return [`HybridError::Interrupted`] at their next
+//!   [`run_batch_par`](crate::run_batch_par) return [`HybridError::Interrupted`](crate::HybridError::Interrupted) at their next
 //!   integration call or lockstep step (every lane of a batch steps at least once per loop);
 //! - an [`Integrator`](crate::Integrator) call in progress ends within 1024 step attempts as if
 //!   its step budget had run out ([`StopReason::MaxSteps`](crate::StopReason::MaxSteps)), so a

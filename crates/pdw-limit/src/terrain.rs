@@ -463,12 +463,12 @@ pub fn monte_carlo_scalar(
 }
 
 /// The walk in closed form ([`Walker::closed_stride`]): each walker one stride after another
-/// on one thread, each stride the model's [`ClosedStride::stride_on`] on the ground of its
+/// on one thread, each stride the model's [`pdw_model::ClosedStride::stride_on`] on the ground of its
 /// draw, between the shifts of [`SlopeWalk::stride`] (module docs, "Convention"); a stride
 /// whose start the closed form does not cover ([`ClosedEnd::Outside`]) is integrated
 /// ([`SlopeWalk::stride`]). No tolerance, so it differs from the integrated walks only where
 /// a stride lands within their tolerance of a fall (or creeps past the stride time budget,
-/// [`ClosedStride`]). Walkers in walker order, identical for any thread count; `progress`
+/// [`pdw_model::ClosedStride`]). Walkers in walker order, identical for any thread count; `progress`
 /// gets the number of walkers done. [`LimitError::Model`] when the model has no closed form,
 /// or for a step height outside the model's range (as [`monte_carlo`]).
 pub fn monte_carlo_closed_form(

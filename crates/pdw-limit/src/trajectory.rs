@@ -1,7 +1,7 @@
 //! Trajectories: the time series of a walk of `N` steps from one initial state.
 //!
 //! A step runs from the post-impact state on the Poincaré section to the next firing of the
-//! section reset ([`Section::section_guard`]), through every intermediate reset (a knee strike),
+//! section reset ([`pdw_hybrid::Section::section_guard`]), through every intermediate reset (a knee strike),
 //! exactly as one application of the stride map ([`crate::StrideMap`]) does. Along the way
 //! [`simulate`] records, per sample,
 //!
@@ -133,7 +133,7 @@ pub struct TrajectoryEvent {
     /// Step during which it happened (0-based).
     pub step: usize,
     /// The guard's name (e.g. `"heel_strike"`, `"knee_strike"`), or for a fall the fall's name
-    /// ([`Walker::fall_name`]).
+    /// ([`pdw_hybrid::FallKind::name`]).
     pub kind: String,
     /// True for the reset that ends a step (the section event).
     pub ends_step: bool,

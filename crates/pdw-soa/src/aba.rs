@@ -23,7 +23,7 @@ use crate::workspace::{kin_pass, Workspace};
 ///
 /// - `q`, `qd`: joint positions and rates (length `n`);
 /// - `tau`: applied joint torques/forces (length `n`);
-/// - `f_tip`: spatial force the tip exerts on the environment (see [`crate::rnea`]), or `None`;
+/// - `f_tip`: spatial force the tip exerts on the environment (see [`crate::rnea()`]), or `None`;
 /// - `qdd`: output joint accelerations (length `n`).
 pub fn aba(
     chain: &Chain,

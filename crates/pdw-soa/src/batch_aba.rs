@@ -1,4 +1,4 @@
-//! Batched O(n) forward dynamics: the articulated-body recursion of [`crate::aba`] over
+//! Batched O(n) forward dynamics: the articulated-body recursion of [`crate::aba()`] over
 //! `(lanes × n)` matrices, bit-for-bit equal per lane to the scalar [`crate::aba::aba`].
 
 use faer::reborrow::ReborrowMut;
@@ -15,7 +15,7 @@ use crate::workspace::{kin_recursion, lanes_angles, lanes_kin, lanes_tip, KinLan
 ///
 /// - `q`, `qd`, `tau`: `(lanes × n)`; `qdd`: output `(lanes × n)`;
 /// - `f_tip`: optional `(lanes × 3)` spatial force `[τ, f_y, f_z]` each tip exerts on the
-///   environment (convention of [`crate::rnea`]).
+///   environment (convention of [`crate::rnea()`]).
 pub fn batch_aba(
     chain: &Chain,
     bw: &mut BatchWorkspace,

@@ -1,4 +1,4 @@
-//! Batched inverse dynamics: the RNEA of [`crate::rnea`] over `(lanes × n)` matrices,
+//! Batched inverse dynamics: the RNEA of [`crate::rnea()`] over `(lanes × n)` matrices,
 //! bit-for-bit equal per lane to the scalar [`crate::rnea::rnea`].
 
 use faer::Mat;
@@ -12,7 +12,7 @@ use crate::spatial;
 /// Batched inverse dynamics `τ = 𝓜 q̈ + C + Jᵀ F_t` for every lane.
 ///
 /// - `q`, `qd`, `qdd`: `(lanes × n)`; `tau`: output `(lanes × n)`;
-/// - `f_tip`: optional `(lanes × 3)` tip force on the environment (see [`crate::rnea`]).
+/// - `f_tip`: optional `(lanes × 3)` tip force on the environment (see [`crate::rnea()`]).
 pub fn batch_rnea(
     chain: &Chain,
     bw: &mut BatchWorkspace,

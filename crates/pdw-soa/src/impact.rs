@@ -9,7 +9,7 @@
 //! ```
 //! (for `A = J_lin`, the 2 × n linear tip Jacobian: `q̇⁺ = q̇⁻ − 𝓜⁻¹Jᵀ(J𝓜⁻¹Jᵀ)⁻¹Jq̇⁻`).
 //! `Λ` is the impulse the constrained points exert on the environment (same sign convention
-//! as the tip force of [`crate::rnea`]); the environment's impulse on the tip is `−Λ`.
+//! as the tip force of [`crate::rnea()`]); the environment's impulse on the tip is `−Λ`.
 //! The kinetic energy changes by exactly `ΔT = −½ (A q̇⁻)ᵀ Λ ≤ 0`.
 //!
 //! Dense: 𝓜 by CRBA, Cholesky of 𝓜 and of `A 𝓜⁻¹ Aᵀ` (faer), all in workspace memory.

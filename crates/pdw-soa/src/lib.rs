@@ -15,8 +15,8 @@
 //! [`BatchWorkspace::new`]`(&chain, lanes)` for the batched ones (`n` columns of one block of
 //! lanes; any lane count is processed block by block). Reused, they make these calls
 //! allocation-free from the second call on (tested with a counting global allocator in
-//! `tests/derivatives.rs`): [`forward_kinematics`], [`aba`], [`rnea`],
-//! [`forward_dynamics_crba`], [`total_energy`], [`batch_aba`], [`batch_rnea`]. The first
+//! `tests/derivatives.rs`): [`forward_kinematics`], [`aba()`], [`rnea()`],
+//! [`forward_dynamics_crba`], [`total_energy`], [`batch_aba()`], [`batch_rnea()`]. The first
 //! batched call of a process reads the `PDW_SIMD` override once (pdw-simd caches the path).
 //! The dual-number [`derivatives`] need no workspace: their intermediates are stack arrays of
 //! [`derivatives::MAX_DOF`] entries, so every call is allocation-free, and chains of more than

@@ -31,7 +31,7 @@ pub(crate) fn set_mask(ws: &mut Workspace, n: usize, locked: &[usize]) -> Result
 /// Forward dynamics with the joints in `locked` held at `q̈ = 0` (pseudo joints).
 ///
 /// - `tau`: applied joint torques (length `n`; entries of locked joints are applied too);
-/// - `f_tip`: tip force on the environment (see [`crate::rnea`]) or `None`;
+/// - `f_tip`: tip force on the environment (see [`crate::rnea()`]) or `None`;
 /// - `qdd`: output accelerations, exactly `0.0` at locked joints;
 /// - `lock_torque`: output torque each lock must add (`0.0` at free joints), so that
 ///   `τ + τ_lock = 𝓜 q̈ + C + Jᵀ F_t`.

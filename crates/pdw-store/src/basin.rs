@@ -45,7 +45,7 @@ use crate::{time, Result, StoreError};
 
 /// Value of the root attribute `format` of a basin file.
 pub const BASIN_FORMAT: &str = "pdw-sweep basin v1";
-/// Rows per chunk of the 2-D/3-D datasets, and per shard block (see [`shard_rows`]).
+/// Rows per chunk of the 2-D/3-D datasets, and per shard block (see [`shard_rows`](crate::shard::shard_rows)).
 /// Writing blocks aligned to it (`row0` a multiple, `BLOCK_ROWS` rows) writes whole chunks.
 pub const BLOCK_ROWS: usize = 16;
 /// Outcome code of a cell not (yet) computed: the fill value of `/basin/outcome`.
@@ -94,7 +94,7 @@ pub struct BasinHeader {
     pub state_names: Vec<String>,
     /// Outcome codes and names, e.g. `(0, "gait")`; codes unique and not [`NOT_COMPUTED`].
     pub legend: Vec<(u8, String)>,
-    /// `Some` for a shard file holding only [`shard_rows`]`(ny, index, count)`.
+    /// `Some` for a shard file holding only [`shard_rows`](crate::shard::shard_rows)`(ny, index, count)`.
     pub shard: Option<ShardSpec>,
 }
 

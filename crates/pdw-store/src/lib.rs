@@ -47,7 +47,7 @@
 //! /metrics          attrs basin_entropy, boundary_entropy, entropy_box, fractions (JSON object
 //!                   name → fraction), fraction_NAME (one f64 per outcome)
 //! ```
-//! A 3-D grid ([`BasinHeader::z`]) adds `/grid/z` (f64 [nz], attr `name`; the scale of
+//! A 3-D grid ([`BasinHeader::z`]) adds `/grid/z` (f64 `[nz]`, attr `name`; the scale of
 //! dimension 0) and stores its cells in z, y, x order: outcome and strides [nz, ny, nx], final
 //! [nz, ny, nx, d], chunked by blocks of [`BLOCK_ROWS`] rows within one z-slice; rows_done is
 //! [nz·ny] and block_digest [nz·⌈ny/16⌉] over the grid's (z, y) rows, row `k·ny + i` for

@@ -1,7 +1,7 @@
 //! The library under both front ends (the `pdw-sweep` CLI and the Python package): what a run
 //! needs before and around the analysis — building a model by name or spec file with its
 //! parameter overrides ([`model`]), reading the values people type ([`input`]), choosing the
-//! integrator ([`integrator`]) and finding the gaits to start from ([`gaits`]) — and the
+//! integrator ([`integrator()`]) and finding the gaits to start from ([`gaits`]) — and the
 //! computations of the runs themselves, as typed plans and their steps: a basin of attraction
 //! ([`basin`]), basin stability over a parameter ([`basin_over`]), a continuation over a
 //! parameter grid and its orbit diagram ([`sweep`]), a bifurcation curve in two parameters

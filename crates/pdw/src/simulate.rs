@@ -93,7 +93,7 @@ pub enum StartError {
 pub const SAMPLES_PER_STEP: f64 = 100.0;
 
 /// Samples per natural time unit of the default output spacing from a state (no period known):
-/// `dt_out = T / 50`, `T = √(L/g)` from the model's [`Scales`](pdw_model::Scales).
+/// `dt_out = T / 50`, `T = √(L/g)` from the model's [`Scales`](pdw_walkers::Scales).
 pub const SAMPLES_PER_TIME_SCALE: f64 = 50.0;
 
 /// The output spacing a front end asks for.
@@ -330,7 +330,7 @@ pub fn run(
 /// so its series jumps up by the drop at each foot change. Measured from the first stance
 /// foot instead, `E_fixed = E − m g Σ_{k<j} L_k sin γ` on step `j`, with `L_k` the step
 /// length of step `k` (the distance between the feet at its heel strike, along the slope) and
-/// `m g` the total weight (the model's [`Scales`](pdw_model::Scales)): constant between
+/// `m g` the total weight (the model's [`Scales`](pdw_walkers::Scales)): constant between
 /// impacts, it drops at each impact by what the impact dissipates — on a gait, by the
 /// `m g L sin γ` one step on the slope releases (Garcia et al. 1998 §4: the energy balance of
 /// a passive gait).
@@ -384,7 +384,7 @@ pub const POSITIONS_FRAME: &str = "slope frame fixed for the whole walk: x along
 /// The walker's named points and centre of mass along a walk, in [`POSITIONS_FRAME`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Positions {
-    /// Point names ([`pdw_model::BodyPoints::names`]), `P` of them.
+    /// Point names ([`pdw_walkers::BodyPoints::names`]), `P` of them.
     pub names: Vec<String>,
     /// `n × P × 2` values, row-major (sample, point, x/y).
     pub points: Vec<f64>,
@@ -412,7 +412,7 @@ fn round_feet(m: &BuiltModel) -> bool {
         .any(|(n, v)| n == "foot_radius" && *v != 0.0)
 }
 
-/// The walker's named points ([`pdw_model::Walker::body_points`]) and centre of mass at every
+/// The walker's named points ([`pdw_walkers::Walker::body_points`]) and centre of mass at every
 /// sample of `tr`, in the fixed frame of [`POSITIONS_FRAME`]: the stance frame of the sample
 /// shifted down the slope by its step's stance-foot offset. `Err` says why there are none: the
 /// model gives no points, or round feet (the contact point rolls along the foot during

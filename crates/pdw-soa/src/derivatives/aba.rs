@@ -76,8 +76,8 @@ impl AbaLanes for StackLane<'_> {
 ///
 /// - `q`, `qd`: joint positions (rad or m) and rates, length `n`;
 /// - `tau`: applied joint torques/forces (N m or N), length `n`;
-/// - `locked`: mask of locked joints, length `n` (all `false`: plain [`crate::aba`]);
-/// - `qdd`: output accelerations, length `n`; bit-identical to [`crate::aba`] (no joint locked)
+/// - `locked`: mask of locked joints, length `n` (all `false`: plain [`crate::aba()`]);
+/// - `qdd`: output accelerations, length `n`; bit-identical to [`crate::aba()`] (no joint locked)
 ///   or [`crate::pseudo_joint_dynamics`] (the same joints locked, no tip force), `0.0` at locked
 ///   joints;
 /// - `dqdd_dq`, `dqdd_dqd`: output `∂q̈/∂q`, `∂q̈/∂q̇`, `n × n` row-major (entry `(i, j)` at

@@ -18,7 +18,7 @@
 //! ```text
 //! ∂q̈_f/∂x = −𝓜_ff⁻¹ ∂ID_f/∂x |_{q̈ = FD(q, q̇, τ)},    ∂q̈_l/∂x = 0.
 //! ```
-//! The value `q̈` is the kernel's articulated-body recursion ([`crate::aba`],
+//! The value `q̈` is the kernel's articulated-body recursion ([`crate::aba()`],
 //! [`crate::pseudo_joint_dynamics`]) run on the same step functions, so it equals theirs bit for
 //! bit. Then **one** RNEA pass in duals of width `3n`, seeded on `(q, q̇, q̈)` at that `q̈`,
 //! returns `∂ID/∂q`, `∂ID/∂q̇` and `𝓜 = ∂ID/∂q̈` at once; an `LDLᵀ` factorisation of `𝓜_ff`
@@ -30,7 +30,7 @@
 //! `e_kᵀ` for each locked joint `k`. The map is linear in `q̇⁻`, so
 //! `∂q̇⁺/∂q̇⁻ = I − X S⁻¹ A`, and `∂q̇⁺/∂q` follows from running the whole computation in duals
 //! of width `n` seeded on `q`: kinematics and the tip Jacobian by the generic kinematic steps,
-//! `𝓜(q)` by the generic composite-rigid-body steps of [`crate::crba`], the two solves by
+//! `𝓜(q)` by the generic composite-rigid-body steps of [`crate::crba()`], the two solves by
 //! `LDLᵀ` in duals.
 //!
 //! The value `q̇⁺` is computed apart, in `f64`, by the kernel's operations in the kernel's order

@@ -9,7 +9,7 @@
 //! `--x`/`--y`, else the default box of `basin` around the gait at A (stated in the output).
 //!
 //! [`run`] reads as the command runs: [`parse`], claim the outputs, [`plan`] (a model per value
-//! and the box), the library's [`pdw::basin_over::at_value`] for every value, [`write`] the
+//! and the box), the library's [`pdw::basin_over::at_value`] for every value, [`write()`] the
 //! file and the chart, and print.
 
 use super::basin::{axis, check_memory, fixed_json, progress_bar, AXIS_FLAGS};

@@ -5,7 +5,7 @@
 //! [`run`] reads as the command does: the flags checked ([`parse`]), the plan made from the
 //! model's own values ([`plan`]), the outputs claimed, the corners, integrator and guess checked
 //! ([`prepare`]), the gait, its bifurcation, the curve and the region map computed
-//! ([`compute`]), the file and the picture written ([`write`]), the curve printed ([`report`]).
+//! ([`compute`]), the file and the picture written ([`write()`]), the curve printed ([`report`]).
 
 use super::output::{Format, Output};
 use super::BuiltModel;

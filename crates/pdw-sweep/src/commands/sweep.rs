@@ -12,7 +12,7 @@
 //!
 //! [`run`] reads as the command does: the sweep parsed ([`parse`]), the outputs claimed, the
 //! plan made ([`plan`]), the gait, the branches and the orbit diagram computed by the library
-//! ([`pdw::sweep`], [`compute`]), the file, picture and CSV written ([`write`]), the result
+//! ([`pdw::sweep`], [`compute`]), the file, picture and CSV written ([`write()`]), the result
 //! printed ([`report`]).
 
 use super::fixedpoint::report_failure;
