@@ -93,9 +93,9 @@ pub struct MidStance<'a> {
     model: &'a dyn Walker,
     /// The section's fixed coordinate ([`plane`]): its index and its value on the section
     /// (`σ s` for the stance leg along the vertical, 0 for the legs together).
-    absolute: usize,
-    vertical: f64,
-    /// `ρ`: the guard is `ρ (x_a − σ s)`.
+    index: usize,
+    at: f64,
+    /// `ρ`: the guard is `ρ (x[index] − at)`.
     sense: f64,
     /// The model's heel strike `(mode, guard)`: its section guard.
     heel: (usize, usize),
@@ -140,13 +140,19 @@ pub fn unsupported(model: &dyn Walker) -> Option<String> {
 /// for a model without legs ([`Walker::legs_together`]); the angle between the legs at 0 on
 /// step heights.
 pub fn plane(model: &dyn Walker, kind: TerrainKind) -> Result<(usize, f64), LimitError> {
-    if kind == TerrainKind::StepDown {
-        if let Some(i) = model.legs_together() {
-            return Ok((i, 0.0));
-        }
+    if let Some(i) = legs_together_on(model, kind) {
+        return Ok((i, 0.0));
     }
     let (a, sign) = model.absolute_angle().unwrap_or((0, 1.0));
     Ok((a, sign * slope_of(model)?))
+}
+
+/// The index of the angle between the legs where the section on terrain of kind `kind` is
+/// the legs together ([`plane`]: step heights on a model with legs), else `None`.
+pub fn legs_together_on(model: &dyn Walker, kind: TerrainKind) -> Option<usize> {
+    (kind == TerrainKind::StepDown)
+        .then(|| model.legs_together())
+        .flatten()
 }
 
 impl<'a> MidStance<'a> {
@@ -160,13 +166,13 @@ impl<'a> MidStance<'a> {
                 message,
             });
         }
-        let (absolute, vertical) = plane(model, kind)?;
+        let (index, at) = plane(model, kind)?;
         let mut guards = model.guards(0).to_vec();
         guards.push(MID_STANCE);
         Ok(Self {
             model,
-            absolute,
-            vertical,
+            index,
+            at,
             sense,
             heel: model.section_guard(),
             guards,
@@ -182,7 +188,7 @@ impl<'a> MidStance<'a> {
     /// The section point of a full state `(x, p)` on the section.
     pub fn project(&self, x: &[f64]) -> Vec<f64> {
         (0..self.d)
-            .filter(|&j| j != self.absolute)
+            .filter(|&j| j != self.index)
             .map(|j| x[j])
             .collect()
     }
@@ -192,8 +198,8 @@ impl<'a> MidStance<'a> {
         let mut x = Vec::with_capacity(self.d + 1);
         let mut it = s.iter();
         for j in 0..self.d {
-            x.push(if j == self.absolute {
-                self.vertical
+            x.push(if j == self.index {
+                self.at
             } else {
                 *it.next().unwrap_or(&f64::NAN)
             });
@@ -216,7 +222,7 @@ impl<'a> MidStance<'a> {
     }
 
     fn mid(&self, x: &[f64]) -> f64 {
-        self.sense * (x[self.absolute] - self.vertical)
+        self.sense * (x[self.index] - self.at)
     }
 }
 
@@ -280,7 +286,7 @@ impl HybridSystem for MidStance<'_> {
         self.model
             .guards_with_rates(ws, mode, &x[..d], &f[..d], &mut g[..n], &mut rate[..n]);
         g[n] = self.mid(x);
-        rate[n] = self.sense * f[self.absolute];
+        rate[n] = self.sense * f[self.index];
     }
 
     fn guards_with_rates_batch(
@@ -293,7 +299,7 @@ impl HybridSystem for MidStance<'_> {
         mut rate: MatMut<'_, f64>,
     ) {
         use faer::reborrow::ReborrowMut;
-        let (d, n, a) = (self.d, self.n_model(), self.absolute);
+        let (d, n, a) = (self.d, self.n_model(), self.index);
         self.model.guards_with_rates_batch(
             ws,
             mode,
@@ -303,7 +309,7 @@ impl HybridSystem for MidStance<'_> {
             rate.rb_mut().subcols_mut(0, n),
         );
         for l in 0..x.nrows() {
-            g[(l, n)] = self.sense * (x[(l, a)] - self.vertical);
+            g[(l, n)] = self.sense * (x[(l, a)] - self.at);
             rate[(l, n)] = self.sense * f[(l, a)];
         }
     }
@@ -349,7 +355,7 @@ impl HybridSystem for MidStance<'_> {
             self.model
                 .guard_gradient(ws, mode, k, &x[..d], &mut grad[..d]);
         } else {
-            grad[self.absolute] = self.sense;
+            grad[self.index] = self.sense;
         }
     }
 }

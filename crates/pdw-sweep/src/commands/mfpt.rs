@@ -269,8 +269,7 @@ fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>, legs: bool) -
 
 /// Whether the chain's mid-stance section is the legs together for `m` on `plan`'s terrain.
 fn legs_together(m: &BuiltModel, plan: &mfpt::MfptPlan) -> bool {
-    plan.terrain.kind == pdw_limit::terrain::TerrainKind::StepDown
-        && m.walker.legs_together().is_some()
+    pdw_limit::mid_stance::legs_together_on(m.walker.as_ref(), plan.terrain.kind).is_some()
 }
 
 /// Writes the HDF5 file (with provenance and units) and the survival curve's PNG next to it.
