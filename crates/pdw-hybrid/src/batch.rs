@@ -275,9 +275,12 @@ impl Queue {
 }
 
 /// Parallel: one lockstep batch per thread of the given rayon pool, all drawing items from one
-/// queue in blocks of `chunk` consecutive items (the block size independent of the thread
-/// count), so that a batch refills its lanes until the whole queue is empty and no lane waits
-/// at the end of a block for the longest item in it. `progress(n_done_items)` is called each
+/// queue in blocks of `chunk` consecutive items, so that a batch refills its lanes until the
+/// whole queue is empty and no lane waits at the end of a block for the longest item in it.
+/// Fewer items than four blocks per thread are claimed in smaller blocks (a quarter of each
+/// thread's share): a call of fewer than `chunk` items — a slow model's basin rows, which the
+/// front ends hand over a fraction of a second at a time — would otherwise be one block, and
+/// every thread but one would wait. `progress(n_done_items)` is called each
 /// time a batch has finished `chunk` more items, and once at its end. Results in item order,
 /// identical for any thread count, lane count and chunk size. If a batch fails, the others stop
 /// claiming items and the first failed batch's error (in pool order) is returned.
@@ -304,11 +307,10 @@ where
     if items.is_empty() {
         return Ok(Vec::new());
     }
-    let queue = Queue::new(items.len(), chunk);
-    let workers = pool
-        .current_num_threads()
-        .min(items.len().div_ceil(chunk))
-        .max(1);
+    let threads = pool.current_num_threads().max(1);
+    let block = chunk.min(items.len().div_ceil(4 * threads)).max(1);
+    let queue = Queue::new(items.len(), block);
+    let workers = threads.min(items.len().div_ceil(block));
     type Part<O> = Result<Vec<(usize, O)>, HybridError>;
     let parts: Vec<Part<D::Output>> = pool.install(|| {
         (0..workers)
