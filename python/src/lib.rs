@@ -1534,6 +1534,7 @@ fn mfpt<'py>(
     pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(&m, &plan, &MFPT_FLAGS).map_err(err)?;
     let chain_plan = if chain {
+        pdw::mfpt::check_chain_terrain(&m, kind, "chain").map_err(err)?;
         let c = pdw::mfpt::check_chain(&m, mesh, nodes, section, &CHAIN_FLAGS).map_err(err)?;
         Some(pdw::mfpt::check_layout(c, chain_mesh, "chain_mesh").map_err(err)?)
     } else {

@@ -571,7 +571,7 @@ def test_mfpt_on_step_heights():
         pdw.mfpt("compass", terrain="step-down", sd=0.2)
 
 
-def test_round_feet_walk_on_step_heights_not_on_slopes(tmp_path):
+def test_round_feet_walk_on_step_heights_and_on_slopes(tmp_path):
     # the compass preset (models/compass.toml) with arc feet of a tenth of its leg
     spec = tmp_path / "round.toml"
     text = (Path(__file__).resolve().parents[2] / "models" / "compass.toml").read_text()
@@ -579,8 +579,11 @@ def test_round_feet_walk_on_step_heights_not_on_slopes(tmp_path):
     r = pdw.mfpt(str(spec), terrain="step-down", sd=0.004, walkers=300, max_steps=2000, seed=3)
     assert r["falls"] + r["censored"] == 300 and r["falls"] > 150
     assert r["mfpt"] == r["total_steps"] / r["falls"]
+    # random slopes: the Monte Carlo walk on tilted landing lines; no Markov chain
+    r = pdw.mfpt(str(spec), sd="0.5deg", walkers=100, max_steps=2000, seed=1)
+    assert r["falls"] + r["censored"] == 100 and r["falls"] > 50
     with pytest.raises(ValueError, match="foot_radius"):
-        pdw.mfpt(str(spec), sd="0.2deg", walkers=2)
+        pdw.mfpt(str(spec), sd="0.2deg", walkers=2, chain=True)
 
 
 def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():

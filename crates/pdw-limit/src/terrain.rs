@@ -16,6 +16,27 @@
 //! With `s = s̄` both shifts add an exact zero, so the terrain stride is the ordinary stride
 //! bit for bit.
 //!
+//! # Round feet
+//! A round foot rolls, so its contact point moves along the line it stands on, and a change of
+//! line is not a rotation about it ([`Walker::terrain_frame`] is `None`). Such a model walks
+//! random slopes on **tilted landing lines** ([`Walker::on_tilted_line`]): during step `k` the
+//! stance foot rolls on the line it landed on (slope `s_{k−1}`), and the swing foot lands on
+//! line `k`, which passes through the stance foot's contact point at the moment of that heel
+//! strike and is inclined `Δ = s_k − s_{k−1}` against line `k−1`. The step is the model at
+//! slope `s_{k−1}` in that line's frame, whose swing-foot guard measures the foot against the
+//! tilted line and whose heel strike puts the new contact point on it; the frame shifts are
+//! those of point feet (the absolute angle only: the rolling constraint fixes the contact's
+//! rate, not where along the line it is). The ground the walk realises is a polyline with a
+//! corner under each heel strike's stance contact point; it is the walk's ground as long as the
+//! swing foot does not cross it before the heel strike, which the guard does not check
+//! (neither does the point-foot walk). A stride then depends on the last line's slope as well
+//! as on the next one, so the walk is Markov in `(state, s_{k−1})`: [`SlopeWalk::stride_from`]
+//! takes both, the Monte Carlo walks one walker at a time ([`monte_carlo_scalar`]), and the
+//! Markov chain on the post-heel-strike section is not built for it (its state would need the
+//! last two slopes: the trailing foot stands on line `k−1`, the new stance foot on line `k`,
+//! so the section's symmetric lift no longer holds). For point feet the tilted walk
+//! ([`SlopeWalk::with_tilted_lines`]) is the rotated walk above in another frame.
+//!
 //! # Step heights
 //! With [`TerrainKind::StepDown`] the ground of step `k` is a line parallel to the model's
 //! slope, `h_k` below the stance foot along the slope normal (a step down positive, up
@@ -280,6 +301,9 @@ pub struct SlopeWalk<'a> {
     mean: f64,
     absolute: usize,
     sign: f64,
+    /// the stride depends on the last line too ([`Walker::on_tilted_line`]; module docs,
+    /// "Round feet")
+    tilted: bool,
     integrator: Options,
 }
 
@@ -300,15 +324,22 @@ impl<'a> SlopeWalk<'a> {
         integrator: Options,
     ) -> Result<Self, LimitError> {
         integrator.validate()?;
-        let frame = model_at(mean)?.terrain_frame();
-        // step heights shift nothing; a slope needs the model's absolute angle
-        let (absolute, sign) = match (kind, frame) {
-            (TerrainKind::StepDown, f) => f.unwrap_or((0, 0.0)),
-            (TerrainKind::Slope, Some(f)) => f,
-            (TerrainKind::Slope, None) => {
+        let model = model_at(mean)?;
+        let frame = model.terrain_frame();
+        // step heights shift nothing; a slope needs the model's absolute angle, and a model
+        // whose change of line is not a rotation lands on a tilted line (round feet)
+        let tilts = || model.on_tilted_line(0.0).is_some_and(|r| r.is_ok());
+        let (absolute, sign, tilted) = match (kind, frame, model.absolute_angle()) {
+            (TerrainKind::StepDown, f, _) => {
+                let (a, s) = f.unwrap_or((0, 0.0));
+                (a, s, false)
+            }
+            (TerrainKind::Slope, Some((a, s)), _) => (a, s, false),
+            (TerrainKind::Slope, None, Some((a, s))) if tilts() => (a, s, true),
+            (TerrainKind::Slope, None, _) => {
                 return Err(LimitError::Model {
                     param: mean,
-                    message: "the model does not walk on random terrain (round feet?)".into(),
+                    message: "the model does not walk on random slopes".into(),
                 })
             }
         };
@@ -318,6 +349,43 @@ impl<'a> SlopeWalk<'a> {
             mean,
             absolute,
             sign,
+            tilted,
+            integrator,
+        })
+    }
+
+    /// Whether a stride depends on the slope of the line the stance foot stands on as well as
+    /// on the landing line's (round feet on random slopes, module docs "Round feet"): then only
+    /// [`SlopeWalk::stride_from`] walks it.
+    pub fn tilted(&self) -> bool {
+        self.tilted
+    }
+
+    /// The walk on random slopes by tilted landing lines (module docs, "Round feet") for any
+    /// model that has them ([`Walker::on_tilted_line`]), also one whose change of line is a
+    /// rotation (point feet: the two walks are the same walk in two frames, which the tests
+    /// compare). [`LimitError::Model`] for a model without tilted landing lines.
+    pub fn with_tilted_lines(
+        model_at: ModelAt<'a>,
+        mean: f64,
+        integrator: Options,
+    ) -> Result<Self, LimitError> {
+        integrator.validate()?;
+        let model = model_at(mean)?;
+        let tilts = model.on_tilted_line(0.0).is_some_and(|r| r.is_ok());
+        let Some((absolute, sign)) = model.absolute_angle().filter(|_| tilts) else {
+            return Err(LimitError::Model {
+                param: mean,
+                message: "the model has no tilted landing line".into(),
+            });
+        };
+        Ok(Self {
+            model_at,
+            kind: TerrainKind::Slope,
+            mean,
+            absolute,
+            sign,
+            tilted: true,
             integrator,
         })
     }
@@ -349,6 +417,15 @@ impl<'a> SlopeWalk<'a> {
         x: &[f64],
         slope: f64,
     ) -> Result<TerrainStride, LimitError> {
+        if self.tilted {
+            return Err(LimitError::Model {
+                param: slope,
+                message: "this model's stride on random slopes depends on the last line's slope \
+                          too (round feet): it walks one walker at a time (stride_from), and has \
+                          no Markov chain on its post-heel-strike section"
+                    .into(),
+            });
+        }
         let w = (self.model_at)(slope)?;
         let map = StrideMap::new(w.as_ref(), self.integrator)?;
         let mut x0 = x.to_vec();
@@ -356,6 +433,42 @@ impl<'a> SlopeWalk<'a> {
         let end = run_scalar_with(integ, map.system(), &map.driver(), &x0)?;
         let mut post = end.post;
         self.shift(&mut post, slope, self.mean);
+        Ok(TerrainStride {
+            outcome: end.outcome,
+            post,
+        })
+    }
+
+    /// One stride from the post-heel-strike full state `x` (mean slope's frame) of a walker
+    /// standing on a line inclined `last`, landing on a line inclined `slope`. For a walk that
+    /// is not [`SlopeWalk::tilted`] this is [`SlopeWalk::stride`] (`last` does not matter).
+    /// Tilted (module docs, "Round feet"): the model at slope `last` landing on a line inclined
+    /// `slope − last` against it ([`Walker::on_tilted_line`]), between the shifts into and out
+    /// of `last`'s frame.
+    pub fn stride_from(
+        &self,
+        integ: &mut Integrator,
+        x: &[f64],
+        last: f64,
+        slope: f64,
+    ) -> Result<TerrainStride, LimitError> {
+        if !self.tilted {
+            return self.stride(integ, x, slope);
+        }
+        let refused = |message: String| LimitError::Model {
+            param: slope,
+            message,
+        };
+        let w = (self.model_at)(last)?
+            .on_tilted_line(slope - last)
+            .ok_or_else(|| refused("the model has no tilted landing line".into()))?
+            .map_err(refused)?;
+        let map = StrideMap::new(w.as_ref(), self.integrator)?;
+        let mut x0 = x.to_vec();
+        self.shift(&mut x0, self.mean, last);
+        let end = run_scalar_with(integ, map.system(), &map.driver(), &x0)?;
+        let mut post = end.post;
+        self.shift(&mut post, last, self.mean);
         Ok(TerrainStride {
             outcome: end.outcome,
             post,
@@ -398,8 +511,11 @@ pub fn walk_one(
 ) -> Result<Fate, LimitError> {
     let mut integ = walk.integrator(x0.len())?;
     let mut x = x0.to_vec();
+    // the walker starts just after a heel strike on a line of the mean slope
+    let mut last = walk.mean();
     for k in 0..max_steps {
-        let st = walk.stride(&mut integ, &x, terrain.slope(i, k as u64 + 1))?;
+        let slope = terrain.slope(i, k as u64 + 1);
+        let st = walk.stride_from(&mut integ, &x, last, slope)?;
         if !st.outcome.is_ok() {
             return Ok(Fate {
                 steps: k,
@@ -407,6 +523,7 @@ pub fn walk_one(
             });
         }
         x = st.post;
+        last = slope;
     }
     Ok(Fate {
         steps: max_steps,
@@ -417,8 +534,9 @@ pub fn walk_one(
 /// `walkers` walkers (0, 1, …) from `x0` on `pool`, in walker order; identical for any thread
 /// count, lane count and chunk size (each walker's slopes are its own counter-based draws).
 /// Both terrains run in batched lockstep ([`crate::lockstep`], lanes and chunks of
-/// [`Lockstep::for_pool`]); step heights on a model without [`Walker::step_height`] run one
-/// walker at a time ([`monte_carlo_scalar`]). `progress` gets the number of walkers done.
+/// [`Lockstep::for_pool`]); step heights on a model without [`Walker::step_height`], and random
+/// slopes on tilted landing lines ([`SlopeWalk::tilted`]: round feet, whose flow depends on the
+/// line the stance foot rolls on), run one walker at a time ([`monte_carlo_scalar`]). `progress` gets the number of walkers done.
 pub fn monte_carlo(
     walk: &SlopeWalk,
     terrain: &SlopeTerrain,
@@ -429,7 +547,7 @@ pub fn monte_carlo(
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Vec<Fate>, LimitError> {
     let steps = terrain.kind == TerrainKind::StepDown || walk.kind() == TerrainKind::StepDown;
-    if steps && walk.model(walk.mean())?.step_height().is_none() {
+    if walk.tilted() || steps && walk.model(walk.mean())?.step_height().is_none() {
         return monte_carlo_scalar(walk, terrain, x0, walkers, max_steps, pool, progress);
     }
     let batch = Lockstep::for_pool(walkers, pool.current_num_threads());

@@ -137,6 +137,16 @@ pub trait Walker: Section {
     fn terrain_frame(&self) -> Option<(usize, f64)> {
         None
     }
+    /// The model whose stance foot stays on its own line (the state's frame, gravity at the
+    /// model's slope) and whose swing foot lands on the line through the stance foot's contact
+    /// point inclined `delta` (rad, downhill positive) against it: a step of random slopes for a
+    /// model whose change of line is not a rotation about the contact point (round feet,
+    /// [`terrain_frame`](Walker::terrain_frame) `None`). `None` (the default): the model has no
+    /// such step; `Some(Err)`: it refuses this `delta`, saying why.
+    fn on_tilted_line(&self, delta: f64) -> Option<Result<Box<dyn Walker>, String>> {
+        let _ = delta;
+        None
+    }
     /// `(index, sign)` of the state's one absolute angle, measured from the normal of the line
     /// the stance foot stands on: the stance leg is along gravity's vertical where
     /// `x[index] = sign·slope` (the mid-stance section of random terrain). Default:

@@ -93,7 +93,7 @@ fn the_mfpt_file_holds_the_library_estimate_with_units_and_provenance() {
 /// on step heights their chain at mid-stance lies at the legs together, and the file says so;
 /// a negative `--sd` and an unknown terrain are refused.
 #[test]
-fn mfpt_refuses_round_feet_and_a_negative_sd_clearly() {
+fn mfpt_takes_round_feet_on_both_terrains_and_refuses_a_negative_sd_clearly() {
     let o = run(&["mfpt", "--sd=-1deg", "--walkers", "2"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--sd"), "{}", stderr(&o));
@@ -109,9 +109,43 @@ fn mfpt_refuses_round_feet_and_a_negative_sd_clearly() {
     )
     .unwrap();
     let spec = spec.to_str().unwrap();
-    let o = run(&["mfpt", "--model", spec, "--sd", "0.2deg", "--walkers", "2"]);
+    // random slopes: the Monte Carlo walk on tilted landing lines; the chain refused, naming why
+    let slopes = dir.path().join("slopes.h5");
+    let o = run(&[
+        "mfpt",
+        "--model",
+        spec,
+        "--sd",
+        "0.5deg",
+        "--walkers",
+        "100",
+        "--seed",
+        "1",
+        "--quiet",
+        "--out",
+        slopes.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let d = pdw_store::read_mfpt(&slopes).unwrap();
+    assert_eq!(d.terrain, "slope");
+    assert!(d.falls > 50 && d.falls + d.censored == 100, "{}", d.falls);
+    assert_eq!(d.mfpt, d.total_steps as f64 / d.falls as f64);
+    let o = run(&[
+        "mfpt",
+        "--model",
+        spec,
+        "--sd",
+        "0.2deg",
+        "--walkers",
+        "2",
+        "--chain",
+    ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("foot_radius"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--chain") && stderr(&o).contains("foot_radius"),
+        "{}",
+        stderr(&o)
+    );
     let out = dir.path().join("steps.h5");
     let o = run(&[
         "mfpt",

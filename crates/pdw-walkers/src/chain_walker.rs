@@ -122,6 +122,23 @@
 //! line; and the lift's `ℓ` is the length from the hip to the arc centre, `L − r` (the trailing
 //! arc centre is `h` above the new stance arc centre). A height of `ℓ` or more is refused.
 //!
+//! # Landing on a tilted line (random slopes with round feet)
+//! [`ChainWalker::with_tilt`]`(Δ)` keeps the stance foot on its line (the kernel's frame,
+//! gravity at `slope`) and lands the swing foot on the line through the stance foot's contact
+//! point `c` inclined `Δ` against it (downhill positive: tangent `t = (cos Δ, −sin Δ)`, normal
+//! `n = (sin Δ, cos Δ)` in `(y, z)`). With `p` the swing arc centre relative to the stance arc
+//! centre (so `c = (0, −r)` relative to it), the swing arc's lowest point over the landing line
+//! is `(p − c)·n − r = p·n + r (cos Δ − 1)` — the swing-foot guards (and `ṗ·n` their rate,
+//! `n`-weighted rows of the tip Jacobian their gradient); the foot is ahead where `p·t > 0`,
+//! and the heel-strike factor is the level one in the landing line's frame, whose absolute
+//! angle is `q₀ + Δ`: `|2(θ_s + Δ) + q_m| < |q_m|`. The heel strike's new contact point is
+//! `r` along `−n` from the swing arc centre; the trailing foot's row (on the stance line) is
+//! unchanged; the impact report gives the new stance foot's impulse along `(t, n)`. For point
+//! feet (`r = 0`) all of this is the level model in the landing line's frame (the state's
+//! `q₀ + Δ`), which is how point feet walk random slopes; with round feet it is how they do
+//! (pdw-limit's `terrain`, "Round feet"). The guards run lane by lane on a tilted line. At
+//! `Δ = 0` nothing changes, bit for bit.
+//!
 //! # Section
 //! Just after heel strike, every knee straight: `q = (s₀, 0…, −2s₀, 0…)`,
 //! `q̇ = (s₁, 0…, s₂, 0…)`; reduced coordinates `(q₀, q̇₀, q̇_m)` (`"stance"`, `"stance_rate"`,
@@ -265,6 +282,12 @@ pub struct ChainWalker {
     /// when it is held by a stop (its release at heel strike is a mode change of the model)
     trailing_free: Option<usize>,
     state_names: Vec<String>,
+    /// inclination `Δ` of the landing line against the stance foot's line (0: the same line;
+    /// module docs, "Landing on a tilted line")
+    tilt: f64,
+    /// `(sin Δ, cos Δ)`: the landing line's normal `n = (sin Δ, cos Δ)` in the stance line's
+    /// frame
+    tilt_sc: (f64, f64),
 }
 
 /// The chain walker's scratch (held in a [`Scratch`]): kernel workspaces sized by the number
@@ -432,7 +455,100 @@ impl ChainWalker {
             latched,
             trailing_free,
             state_names: names,
+            tilt: 0.0,
+            tilt_sc: (0.0, 1.0),
         })
+    }
+
+    /// The same walker landing on a line through the stance foot's contact point inclined `Δ`
+    /// (`delta`, rad, downhill positive) against the line the stance foot stands on (module
+    /// docs, "Landing on a tilted line"): one step of random slopes for round feet. The state
+    /// stays in the stance line's frame (gravity at the spec's `slope`); the swing-foot guards,
+    /// the heel strike's admissibility and contact point see the landing line. Refused with
+    /// `step_down ≠ 0` (one ground change per step) and for `|Δ| ≥ π/4`.
+    pub fn with_tilt(&self, delta: f64) -> Result<Self, WalkerError> {
+        if !(delta.is_finite() && delta.abs() < std::f64::consts::FRAC_PI_4) {
+            return Err(WalkerError::InvalidSpec {
+                source_name: self.spec.name.clone(),
+                field: "tilt".into(),
+                value: delta.to_string(),
+                rule: "a landing line inclined less than pi/4 rad against the stance line".into(),
+            });
+        }
+        if self.r.step_down != 0.0 && delta != 0.0 {
+            return Err(WalkerError::InvalidSpec {
+                source_name: self.spec.name.clone(),
+                field: "parameters.step_down".into(),
+                value: self.r.step_down.to_string(),
+                rule: "a tilted landing line starts at the stance foot: step_down must be 0".into(),
+            });
+        }
+        let mut w = self.clone();
+        w.tilt = delta;
+        w.tilt_sc = if delta == 0.0 {
+            (0.0, 1.0)
+        } else {
+            delta.sin_cos()
+        };
+        Ok(w)
+    }
+
+    /// The new contact point from the swing arc centre at a heel strike: `r` along the landing
+    /// line's inward normal, `−r n = −r (sin Δ, cos Δ)` (`[0, −r]` on the stance line).
+    fn landing_offset(&self) -> [f64; 2] {
+        if self.tilt == 0.0 {
+            [0.0, -self.radius]
+        } else {
+            let (s, c) = self.tilt_sc;
+            [-self.radius * s, -self.radius * c]
+        }
+    }
+
+    /// Inclination `Δ` of the landing line against the stance line (0 unless
+    /// [`ChainWalker::with_tilt`]).
+    pub fn tilt(&self) -> f64 {
+        self.tilt
+    }
+
+    /// Height of the swing arc's lowest point over the tilted landing line (module docs,
+    /// "Landing on a tilted line"), from the swing arc centre `p` relative to the stance arc
+    /// centre: `p·n + r (cos Δ − 1)`; its rate from `ṗ`.
+    #[inline]
+    fn above_tilted(&self, p: [f64; 2], pd: [f64; 2]) -> (f64, f64) {
+        let (s, c) = self.tilt_sc;
+        (
+            p[0] * s + p[1] * c + self.radius * (c - 1.0),
+            pd[0] * s + pd[1] * c,
+        )
+    }
+
+    /// The swing arc centre relative to the stance arc centre ([`ChainWalker::swing_foot`])
+    /// and its rate along `f = (q̇, q̈)`: `ṗ = Σ len_i θ̇_i (−cos θ_i, −sin θ_i)`.
+    fn swing_foot_and_rate(&self, x: &[f64], f: &[f64]) -> ([f64; 2], [f64; 2]) {
+        let (mut th, mut thd) = (0.0, 0.0);
+        let (mut p, mut pd) = ([0.0; 2], [0.0; 2]);
+        for ((qk, fk), len) in x[..self.n].iter().zip(&f[..self.n]).zip(&self.len) {
+            th += qk;
+            thd += fk;
+            let (s, c) = pdw_simd::sincos(th);
+            p[0] -= len * s;
+            p[1] += len * c;
+            pd[0] -= len * c * thd;
+            pd[1] -= len * s * thd;
+        }
+        (p, pd)
+    }
+
+    /// Whether the swing foot is ahead of the stance foot: along the stance line, or along the
+    /// landing line when it is tilted (its tangent `(cos Δ, −sin Δ)`).
+    fn swing_ahead(&self, x: &[f64]) -> bool {
+        let p = self.swing_foot(x);
+        if self.tilt == 0.0 {
+            p[0] > 0.0
+        } else {
+            let (s, c) = self.tilt_sc;
+            p[0] * c - p[1] * s > 0.0
+        }
     }
 
     /// The spec the walker was built from.
@@ -750,7 +866,7 @@ impl ChainWalker {
                 &self.floating,
                 &s.q[..n + 2],
                 &s.qd[..n + 2],
-                [0.0, -self.radius],
+                self.landing_offset(),
                 &self.floating_knees,
                 qd_post,
                 None,
@@ -923,8 +1039,14 @@ impl ChainWalker {
         let twin = k != 0 && k == self.twin_guard(mode);
         let base = match (free, self.base_guard(mode, k)) {
             (true, 0) => true,
-            (true, 1) => self.swing_foot(x)[0] > 0.0,
-            (false, 0) if h != 0.0 => self.swing_foot(x)[0] > 0.0,
+            (true, 1) => self.swing_ahead(x),
+            (false, 0) if h != 0.0 => self.swing_ahead(x),
+            (false, 0) if self.tilt != 0.0 => {
+                // the heel-strike factor in the landing line's frame (stance angle + Δ)
+                let qh = x[self.m];
+                self.swing_ahead(x)
+                    && (2.0 * (self.stance_angle(x) + self.tilt) + qh).abs() < qh.abs()
+            }
             (false, 0) => {
                 let qh = x[self.m];
                 self.swing_foot(x)[0] > 0.0 && (2.0 * self.stance_angle(x) + qh).abs() < qh.abs()
@@ -981,7 +1103,9 @@ impl ChainWalker {
             }
             _ => {
                 p.push(
-                    TipContact { offset: [0.0, -r] },
+                    TipContact {
+                        offset: self.landing_offset(),
+                    },
                     false,
                     true,
                     Role::NewStanceFoot,
@@ -1121,10 +1245,19 @@ impl ChainWalker {
                 Role::TrailingKnee(j) => (self.knee_name("trailing_knee", j), false),
                 Role::NewStanceKnee(j) => (self.knee_name("new_stance_knee", j), false),
             };
+            let (impulse, rate) = match p.roles[i] {
+                // the landing line's tangent (cos Δ, −sin Δ) and normal (sin Δ, cos Δ)
+                Role::NewStanceFoot if self.tilt != 0.0 => {
+                    let (s, c) = self.tilt_sc;
+                    let along = |v: [f64; 2]| [v[0] * c - v[1] * s, v[0] * s + v[1] * c];
+                    (along(res.impulse), along(res.rate))
+                }
+                _ => (res.impulse, res.rate),
+            };
             if contact {
                 if !it.unilateral {
-                    friction = if res.impulse[1] > 0.0 {
-                        (res.impulse[0] / res.impulse[1]).abs()
+                    friction = if impulse[1] > 0.0 {
+                        (impulse[0] / impulse[1]).abs()
                     } else {
                         f64::INFINITY
                     };
@@ -1138,8 +1271,8 @@ impl ChainWalker {
                         kind,
                         unilateral: it.unilateral,
                         active: res.active,
-                        impulse: res.impulse[c],
-                        rate_after: if res.active { 0.0 } else { res.rate[c] },
+                        impulse: impulse[c],
+                        rate_after: if res.active { 0.0 } else { rate[c] },
                     });
                 }
             } else {
@@ -1148,8 +1281,8 @@ impl ChainWalker {
                     kind: ImpulseKind::KneeStop,
                     unilateral: it.unilateral,
                     active: res.active,
-                    impulse: res.impulse[0],
-                    rate_after: if res.active { 0.0 } else { res.rate[0] },
+                    impulse: impulse[0],
+                    rate_after: if res.active { 0.0 } else { rate[0] },
                 });
             }
         }
@@ -1325,6 +1458,16 @@ impl HybridSystem for ChainWalker {
         };
         match (free, k) {
             (true, 0) => column(self.free_knee.unwrap_or(0), out, 0.0),
+            (_, k) if k < lead && self.tilt != 0.0 => {
+                // a tilted landing line (one walker's step of random slopes): lane by lane
+                let mut xi = [0.0; 2 * MAX_SEGMENTS];
+                for (l, o) in out.iter_mut().enumerate().take(lanes) {
+                    for (j, v) in xi.iter_mut().enumerate().take(n) {
+                        *v = x[(l, j)];
+                    }
+                    *o = self.above_tilted(self.swing_foot(&xi[..n]), [0.0; 2]).0;
+                }
+            }
             (_, k) if k < lead => {
                 pdw_simd::dispatch(
                     #[inline(always)]
@@ -1370,6 +1513,10 @@ impl HybridSystem for ChainWalker {
         let free = self.free_knee.is_some() && mode == FREE;
         let lead = if free { 2 } else { 1 };
         let ng = self.guards(mode).len();
+        if self.tilt != 0.0 {
+            // a tilted landing line (one walker's step of random slopes): lane by lane
+            return pdw_hybrid::guards_with_rates_by_lane(self, ws, mode, x, f, g, rate);
+        }
         let mut xc: [&[f64]; 4 * MAX_SEGMENTS] = [&[]; 4 * MAX_SEGMENTS];
         let mut fc: [&[f64]; 4 * MAX_SEGMENTS] = [&[]; 4 * MAX_SEGMENTS];
         for j in 0..2 * n {
@@ -1567,6 +1714,13 @@ impl HybridSystem for ChainWalker {
                     &mut pos,
                     &mut j[..2 * n],
                 ) {
+                    Ok(()) if self.tilt != 0.0 => {
+                        // ∇(p·n): rows y and z of the tip Jacobian weighted by n = (sin Δ, cos Δ)
+                        let (s, c) = self.tilt_sc;
+                        for i in 0..n {
+                            grad[i] = s * j[i] + c * j[n + i];
+                        }
+                    }
                     Ok(()) => grad[..n].copy_from_slice(&j[n..2 * n]),
                     Err(_) => grad[..d].fill(f64::NAN),
                 }
@@ -1651,7 +1805,7 @@ impl HybridSystem for ChainWalker {
                 &self.floating,
                 &s.q[..f],
                 &s.qd[..f],
-                [0.0, -self.radius],
+                self.landing_offset(),
                 &self.floating_knees,
                 &mut s.v[..f],
                 Some(&mut jf[..f * 2 * f]),
@@ -1715,6 +1869,9 @@ impl StepHeight for ChainWalker {
         let lead = if free { 2 } else { 1 };
         match (free, k) {
             (true, 0) => x[self.free_knee.unwrap_or(0)],
+            (_, k) if k < lead && self.tilt != 0.0 => {
+                self.above_tilted(self.swing_foot(x), [0.0; 2]).0
+            }
             (_, k) if k < lead => Self::above_foothold(self.swing_foot(x)[1], h),
             (_, k) => match k - lead {
                 0 => x[n],
@@ -1743,6 +1900,10 @@ impl StepHeight for ChainWalker {
                 (true, 0) => {
                     let j = self.free_knee.unwrap_or(0);
                     (x[j], f[j])
+                }
+                (_, k) if k < lead && self.tilt != 0.0 => {
+                    let (p, pd) = self.swing_foot_and_rate(x, f);
+                    self.above_tilted(p, pd)
                 }
                 (_, k) if k < lead => {
                     let (z, zr) = self.foot_height_and_rate(x, f);
@@ -1853,6 +2014,14 @@ impl Walker for ChainWalker {
     fn step_height(&self) -> Option<&dyn StepHeight> {
         Some(self as &dyn StepHeight)
     }
+    /// [`ChainWalker::with_tilt`] (module docs, "Landing on a tilted line").
+    fn on_tilted_line(&self, delta: f64) -> Option<Result<Box<dyn Walker>, String>> {
+        Some(
+            self.with_tilt(delta)
+                .map(|w| Box::new(w) as Box<dyn Walker>)
+                .map_err(|e| e.to_string()),
+        )
+    }
     /// `stance_reverses` counts while `q₀ > slope` ([`ChainWalker::admissible_on`]).
     fn admissible_on_slope(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {
         self.admissible_on(mode, k, x, slope, self.r.step_down)
@@ -1893,6 +2062,9 @@ impl Walker for ChainWalker {
         // level ground names the model as before step heights existed
         if r.step_down != 0.0 {
             s.push_str(&format!("step_down = {:?}\n", r.step_down));
+        }
+        if self.tilt != 0.0 {
+            s.push_str(&format!("tilt = {:?}\n", self.tilt));
         }
         for (k, g) in r.segments.iter().enumerate() {
             let [l, m, c, cn, i] = *g;
@@ -2099,6 +2271,9 @@ impl Walker for ChainWalker {
     /// `h` lower (module docs, "Step down"), so a swing foot ahead is measured from there.
     fn swing_clearance(&self, _mode: usize, x: &[f64]) -> Option<f64> {
         let [y, z] = self.swing_foot(x);
+        if self.tilt != 0.0 && self.swing_ahead(x) {
+            return Some(self.above_tilted([y, z], [0.0; 2]).0);
+        }
         let h = self.r.step_down;
         Some(if h > 0.0 && y > 0.0 { z + h } else { z })
     }

@@ -526,3 +526,122 @@ fn round_feet_take_steps_where_plane_geometry_puts_them() {
         );
     }
 }
+
+/// A tilted landing line (random slopes with round feet), from plane geometry written here: the
+/// stance arc centre at the origin, its contact point `c = (0, −r)`, the landing line through
+/// `c` with tangent `t = (cos Δ, −sin Δ)` and normal `n = (sin Δ, cos Δ)`; straight legs put the
+/// hip at `ℓ(−sin q₀, cos q₀)` and the swing arc centre at the hip plus `ℓ(sin ψ, −cos ψ)`
+/// (`ℓ = L − r`). The guard is the swing arc's distance to the line less `r`; at a touch the
+/// heel strike leaves the new contact point `S − r n` at rest and the ground pushes along `n`;
+/// the exact gradient and rate agree with differences, the batched guard with the scalar one.
+#[test]
+fn a_tilted_landing_line_is_where_plane_geometry_puts_it() {
+    let l_leg = 1.0; // the compass preset: a + b
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    for r in [0.0, 0.1] {
+        let base = with_radius(&presets::compass(&[]).unwrap(), r);
+        let ell = l_leg - r;
+        for delta in [0.03, -0.05, 0.2] {
+            let w = base.with_tilt(delta).unwrap();
+            assert_eq!(w.tilt(), delta);
+            let (s, c) = (delta.sin(), delta.cos());
+            let geometric = |q0: f64, psi: f64| {
+                let hip = [-ell * q0.sin(), ell * q0.cos()];
+                let sc = [hip[0] + ell * psi.sin(), hip[1] - ell * psi.cos()];
+                ((sc[0] * s + (sc[1] + r) * c) - r, sc)
+            };
+            let mut ws = Scratch::new();
+            for _ in 0..20 {
+                let q0: f64 = rng.random_range(-0.5..0.5);
+                let psi: f64 = rng.random_range(-0.6..0.6);
+                let mut x = vec![0.0; w.dim()];
+                x[0] = q0;
+                x[1] = psi - q0;
+                let (g, _) = geometric(q0, psi);
+                let got = w.guard(&mut ws, 0, 0, &x);
+                assert!((got - g).abs() < 1e-14, "r {r}, Δ {delta}: {got} vs {g}");
+            }
+            // a touch ahead: the swing leg's angle ψ where the arc meets the line (bisection)
+            let q0: f64 = -0.3;
+            let (mut lo, mut hi) = (q0 + 0.02, 1.2);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                // below the line at lo (the legs nearly together), above it at hi
+                if geometric(q0, mid).0 > 0.0 {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            let psi = 0.5 * (lo + hi);
+            let sc = geometric(q0, psi).1;
+            let mut x = vec![0.0; w.dim()];
+            x[0] = q0;
+            x[1] = psi - q0;
+            x[2] = -1.1;
+            x[3] = 0.8;
+            let g = w.guard(&mut ws, 0, 0, &x);
+            assert!(g.abs() < 1e-13, "r {r}, Δ {delta}: guard {g} at a touch");
+            assert!(w.admissible(0, 0, &x), "r {r}, Δ {delta}: a touch ahead");
+            // the point of the arc nearest the line is on the line, ahead of c
+            let touch = [sc[0] - r * s, sc[1] - r * c];
+            let along = touch[0] * c - (touch[1] + r) * s;
+            let across = touch[0] * s + (touch[1] + r) * c;
+            assert!(along > 0.0 && across.abs() < 1e-13, "{touch:?}");
+            let mut v = vec![0.0; 4];
+            let imp = w.heel_strike(&mut ws, &x, &mut v);
+            let mut q = vec![0.0; 4];
+            q[2..].copy_from_slice(&x[..2]);
+            let mut jt = vec![0.0; 8];
+            let mut pos = [0.0; 2];
+            pdw_soa::tip_position_derivatives(w.floating_chain(), &q, &mut pos, &mut jt).unwrap();
+            let vs: Vec<f64> = (0..2)
+                .map(|i| (0..4).map(|k| jt[i * 4 + k] * v[k]).sum())
+                .collect();
+            let omega = v[2] + v[3]; // the swing leg's absolute rate
+                                     // contact point velocity: Ṡ + ω × (−r n), ω × (a, b) = ω (−b, a)
+            let vc = [vs[0] + omega * r * c, vs[1] - omega * r * s];
+            assert!(
+                vc[0].abs() < 1e-12 && vc[1].abs() < 1e-12,
+                "r {r}, Δ {delta}: the new contact point moves at {vc:?}"
+            );
+            assert!(imp[0] * s + imp[1] * c > 0.0, "the ground pushes: {imp:?}");
+            // gradient and rate against differences, batched = scalar
+            for _ in 0..5 {
+                let x = random_state(&w, &mut rng, 0);
+                let mut grad = vec![0.0; 4];
+                w.guard_gradient(&mut ws, 0, 0, &x, &mut grad);
+                let mut ws2 = Scratch::new();
+                let fd = richardson(&mut |x, out| out[0] = w.guard(&mut ws2, 0, 0, x), &x, 1);
+                assert_close(&grad, &fd, 1e-8, &format!("tilted guard gradient r {r}"));
+                let mut f = vec![0.0; 4];
+                w.flow(&mut ws, 0, &x, &mut f);
+                let ng = w.guards(0).len();
+                let (mut gs, mut rates) = (vec![0.0; ng], vec![0.0; ng]);
+                w.guards_with_rates(&mut ws, 0, &x, &f, &mut gs, &mut rates);
+                let dot: f64 = grad.iter().zip(&f).map(|(a, b)| a * b).sum();
+                assert!((rates[0] - dot).abs() < 1e-12 * (1.0 + dot.abs()), "rate");
+                assert_eq!(gs[0].to_bits(), w.guard(&mut ws, 0, 0, &x).to_bits());
+                let xm = Mat::from_fn(3, 4, |_, j| x[j]);
+                let mut gb = vec![0.0; 3];
+                w.guard_batch(&mut ws, 0, 0, xm.as_ref(), &mut gb);
+                assert!(gb.iter().all(|v| v.to_bits() == gs[0].to_bits()));
+            }
+        }
+        // refused: a tilt of π/4 or more, and a tilt together with a step height
+        assert!(base.with_tilt(std::f64::consts::FRAC_PI_4).is_err());
+        let values: Vec<f64> = base
+            .param_values()
+            .into_iter()
+            .map(|(n, v)| if n == "step_down" { 0.05 } else { v })
+            .collect();
+        let stepped = ChainWalker::new(base.spec().clone(), &values).unwrap();
+        let e = stepped.with_tilt(0.01).unwrap_err().to_string();
+        assert!(e.contains("step_down"), "{e}");
+        // Δ = 0 is the model itself
+        assert_eq!(
+            base.with_tilt(0.0).unwrap().fingerprint(),
+            base.fingerprint()
+        );
+    }
+}

@@ -98,9 +98,13 @@ pub fn respond_from(
         returned_after: None,
     };
     let mut sec = vec![0.0; s0.len()];
+    // the walker stands on a line of the nominal slope (round feet on slopes: the stride
+    // depends on it, SlopeWalk::stride_from)
+    let mut last = mean;
     for k in 0..steps {
         let value = if k == 0 { mean + d } else { mean };
-        let st = walk.stride(&mut integ, &x, value).map_err(err)?;
+        let st = walk.stride_from(&mut integ, &x, last, value).map_err(err)?;
+        last = value;
         if !st.outcome.is_ok() {
             r.steps = k;
             r.fall = Some(st.outcome);

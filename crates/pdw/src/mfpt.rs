@@ -283,10 +283,12 @@ pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> 
     Ok(())
 }
 
-/// Refuses a model that cannot walk on terrain of kind `kind`: round feet on random slopes
-/// ([`check_model`]), a model without a `step_down` parameter on step heights.
+/// Refuses a model that cannot walk on terrain of kind `kind`: on random slopes a model
+/// without a frame change or a tilted landing line ([`Walker::on_tilted_line`]: round feet
+/// walk one walker at a time), a model without a `step_down` parameter on step heights.
 pub fn check_model_for(m: &BuiltModel, kind: TerrainKind) -> Result<(), InputError> {
     match kind {
+        TerrainKind::Slope if tilted(m) => Ok(()),
         TerrainKind::Slope => check_model(m),
         TerrainKind::StepDown if m.params.iter().any(|p| p.0 == "step_down") => Ok(()),
         TerrainKind::StepDown => Err(InputError(format!(
@@ -329,16 +331,42 @@ fn limit_message(e: &LimitError) -> String {
     }
 }
 
-/// Refuses a model that does not walk on random terrain (round feet), naming why.
+/// Whether `m` walks random slopes on tilted landing lines ([`Walker::on_tilted_line`]; round
+/// feet): its stride depends on the last line's slope too, so it has the Monte Carlo walk and
+/// the single disturbance but no Markov chain on its section and no gait sensitivity norm.
+pub fn tilted(m: &BuiltModel) -> bool {
+    m.walker.terrain_frame().is_none()
+        && m.walker.absolute_angle().is_some()
+        && m.walker.on_tilted_line(0.0).is_some_and(|r| r.is_ok())
+}
+
+/// Refuses a model whose stride on random slopes is not a function of the landing slope alone
+/// (round feet), for what needs one: the gait sensitivity norm, `--over`, the Markov chain.
 pub fn check_model(m: &BuiltModel) -> Result<(), InputError> {
     if m.walker.terrain_frame().is_some() {
         return Ok(());
     }
     Err(InputError(format!(
-        "model '{}' cannot walk on random terrain yet: random slopes are defined for point feet \
-         (a round foot's contact point rolls along the line); set foot_radius=0",
+        "model '{}' has no stride of one landing slope: with round feet the stance foot rolls on \
+         the last line while the swing foot lands on the next, so a stride depends on both \
+         slopes; its Monte Carlo walk and single disturbances run (pdw-sweep mfpt without \
+         --chain or --over), the Markov chain and the gait sensitivity norm on random slopes \
+         need point feet (foot_radius=0)",
         m.info.name
     )))
+}
+
+/// Refuses the Markov chain where its states do not hold the walk's: round feet on random
+/// slopes ([`check_model`]); `flag` names the request.
+pub fn check_chain_terrain(
+    m: &BuiltModel,
+    kind: TerrainKind,
+    flag: &str,
+) -> Result<(), InputError> {
+    match kind {
+        TerrainKind::Slope => check_model(m).map_err(|e| InputError(format!("{flag}: {}", e.0))),
+        TerrainKind::StepDown => Ok(()),
+    }
 }
 
 /// The model of `m` at any slope: its parameter values with only `slope` replaced, built by

@@ -10,6 +10,7 @@ mod input;
 mod mfpt;
 mod mfpt_closed_form;
 mod mfpt_lockstep;
+mod mfpt_round_slopes;
 mod mfpt_step_down;
 mod missed_events;
 mod rimless_chain;

@@ -274,9 +274,14 @@ fn round_feet_and_bad_requests_are_refused_with_clear_messages() {
     let m = round_compass();
     let e = mfpt::check_model(&m).unwrap_err().to_string();
     assert!(e.contains("point feet") && e.contains("foot_radius"), "{e}");
+    // round feet walk random slopes on tilted landing lines, with no stride of one slope
     let at = mfpt::model_at(&m);
-    let walk = SlopeWalk::new(&at, 0.05, mfpt::default_integrator());
-    assert!(matches!(walk, Err(LimitError::Model { .. })));
+    let walk = SlopeWalk::new(&at, 0.05, mfpt::default_integrator()).unwrap();
+    assert!(walk.tilted());
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let mut integ = walk.integrator(x0.len()).unwrap();
+    let e = walk.stride(&mut integ, &x0, 0.05).unwrap_err();
+    assert!(matches!(e, LimitError::Model { .. }), "{e}");
     assert!(mfpt::parse_sd("-1deg", &FLAGS)
         .unwrap_err()
         .0

@@ -394,6 +394,7 @@ pub(super) fn chain_plan(
         section: "--chain-section",
     };
     let section = mfpt::ChainSection::parse(&a.chain_section, flags.section)?;
+    mfpt::check_chain_terrain(m, mfpt::check_terrain(&a.terrain, &FLAGS)?, flags.chain)?;
     let c = mfpt::check_chain(m, a.mesh, Some(a.nodes), section, &flags)?;
     mfpt::check_layout(c, &a.chain_mesh, "--chain-mesh").map(Some)
 }
