@@ -266,6 +266,75 @@ fn parallel_batches_are_identical_for_any_thread_count_and_chunk_size() {
     }
 }
 
+/// The [`Bouncer`] that notes which pool thread started each item and takes a millisecond to
+/// start one (so that a thread left idle would show).
+struct Noted {
+    inner: Bouncer,
+    threads: std::sync::Mutex<std::collections::BTreeSet<usize>>,
+}
+
+impl<S: HybridSystem + ?Sized> LaneDriver<S> for Noted {
+    type Item = Item;
+    type Output = Out;
+    type Lane = LaneLog;
+
+    fn start(&self, sys: &S, item: &Item, lane: &mut LaneLog, x: &mut [f64]) -> (usize, f64) {
+        if let Some(i) = rayon::current_thread_index() {
+            self.threads.lock().unwrap().insert(i);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+        LaneDriver::<S>::start(&self.inner, sys, item, lane, x)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn on_stop(
+        &self,
+        sys: &S,
+        ws: &mut Scratch,
+        item: &Item,
+        lane: &mut LaneLog,
+        stop: StopReason,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+    ) -> Control {
+        self.inner.on_stop(sys, ws, item, lane, stop, mode, t, x)
+    }
+
+    fn finish(&self, sys: &S, item: &Item, lane: LaneLog, t: f64, x: &[f64]) -> Out {
+        LaneDriver::<S>::finish(&self.inner, sys, item, lane, t, x)
+    }
+}
+
+/// A call of fewer items than one block (`chunk`) still runs on every thread of the pool (a
+/// slow model's basin rows are handed over a fraction of a second at a time), with the same
+/// results.
+#[test]
+fn a_call_smaller_than_one_block_runs_on_every_thread() {
+    let sys = soft();
+    let drv = Noted {
+        inner: Bouncer {
+            max_events: 8,
+            start_mode: 0,
+        },
+        threads: Default::default(),
+    };
+    let its = items(200, 29);
+    let opts = BatchOptions {
+        lanes: 16,
+        integrator: Options::dop853(1e-10),
+    };
+    let reference = run_batch(dynsys(&sys), &drv.inner, &its, &opts).unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let out = run_batch_par(dynsys(&sys), &drv, &its, &opts, &pool, 1024, &|_| {}).unwrap();
+    assert!(out == reference);
+    let threads = drv.threads.into_inner().unwrap();
+    assert_eq!(threads.len(), 2, "items started on threads {threads:?}");
+}
+
 #[test]
 fn bad_batch_arguments_are_errors() {
     let sys = soft();
