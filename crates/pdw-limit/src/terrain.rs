@@ -427,12 +427,24 @@ impl<'a> SlopeWalk<'a> {
             });
         }
         let w = (self.model_at)(slope)?;
-        let map = StrideMap::new(w.as_ref(), self.integrator)?;
+        self.stride_in(integ, w.as_ref(), x, slope)
+    }
+
+    /// The stride of model `w`, whose frame is that of the line inclined `frame`, from `x` in
+    /// the mean slope's frame, its end shifted back to it.
+    fn stride_in(
+        &self,
+        integ: &mut Integrator,
+        w: &dyn Walker,
+        x: &[f64],
+        frame: f64,
+    ) -> Result<TerrainStride, LimitError> {
+        let map = StrideMap::new(w, self.integrator)?;
         let mut x0 = x.to_vec();
-        self.shift(&mut x0, self.mean, slope);
+        self.shift(&mut x0, self.mean, frame);
         let end = run_scalar_with(integ, map.system(), &map.driver(), &x0)?;
         let mut post = end.post;
-        self.shift(&mut post, slope, self.mean);
+        self.shift(&mut post, frame, self.mean);
         Ok(TerrainStride {
             outcome: end.outcome,
             post,
@@ -463,16 +475,7 @@ impl<'a> SlopeWalk<'a> {
             .on_tilted_line(slope - last)
             .ok_or_else(|| refused("the model has no tilted landing line".into()))?
             .map_err(refused)?;
-        let map = StrideMap::new(w.as_ref(), self.integrator)?;
-        let mut x0 = x.to_vec();
-        self.shift(&mut x0, self.mean, last);
-        let end = run_scalar_with(integ, map.system(), &map.driver(), &x0)?;
-        let mut post = end.post;
-        self.shift(&mut post, last, self.mean);
-        Ok(TerrainStride {
-            outcome: end.outcome,
-            post,
-        })
+        self.stride_in(integ, w.as_ref(), x, last)
     }
 
     /// A fresh integrator for this walk.

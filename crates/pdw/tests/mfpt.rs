@@ -256,17 +256,7 @@ fn the_estimator_recovers_a_known_geometric_mfpt() {
 /// The compass preset with round feet of radius 0.1 (a tenth of its leg), built from a spec
 /// file written for it.
 pub fn round_compass() -> pdw::BuiltModel {
-    let text = pdw_walkers::registry::preset_text("compass").unwrap();
-    let round = text.replacen("[parameters]", "foot_radius = 0.1\n\n[parameters]", 1);
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let k = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("pdw-round-{}-{k}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("round.toml");
-    std::fs::write(&path, round).unwrap();
-    let m = pdw::build(path.to_str().unwrap(), &[]).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
-    m
+    crate::mfpt_round_slopes::compass_with_radius(0.1)
 }
 
 #[test]

@@ -12,7 +12,7 @@ use pdw_limit::{StrideMap, StrideOutcome};
 const MEAN: f64 = 0.05235987755982988; // the compass preset's 3°
 
 /// The compass preset with round feet of radius `r`.
-fn compass_with_radius(r: f64) -> pdw::BuiltModel {
+pub fn compass_with_radius(r: f64) -> pdw::BuiltModel {
     let text = pdw_walkers::registry::preset_text("compass").unwrap();
     let round = text.replacen(
         "[parameters]",
