@@ -88,6 +88,9 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
         ),
         None => (Vec::new(), method_of(None, false)),
     };
+    if let Some(w) = agreement_warning(&chain, &est) {
+        crate::outln!("{w}");
+    }
     if let (Some(out), Some(_claim)) = (&a.out, claim) {
         write(out, &m, &plan, &section, &est, secs, (chain, method))?;
     }
@@ -576,6 +579,31 @@ fn mesh_box_text(cb: &mfpt::ChainBox) -> String {
     )
 }
 
+/// A warning when the finer mesh's chain and the walkers (no walker censored) disagree by more
+/// than 3 of the walkers' standard errors plus what the mesh refinement moved the chain: the
+/// chain then carries a discretisation error its own refinement does not show — the terrain
+/// quadrature's (the simplest walker on step heights, docs/cli.md) or a mesh too coarse — and
+/// the walkers are the reference.
+pub(super) fn agreement_warning(chain: &[(String, f64)], est: &MfptEstimate) -> Option<String> {
+    let get = |k: &str| chain.iter().find(|(n, _)| n == k).map(|(_, v)| *v);
+    let (coarse, fine) = (get("mfpt_coarse")?, get("mfpt_fine")?);
+    if est.censored > 0 || !(coarse.is_finite() && fine.is_finite()) {
+        return None;
+    }
+    let (mc, se) = (est.restricted_mean, est.restricted_stderr);
+    let allowed = 3.0 * se + (fine - coarse).abs();
+    ((fine - mc).abs() > allowed).then(|| {
+        format!(
+            "WARNING: the chain's MFPT {fine:.4} (finer mesh) and the walkers' {mc:.4} ± {se:.4} \
+             differ by {:.1} standard errors, more than the mesh refinement moved the chain \
+             ({:.4}): a discretisation error of the terrain quadrature (--nodes) or of the \
+             mesh; where both run the walkers are the reference",
+            (fine - mc).abs() / se.max(f64::MIN_POSITIVE),
+            (fine - coarse).abs()
+        )
+    })
+}
+
 /// A warning when the chain's absorption is more than 1 % landings outside the mesh rather
 /// than falls: its MFPT is then the time to leave the box, an underestimate of the time to fall.
 pub(super) fn box_warning(r: &pdw_limit::markov::ChainResult) -> Option<String> {
@@ -590,4 +618,52 @@ pub(super) fn box_warning(r: &pdw_limit::markov::ChainResult) -> Option<String> 
             r.fall_per_step
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::agreement_warning;
+    use pdw_limit::terrain::MfptEstimate;
+
+    fn est(mean: f64, se: f64, censored: usize) -> MfptEstimate {
+        MfptEstimate {
+            walkers: 4000,
+            falls: 4000 - censored,
+            censored,
+            total_steps: 42_906,
+            mfpt: mean,
+            stderr: se,
+            restricted_mean: mean,
+            restricted_stderr: se,
+            survival: Vec::new(),
+            failures: Vec::new(),
+        }
+    }
+
+    fn chain(coarse: f64, fine: f64) -> Vec<(String, f64)> {
+        vec![
+            ("mfpt_coarse".to_string(), coarse),
+            ("mfpt_fine".to_string(), fine),
+        ]
+    }
+
+    /// The simplest walker on step heights (docs/cli.md): 11.2061 / 11.2818 against
+    /// 10.7265 ± 0.1122 is 4.9 standard errors, the refinement 0.08 — warned; within 3 standard
+    /// errors plus the refinement, with censored walkers, or without a chain — silent.
+    #[test]
+    fn the_chain_is_flagged_where_it_and_the_walkers_disagree_beyond_its_refinement() {
+        let w = agreement_warning(&chain(11.2061, 11.2818), &est(10.7265, 0.1122, 0)).unwrap();
+        assert!(
+            w.starts_with("WARNING") && w.contains("4.9 standard errors"),
+            "{w}"
+        );
+        assert!(w.contains("--nodes"), "{w}");
+        // within 3 standard errors
+        assert!(agreement_warning(&chain(11.2, 11.05), &est(10.7265, 0.1122, 0)).is_none());
+        // beyond them, but the refinement moved the chain as much
+        assert!(agreement_warning(&chain(12.2, 11.28), &est(10.7265, 0.1122, 0)).is_none());
+        // censored walkers: the restricted mean is not the MFPT
+        assert!(agreement_warning(&chain(11.2, 11.28), &est(10.7265, 0.1122, 3)).is_none());
+        assert!(agreement_warning(&[], &est(10.7265, 0.1122, 0)).is_none());
+    }
 }
