@@ -283,6 +283,13 @@ impl SlopeTerrain {
     }
 }
 
+/// The absolute angle `(index, sign)` of a model that walks random slopes on tilted landing
+/// lines ([`Walker::on_tilted_line`], module docs "Round feet"); `None` for one that has none.
+pub fn tilted_frame(model: &dyn Walker) -> Option<(usize, f64)> {
+    let tilts = model.on_tilted_line(0.0).is_some_and(|r| r.is_ok());
+    model.absolute_angle().filter(|_| tilts)
+}
+
 /// The model at a given slope (the same model with only its slope changed).
 pub type ModelAt<'a> = &'a (dyn Fn(f64) -> Result<Box<dyn Walker>, LimitError> + Sync);
 
@@ -328,15 +335,14 @@ impl<'a> SlopeWalk<'a> {
         let frame = model.terrain_frame();
         // step heights shift nothing; a slope needs the model's absolute angle, and a model
         // whose change of line is not a rotation lands on a tilted line (round feet)
-        let tilts = || model.on_tilted_line(0.0).is_some_and(|r| r.is_ok());
-        let (absolute, sign, tilted) = match (kind, frame, model.absolute_angle()) {
+        let (absolute, sign, tilted) = match (kind, frame, tilted_frame(model.as_ref())) {
             (TerrainKind::StepDown, f, _) => {
                 let (a, s) = f.unwrap_or((0, 0.0));
                 (a, s, false)
             }
             (TerrainKind::Slope, Some((a, s)), _) => (a, s, false),
-            (TerrainKind::Slope, None, Some((a, s))) if tilts() => (a, s, true),
-            (TerrainKind::Slope, None, _) => {
+            (TerrainKind::Slope, None, Some((a, s))) => (a, s, true),
+            (TerrainKind::Slope, None, None) => {
                 return Err(LimitError::Model {
                     param: mean,
                     message: "the model does not walk on random slopes".into(),
@@ -371,9 +377,7 @@ impl<'a> SlopeWalk<'a> {
         integrator: Options,
     ) -> Result<Self, LimitError> {
         integrator.validate()?;
-        let model = model_at(mean)?;
-        let tilts = model.on_tilted_line(0.0).is_some_and(|r| r.is_ok());
-        let Some((absolute, sign)) = model.absolute_angle().filter(|_| tilts) else {
+        let Some((absolute, sign)) = tilted_frame(model_at(mean)?.as_ref()) else {
             return Err(LimitError::Model {
                 param: mean,
                 message: "the model has no tilted landing line".into(),
@@ -539,7 +543,8 @@ pub fn walk_one(
 /// Both terrains run in batched lockstep ([`crate::lockstep`], lanes and chunks of
 /// [`Lockstep::for_pool`]); step heights on a model without [`Walker::step_height`], and random
 /// slopes on tilted landing lines ([`SlopeWalk::tilted`]: round feet, whose flow depends on the
-/// line the stance foot rolls on), run one walker at a time ([`monte_carlo_scalar`]). `progress` gets the number of walkers done.
+/// line the stance foot rolls on), run one walker at a time ([`monte_carlo_scalar`]).
+/// `progress` gets the number of walkers done.
 pub fn monte_carlo(
     walk: &SlopeWalk,
     terrain: &SlopeTerrain,

@@ -1041,15 +1041,12 @@ impl ChainWalker {
             (true, 0) => true,
             (true, 1) => self.swing_ahead(x),
             (false, 0) if h != 0.0 => self.swing_ahead(x),
-            (false, 0) if self.tilt != 0.0 => {
-                // the heel-strike factor in the landing line's frame (stance angle + Δ)
+            (false, 0) => {
+                // the heel-strike factor in the landing line's frame (stance angle + Δ; adding
+                // Δ = 0 changes no bit of the factor)
                 let qh = x[self.m];
                 self.swing_ahead(x)
                     && (2.0 * (self.stance_angle(x) + self.tilt) + qh).abs() < qh.abs()
-            }
-            (false, 0) => {
-                let qh = x[self.m];
-                self.swing_foot(x)[0] > 0.0 && (2.0 * self.stance_angle(x) + qh).abs() < qh.abs()
             }
             (_, k) if k == lead => x[0] > slope,
             _ => true,

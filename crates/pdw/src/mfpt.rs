@@ -336,8 +336,7 @@ fn limit_message(e: &LimitError) -> String {
 /// the single disturbance but no Markov chain on its section and no gait sensitivity norm.
 pub fn tilted(m: &BuiltModel) -> bool {
     m.walker.terrain_frame().is_none()
-        && m.walker.absolute_angle().is_some()
-        && m.walker.on_tilted_line(0.0).is_some_and(|r| r.is_ok())
+        && pdw_limit::terrain::tilted_frame(m.walker.as_ref()).is_some()
 }
 
 /// Refuses a model whose stride on random slopes is not a function of the landing slope alone
