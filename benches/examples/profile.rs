@@ -188,6 +188,7 @@ fn main() {
                 .expect("fixed point")
                 .section;
             let map = StrideMap::new(&sys, opts).expect("valid options");
+            pdw_hybrid::phases::reset();
             let t0 = Instant::now();
             if what == "compass-stride" {
                 let mut integ = Integrator::new(4, opts).expect("valid options");
@@ -198,11 +199,13 @@ fn main() {
                 let states = vec![s0.clone(); n];
                 map.strides(&states, lanes).expect("strides");
             }
+            let per = t0.elapsed().as_secs_f64() * 1e9 / n as f64;
             println!(
                 "{n} compass strides ({what}, {:?}): {:.3} µs/stride",
                 opts.method,
-                t0.elapsed().as_secs_f64() * 1e6 / n as f64
+                per * 1e-3
             );
+            print_phases(per, n);
         }
         "rhs" => {
             // `profile rhs N [SPREAD]`: N calls of the batched right-hand side on 256 lanes,

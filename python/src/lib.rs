@@ -3,8 +3,8 @@
 //! Every function builds the model from the registry ([`pdw_walkers::model_info`]) with the
 //! same parameter names as the CLI's `--set`, calls the library crates (pdw-limit), and converts
 //! the result to Python objects. Computation runs on a worker thread with the interpreter
-//! released ([`interruptible`]), while the calling thread watches for signals: Ctrl-C raises
-//! `KeyboardInterrupt` within milliseconds; batched work runs on a rayon pool of [`THREADS`]
+//! released (`interruptible`), while the calling thread watches for signals: Ctrl-C raises
+//! `KeyboardInterrupt` within milliseconds; batched work runs on a rayon pool of `THREADS`
 //! threads. Invalid input raises `ValueError` with the library's message (the one the CLI
 //! prints).
 

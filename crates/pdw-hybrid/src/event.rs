@@ -4,7 +4,7 @@
 //! states x₀, x₁) together with its rate along the flow `ġ = ∇g·f`
 //! ([`HybridSystem::guards_with_rates`], column-wise over lanes in a batch). From these four
 //! numbers alone a column kernel decides whether the guard can show a crossing inside the step
-//! ([`may_cross`]: the guard's cubic Hermite over the step, bounded by the convex hull of its
+//! (`may_cross`: the guard's cubic Hermite over the step, bounded by the convex hull of its
 //! Bernstein control points, stays away from zero). Most steps of most guards are cleared
 //! there. A flagged step is then cleared after all when its cubic rules out a crossing in the
 //! guard's direction (`clears_direction`: it starts on the guard after a reset and moves

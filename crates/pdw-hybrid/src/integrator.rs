@@ -9,7 +9,7 @@
 //! the first step: the one the controller proposed when the previous call stopped
 //! ([`Options::warm_restart`](crate::Options::warm_restart)); guard values within
 //! [`HybridSystem::guard_tolerance`] of zero at the start count as zero, so the event just
-//! handled is not reported again (see the [`event`](crate::event) module).
+//! handled is not reported again (see the [`crate::event`] module).
 
 use crate::engine::{self, After, Ctl, LaneScratch, Store};
 use crate::event;

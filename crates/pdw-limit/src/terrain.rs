@@ -74,7 +74,7 @@ pub fn mix64(z: u64) -> u64 {
 }
 
 /// 64 random bits for `(seed, walker, step, stream)`: each coordinate mixed in turn, each with
-/// its own multiple of [`GOLDEN`] added so that swapping two coordinates changes the result.
+/// its own multiple of `GOLDEN` added so that swapping two coordinates changes the result.
 pub fn counter_bits(seed: u64, walker: u64, step: u64, stream: u64) -> u64 {
     let mut h = mix64(seed.wrapping_add(GOLDEN));
     for (j, v) in [walker, step, stream].into_iter().enumerate() {

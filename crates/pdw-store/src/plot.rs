@@ -1609,7 +1609,7 @@ fn draw_caption(
 /// axes in every frame (the bounding box of all links, joints and traces, padded, with equal
 /// scales on x and y): slope in brown, links black, joints as dots, swing-foot trace in blue.
 /// The caption band on top holds `title` and, below it, the frame's label, each at the
-/// largest font size (18 and 14 px at most) that fits the picture's width ([`fit_text`]).
+/// largest font size (18 and 14 px at most) that fits the picture's width (`fit_text`).
 pub fn animate_gif(
     path: impl AsRef<Path>,
     frames: &[Frame],

@@ -1481,7 +1481,7 @@ impl HybridSystem for ChainWalker {
     }
 
     /// Every guard with its exact rate `∇g·f`: the knee angle (rate `q̇_knee`), the swing-foot
-    /// height ([`ChainWalker::foot_height_and_rate`]), the stance rate (rate `q̈₀`), the stance
+    /// height (`ChainWalker::foot_height_and_rate`), the stance rate (rate `q̈₀`), the stance
     /// angle (rate `q̇₀`); `f = (q̇, q̈)`.
     fn guards_with_rates(
         &self,
@@ -2019,7 +2019,7 @@ impl Walker for ChainWalker {
                 .map_err(|e| e.to_string()),
         )
     }
-    /// `stance_reverses` counts while `q₀ > slope` ([`ChainWalker::admissible_on`]).
+    /// `stance_reverses` counts while `q₀ > slope` (`ChainWalker::admissible_on`).
     fn admissible_on_slope(&self, mode: usize, k: usize, x: &[f64], slope: f64) -> bool {
         self.admissible_on(mode, k, x, slope, self.r.step_down)
     }

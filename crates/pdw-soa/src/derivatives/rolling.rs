@@ -42,7 +42,7 @@ pub(crate) fn check_floating(chain: &Chain) -> Result<usize, SoaError> {
 /// Jᵀ ID_F(J q, J q̇, J q̈) = τ        (Jᵀ𝓜_F J q̈ = τ − Jᵀ C_F)
 /// ```
 /// with the joints where `locked[k]` is true held (`q̈_k = 0`, seed §3.4) and the others passive
-/// (`τ = 0`). `chain` is the floating chain (see [`check_floating`]: prismatic `y`, prismatic
+/// (`τ = 0`). `chain` is the floating chain (see `check_floating`: prismatic `y`, prismatic
 /// `z`, then the `n` joints of the walker rooted at the arc centre); `radius = 0` is a pinned
 /// base (the values agree with [`crate::pseudo_joint_dynamics`] to roundoff).
 ///
