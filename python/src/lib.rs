@@ -1548,7 +1548,7 @@ fn mfpt<'py>(
             .map_err(err)?;
         let (_, est) = pdw::mfpt::run(&m, &plan, &x0, &pool, &|_| {}).map_err(err)?;
         let pair = match &chain_plan {
-            Some(c) => Some(pdw::mfpt::chain_pair(&m, &plan, c, &x0, &pool).map_err(err)?),
+            Some(c) => Some(pdw::mfpt::chain_pair(&m, &plan, c, &x0, &pool, &|_| {}).map_err(err)?),
             None => None,
         };
         Ok((est, section, pair))

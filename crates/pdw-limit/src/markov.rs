@@ -389,6 +389,7 @@ fn strides_onto(
         lanes: 256,
         integrator: walk.options(),
     };
+    let progress = walk.batch_progress();
     let ends = run_batch_par(
         map.system(),
         &map.driver(),
@@ -396,7 +397,7 @@ fn strides_onto(
         &opts,
         pool,
         1024,
-        &|_| {},
+        &progress,
     )?;
     Ok(ends
         .into_iter()

@@ -405,7 +405,8 @@ pub fn map_onto(
         lanes: 256,
         integrator: walk.options(),
     };
-    let ends = run_batch_par(&sys, &sys.driver(), &items, &opts, pool, 1024, &|_| {})?;
+    let progress = walk.batch_progress();
+    let ends = run_batch_par(&sys, &sys.driver(), &items, &opts, pool, 1024, &progress)?;
     Ok(ends
         .iter()
         .map(|e| landing(&sys, &e.outcome, &e.post))
@@ -642,6 +643,7 @@ fn walk_visits(
             None => integ.insert(Integrator::new(sys.d + 1, walk.options())?),
         };
         let end = run_scalar_with(integ, &sys, &sys.driver(), &sys.lift(&s, 0.0))?;
+        walk.report(1);
         match landing(&sys, &end.outcome, &end.post).point {
             Some(p) => {
                 out.push(p.clone());

@@ -312,6 +312,9 @@ pub struct SlopeWalk<'a> {
     /// "Round feet")
     tilted: bool,
     integrator: Options,
+    /// Told the number of strides each batched call of a chain has finished since it last
+    /// told ([`SlopeWalk::with_progress`]).
+    progress: Option<&'a (dyn Fn(usize) + Sync)>,
 }
 
 impl<'a> SlopeWalk<'a> {
@@ -357,6 +360,7 @@ impl<'a> SlopeWalk<'a> {
             sign,
             tilted,
             integrator,
+            progress: None,
         })
     }
 
@@ -391,7 +395,36 @@ impl<'a> SlopeWalk<'a> {
             sign,
             tilted: true,
             integrator,
+            progress: None,
         })
+    }
+
+    /// The walk with `progress` told how many more strides the Markov chains' batched maps
+    /// ([`crate::markov`], [`crate::mid_stance`]) and their walks of visited states have run,
+    /// as they run (a front end's progress bar; calls come from the pool's threads).
+    pub fn with_progress(mut self, progress: &'a (dyn Fn(usize) + Sync)) -> Self {
+        self.progress = Some(progress);
+        self
+    }
+
+    /// `strides` more strides run ([`SlopeWalk::with_progress`]).
+    pub fn report(&self, strides: usize) {
+        if let Some(p) = self.progress {
+            p(strides);
+        }
+    }
+
+    /// A progress callback for one call of [`pdw_hybrid::run_batch_par`] (which tells the
+    /// call's items done so far, from any thread, not necessarily in order) that reports the
+    /// increments to [`SlopeWalk::report`].
+    pub(crate) fn batch_progress(&self) -> impl Fn(usize) + Sync + '_ {
+        let told = std::sync::atomic::AtomicUsize::new(0);
+        move |done: usize| {
+            let before = told.fetch_max(done, std::sync::atomic::Ordering::Relaxed);
+            if done > before {
+                self.report(done - before);
+            }
+        }
     }
 
     /// The mean slope `s̄`.
@@ -792,6 +825,7 @@ pub fn visited(
                 for k in 0..max_steps {
                     let s = terrain.slope(i as u64, k as u64 + 1);
                     let st = walk.stride(&mut integ, &x, s)?;
+                    walk.report(1);
                     if !st.outcome.is_ok() {
                         break;
                     }

@@ -494,7 +494,7 @@ fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
             section: mfpt::ChainSection::MidStance,
             layout,
         };
-        let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool).unwrap();
+        let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool, &|_| {}).unwrap();
         assert_eq!(get("mfpt_coarse"), Some(pair.results[0].mfpt));
         assert_eq!(get("mfpt_fine"), Some(pair.results[1].mfpt));
         match &pair.clouds {

@@ -559,9 +559,10 @@ pub fn visited_points(
     plan: &MfptPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<(Vec<Vec<f64>>, Vec<f64>), LimitError> {
     let at = model_at_param(m, plan.terrain.kind.param());
-    let walk = walk_of(&at, plan)?;
+    let walk = walk_of(&at, plan)?.with_progress(progress);
     let pts = terrain::visited(&walk, &plan.terrain, x0, BOX_WALKERS, BOX_STEPS, pool)?;
     let mut s0 = vec![0.0; m.info.section_names.len()];
     m.walker.project(x0, &mut s0);
@@ -576,7 +577,7 @@ pub fn visited_box(
     x0: &[f64],
     pool: &rayon::ThreadPool,
 ) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
-    let (pts, s0) = visited_points(m, plan, x0, pool)?;
+    let (pts, s0) = visited_points(m, plan, x0, pool, &|_| {})?;
     Ok(padded(Frame::identity(s0.len()).bounds(&pts, &s0)))
 }
 
@@ -587,8 +588,9 @@ pub fn visited_frame(
     plan: &MfptPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<(Frame, SectionBox), LimitError> {
-    let (mut pts, s0) = visited_points(m, plan, x0, pool)?;
+    let (mut pts, s0) = visited_points(m, plan, x0, pool, progress)?;
     pts.push(s0.clone());
     let frame = Frame::principal(&pts, s0.len());
     let bounds = padded(frame.bounds(&pts, &frame.to_frame(&s0)));
@@ -603,8 +605,10 @@ pub fn mid_stance_frame(
     plan: &MfptPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<(Frame, SectionBox), LimitError> {
-    let (_, frame, bounds) = mid_stance_points(m, plan, x0, (BOX_WALKERS, BOX_STEPS), pool)?;
+    let (_, frame, bounds) =
+        mid_stance_points(m, plan, x0, (BOX_WALKERS, BOX_STEPS), pool, progress)?;
     Ok((frame, bounds))
 }
 
@@ -617,9 +621,10 @@ pub fn mid_stance_points(
     x0: &[f64],
     (walkers, steps): (usize, usize),
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<(Vec<Vec<f64>>, Frame, SectionBox), LimitError> {
     let at = model_at_param(m, plan.terrain.kind.param());
-    let walk = walk_of(&at, plan)?;
+    let walk = walk_of(&at, plan)?.with_progress(progress);
     let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), walk.kind(), x0)?;
     let pts = mid_stance::visited(&walk, &plan.terrain, x0, sense, walkers, steps, pool)?;
     let Some(first) = pts.first() else {
@@ -642,6 +647,10 @@ fn padded((mut lo, mut hi): SectionBox) -> SectionBox {
     }
     (lo, hi)
 }
+
+/// Told how many more strides a chain's maps and walks have run, as they run (a progress bar;
+/// called from the pool's threads): [`pdw_limit::terrain::SlopeWalk::with_progress`].
+pub type Progress<'a> = dyn Fn(usize) + Sync + 'a;
 
 /// The terrain nodes `(s_l, w_l)` (slopes or step heights) of an `n`-point quadrature of
 /// `plan`'s terrain distribution ([`TerrainDist::quadrature`]: Gauss–Hermite for normals,
@@ -694,12 +703,13 @@ pub fn chain_box(
     chain: &ChainPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<ChainBox, LimitError> {
     let (frame, visited) = match chain.section {
-        ChainSection::Landing => visited_frame(m, plan, x0, pool)?,
-        ChainSection::MidStance => mid_stance_frame(m, plan, x0, pool)?,
+        ChainSection::Landing => visited_frame(m, plan, x0, pool, progress)?,
+        ChainSection::MidStance => mid_stance_frame(m, plan, x0, pool, progress)?,
     };
-    let r = chain_in(m, plan, chain, &frame, &visited, x0, pool)?;
+    let r = chain_in(m, plan, chain, &frame, &visited, x0, pool, progress)?;
     let absorbed = r.out_of_mesh + r.fall_per_step;
     let out_share = if absorbed > 0.0 {
         r.out_of_mesh / absorbed
@@ -715,7 +725,7 @@ pub fn chain_box(
         });
     }
     let at = model_at_param(m, plan.terrain.kind.param());
-    let walk = walk_of(&at, plan)?;
+    let walk = walk_of(&at, plan)?.with_progress(progress);
     let d = visited.0.len();
     let per_axis = HULL_MESH[d.clamp(1, 3) - 1];
     let slopes = terrain_nodes(plan, chain.nodes);
@@ -755,10 +765,12 @@ pub fn chain(
     pool: &rayon::ThreadPool,
 ) -> Result<pdw_limit::markov::ChainResult, LimitError> {
     let frame = Frame::identity(bounds.0.len());
-    chain_in(m, plan, chain, &frame, bounds, x0, pool)
+    chain_in(m, plan, chain, &frame, bounds, x0, pool, &|_| {})
 }
 
-/// The chain's MFPT from `x0` on `chain`'s mesh over `bounds`, a box of `frame`'s coordinates.
+/// The chain's MFPT from `x0` on `chain`'s mesh over `bounds`, a box of `frame`'s coordinates;
+/// `progress` told the strides as they run ([`Progress`]).
+#[allow(clippy::too_many_arguments)]
 pub fn chain_in(
     m: &BuiltModel,
     plan: &MfptPlan,
@@ -767,10 +779,11 @@ pub fn chain_in(
     bounds: &SectionBox,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<pdw_limit::markov::ChainResult, LimitError> {
     use pdw_limit::markov;
     let at = model_at_param(m, plan.terrain.kind.param());
-    let walk = walk_of(&at, plan)?;
+    let walk = walk_of(&at, plan)?.with_progress(progress);
     let slopes = terrain_nodes(plan, chain.nodes);
     let mesh = markov::Mesh {
         lo: bounds.0.clone(),
@@ -975,11 +988,13 @@ pub fn cloud_pair(
     chain: &ChainPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<ChainPair, LimitError> {
     let at = model_at_param(m, plan.terrain.kind.param());
-    let walk = walk_of(&at, plan)?;
+    let walk = walk_of(&at, plan)?.with_progress(progress);
     let sense = mid_stance::sweep_sense(walk.model(walk.mean())?.as_ref(), walk.kind(), x0)?;
-    let (pts, frame, bounds) = mid_stance_points(m, plan, x0, (CLOUD_WALKERS, CLOUD_STEPS), pool)?;
+    let (pts, frame, bounds) =
+        mid_stance_points(m, plan, x0, (CLOUD_WALKERS, CLOUD_STEPS), pool, progress)?;
     let slopes = terrain_nodes(plan, chain.nodes);
     let run = |n: usize| -> Result<(ChainResult, CloudStats), LimitError> {
         let t0 = std::time::Instant::now();
@@ -1030,17 +1045,18 @@ pub fn chain_pair(
     chain: &ChainPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    progress: &Progress,
 ) -> Result<ChainPair, LimitError> {
     if chain.layout == ChainMesh::Cloud {
-        return cloud_pair(m, plan, chain, x0, pool);
+        return cloud_pair(m, plan, chain, x0, pool, progress);
     }
-    let cb = chain_box(m, plan, chain, x0, pool)?;
+    let cb = chain_box(m, plan, chain, x0, pool, progress)?;
     let at = |n: usize| {
         let c = ChainPlan {
             mesh: n,
             ..chain.clone()
         };
-        chain_in(m, plan, &c, &cb.frame, &cb.bounds, x0, pool)
+        chain_in(m, plan, &c, &cb.frame, &cb.bounds, x0, pool, progress)
     };
     let results = [at(chain.mesh)?, at(2 * chain.mesh)?];
     let change = refinement_change(&results[0], &results[1]);

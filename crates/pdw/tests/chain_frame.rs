@@ -56,7 +56,7 @@ fn the_principal_axes_mesh_resolves_the_simplest_walkers_band_where_the_axis_box
 
     // the principal frame: its box is far smaller than the axis box, no widening is needed,
     // the two meshes agree within the refinement tolerance and with the walkers within 10 %
-    let cb = mfpt::chain_box(&m, &plan, &c(60), &x0, &pool).unwrap();
+    let cb = mfpt::chain_box(&m, &plan, &c(60), &x0, &pool, &|_| {}).unwrap();
     assert!(!cb.frame.is_identity());
     assert_eq!(cb.passes, 0, "box exits {:.3} of absorption", cb.out_share);
     let (_, edges) = cb.frame.edges(&cb.bounds);
@@ -66,8 +66,28 @@ fn the_principal_axes_mesh_resolves_the_simplest_walkers_band_where_the_axis_box
         area < 0.5 * axis_area,
         "frame box {area} vs axis box {axis_area}"
     );
-    let f60 = mfpt::chain_in(&m, &plan, &c(60), &cb.frame, &cb.bounds, &x0, &pool).unwrap();
-    let f120 = mfpt::chain_in(&m, &plan, &c(120), &cb.frame, &cb.bounds, &x0, &pool).unwrap();
+    let f60 = mfpt::chain_in(
+        &m,
+        &plan,
+        &c(60),
+        &cb.frame,
+        &cb.bounds,
+        &x0,
+        &pool,
+        &|_| {},
+    )
+    .unwrap();
+    let f120 = mfpt::chain_in(
+        &m,
+        &plan,
+        &c(120),
+        &cb.frame,
+        &cb.bounds,
+        &x0,
+        &pool,
+        &|_| {},
+    )
+    .unwrap();
     assert!(
         mfpt::refinement_warning(&f60, &f120, 60).is_none(),
         "{} / {}",

@@ -99,7 +99,7 @@ fn agrees_with_the_walkers(m: &pdw::BuiltModel, p: &MfptPlan, mesh: usize, nodes
     let (x0, _) = mfpt::start(m).unwrap();
     let (_, mc) = mfpt::run(m, p, &x0, &pool, &|_| {}).unwrap();
     assert_eq!(mc.censored, 0, "{mc:?}");
-    let pair = mfpt::chain_pair(m, p, &mid(mesh, nodes), &x0, &pool).unwrap();
+    let pair = mfpt::chain_pair(m, p, &mid(mesh, nodes), &x0, &pool, &|_| {}).unwrap();
     let [coarse, fine] = &pair.results;
     eprintln!(
         "{}: Monte Carlo {} ± {}; mid-stance chain {} (mesh/2 {}), box {:?}",
@@ -194,9 +194,15 @@ fn cloud_agrees_with_the_walkers(m: &pdw::BuiltModel, p: &MfptPlan, mesh: usize,
     let at = mfpt::model_at_param(m, p.terrain.kind.param());
     let walk = mfpt::walk_of(&at, p).unwrap();
     let sense = mid_stance::sweep_sense(m.walker.as_ref(), p.terrain.kind, &x0).unwrap();
-    let (visited, _, _) =
-        mfpt::mid_stance_points(m, p, &x0, (mfpt::CLOUD_WALKERS, mfpt::CLOUD_STEPS), &pool)
-            .unwrap();
+    let (visited, _, _) = mfpt::mid_stance_points(
+        m,
+        p,
+        &x0,
+        (mfpt::CLOUD_WALKERS, mfpt::CLOUD_STEPS),
+        &pool,
+        &|_| {},
+    )
+    .unwrap();
     let mut cloud = pdw_limit::cloud::Cloud::thinned(&visited, mesh).unwrap();
     let nodes = mfpt::terrain_nodes(p, nodes);
     let cc = mid_stance::cloud_transitions(
@@ -401,4 +407,46 @@ fn the_simplest_walkers_legs_together_map_is_its_walk_and_the_quadrature_its_exc
     assert!((me - mw).abs() < 3.0 * sw, "{me} against {mw} ± {sw}");
     assert!(dq > 3.0 * sq, "Gauss-Hermite: {dq} ± {sq}");
     assert!(df.abs() < 3.0 * sf, "{q} quantiles: {df} ± {sf}");
+}
+
+/// The strides a chain reports as it runs ([`mfpt::Progress`], the CLI's counter) are the
+/// strides it maps, counted once whichever thread ran them: on a mesh of `n^d` nodes with `N`
+/// terrain nodes, `N n^d` at mid-stance and `N (N n^d + 1)` just after heel strike (every layer
+/// and the start's row onto every node); the calls are increments, and the count is the same
+/// with one thread and with two.
+#[test]
+fn a_chain_reports_every_stride_it_maps_once() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let slope = 3f64.to_radians();
+    let m = pdw::build("compass", &[("slope".to_string(), slope)]).unwrap();
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let p = plan(TerrainKind::Slope, slope, 0.2f64.to_radians(), 50);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for (section, want) in [
+            (ChainSection::MidStance, 5 * 6usize.pow(3)),
+            (ChainSection::Landing, 5 * (5 * 6usize.pow(3) + 1)),
+        ] {
+            let c = ChainPlan {
+                section,
+                ..mid(6, 5)
+            };
+            let cb = mfpt::chain_box(&m, &p, &c, &x0, &pool, &|_| {}).unwrap();
+            let (count, calls) = (AtomicUsize::new(0), AtomicUsize::new(0));
+            let tell = |n: usize| {
+                assert!(n > 0, "a report of no stride");
+                count.fetch_add(n, Ordering::Relaxed);
+                calls.fetch_add(1, Ordering::Relaxed);
+            };
+            mfpt::chain_in(&m, &p, &c, &cb.frame, &cb.bounds, &x0, &pool, &tell).unwrap();
+            assert_eq!(count.into_inner(), want, "{section:?}, {threads} threads");
+            assert!(
+                calls.into_inner() >= 5,
+                "{section:?}: one report per node at least"
+            );
+        }
+    }
 }

@@ -264,7 +264,7 @@ fn the_mid_stance_chain_of_the_rimless_wheel_matches_the_closed_form_chain() {
         section: mfpt::ChainSection::MidStance,
         layout: Default::default(),
     };
-    let pair = mfpt::chain_pair(&m, &plan(), &c, &x0, &pool()).unwrap();
+    let pair = mfpt::chain_pair(&m, &plan(), &c, &x0, &pool(), &|_| {}).unwrap();
     let (coarse, finer) = (pair.results[0].mfpt, pair.results[1].mfpt);
     eprintln!("closed form {fine} (h×2: {half}); mid-stance {finer} (mesh/2: {coarse})");
     let tol = (finer - coarse).abs() + (fine - half).abs();
@@ -297,7 +297,7 @@ fn the_mid_stance_chain_reports_the_landings_its_box_cannot_hold() {
         section: mfpt::ChainSection::MidStance,
         layout: Default::default(),
     };
-    let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool()).unwrap();
+    let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool(), &|_| {}).unwrap();
     assert_eq!(
         pair.chain_box.passes,
         mfpt::HULL_PASSES,
@@ -372,7 +372,7 @@ fn the_chains_widened_box_makes_falls_not_box_exits_absorb() {
         narrow.out_of_mesh > 10.0 * narrow.fall_per_step,
         "{narrow:?}"
     );
-    let cb = mfpt::chain_box(&m, &plan, &c(200), &x0, &pool).unwrap();
+    let cb = mfpt::chain_box(&m, &plan, &c(200), &x0, &pool, &|_| {}).unwrap();
     assert!(cb.passes > 0 && cb.out_share > 0.9, "{cb:?}");
     let wide = cb.bounds;
     let run = |n| mfpt::chain(&m, &plan, &c(n), &wide, &x0, &pool).unwrap();
@@ -439,7 +439,7 @@ fn engine_pair(m: &pdw::BuiltModel, plan: &MfptPlan, x0: &[f64], mesh: usize) ->
         section: Default::default(),
         layout: Default::default(),
     };
-    let pair = mfpt::chain_pair(m, plan, &c, x0, &pool()).unwrap();
+    let pair = mfpt::chain_pair(m, plan, &c, x0, &pool(), &|_| {}).unwrap();
     (pair.results[0].mfpt, pair.results[1].mfpt)
 }
 

@@ -6,6 +6,7 @@ use super::basin::progress_bar;
 use super::build_model;
 use crate::args::InputError;
 use crate::cli::MfptArgs;
+use indicatif::ProgressBar;
 use pdw::mfpt::{self, MfptFlags, MfptPlan, StrideMap};
 use pdw::BuiltModel;
 use pdw_limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
@@ -83,7 +84,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     summary(&m, &plan, &section, &est, secs);
     let (chain, method) = match chain {
         Some(c) => (
-            run_chain(&m, &plan, &c, &x0, &pool)?,
+            run_chain(&m, &plan, &c, &x0, &pool, a.quiet)?,
             method_of(Some((c.section, c.layout)), legs_together(&m, &plan)),
         ),
         None => (Vec::new(), method_of(None, false)),
@@ -402,19 +403,36 @@ pub(super) fn chain_plan(
     mfpt::check_layout(c, &a.chain_mesh, "--chain-mesh").map(Some)
 }
 
+/// A counter of the chain's strides on stderr, with the stage in its message (hidden with
+/// --quiet or off a terminal): the chain's total is not known before its box and, on a cloud,
+/// its closure are.
+fn chain_progress(quiet: bool) -> ProgressBar {
+    let pb = progress_bar(
+        quiet,
+        0,
+        "{elapsed_precise} {spinner} {human_pos} strides of the chain  {per_sec}  {msg}",
+    );
+    pb.enable_steady_tick(std::time::Duration::from_millis(250));
+    pb
+}
+
 /// The chain at `--mesh` and twice as fine over the box the walkers visit; prints both and
-/// returns the numbers the file keeps.
+/// returns the numbers the file keeps. A counter of its strides on stderr unless `quiet`.
 pub(super) fn run_chain(
     m: &BuiltModel,
     plan: &MfptPlan,
     c: &mfpt::ChainPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    quiet: bool,
 ) -> anyhow::Result<Vec<(String, f64)>> {
     if c.layout == mfpt::ChainMesh::Cloud {
-        return run_cloud(m, plan, c, x0, pool);
+        return run_cloud(m, plan, c, x0, pool, quiet);
     }
-    let cb = mfpt::chain_box(m, plan, c, x0, pool)?;
+    let pb = chain_progress(quiet);
+    let tell = |n: usize| pb.inc(n as u64);
+    pb.set_message("the box the walkers visit");
+    let cb = mfpt::chain_box(m, plan, c, x0, pool, &tell)?;
     let how = if cb.passes == 0 {
         "the walkers' box, padded".to_string()
     } else {
@@ -426,13 +444,15 @@ pub(super) fn run_chain(
             100.0 * cb.out_share
         )
     };
-    crate::outln!(
-        "Markov chain: {} {} nodes of the terrain, {} section, mesh over {} ({how})",
-        c.nodes,
-        mfpt::quadrature_name(&plan.terrain.dist),
-        c.section.name(),
-        mesh_box_text(&cb)
-    );
+    pb.suspend(|| {
+        crate::outln!(
+            "Markov chain: {} {} nodes of the terrain, {} section, mesh over {} ({how})",
+            c.nodes,
+            mfpt::quadrature_name(&plan.terrain.dist),
+            c.section.name(),
+            mesh_box_text(&cb)
+        )
+    });
     let mut out = vec![
         ("nodes".to_string(), c.nodes as f64),
         ("box_widening_passes".to_string(), cb.passes as f64),
@@ -448,11 +468,13 @@ pub(super) fn run_chain(
             mesh: n,
             ..c.clone()
         };
-        let r = mfpt::chain_in(m, plan, &fine, &cb.frame, &cb.bounds, x0, pool)?;
+        pb.set_message(format!("mesh {n}"));
+        let r = mfpt::chain_in(m, plan, &fine, &cb.frame, &cb.bounds, x0, pool, &tell)?;
         let secs = t0.elapsed().as_secs_f64();
-        report_mesh(&r, (n, secs), label, &format!("{secs:.1} s"), &mut out);
+        pb.suspend(|| report_mesh(&r, (n, secs), label, &format!("{secs:.1} s"), &mut out));
         results.push(r);
     }
+    pb.finish_and_clear();
     let change = mfpt::refinement_change(&results[0], &results[1]);
     out.push(("refinement_change".to_string(), change));
     if let Some(w) = mfpt::refinement_warning(&results[0], &results[1], c.mesh) {
@@ -506,6 +528,7 @@ fn run_cloud(
     c: &mfpt::ChainPlan,
     x0: &[f64],
     pool: &rayon::ThreadPool,
+    quiet: bool,
 ) -> anyhow::Result<Vec<(String, f64)>> {
     crate::outln!(
         "Markov chain: {} {} nodes of the terrain, mid-stance section{}, on a cloud: the states \
@@ -525,7 +548,14 @@ fn run_cloud(
         mfpt::CLOUD_PASSES
     );
     let t0 = Instant::now();
-    let pair = mfpt::cloud_pair(m, plan, c, x0, pool)?;
+    let pb = chain_progress(quiet);
+    pb.set_message(format!(
+        "the visited states, the clouds of mesh {} and {}",
+        c.mesh,
+        2 * c.mesh
+    ));
+    let pair = mfpt::cloud_pair(m, plan, c, x0, pool, &|n| pb.inc(n as u64))?;
+    pb.finish_and_clear();
     let mut out = vec![
         ("nodes".to_string(), c.nodes as f64),
         ("box_widening_passes".to_string(), 0.0),

@@ -53,7 +53,7 @@ pub(super) fn run(
         let (_, est) = mfpt::run(m, &p, &x0, &pool, &|n| pb.set_position(done + n as u64))?;
         let chain = match &chain {
             Some(c) => {
-                let numbers = pb.suspend(|| run_chain(m, &p, c, &x0, &pool))?;
+                let numbers = pb.suspend(|| run_chain(m, &p, c, &x0, &pool, a.quiet))?;
                 let get = |k: &str| numbers.iter().find(|e| e.0 == k).map_or(f64::NAN, |e| e.1);
                 [get("mfpt_coarse"), get("mfpt_fine")]
             }

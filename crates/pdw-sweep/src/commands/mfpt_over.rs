@@ -53,7 +53,7 @@ pub(super) fn run(
             pb.set_position(done + n as u64)
         })?;
         if let (Some(c), Some(x0)) = (chain_plan(a, &m)?, x0) {
-            let numbers = pb.suspend(|| run_chain(&m, &p, &c, &x0, &pool))?;
+            let numbers = pb.suspend(|| run_chain(&m, &p, &c, &x0, &pool, a.quiet))?;
             let get = |k: &str| numbers.iter().find(|e| e.0 == k).map_or(f64::NAN, |e| e.1);
             row.chain = [get("mfpt_coarse"), get("mfpt_fine")];
         }
