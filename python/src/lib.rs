@@ -1557,7 +1557,13 @@ fn mfpt<'py>(
     d.set_item("start", start)?;
     d.set_item("stride_map", plan.stride_map.describe(&m))?;
     if let (Some(c), Some(pair)) = (&chain_plan, &pair) {
-        d.set_item("chain", chain_dict(py, &plan, c, pair)?)?;
+        let cd = chain_dict(py, &plan, c, pair)?;
+        let [coarse, fine] = &pair.results;
+        cd.set_item(
+            "agreement",
+            pdw::mfpt::agreement_warning(coarse.mfpt, fine.mfpt, &est, "nodes"),
+        )?;
+        d.set_item("chain", cd)?;
     }
     Ok(d)
 }
@@ -1618,7 +1624,8 @@ fn estimate_dict<'py>(
 
 /// The chain's results as `mfpt(..., chain=True)["chain"]`: per mesh (arrays of two: `mesh`,
 /// `mfpt`, `lambda`, `mfpt_lambda` = 1/(1 − λ) − 1, `mfpt_quasi_stationary`, `fall_per_step`,
-/// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged), `nodes`,
+/// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged),
+/// `agreement` (set by the caller: the chain against the walkers, None when they agree), `nodes`,
 /// `quadrature`, `section` (`landing` or `mid-stance`), `layout` (`grid` or `cloud`), and
 /// `box`: `corner`, `edges` (rows), `widening_passes`, `out_share`; on a cloud also `cloud`
 /// (arrays of two: `cell`, `seeds`, `nodes`, `passes`).

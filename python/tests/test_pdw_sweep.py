@@ -601,6 +601,15 @@ def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
     change = abs(c["mfpt"][1] - c["mfpt"][0]) / max(c["mfpt"])
     assert abs(c["refinement_change"] - change) < 1e-12
     assert (c["warning"] is None) == (change <= 0.1)
+    assert c["agreement"] is None
+    # a quadrature of 4 nodes: the chain's 83.7 against the walkers' 115.8 ± 2.6 is flagged,
+    # by the rule the docs give (3 standard errors plus the refinement's change)
+    r4 = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True,
+                  mesh=100, nodes=4)
+    c4 = r4["chain"]
+    beyond = abs(c4["mfpt"][1] - r4["restricted_mean"]) - abs(c4["mfpt"][1] - c4["mfpt"][0])
+    assert beyond > 3 * r4["restricted_stderr"]
+    assert c4["agreement"].startswith("WARNING") and "quadrature (nodes)" in c4["agreement"]
     # the box: a corner and one edge per section axis
     assert c["box"]["corner"].shape == (1,) and c["box"]["edges"].shape == (1, 1)
     assert c["box"]["corner"][0] < r["start"][0] < c["box"]["corner"][0] + c["box"]["edges"][0, 0]

@@ -841,6 +841,37 @@ pub fn refinement_warning(coarse: &ChainResult, fine: &ChainResult, n: usize) ->
     })
 }
 
+/// A warning when the chain's MFPT on its finer mesh (`fine`; `coarse` on the mesh half as
+/// fine) and the walkers' restricted mean (none censored) disagree by more than 3 of the
+/// walkers' standard errors plus what the mesh refinement moved the chain: the chain then
+/// carries a discretisation error its own refinement does not show — the terrain quadrature's
+/// (the simplest walker on step heights, docs/cli.md) or a mesh too coarse — and the walkers
+/// are the reference. `nodes_flag` names the quadrature's option in the caller's words. `None`
+/// where they agree, a walker was censored (the restricted mean is then not the MFPT), or an
+/// MFPT is not finite.
+pub fn agreement_warning(
+    coarse: f64,
+    fine: f64,
+    est: &MfptEstimate,
+    nodes_flag: &str,
+) -> Option<String> {
+    if est.censored > 0 || !(coarse.is_finite() && fine.is_finite()) {
+        return None;
+    }
+    let (mc, se) = (est.restricted_mean, est.restricted_stderr);
+    let allowed = 3.0 * se + (fine - coarse).abs();
+    ((fine - mc).abs() > allowed).then(|| {
+        format!(
+            "WARNING: the chain's MFPT {fine:.4} (finer mesh) and the walkers' {mc:.4} ± {se:.4} \
+             differ by {:.1} standard errors, more than the mesh refinement moved the chain \
+             ({:.4}): a discretisation error of the terrain quadrature ({nodes_flag}) or of the \
+             mesh; where both run the walkers are the reference",
+            (fine - mc).abs() / se.max(f64::MIN_POSITIVE),
+            (fine - coarse).abs()
+        )
+    })
+}
+
 /// The terrain distribution in words, for reports and files: its name, and for a list of
 /// values how many there are, their mean and standard deviation.
 pub fn dist_words(d: &TerrainDist) -> String {

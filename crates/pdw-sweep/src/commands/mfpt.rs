@@ -609,29 +609,11 @@ fn mesh_box_text(cb: &mfpt::ChainBox) -> String {
     )
 }
 
-/// A warning when the finer mesh's chain and the walkers (no walker censored) disagree by more
-/// than 3 of the walkers' standard errors plus what the mesh refinement moved the chain: the
-/// chain then carries a discretisation error its own refinement does not show — the terrain
-/// quadrature's (the simplest walker on step heights, docs/cli.md) or a mesh too coarse — and
-/// the walkers are the reference.
+/// [`mfpt::agreement_warning`] of the chain's numbers as the file keeps them (`mfpt_coarse`,
+/// `mfpt_fine`; none without a chain).
 pub(super) fn agreement_warning(chain: &[(String, f64)], est: &MfptEstimate) -> Option<String> {
     let get = |k: &str| chain.iter().find(|(n, _)| n == k).map(|(_, v)| *v);
-    let (coarse, fine) = (get("mfpt_coarse")?, get("mfpt_fine")?);
-    if est.censored > 0 || !(coarse.is_finite() && fine.is_finite()) {
-        return None;
-    }
-    let (mc, se) = (est.restricted_mean, est.restricted_stderr);
-    let allowed = 3.0 * se + (fine - coarse).abs();
-    ((fine - mc).abs() > allowed).then(|| {
-        format!(
-            "WARNING: the chain's MFPT {fine:.4} (finer mesh) and the walkers' {mc:.4} ± {se:.4} \
-             differ by {:.1} standard errors, more than the mesh refinement moved the chain \
-             ({:.4}): a discretisation error of the terrain quadrature (--nodes) or of the \
-             mesh; where both run the walkers are the reference",
-            (fine - mc).abs() / se.max(f64::MIN_POSITIVE),
-            (fine - coarse).abs()
-        )
-    })
+    mfpt::agreement_warning(get("mfpt_coarse")?, get("mfpt_fine")?, est, "--nodes")
 }
 
 /// A warning when the chain's absorption is more than 1 % landings outside the mesh rather
