@@ -66,28 +66,10 @@ fn the_principal_axes_mesh_resolves_the_simplest_walkers_band_where_the_axis_box
         area < 0.5 * axis_area,
         "frame box {area} vs axis box {axis_area}"
     );
-    let f60 = mfpt::chain_in(
-        &m,
-        &plan,
-        &c(60),
-        &cb.frame,
-        &cb.bounds,
-        &x0,
-        &pool,
-        &|_| {},
-    )
-    .unwrap();
-    let f120 = mfpt::chain_in(
-        &m,
-        &plan,
-        &c(120),
-        &cb.frame,
-        &cb.bounds,
-        &x0,
-        &pool,
-        &|_| {},
-    )
-    .unwrap();
+    let on_frame = |n: usize| {
+        mfpt::chain_in(&m, &plan, &c(n), &cb.frame, &cb.bounds, &x0, &pool, &|_| {}).unwrap()
+    };
+    let (f60, f120) = (on_frame(60), on_frame(120));
     assert!(
         mfpt::refinement_warning(&f60, &f120, 60).is_none(),
         "{} / {}",
