@@ -1563,6 +1563,10 @@ fn mfpt<'py>(
             "agreement",
             pdw::mfpt::agreement_warning(coarse.mfpt, fine.mfpt, &est, "nodes"),
         )?;
+        cd.set_item(
+            "node_warning",
+            pdw::mfpt::zero_height_node_warning(&plan, c.nodes, "nodes"),
+        )?;
         d.set_item("chain", cd)?;
     }
     Ok(d)

@@ -564,6 +564,11 @@ def test_mfpt_on_step_heights():
     assert r2["mfpt"] < r["mfpt"]
     with pytest.raises(ValueError, match="not a height"):
         pdw.mfpt("rimless", terrain="step-down", sd="1deg")
+    # the chain's rule with a node at a step height of exactly 0 (odd, mean 0) is warned of
+    kw = dict(terrain="step-down", sd=0.01, walkers=50, max_steps=500, seed=2, chain=True, mesh=20)
+    odd = pdw.mfpt("rimless", nodes=5, **kw)["chain"]["node_warning"]
+    assert odd.startswith("WARNING") and "nodes 5" in odd
+    assert pdw.mfpt("rimless", nodes=6, **kw)["chain"]["node_warning"] is None
     # the compass walks on step heights; draws beyond its 1 m legs are refused
     rc = pdw.mfpt("compass", terrain="step-down", sd=0.002, walkers=20, max_steps=30)
     assert rc["falls"] + rc["censored"] == 20
@@ -601,7 +606,7 @@ def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
     change = abs(c["mfpt"][1] - c["mfpt"][0]) / max(c["mfpt"])
     assert abs(c["refinement_change"] - change) < 1e-12
     assert (c["warning"] is None) == (change <= 0.1)
-    assert c["agreement"] is None
+    assert c["agreement"] is None and c["node_warning"] is None
     # a quadrature of 4 nodes: the chain's 83.7 against the walkers' 115.8 ± 2.6 is flagged,
     # by the rule the docs give (3 standard errors plus the refinement's change)
     r4 = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True,

@@ -450,3 +450,30 @@ fn a_chain_reports_every_stride_it_maps_once() {
         }
     }
 }
+
+/// The warning of a terrain node at a step height of exactly 0 (level ground, the step model's
+/// limit from below only): set on step heights of mean 0 with an odd symmetric rule (Gauss–
+/// Hermite, Gauss–Legendre), not with an even one, a mean off 0, no spread, or on slopes.
+#[test]
+fn a_node_at_zero_step_height_is_warned_of() {
+    let warn = |kind, mean, sd, dist: pdw_limit::terrain::TerrainDist, nodes| {
+        let mut p = plan(kind, mean, sd, 1);
+        p.terrain.dist = dist;
+        mfpt::zero_height_node_warning(&p, nodes, "--nodes")
+    };
+    use pdw_limit::terrain::TerrainDist::{Normal, Uniform};
+    let w = warn(TerrainKind::StepDown, 0.0, 0.0005, Normal, 11).unwrap();
+    assert!(w.contains("--nodes 11") && w.contains("even"), "{w}");
+    assert!(warn(TerrainKind::StepDown, 0.0, 0.0005, Uniform, 3).is_some());
+    for (kind, mean, sd, nodes) in [
+        (TerrainKind::StepDown, 0.0, 0.0005, 12),
+        (TerrainKind::StepDown, 0.001, 0.0005, 11),
+        (TerrainKind::StepDown, 0.0, 0.0, 11),
+        (TerrainKind::Slope, 0.0, 0.0005, 11),
+    ] {
+        assert!(
+            warn(kind, mean, sd, Normal, nodes).is_none(),
+            "{kind:?} {mean} {sd} {nodes}"
+        );
+    }
+}

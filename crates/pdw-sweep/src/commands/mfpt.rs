@@ -429,6 +429,9 @@ pub(super) fn run_chain(
     if c.layout == mfpt::ChainMesh::Cloud {
         return run_cloud(m, plan, c, x0, pool, quiet);
     }
+    if let Some(w) = mfpt::zero_height_node_warning(plan, c.nodes, "--nodes") {
+        crate::outln!("{w}");
+    }
     let pb = chain_progress(quiet);
     let tell = |n: usize| pb.inc(n as u64);
     pb.set_message("the box the walkers visit");
@@ -547,6 +550,9 @@ fn run_cloud(
         2 * c.mesh,
         mfpt::CLOUD_PASSES
     );
+    if let Some(w) = mfpt::zero_height_node_warning(plan, c.nodes, "--nodes") {
+        crate::outln!("{w}");
+    }
     let t0 = Instant::now();
     let pb = chain_progress(quiet);
     pb.set_message(format!(
