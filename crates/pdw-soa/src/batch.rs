@@ -166,6 +166,18 @@ impl BatchWorkspace {
             lc: vec![LinkChunk::default(); n],
         }
     }
+    /// The bytes [`BatchWorkspace::new`] allocates for `lanes` states of a chain of `n` joints,
+    /// known before building it (in the manner of faer's `*_scratch` queries): 17 per-link
+    /// columns and 7 more of one block of `min(lanes, BLOCK)` lanes, and one [`WIDTH`]-lane
+    /// chunk buffer per link for the articulated-body recursion. It stops growing at
+    /// [`BLOCK`] lanes: any lane count is processed block by block in the same memory (tested
+    /// against a byte-counting allocator).
+    pub fn scratch_bytes(n: usize, lanes: usize) -> usize {
+        const F: usize = std::mem::size_of::<f64>();
+        let b = lanes.clamp(1, BLOCK);
+        (17 * n + 2 + 3 + 2) * b * F + n * std::mem::size_of::<LinkChunk>()
+    }
+
     /// Lane count this workspace was sized for.
     pub fn lanes(&self) -> usize {
         self.lanes

@@ -84,9 +84,7 @@ impl Workspace {
     pub fn new(chain: &Chain) -> Self {
         let n = chain.dof();
         let v = || vec![0.0; n];
-        let req = llt::factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default())
-            .or(llt::solve::solve_in_place_scratch::<f64>(n, n, Par::Seq))
-            .or(StackReq::new::<f64>(4 * n + 16));
+        let req = Self::faer_scratch(n);
         Workspace {
             n,
             theta: v(),
@@ -125,6 +123,33 @@ impl Workspace {
             mask: vec![false; n],
             mem: MemBuffer::new(req),
         }
+    }
+
+    /// The bytes [`Workspace::new`] allocates for a chain of `n` joints, known before building
+    /// it (in the manner of faer's `*_scratch` queries): 17 per-link vectors, 6 per-link
+    /// spatial triples or pairs, the symmetric `P_k`, seven dense blocks (faer pads each column
+    /// to a multiple of 8 rows) and faer's Cholesky scratch. Memory does not depend on the
+    /// lane count or the call: every kernel call reuses it (tested against a byte-counting
+    /// allocator).
+    pub fn scratch_bytes(n: usize) -> usize {
+        const F: usize = std::mem::size_of::<f64>();
+        let padded = |rows: usize| rows.next_multiple_of(8);
+        let vectors = 17 * n * F;
+        let triples = 4 * n * 3 * F + 2 * n * 2 * F + n * 6 * F;
+        let mask = n * std::mem::size_of::<bool>();
+        let dense = if n == 0 {
+            0
+        } else {
+            (6 * padded(n) * n + padded(3) * n) * F
+        };
+        vectors + triples + mask + dense + Self::faer_scratch(n).size_bytes()
+    }
+
+    /// faer's scratch for the Cholesky factorisation and solve of an `n × n` block.
+    fn faer_scratch(n: usize) -> StackReq {
+        llt::factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default())
+            .or(llt::solve::solve_in_place_scratch::<f64>(n, n, Par::Seq))
+            .or(StackReq::new::<f64>(4 * n + 16))
     }
 
     /// Number of joints this workspace was sized for.

@@ -19,11 +19,14 @@ struct Counting;
 thread_local! {
     /// Allocations made by this thread (tests run on separate threads).
     static ALLOCS: Cell<usize> = const { Cell::new(0) };
+    /// Bytes requested by this thread's allocations.
+    static BYTES: Cell<usize> = const { Cell::new(0) };
 }
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
         ALLOCS.with(|c| c.set(c.get() + 1));
+        BYTES.with(|c| c.set(c.get() + l.size()));
         unsafe { System.alloc(l) }
     }
     unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
@@ -36,6 +39,10 @@ static GLOBAL: Counting = Counting;
 
 fn allocs() -> usize {
     ALLOCS.with(|c| c.get())
+}
+
+fn bytes() -> usize {
+    BYTES.with(|c| c.get())
 }
 
 /// Jacobian (`r × p`, row-major) of `f: R^p → R^r` at `x` by central differences with steps
@@ -520,4 +527,37 @@ fn derivatives_reject_bad_arguments() {
         tip_impact_derivatives(&chain, &z, &z, &[], &mut post, &mut jac[..31]),
         Err(SoaError::DimensionMismatch { .. })
     ));
+}
+
+/// The size queries tell what building a workspace will allocate, byte for byte: the scalar
+/// [`Workspace`] for chains of 1–12 joints, the [`BatchWorkspace`] for lane counts below, at
+/// and above one block (where it stops growing).
+#[test]
+fn workspace_size_queries_equal_what_building_them_allocates() {
+    let mut r = rng(99);
+    for n in 1..=12 {
+        let chain = random_chain(&mut r, n, n % 3 == 0);
+        let b = bytes();
+        let ws = Workspace::new(&chain);
+        assert_eq!(
+            bytes() - b,
+            Workspace::scratch_bytes(n),
+            "Workspace, n = {n}"
+        );
+        drop(ws);
+        for lanes in [1, 7, 16, 255, 256, 257, 5000] {
+            let b = bytes();
+            let bw = BatchWorkspace::new(&chain, lanes);
+            assert_eq!(
+                bytes() - b,
+                BatchWorkspace::scratch_bytes(n, lanes),
+                "BatchWorkspace, n = {n}, lanes = {lanes}"
+            );
+            drop(bw);
+        }
+    }
+    assert_eq!(
+        BatchWorkspace::scratch_bytes(5, 1 << 20),
+        BatchWorkspace::scratch_bytes(5, pdw_soa::batch::BLOCK)
+    );
 }
