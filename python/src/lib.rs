@@ -1557,17 +1557,7 @@ fn mfpt<'py>(
     d.set_item("start", start)?;
     d.set_item("stride_map", plan.stride_map.describe(&m))?;
     if let (Some(c), Some(pair)) = (&chain_plan, &pair) {
-        let cd = chain_dict(py, &plan, c, pair)?;
-        let [coarse, fine] = &pair.results;
-        cd.set_item(
-            "agreement",
-            pdw::mfpt::agreement_warning(coarse.mfpt, fine.mfpt, &est, "nodes"),
-        )?;
-        cd.set_item(
-            "node_warning",
-            pdw::mfpt::zero_height_node_warning(&plan, c.nodes, "nodes"),
-        )?;
-        d.set_item("chain", cd)?;
+        d.set_item("chain", chain_dict(py, &plan, c, pair, &est)?)?;
     }
     Ok(d)
 }
@@ -1629,7 +1619,8 @@ fn estimate_dict<'py>(
 /// The chain's results as `mfpt(..., chain=True)["chain"]`: per mesh (arrays of two: `mesh`,
 /// `mfpt`, `lambda`, `mfpt_lambda` = 1/(1 − λ) − 1, `mfpt_quasi_stationary`, `fall_per_step`,
 /// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged),
-/// `agreement` (set by the caller: the chain against the walkers, None when they agree), `nodes`,
+/// `agreement` (the chain against the walkers `est`, None when they agree), `node_warning` (a
+/// node of the rule at a step height of exactly 0, else None), `nodes`,
 /// `quadrature`, `section` (`landing` or `mid-stance`), `layout` (`grid` or `cloud`), and
 /// `box`: `corner`, `edges` (rows), `widening_passes`, `out_share`; on a cloud also `cloud`
 /// (arrays of two: `cell`, `seeds`, `nodes`, `passes`).
@@ -1638,6 +1629,7 @@ fn chain_dict<'py>(
     plan: &pdw::mfpt::MfptPlan,
     c: &pdw::mfpt::ChainPlan,
     pair: &pdw::mfpt::ChainPair,
+    est: &pdw_limit::terrain::MfptEstimate,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     type Column = fn(&pdw_limit::markov::ChainResult) -> f64;
@@ -1666,6 +1658,15 @@ fn chain_dict<'py>(
     )?;
     d.set_item("refinement_change", pair.change)?;
     d.set_item("warning", pair.warning.clone())?;
+    let [coarse, fine] = &pair.results;
+    d.set_item(
+        "agreement",
+        pdw::mfpt::agreement_warning(coarse.mfpt, fine.mfpt, est, "nodes"),
+    )?;
+    d.set_item(
+        "node_warning",
+        pdw::mfpt::zero_height_node_warning(plan, c.nodes, "nodes"),
+    )?;
     d.set_item("nodes", c.nodes)?;
     d.set_item("section", c.section.name())?;
     d.set_item("quadrature", pdw::mfpt::quadrature_name(&plan.terrain.dist))?;

@@ -619,3 +619,57 @@ fn the_stride_map_is_chosen_recorded_and_refused_clearly() {
         assert!(stderr(&o).contains(says), "{a:?}: {}", stderr(&o));
     }
 }
+
+/// On random step heights of mean 0 an odd `--nodes` puts a node at a step of exactly 0 (the
+/// level-ground model): the CLI warns once, before the chain, on the grid and on the cloud,
+/// and not for an even count.
+#[test]
+fn the_zero_height_node_warning_is_printed_once_and_only_for_an_odd_rule() {
+    let chain = |nodes: &str, mesh: &str| {
+        let o = run(&[
+            "mfpt",
+            "--model",
+            "rimless",
+            "--terrain",
+            "step-down",
+            "--sd",
+            "0.005",
+            "--walkers",
+            "100",
+            "--max-steps",
+            "200",
+            "--seed",
+            "1",
+            "--chain",
+            "--chain-section",
+            if mesh == "cloud" {
+                "mid-stance"
+            } else {
+                "landing"
+            },
+            "--chain-mesh",
+            mesh,
+            "--nodes",
+            nodes,
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout).to_string();
+        let warned = out.matches("at a step height of exactly 0").count();
+        let before = out
+            .find("at a step height of exactly 0")
+            .zip(out.find("Markov chain"))
+            .is_some_and(|(w, c)| w < c);
+        (warned, before, out)
+    };
+    for mesh in ["grid", "cloud"] {
+        let (warned, before, out) = chain("5", mesh);
+        assert_eq!(warned, 1, "{mesh}: {out}");
+        assert!(
+            before,
+            "{mesh}: the warning comes before the chain's lines: {out}"
+        );
+        let (warned, _, out) = chain("6", mesh);
+        assert_eq!(warned, 0, "{mesh}: {out}");
+    }
+}

@@ -426,11 +426,11 @@ pub(super) fn run_chain(
     pool: &rayon::ThreadPool,
     quiet: bool,
 ) -> anyhow::Result<Vec<(String, f64)>> {
-    if c.layout == mfpt::ChainMesh::Cloud {
-        return run_cloud(m, plan, c, x0, pool, quiet);
-    }
     if let Some(w) = mfpt::zero_height_node_warning(plan, c.nodes, "--nodes") {
         crate::outln!("{w}");
+    }
+    if c.layout == mfpt::ChainMesh::Cloud {
+        return run_cloud(m, plan, c, x0, pool, quiet);
     }
     let pb = chain_progress(quiet);
     let tell = |n: usize| pb.inc(n as u64);
@@ -550,9 +550,6 @@ fn run_cloud(
         2 * c.mesh,
         mfpt::CLOUD_PASSES
     );
-    if let Some(w) = mfpt::zero_height_node_warning(plan, c.nodes, "--nodes") {
-        crate::outln!("{w}");
-    }
     let t0 = Instant::now();
     let pb = chain_progress(quiet);
     pb.set_message(format!(
