@@ -99,6 +99,19 @@ pub struct BatchWorkspace {
     /// the articulated-body recursion's pass 1 and gains for one chunk of [`WIDTH`] lanes,
     /// one entry per link (`batch_aba`)
     pub(crate) lc: Vec<LinkChunk>,
+    /// the last lanes of a call, fewer than a chunk of 8, padded to 8 (`batch_aba`)
+    pub(crate) pad: PadChunk,
+}
+
+/// Inputs and output of one padded chunk of `WIDTH / 2` lanes, column-major (`q`, `qd`, `tau`,
+/// `qdd`: `WIDTH / 2 × n`; `ft`: `WIDTH / 2 × 3`).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PadChunk {
+    pub(crate) q: Vec<f64>,
+    pub(crate) qd: Vec<f64>,
+    pub(crate) tau: Vec<f64>,
+    pub(crate) qdd: Vec<f64>,
+    pub(crate) ft: Vec<f64>,
 }
 
 /// Lanes of one chunk of the batched articulated-body recursion: 16 doubles, two AVX-512
@@ -164,18 +177,28 @@ impl BatchWorkspace {
             zeros: vec![0.0; b],
             ones: vec![1.0; b],
             lc: vec![LinkChunk::default(); n],
+            pad: PadChunk {
+                q: vec![0.0; WIDTH / 2 * n],
+                qd: vec![0.0; WIDTH / 2 * n],
+                tau: vec![0.0; WIDTH / 2 * n],
+                qdd: vec![0.0; WIDTH / 2 * n],
+                ft: vec![0.0; WIDTH / 2 * 3],
+            },
         }
     }
     /// The bytes [`BatchWorkspace::new`] allocates for `lanes` states of a chain of `n` joints,
     /// known before building it (in the manner of faer's `*_scratch` queries): 17 per-link
-    /// columns and 7 more of one block of `min(lanes, BLOCK)` lanes, and one [`WIDTH`]-lane
-    /// chunk buffer per link for the articulated-body recursion. It stops growing at
+    /// columns and 7 more of one block of `min(lanes, BLOCK)` lanes, one [`WIDTH`]-lane
+    /// chunk buffer per link for the articulated-body recursion and the inputs and output of
+    /// one padded chunk of `WIDTH / 2` lanes (`4n + 3` columns). It stops growing at
     /// [`BLOCK`] lanes: any lane count is processed block by block in the same memory (tested
     /// against a byte-counting allocator).
     pub fn scratch_bytes(n: usize, lanes: usize) -> usize {
         const F: usize = std::mem::size_of::<f64>();
         let b = lanes.clamp(1, BLOCK);
-        (17 * n + 2 + 3 + 2) * b * F + n * std::mem::size_of::<LinkChunk>()
+        (17 * n + 2 + 3 + 2) * b * F
+            + n * std::mem::size_of::<LinkChunk>()
+            + (4 * n + 3) * (WIDTH / 2) * F
     }
 
     /// Lane count this workspace was sized for.

@@ -5,7 +5,7 @@ use faer::reborrow::ReborrowMut;
 use faer::{Mat, MatMut, MatRef};
 
 use crate::aba::{aba_recursion, lanes_back, lanes_fwd, AbaLanes};
-use crate::batch::{check_batch, check_view, col, BatchWorkspace, LinkChunk, WIDTH};
+use crate::batch::{check_batch, check_view, col, BatchWorkspace, LinkChunk, PadChunk, WIDTH};
 use crate::chain::Chain;
 use crate::error::{check_len, SoaError};
 use crate::spatial;
@@ -52,7 +52,8 @@ pub fn batch_aba(
 /// the scalar [`crate::pseudo_joint_dynamics`] does.
 ///
 /// - `q`, `qd`: `(lanes × n)` views with contiguous columns (e.g. column ranges of a state
-///   matrix `(lanes × 2n)`); any lane count (processed 16 lanes at a time, then 8, then one by one);
+///   matrix `(lanes × 2n)`); any lane count (processed 16 lanes at a time, then 8, then the
+///   last 2–7 lanes as one padded chunk of 8, or a last lane alone);
 /// - `tau`: `(lanes × n)` applied torques or `None` for zero (a passive walker);
 /// - `f_tip`: optional `(lanes × 3)` tip force on the environment;
 /// - `locked`: mask of length `n` (the same joints locked in every lane) or `None`;
@@ -96,16 +97,41 @@ pub fn batch_aba_view(
             // lane the same arithmetic)
             let mut a = 0;
             while lanes - a >= WIDTH {
-                chunk::<WIDTH>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
+                chunk::<WIDTH>(
+                    chain,
+                    &mut bw.lc,
+                    q,
+                    qd,
+                    tau,
+                    f_tip,
+                    locked,
+                    qdd.rb_mut(),
+                    a,
+                );
                 a += WIDTH;
             }
+            let lc = &mut bw.lc;
             if lanes - a >= HALF {
-                chunk::<HALF>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
+                chunk::<HALF>(chain, lc, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
                 a += HALF;
             }
-            while a < lanes {
-                chunk::<1>(chain, bw, q, qd, tau, f_tip, locked, qdd.rb_mut(), a);
-                a += 1;
+            match lanes - a {
+                0 => {}
+                1 => chunk::<1>(chain, lc, q, qd, tau, f_tip, locked, qdd.rb_mut(), a),
+                // 2..7 lanes: one chunk of 8 on padded copies costs about one single lane
+                r => padded(
+                    chain,
+                    lc,
+                    &mut bw.pad,
+                    q,
+                    qd,
+                    tau,
+                    f_tip,
+                    locked,
+                    qdd.rb_mut(),
+                    a,
+                    r,
+                ),
             }
         },
     );
@@ -120,7 +146,7 @@ pub fn batch_aba_view(
 #[allow(clippy::too_many_arguments)]
 fn chunk<const W: usize>(
     chain: &Chain,
-    bw: &mut BatchWorkspace,
+    lc: &mut [LinkChunk],
     q: MatRef<'_, f64>,
     qd: MatRef<'_, f64>,
     tau: Option<MatRef<'_, f64>>,
@@ -133,7 +159,7 @@ fn chunk<const W: usize>(
     kin_recursion(
         chain,
         &mut KinChunk::<W> {
-            lc: &mut bw.lc,
+            lc: &mut *lc,
             tip: &mut tip,
             q,
             qd,
@@ -157,7 +183,7 @@ fn chunk<const W: usize>(
     }
     let ab = chain.base_acc;
     let mut c = Chunk::<W> {
-        lc: &mut bw.lc,
+        lc,
         tau,
         qdd,
         a,
@@ -166,6 +192,66 @@ fn chunk<const W: usize>(
         ca: [[ab[0]; W], [ab[1]; W], [ab[2]; W]],
     };
     aba_recursion(chain, locked, &mut c);
+}
+
+/// The last `r` (2 ≤ r < 8) lanes `a..a + r` of a call as one chunk of 8: their inputs copied
+/// into the workspace's padded chunk, the rows after `r` repeating lane `a + r − 1` (a valid
+/// state: no NaN or subnormal enters the vector units), and the first `r` rows of the result
+/// copied out. Each lane's arithmetic is that of every chunk width, so its bits are those of
+/// the single-lane call.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn padded(
+    chain: &Chain,
+    lc: &mut [LinkChunk],
+    pad: &mut PadChunk,
+    q: MatRef<'_, f64>,
+    qd: MatRef<'_, f64>,
+    tau: Option<MatRef<'_, f64>>,
+    f_tip: Option<MatRef<'_, f64>>,
+    locked: Option<&[bool]>,
+    mut qdd: MatMut<'_, f64>,
+    a: usize,
+    r: usize,
+) {
+    let n = chain.dof();
+    let fill = |dst: &mut [f64], src: &[f64]| {
+        for (l, d) in dst.iter_mut().enumerate() {
+            *d = src[a + l.min(r - 1)];
+        }
+    };
+    for k in 0..n {
+        let cols = k * HALF..(k + 1) * HALF;
+        fill(&mut pad.q[cols.clone()], col(q, k));
+        fill(&mut pad.qd[cols.clone()], col(qd, k));
+        if let Some(t) = tau {
+            fill(&mut pad.tau[cols], col(t, k));
+        }
+    }
+    if let Some(ft) = f_tip {
+        for k in 0..3 {
+            fill(&mut pad.ft[k * HALF..(k + 1) * HALF], col(ft, k));
+        }
+    }
+    fn view(v: &[f64], cols: usize) -> MatRef<'_, f64> {
+        MatRef::from_column_major_slice(&v[..HALF * cols], HALF, cols)
+    }
+    chunk::<HALF>(
+        chain,
+        lc,
+        view(&pad.q, n),
+        view(&pad.qd, n),
+        tau.map(|_| view(&pad.tau, n)),
+        f_tip.map(|_| view(&pad.ft, 3)),
+        locked,
+        MatMut::from_column_major_slice_mut(&mut pad.qdd[..HALF * n], HALF, n),
+        0,
+    );
+    for k in 0..n {
+        if let Some(out) = qdd.rb_mut().col_mut(k).try_as_col_major_mut() {
+            out.as_slice_mut()[a..a + r].copy_from_slice(&pad.qdd[k * HALF..k * HALF + r]);
+        }
+    }
 }
 
 /// The chunk after the last full one, when 8 or more lanes are left.

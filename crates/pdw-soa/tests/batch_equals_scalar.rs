@@ -17,7 +17,7 @@ fn batched_aba_and_rnea_equal_scalar_bit_for_bit_per_lane() {
     for (ci, n) in [1usize, 2, 5, 9].into_iter().enumerate() {
         let chain = random_chain(&mut r, n, ci % 2 == 1);
         let mut ws = Workspace::new(&chain);
-        for lanes in [1usize, 7, 64, 1000] {
+        for lanes in [1usize, 2, 7, 23, 64, 1000] {
             let mut bw = BatchWorkspace::new(&chain, lanes);
             let q = fill(&mut r, lanes, n, -2.5, 2.5);
             let qd = fill(&mut r, lanes, n, -3.0, 3.0);
