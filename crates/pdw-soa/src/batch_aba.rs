@@ -93,8 +93,8 @@ pub fn batch_aba_view(
         || {
             // WIDTH lanes at a time (two AVX-512 registers per quantity: two independent
             // dependency chains in flight), pass 1 and the recursion per chunk in the chunk's
-            // link buffers, the carries in registers; then 8 lanes, then one at a time (each
-            // lane the same arithmetic)
+            // link buffers, the carries in registers; then 8 lanes, then the last 2–7 as one
+            // padded chunk of 8 or a last one alone (each lane the same arithmetic)
             let mut a = 0;
             while lanes - a >= WIDTH {
                 chunk::<WIDTH>(

@@ -16,7 +16,7 @@
 //! lanes; any lane count is processed block by block). What building them allocates is known
 //! before, byte for byte ([`Workspace::scratch_bytes`]`(n)`,
 //! [`BatchWorkspace::scratch_bytes`]`(n, lanes)`, in the manner of faer's `*_scratch` queries;
-//! e.g. 4 125 bytes for `n = 5`, and 199 936 for 256 or more lanes of it, per thread).
+//! e.g. 4 125 bytes for `n = 5`, and 201 408 for 256 or more lanes of it, per thread).
 //! Reused, they make these calls
 //! allocation-free from the second call on (tested with a counting global allocator in
 //! `tests/derivatives.rs`): [`forward_kinematics`], [`aba()`], [`rnea()`],
