@@ -245,18 +245,17 @@ pub fn unilateral_impact(
             what: "A 𝓜⁻¹ Aᵀ (impact)",
         },
     )? == 0.0;
-    // the map and its Jacobian for the chosen set
-    let mut scratch = [0.0; 2 * MAX_DOF * MAX_DOF];
-    let j = match jac {
-        Some(j) => j,
-        None => &mut scratch[..2 * n * n],
-    };
+    // the map, and its Jacobian if asked for, for the chosen set (without it, duals of width
+    // 0: the value arithmetic of every width, hence the same bits, without the derivatives)
     let mut lam = [0.0; MAX_DOF];
-    by_dof!(
-        n,
-        1,
-        solve_w(chain, q, qd, items, &chosen, qd_post, &mut lam, j)
-    )?;
+    match jac {
+        Some(j) => by_dof!(
+            n,
+            1,
+            solve_w(chain, q, qd, items, &chosen, qd_post, &mut lam, Some(j))
+        )?,
+        None => solve_w::<0>(chain, q, qd, items, &chosen, qd_post, &mut lam, None)?,
+    }
     // per-item results on the values
     let mut sol = ImpactSolution {
         items: [ItemResult::default(); MAX_ITEMS],
@@ -443,13 +442,18 @@ fn solve_w<const W: usize>(
     act: &[bool],
     qd_post: &mut [f64],
     lam_out: &mut [f64],
-    jac: &mut [f64],
+    jac: Option<&mut [f64]>,
 ) -> Result<(), SoaError> {
     let n = chain.dof();
     let zero = Dual::<W>::constant(0.0);
     let mut qx = [zero; MAX_DOF];
     for k in 0..n {
-        qx[k] = Dual::variable(q[k], k);
+        // seeded on q when the Jacobian is asked for (W = n), constants for the values (W = 0)
+        qx[k] = if k < W {
+            Dual::variable(q[k], k)
+        } else {
+            Dual::constant(q[k])
+        };
     }
     let kd = kin(chain, &qx[..n], None);
     let mut mm = [[zero; MAX_DOF]; MAX_DOF];
@@ -477,9 +481,11 @@ fn solve_w<const W: usize>(
     let w2 = 2 * n;
     if m == 0 {
         qd_post[..n].copy_from_slice(&qd[..n]);
-        jac[..n * w2].fill(0.0);
-        for k in 0..n {
-            jac[k * w2 + n + k] = 1.0;
+        if let Some(jac) = jac {
+            jac[..n * w2].fill(0.0);
+            for k in 0..n {
+                jac[k * w2 + n + k] = 1.0;
+            }
         }
         return Ok(());
     }

@@ -325,3 +325,53 @@ fn bad_items_are_clear_errors() {
     );
     assert!(e.is_err());
 }
+
+/// Asked without its Jacobian, an impact gives the same bits as with it (post-impact rates,
+/// impulses, rates per item, energy lost and the active set): the value-only solve runs the
+/// same value arithmetic in duals of width 0.
+#[test]
+fn the_map_without_its_jacobian_has_the_same_bits() {
+    let mut r = rng(14);
+    let mut solved = 0;
+    for case in 0..200 {
+        let m = 1 + case % 3;
+        let ch = floating_walker(&mut r, m);
+        let (q, qd) = walker_state(&mut r, m);
+        let n = ch.dof();
+        let rad = if case % 2 == 0 { 0.0 } else { 0.1 };
+        let items = [
+            ImpactItem {
+                row: ImpactRow::TipContact {
+                    offset: [0.0, -rad],
+                },
+                unilateral: false,
+            },
+            ImpactItem {
+                row: ImpactRow::BaseContact { radius: rad },
+                unilateral: true,
+            },
+            stop(2 + m - 1, 1.0, case % 4 < 2),
+        ];
+        let (mut v, mut w) = (vec![0.0; n], vec![f64::NAN; n]);
+        let mut jac = vec![0.0; 2 * n * n];
+        let with = unilateral_impact(&ch, &q, &qd, &items, None, &mut v, Some(&mut jac));
+        let without = unilateral_impact(&ch, &q, &qd, &items, None, &mut w, None);
+        match (with, without) {
+            (Ok(a), Ok(b)) => {
+                solved += 1;
+                let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&v), bits(&w), "case {case}");
+                assert_eq!(a.energy_lost.to_bits(), b.energy_lost.to_bits());
+                for i in 0..items.len() {
+                    let (x, y) = (&a.items[i], &b.items[i]);
+                    assert_eq!(x.active, y.active, "case {case} item {i}");
+                    assert_eq!(bits(&x.impulse), bits(&y.impulse), "case {case} item {i}");
+                    assert_eq!(bits(&x.rate), bits(&y.rate), "case {case} item {i}");
+                }
+                assert!(jac.iter().all(|x| x.is_finite()));
+            }
+            (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "case {case}"),
+        }
+    }
+    assert!(solved > 150, "{solved} of 200 solved");
+}

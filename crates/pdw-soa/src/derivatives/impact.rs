@@ -124,7 +124,7 @@ pub(crate) fn impact_derivatives_w<const W: usize>(
     ldl(&mut mm, n).ok_or(SoaError::MassMatrixNotPositiveDefinite)?;
     let arows = constraint_rows(chain, &kd, tip, locked, offset);
     let (mut v, mut lam) = ([0.0; MAX_DOF], [0.0; MAX_DOF]);
-    impact_in_duals(n, m, &mm, &arows, qd, &mut v, &mut lam, jac)?;
+    impact_in_duals(n, m, &mm, &arows, qd, &mut v, &mut lam, Some(jac))?;
     Ok(())
 }
 
@@ -142,7 +142,7 @@ pub(crate) fn impact_in_duals<const W: usize>(
     qd: &[f64],
     qd_post: &mut [f64],
     lam_out: &mut [f64],
-    jac: &mut [f64],
+    mut jac: Option<&mut [f64]>,
 ) -> Result<(f64, f64), SoaError> {
     let zero = Dual::<W>::constant(0.0);
     // X = 𝓜⁻¹ Aᵀ (column i of X in xt[i])
@@ -182,8 +182,14 @@ pub(crate) fn impact_in_duals<const W: usize>(
             v = v - xt[i][k] * lam[i];
         }
         qd_post[k] = v.v;
-        jac[k * w2..k * w2 + n].copy_from_slice(&v.d[..n]);
+        if let Some(j) = jac.as_deref_mut() {
+            j[k * w2..k * w2 + n].copy_from_slice(&v.d[..n]);
+        }
     }
+    let Some(jac) = jac else {
+        // the values only (W = 0: the same value arithmetic as any W)
+        return Ok(pivots);
+    };
 
     // ∂q̇⁺/∂q̇⁻ = I − X S⁻¹ A on the values
     let mut sv = [[0.0; MAX_DOF]; MAX_DOF];
