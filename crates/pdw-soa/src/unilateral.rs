@@ -191,14 +191,23 @@ pub fn unilateral_impact(
         check_len("jac (n x 2n)", 2 * n * n, j.len())?;
     }
     // candidate active sets: the imposed one, or every subset of the unilateral items
-    let uni: Vec<usize> = (0..items.len()).filter(|&i| items[i].unilateral).collect();
+    // the unilateral items' indices (on the stack: no call allocates)
+    let (mut uni_at, mut n_uni) = ([0usize; MAX_ITEMS], 0);
+    for (i, it) in items.iter().enumerate() {
+        if it.unilateral {
+            uni_at[n_uni] = i;
+            n_uni += 1;
+        }
+    }
+    let uni = &uni_at[..n_uni];
     let k64 = kin::<f64>(chain, q, None);
     let mut mass = [[0.0; MAX_DOF]; MAX_DOF];
     mass_matrix(chain, &k64, &mut mass);
     let all_rows = item_rows(chain, &k64, items);
     let mut mfac = mass;
     ldl(&mut mfac, n).ok_or(SoaError::MassMatrixNotPositiveDefinite)?;
-    let chosen: Vec<bool> = match hold {
+    let mut chosen_at = [false; MAX_ITEMS];
+    match hold {
         Some(h) => {
             for (i, it) in items.iter().enumerate() {
                 if !it.unilateral && !h[i] {
@@ -209,17 +218,18 @@ pub fn unilateral_impact(
                     });
                 }
             }
-            h.to_vec()
+            chosen_at[..items.len()].copy_from_slice(h);
         }
         None => {
-            let mut best: Option<(f64, Vec<bool>)> = None;
+            let mut best: Option<(f64, [bool; MAX_ITEMS])> = None;
             // all unilateral items active first, then fewer
             for code in (0..1usize << uni.len()).rev() {
-                let mut act = vec![true; items.len()];
+                let mut act = [true; MAX_ITEMS];
                 for (b, &i) in uni.iter().enumerate() {
                     act[i] = code >> b & 1 == 1;
                 }
-                let Some(v) = violation(n, items, &all_rows, &mass, &mfac, &act, qd) else {
+                let act_items = &act[..items.len()];
+                let Some(v) = violation(n, items, &all_rows, &mass, &mfac, act_items, qd) else {
                     continue;
                 };
                 if v == 0.0 {
@@ -231,7 +241,7 @@ pub fn unilateral_impact(
                 }
             }
             match best {
-                Some((_, a)) => a,
+                Some((_, a)) => chosen_at = a,
                 None => {
                     return Err(SoaError::SingularConstraint {
                         what: "A 𝓜⁻¹ Aᵀ (every active set of the impact)",
@@ -239,8 +249,9 @@ pub fn unilateral_impact(
                 }
             }
         }
-    };
-    let complementary = violation(n, items, &all_rows, &mass, &mfac, &chosen, qd).ok_or(
+    }
+    let chosen = &chosen_at[..items.len()];
+    let complementary = violation(n, items, &all_rows, &mass, &mfac, chosen, qd).ok_or(
         SoaError::SingularConstraint {
             what: "A 𝓜⁻¹ Aᵀ (impact)",
         },
@@ -252,9 +263,9 @@ pub fn unilateral_impact(
         Some(j) => by_dof!(
             n,
             1,
-            solve_w(chain, q, qd, items, &chosen, qd_post, &mut lam, Some(j))
+            solve_w(chain, q, qd, items, chosen, qd_post, &mut lam, Some(j))
         )?,
-        None => solve_w::<0>(chain, q, qd, items, &chosen, qd_post, &mut lam, None)?,
+        None => solve_w::<0>(chain, q, qd, items, chosen, qd_post, &mut lam, None)?,
     }
     // per-item results on the values
     let mut sol = ImpactSolution {

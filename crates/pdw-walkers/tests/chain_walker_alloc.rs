@@ -1,5 +1,5 @@
 //! The chain walker allocates nothing per right-hand side (scalar or batched), flow Jacobian,
-//! guard, guard gradient, reset, reset Jacobian or trajectory sample (constraint forces, step
+//! guard, guard gradient, admissibility, reset, reset Jacobian or trajectory sample (constraint forces, step
 //! flags, energy) once its scratch is filled; body points allocate only the value they return. (One test in this
 //! binary: the allocation counter is global.)
 
@@ -46,9 +46,9 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
             .collect();
         let mut dx = Mat::<f64>::zeros(lanes, d);
         let (mut f, mut jac, mut out) = (vec![0.0; d], vec![0.0; d * d], vec![0.0; d]);
-        let mut counts = [0usize; 8];
-        let mut run = |ws: &mut Scratch, counts: &mut [usize; 8]| {
-            let tick = |i: usize, c: &mut [usize; 8], before: usize| {
+        let mut counts = [0usize; 9];
+        let mut run = |ws: &mut Scratch, counts: &mut [usize; 9]| {
+            let tick = |i: usize, c: &mut [usize; 9], before: usize| {
                 c[i] += ALLOCS.load(Ordering::SeqCst) - before;
             };
             for &m in &modes {
@@ -83,15 +83,22 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
                     );
                     tick(7, counts, b);
                     assert!(sample.0.is_some() && sample.1.is_some() && sample.2.is_some());
+                    // admissibility of every guard: the impact's complementarity problem for
+                    // a stance knee's buckling at the impact guard
+                    let b = ALLOCS.load(Ordering::SeqCst);
+                    for k in 0..w.guards(m).len() {
+                        std::hint::black_box(w.admissible(m, k, s));
+                    }
+                    tick(8, counts, b);
                 }
             }
         };
-        run(&mut ws, &mut [0; 8]); // fills the scratch
+        run(&mut ws, &mut [0; 9]); // fills the scratch
         run(&mut ws, &mut counts);
         assert_eq!(
-            counts, [0; 8],
+            counts, [0; 9],
             "{name}: allocations in [flow_batch, flow, flow_jacobian, guard, reset, \
-             reset_jacobian, guard_gradient, trajectory sample]"
+             reset_jacobian, guard_gradient, trajectory sample, admissible]"
         );
         // body points: the kinematics run in the scratch's workspace; only the returned value
         // allocates (its point list, its name list and one string per name), while the call
