@@ -40,7 +40,9 @@ THREADS = 2
 
 
 def estimates(root):
-    """{full_id: (mean seconds per iteration, elements per iteration)} of every benchmark."""
+    """{full_id: (mean seconds per iteration, elements per iteration, fastest sample's seconds
+    per iteration)} of every benchmark (the fastest sample is the one least disturbed by other
+    processes on a shared machine; the mean where criterion kept no samples)."""
     out = {}
     for dirpath, _, files in os.walk(root):
         if os.path.basename(dirpath) != "new" or "benchmark.json" not in files:
@@ -50,7 +52,13 @@ def estimates(root):
         with open(os.path.join(dirpath, "estimates.json")) as f:
             mean = json.load(f)["mean"]["point_estimate"] * 1e-9
         elements = (bench.get("throughput") or {}).get("Elements", 1)
-        out[bench["full_id"]] = (mean, elements)
+        fastest = mean
+        sample_path = os.path.join(dirpath, "sample.json")
+        if os.path.exists(sample_path):
+            with open(sample_path) as f:
+                sample = json.load(f)
+            fastest = min(t / i for t, i in zip(sample["times"], sample["iters"])) * 1e-9
+        out[bench["full_id"]] = (mean, elements, fastest)
     return out
 
 
@@ -76,23 +84,25 @@ def pin_at(pin, n):
 
 def kernel_table(est, pin):
     lines = [
-        "| n | batched ABA, 1024 lanes (µs per call) | ns per lane-DoF | 64 lanes: ns per lane-DoF "
-        "| 1 lane (ns) | Pinocchio ABA ns/DoF (n run) | × Pinocchio per DoF |",
-        "|---|---|---|---|---|---|---|",
+        "| n | batched ABA, 1024 lanes (µs per call) | ns per lane-DoF | fastest sample: ns per "
+        "lane-DoF | 64 lanes: ns per lane-DoF | 1 lane (ns) | Pinocchio ABA ns/DoF (n run) "
+        "| × Pinocchio per DoF |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     ns = sorted({int(m.group(1)) for k in est if (m := re.match(r"soa_batch_aba_n(\d+)/", k))})
     if not ns:
         raise SystemExit("no soa_batch_aba_nN benchmarks in the criterion folder")
     for n in ns:
         def per(lanes):
-            t, _ = est[f"soa_batch_aba_n{n}/{lanes}"]
+            t, _, _ = est[f"soa_batch_aba_n{n}/{lanes}"]
             return t, t / (lanes * n) * 1e9
         t1024, d1024 = per(1024)
+        f1024 = est[f"soa_batch_aba_n{n}/1024"][2] / (1024 * n) * 1e9
         _, d64 = per(64)
         t1, _ = per(1)
         p, runs = pin_at(pin, n)
         lines.append(
-            f"| {n} | {t1024 * 1e6:.2f} | {d1024:.2f} | {d64:.2f} | {t1 * 1e9:.1f} | "
+            f"| {n} | {t1024 * 1e6:.2f} | {d1024:.2f} | {f1024:.2f} | {d64:.2f} | {t1 * 1e9:.1f} | "
             f"{p:.1f} ({runs}) | {p / d1024:.0f}× |"
         )
     return lines, ns
@@ -106,8 +116,8 @@ def walker_table(est):
     ]
     rate = {}
     for m in MODELS:
-        ts, es = est[f"models_stride/{m}"]
-        tb, eb = est[f"models_basin/{m}"]
+        ts, es, _ = est[f"models_stride/{m}"]
+        tb, eb, _ = est[f"models_basin/{m}"]
         rate[m] = (es / ts, eb / tb)
     s0, b0 = rate["simplest"]
     for m in MODELS:
@@ -127,6 +137,7 @@ def block(est, pin, load):
     k, ns = kernel_table(est, pin)
     w, rate = walker_table(est)
     d5 = est["soa_batch_aba_n5/1024"][0] / (1024 * 5) * 1e9 if 5 in ns else None
+    f5 = est["soa_batch_aba_n5/1024"][2] / (1024 * 5) * 1e9 if 5 in ns else None
     p5 = pin_at(pin, 5)[0] if 5 in ns else None
     compass_us = THREADS / rate["compass"][0] * 1e6
     out = [
@@ -142,7 +153,8 @@ def block(est, pin, load):
     if d5 is not None:
         out += [
             f"Target at n = 5: ≤ {ABA_TARGET_NS:g} ns per lane-DoF and ≥ {PIN_RATIO_TARGET:g}× "
-            f"Pinocchio — measured {d5:.2f} ns and {p5 / d5:.0f}×: "
+            f"Pinocchio — measured {d5:.2f} ns and {p5 / d5:.0f}× (mean; the fastest sample "
+            f"{f5:.2f} ns and {p5 / f5:.0f}×): "
             + ("met." if d5 <= ABA_TARGET_NS and p5 / d5 >= PIN_RATIO_TARGET else "missed."),
             "",
         ]
