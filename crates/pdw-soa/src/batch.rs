@@ -188,7 +188,7 @@ impl BatchWorkspace {
     }
     /// The bytes [`BatchWorkspace::new`] allocates for `lanes` states of a chain of `n` joints,
     /// known before building it (in the manner of faer's `*_scratch` queries): 17 per-link
-    /// columns and 7 more of one block of `min(lanes, BLOCK)` lanes, one [`WIDTH`]-lane
+    /// columns and 7 more of one block of `min(lanes, BLOCK)` lanes, one 16-lane
     /// chunk buffer per link for the articulated-body recursion and the inputs and output of
     /// one padded chunk of `WIDTH / 2` lanes (`4n + 3` columns). It stops growing at
     /// [`BLOCK`] lanes: any lane count is processed block by block in the same memory (tested
