@@ -64,6 +64,23 @@ fn stop(j: usize, sign: f64, unilateral: bool) -> ImpactItem {
     }
 }
 
+/// A heel strike's two feet on feet of radius `rad`: the striking foot held (bilateral), the
+/// trailing foot free to leave the ground (unilateral).
+fn heel_strike_feet(rad: f64) -> [ImpactItem; 2] {
+    [
+        ImpactItem {
+            row: ImpactRow::TipContact {
+                offset: [0.0, -rad],
+            },
+            unilateral: false,
+        },
+        ImpactItem {
+            row: ImpactRow::BaseContact { radius: rad },
+            unilateral: true,
+        },
+    ]
+}
+
 #[test]
 fn bilateral_heel_strike_equals_the_kernel_tip_impact() {
     let mut r = rng(11);
@@ -131,20 +148,8 @@ fn the_complementarity_solution_is_the_only_one() {
         let (q, qd) = walker_state(&mut r, 2);
         let n = ch.dof();
         let rad = if case % 2 == 0 { 0.0 } else { 0.1 };
-        let items = [
-            ImpactItem {
-                row: ImpactRow::TipContact {
-                    offset: [0.0, -rad],
-                },
-                unilateral: false,
-            },
-            ImpactItem {
-                row: ImpactRow::BaseContact { radius: rad },
-                unilateral: true,
-            },
-            stop(3, 1.0, true),
-            stop(5, -1.0, true),
-        ];
+        let [strike, trail] = heel_strike_feet(rad);
+        let items = [strike, trail, stop(3, 1.0, true), stop(5, -1.0, true)];
         let mut v = vec![0.0; n];
         let Ok(sol) = unilateral_impact(&ch, &q, &qd, &items, None, &mut v, None) else {
             continue;
@@ -339,19 +344,8 @@ fn the_map_without_its_jacobian_has_the_same_bits() {
         let (q, qd) = walker_state(&mut r, m);
         let n = ch.dof();
         let rad = if case % 2 == 0 { 0.0 } else { 0.1 };
-        let items = [
-            ImpactItem {
-                row: ImpactRow::TipContact {
-                    offset: [0.0, -rad],
-                },
-                unilateral: false,
-            },
-            ImpactItem {
-                row: ImpactRow::BaseContact { radius: rad },
-                unilateral: true,
-            },
-            stop(2 + m - 1, 1.0, case % 4 < 2),
-        ];
+        let [strike, trail] = heel_strike_feet(rad);
+        let items = [strike, trail, stop(2 + m - 1, 1.0, case % 4 < 2)];
         let (mut v, mut w) = (vec![0.0; n], vec![f64::NAN; n]);
         let mut jac = vec![0.0; 2 * n * n];
         let with = unilateral_impact(&ch, &q, &qd, &items, None, &mut v, Some(&mut jac));
