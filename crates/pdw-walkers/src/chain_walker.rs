@@ -1129,8 +1129,9 @@ impl ChainWalker {
         let p = self.impact_problem(mode, x);
         let stance_knee =
             |i: usize| matches!(p.roles[i], Role::StanceKnee(_) | Role::NewStanceKnee(_));
-        if !(0..p.len).any(stance_knee) {
-            // no stance knee in the problem (a compass gait): none can buckle, no solve needed
+        if !(0..p.len).any(|i| stance_knee(i) && p.items[i].unilateral) {
+            // no stance knee in the problem (a compass gait), or only latched ones (bilateral:
+            // held in every active set the solve may choose): none can buckle, no solve needed
             return false;
         }
         let nf = self.n + 2;
