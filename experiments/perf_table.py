@@ -31,7 +31,7 @@ import re
 import sys
 
 MODELS = ["simplest", "compass", "kneed", "seed5"]
-# the targets of the kernel issue: basin cells/s as a fraction of the simplest walker's
+# the kernel's speed targets: basin cells/s as a fraction of the simplest walker's
 BASIN_TARGET = {"compass": 1 / 4, "kneed": 1 / 12, "seed5": 1 / 12}
 ABA_TARGET_NS = 4.0
 PIN_RATIO_TARGET = 100.0
