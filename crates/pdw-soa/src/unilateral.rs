@@ -192,8 +192,8 @@ pub fn unilateral_impact(
     if let Some(j) = jac.as_deref() {
         check_len("jac (n x 2n)", 2 * n * n, j.len())?;
     }
-    // candidate active sets: the imposed one, or every subset of the unilateral items
-    // the unilateral items' indices (on the stack: no call allocates)
+    // candidate active sets: the imposed one, or every subset of the unilateral items (their
+    // indices on the stack: no call allocates)
     let (mut uni_at, mut n_uni) = ([0usize; MAX_ITEMS], 0);
     for (i, it) in items.iter().enumerate() {
         if it.unilateral {
@@ -209,7 +209,8 @@ pub fn unilateral_impact(
     let mut mfac = mass;
     ldl(&mut mfac, n).ok_or(SoaError::MassMatrixNotPositiveDefinite)?;
     let mut chosen_at = [false; MAX_ITEMS];
-    match hold {
+    // the chosen set's violation: known from the search, computed for an imposed set
+    let violated = match hold {
         Some(h) => {
             for (i, it) in items.iter().enumerate() {
                 if !it.unilateral && !h[i] {
@@ -221,6 +222,7 @@ pub fn unilateral_impact(
                 }
             }
             chosen_at[..items.len()].copy_from_slice(h);
+            violation(n, items, &all_rows, &mass, &mfac, h, qd)
         }
         None => {
             let mut best: Option<(f64, [bool; MAX_ITEMS])> = None;
@@ -243,7 +245,10 @@ pub fn unilateral_impact(
                 }
             }
             match best {
-                Some((_, a)) => chosen_at = a,
+                Some((v, a)) => {
+                    chosen_at = a;
+                    Some(v)
+                }
                 None => {
                     return Err(SoaError::SingularConstraint {
                         what: "A 𝓜⁻¹ Aᵀ (every active set of the impact)",
@@ -251,13 +256,11 @@ pub fn unilateral_impact(
                 }
             }
         }
-    }
+    };
     let chosen = &chosen_at[..items.len()];
-    let complementary = violation(n, items, &all_rows, &mass, &mfac, chosen, qd).ok_or(
-        SoaError::SingularConstraint {
-            what: "A 𝓜⁻¹ Aᵀ (impact)",
-        },
-    )? == 0.0;
+    let complementary = violated.ok_or(SoaError::SingularConstraint {
+        what: "A 𝓜⁻¹ Aᵀ (impact)",
+    })? == 0.0;
     // the map, and its Jacobian if asked for, for the chosen set (without it, duals of width
     // 0: the value arithmetic of every width, hence the same bits, without the derivatives)
     let mut lam = [0.0; MAX_DOF];
