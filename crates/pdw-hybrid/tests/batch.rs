@@ -266,11 +266,13 @@ fn parallel_batches_are_identical_for_any_thread_count_and_chunk_size() {
     }
 }
 
-/// The [`Bouncer`] that notes which pool thread started each item and takes a millisecond to
-/// start one (so that a thread left idle would show).
+/// The [`Bouncer`] that notes which pool thread started each item, and holds each start until
+/// a second pool thread has started one too (so a thread left idle shows: the wait then ends at
+/// its bound, 10 s, and the test sees one thread — a bound against hanging, not a timing).
 struct Noted {
     inner: Bouncer,
     threads: std::sync::Mutex<std::collections::BTreeSet<usize>>,
+    both: std::sync::Condvar,
 }
 
 impl<S: HybridSystem + ?Sized> LaneDriver<S> for Noted {
@@ -280,9 +282,14 @@ impl<S: HybridSystem + ?Sized> LaneDriver<S> for Noted {
 
     fn start(&self, sys: &S, item: &Item, lane: &mut LaneLog, x: &mut [f64]) -> (usize, f64) {
         if let Some(i) = rayon::current_thread_index() {
-            self.threads.lock().unwrap().insert(i);
+            let mut seen = self.threads.lock().unwrap();
+            seen.insert(i);
+            self.both.notify_all();
+            let _unused = self
+                .both
+                .wait_timeout_while(seen, std::time::Duration::from_secs(10), |s| s.len() < 2)
+                .unwrap();
         }
-        std::thread::sleep(std::time::Duration::from_millis(1));
         LaneDriver::<S>::start(&self.inner, sys, item, lane, x)
     }
 
@@ -318,6 +325,7 @@ fn a_call_smaller_than_one_block_runs_on_every_thread() {
             start_mode: 0,
         },
         threads: Default::default(),
+        both: Default::default(),
     };
     let its = items(200, 29);
     let opts = BatchOptions {

@@ -104,7 +104,22 @@ fn pseudo_arclength_passes_the_saddle_node_fold_and_natural_continuation_reports
             param, multiplier, ..
         } => {
             assert!(param > 0.0 && param < 1e-3, "{param}");
-            assert!((multiplier - 1.0).abs() < 0.1);
+            // The closed form, not the rule that named the end: the last point is a fixed point
+            // of x ↦ x + μ − x² (x² = μ, to the corrector's residual) and its multiplier is that
+            // map's derivative 1 − 2x there.
+            let last = nat.points.last().unwrap();
+            let x = last.section[0];
+            assert_eq!(last.param, param);
+            assert!(
+                (x * x - param).abs() <= opts.newton_tol,
+                "x² − μ = {}",
+                x * x - param
+            );
+            assert!(
+                (multiplier - (1.0 - 2.0 * x)).abs() < 1e-12,
+                "multiplier {multiplier} against 1 − 2x = {}",
+                1.0 - 2.0 * x
+            );
         }
         ref e => panic!("expected FoldSuspected, got {e:?}"),
     }

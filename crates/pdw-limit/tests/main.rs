@@ -9,4 +9,5 @@ mod cloud;
 mod continuation_closed_form;
 mod continuation_maps;
 mod internals;
+mod section_frame;
 mod standing_still;
