@@ -364,8 +364,8 @@ def explore(
     threads: int = 2,
 ) -> str:
     """Serves the basin file(s) on 127.0.0.1 with the page of `pdw-sweep explore` (click a
-    cell to watch it walk, drag a box to refine) on a background thread and returns the URL;
-    port=0 picks a free port. The server runs until the interpreter exits."""
+    cell to watch it walk, drag a box to refine) on a background thread and returns the URL
+    with the session token (every API request needs it); port=0 picks a free port. The server runs until the interpreter exits."""
     ...
 
 def animate(

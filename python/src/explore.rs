@@ -12,8 +12,8 @@ static SERVERS: Mutex<Vec<pdw_explore::Server>> = Mutex::new(Vec::new());
 
 /// `explore(path, port=0, save_dir=".", threads=2)`: serves the basin file `path` (or a list
 /// of files) on 127.0.0.1 — the page of `pdw-sweep explore` — on a background thread and
-/// returns its URL (`port=0`: any free port; the URL has the real one). The server runs until
-/// the interpreter exits.
+/// returns its URL with the session token (`http://127.0.0.1:PORT/?token=…`; `port=0`: any
+/// free port; the URL has the real one). The server runs until the interpreter exits.
 #[pyfunction]
 #[pyo3(
     signature = (path, port=0, save_dir=PathBuf::from("."), threads=2),

@@ -30,13 +30,15 @@ def test_explore_serves_the_page_and_the_file():
         subprocess.run([exe, "basin", "--grid", "31x27", "--out", path, "--quiet"], check=True,
                        capture_output=True)
         url = pdw.explore(path, port=0, save_dir=d)
-        assert url.startswith("http://127.0.0.1:") and not url.endswith(":0/")
+        base, token = url.split("?token=")
+        assert base.startswith("http://127.0.0.1:") and not base.endswith(":0/")
+        assert len(token) == 64
         st, ctype, page = get(url)
         assert st == 200 and ctype.startswith("text/html") and b"/app.js" in page
-        st, _, body = get(url + "api/files")
+        st, _, body = get(base + "api/files?token=" + token)
         files = json.loads(body)["files"]
         assert files == [{"index": 0, "name": "b.h5", "kind": "basin", "model": "simplest"}]
-        b = json.loads(get(url + "api/basin/0")[2])
+        b = json.loads(get(base + "api/basin/0?token=" + token)[2])
         with h5py.File(path) as f:
             outcome = f["basin/outcome"][()]
             legend = json.loads(f["basin/outcome"].attrs["legend"])
@@ -44,7 +46,7 @@ def test_explore_serves_the_page_and_the_file():
         assert b["outcome"] == outcome.ravel().tolist()
         assert {str(l["code"]): l["name"] for l in b["legend"]} == legend
         with pytest.raises(urllib.error.HTTPError) as e:
-            get(url + "api/basin/5")
+            get(base + "api/basin/5?token=" + token)
         assert e.value.code == 404 and "no file 5" in json.loads(e.value.read())["error"]
 
 

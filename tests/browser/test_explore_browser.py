@@ -8,7 +8,11 @@ point moves; on a sweep file it clicks a stable branch point and checks its gait
 design file it sorts the designs table both ways (checked against the file read with h5py),
 walks a design's gait and clicks a design without a gait for its message.
 Screenshots and the measured times (click to first animation frame for every
-preset, a 400x400 window of the simplest walker) go to experiments/results/explore/.
+preset, a 400x400 window of the simplest walker) go to a fresh temporary folder (its path is
+printed), or to $PDW_EXPLORE_RESULTS when set (e.g. experiments/results/explore to refresh the
+pictures the docs show); the test never writes into the repository otherwise.
+Every wait is on a condition of the page (a frame counter advancing, a status shown), none on
+a fixed time.
 
 Skips when chromium or chromedriver is missing, except in CI (CI=true), where that fails.
 Run: `python -m pytest -q tests/browser` after `cargo build --release`.
@@ -27,7 +31,7 @@ import pytest
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 EXE = os.path.join(os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")), "release",
                    "pdw-sweep")
-RESULTS = os.path.join(ROOT, "experiments", "results", "explore")
+RESULTS = os.environ.get("PDW_EXPLORE_RESULTS") or tempfile.mkdtemp(prefix="pdw-explore-browser-")
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 DRIVER = shutil.which("chromedriver") or "/usr/bin/chromedriver"
 # (name, basin arguments): every preset with a two-coordinate section
@@ -95,6 +99,7 @@ def setup():
     driver = webdriver.Chrome(service=Service(DRIVER), options=opts)
     driver.get(url)
     os.makedirs(RESULTS, exist_ok=True)
+    print(f"screenshots and measured.json go to {RESULTS}")
     yield {"driver": driver, "files": files, "work": work, "url": url}
     driver.quit()
     server.terminate()
@@ -110,6 +115,12 @@ def wait(cond, what, timeout=60):
             return v
         time.sleep(0.05)
     raise AssertionError(f"timed out waiting for {what}")
+
+
+def frames_advance(d, n=1):
+    """Waits until the walk's frame counter has advanced by `n` frames (the animation runs)."""
+    f0 = int(text(d, "frame"))
+    wait(lambda: int(text(d, "frame")) >= f0 + n, f"the animation to advance {n} frame(s)")
 
 
 def js(d, expr):
@@ -186,10 +197,8 @@ def test_click_walks_the_cell_with_the_files_label(setup):
         i, j = interior(outcome, name_of, kind)
         want = click_cell(d, path, i, j)
         assert text(d, "outcome") == want and text(d, "stored") == want
-        f0 = int(text(d, "frame"))
-        time.sleep(0.6)
-        assert int(text(d, "frame")) > f0, "the animation does not run"
-    time.sleep(1.2)
+        frames_advance(d)
+    frames_advance(d, 60)
     d.save_screenshot(os.path.join(RESULTS, "walk.png"))
 
 
@@ -204,7 +213,7 @@ def test_click_to_first_frame_for_every_preset(setup):
         assert text(d, "outcome") == want
         times[name] = round(js(d, "window.explorer.firstFrameMs"), 1)
         if name == "kneed":
-            time.sleep(1.3)
+            frames_advance(d, 60)
             d.save_screenshot(os.path.join(RESULTS, "walk-kneed.png"))
     record("click_to_first_frame_ms", times)
     print("click to first frame (ms):", times)
@@ -261,7 +270,7 @@ def test_zoom_refines_as_basin_and_saves(setup):
     code = g["outcome"][i * nx + j]
     want = [l["name"] for l in g["legend"] if l["code"] == code][0]
     assert text(d, "outcome") == want and text(d, "stored") == want
-    time.sleep(1.3)
+    frames_advance(d, 60)
     d.save_screenshot(os.path.join(RESULTS, "zoom.png"))
     # the slope slider: the window and its gait are computed again
     before = text(d, "gaitpoint")
@@ -302,9 +311,7 @@ def test_a_sweep_point_walks_with_its_multipliers(setup):
     at(d, c, px, py).click().perform()
     wait(lambda: "multipliers" in text(d, "cellinfo"), "the branch point's gait")
     assert text(d, "outcome").endswith("stable")
-    f0 = int(text(d, "frame"))
-    time.sleep(0.6)
-    assert int(text(d, "frame")) > f0
+    frames_advance(d)
 
 
 def design_rows(d):
@@ -382,15 +389,16 @@ def test_a_design_files_table_sorts_and_its_designs_walk(setup):
     assert text(d, "outcome") == f"{i}: feasible"
     row = [r for r in design_rows(d) if int(r[0]) == i][0]
     assert text(d, "stored") == ", ".join(f"{n} = {row[1 + k]}" for k, n in enumerate(free))
-    f0, s0 = int(text(d, "frame")), js(d, "window.explorer.t")
-    time.sleep(0.6)
-    assert int(text(d, "frame")) > f0 and js(d, "window.explorer.t") != s0, "no animation"
+    s0 = js(d, "window.explorer.t")
+    frames_advance(d)
+    wait(lambda: js(d, "window.explorer.t") != s0, "the walk's time to move")
     assert not d.find_element("id", "walkmsg").is_displayed()
     ms = round(js(d, "window.explorer.firstFrameMs"), 1)
     record("design_click_to_first_frame_ms", ms)
     print(f"design click to first frame: {ms} ms (page), {wall_ms:.0f} ms (test's wall clock)")
     d.execute_script("window.scrollTo(0, 0);")
-    time.sleep(1.0)
+    wait(lambda: js(d, "window.scrollY") == 0, "the page scrolled to the top")
+    frames_advance(d, 60)
     d.save_screenshot(os.path.join(RESULTS, "design.png"))
     # every uphill design (slope < 0: a passive walker loses energy at each impact and gains
     # none from gravity) has no gait; a click on it says so instead of animating

@@ -71,18 +71,36 @@ impl Grid {
         }
     }
 
-    /// A refined window of `r` with the engine's `outcome` and `strides`; axis units from the
-    /// file's grid `like`.
-    pub fn of_window(r: &Rebuilt, outcome: Vec<u8>, strides: Vec<u16>, like: &Grid) -> Grid {
+    /// The x and y axes of file `src` (names and units; no values), as a window of it labels
+    /// its axes.
+    pub fn axes_of(src: &BasinSource) -> (GridAxis, GridAxis) {
+        let h = &src.data.header;
+        let unit = |i: usize| src.units.get(i).cloned().unwrap_or_default();
+        let axis = |name: &str, i: usize| GridAxis {
+            name: name.to_string(),
+            units: unit(i),
+            values: Vec::new(),
+        };
+        (axis(&h.x_name, 0), axis(&h.y_name, 1))
+    }
+
+    /// A refined window of `r` with the engine's `outcome` and `strides`; axis names and units
+    /// from `like` ([`Grid::axes_of`] the file).
+    pub fn of_window(
+        r: &Rebuilt,
+        outcome: Vec<u8>,
+        strides: Vec<u16>,
+        like: &(GridAxis, GridAxis),
+    ) -> Grid {
         let p = &r.plan;
         Grid {
             x: GridAxis {
                 values: p.xs.clone(),
-                ..like.x.clone()
+                ..like.0.clone()
             },
             y: GridAxis {
                 values: p.ys.clone(),
-                ..like.y.clone()
+                ..like.1.clone()
             },
             z: None,
             outcome,
@@ -132,22 +150,79 @@ impl Grid {
             .collect()
     }
 
-    /// The page's JSON of this grid; `params` the model's parameters for the sliders.
-    pub fn to_json(&self, params: &[(String, f64)]) -> Value {
-        let axis = |a: &GridAxis| json!({"name": a.name, "units": a.units, "values": a.values});
-        json!({
-            "x": axis(&self.x),
-            "y": axis(&self.y),
-            "z": self.z.as_ref().map(axis),
-            "nx": self.nx(), "ny": self.ny(), "nz": self.nz(),
-            "outcome": self.outcome,
-            "strides": self.strides,
-            "legend": self.legend_json(),
-            "attractors": self.attractors.iter().map(|(n, p)| json!({"name": n, "points": p})).collect::<Vec<_>>(),
-            "section_names": self.section_names,
-            "complete": self.complete,
-            "shard": self.shard.map(|(i, n)| json!({"index": i, "count": n})),
-            "params": params.iter().map(|(n, v)| json!({"name": n, "value": v})).collect::<Vec<_>>(),
-        })
+    /// The page's JSON of this grid with the fields of `extra` beside it; `params` the
+    /// model's parameters for the sliders. Serialised straight from the arrays (no JSON tree
+    /// of the cells: a 4-million-cell grid is its ~20 MB of text, not gigabytes of values).
+    pub fn to_json_bytes(
+        &self,
+        params: &[(String, f64)],
+        extra: serde_json::Map<String, Value>,
+    ) -> Result<Vec<u8>, crate::ApiError> {
+        let axis = AxisOut::of;
+        let out = GridOut {
+            x: axis(&self.x),
+            y: axis(&self.y),
+            z: self.z.as_ref().map(axis),
+            nx: self.nx(),
+            ny: self.ny(),
+            nz: self.nz(),
+            outcome: &self.outcome,
+            strides: &self.strides,
+            legend: self.legend_json(),
+            attractors: self
+                .attractors
+                .iter()
+                .map(|(n, p)| json!({"name": n, "points": p}))
+                .collect(),
+            section_names: &self.section_names,
+            complete: self.complete,
+            shard: self.shard.map(|(i, n)| json!({"index": i, "count": n})),
+            params: params
+                .iter()
+                .map(|(n, v)| json!({"name": n, "value": v}))
+                .collect(),
+            extra,
+        };
+        serde_json::to_vec(&out)
+            .map_err(|e| crate::ApiError::internal(format!("the grid's JSON: {e}")))
     }
+}
+
+/// An axis as the page reads it.
+#[derive(serde::Serialize)]
+struct AxisOut<'a> {
+    name: &'a str,
+    units: &'a str,
+    values: &'a [f64],
+}
+
+impl AxisOut<'_> {
+    fn of(a: &GridAxis) -> AxisOut<'_> {
+        AxisOut {
+            name: &a.name,
+            units: &a.units,
+            values: &a.values,
+        }
+    }
+}
+
+/// A grid as the page reads it (see [`Grid::to_json_bytes`]).
+#[derive(serde::Serialize)]
+struct GridOut<'a> {
+    x: AxisOut<'a>,
+    y: AxisOut<'a>,
+    z: Option<AxisOut<'a>>,
+    nx: usize,
+    ny: usize,
+    nz: usize,
+    outcome: &'a [u8],
+    strides: &'a [u16],
+    legend: Vec<Value>,
+    attractors: Vec<Value>,
+    section_names: &'a [String],
+    complete: bool,
+    shard: Option<Value>,
+    params: Vec<Value>,
+    #[serde(flatten)]
+    extra: serde_json::Map<String, Value>,
 }

@@ -5,16 +5,23 @@
 //! engine, and the window saved as a basin file. See docs/explore.md.
 //!
 //! Safety: the server binds the loopback address unless told otherwise explicitly
-//! ([`Config::bind_explicit`]); files are addressed by their index in the list it was started
-//! with (the page never sends a path); request bodies are capped ([`MAX_BODY`]); every error
-//! is a JSON `{"error": …}` the page shows. The HTTP side runs on a tokio runtime of at most
-//! two workers; computations run on one rayon pool ([`Config::threads`]) through
-//! `spawn_blocking` and the refine worker ([`jobs`]).
+//! ([`Config::bind_explicit`]); it answers only its own page ([`guard`]: the session token in
+//! the printed URL, the Host and Origin checked, JSON-only POSTs); files are addressed by their
+//! index in the list it was started with (the page never sends a path); request bodies are
+//! capped ([`MAX_BODY`]) and must arrive in time, like request heads; connections are bounded
+//! ([`Config::max_connections`]), so are the large responses prepared at once ([`heavy`]) and
+//! the finished windows kept ([`jobs::CACHE_BYTES`]); every error is a JSON `{"error": …}` the
+//! page shows. The HTTP side runs on a tokio runtime of at most two workers; walks run on one
+//! rayon pool ([`Config::threads`]) through `spawn_blocking`, windows on the refine worker's
+//! own pool ([`jobs`]), so that walks never wait behind a window.
 
 pub mod design;
 pub mod error;
 pub mod grid;
+pub mod guard;
+pub mod heavy;
 pub mod jobs;
+pub mod private_dir;
 mod routes;
 pub mod save;
 pub mod source;
@@ -50,7 +57,24 @@ pub struct Config {
     pub save_dir: PathBuf,
     /// Threads of the computing pool.
     pub threads: usize,
+    /// Most connections open at once; a connection beyond is closed at once (file
+    /// descriptors stay for the files).
+    pub max_connections: usize,
+    /// Time limits of a request's head and body.
+    pub limits: guard::Limits,
+    /// Large responses prepared at once, and how many more may wait ([`heavy`]).
+    pub heavy: (usize, usize),
+    /// Bytes of finished windows the refine cache keeps ([`jobs::CACHE_BYTES`]).
+    pub cache_bytes: usize,
 }
+
+/// [`Config::max_connections`] by default.
+pub const MAX_CONNECTIONS: usize = 128;
+/// [`guard::Limits`] by default: 10 s for a request head, 10 s for a body.
+pub const LIMITS: guard::Limits = guard::Limits {
+    header_timeout: std::time::Duration::from_secs(10),
+    body_timeout: std::time::Duration::from_secs(10),
+};
 
 impl Config {
     /// Loopback on `port`, saving into the current directory, two threads.
@@ -62,6 +86,10 @@ impl Config {
             port,
             save_dir: PathBuf::from("."),
             threads: 2,
+            max_connections: MAX_CONNECTIONS,
+            limits: LIMITS,
+            heavy: heavy::DEFAULT,
+            cache_bytes: jobs::CACHE_BYTES,
         }
     }
 }
@@ -116,6 +144,8 @@ pub struct AppState {
     pub pool: Arc<rayon::ThreadPool>,
     pub jobs: Arc<jobs::Jobs>,
     pub save_dir: PathBuf,
+    /// The gate of large responses.
+    pub heavy: heavy::Heavy,
 }
 
 impl AppState {
@@ -133,7 +163,10 @@ impl AppState {
 /// A running server: its URL and state; dropping it stops it.
 pub struct Server {
     pub addr: SocketAddr,
+    /// The page's URL with the session token (`http://127.0.0.1:8737/?token=…`).
     pub url: String,
+    /// The session token every API request needs ([`guard`]).
+    pub token: String,
     pub state: Arc<AppState>,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<std::thread::JoinHandle<()>>,
@@ -171,19 +204,56 @@ pub fn check_bind(addr: IpAddr, explicit: bool) -> Result<(), String> {
     }
 }
 
+/// Refuses a save directory that is missing, not a directory or not writable, naming it.
+pub fn check_save_dir(dir: &std::path::Path) -> Result<(), String> {
+    let shown = dir.display();
+    let md = std::fs::metadata(dir)
+        .map_err(|e| format!("--save-dir '{shown}': {e}; give an existing, writable directory"))?;
+    if !md.is_dir() {
+        return Err(format!(
+            "--save-dir '{shown}' is not a directory; give an existing, writable directory"
+        ));
+    }
+    let probe =
+        tempfile_probe(dir).map_err(|e| format!("--save-dir '{shown}' is not writable: {e}"))?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+/// A probe file created (new, never an existing path) in `dir`.
+fn tempfile_probe(dir: &std::path::Path) -> std::io::Result<PathBuf> {
+    let name = format!(
+        ".pdw-explore-probe-{}",
+        guard::hex(&guard::random_bytes(8).map_err(std::io::Error::other)?)
+    );
+    let p = dir.join(name);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&p)?;
+    Ok(p)
+}
+
 /// Starts the server on a thread of its own; returns once it listens.
 pub fn start(cfg: Config) -> Result<Server, String> {
     check_bind(cfg.addr, cfg.bind_explicit)?;
+    check_save_dir(&cfg.save_dir)?;
     let threads = pdw::input::check_threads(cfg.threads, "threads").map_err(|e| e.0)?;
+    let token = guard::Token::random()?;
     let listener = std::net::TcpListener::bind(SocketAddr::new(cfg.addr, cfg.port))
         .map_err(|e| format!("cannot listen on {}:{}: {e}", cfg.addr, cfg.port))?;
     listener.set_nonblocking(true).map_err(|e| e.to_string())?;
     let addr = listener.local_addr().map_err(|e| e.to_string())?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| e.to_string())?;
-    let pool = Arc::new(pool);
+    let pool = |name: &'static str| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(move |i| format!("{name}-{i}"))
+    };
+    let walk_pool = Arc::new(
+        pool("pdw-explore-walk")
+            .build()
+            .map_err(|e| e.to_string())?,
+    );
     let state = Arc::new(AppState {
         entries: cfg
             .files
@@ -196,9 +266,10 @@ pub fn start(cfg: Config) -> Result<Server, String> {
                 design: OnceLock::new(),
             })
             .collect(),
-        jobs: jobs::Jobs::start(pool.clone()),
-        pool,
+        jobs: jobs::Jobs::start(pool("pdw-explore-refine"), cfg.cache_bytes)?,
+        pool: walk_pool,
         save_dir: cfg.save_dir.clone(),
+        heavy: heavy::Heavy::new(cfg.heavy.0, cfg.heavy.1),
     });
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -207,7 +278,9 @@ pub fn start(cfg: Config) -> Result<Server, String> {
         .build()
         .map_err(|e| e.to_string())?;
     let (tx, rx) = tokio::sync::oneshot::channel::<()>();
-    let app = routes::router(state.clone());
+    let guard = Arc::new(guard::Guard::new(token.clone(), addr, cfg.limits));
+    let app = routes::router(state.clone(), guard);
+    let (max_conn, header_timeout) = (cfg.max_connections.max(1), cfg.limits.header_timeout);
     let thread = std::thread::Builder::new()
         .name("pdw-explore".into())
         .spawn(move || {
@@ -215,26 +288,62 @@ pub fn start(cfg: Config) -> Result<Server, String> {
                 let Ok(l) = tokio::net::TcpListener::from_std(listener) else {
                     return;
                 };
-                let _ = axum::serve(l, app)
-                    .with_graceful_shutdown(async {
-                        let _ = rx.await;
-                    })
-                    .await;
+                serve(l, app, max_conn, header_timeout, rx).await;
             });
         })
         .map_err(|e| e.to_string())?;
     warm_up(&state);
-    let host = match addr.ip() {
-        IpAddr::V6(a) => format!("[{a}]"),
-        IpAddr::V4(a) => a.to_string(),
-    };
     Ok(Server {
         addr,
-        url: format!("http://{host}:{}/", addr.port()),
+        url: format!(
+            "http://{}:{}/?token={}",
+            guard::ip_text(addr.ip()),
+            addr.port(),
+            token.as_str()
+        ),
+        token: token.as_str().to_string(),
         state,
         stop: Some(tx),
         thread: Some(thread),
     })
+}
+
+/// Accepts connections until `stop`: at most `max_conn` at once (one more is closed at once),
+/// each served by hyper's HTTP/1 with a deadline on every request head.
+async fn serve(
+    l: tokio::net::TcpListener,
+    app: axum::Router,
+    max_conn: usize,
+    header_timeout: std::time::Duration,
+    mut stop: tokio::sync::oneshot::Receiver<()>,
+) {
+    let slots = Arc::new(tokio::sync::Semaphore::new(max_conn));
+    loop {
+        let tcp = tokio::select! {
+            _ = &mut stop => return,
+            r = l.accept() => match r {
+                Ok((tcp, _)) => tcp,
+                // out of file descriptors, or a connection reset before it was accepted
+                Err(_) => {
+                    tokio::task::yield_now().await;
+                    continue;
+                }
+            },
+        };
+        let Ok(slot) = slots.clone().try_acquire_owned() else {
+            drop(tcp);
+            continue;
+        };
+        let svc = hyper_util::service::TowerToHyperService::new(app.clone());
+        tokio::spawn(async move {
+            let _slot = slot;
+            let conn = hyper::server::conn::http1::Builder::new()
+                .timer(hyper_util::rt::TokioTimer::new())
+                .header_read_timeout(header_timeout)
+                .serve_connection(hyper_util::rt::TokioIo::new(tcp), svc);
+            let _ = conn.await;
+        });
+    }
 }
 
 /// Reads the files and rebuilds their runs in the background, so that the first click walks

@@ -1,8 +1,9 @@
-//! The page, its assets and the JSON API (see docs/explore.md for every endpoint).
+//! The page, its assets and the JSON API (see docs/explore.md for every endpoint), behind the
+//! checks of [`crate::guard`].
 
 use crate::error::ApiError;
 use crate::grid::Grid;
-use crate::jobs::Status;
+use crate::jobs::{CancelAnswer, Status};
 use crate::source::Window;
 use crate::{AppState, MAX_BODY, MAX_WINDOW_CELLS};
 use axum::body::Bytes;
@@ -22,8 +23,8 @@ const INDEX_HTML: &str = include_str!("assets/index.html");
 const APP_JS: &str = include_str!("assets/app.js");
 const APP_CSS: &str = include_str!("assets/app.css");
 
-/// Every route, the body cap and the JSON 404.
-pub fn router(state: Arc<AppState>) -> Router {
+/// Every route, the body cap, the JSON 404, and in front of them all the guard.
+pub fn router(state: Arc<AppState>, guard: Arc<crate::guard::Guard>) -> Router {
     Router::new()
         .route("/", get(|| asset(INDEX_HTML, "text/html; charset=utf-8")))
         .route(
@@ -48,6 +49,10 @@ pub fn router(state: Arc<AppState>) -> Router {
         .route("/api/stats", get(stats))
         .fallback(|| async { ApiError::not_found("no such page or API endpoint") })
         .layer(DefaultBodyLimit::max(MAX_BODY))
+        .layer(axum::middleware::from_fn_with_state(
+            guard,
+            crate::guard::check,
+        ))
         .with_state(state)
 }
 
@@ -156,11 +161,13 @@ async fn design_walk(State(s): St, body: Body) -> ApiResult {
     Ok(Json(v))
 }
 
-/// `GET /api/basin/{i}`: the basin of file i ([`Grid::to_json`]) with its model.
-async fn basin(State(s): St, Path(i): Path<String>) -> ApiResult {
+/// `GET /api/basin/{i}`: the basin of file i ([`Grid::to_json_bytes`]) with its model; one of
+/// the large responses [`crate::heavy`] bounds.
+async fn basin(State(s): St, Path(i): Path<String>) -> Result<Response, ApiError> {
     let i = number(&i, "file")? as usize;
     s.entry(i)?;
-    let v = blocking(move || {
+    let permit = s.heavy.enter().await?;
+    let bytes = blocking(move || {
         let src = s.entry(i)?.source()?;
         let h = &src.data.header;
         let params: Vec<(String, f64)> =
@@ -169,16 +176,16 @@ async fn basin(State(s): St, Path(i): Path<String>) -> ApiResult {
                 .into_iter()
                 .filter_map(|(n, v)| Some((n, v.as_f64()?)))
                 .collect();
-        let mut v = Grid::of_file(&src).to_json(&params);
-        v["file"] = json!(i);
-        v["model"] = json!(h.model);
-        v["slope"] = json!(h.slope);
-        v["max_strides"] = json!(h.max_strides);
-        v["coordinates"] = src.coordinates.clone();
-        Ok(v)
+        let mut extra = serde_json::Map::new();
+        extra.insert("file".into(), json!(i));
+        extra.insert("model".into(), json!(h.model));
+        extra.insert("slope".into(), json!(h.slope));
+        extra.insert("max_strides".into(), json!(h.max_strides));
+        extra.insert("coordinates".into(), src.coordinates.clone());
+        Grid::of_file(&src).to_json_bytes(&params, extra)
     })
     .await?;
-    Ok(Json(v))
+    Ok(crate::heavy::response(bytes, permit))
 }
 
 /// `GET /api/sweep/{i}`: the branches of sweep file i ([`crate::sweep::to_json`]).
@@ -351,38 +358,36 @@ impl RefineRequest {
 
 /// `POST /api/refine`: queues the window (cancelling older ones); `{job}`, or with `wait` the
 /// job's status once finished.
-async fn refine(State(s): St, body: Body) -> ApiResult {
+async fn refine(State(s): St, body: Body) -> Result<Response, ApiError> {
     let req: RefineRequest = parse(body)?;
     req.check()?;
     s.entry(req.file)?;
     let s2 = s.clone();
     let file = req.file;
-    let (src, base) = blocking(move || {
-        let src = s2.entry(file)?.source()?;
-        let g = Grid::of_file(&src);
-        Ok((src, g))
-    })
-    .await?;
-    if req.slice >= base.nz() {
+    let src = blocking(move || s2.entry(file)?.source()).await?;
+    let z = src.data.header.z.as_ref().map(|z| &z.values);
+    let nz = z.map_or(1, |z| z.len());
+    if req.slice >= nz {
         return Err(ApiError::bad_request(format!(
-            "slice {} of {}",
-            req.slice,
-            base.nz()
+            "slice {}: the file has {nz} slice(s), numbered from 0",
+            req.slice
         )));
     }
+    let z_fixed = z.map(|z| z[req.slice]);
+    let axes = Grid::axes_of(&src);
     let w = Window {
         bounds: Some((req.bx.x[0], req.bx.x[1], req.bx.y[0], req.bx.y[1])),
         grid: Some((req.nx, req.ny)),
-        z_fixed: base.z.as_ref().map(|z| z.values[req.slice]),
+        z_fixed,
         overrides: req.set.iter().map(|(n, v)| (n.clone(), *v)).collect(),
     };
     let key = serde_json::to_string(&json!([
         file, req.bx.x, req.bx.y, req.nx, req.ny, req.slice, req.set
     ]))
     .unwrap_or_default();
-    let id = s.jobs.submit(key, file, src, w, base);
+    let id = s.jobs.submit(key, file, src, w, axes);
     if !req.wait {
-        return Ok(Json(json!({ "job": id })));
+        return Ok(Json(json!({ "job": id })).into_response());
     }
     let guard = CancelOnDrop {
         s: s.clone(),
@@ -392,7 +397,7 @@ async fn refine(State(s): St, body: Body) -> ApiResult {
     loop {
         tokio::time::sleep(std::time::Duration::from_millis(20)).await;
         match s.jobs.status(id) {
-            Some((Status::Queued | Status::Running, _, _)) => continue,
+            Some((Status::Queued | Status::Running, ..)) => continue,
             _ => break,
         }
     }
@@ -417,40 +422,52 @@ impl Drop for CancelOnDrop {
     }
 }
 
-/// `GET /api/job/{id}`: status, progress, and the window once done.
-async fn job(State(s): St, Path(id): Path<String>) -> ApiResult {
+/// `GET /api/job/{id}`: status, progress and phase, and the window once done (a large
+/// response, bounded by [`crate::heavy`]).
+async fn job(State(s): St, Path(id): Path<String>) -> Result<Response, ApiError> {
     let id = number(&id, "job")?;
-    let (st, done, total) = s
+    let (st, done, total, phase) = s
         .jobs
         .status(id)
         .ok_or_else(|| ApiError::not_found(format!("no job {id}")))?;
+    let name = crate::jobs::status_name(&st);
     let v = match st {
-        Status::Queued => json!({"job": id, "status": "queued", "done": done, "total": total}),
-        Status::Running => json!({"job": id, "status": "running", "done": done, "total": total}),
-        Status::Cancelled => {
-            json!({"job": id, "status": "cancelled", "done": done, "total": total})
-        }
-        Status::Failed(e) => json!({"job": id, "status": "failed", "error": e.message}),
+        Status::Queued | Status::Running => json!({"job": id, "status": name, "done": done,
+                                                   "total": total, "phase": phase.name()}),
+        Status::Cancelled(p) => json!({"job": id, "status": name, "done": done, "total": total,
+                                       "phase": p.name()}),
+        Status::Failed(e) => json!({"job": id, "status": name, "error": e.message}),
+        Status::Evicted => json!({"job": id, "status": name, "error": format!(
+            "job {id}'s window was dropped from the cache (at most {} MiB of windows are \
+             kept, the least recently used leave first): refine it again",
+            s.jobs.cache_cap >> 20)}),
         Status::Done(r) => {
+            let permit = s.heavy.enter().await?;
             let params = r.rebuilt.m.params.clone();
-            let mut g = blocking(move || Ok(r.grid.to_json(&params))).await?;
-            g["job"] = json!(id);
-            g["status"] = json!("done");
-            g["done"] = json!(total);
-            g["total"] = json!(total);
-            g
+            let mut extra = serde_json::Map::new();
+            extra.insert("job".into(), json!(id));
+            extra.insert("status".into(), json!("done"));
+            extra.insert("done".into(), json!(total));
+            extra.insert("total".into(), json!(total));
+            let bytes = blocking(move || r.grid.to_json_bytes(&params, extra)).await?;
+            return Ok(crate::heavy::response(bytes, permit));
         }
     };
-    Ok(Json(v))
+    Ok(Json(v).into_response())
 }
 
-/// `POST /api/job/{id}/cancel`.
+/// `POST /api/job/{id}/cancel`: `cancelled: true` for a job queued or running; a job that had
+/// ended says so (`cancelled: false` and its status).
 async fn cancel(State(s): St, Path(id): Path<String>) -> ApiResult {
     let id = number(&id, "job")?;
-    if !s.jobs.cancel(id) {
-        return Err(ApiError::not_found(format!("no job {id}")));
+    match s.jobs.cancel(id) {
+        CancelAnswer::Unknown => Err(ApiError::not_found(format!("no job {id}"))),
+        CancelAnswer::Cancelled => Ok(Json(json!({"job": id, "cancelled": true}))),
+        CancelAnswer::Finished(st) => Ok(Json(json!({
+            "job": id, "cancelled": false, "status": st,
+            "message": format!("job {id} had already finished ({st}): nothing to cancel"),
+        }))),
     }
-    Ok(Json(json!({"job": id, "cancelled": true})))
 }
 
 #[derive(Deserialize)]
@@ -478,12 +495,16 @@ async fn save(State(s): St, body: Body) -> ApiResult {
     Ok(Json(json!({"saved": name})))
 }
 
-/// `GET /api/stats`: refine jobs started and completed.
+/// `GET /api/stats`: refine jobs started, completed and evicted; the cache's bytes and cap.
 async fn stats(State(s): St) -> ApiResult {
     use std::sync::atomic::Ordering;
     let c = &s.jobs.counters;
     Ok(Json(json!({
         "refines_started": c.started.load(Ordering::SeqCst),
         "refines_completed": c.completed.load(Ordering::SeqCst),
+        "windows_evicted": c.evicted.load(Ordering::SeqCst),
+        "cache_bytes": s.jobs.cache_bytes(),
+        "cache_cap": s.jobs.cache_cap,
+        "jobs_kept": s.jobs.records(),
     })))
 }

@@ -11,9 +11,11 @@ use pdw_limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
 use pdw_store::{Attractor, BasinHeader, BasinMetrics, BasinWriter};
 use std::path::{Path, PathBuf};
 
-/// The header of window `w`: the run's model, integrator and options, the window's grid.
-fn header(src: &BasinSource, w: &Refined) -> BasinHeader {
+/// The header of window `w`: the run's model, integrator and options (the attractor
+/// discovery's among them, as `pdw-sweep basin` writes them), the window's grid.
+pub fn header(src: &BasinSource, w: &Refined) -> BasinHeader {
     let (r, g) = (&w.rebuilt, &w.grid);
+    let disc = pdw_limit::attractors::DiscoveryOptions::default();
     let h = &src.data.header;
     let opts = &r.plan.opts;
     let names = &r.m.info.section_names;
@@ -35,6 +37,8 @@ fn header(src: &BasinSource, w: &Refined) -> BasinHeader {
             "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
             "confirm": opts.confirm, "max_period": opts.max_period,
             "fixed_point_residual": r.plan.gait().map(|fp| fp.residual),
+            "attractor_seeds": r.seeds, "seed_strides": disc.seed_strides,
+            "chaos_radius": disc.chaos_radius, "chaos_sample": disc.cloud_points,
             "fixed": fixed,
         })
         .to_string(),
@@ -56,7 +60,8 @@ fn file_name(p: &Path) -> String {
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
 }
 
-/// A fresh file name in `dir` for window `w` (the first free `explore-…-<n>.h5`).
+/// A fresh file name in `dir` for window `w`: the first `explore-…-<n>.h5` where nothing
+/// exists, a link included (a dangling link is not free: writing through it is refused).
 fn fresh_path(dir: &Path, model: &str, nx: usize, ny: usize) -> PathBuf {
     let model: String = model
         .chars()
@@ -64,7 +69,7 @@ fn fresh_path(dir: &Path, model: &str, nx: usize, ny: usize) -> PathBuf {
         .collect();
     (1..)
         .map(|n| dir.join(format!("explore-{model}-{nx}x{ny}-{n}.h5")))
-        .find(|p| !p.exists())
+        .find(|p| std::fs::symlink_metadata(p).is_err())
         .expect("a free name")
 }
 

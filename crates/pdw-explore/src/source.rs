@@ -78,6 +78,8 @@ pub struct Rebuilt {
     pub set: AttractorSet,
     /// Parameter overrides on top of the file's (the page's sliders).
     pub overrides: Vec<(String, f64)>,
+    /// Seeds the attractor discovery tried (the header's `attractor_seeds`).
+    pub seeds: usize,
 }
 
 /// The model of header `h` with its parameters, then `extra` on top.
@@ -191,25 +193,44 @@ pub fn rebuild(
     w: &Window,
     pool: &rayon::ThreadPool,
 ) -> Result<Rebuilt, ApiError> {
+    rebuild_with(src, w, pool, &|_| true).map(|r| r.expect("a rebuild told to go on finishes"))
+}
+
+/// [`rebuild`], asking `go_on` as the gait search and the attractor discovery start and once
+/// they end (`false`: stop there, `None`).
+pub fn rebuild_with(
+    src: &BasinSource,
+    w: &Window,
+    pool: &rayon::ThreadPool,
+    go_on: &dyn Fn(crate::jobs::Phase) -> bool,
+) -> Result<Option<Rebuilt>, ApiError> {
+    use crate::jobs::Phase;
     let m = model(&src.data.header, &w.overrides)?;
     let req = request(src, &m, w)?;
     let failed = |e: pdw_limit::LimitError| ApiError::internal(format!("gait search: {e}"));
+    if !go_on(Phase::GaitSearch) {
+        return Ok(None);
+    }
     let gaits = pdw::basin::find_gaits(&m).map_err(failed)?;
     let centre = pdw::basin::grid_centre(&m, &gaits, true)
         .ok_or_else(|| ApiError::unprocessable("the model has no guess to centre on"))?;
     let bx = pdw::basin::choose_box(&req, &m.info.section_names, &centre, FLAGS, "box")
         .map_err(|e| ApiError::bad_request(e.0))?;
     let plan = BasinPlan::new(&req, bx, gaits, centre);
-    let (set, _) = plan
+    if !go_on(Phase::Attractors) {
+        return Ok(None);
+    }
+    let (set, seeds) = plan
         .attractors(&m, pool)
         .map_err(|e| ApiError::internal(format!("attractor discovery: {e}")))?;
-    Ok(Rebuilt {
+    Ok(Some(Rebuilt {
         m,
         req,
         plan,
         set,
         overrides: w.overrides.clone(),
-    })
+        seeds,
+    }))
 }
 
 /// Refuses a rebuild of the file's own box that does not reproduce its grid and legend.

@@ -1,16 +1,17 @@
 //! `pdw-sweep explore`: the cells the explorer walks get the labels their basin file records, a
 //! refined window is `pdw-sweep basin` on that box cell for cell, and the server keeps to its
-//! rules (loopback unless told, files by index only, JSON errors, body cap, disconnects and
-//! rapid refines).
+//! rules (loopback unless told, only its own page — token, Host, Origin, JSON POSTs —, files by
+//! index only, JSON errors, body cap, bounded connections, responses and cache, disconnects,
+//! cancels and rapid refines).
 
 use crate::common::run;
-use pdw_explore::jobs::compute;
+use pdw_explore::jobs::{compute, Computed, Phase};
 use pdw_explore::source::{self, Window};
 use pdw_limit::trajectory::Trajectory;
 use std::io::{Read, Write};
 use std::net::{IpAddr, Ipv4Addr, TcpStream};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// A basin file of `model` on `grid` (extra `args`) in `dir`.
@@ -121,9 +122,11 @@ fn refine_equals_basin(
         overrides: Vec::new(),
     };
     let (stop, done) = (AtomicBool::new(false), AtomicUsize::new(0));
-    let (_, outcome, strides, _) = compute(&src, &w, &pool(), &stop, &done)
-        .unwrap()
-        .expect("not cancelled");
+    let Computed::Done(_, outcome, strides, _) =
+        compute(&src, &w, &pool(), &stop, &done, &|_| {}).unwrap()
+    else {
+        panic!("cancelled")
+    };
     let h = &src.data.header;
     let x = format!("{}={}:{}", h.x_name, bx.0, bx.1);
     let y = format!("{}={}:{}", h.y_name, bx.2, bx.3);
@@ -169,100 +172,176 @@ fn a_refined_window_is_basin_on_that_box() {
     );
 }
 
-/// A response: status and JSON body.
-fn http(addr: &str, method: &str, path: &str, body: &str) -> (u16, serde_json::Value) {
+/// A response to the raw request text `req`: status, headers and JSON body (`Null` if none).
+fn raw(addr: &str, req: &str) -> (u16, String, serde_json::Value) {
     let mut s = TcpStream::connect(addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
-    write!(
-        s,
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nContent-Type: application/json\r\n\
-         Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
-        body.len()
-    )
-    .unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(120))).unwrap();
+    s.write_all(req.as_bytes()).unwrap();
     let mut text = String::new();
     s.read_to_string(&mut text).unwrap();
     let status: u16 = text[9..12].parse().unwrap();
-    let json = text
-        .split_once("\r\n\r\n")
-        .and_then(|(_, b)| serde_json::from_str(b).ok())
-        .unwrap_or(serde_json::Value::Null);
-    (status, json)
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    let json = serde_json::from_str(body).unwrap_or(serde_json::Value::Null);
+    (status, head.to_string(), json)
+}
+
+/// A request's text: `method path` with `headers` and `body`, closing the connection after.
+fn request(method: &str, path: &str, headers: &[(&str, &str)], body: &str) -> String {
+    let mut r = format!("{method} {path} HTTP/1.1\r\n");
+    for (k, v) in headers {
+        r += &format!("{k}: {v}\r\n");
+    }
+    r + &format!(
+        "Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    )
+}
+
+/// A client of a server's API as its page is: the server's Host, its token, JSON bodies.
+struct Client {
+    addr: String,
+    token: String,
+}
+
+impl Client {
+    fn of(s: &pdw_explore::Server) -> Client {
+        Client {
+            addr: s.addr.to_string(),
+            token: s.token.clone(),
+        }
+    }
+
+    /// The answer to `method path` with `body`: status and JSON.
+    fn call(&self, method: &str, path: &str, body: &str) -> (u16, serde_json::Value) {
+        let auth = format!("token {}", self.token);
+        let h = [
+            ("Host", self.addr.as_str()),
+            ("Authorization", auth.as_str()),
+            ("Content-Type", "application/json"),
+        ];
+        let (st, _, j) = raw(&self.addr, &request(method, path, &h, body));
+        (st, j)
+    }
 }
 
 /// Polls job `id` until it leaves `queued`/`running`; its final JSON.
-fn wait_job(addr: &str, id: u64) -> serde_json::Value {
+fn wait_job(c: &Client, id: u64) -> serde_json::Value {
+    wait_status(c, id, |s| s != "queued" && s != "running")
+}
+
+/// Polls job `id` until its status satisfies `done`; its JSON then.
+fn wait_status(c: &Client, id: u64, done: impl Fn(&str) -> bool) -> serde_json::Value {
     let t0 = Instant::now();
     loop {
-        let (st, j) = http(addr, "GET", &format!("/api/job/{id}"), "");
-        assert_eq!(st, 200);
-        let s = j["status"].as_str().unwrap().to_string();
-        if s != "queued" && s != "running" {
+        let (st, j) = c.call("GET", &format!("/api/job/{id}"), "");
+        assert_eq!(st, 200, "{j}");
+        if done(j["status"].as_str().unwrap()) {
             return j;
         }
-        assert!(
-            t0.elapsed() < Duration::from_secs(120),
-            "job {id} never ends"
-        );
-        std::thread::sleep(Duration::from_millis(20));
+        assert!(t0.elapsed() < Duration::from_secs(300), "job {id}: {j}");
+        std::thread::yield_now();
     }
 }
 
-/// A client that disconnects mid-refine cancels it and leaves the server serving; of 20 rapid refines only
-/// the last computes; save writes the window into the save directory `dir`.
-fn refines_cancel_and_save(a: &str, dir: &Path) {
-    let a = a.to_string();
-    // a client that disconnects while a refine runs: the server goes on serving
-    let mut c = TcpStream::connect(&a).unwrap();
-    let body = r#"{"file": 0, "box": {"x": [0.16, 0.24], "y": [-0.24, -0.16]}, "nx": 300, "ny": 300, "wait": true}"#;
-    write!(
-        c,
-        "POST /api/refine HTTP/1.1\r\nHost: x\r\nContent-Length: {}\r\n\r\n{body}",
-        body.len()
+/// The refine request of a box `[lo, 0.24] x [-0.24, -0.16]` at `n` x `n` cells.
+fn refine_body(lo: f64, n: usize, wait: bool) -> String {
+    format!(
+        r#"{{"file": 0, "box": {{"x": [{lo}, 0.24], "y": [-0.24, -0.16]}}, "nx": {n}, "ny": {n}, "wait": {wait}}}"#
     )
-    .unwrap();
-    std::thread::sleep(Duration::from_millis(200));
-    drop(c);
-    let (st, _) = http(&a, "GET", "/api/files", "");
-    assert_eq!(st, 200);
-    let first = wait_job(&a, 1);
-    // the request's drop guard cancelled it (90 000 cells take over a second on 2 threads)
-    assert_eq!(first["status"], "cancelled", "{first}");
-    // 20 rapid refines: only the last computes
-    let (_, before) = http(&a, "GET", "/api/stats", "");
-    let mut ids = Vec::new();
-    for k in 0..20 {
-        let lo = 0.16 + 0.001 * k as f64;
-        let body = format!(
-            r#"{{"file": 0, "box": {{"x": [{lo}, 0.24], "y": [-0.24, -0.16]}}, "nx": 40, "ny": 40}}"#
-        );
-        let (st, j) = http(&a, "POST", "/api/refine", &body);
-        assert_eq!(st, 200, "{j}");
-        ids.push(j["job"].as_u64().unwrap());
+}
+
+/// A client that disconnects mid-refine cancels it and leaves the server serving; of 20 refines
+/// sent while the worker is held only the last computes; cancelling a finished job says it had
+/// finished; save writes the window into the save directory `dir` with `basin`'s header, past a
+/// dangling link named like the next save.
+fn refines_cancel_and_save(server: &pdw_explore::Server, dir: &Path) {
+    let c = Client::of(server);
+    // a client that disconnects while its refine runs (1000x1000 cells: far longer than the
+    // test's steps): the refine is cancelled, the server goes on serving
+    let mut conn = TcpStream::connect(&c.addr).unwrap();
+    let auth = format!("token {}", c.token);
+    let h = [
+        ("Host", c.addr.as_str()),
+        ("Authorization", auth.as_str()),
+        ("Content-Type", "application/json"),
+    ];
+    let body = refine_body(0.16, 1000, true);
+    conn.write_all(request("POST", "/api/refine", &h, &body).as_bytes())
+        .unwrap();
+    // job 1 once the server has it, and until it runs
+    let t0 = Instant::now();
+    while c.call("GET", "/api/job/1", "").1["status"] != "running" {
+        assert!(t0.elapsed() < Duration::from_secs(300), "job 1 never runs");
+        std::thread::yield_now();
     }
-    let last = wait_job(&a, *ids.last().unwrap());
+    drop(conn);
+    let (st, _) = c.call("GET", "/api/files", "");
+    assert_eq!(st, 200);
+    let first = wait_job(&c, 1);
+    assert_eq!(first["status"], "cancelled", "{first}");
+    // 20 refines while the worker is held: only the last computes
+    let (_, before) = c.call("GET", "/api/stats", "");
+    let mut ids = Vec::new();
+    {
+        let _hold = server.state.jobs.hold();
+        for k in 0..20 {
+            let body = refine_body(0.16 + 0.001 * k as f64, 40, false);
+            let (st, j) = c.call("POST", "/api/refine", &body);
+            assert_eq!(st, 200, "{j}");
+            ids.push(j["job"].as_u64().unwrap());
+        }
+    }
+    let last = wait_job(&c, *ids.last().unwrap());
     assert_eq!(last["status"], "done");
     for id in &ids[..19] {
-        assert_eq!(wait_job(&a, *id)["status"], "cancelled", "job {id}");
+        assert_eq!(wait_job(&c, *id)["status"], "cancelled", "job {id}");
     }
-    let (_, after) = http(&a, "GET", "/api/stats", "");
+    let (_, after) = c.call("GET", "/api/stats", "");
     let n = |v: &serde_json::Value, k: &str| v[k].as_u64().unwrap();
+    assert_eq!(
+        n(&after, "refines_started") - n(&before, "refines_started"),
+        1
+    );
     assert_eq!(
         n(&after, "refines_completed") - n(&before, "refines_completed"),
         1
     );
-    // save: the server names the file, in its save directory
-    let (st, j) = http(
-        &a,
-        "POST",
-        "/api/save",
-        &format!(r#"{{"job": {}}}"#, ids[19]),
-    );
+    // cancelling a finished job says it had finished
+    let (st, j) = c.call("POST", &format!("/api/job/{}/cancel", ids[19]), "{}");
     assert_eq!(st, 200, "{j}");
+    assert_eq!(j["cancelled"], false, "{j}");
+    assert_eq!(j["status"], "done", "{j}");
+    assert!(j["message"].as_str().unwrap().contains("already finished"));
+    // a dangling link named like the next save: the save takes the next name, the link stays
+    let link = dir.join("explore-simplest-40x40-1.h5");
+    std::os::unix::fs::symlink(dir.join("nowhere"), &link).unwrap();
+    let (st, j) = c.call("POST", "/api/save", &format!(r#"{{"job": {}}}"#, ids[19]));
+    assert_eq!(st, 200, "{j}");
+    assert_eq!(j["saved"], "explore-simplest-40x40-2.h5");
+    assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
+    assert!(!dir.join("nowhere").exists());
     let saved = dir.join(j["saved"].as_str().unwrap());
     let d = pdw_store::read_basin(&saved).unwrap();
     assert_eq!(d.header.nx(), 40);
     assert!(d.complete);
+    // the saved window's header is `basin`'s on that box, the discovery's settings included
+    let h = &d.header;
+    let x = format!("{}={}:{}", h.x_name, h.x[0], h.x[h.nx() - 1]);
+    let y = format!("{}={}:{}", h.y_name, h.y[0], h.y[h.ny() - 1]);
+    let b = basin(dir, "box40", &["--x", &x, "--y", &y, "--grid", "40x40"]);
+    let cli = pdw_store::read_basin_header(&b).unwrap();
+    let tol = |t: &str| serde_json::from_str::<serde_json::Value>(t).unwrap();
+    let (mine, theirs) = (tol(&h.tolerances), tol(&cli.tolerances));
+    for k in [
+        "attractor_seeds",
+        "seed_strides",
+        "chaos_radius",
+        "chaos_sample",
+    ] {
+        assert!(!theirs[k].is_null(), "basin writes {k}");
+    }
+    assert_eq!(mine, theirs);
+    assert_eq!(h.legend, cli.legend);
 }
 
 #[test]
@@ -279,33 +358,29 @@ fn the_server_keeps_to_its_rules() {
     cfg.addr = IpAddr::V4(Ipv4Addr::LOCALHOST);
     cfg.save_dir = dir.path().to_path_buf();
     let server = pdw_explore::start(cfg).unwrap();
-    let a = server.addr.to_string();
+    let c = Client::of(&server);
     let error = |(st, j): (u16, serde_json::Value), want: u16| {
         assert_eq!(st, want, "{j}");
         j["error"].as_str().expect("a JSON error").to_string()
     };
     // files by index only: out of range, a path in the body, a path in the URL
-    error(http(&a, "GET", "/api/basin/7", ""), 404);
+    error(c.call("GET", "/api/basin/7", ""), 404);
     let walk = r#"{"file": 0, "cell": [1, 1], "path": "../../etc/passwd"}"#;
-    assert!(error(http(&a, "POST", "/api/walk", walk), 400).contains("path"));
+    assert!(error(c.call("POST", "/api/walk", walk), 400).contains("path"));
     error(
-        http(
-            &a,
+        c.call(
             "POST",
             "/api/walk",
             r#"{"file": "/etc/passwd", "cell": [1, 1]}"#,
         ),
         400,
     );
-    error(http(&a, "GET", "/../../etc/passwd", ""), 404);
-    error(
-        http(&a, "GET", "/api/basin/..%2F..%2Fetc%2Fpasswd", ""),
-        400,
-    );
+    error(c.call("GET", "/../../etc/passwd", ""), 404);
+    error(c.call("GET", "/api/basin/..%2F..%2Fetc%2Fpasswd", ""), 400);
     // a malformed file is a clear error, the good one is served
-    let e = error(http(&a, "GET", "/api/basin/1", ""), 422);
+    let e = error(c.call("GET", "/api/basin/1", ""), 422);
     assert!(e.contains("bad.h5"), "{e}");
-    let (st, b) = http(&a, "GET", "/api/basin/0", "");
+    let (st, b) = c.call("GET", "/api/basin/0", "");
     assert_eq!(st, 200);
     assert_eq!(b["outcome"].as_array().unwrap().len(), 21 * 21);
     // request bodies are capped
@@ -313,8 +388,8 @@ fn the_server_keeps_to_its_rules() {
         r#"{{"file": 0, "cell": [1, 1], "pad": "{}"}}"#,
         "x".repeat(40_000)
     );
-    error(http(&a, "POST", "/api/walk", &big), 413);
-    refines_cancel_and_save(&a, dir.path());
+    error(c.call("POST", "/api/walk", &big), 413);
+    refines_cancel_and_save(&server, dir.path());
 }
 
 #[test]
@@ -333,10 +408,10 @@ fn a_sweep_point_walks_its_gait_with_the_files_period() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let server = pdw_explore::start(pdw_explore::Config::local(vec![out.clone()], 0)).unwrap();
-    let a = server.addr.to_string();
-    let (_, files) = http(&a, "GET", "/api/files", "");
+    let c = Client::of(&server);
+    let (_, files) = c.call("GET", "/api/files", "");
     assert_eq!(files["files"][0]["kind"], "sweep");
-    let (st, s) = http(&a, "GET", "/api/sweep/0", "");
+    let (st, s) = c.call("GET", "/api/sweep/0", "");
     assert_eq!(st, 200, "{s}");
     let d = pdw_store::read_sweep(&out).unwrap();
     let b = d
@@ -346,8 +421,7 @@ fn a_sweep_point_walks_its_gait_with_the_files_period() {
         .unwrap();
     let i = d.branches[b].stable.iter().position(|s| *s).unwrap();
     assert_eq!(s["branches"][b]["parameter"][i], d.branches[b].parameter[i]);
-    let (st, g) = http(
-        &a,
+    let (st, g) = c.call(
         "POST",
         "/api/gait",
         &format!(r#"{{"file": 0, "branch": {b}, "point": {i}}}"#),
@@ -373,8 +447,7 @@ fn a_sweep_point_walks_its_gait_with_the_files_period() {
     let want = pdw_explore::sweep::PERIODS_WALKED as f64 * d.branches[b].period[i];
     let got = ends[ends.len() - 1] - t0;
     assert!((got - want).abs() < 1e-6 * want, "{got} vs {want}");
-    let (st, _) = http(
-        &a,
+    let (st, _) = c.call(
         "POST",
         "/api/gait",
         r#"{"file": 0, "branch": 99, "point": 0}"#,
@@ -436,11 +509,11 @@ fn a_design_files_table_is_the_files_and_a_design_walks_its_gait() {
     pdw_store::write_design(&out2, &nog).unwrap();
     let server =
         pdw_explore::start(pdw_explore::Config::local(vec![out.clone(), out2], 0)).unwrap();
-    let a = server.addr.to_string();
-    let (_, files) = http(&a, "GET", "/api/files", "");
+    let c = Client::of(&server);
+    let (_, files) = c.call("GET", "/api/files", "");
     assert_eq!(files["files"][0]["kind"], "design");
     assert_eq!(files["files"][0]["model"], "compass");
-    let (st, t) = http(&a, "GET", "/api/design/0", "");
+    let (st, t) = c.call("GET", "/api/design/0", "");
     assert_eq!(st, 200, "{t}");
     assert_eq!(t["designs"], d.params.len());
     let col = |name: &str| {
@@ -464,8 +537,7 @@ fn a_design_files_table_is_the_files_and_a_design_walks_its_gait() {
     }
     // a feasible design walks its stored gait: each stride takes the stored period
     let i = d.status.iter().position(|s| *s == 0).unwrap();
-    let (st, g) = http(
-        &a,
+    let (st, g) = c.call(
         "POST",
         "/api/design_walk",
         &format!(r#"{{"file": 0, "design": {i}}}"#),
@@ -479,26 +551,503 @@ fn a_design_files_table_is_the_files_and_a_design_walks_its_gait() {
     let got = ends[0] - w["t"][0].as_f64().unwrap();
     assert!((got - want).abs() < 1e-6 * want, "{got} vs {want}");
     // a design without a gait: a clear message naming its status and reason
-    let (st, e) = http(
-        &a,
-        "POST",
-        "/api/design_walk",
-        r#"{"file": 1, "design": 1}"#,
-    );
+    let (st, e) = c.call("POST", "/api/design_walk", r#"{"file": 1, "design": 1}"#);
     assert_eq!(st, 422, "{e}");
     let msg = e["error"].as_str().unwrap();
     assert!(
         msg.contains("no gait") && msg.contains("no gait found"),
         "{msg}"
     );
-    let (st, t2) = http(&a, "GET", "/api/design/1", "");
+    let (st, t2) = c.call("GET", "/api/design/1", "");
     assert_eq!(st, 200, "{t2}");
     assert_eq!(t2["status_words"][1], "no gait");
-    let (st, _) = http(
-        &a,
-        "POST",
-        "/api/design_walk",
-        r#"{"file": 0, "design": 99}"#,
-    );
+    let (st, _) = c.call("POST", "/api/design_walk", r#"{"file": 0, "design": 99}"#);
     assert_eq!(st, 404);
+}
+
+/// A served simplest-walker basin (21x21) in `dir`, on a server configured by `tune`.
+fn served(dir: &Path, tune: impl FnOnce(&mut pdw_explore::Config)) -> pdw_explore::Server {
+    let s = basin(dir, "simplest", &["--grid", "21x21"]);
+    let mut cfg = pdw_explore::Config::local(vec![s], 0);
+    cfg.save_dir = dir.to_path_buf();
+    tune(&mut cfg);
+    pdw_explore::start(cfg).unwrap()
+}
+
+/// The files "save" wrote into `dir`.
+fn saves(dir: &Path) -> usize {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .filter(|e| {
+            let n = e.as_ref().unwrap().file_name();
+            n.to_string_lossy().starts_with("explore-")
+        })
+        .count()
+}
+
+#[test]
+fn the_server_answers_only_its_own_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = served(dir.path(), |_| {});
+    let c = Client::of(&server);
+    let (a, port) = (c.addr.as_str(), server.addr.port());
+    // a window to save, made by the page's own client
+    let (st, j) = c.call("POST", "/api/refine", &refine_body(0.18, 10, true));
+    assert_eq!(st, 200, "{j}");
+    let job = j["job"].as_u64().unwrap();
+    let (_, stats0) = c.call("GET", "/api/stats", "");
+    let refused = |req: String, want: u16, says: &str| {
+        let (st, _, j) = raw(a, &req);
+        assert_eq!(st, want, "{req}: {j}");
+        let e = j["error"].as_str().expect("a JSON error");
+        assert!(e.contains(says), "{e} (wanted '{says}')");
+    };
+    let auth = format!("token {}", c.token);
+    let refine =
+        r#"{"file":0,"box":{"x":[0.19,0.21],"y":[-0.21,-0.19]},"nx":100,"ny":100,"wait":true}"#;
+    let save = format!(r#"{{"job":{job}}}"#);
+    // the issue's reproduction: a text/plain cross-site POST with a rebound Host, no token
+    let evil = [
+        ("Host", "rebind.attacker.example"),
+        ("Origin", "http://evil.example"),
+        ("Content-Type", "text/plain"),
+    ];
+    refused(
+        request("POST", "/api/refine", &evil, refine),
+        403,
+        "rebind.attacker.example",
+    );
+    refused(request("POST", "/api/save", &evil, &save), 403, "Host");
+    // each check alone, everything else right
+    let ok_host = a.to_string();
+    let with = |host: &str, origin: Option<&str>, token: Option<&str>, ct: Option<&str>| {
+        let mut h = vec![("Host", host.to_string())];
+        if let Some(o) = origin {
+            h.push(("Origin", o.to_string()));
+        }
+        if let Some(t) = token {
+            h.push(("Authorization", format!("token {t}")));
+        }
+        if let Some(ct) = ct {
+            h.push(("Content-Type", ct.to_string()));
+        }
+        h
+    };
+    let send = |m: &str, path: &str, h: Vec<(&str, String)>, body: &str| {
+        let h: Vec<(&str, &str)> = h.iter().map(|(k, v)| (*k, v.as_str())).collect();
+        request(m, path, &h, body)
+    };
+    let tok = Some(c.token.as_str());
+    let json = Some("application/json");
+    for host in [
+        format!("rebind.attacker.example:{port}"),
+        format!("127.0.0.1:{}", port.wrapping_add(1)),
+        format!("127.0.0.2:{port}"),
+        "127.0.0.1".to_string(),
+    ] {
+        refused(
+            send("POST", "/api/save", with(&host, None, tok, json), &save),
+            403,
+            &host,
+        );
+        refused(
+            send("GET", "/", with(&host, None, None, None), ""),
+            403,
+            "Host",
+        );
+    }
+    refused(
+        format!("GET /api/files HTTP/1.0\r\nAuthorization: {auth}\r\n\r\n"),
+        403,
+        "(none)",
+    );
+    for origin in [
+        "http://evil.example".to_string(),
+        format!("http://127.0.0.1:{}", port.wrapping_add(1)),
+        format!("https://{a}"),
+        "null".to_string(),
+    ] {
+        let h = with(&ok_host, Some(&origin), tok, json);
+        refused(send("POST", "/api/save", h, &save), 403, &origin);
+    }
+    let mut h = with(&ok_host, None, tok, json);
+    h.push(("Sec-Fetch-Site", "cross-site".into()));
+    refused(send("POST", "/api/save", h, &save), 403, "cross-site");
+    let mut h = with(&ok_host, None, None, None);
+    h.push(("Sec-Fetch-Site", "same-site".into()));
+    refused(send("GET", "/api/files", h, ""), 403, "same-site");
+    // no token, a wrong one, one of another length, in the header, the query or a cookie
+    let wrong = "0".repeat(64);
+    refused(
+        send("POST", "/api/save", with(&ok_host, None, None, json), &save),
+        403,
+        "token",
+    );
+    refused(
+        send(
+            "POST",
+            "/api/save",
+            with(&ok_host, None, Some(&wrong), json),
+            &save,
+        ),
+        403,
+        "token",
+    );
+    refused(
+        send(
+            "GET",
+            "/api/files",
+            with(&ok_host, None, Some("abc"), None),
+            "",
+        ),
+        403,
+        "token",
+    );
+    refused(
+        send(
+            "GET",
+            &format!("/api/files?token={wrong}"),
+            with(&ok_host, None, None, None),
+            "",
+        ),
+        403,
+        "token",
+    );
+    let mut h = with(&ok_host, None, None, None);
+    h.push(("Cookie", format!("pdw_explore_{port}={wrong}")));
+    refused(send("GET", "/api/files", h, ""), 403, "token");
+    refused(
+        send(
+            "GET",
+            &format!("/?token={wrong}"),
+            with(&ok_host, None, None, None),
+            "",
+        ),
+        403,
+        "token",
+    );
+    // API POSTs are JSON only
+    for ct in [
+        Some("text/plain"),
+        Some("application/x-www-form-urlencoded"),
+        None,
+    ] {
+        let h = with(&ok_host, None, tok, ct);
+        refused(
+            send("POST", "/api/save", h.clone(), &save),
+            415,
+            "application/json",
+        );
+        refused(send("POST", "/api/refine", h, refine), 415, "Content-Type");
+    }
+    // nothing refused ran: no refine started, no file saved
+    let (_, stats1) = c.call("GET", "/api/stats", "");
+    assert_eq!(stats0["refines_started"], stats1["refines_started"]);
+    assert_eq!(saves(dir.path()), 0);
+    // admitted: the bound address or localhost with the port, the server's own Origin, the
+    // token by header, query or the cookie the page sets
+    let (st, head, _) = raw(
+        a,
+        &send(
+            "GET",
+            &format!("/?token={}", c.token),
+            with(&ok_host, None, None, None),
+            "",
+        ),
+    );
+    assert_eq!(st, 200);
+    let cookie = head
+        .lines()
+        .find_map(|l| l.strip_prefix("set-cookie: "))
+        .expect("the page sets its cookie")
+        .split(';')
+        .next()
+        .unwrap()
+        .to_string();
+    assert_eq!(cookie, format!("pdw_explore_{port}={}", c.token));
+    let local = format!("localhost:{port}");
+    for (host, origin) in [
+        (ok_host.clone(), format!("http://{ok_host}")),
+        (local.clone(), format!("http://{local}")),
+    ] {
+        let mut h = with(&host, Some(&origin), None, json);
+        h.push(("Cookie", format!("other=1; {cookie}")));
+        h.push(("Sec-Fetch-Site", "same-origin".into()));
+        let (st, _, j) = raw(a, &send("POST", "/api/save", h, &save));
+        assert_eq!(st, 200, "{host}: {j}");
+    }
+    let (st, _, j) = raw(
+        a,
+        &send(
+            "GET",
+            &format!("/api/files?token={}", c.token),
+            with(&local, None, None, None),
+            "",
+        ),
+    );
+    assert_eq!(st, 200, "{j}");
+    assert_eq!(saves(dir.path()), 2);
+    assert!(
+        server.url.ends_with(&format!("/?token={}", c.token)),
+        "{}",
+        server.url
+    );
+    assert_eq!(c.token.len(), 64);
+}
+
+/// What the server sent on `s` before it closed it (a reset counts as closed; the test's own
+/// read timeout does not).
+fn closed_by_server(s: &mut TcpStream) -> Vec<u8> {
+    let mut buf = Vec::new();
+    if let Err(e) = s.read_to_end(&mut buf) {
+        assert_eq!(e.kind(), std::io::ErrorKind::ConnectionReset, "{e}");
+    }
+    buf
+}
+
+#[test]
+fn slow_clients_time_out_and_connections_are_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = served(dir.path(), |cfg| {
+        cfg.limits.header_timeout = Duration::from_millis(300);
+        cfg.limits.body_timeout = Duration::from_millis(300);
+    });
+    let c = Client::of(&server);
+    // a half-sent head: the server closes the connection (read ends) and serves others meanwhile
+    let mut half = TcpStream::connect(&c.addr).unwrap();
+    half.set_read_timeout(Some(Duration::from_secs(120)))
+        .unwrap();
+    half.write_all(b"GET /api/files HTTP/1.1\r\nHo").unwrap();
+    assert_eq!(c.call("GET", "/api/files", "").0, 200);
+    closed_by_server(&mut half);
+    // a body that never comes: 408, and no work
+    let mut slow = TcpStream::connect(&c.addr).unwrap();
+    slow.set_read_timeout(Some(Duration::from_secs(120)))
+        .unwrap();
+    let auth = format!("token {}", c.token);
+    write!(
+        slow,
+        "POST /api/save HTTP/1.1\r\nHost: {}\r\nAuthorization: {auth}\r\nContent-Type: \
+         application/json\r\nContent-Length: 100\r\n\r\n{{\"job\"",
+        c.addr
+    )
+    .unwrap();
+    // the answer's head (the server need not close the connection after it)
+    let mut head = Vec::new();
+    let mut byte = [0u8; 1];
+    while !head.ends_with(b"\r\n\r\n") && slow.read(&mut byte).unwrap() == 1 {
+        head.push(byte[0]);
+    }
+    let text = String::from_utf8_lossy(&head);
+    assert!(text.starts_with("HTTP/1.1 408"), "{text}");
+    drop(server);
+    // at most max_connections at once: one more is closed at once, without an answer; once one
+    // closes, the server answers again
+    let dir = tempfile::tempdir().unwrap();
+    let server = served(dir.path(), |cfg| cfg.max_connections = 3);
+    let c = Client::of(&server);
+    let held: Vec<TcpStream> = (0..3)
+        .map(|_| TcpStream::connect(&c.addr).unwrap())
+        .collect();
+    let mut extra = TcpStream::connect(&c.addr).unwrap();
+    extra
+        .set_read_timeout(Some(Duration::from_secs(120)))
+        .unwrap();
+    assert!(closed_by_server(&mut extra).is_empty());
+    drop(held);
+    let t0 = Instant::now();
+    loop {
+        let mut s = TcpStream::connect(&c.addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(120))).unwrap();
+        let auth = format!("token {}", c.token);
+        let h = [("Host", c.addr.as_str()), ("Authorization", auth.as_str())];
+        s.write_all(request("GET", "/api/files", &h, "").as_bytes())
+            .unwrap();
+        let mut text = String::new();
+        let _ = s.read_to_string(&mut text);
+        if text.starts_with("HTTP/1.1 200") {
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(120),
+            "never answered again"
+        );
+    }
+}
+
+#[test]
+fn heavy_responses_and_the_window_cache_are_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    // a 10x10 window of the simplest walker: 100 + 200 + 8 (200 + 20) bytes
+    let window = 100 + 200 + 8 * (200 + 20);
+    let server = served(dir.path(), |cfg| {
+        cfg.heavy = (1, 0);
+        cfg.cache_bytes = 2 * window + window / 2;
+    });
+    let c = Client::of(&server);
+    // the gate full: a large response is refused at once with 503, then served
+    let permit = server.state.heavy.try_enter().expect("a permit");
+    let (st, j) = c.call("GET", "/api/basin/0", "");
+    assert_eq!(st, 503, "{j}");
+    assert!(j["error"].as_str().unwrap().contains("busy"));
+    drop(permit);
+    let (st, j) = c.call("GET", "/api/basin/0", "");
+    assert_eq!(st, 200, "{j}");
+    assert_eq!(j["outcome"].as_array().unwrap().len(), 21 * 21);
+    // three windows with room for two and a half: the least recently used leaves
+    let job = |lo: f64| {
+        let (st, j) = c.call("POST", "/api/refine", &refine_body(lo, 10, true));
+        assert_eq!(st, 200, "{j}");
+        assert_eq!(j["status"], "done", "{j}");
+        j["job"].as_u64().unwrap()
+    };
+    let (a, b) = (job(0.17), job(0.18));
+    assert_eq!(
+        c.call("GET", &format!("/api/job/{a}"), "").1["status"],
+        "done"
+    );
+    let x = job(0.19);
+    let status = |id: u64| c.call("GET", &format!("/api/job/{id}"), "").1;
+    assert_eq!(status(a)["status"], "done");
+    assert_eq!(status(x)["status"], "done");
+    let e = status(b);
+    assert_eq!(e["status"], "evicted", "{e}");
+    assert!(e["error"].as_str().unwrap().contains("refine it again"));
+    let (_, st) = c.call("GET", "/api/stats", "");
+    assert_eq!(st["cache_bytes"], 2 * window);
+    assert_eq!(st["windows_evicted"], 1);
+    // an evicted window is computed again when asked again
+    assert_ne!(job(0.18), b);
+    // the job table is bounded too: refines queued while the worker is held
+    {
+        let _hold = server.state.jobs.hold();
+        for k in 0..pdw_explore::jobs::MAX_RECORDS + 20 {
+            let body = refine_body(0.16 + 1e-6 * k as f64, 10, false);
+            assert_eq!(c.call("POST", "/api/refine", &body).0, 200);
+        }
+    }
+    assert!(server.state.jobs.records() <= pdw_explore::jobs::MAX_RECORDS);
+}
+
+/// A window of `src` (the slope changed: its gaits are searched again) cancelled as phase `at`
+/// starts (`None`: never).
+fn cancelled_in(src: &source::BasinSource, at: Option<Phase>) -> Computed {
+    let w = Window {
+        bounds: Some((0.17, 0.23, -0.23, -0.17)),
+        grid: Some((30, 30)),
+        z_fixed: None,
+        overrides: vec![("slope".into(), 0.0095)],
+    };
+    let stop = AtomicBool::new(false);
+    let done = AtomicUsize::new(0);
+    let on_phase = |p: Phase| {
+        if Some(p) == at {
+            stop.store(true, Ordering::SeqCst);
+        }
+    };
+    compute(src, &w, &pool(), &stop, &done, &on_phase).unwrap()
+}
+
+/// A cancel is seen at the window's next step: the gait search, the attractor discovery and
+/// the cells are each not started once it is set.
+#[test]
+fn a_cancel_stops_a_window_at_each_phase() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = basin(dir.path(), "simplest", &["--grid", "11x11"]);
+    let src = source::load(&s).unwrap();
+    for at in [Phase::GaitSearch, Phase::Attractors, Phase::Cells] {
+        match cancelled_in(&src, Some(at)) {
+            Computed::Cancelled(p) => assert_eq!(p, at),
+            Computed::Done(..) => panic!("a cancel at {} was not seen", at.name()),
+        }
+    }
+    // the process-wide interrupt is untouched (walks go on): the next window computes
+    assert!(!pdw_hybrid::interrupt::requested());
+    assert!(matches!(cancelled_in(&src, None), Computed::Done(..)));
+}
+
+#[test]
+fn a_private_directory_is_new_and_only_the_users() {
+    use pdw_explore::private_dir::PrivateDir;
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("d");
+    let d = PrivateDir::create(&p).unwrap();
+    let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode, 0o700);
+    std::fs::write(p.join("f"), b"x").unwrap();
+    // an existing directory, file or link (dangling too) is never reused
+    let e = PrivateDir::create(&p).unwrap_err();
+    assert!(e.contains("never reused"), "{e}");
+    drop(d);
+    assert!(!p.exists());
+    let link = dir.path().join("l");
+    std::os::unix::fs::symlink(dir.path().join("elsewhere"), &link).unwrap();
+    assert!(PrivateDir::create(&link).is_err());
+    assert!(!dir.path().join("elsewhere").exists());
+    let a = PrivateDir::new("pdw-explore-test-").unwrap();
+    let b = PrivateDir::new("pdw-explore-test-").unwrap();
+    assert_ne!(a.path(), b.path());
+}
+
+#[test]
+fn a_save_dir_that_cannot_take_saves_is_refused_at_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = basin(dir.path(), "simplest", &["--grid", "5x5"]);
+    let f = dir.path().join("plain");
+    std::fs::write(&f, b"").unwrap();
+    let missing = dir.path().join("missing");
+    for (sd, says) in [(&missing, "No such file"), (&f, "not a directory")] {
+        let o = run(&[
+            "explore",
+            s.to_str().unwrap(),
+            "--port",
+            "0",
+            "--save-dir",
+            sd.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2));
+        let e = crate::common::stderr(&o);
+        assert!(e.contains(sd.to_str().unwrap()) && e.contains(says), "{e}");
+    }
+}
+
+#[test]
+fn explore_without_a_file_computes_into_a_private_directory_removed_on_ctrl_c() {
+    use std::io::BufRead;
+    use std::os::unix::fs::PermissionsExt;
+    let sd = tempfile::tempdir().unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
+        .args(["explore", "--port", "0", "--save-dir"])
+        .arg(sd.path())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    err.read_line(&mut line).unwrap();
+    let tmp = line
+        .split("(into ")
+        .nth(1)
+        .and_then(|r| r.split(", removed").next())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| panic!("no directory named: {line}"));
+    assert!(tmp.file_name().unwrap().to_string_lossy().len() > "pdw-explore-".len() + 8);
+    let mode = std::fs::metadata(&tmp).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode, 0o700, "{}", tmp.display());
+    // stdout: the default basin's summary, then the URL
+    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut url = String::new();
+    while !url.contains("http://") {
+        url.clear();
+        assert!(out.read_line(&mut url).unwrap() > 0, "no URL printed");
+    }
+    assert!(url.contains("/?token="), "{url}");
+    assert!(tmp.join("basin.h5").exists());
+    let pid = i32::try_from(child.id()).unwrap();
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    let st = child.wait().unwrap();
+    assert_eq!(st.code(), Some(0));
+    assert!(!tmp.exists(), "{} left behind", tmp.display());
 }

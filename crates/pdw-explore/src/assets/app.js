@@ -248,7 +248,7 @@ function pollJob(id) {
     try { j = await api(`/api/job/${id}`); } catch (err) { showError(err.message); return; }
     if (id !== S.job) return;
     $("progress").value = j.total ? j.done / j.total : 0;
-    $("winstatus").textContent = `window ${j.status}` + (j.total ? ` (${j.done} of ${j.total} cells)` : "");
+    $("winstatus").textContent = `window ${j.status}` + (j.phase ? `, ${j.phase}` : "") + (j.total ? ` (${j.done} of ${j.total} cells)` : "");
     if (j.status === "queued" || j.status === "running") { pollJob(id); return; }
     $("cancel").disabled = true; $("busy").textContent = "";
     if (j.status === "done") {
@@ -256,7 +256,7 @@ function pollJob(id) {
       $("winstatus").textContent = `window done: ${j.nx}x${j.ny} cells in ${(S.refineMs / 1000).toFixed(2)} s`;
       $("winstatus").dataset.status = "done";
       S.slice = 0; setGrid(j); $("back").disabled = false; $("save").disabled = false;
-    } else if (j.status === "failed") showError(j.error);
+    } else if (j.status === "failed" || j.status === "evicted") showError(j.error);
     else if (j.status === "cancelled" && !S.userCancel) refine(S.refineBox);
   }, 60);
 }
