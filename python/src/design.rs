@@ -71,13 +71,16 @@ fn options(
 
 /// `design(model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6,
 /// knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2,
-/// out=None, force=False, slope=None, **params)`. `basin_box=None` scales the box with each
-/// design's gait; `out` writes the design file `pdw-sweep design` writes (an existing one only
-/// with `force=True`).
+/// out=None, force=False, slope=None, starts=1, **params)`. `basin_box=None` scales the box
+/// with each design's gait; `starts` local runs of the multi-start share `budget`
+/// ([`pdw_limit::design::search_multi`]); `out` writes the design file `pdw-sweep design`
+/// writes (an existing one only with `force=True`). The dict's `best` is the closest design
+/// (the smallest graded cost) with `closest_because` when nothing is feasible; `fates` and
+/// `bindings` give every design's gait-search fates and binding criterion.
 #[pyfunction]
 #[pyo3(
-    signature = (model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=THREADS, out=None, force=false, slope=None, **params),
-    text_signature = "(model='compass', free=None, objective='basin', budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2, out=None, force=False, slope=None, **params)"
+    signature = (model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=THREADS, out=None, force=false, slope=None, starts=1, **params),
+    text_signature = "(model='compass', free=None, objective='basin', budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2, out=None, force=False, slope=None, starts=1, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn design<'py>(
@@ -98,8 +101,10 @@ pub(crate) fn design<'py>(
     out: Option<std::path::PathBuf>,
     force: bool,
     slope: Option<&Bound<'py, PyAny>>,
+    starts: i64,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let starts = pdw::design::check_starts(starts, "starts").map_err(err)?;
     let free = match free {
         Some(f) => free_texts(f)?,
         None => Vec::new(),
@@ -131,6 +136,7 @@ pub(crate) fn design<'py>(
         model: choice,
         space,
         options,
+        starts,
     };
     let hist = interruptible(py, || -> PyResult<_> {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -161,12 +167,13 @@ fn write_file(
     let settings = pdw::design::settings(plan, base);
     let options = pdw::design::run_options(&settings, threads);
     let call = format!(
-        "python: pdw_sweep.design(model='{}', free=[{}], budget={}, seed={}, init={})",
+        "python: pdw_sweep.design(model='{}', free=[{}], budget={}, seed={}, init={}, starts={})",
         plan.model.model,
         plan.space.names.join(", "),
         plan.options.budget,
         plan.options.seed,
-        plan.options.init
+        plan.options.init,
+        plan.starts
     );
     let prov = pdw::provenance(&call, &options);
     pdw::design::write_file(out, (plan, base, &settings), hist, &prov, &[]).map_err(err)
@@ -192,6 +199,14 @@ fn design_dict<'py>(
         "reasons",
         hist.iter().map(|e| e.reason.clone()).collect::<Vec<_>>(),
     )?;
+    d.set_item(
+        "bindings",
+        hist.iter().map(|e| e.binding.clone()).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "fates",
+        hist.iter().map(|e| e.fates.clone()).collect::<Vec<_>>(),
+    )?;
     let sec: Vec<f64> = hist.iter().flat_map(|e| e.section).collect();
     let sec = Array2::from_shape_vec((n, 3), sec).map_err(err)?;
     d.set_item("section", sec.into_pyarray(py))?;
@@ -210,7 +225,7 @@ fn best_dict<'py>(
     plan: &DesignPlan,
     hist: &[DesignEval],
 ) -> PyResult<Option<Bound<'py, PyDict>>> {
-    let Some(b) = hist.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)) else {
+    let Some((b, why)) = pdw::design::closest(hist, plan.options.min_margin) else {
         return Ok(None);
     };
     let d = PyDict::new(py);
@@ -227,8 +242,16 @@ fn best_dict<'py>(
     for (name, v) in COLUMNS.iter().zip(measures(b)) {
         d.set_item(*name, v)?;
     }
-    // A best design on a face of the box: named in `on_bound` and warned about.
-    let on_bound = pdw::design::bound_warnings(&plan.space, &b.params);
+    d.set_item("binding", &b.binding)?;
+    d.set_item("fates", &b.fates)?;
+    d.set_item("closest_because", why)?;
+    // A feasible best design on a face of the box: named in `on_bound` and warned about (an
+    // infeasible one says nothing about an optimum beyond the bound).
+    let on_bound = if b.feasible() {
+        pdw::design::bound_warnings(&plan.space, &b.params)
+    } else {
+        Vec::new()
+    };
     for w in &on_bound {
         crate::queue_warning(w);
     }

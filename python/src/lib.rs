@@ -572,7 +572,8 @@ fn fixed_point_dict<'py>(
 /// stride map iterated from each. Returns a dict: `gaits` (the dicts of `fixed_point`, each with
 /// `starts_newton` and `starts_settled`), `orbits` (period-K attractors: `period_k`, `orbit`
 /// (K, d_s), `multipliers`, `stable`, `period`, `residual`, `starts_settled`), `starts`, `fell`,
-/// `unsettled` and `box` (`{name: (lo, hi)}`).
+/// `unsettled`, `fates` (`{fate: starts}`: every start by how it ended, e.g. `stance knee
+/// buckled`), `fates_text` and `box` (`{name: (lo, hi)}`).
 #[pyfunction]
 #[pyo3(
     name = "gaits",
@@ -666,6 +667,16 @@ fn scan_dict<'py>(
     d.set_item("starts", sc.starts)?;
     d.set_item("fell", sc.fell)?;
     d.set_item("unsettled", sc.unsettled)?;
+    // every start by fate, most first: {fate: starts}, and the report's sentence
+    let fates = PyDict::new(py);
+    for (f, n) in sc.fates() {
+        fates.set_item(f, n)?;
+    }
+    d.set_item("fates", fates)?;
+    d.set_item(
+        "fates_text",
+        pdw_limit::scan::fates_text(sc.starts, &sc.fates()),
+    )?;
     d.set_item("near_gait_starts", sc.near_gait_starts)?;
     d.set_item("box", bx)?;
     Ok(d)

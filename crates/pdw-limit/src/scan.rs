@@ -4,7 +4,9 @@
 //! 1. Newton on `P(s) − s` ([`find_fixed_point`]): the period-one gaits, stable and unstable,
 //!    whose Newton basin holds a start;
 //! 2. the stride map iterated [`ScanOptions::iterates`] strides: a start that falls is counted as
-//!    a fall; one that settles — its last iterates repeat with a period `K ≤`
+//!    a fall, by how its last stride ended ([`Scan::fell_by`]: the stride-end reasons of
+//!    [`crate::StrideOutcome`], e.g. `stance knee buckled`; [`Scan::fates`] names every start's
+//!    fate, so that a scan that finds nothing says why); one that settles — its last iterates repeat with a period `K ≤`
 //!    [`ScanOptions::max_period`] to within [`SETTLED`] — is refined by Newton on `P^K − id`
 //!    ([`find_periodic_orbit`]) to the attractor it reached (a stable gait for `K = 1`, a
 //!    period-K orbit otherwise); one that does neither within the budget is "unsettled"
@@ -36,7 +38,7 @@ use crate::error::LimitError;
 use crate::gaits::{default_integrator, rotate_to_canonical};
 use crate::newton::{find_fixed_point, FixedPoint, NewtonOptions};
 use crate::periodic::{find_periodic_orbit, same_orbit, PeriodicOrbit};
-use crate::stride::StrideMap;
+use crate::stride::{StrideMap, StrideOutcome};
 use pdw_hybrid::{Integrator, Options};
 use pdw_model::Walker;
 use rayon::prelude::*;
@@ -131,6 +133,9 @@ pub struct Scan {
     pub orbits: Vec<ScanOrbit>,
     /// Starts whose iterates fell.
     pub fell: usize,
+    /// The starts that fell by how their last stride ended (the words of
+    /// [`crate::StrideOutcome`], e.g. `stance knee buckled`, `fell forward`), most first.
+    pub fell_by: Vec<(String, usize)>,
     /// Starts whose iterates neither fell nor settled within the budget.
     pub unsettled: usize,
     /// Starts seeded next to the unstable gaits (two per gait with a real multiplier outside
@@ -138,12 +143,52 @@ pub struct Scan {
     pub near_gait_starts: usize,
 }
 
+/// A start's fate where the stride map itself failed (not a stride's end).
+pub const STRIDE_MAP_FAILED: &str = "the stride map failed";
+
+/// Fate of the starts that neither fell nor settled, in [`Scan::fates`].
+pub const UNSETTLED: &str = "neither fell nor settled";
+
+/// Fate of the starts that settled on a gait or an orbit, in [`Scan::fates`].
+pub const SETTLED_FATE: &str = "settled on a gait or orbit";
+
+impl Scan {
+    /// What became of the (non-seeded) starts, by fate, most first: the falls by how their
+    /// stride ended ([`Scan::fell_by`]), [`UNSETTLED`], [`SETTLED_FATE`]; the counts add up to
+    /// [`Scan::starts`].
+    pub fn fates(&self) -> Vec<(String, usize)> {
+        let mut v = self.fell_by.clone();
+        let settled = self.starts - self.fell - self.unsettled;
+        for (what, n) in [(UNSETTLED, self.unsettled), (SETTLED_FATE, settled)] {
+            if n > 0 {
+                v.push((what.to_string(), n));
+            }
+        }
+        by_count(v)
+    }
+}
+
+/// `fates` sorted by count, largest first, equal counts by name (a stable order for reports
+/// and files).
+pub fn by_count(mut fates: Vec<(String, usize)>) -> Vec<(String, usize)> {
+    fates.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+    fates
+}
+
+/// `N starts: n₁ fate₁, n₂ fate₂, …` (e.g. `256 starts: 201 stance knee buckled, 40 fell
+/// forward, 15 neither fell nor settled`).
+pub fn fates_text(starts: usize, fates: &[(String, usize)]) -> String {
+    let parts: Vec<String> = fates.iter().map(|(f, n)| format!("{n} {f}")).collect();
+    format!("{starts} starts: {}", parts.join(", "))
+}
+
 /// Offset of the starts seeded next to an unstable gait, along its unstable eigenvector.
 pub const NEAR_GAIT_OFFSET: f64 = 1e-3;
 
 /// Where the iterates of one start went.
 enum Fate {
-    Fell,
+    /// The stride that ended otherwise than at the section, in words.
+    Fell(String),
     Unsettled,
     Gait(FixedPoint),
     Orbit(PeriodicOrbit),
@@ -278,20 +323,29 @@ pub fn scan(
         gaits: Vec::new(),
         orbits: Vec::new(),
         fell: 0,
+        fell_by: Vec::new(),
         unsettled: 0,
         near_gait_starts: 0,
     };
+    let mut fell_by: Vec<(String, usize)> = Vec::new();
     for r in per_start {
         let (fp, fate) = r?;
         if let Some(fp) = fp {
             gait_entry(&mut out.gaits, fp).newton_starts += 1;
         }
         match fate {
-            Fate::Fell => out.fell += 1,
+            Fate::Fell(why) => {
+                out.fell += 1;
+                match fell_by.iter_mut().find(|f| f.0 == why) {
+                    Some(f) => f.1 += 1,
+                    None => fell_by.push((why, 1)),
+                }
+            }
             Fate::Unsettled => out.unsettled += 1,
             settled => settle_into(&mut out, settled, false),
         }
     }
+    out.fell_by = by_count(fell_by);
     let seeds = near_gait_starts(&out.gaits);
     out.near_gait_starts = seeds.len();
     let fates: Vec<Result<Fate, LimitError>> = pool.install(|| {
@@ -313,7 +367,7 @@ pub fn scan(
 /// Counts a start that settled (`near`: one seeded next to a gait) on its gait or orbit.
 fn settle_into(out: &mut Scan, fate: Fate, near: bool) {
     let (attracted, near_gaits) = match fate {
-        Fate::Fell | Fate::Unsettled => return,
+        Fate::Fell(_) | Fate::Unsettled => return,
         Fate::Gait(fp) => {
             let g = gait_entry(&mut out.gaits, fp);
             (&mut g.attracted_starts, &mut g.near_gaits)
@@ -436,10 +490,13 @@ fn settle(
         let st = match map.stride_with(&mut integ, x) {
             Ok(st) => st,
             Err(e) if e.is_interrupted() => return Err(e),
-            Err(_) => return Ok(Fate::Fell),
+            Err(_) => return Ok(Fate::Fell(STRIDE_MAP_FAILED.into())),
         };
-        if !st.outcome.is_ok() || !st.next.iter().all(|v| v.is_finite()) {
-            return Ok(Fate::Fell);
+        if !st.outcome.is_ok() {
+            return Ok(Fate::Fell(st.outcome.to_string()));
+        }
+        if !st.next.iter().all(|v| v.is_finite()) {
+            return Ok(Fate::Fell(StrideOutcome::NonFinite.to_string()));
         }
         if tail.len() > kmax {
             tail.remove(0);

@@ -6,7 +6,8 @@
 //! (JSON: model, fixed parameters, free parameters and bounds, objective, constraints, seed —
 //! a rerun must match it to continue), `free_names` (JSON array); datasets `params [N, k]`,
 //! `status [N]` (u8 codes, legend in the attribute `status_names`), `section [N, 3]`,
-//! `reasons` (UTF-8 JSON array of strings, as bytes) and one `[N]` f64 dataset per named
+//! `reasons`, `bindings` (the binding validity criterion) and `fates` (how a gait search that
+//! found nothing ended its guesses) (each a UTF-8 JSON array of strings, as bytes) and one `[N]` f64 dataset per named
 //! measure (`cost`, `rho`, `basin_fraction`, …; NaN where not measured). Written by
 //! [`write_design_annotated`], every dataset also carries a `units` attribute and the file a
 //! `/provenance` group whose `commands` list every run that wrote the search, a continued run's
@@ -37,6 +38,12 @@ pub struct DesignData {
     pub params: Vec<Vec<f64>>,
     pub status: Vec<u8>,
     pub reasons: Vec<String>,
+    /// Per design: the binding validity criterion's name (empty where not measured). A file
+    /// written before it was stored reads empty names.
+    pub bindings: Vec<String>,
+    /// Per design: how the gait search's guesses ended where it found no gait (`4 starts: 3
+    /// stance knee buckled, 1 fell forward`; empty with a gait). Empty in older files.
+    pub fates: Vec<String>,
     /// Gait section state per design (NaN without a gait).
     pub section: Vec<[f64; 3]>,
     /// Named per-design measures, each of length `N`.
@@ -50,6 +57,8 @@ impl DesignData {
         let bad = self.params.iter().any(|p| p.len() != k)
             || self.status.len() != n
             || self.reasons.len() != n
+            || self.bindings.len() != n
+            || self.fates.len() != n
             || self.section.len() != n
             || self.columns.iter().any(|c| c.1.len() != n);
         if bad {
@@ -126,8 +135,14 @@ fn fill(p: &Path, f: &File, d: &DesignData) -> Result<()> {
     put(p, f, "params", &params)?;
     put(p, f, "section", &section)?;
     put(p, f, "status", &d.status)?;
-    let reasons = serde_json::to_string(&d.reasons).unwrap_or_default();
-    put(p, f, "reasons", reasons.as_bytes())?;
+    for (name, texts) in [
+        ("reasons", &d.reasons),
+        ("bindings", &d.bindings),
+        ("fates", &d.fates),
+    ] {
+        let t = serde_json::to_string(texts).unwrap_or_default();
+        put(p, f, name, t.as_bytes())?;
+    }
     for (name, v) in &d.columns {
         put(p, f, name, v)?;
     }
@@ -190,6 +205,16 @@ pub fn read_design(path: impl AsRef<Path>, columns: &[&str]) -> Result<DesignDat
         .at(p, "reasons")?;
     let reasons: Vec<String> =
         serde_json::from_slice(&reason_bytes).map_err(|e| bad(format!("reasons: {e}")))?;
+    // per-design texts added later: absent in older files, read as empty
+    let texts = |name: &str| -> Result<Vec<String>> {
+        let Ok(ds) = f.dataset(name) else {
+            return Ok(vec![String::new(); reasons.len()]);
+        };
+        let b = ds.read_raw::<u8>().at(p, name)?;
+        serde_json::from_slice(&b).map_err(|e| bad(format!("{name}: {e}")))
+    };
+    let bindings = texts("bindings")?;
+    let fates = texts("fates")?;
     let mut cols = Vec::new();
     for c in columns {
         let v = f.dataset(c).and_then(|d| d.read_raw::<f64>()).at(p, c)?;
@@ -202,6 +227,8 @@ pub fn read_design(path: impl AsRef<Path>, columns: &[&str]) -> Result<DesignDat
         params: params.rows().into_iter().map(|r| r.to_vec()).collect(),
         status,
         reasons,
+        bindings,
+        fates,
         section: section
             .rows()
             .into_iter()

@@ -552,6 +552,11 @@ pub struct DesignArgs {
     /// Nelder-Mead starts from the best design so far.
     #[arg(long, default_value_t = 0)]
     pub init: usize,
+    /// Local runs of the multi-start: run 0 from the model's own values (with --init), the
+    /// others each from a seeded random design; --budget is shared out evenly and the runs
+    /// run in parallel on --threads.
+    #[arg(long, default_value_t = 1, value_parser = parse_design_starts)]
+    pub starts: usize,
     /// Largest friction coefficient the ground supplies.
     #[arg(long, default_value_t = 0.6, value_parser = parse_mu)]
     pub mu: f64,
@@ -578,7 +583,7 @@ pub struct DesignArgs {
     /// PNG of the search (default: the output path with .png).
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Worker threads of the basin engine.
+    /// Worker threads: the multi-start's runs (--starts) and the basin engine.
     #[arg(long, default_value_t = 2, value_parser = crate::args::parse_threads)]
     pub threads: usize,
     /// Start over: replace an existing --out.
@@ -693,6 +698,11 @@ fn integer(s: &str) -> Result<i64, String> {
 /// `design --budget`: 1 to 100000 designs.
 fn parse_budget(s: &str) -> Result<usize, String> {
     pdw::design::check_budget(integer(s)?, "--budget").map_err(|e| e.0)
+}
+
+/// `design --starts`: 1 to 10000 local runs.
+fn parse_design_starts(s: &str) -> Result<usize, String> {
+    pdw::design::check_starts(integer(s)?, "--starts").map_err(|e| e.0)
 }
 
 /// `design --basin-grid`: 1 to 200 cells per side.

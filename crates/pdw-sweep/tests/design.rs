@@ -112,6 +112,10 @@ fn bad_design_arguments_exit_2_naming_the_value() {
         ),
         (vec!["--free", "hip_mass=-1:1"], "hip_mass"),
         (
+            vec!["--free", "hip_mass=0.3:1", "--starts", "0"],
+            "--starts",
+        ),
+        (
             vec!["--free", "hip_mass=0.3:1", "--set", "hip_mass=0.5"],
             "free or set",
         ),
@@ -238,4 +242,173 @@ fn the_default_basin_box_follows_each_gait_and_is_not_saturated() {
         .unwrap()
         .to_string();
     assert_eq!(u, "rad/s");
+}
+
+fn multi_start(out: &Path, budget: &str, threads: &str) -> Output {
+    run(&[
+        "design",
+        "--model",
+        "kneed",
+        "--free",
+        "hip_mass=0.3:1.2",
+        "--free",
+        "a2=0.12:0.22",
+        "--objective",
+        "margin",
+        "--budget",
+        budget,
+        "--seed",
+        "3",
+        "--starts",
+        "2",
+        "--threads",
+        threads,
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+/// The multi-start's two runs share the pool: the file is the same on one and two threads,
+/// and a search continued from a shorter one's file is the uninterrupted search.
+#[test]
+fn a_multi_start_is_the_same_on_one_and_two_threads_and_after_a_resume() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |n: &str| dir.path().join(n);
+    let ok = |o: &Output| assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(o));
+    ok(&multi_start(&path("one.h5"), "8", "1"));
+    ok(&multi_start(&path("two.h5"), "8", "2"));
+    let cols = ["cost", "rho", "min_knee_torque", "run"];
+    let read = |n: &str| pdw_store::read_design(path(n), &cols).unwrap();
+    let (one, two) = (read("one.h5"), read("two.h5"));
+    assert_eq!(one.params.len(), 8);
+    let runs = one.column("run").unwrap();
+    assert_eq!(runs.iter().filter(|r| **r == 0.0).count(), 4);
+    assert_eq!(runs.iter().filter(|r| **r == 1.0).count(), 4);
+    // run 1 starts elsewhere than the model's own values (run 0's first design)
+    assert_ne!(one.params[0], one.params[4]);
+    let bits4 = |d: &pdw_store::DesignData| {
+        let mut v = bits(d);
+        v.extend(d.column("run").unwrap().iter().map(|x| x.to_bits()));
+        v
+    };
+    assert_eq!(
+        bits4(&one),
+        bits4(&two),
+        "same designs on one and two threads"
+    );
+    ok(&multi_start(&path("resumed.h5"), "4", "2"));
+    assert_eq!(read("resumed.h5").params.len(), 4);
+    let o = multi_start(&path("resumed.h5"), "8", "2");
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("(4 new) from 2 starts"));
+    assert_eq!(
+        bits4(&one),
+        bits4(&read("resumed.h5")),
+        "resumed = uninterrupted"
+    );
+}
+
+/// Hsu Chen's walker with push-only stops: its stance knee buckles at the knee strike, so the
+/// gait search finds nothing and the design keeps how its guesses ended. Checked against the
+/// latched walker, an independent reading: its gait's knee strike needs the stance knee's latch
+/// to pull (a negative margin), which a stop cannot.
+#[test]
+fn a_design_without_a_gait_keeps_its_fates_and_the_report_names_the_closest_design() {
+    let dir = tempfile::tempdir().unwrap();
+    let kneed = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/kneed.toml"
+    ))
+    .unwrap();
+    assert!(kneed.contains("hold = \"latch\""));
+    let spec = dir.path().join("stops.toml");
+    std::fs::write(&spec, kneed.replace("hold = \"latch\"", "hold = \"stop\"")).unwrap();
+    let out = dir.path().join("stops.h5");
+    let o = run(&[
+        "design",
+        "--model",
+        spec.to_str().unwrap(),
+        "--free",
+        "hip_mass=0.45:0.55",
+        "--objective",
+        "margin",
+        "--budget",
+        "1",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let d = pdw_store::read_design(&out, &["cost", "strides_survived"]).unwrap();
+    assert_eq!(d.status[0], 3, "no gait: {}", d.reasons[0]);
+    assert!(
+        d.fates[0].contains("stance knee buckled"),
+        "fates: {}",
+        d.fates[0]
+    );
+    // the graded cost of the band without a gait: 9 + 0.5 (1 − n/10) + 0.5 q/(1 + q)
+    let n = d.column("strides_survived").unwrap()[0];
+    let c = d.column("cost").unwrap()[0];
+    assert!(
+        (9.0..=10.0).contains(&c) && n < 10.0,
+        "cost {c}, strides {n}"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("no feasible design; closest"), "{stdout}");
+    assert!(stdout.contains("stance knee buckled"), "{stdout}");
+    assert!(
+        !stderr(&o).contains("warning:"),
+        "no bound warnings: {}",
+        stderr(&o)
+    );
+    // the latched walker: its stance knee's latch pulls at the knee strike
+    let fp = crate::common::json(&run(&["fixedpoint", "--model", "kneed", "--json"]));
+    let margins = fp["fixed_points"][0]["validity"]["margins"]
+        .as_array()
+        .expect("margins");
+    let pull = margins
+        .iter()
+        .find(|m| m["name"] == "knee_strike:stance_knee")
+        .expect("the knee strike's stance knee entry");
+    assert!(pull["raw"].as_f64().unwrap() < 0.0, "{pull}");
+}
+
+/// A scan that finds nothing says why, start by start: on the stop-only walker every start's
+/// fate is named, the falls' fates add up to the starts that fell and all of them to the starts.
+#[test]
+fn a_scan_that_finds_nothing_reports_every_start_by_fate() {
+    let dir = tempfile::tempdir().unwrap();
+    let kneed = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/kneed.toml"
+    ))
+    .unwrap();
+    let spec = dir.path().join("stops.toml");
+    std::fs::write(&spec, kneed.replace("hold = \"latch\"", "hold = \"stop\"")).unwrap();
+    let m = spec.to_str().unwrap();
+    let o = run(&["fixedpoint", "--model", m, "--search", "32", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let scan = &v["scan"];
+    let fates = scan["fates"].as_array().expect("fates");
+    let count = |f: &serde_json::Value| f["starts"].as_u64().unwrap();
+    assert_eq!(fates.iter().map(count).sum::<u64>(), 32, "{fates:?}");
+    let fell: u64 = fates
+        .iter()
+        .filter(|f| {
+            f["fate"] != "neither fell nor settled" && f["fate"] != "settled on a gait or orbit"
+        })
+        .map(count)
+        .sum();
+    assert_eq!(fell, scan["fell"].as_u64().unwrap());
+    // most first
+    assert!(fates.windows(2).all(|w| count(&w[0]) >= count(&w[1])));
+    if v["fixed_points"].as_array().is_some_and(|f| f.is_empty()) {
+        assert_eq!(o.status.code(), Some(2));
+        assert!(
+            stderr(&o).contains("by a scan (32 starts: "),
+            "{}",
+            stderr(&o)
+        );
+    }
 }

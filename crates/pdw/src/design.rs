@@ -1,6 +1,9 @@
 //! A design search ([`pdw_limit::design`]): free parameters of a chain walker searched, within
 //! their bounds, for the most robust (or most stable) passive gait that is physically valid
-//! along the whole stride. The plan ([`DesignPlan`]) holds the model, the free parameters and
+//! along the whole stride. Any parameter of the walker's spec (its `[parameters]` table:
+//! segment lengths, masses, centres of mass along and normal to a segment, inertias, foot
+//! radius, hip mass, slope, knee hardware limits) may be free; the search is the library's
+//! multi-start ([`pdw_limit::design::search_multi`]) on the caller's pool. The plan ([`DesignPlan`]) holds the model, the free parameters and
 //! the search's options; [`settings`] is what a stored search is continued by; [`search`]
 //! runs it, every design built from the plan's model with the free values on top. The checks
 //! of a front end's values ([`check_model`], [`space`], [`check_mu`] and the others) name the
@@ -22,6 +25,8 @@ pub struct DesignPlan {
     /// The free parameters and their bounds.
     pub space: DesignSpace,
     pub options: DesignOptions,
+    /// Local runs of the multi-start ([`pdw_limit::design::search_multi`]; at least 1).
+    pub starts: usize,
 }
 
 /// The search's settings as one JSON text: the model (name, fixed values, the resolved walker
@@ -46,6 +51,7 @@ pub fn settings(plan: &DesignPlan, base: &BuiltModel) -> String {
         "min_margin": o.min_margin,
         "seed": o.seed,
         "init": o.init,
+        "starts": plan.starts,
         "basin_grid": o.basin_grid,
         "basin_box": o.basin_box,
         "max_strides": o.basin.max_strides,
@@ -67,27 +73,74 @@ pub fn run_options(settings: &str, threads: usize) -> serde_json::Value {
 
 /// Runs the search from `history` (designs already evaluated, replayed without evaluation)
 /// on `pool`, the gaits of `base` (the model's own values) as the first guesses. `on_eval` sees
-/// every newly evaluated design in order; a design whose values make no model is recorded as
-/// such. Returns every design, the history's first.
+/// every newly evaluated design (one at a time; with several starts in the order the pool's
+/// threads finish them); a design whose values make no model is recorded as such. Returns
+/// every design, run by run, each run's in its evaluation order (the same on any number of
+/// threads).
 pub fn search(
     plan: &DesignPlan,
     base: &BuiltModel,
     history: Vec<DesignEval>,
     pool: &rayon::ThreadPool,
-    on_eval: &mut dyn FnMut(&DesignEval),
+    on_eval: &mut (dyn FnMut(&DesignEval) + Send),
 ) -> Result<Vec<DesignEval>, LimitError> {
     let guesses = pdw_limit::gaits::model_guesses(base.walker.as_ref());
     let names = &plan.space.names;
-    let mut eval = |p: &[f64], g: &[(String, Vec<f64>)]| -> DesignEval {
+    let on_eval = std::sync::Mutex::new(on_eval);
+    let eval = |run: u32, p: &[f64], g: &[(String, Vec<f64>)]| -> DesignEval {
         let set: Vec<(String, f64)> = names.iter().cloned().zip(p.iter().copied()).collect();
-        let ev = match build_with(&plan.model, &set) {
+        let mut ev = match build_with(&plan.model, &set) {
             Ok(m) => evaluate_design(p, m.walker.as_ref(), g, &plan.options, pool),
             Err(e) => DesignEval::bad_model(p, e.0),
         };
-        on_eval(&ev);
+        ev.run = run;
+        if let Ok(mut f) = on_eval.lock() {
+            (*f)(&ev);
+        }
         ev
     };
-    pdw_limit::design::search(&plan.space, &plan.options, &guesses, history, &mut eval)
+    pdw_limit::design::search_multi(
+        &plan.space,
+        &plan.options,
+        plan.starts,
+        &guesses,
+        history,
+        &eval,
+        pool,
+    )
+}
+
+/// The number of local runs: 1 to 10000.
+pub fn check_starts(n: i64, flag: &str) -> Result<usize, InputError> {
+    check_count(n, flag, " starts", (1, 10_000)).map(|n| n as usize)
+}
+
+/// The closest design of `hist` (the smallest cost) and, when nothing is feasible, what keeps
+/// it from being feasible in words: its binding criterion with its relative margin, or without
+/// a gait how its guesses ended.
+pub fn closest(hist: &[DesignEval], min_margin: f64) -> Option<(&DesignEval, Option<String>)> {
+    let b = hist.iter().min_by(|x, y| x.cost.total_cmp(&y.cost))?;
+    if b.feasible() {
+        return Some((b, None));
+    }
+    let why = if !b.binding.is_empty() && b.min_relative_margin.is_finite() {
+        format!(
+            "binding criterion {} at relative margin {:.4} (required {min_margin}); shortfall {:.4}",
+            b.binding, b.min_relative_margin, b.shortfall
+        )
+    } else if !b.fates.is_empty() {
+        format!(
+            "no gait; the best guess walked {} of {} strides (smallest stride-to-stride change \
+             {:.3e}); {}",
+            b.strides_survived,
+            pdw_limit::design::PROBE_STRIDES,
+            b.probe_residual,
+            b.fates
+        )
+    } else {
+        b.reason.clone()
+    };
+    Some((b, Some(why)))
 }
 
 /// The design's model must be a chain walker (the search varies a walker spec's parameters);
@@ -309,7 +362,7 @@ pub fn bound_warnings(space: &DesignSpace, best: &[f64]) -> Vec<String> {
 /// Per-design measures as the design file stores them (columns, in this order) and Python
 /// returns them; `basin_box_*` are the half widths of the box each basin fraction was measured
 /// in ([`pdw_limit::design::basin_box`]).
-pub const COLUMNS: [&str; 11] = [
+pub const COLUMNS: [&str; 15] = [
     "cost",
     "basin_fraction",
     "rho",
@@ -321,10 +374,14 @@ pub const COLUMNS: [&str; 11] = [
     "min_relative_margin",
     "basin_box_stance",
     "basin_box_stance_rate",
+    "shortfall",
+    "strides_survived",
+    "probe_residual",
+    "run",
 ];
 
 /// The measures of `e` in [`COLUMNS`]' order.
-pub fn measures(e: &DesignEval) -> [f64; 11] {
+pub fn measures(e: &DesignEval) -> [f64; 15] {
     [
         e.cost,
         e.basin_fraction,
@@ -337,6 +394,10 @@ pub fn measures(e: &DesignEval) -> [f64; 11] {
         e.min_relative_margin,
         e.basin_box[0],
         e.basin_box[1],
+        e.shortfall,
+        e.strides_survived,
+        e.probe_residual,
+        f64::from(e.run),
     ]
 }
 
@@ -350,6 +411,8 @@ pub fn to_data(settings: &str, names: &[String], hist: &[DesignEval]) -> DesignD
         params: hist.iter().map(|e| e.params.clone()).collect(),
         status: hist.iter().map(|e| e.status).collect(),
         reasons: hist.iter().map(|e| e.reason.clone()).collect(),
+        bindings: hist.iter().map(|e| e.binding.clone()).collect(),
+        fates: hist.iter().map(|e| e.fates.clone()).collect(),
         section: hist.iter().map(|e| e.section).collect(),
         columns: COLUMNS
             .iter()
@@ -379,6 +442,19 @@ pub fn from_data(d: &DesignData) -> Vec<DesignEval> {
                 step_length: c("step_length"),
                 min_relative_margin: c("min_relative_margin"),
                 basin_box: [c("basin_box_stance"), c("basin_box_stance_rate")],
+                binding: d.bindings.get(i).cloned().unwrap_or_default(),
+                shortfall: c("shortfall"),
+                strides_survived: c("strides_survived"),
+                probe_residual: c("probe_residual"),
+                fates: d.fates.get(i).cloned().unwrap_or_default(),
+                run: {
+                    let r = c("run");
+                    if r.is_finite() && r >= 0.0 {
+                        r as u32
+                    } else {
+                        0
+                    }
+                },
             }
         })
         .collect()
@@ -412,6 +488,7 @@ pub fn units(base: &BuiltModel, names: &[String]) -> impl Fn(&str) -> Option<Str
             "step_length" => lu.clone(),
             "basin_box_stance" => box_units.0.clone(),
             "basin_box_stance_rate" => box_units.1.clone(),
+            // strides, run indices, relative changes and shortfalls are counts and ratios
             // codes, fractions, multiplier moduli, friction coefficients, costs, the reasons' text
             _ => "1".into(),
         })

@@ -85,3 +85,216 @@ fn a_budget_smaller_than_the_simplex_ends_the_search_without_a_panic() {
     let best = h.iter().map(|e| e.cost).fold(f64::INFINITY, f64::min);
     assert!(best < 1e-6, "best cost {best}");
 }
+
+use pdw_limit::design::{graded_cost, Grade, Shortfall, PROBE_STRIDES};
+
+#[test]
+fn the_graded_cost_is_the_documented_formula_at_hand_computed_designs() {
+    // stable, invalid: 1 + 3 d/(1 + d) + 0.5 ρ
+    assert!((graded_cost(Grade::Gait { rho: 0.5, d: 1.0 }) - 2.75).abs() < 1e-15);
+    assert!((graded_cost(Grade::Gait { rho: 0.8, d: 0.25 }) - 2.0).abs() < 1e-15);
+    // unstable: 5 + 2 (1 − 1/ρ) + 2 d/(1 + d)
+    assert!((graded_cost(Grade::Gait { rho: 2.0, d: 0.0 }) - 6.0).abs() < 1e-15);
+    assert!((graded_cost(Grade::Gait { rho: 1.25, d: 3.0 }) - 6.9).abs() < 1e-14);
+    // no gait: 9 + 0.5 (1 − n/N) + 0.5 q/(1 + q); nothing walked and no stride is the old 10
+    let ng = |n, q| graded_cost(Grade::NoGait { n, of: 10, q });
+    assert!((ng(5, 1.0) - 9.5).abs() < 1e-15);
+    assert_eq!(ng(0, f64::INFINITY), 10.0);
+    assert_eq!(ng(10, 0.0), 9.0);
+    assert_eq!(graded_cost(Grade::BadModel), 11.0);
+    // the shortfall from its quantities: margin 0.01 − (−0.03), friction (0.7 − 0.6)/0.6, knee
+    // torque (0.1 − 0.05)/5, one discrete failure at 0.5
+    let s = Shortfall::of((-0.03, 0.01), (0.7, 0.6), (0.05, 0.1, 5.0), 1);
+    assert!((s.margin - 0.04).abs() < 1e-15);
+    assert!((s.friction - 0.1 / 0.6).abs() < 1e-15);
+    assert!((s.knee - 0.01).abs() < 1e-15);
+    assert!((s.total() - (0.04 + 0.1 / 0.6 + 0.01 + 0.5)).abs() < 1e-15);
+    // what is not measured or already met adds nothing
+    let none = Shortfall::of((f64::NAN, 0.01), (0.3, 0.6), (f64::NAN, 0.1, 5.0), 0);
+    assert_eq!(none.total(), 0.0);
+    assert_eq!(
+        Shortfall::of((0.2, 0.01), (0.6, 0.6), (3.0, 0.1, 5.0), 0).total(),
+        0.0
+    );
+}
+
+#[test]
+fn the_graded_cost_is_monotone_in_each_quantity_and_its_bands_are_ordered() {
+    let ds = [0.0, 1e-3, 0.01, 0.1, 0.5, 1.0, 3.0, 30.0, f64::INFINITY];
+    let stable = [0.0, 0.3, 0.6, 0.9, 0.999];
+    let unstable = [1.0, 1.001, 1.5, 3.0, 100.0];
+    for w in ds.windows(2) {
+        for &rho in stable.iter().chain(&unstable) {
+            let (a, b) = (
+                graded_cost(Grade::Gait { rho, d: w[0] }),
+                graded_cost(Grade::Gait { rho, d: w[1] }),
+            );
+            assert!(
+                a < b || (w[1].is_infinite() && a <= b),
+                "d {w:?} at ρ {rho}: {a} {b}"
+            );
+        }
+    }
+    for rhos in [&stable[..], &unstable[..]] {
+        for w in rhos.windows(2) {
+            for &d in &ds {
+                let (a, b) = (
+                    graded_cost(Grade::Gait { rho: w[0], d }),
+                    graded_cost(Grade::Gait { rho: w[1], d }),
+                );
+                assert!(a < b, "ρ {w:?} at d {d}: {a} {b}");
+            }
+        }
+    }
+    // every stable invalid design below every unstable one, every unstable one below (or at)
+    // every design without a gait
+    let worst_stable = graded_cost(Grade::Gait {
+        rho: 0.999,
+        d: f64::INFINITY,
+    });
+    let best_unstable = graded_cost(Grade::Gait { rho: 1.0, d: 0.0 });
+    assert!(worst_stable < best_unstable);
+    let worst_unstable = graded_cost(Grade::Gait { rho: 1e12, d: 1e12 });
+    let best_no_gait = graded_cost(Grade::NoGait {
+        n: PROBE_STRIDES,
+        of: PROBE_STRIDES,
+        q: 0.0,
+    });
+    assert!(worst_unstable <= best_no_gait);
+    // more strides walked is better, a smaller stride-to-stride change is better
+    let qs = [0.0, 1e-6, 1e-2, 1.0, 10.0, f64::INFINITY];
+    for n in 0..PROBE_STRIDES {
+        for &q in &qs {
+            let at = |n| {
+                graded_cost(Grade::NoGait {
+                    n,
+                    of: PROBE_STRIDES,
+                    q,
+                })
+            };
+            assert!(at(n + 1) < at(n), "n {n} q {q}");
+        }
+    }
+    for w in qs.windows(2) {
+        let at = |q| {
+            graded_cost(Grade::NoGait {
+                n: 3,
+                of: PROBE_STRIDES,
+                q,
+            })
+        };
+        assert!(at(w[0]) < at(w[1]), "q {w:?}");
+    }
+}
+
+/// Two basins on the unit square: a wide local one at `A` (cost 0.5 at its bottom) and the
+/// global one at `B` (cost 0).
+const A: [f64; 2] = [0.2, 0.2];
+const B: [f64; 2] = [0.8, 0.7];
+
+fn two_basins(p: &[f64]) -> pdw_limit::design::DesignEval {
+    let mut e = pdw_limit::design::DesignEval::bad_model(p, String::new());
+    e.status = pdw_limit::design::status::FEASIBLE;
+    let d2 = |c: &[f64; 2]| (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2);
+    e.cost = (0.5 + 2.0 * d2(&A)).min(2.0 * d2(&B));
+    e
+}
+
+fn square() -> DesignSpace {
+    DesignSpace {
+        names: vec!["a".into(), "b".into()],
+        lo: vec![0.0; 2],
+        hi: vec![1.0; 2],
+    }
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+}
+
+fn multi(
+    budget: usize,
+    starts: usize,
+    history: Vec<pdw_limit::design::DesignEval>,
+    threads: usize,
+) -> Vec<pdw_limit::design::DesignEval> {
+    let mut o = bowl_options(budget, 0);
+    o.start = Some(A.to_vec());
+    let eval = |_: u32, p: &[f64], _: &[(String, Vec<f64>)]| two_basins(p);
+    pdw_limit::design::search_multi(&square(), &o, starts, &[], history, &eval, &pool(threads))
+        .unwrap()
+}
+
+fn bits(h: &[pdw_limit::design::DesignEval]) -> Vec<(u32, Vec<u64>, u64)> {
+    h.iter()
+        .map(|e| {
+            (
+                e.run,
+                e.params.iter().map(|v| v.to_bits()).collect(),
+                e.cost.to_bits(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_multi_start_finds_the_global_optimum_a_single_start_misses() {
+    // one run from A stays in A's basin
+    let one = multi(120, 1, Vec::new(), 1);
+    let best1 = one.iter().map(|e| e.cost).fold(f64::INFINITY, f64::min);
+    assert!(best1 > 0.49, "a single run from A left its basin: {best1}");
+    // eight runs, seven from seeded random designs: the global minimum at B
+    let many = multi(480, 8, Vec::new(), 2);
+    assert!(many.len() <= 480);
+    let b = many
+        .iter()
+        .min_by(|x, y| x.cost.total_cmp(&y.cost))
+        .unwrap();
+    assert!(b.cost < 1e-8, "best cost {}", b.cost);
+    assert!((b.params[0] - B[0]).abs() < 1e-3 && (b.params[1] - B[1]).abs() < 1e-3);
+    // run 0 is the single search itself (the same designs, in the same order)
+    let mut o = bowl_options(60, 0);
+    o.start = Some(A.to_vec());
+    let mut eval = |p: &[f64], _: &[(String, Vec<f64>)]| two_basins(p);
+    let single = pdw_limit::design::search(&square(), &o, &[], Vec::new(), &mut eval).unwrap();
+    let run0: Vec<_> = many.iter().filter(|e| e.run == 0).cloned().collect();
+    assert_eq!(bits(&single), bits(&run0));
+}
+
+#[test]
+fn a_multi_start_is_the_same_on_one_and_two_threads_and_after_a_resume() {
+    let full = multi(200, 5, Vec::new(), 1);
+    assert_eq!(full.len(), 200);
+    assert_eq!(bits(&full), bits(&multi(200, 5, Vec::new(), 2)));
+    // a killed run's file: each run's first designs (a different number per run), stored in
+    // the order the threads finished them (interleaved); resumed, the same search
+    let prefixes: Vec<Vec<pdw_limit::design::DesignEval>> = (0..5u32)
+        .map(|r| {
+            let keep = [3usize, 17, 0, 40, 9][r as usize];
+            full.iter()
+                .filter(|e| e.run == r)
+                .take(keep)
+                .cloned()
+                .collect()
+        })
+        .collect();
+    let mut killed = Vec::new();
+    for i in 0..40 {
+        for p in prefixes.iter().rev() {
+            if let Some(e) = p.get(i) {
+                killed.push(e.clone());
+            }
+        }
+    }
+    assert_eq!(killed.len(), 3 + 17 + 40 + 9);
+    assert_eq!(bits(&full), bits(&multi(200, 5, killed, 2)));
+    // zero starts are refused
+    let mut o = bowl_options(10, 0);
+    o.start = None;
+    let eval = |_: u32, p: &[f64], _: &[(String, Vec<f64>)]| two_basins(p);
+    let e = pdw_limit::design::search_multi(&square(), &o, 0, &[], Vec::new(), &eval, &pool(1));
+    assert!(e.is_err());
+}

@@ -100,6 +100,7 @@ fn plan(a: &DesignArgs, base: &BuiltModel, space: DesignSpace) -> anyhow::Result
         model: super::choice(&a.model),
         space,
         options,
+        starts: a.starts,
     })
 }
 
@@ -246,7 +247,7 @@ fn plot(png: &Path, base: &BuiltModel, plan: &DesignPlan, s: &Searched) -> anyho
     pdw_store::plot_lines_marked(
         png,
         &format!(
-            "design search, {} ({}): cost < 1 feasible; 1-5 invalid; 5-9 unstable; 10 no gait",
+            "design search, {} ({}): cost < 1 feasible; 1-4.5 invalid; 5-9 unstable; 9-10 no gait",
             base.info.name,
             plan.options.objective.name()
         ),
@@ -260,7 +261,10 @@ fn plot(png: &Path, base: &BuiltModel, plan: &DesignPlan, s: &Searched) -> anyho
 }
 
 /// The designs by status and the best one, with the command line that reproduces its gait;
-/// exit 1 when the best design is not feasible.
+/// when nothing is feasible, the closest design and what keeps it from being feasible (its
+/// binding criterion, or how its gait search's guesses ended). Bound warnings only for a
+/// feasible best (an infeasible one on a bound says nothing about an optimum beyond it).
+/// Exit 1 when the best design is not feasible.
 fn report(
     a: &DesignArgs,
     png: &Path,
@@ -270,16 +274,18 @@ fn report(
 ) -> anyhow::Result<ExitCode> {
     let count = |s: u8| hist.iter().filter(|e| e.status == s).count();
     crate::outln!(
-        "{} designs ({} new): {} feasible, {} invalid, {} unstable, {} without a gait, {} not a model",
+        "{} designs ({} new) from {} start{}: {} feasible, {} invalid, {} unstable, {} without a gait, {} not a model",
         hist.len(),
         hist.len() - stored.min(hist.len()),
+        plan.starts,
+        if plan.starts == 1 { "" } else { "s" },
         count(status::FEASIBLE),
         count(status::INVALID),
         count(status::UNSTABLE),
         count(status::NO_GAIT),
         count(status::BAD_MODEL)
     );
-    let Some(b) = hist.iter().min_by(|x, y| x.cost.total_cmp(&y.cost)) else {
+    let Some((b, why)) = pdw::design::closest(hist, a.min_margin) else {
         return Ok(ExitCode::SUCCESS);
     };
     let sets: Vec<String> = plan
@@ -290,7 +296,12 @@ fn report(
         .map(|(n, v)| format!("--set {n}={v}"))
         .collect();
     crate::outln!(
-        "best: {} (cost {:.6}{}{}) {}",
+        "{}: {} (cost {:.6}{}{}) {}",
+        if b.feasible() {
+            "best"
+        } else {
+            "no feasible design; closest"
+        },
         status::NAMES[b.status as usize],
         b.cost,
         if b.basin_fraction.is_finite() {
@@ -305,6 +316,9 @@ fn report(
         },
         b.reason
     );
+    if let Some(why) = &why {
+        crate::outln!("  closest because: {why}");
+    }
     if b.section.iter().all(|v| v.is_finite()) {
         let gait: Vec<String> = b.section.iter().map(|v| format!("{v:.6}")).collect();
         // a model without knees has no knee torque (NaN): the clause is left out
@@ -324,18 +338,29 @@ fn report(
     }
     if b.min_relative_margin.is_finite() {
         crate::outln!(
-            "  smallest relative margin {:.4} (required {})",
+            "  smallest relative margin {:.4} ({}; required {})",
             b.min_relative_margin,
+            b.binding,
             a.min_margin
         );
     }
+    let values: Vec<String> = plan
+        .space
+        .names
+        .iter()
+        .zip(&b.params)
+        .map(|(n, v)| format!("{n} = {v}"))
+        .collect();
+    crate::outln!("  parameters: {}", values.join(", "));
     crate::outln!(
         "  reproduce: pdw-sweep fixedpoint --model {} {}",
         a.model.model,
         sets.join(" ")
     );
-    for w in pdw::design::bound_warnings(&plan.space, &b.params) {
-        eprintln!("warning: {w}");
+    if b.feasible() {
+        for w in pdw::design::bound_warnings(&plan.space, &b.params) {
+            eprintln!("warning: {w}");
+        }
     }
     crate::outln!("  written: {}, {}", a.out.display(), png.display());
     Ok(if b.feasible() {

@@ -303,15 +303,12 @@ fn run_search(
     }
     if gaits.is_empty() && orbits.is_empty() {
         eprintln!(
-            "no {}gait found for model '{}' at slope {} by a scan of {} starts ({} fell, {} \
-             neither fell nor settled); try more starts (--search N), a smaller --search-box, \
-             or: {}",
+            "no {}gait found for model '{}' at slope {} by a scan ({}); try more starts \
+             (--search N), a smaller --search-box, or: {}",
             gait_adjective(&a.gait),
             m.info.name,
             m.slope(),
-            sc.starts,
-            sc.fell,
-            sc.unsettled,
+            pdw_limit::scan::fates_text(sc.starts, &sc.fates()),
             advice(m)
         );
         return Ok(ExitCode::from(2));
@@ -365,6 +362,10 @@ fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options
         pdw_limit::scan::MAX_PERIOD,
         sc.near_gait_starts
     );
+    crate::outln!(
+        "  by fate: {}",
+        pdw_limit::scan::fates_text(sc.starts, &sc.fates())
+    );
 }
 
 /// `--search --json`: the `--json` of the gaits and of the orbits found, each with its starts,
@@ -415,6 +416,8 @@ fn scan_json(
             .collect::<Vec<_>>(),
         "fell": sc.fell,
         "unsettled": sc.unsettled,
+        "fates": sc.fates().iter().map(|(f, n)| serde_json::json!({"fate": f, "starts": n}))
+            .collect::<Vec<_>>(),
         "near_gait_starts": sc.near_gait_starts,
         "near_gait_offset": pdw_limit::scan::NEAR_GAIT_OFFSET,
     });
