@@ -310,6 +310,38 @@ impl ModelInfo {
         Ok(v)
     }
 
+    /// `value` in `unit` as a value of parameter `name` in the unit the model lists it in (a
+    /// spec's base unit): through [`crate::units::convert`] with that unit's dimension, so a
+    /// unit of another quantity is refused ("unit `deg` is an angle, hip_mass is a mass (kg,
+    /// g, …)"). A parameter in a model's own unit that no unit of the table converts into (the
+    /// simplest walker's `sqrt(l/g)`) takes plain numbers only.
+    pub fn value_in_unit(&self, name: &str, value: f64, unit: &str) -> Result<f64, String> {
+        let Some(p) = self.params.iter().find(|p| p.name == name) else {
+            return Err(WalkerError::UnknownParam {
+                model: self.name.clone(),
+                name: name.to_string(),
+                valid: self
+                    .params
+                    .iter()
+                    .map(|p| p.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            }
+            .to_string());
+        };
+        let expected = crate::units::dimension_of(&p.unit).map_err(|_| {
+            format!(
+                "model '{}' has {name} in `{}`, its own unit, which no unit converts into: give \
+                 a plain number",
+                self.name, p.unit
+            )
+        })?;
+        let system = self
+            .spec()
+            .map_or(crate::units::UnitSystem::Si, WalkerSpec::unit_system);
+        crate::units::convert(value, unit, name, expected, system)
+    }
+
     /// Builds the model from values in `params` order (as [`ModelInfo::resolve`] gives them).
     pub fn build_from(&self, values: &[f64]) -> Result<Box<dyn Walker>, WalkerError> {
         match &self.builder {

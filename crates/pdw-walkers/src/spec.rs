@@ -42,12 +42,15 @@
 //! like any other parameter. A parameter's value is in its `unit`, converted into the spec's
 //! base unit by the table of [`crate::units`] (`{ value = 3, unit = "deg" }` is 3° in rad,
 //! `{ value = 50, unit = "cm" }` 0.5 m in an SI spec; `L`, `M`, `T` and `1` are taken as is).
+//! A unit must measure what its parameter is in the walker (a mass in kg or g, a length in m,
+//! a slope in rad or deg; [`crate::units::Dimension`]): each field's expression is computed in
+//! its parameters' units and refused when it is another quantity.
 //! Unknown keys, unknown units, a leg without segments, a knee on a one-segment leg,
 //! non-positive masses and lengths, NaN, unknown names in expressions are errors that name the
 //! field, its value and the rule.
 
 use crate::error::WalkerError;
-use crate::units::{self, UnitSystem};
+use crate::units::{self, Dimension, UnitSystem};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -228,6 +231,14 @@ impl ParamTable {
             .position(|n| n == name)
             .map(|i| self.values[i])
     }
+
+    /// The (base) unit of parameter `name`.
+    pub fn get_unit(&self, name: &str) -> Option<&str> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| self.units[i].as_str())
+    }
 }
 
 /// The evaluated, validated geometry of a spec at given parameter values (SI or the spec's units).
@@ -287,6 +298,160 @@ impl WalkerSpec {
                     value: format!("\"{}\"", p.unit),
                     rule: format!("{why}; units accepted: {}", units::ACCEPTED),
                 });
+            }
+        }
+        self.check_dimensions(source_name, system)
+    }
+
+    /// The dimension each field's value has by its role in the walker (a segment's `mass` is a
+    /// mass, its `com` a length, a gait's rates angular rates): `(field, expression,
+    /// dimension)` for every field written as an expression (a plain number is in the base
+    /// unit of its field). The unit check walks this table; a new field adds a row.
+    fn dimensioned_fields<'a>(&'a self) -> Vec<(String, &'a str, Dimension)> {
+        let mut out = Vec::new();
+        let mut num = |field: String, n: &'a Num, d: Dimension| {
+            if let Num::Expr(e) = n {
+                out.push((field, e.as_str(), d));
+            }
+        };
+        num("hip_mass".into(), &self.hip_mass, Dimension::MASS);
+        num("foot_radius".into(), &self.foot_radius, Dimension::LENGTH);
+        for (i, s) in self.segments.iter().enumerate() {
+            let f = |k: &str| format!("segments[{i}].{k}");
+            num(f("length"), &s.length, Dimension::LENGTH);
+            num(f("mass"), &s.mass, Dimension::MASS);
+            num(f("com"), &s.com, Dimension::LENGTH);
+            num(f("com_normal"), &s.com_normal, Dimension::LENGTH);
+            num(f("inertia"), &s.inertia, Dimension::INERTIA);
+        }
+        let section = [
+            Dimension::ANGLE,
+            Dimension::ANGULAR_RATE,
+            Dimension::ANGULAR_RATE,
+        ];
+        for (i, g) in self.gaits.iter().enumerate() {
+            for (j, (v, d)) in g.section.iter().zip(section).enumerate() {
+                num(format!("gaits[{i}].section[{j}]"), v, d);
+            }
+        }
+        for (i, k) in self.knees.iter().enumerate() {
+            if !matches!(k.mode.trim(), "locked" | "free-swing" | "free_swing") {
+                out.push((
+                    format!("knees[{i}].mode"),
+                    k.mode.as_str(),
+                    Dimension::DIMENSIONLESS,
+                ));
+            }
+        }
+        out
+    }
+
+    /// Refuses a unit of another dimension than its parameter's role: a builtin parameter
+    /// whose unit is not of its quantity (`max_stride_time` in `m`), and a field whose
+    /// expression, computed in its parameters' units, is not of the field's quantity
+    /// ([`WalkerSpec::dimensioned_fields`]: `hip_mass` in `deg`, a length in `rad`). A field
+    /// that is one parameter blames the parameter's unit; an expression that adds two
+    /// quantities or is of the wrong quantity is blamed as written. Expressions that do not
+    /// evaluate are left to [`WalkerSpec::resolve`], which says why.
+    fn check_dimensions(&self, source_name: &str, system: UnitSystem) -> Result<(), WalkerError> {
+        let fail = |field: String, value: String, rule: String| WalkerError::InvalidSpec {
+            source_name: source_name.to_string(),
+            field,
+            value,
+            rule,
+        };
+        for (name, _, unit, _) in BUILTIN_PARAMS {
+            let (Some(p), Ok(expected)) = (self.parameters.get(name), units::dimension_of(unit))
+            else {
+                continue;
+            };
+            let given = units::dimension_of(&p.unit).unwrap_or(expected);
+            if !expected.accepts(given) {
+                return Err(fail(
+                    format!("parameters.{name}.unit"),
+                    format!("\"{}\"", p.unit),
+                    units::mismatch(&p.unit, given, name, expected, system),
+                ));
+            }
+        }
+        let table = self.param_table();
+        let values: Vec<(&str, f64)> = table
+            .names
+            .iter()
+            .map(String::as_str)
+            .zip(table.values.iter().copied())
+            .collect();
+        let quantities: Vec<(&str, units::Quantity)> = values
+            .iter()
+            .zip(&table.units)
+            .map(|(&(n, value), u)| {
+                let dim = units::dimension_of(u).ok();
+                (n, units::Quantity { value, dim })
+            })
+            .collect();
+        for (field, e, expected) in self.dimensioned_fields() {
+            if eval_expr(e, &values).is_err() {
+                continue;
+            }
+            let used = || {
+                let names: Vec<String> = tokenize(e)
+                    .unwrap_or_default()
+                    .into_iter()
+                    .filter_map(|t| match t {
+                        Tok::Name(n) => Some(n),
+                        _ => None,
+                    })
+                    .collect();
+                let mut shown: Vec<String> = Vec::new();
+                for n in names {
+                    let unit = self.parameters.get(&n).map_or_else(
+                        || table.get_unit(&n).unwrap_or("1").to_string(),
+                        |p| p.unit.clone(),
+                    );
+                    let item = format!("{n} in `{unit}`");
+                    if !shown.contains(&item) {
+                        shown.push(item);
+                    }
+                }
+                shown.join(", ")
+            };
+            match eval_in(e, &quantities) {
+                Err(why) => {
+                    return Err(fail(
+                        field.clone(),
+                        quoted(e),
+                        format!("{why} ({}); {field} is {}", used(), expected.name()),
+                    ))
+                }
+                Ok(units::Quantity { dim: Some(d), .. }) if !expected.accepts(d) => {
+                    let what = match self.parameters.get(e.trim()) {
+                        Some(p) => {
+                            let name = e.trim();
+                            let mut rule = units::mismatch(&p.unit, d, name, expected, system);
+                            if field != name {
+                                rule.push_str(&format!(" (it is the spec's {field})"));
+                            }
+                            fail(
+                                format!("parameters.{name}.unit"),
+                                format!("\"{}\"", p.unit),
+                                rule,
+                            )
+                        }
+                        None => fail(
+                            field.clone(),
+                            quoted(e),
+                            format!(
+                                "it is {} ({}), {field} is {} ({}, …)",
+                                d.name(),
+                                used(),
+                                expected.name(),
+                                expected.examples(system)
+                            ),
+                        ),
+                    };
+                    return Err(what);
+                }
+                Ok(_) => {}
             }
         }
         Ok(())
@@ -671,6 +836,67 @@ pub fn quoted(e: &str) -> String {
 /// wrong. Expressions longer than [`MAX_EXPR_CHARS`] or nested (parentheses, unary minus,
 /// powers) deeper than [`MAX_EXPR_DEPTH`] are refused.
 pub fn eval_expr(text: &str, env: &[(&str, f64)]) -> Result<f64, String> {
+    eval_in(text, env)
+}
+
+/// What an expression computes in, by one grammar: plain numbers ([`eval_expr`]) or
+/// quantities with a dimension ([`crate::units::Quantity`], the spec's unit check).
+pub(crate) trait Arith: Copy {
+    fn number(v: f64) -> Self;
+    fn add(self, r: Self, minus: bool) -> Result<Self, String>;
+    fn mul(self, r: Self, divide: bool) -> Self;
+    fn neg(self) -> Self;
+    fn pow(self, e: Self) -> Result<Self, String>;
+}
+
+impl Arith for f64 {
+    fn number(v: f64) -> Self {
+        v
+    }
+    fn add(self, r: Self, minus: bool) -> Result<Self, String> {
+        Ok(if minus { self - r } else { self + r })
+    }
+    fn mul(self, r: Self, divide: bool) -> Self {
+        if divide {
+            self / r
+        } else {
+            self * r
+        }
+    }
+    fn neg(self) -> Self {
+        -self
+    }
+    fn pow(self, e: Self) -> Result<Self, String> {
+        Ok(self.powf(e))
+    }
+}
+
+impl Arith for units::Quantity {
+    fn number(v: f64) -> Self {
+        Self {
+            value: v,
+            dim: None,
+        }
+    }
+    fn add(self, r: Self, minus: bool) -> Result<Self, String> {
+        units::Quantity::add(self, r, minus)
+    }
+    fn mul(self, r: Self, divide: bool) -> Self {
+        units::Quantity::mul(self, r, divide)
+    }
+    fn neg(self) -> Self {
+        Self {
+            value: -self.value,
+            ..self
+        }
+    }
+    fn pow(self, e: Self) -> Result<Self, String> {
+        units::Quantity::pow(self, e)
+    }
+}
+
+/// [`eval_expr`] in the arithmetic `T`.
+pub(crate) fn eval_in<T: Arith>(text: &str, env: &[(&str, T)]) -> Result<T, String> {
     let n = text.chars().count();
     if n > MAX_EXPR_CHARS {
         return Err(format!(
@@ -756,15 +982,15 @@ fn tokenize(s: &str) -> Result<Vec<Tok>, String> {
     Ok(out)
 }
 
-struct Parser<'a> {
+struct Parser<'a, T> {
     toks: &'a [Tok],
     i: usize,
-    env: &'a [(&'a str, f64)],
+    env: &'a [(&'a str, T)],
     /// Open parentheses, unary minuses and power exponents around the current token.
     depth: usize,
 }
 
-impl Parser<'_> {
+impl<T: Arith> Parser<'_, T> {
     /// Enters one level of nesting, refusing more than [`MAX_EXPR_DEPTH`].
     fn nest(&mut self) -> Result<(), String> {
         self.depth += 1;
@@ -777,31 +1003,31 @@ impl Parser<'_> {
         Ok(())
     }
 
-    fn sum(&mut self) -> Result<f64, String> {
+    fn sum(&mut self) -> Result<T, String> {
         let mut v = self.product()?;
         while let Some(Tok::Op(c @ ('+' | '-'))) = self.toks.get(self.i) {
             self.i += 1;
             let r = self.product()?;
-            v = if *c == '+' { v + r } else { v - r };
+            v = v.add(r, *c == '-')?;
         }
         Ok(v)
     }
-    fn product(&mut self) -> Result<f64, String> {
+    fn product(&mut self) -> Result<T, String> {
         let mut v = self.unary()?;
         while let Some(Tok::Op(c @ ('*' | '/'))) = self.toks.get(self.i) {
             self.i += 1;
             let r = self.unary()?;
-            v = if *c == '*' { v * r } else { v / r };
+            v = v.mul(r, *c == '/');
         }
         Ok(v)
     }
     /// A unary minus applies to the power after it: `-2^2` is `-(2^2)` = −4, as in
     /// mathematics (and Python's `-2**2`).
-    fn unary(&mut self) -> Result<f64, String> {
+    fn unary(&mut self) -> Result<T, String> {
         if let Some(Tok::Op('-')) = self.toks.get(self.i) {
             self.i += 1;
             self.nest()?;
-            let v = -self.unary()?;
+            let v = self.unary()?.neg();
             self.depth -= 1;
             return Ok(v);
         }
@@ -809,22 +1035,22 @@ impl Parser<'_> {
     }
     /// `a ^ b` (or `a ** b`): right-associative (`2^3^2` is `2^(3^2)` = 512), binding tighter
     /// than a unary minus on its left; the exponent may carry its own minus (`2^-1` = 0.5).
-    fn power(&mut self) -> Result<f64, String> {
+    fn power(&mut self) -> Result<T, String> {
         let base = self.atom()?;
         if let Some(Tok::Op('^')) = self.toks.get(self.i) {
             self.i += 1;
             self.nest()?;
             let exponent = self.unary()?;
             self.depth -= 1;
-            return Ok(base.powf(exponent));
+            return base.pow(exponent);
         }
         Ok(base)
     }
-    fn atom(&mut self) -> Result<f64, String> {
+    fn atom(&mut self) -> Result<T, String> {
         let t = self.toks.get(self.i).cloned();
         self.i += 1;
         match t {
-            Some(Tok::Num(v)) => Ok(v),
+            Some(Tok::Num(v)) => Ok(T::number(v)),
             Some(Tok::Name(n)) => self
                 .env
                 .iter()

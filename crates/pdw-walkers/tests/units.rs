@@ -171,3 +171,182 @@ fn every_shipped_model_keeps_its_numbers_and_units() {
     assert_eq!(t.get("hip_mass"), Some(0.5));
     ChainWalker::from_spec(spec).unwrap();
 }
+
+/// The seed5 preset with `old` replaced by `new`, built.
+fn seed5_with(old: &str, new: &str) -> Result<ChainWalker, String> {
+    let text = pdw_walkers::preset_text("seed5").unwrap();
+    assert!(text.contains(old), "{old}");
+    WalkerSpec::from_toml(&text.replace(old, new), "my.toml")
+        .and_then(ChainWalker::from_spec)
+        .map_err(|e| e.to_string())
+}
+
+fn assert_refused(e: Result<ChainWalker, String>, parts: &[&str]) {
+    let Err(e) = e else {
+        panic!("accepted, expected a refusal naming {parts:?}")
+    };
+    for part in parts {
+        assert!(e.contains(part), "{part:?} missing in: {e}");
+    }
+}
+
+#[test]
+fn a_unit_of_another_quantity_than_its_parameters_role_is_refused_naming_both() {
+    // 572.96 deg is 10 rad: it was taken as the hip's 10 kg
+    assert_refused(
+        compass_with(
+            "hip_mass = { value = 10.0, unit = \"kg\"",
+            "hip_mass = { value = 572.96, unit = \"deg\"",
+        ),
+        &[
+            "parameters.hip_mass.unit",
+            "unit `deg` is an angle, hip_mass is a mass (kg, g, …)",
+        ],
+    );
+    // a force is not a mass
+    assert_refused(
+        compass_with(
+            "leg_mass = { value = 5.0, unit = \"kg\"",
+            "leg_mass = { value = 49.05, unit = \"N\"",
+        ),
+        &[
+            "parameters.leg_mass.unit",
+            "unit `N` is a force, leg_mass is a mass (kg, g, …)",
+            "segments[0].mass",
+        ],
+    );
+    // a slope in metres, a stride time budget in metres
+    assert_refused(
+        compass_with(
+            "value = 0.05235987755982988, unit = \"rad\"",
+            "value = 0.05, unit = \"m\"",
+        ),
+        &["unit `m` is a length, slope is an angle (rad, deg, °, …)"],
+    );
+    assert_refused(
+        compass_with(
+            "max_stride_time = { value = 5.0, unit = \"s\"",
+            "max_stride_time = { value = 5.0, unit = \"m\"",
+        ),
+        &["unit `m` is a length, max_stride_time is a time (s, ms, …)"],
+    );
+    // a length in radians: alone, and in a sum with a length
+    assert_refused(
+        seed5_with(
+            "shank_length = { value = 2.0, unit = \"m\"",
+            "shank_length = { value = 2.0, unit = \"rad\"",
+        ),
+        &[
+            "parameters.shank_length.unit",
+            "unit `rad` is an angle, shank_length is a length (m, cm, mm, …)",
+        ],
+    );
+    assert_refused(
+        compass_with(
+            "a = { value = 0.5, unit = \"m\"",
+            "a = { value = 0.5, unit = \"rad\"",
+        ),
+        &[
+            "segments[0].length",
+            "\"a + b\"",
+            "`+` between an angle and a length (a in `rad`, b in `m`)",
+        ],
+    );
+    // the kneed preset's own units: a mass in L
+    let text = pdw_walkers::preset_text("kneed").unwrap().replace(
+        "hip_mass = { value = 0.5, unit = \"M\"",
+        "hip_mass = { value = 0.5, unit = \"L\"",
+    );
+    let e = WalkerSpec::from_toml(&text, "k.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("unit `L` is a length, hip_mass is a mass (M, …)"),
+        "{e}"
+    );
+    // a dimensionless parameter where a mass is expected, and a knee mode in kg
+    assert_refused(
+        compass_with(
+            "hip_mass = { value = 10.0, unit = \"kg\"",
+            "hip_mass = { value = 10.0, unit = \"1\"",
+        ),
+        &["unit `1` is dimensionless, hip_mass is a mass (kg, g, …)"],
+    );
+    assert_refused(
+        seed5_with(
+            "free_swing_knee = { value = 0.0, unit = \"1\"",
+            "free_swing_knee = { value = 0.0, unit = \"kg\"",
+        ),
+        &["unit `kg` is a mass, free_swing_knee is dimensionless (1)"],
+    );
+}
+
+#[test]
+fn right_units_of_each_quantity_convert_in_the_roles_they_fill() {
+    let preset = pdw_walkers::presets::compass(&[]).unwrap();
+    for (old, new) in [
+        (
+            "hip_mass = { value = 10.0, unit = \"kg\"",
+            "hip_mass = { value = 10000, unit = \"g\"",
+        ),
+        (
+            "b = { value = 0.5, unit = \"m\"",
+            "b = { value = 500, unit = \"mm\"",
+        ),
+        (
+            "max_stride_time = { value = 5.0, unit = \"s\"",
+            "max_stride_time = { value = 5000, unit = \"ms\"",
+        ),
+        (
+            "value = 0.05235987755982988, unit = \"rad\"",
+            "value = 3, unit = \"deg\"",
+        ),
+    ] {
+        assert_same_walker(&compass_with(old, new).unwrap(), &preset, new);
+    }
+    // an inertia in g cm^2, a plain number as an angle (radians), a COM as a fraction of a length
+    let text = pdw_walkers::preset_text("compass")
+        .unwrap()
+        .replace("inertia = 0.0 ", "inertia = \"i\" ")
+        .replace(
+            "[parameters]\n",
+            "[parameters]\ni = { value = 5e6, unit = \"g cm^2\" }\nf = { value = 0.5 }\n",
+        )
+        .replace("com = \"a\" ", "com = \"f * (a + b)\" ")
+        .replace("unit = \"rad\"", "unit = \"1\"");
+    for part in [
+        "inertia = \"i\"",
+        "com = \"f * (a + b)\"",
+        "slope = { value = 0.05235987755982988, unit = \"1\"",
+    ] {
+        assert!(text.contains(part), "{part}");
+    }
+    let spec = WalkerSpec::from_toml(&text, "my.toml").unwrap();
+    let t = spec.param_table();
+    assert_eq!(t.get("i"), Some(0.5));
+    ChainWalker::from_spec(spec).unwrap();
+}
+
+#[test]
+fn torques_and_impulses_have_their_own_quantities() {
+    use pdw_walkers::units::{convert, dimension_of, Dimension, UnitSystem};
+    for u in ["N m", "N*m", "N·m", "kg m^2/s^2"] {
+        assert_eq!(dimension_of(u), Ok(Dimension::TORQUE), "{u}");
+    }
+    for u in ["N m s", "N*m*s", "kg m^2/s"] {
+        assert_eq!(dimension_of(u), Ok(Dimension::IMPULSE), "{u}");
+    }
+    let si = UnitSystem::Si;
+    assert_eq!(
+        convert(2.0, "N m", "latch_torque", Dimension::TORQUE, si),
+        Ok(2.0)
+    );
+    let e = convert(2.0, "N m s", "latch_torque", Dimension::TORQUE, si).unwrap_err();
+    assert_eq!(
+        e,
+        "unit `N m s` is an angular impulse, latch_torque is a torque (N m, N*m, …)"
+    );
+    assert!(convert(2.0, "N", "latch_impulse", Dimension::IMPULSE, si)
+        .unwrap_err()
+        .contains("is a force, latch_impulse is an angular impulse (N m s"));
+}

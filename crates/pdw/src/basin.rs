@@ -421,9 +421,7 @@ impl BasinPlan {
         let Some(fp) = self.gait() else {
             return Ok(None);
         };
-        let r = crate::model::stride_residual(m, self.opts.integrator, &fp.section)?;
-        let close_enough = r <= 0.1 * self.opts.tol_gait;
-        Ok((!close_enough).then_some(r))
+        crate::integrator::gait_drift(m, self.opts.integrator, &fp.section, self.opts.tol_gait)
     }
 }
 

@@ -42,27 +42,20 @@ pub fn parse_slope(s: &str) -> Result<f64, InputError> {
 /// [`parse_slope`] with the messages naming `flag` (e.g. `--set slope`, `--sweep slope`).
 pub fn parse_slope_for(s: &str, flag: &str) -> Result<f64, InputError> {
     const FORMS: &str = "give radians (0.05, 0.05rad) or degrees (3deg, 3°)";
-    let t = s.trim();
-    // the unit: the letters (or °) the value ends with
-    let number_end = t
-        .char_indices()
-        .rev()
-        .take_while(|(_, c)| c.is_alphabetic() || *c == '°')
-        .last()
-        .map_or(t.len(), |(i, _)| i);
-    let (number, unit) = t.split_at(number_end);
-    let v = match number.trim().parse::<f64>() {
+    let (number, unit) = pdw_walkers::units::split_quantity(s);
+    let v = match number.parse::<f64>() {
         Ok(v) if v.is_finite() => v,
         _ => return err(format!("{flag}: '{s}' is not a number; {FORMS}")),
     };
     let v = if unit.is_empty() {
         v
     } else {
-        match pdw_walkers::units::to_base(v, unit, pdw_walkers::units::UnitSystem::Si) {
-            Ok((rad, base)) if base == "rad" => rad,
-            _ => {
+        use pdw_walkers::units::{convert, Dimension, UnitSystem};
+        match convert(v, unit, flag, Dimension::ANGLE, UnitSystem::Si) {
+            Ok(rad) => rad,
+            Err(why) => {
                 return err(format!(
-                    "{flag}: '{s}' has the unit `{unit}`, not an angle; {FORMS}"
+                    "{flag}: '{s}' has the unit `{unit}`, not an angle ({why}); {FORMS}"
                 ))
             }
         }
@@ -75,8 +68,22 @@ pub fn parse_slope_for(s: &str, flag: &str) -> Result<f64, InputError> {
     Ok(v)
 }
 
-/// `NAME=VALUE` (for `--set`).
+/// `NAME=VALUE` (for `--set`), the value a plain number or a slope in any angle unit.
 pub fn parse_assignment(s: &str) -> Result<(String, f64), InputError> {
+    let (name, v, unit) = parse_assignment_with_unit(s)?;
+    match unit {
+        None => Ok((name, v)),
+        Some(u) => err(format!(
+            "--set {name}: '{s}' has a unit (`{u}`), which only the model can convert"
+        )),
+    }
+}
+
+/// `NAME=VALUE[unit]` (for `--set`): the name, the number and its unit when one is written
+/// (`hip_mass=5kg`, `a=50 cm`). A slope is converted and checked here ([`parse_slope_for`]);
+/// any other unit is converted by the model, which knows its parameter's quantity
+/// ([`pdw_walkers::ModelInfo::value_in_unit`]).
+pub fn parse_assignment_with_unit(s: &str) -> Result<(String, f64, Option<String>), InputError> {
     let Some((name, value)) = s.split_once('=') else {
         return err(format!("--set: '{s}' is not of the form NAME=VALUE"));
     };
@@ -84,12 +91,23 @@ pub fn parse_assignment(s: &str) -> Result<(String, f64), InputError> {
     if name.is_empty() {
         return err(format!("--set: '{s}' has an empty parameter name"));
     }
-    let v = if name == "slope" {
-        parse_slope_for(value, "--set slope")?
-    } else {
-        parse_f64(value, &format!("--set {name}"))?
-    };
-    Ok((name.to_string(), v))
+    if name == "slope" {
+        return Ok((
+            name.to_string(),
+            parse_slope_for(value, "--set slope")?,
+            None,
+        ));
+    }
+    let (number, unit) = pdw_walkers::units::split_quantity(value);
+    if unit.is_empty() {
+        return Ok((
+            name.to_string(),
+            parse_f64(value, &format!("--set {name}"))?,
+            None,
+        ));
+    }
+    let v = parse_f64(number, &format!("--set {name}"))?;
+    Ok((name.to_string(), v, Some(unit.to_string())))
 }
 
 /// An inclusive coordinate range `NAME=A:B` with A < B (for `--x`, `--y`).

@@ -2,6 +2,7 @@
 //! controller, cold restarts), and the integrator in a file's and a line's form.
 
 use crate::input::InputError;
+use crate::model::BuiltModel;
 use pdw_hybrid::{Method, Options};
 
 /// The integrator options as given (every field optional: the run's default fills the rest).
@@ -154,4 +155,81 @@ pub fn integrator_text(o: &Options) -> String {
         Method::Dopri5 => format!("dopri5 rtol={:e} atol={:e}{warm}", o.rtol, o.atol),
         Method::Dop853 => format!("dop853 rtol={:e} atol={:e}{warm}", o.rtol, o.atol),
     }
+}
+
+/// The gait tolerance the integrator check measures a stride against: the basin's cells'
+/// ([`pdw_limit::BasinOptions`]'s `tol_gait`), the loosest the engine uses to call two states
+/// the same gait.
+pub const CHECK_GAIT_TOL: f64 = 1e-6;
+
+/// Integrators at least this accurate need no check: every command's default is (the basin's,
+/// the loosest, is DOP853 at 1e-9), and the tests show each resolves every preset's gait.
+const SOUND_TOL: f64 = 1e-9;
+
+/// How far one stride of `integrator` carries the gait at `section` (a fixed point of the
+/// accurate stride map), when more than a tenth of `gait_tol`: the run's integrator cannot
+/// resolve a stride, so what it reports (a basin's labels, an MFPT, a fall) is the integrator's
+/// error, not the walker's. A stride that does not come back (a fall, a failed integration)
+/// counts as infinitely far. `None`: the integrator is accurate enough.
+pub fn gait_drift(
+    m: &BuiltModel,
+    integrator: Options,
+    section: &[f64],
+    gait_tol: f64,
+) -> Result<Option<f64>, pdw_limit::LimitError> {
+    let r = crate::model::stride_residual(m, integrator, section)?;
+    Ok((r.is_nan() || r > 0.1 * gait_tol).then_some(r))
+}
+
+/// The warning every front end gives for a [`gait_drift`] of `r`.
+pub fn drift_warning(integrator: &Options, r: f64, gait_tol: f64) -> String {
+    let how_far = if r.is_finite() {
+        format!("is a fixed point only to {r:.2e}")
+    } else {
+        "does not come back after one stride (it falls or the integration fails)".to_string()
+    };
+    format!(
+        "with {} the gait {how_far} (the gait tolerance is {gait_tol:e}): this integrator \
+         cannot resolve a stride, and what the run reports (falls, strides, labels) is its \
+         error, not the walker's; use a tighter --rtol/--atol or a smaller --rk4-step",
+        integrator_text(integrator)
+    )
+}
+
+/// The integrator check of a run that has no gait at hand: the model's stable gait (else its
+/// first) found on the accurate stride map from the model's own guesses, then [`gait_drift`]
+/// at [`CHECK_GAIT_TOL`] with the warning. Integrators at least as accurate as every
+/// command's default are not checked (no gait search); a model without a gait at its values
+/// is not checked either (there is nothing to measure the stride against).
+pub fn integrator_warning(
+    m: &BuiltModel,
+    integrator: &Options,
+) -> Result<Option<String>, pdw_limit::LimitError> {
+    let sound = !matches!(integrator.method, Method::Rk4 { .. })
+        && integrator.rtol <= SOUND_TOL
+        && integrator.atol <= SOUND_TOL;
+    if sound {
+        return Ok(None);
+    }
+    let guesses = crate::gaits::model_guesses(m.walker.as_ref());
+    let Ok((found, _)) = crate::gaits::search(m, &guesses, crate::mfpt::GAIT_TOL) else {
+        return Ok(None);
+    };
+    let Some(gait) = crate::gaits::selected(&found) else {
+        return Ok(None);
+    };
+    Ok(
+        gait_drift(m, *integrator, &gait.fp.section, CHECK_GAIT_TOL)?
+            .map(|r| drift_warning(integrator, r, CHECK_GAIT_TOL)),
+    )
+}
+
+/// Gives the [`integrator_warning`] of a run through the library's warnings (the CLI's stderr
+/// as `warning: …`, Python's `warnings.warn`), once per run. Every command that integrates
+/// calls it after building its model and integrator.
+pub fn check_integrator(m: &BuiltModel, integrator: &Options) -> Result<(), pdw_limit::LimitError> {
+    if let Some(msg) = integrator_warning(m, integrator)? {
+        crate::model::warn_integrator(&msg);
+    }
+    Ok(())
 }

@@ -43,6 +43,16 @@ pub fn set_warning_sink(sink: fn(&str)) -> bool {
 /// Python calls this after each call has given its warnings).
 pub fn rearm_warnings() {
     STEEP_SLOPE_WARNED.store(false, Ordering::Relaxed);
+    INTEGRATOR_WARNED.store(false, Ordering::Relaxed);
+}
+
+/// Whether the integrator warning ([`crate::integrator::check_integrator`]) was given in this
+/// run.
+static INTEGRATOR_WARNED: AtomicBool = AtomicBool::new(false);
+
+/// Gives the integrator warning, once per run.
+pub(crate) fn warn_integrator(msg: &str) {
+    warn_once(&INTEGRATOR_WARNED, msg);
 }
 
 /// Gives `msg` unless `given` says it was given in this run.
@@ -121,8 +131,24 @@ impl BuiltModel {
 /// silently ignored.
 pub fn overrides(opts: &ModelChoice) -> Result<Vec<(String, f64)>, InputError> {
     let mut ov: Vec<(String, f64)> = Vec::new();
+    // the model's parameters, read once and only when a value carries a unit
+    let mut info: Option<pdw_walkers::ModelInfo> = None;
     for s in &opts.set {
-        let (name, v) = input::parse_assignment(s)?;
+        let (name, v, unit) = input::parse_assignment_with_unit(s)?;
+        let v = match unit {
+            None => v,
+            Some(u) => {
+                if info.is_none() {
+                    info = Some(
+                        pdw_walkers::model_info(&opts.model)
+                            .map_err(|e| InputError(e.to_string()))?,
+                    );
+                }
+                let m = info.as_ref().expect("read above");
+                m.value_in_unit(&name, v, &u)
+                    .map_err(|why| InputError(format!("--set {s}: {why}")))?
+            }
+        };
         if let Some((_, prev)) = ov.iter().find(|(n, _)| *n == name) {
             return Err(InputError(format!(
                 "--set {name}: given twice ({prev} and {v}); give each parameter once"

@@ -7,6 +7,7 @@ mod design;
 mod disturb;
 mod gsn;
 mod input;
+mod integrator;
 mod mfpt;
 mod mfpt_closed_form;
 mod mfpt_lockstep;
