@@ -13,6 +13,7 @@ mod design;
 mod explore;
 mod follow;
 mod hostile;
+mod integrator_check;
 mod lock;
 mod mfpt;
 mod mfpt_over;

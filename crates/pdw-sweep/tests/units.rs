@@ -88,3 +88,89 @@ fn a_spec_files_slope_in_degrees_is_converted_and_checked() {
         stderr(&o)
     );
 }
+
+/// `--set NAME=VALUE[unit]` converts a unit of the parameter's quantity (the preset's gait bit
+/// for bit) and refuses one of another quantity, naming both, with exit 2.
+#[test]
+fn set_with_a_unit_converts_it_or_refuses_another_quantity() {
+    let base = [
+        "fixedpoint",
+        "--model",
+        "compass",
+        "--gait",
+        "stable",
+        "--json",
+    ];
+    let preset = json(&run(&base));
+    for set in [
+        "hip_mass=10000g",
+        "a=50cm",
+        "b=500 mm",
+        "max_stride_time=5000ms",
+    ] {
+        let o = run(&[&base[..], &["--set", set]].concat());
+        assert!(o.status.success(), "{set}: {}", stderr(&o));
+        assert_eq!(json(&o)["fixed_points"], preset["fixed_points"], "{set}");
+    }
+    for (set, part) in [
+        (
+            "hip_mass=572.96deg",
+            "unit `deg` is an angle, hip_mass is a mass (kg, g, …)",
+        ),
+        ("leg_mass=49N", "unit `N` is a force, leg_mass is a mass"),
+        (
+            "max_stride_time=5m",
+            "unit `m` is a length, max_stride_time is a time (s, ms, …)",
+        ),
+        (
+            "a=0.5rad",
+            "unit `rad` is an angle, a is a length (m, cm, mm, …)",
+        ),
+        ("a=0.5furlong", "`furlong` is not a unit"),
+        ("slope=0.05m", "`m`, not an angle"),
+    ] {
+        let o = run(&["fixedpoint", "--model", "compass", "--set", set]);
+        assert_eq!(o.status.code(), Some(2), "{set}: {}", stderr(&o));
+        assert!(stderr(&o).contains(part), "{set}: {}", stderr(&o));
+        assert!(stderr(&o).contains(&format!("--set {set}")) || set.starts_with("slope"));
+    }
+    // the simplest walker's own units take plain numbers
+    let o = run(&["fixedpoint", "--set", "max_stride_time=12s"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("plain number"), "{}", stderr(&o));
+    // CLI quantities that are angles: a length refused
+    for args in [
+        &["fixedpoint", "--slope", "0.05m"][..],
+        &["mfpt", "--sd", "1mm", "--walkers", "2"][..],
+    ] {
+        let o = run(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("is a length") && stderr(&o).contains("is an angle"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+    }
+}
+
+/// A spec file whose hip mass is in degrees is refused at the command line (exit 2).
+#[test]
+fn a_spec_files_mass_in_degrees_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let preset = String::from_utf8(run(&["models", "--spec", "compass"]).stdout).unwrap();
+    let old = "hip_mass = { value = 10.0, unit = \"kg\"";
+    assert!(preset.contains(old), "{preset}");
+    let bad = dir.path().join("deg.toml");
+    std::fs::write(
+        &bad,
+        preset.replace(old, "hip_mass = { value = 572.96, unit = \"deg\""),
+    )
+    .unwrap();
+    let o = run(&["fixedpoint", "--model", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("unit `deg` is an angle, hip_mass is a mass (kg, g, …)"),
+        "{}",
+        stderr(&o)
+    );
+}

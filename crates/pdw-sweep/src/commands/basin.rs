@@ -441,13 +441,8 @@ fn discover(
 /// ([`BasinPlan::gait_drift`]): cells would come out `other` or `timeout`.
 fn warn_gait_drift(p: &Parsed, plan: &BasinPlan) -> anyhow::Result<()> {
     if let Some(r) = plan.gait_drift(&p.m)? {
-        eprintln!(
-            "warning: with {} the gait is a fixed point only to {r:.2e} (the cells' gait \
-             tolerance is {:e}): cells may come out `other` or `timeout`; use a tighter \
-             --rtol/--atol or a smaller --rk4-step",
-            super::integrator_text(&plan.opts.integrator),
-            plan.opts.tol_gait
-        );
+        let w = pdw::integrator::drift_warning(&plan.opts.integrator, r, plan.opts.tol_gait);
+        eprintln!("warning: {w} (cells may come out `other` or `timeout`)");
     }
     Ok(())
 }

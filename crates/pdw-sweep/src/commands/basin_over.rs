@@ -58,6 +58,9 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let p = parse(a)?;
     let _claim = claim_outputs(a, &p)?;
     let plan = plan(a, &p)?;
+    let mut at_first = p.params.clone();
+    at_first.push((p.over.name.clone(), plan.values[0]));
+    pdw::integrator::check_integrator(&pdw::build(&a.model.model, &at_first)?, &p.integrator)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads)
         .build()?;

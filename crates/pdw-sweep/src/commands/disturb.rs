@@ -25,6 +25,7 @@ pub fn run(a: &DisturbArgs) -> anyhow::Result<ExitCode> {
     let integrator = super::integrator(&a.integrator, pdw::mfpt::default_integrator())?;
     let m = build_model(&a.model)?;
     disturb::check(&m, kind)?;
+    pdw::integrator::check_integrator(&m, &integrator)?;
     if a.steps == 0 {
         return Err(InputError("--steps: 0 must be an integer >= 1".into()).into());
     }

@@ -138,6 +138,7 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
         .into());
     }
     let m = build_model(&a.model)?;
+    pdw::integrator::check_integrator(&m, &integrator)?;
     if let Some(n) = a.search {
         return run_search(a, &m, n, &integrator);
     }

@@ -192,6 +192,8 @@ fn prepare(
     plan.integrator = super::integrator(&a.integrator, Options::dop853(1e-13))?;
     let user = a.guess.as_deref().map(args::parse_guess).transpose()?;
     let m_a = pdw::follow::start_model(&mut plan, user, "--guess")?;
+    pdw::integrator::check_integrator(&m_a, &plan.integrator)
+        .map_err(|e| InputError(e.to_string()))?;
     Ok(Planned {
         plan,
         m_own,

@@ -32,6 +32,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     let choice = model_choice(a, kind)?;
     let m = build_model(&choice)?;
     mfpt::check_model_for(&m, kind)?;
+    pdw::integrator::check_integrator(&m, &integrator)?;
     let stride_map = StrideMap::parse(&a.stride_map, "--stride-map")?;
     stride_map.closed_form(&m, "--stride-map")?;
     let plan = MfptPlan {

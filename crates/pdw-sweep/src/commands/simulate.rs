@@ -53,6 +53,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<ExitCode> {
     simulate::check_request(a.steps, asked.every(), &FLAGS)?;
     let integrator = super::integrator(&a.integrator, simulate::default_integrator())?;
     let m = build_model(&a.model)?;
+    pdw::integrator::check_integrator(&m, &integrator)?;
     // Plan: where the walk starts and what it records.
     let walk = match simulate::start(&m, &start_of(a)?, &FLAGS) {
         Ok(walk) => walk,

@@ -322,6 +322,9 @@ fn plan(
         || o.controller.is_some())
     .then(|| super::integrator(o, pdw_limit::gaits::default_integrator(a.tol)))
     .transpose()?;
+    if let Some(i) = &plan.integrator {
+        pdw::integrator::check_integrator(&m0, i).map_err(|e| InputError(e.to_string()))?;
+    }
     Ok((plan, m0, user))
 }
 
