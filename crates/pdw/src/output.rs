@@ -1,10 +1,12 @@
 //! The files a command writes (HDF5, PNG, GIF, CSV), claimed before anything is computed.
 //!
-//! Every writer of every subcommand goes through [`claim`], which, in this order:
+//! Every writer of every command goes through [`claim`] (the CLI's subcommands, and the
+//! explorer's save, which calls it with its one output), which, in this order:
 //! 1. identifies each path by (device, inode) after following links, and a path that does not
 //!    exist yet by its resolved directory and file name;
 //! 2. refuses an output that is the same file as another output or as an input (the `--model`
-//!    spec file, the shards of `merge`), with or without `--force`;
+//!    spec file, the shards of `merge`, the `--dist` file of `mfpt`), with or without
+//!    `--force`, and an input that is not a regular file ([`pdw_store::check_input`]);
 //! 3. refuses an existing output without `--force` (unless the command continues it, e.g.
 //!    `basin --resume`), and anything that is not a regular file;
 //! 4. refuses an extension that does not name the format written (`--out a.csv` on a sweep,
@@ -13,12 +15,25 @@
 //! 6. takes the exclusive advisory lock (`flock`) that pdw-store's writers take on their files:
 //!    an existing output is locked as it is, a new one through an empty placeholder created in
 //!    its place. A second writer of the same path, whichever command it runs, is refused
-//!    before it truncates anything, with the path and the holder of the lock.
+//!    before it truncates anything, with the path and the holder of the lock;
+//! 7. removes the temporary files (`.NAME.partial-PID…`) a killed writer of the same output
+//!    left behind ([`pdw_store::remove_stale_partials`]).
+//!
+//! A command lists every file it writes, derived pictures included, in one place that both the
+//! claim and the writer read (e.g. [`crate::mfpt::output_files`]), so a picture cannot be written
+//! without having been claimed.
+//!
+//! **Placeholders and kills.** A new output is locked through an empty placeholder at its path.
+//! A run killed by SIGKILL leaves that empty file behind. An output the command continues
+//! (`may_exist`, e.g. `basin --resume`) treats an existing *empty* file as such a placeholder,
+//! not as a file it would replace: a requeued job resumes after any kill, and its picture is
+//! drawn as if the file were new. Every writer renames finished, non-empty files into place,
+//! so an empty file at an output path is never a result.
 //!
 //! Messages name the user's path and the operating system's reason. The claim is held for the
 //! whole command; dropped, it removes the placeholders nothing was written into.
 
-use crate::args::InputError;
+use crate::input::InputError;
 use std::ffi::OsString;
 use std::fs::File;
 use std::os::unix::fs::MetadataExt;
@@ -68,6 +83,27 @@ pub struct Output<'a> {
     /// An existing file is expected here (the command continues it: `--resume`, a design
     /// search), not refused without `--force`.
     pub may_exist: bool,
+}
+
+/// A file a plan will write, owned: a plan lists every output it writes, derived pictures
+/// included, and the claim and the writer both read that one list ([`Planned::output`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Planned {
+    pub flag: &'static str,
+    pub path: PathBuf,
+    pub format: Format,
+}
+
+impl Planned {
+    /// The output to [`claim`] (never continued: `may_exist` false).
+    pub fn output(&self) -> Output<'_> {
+        Output {
+            flag: self.flag,
+            path: &self.path,
+            format: self.format,
+            may_exist: false,
+        }
+    }
 }
 
 /// A file the command reads.
@@ -304,12 +340,23 @@ fn holder(m: &std::fs::Metadata) -> Option<String> {
 }
 
 /// Checks and locks every output of a command before anything is computed (see the module
-/// docs). `inputs` that do not exist are left to their reader to report.
+/// docs), and checks every input that exists ([`pdw_store::check_input`]: a regular file).
+/// `inputs` that do not exist are left to their reader to report. The one claim of every
+/// writer: the CLI's commands and the explorer's save call it with the files they will write
+/// and the files they read; the returned [`Claim`] is held until the files are written.
 pub fn claim(
     outputs: &[Output<'_>],
     inputs: &[Input<'_>],
     force: bool,
 ) -> Result<Claim, InputError> {
+    // 0. every input that exists is a regular file: a FIFO would block its reader, a device
+    // such as /dev/zero never end (missing inputs are left to their reader to report)
+    for i in inputs {
+        if std::fs::metadata(i.path).is_ok() {
+            pdw_store::check_input(i.path, None)
+                .map_err(|e| InputError(format!("{}: {e}", i.flag)))?;
+        }
+    }
     // 1-2. identities: no output is another output or an input
     let mut ids: Vec<(Identity, bool)> = Vec::with_capacity(outputs.len());
     for o in outputs {
@@ -346,14 +393,24 @@ pub fn claim(
         }
         ids.push(id);
     }
+    // A file being written is reported as such, whatever else holds (in the outputs' order). An
+    // empty file where a continued output is expected is a placeholder left by a killed run
+    // (see the module docs): claimed as a new output.
+    let mut leftover = vec![false; outputs.len()];
+    for (k, (o, (_, exists))) in outputs.iter().zip(ids.iter_mut()).enumerate() {
+        if !*exists {
+            continue;
+        }
+        if let Ok(f) = File::open(o.path) {
+            lock(&f, o.path, o.flag)?;
+        }
+        if o.may_exist && std::fs::metadata(o.path).is_ok_and(|m| m.len() == 0) {
+            *exists = false;
+            leftover[k] = true;
+        }
+    }
     // 3-4. overwriting and formats
     for (o, (_, exists)) in outputs.iter().zip(&ids) {
-        if *exists {
-            // a file being written is reported as such, whatever else holds
-            if let Ok(f) = File::open(o.path) {
-                lock(&f, o.path, o.flag)?;
-            }
-        }
         if *exists && !force && !o.may_exist {
             let empty = std::fs::metadata(o.path).is_ok_and(|m| m.len() == 0);
             return Err(InputError(format!(
@@ -384,10 +441,14 @@ pub fn claim(
     }
     // 5-6. writable directories, locks
     let mut claim = Claim { held: Vec::new() };
-    for (o, (_, exists)) in outputs.iter().zip(&ids) {
+    for ((o, (_, exists)), leftover) in outputs.iter().zip(&ids).zip(leftover) {
         probe(o)?;
         let (file, placeholder) = if *exists {
             (open_for_lock(o.path, o.flag)?, None)
+        } else if leftover {
+            let f = open_for_lock(o.path, o.flag)?;
+            let ino = f.metadata().map(|m| m.ino()).ok();
+            (f, ino)
         } else {
             let f = std::fs::OpenOptions::new()
                 .read(true)
@@ -417,6 +478,7 @@ pub fn claim(
         if let Some(h) = claim.held.last_mut() {
             h.file = Some(file);
         }
+        pdw_store::remove_stale_partials(o.path);
     }
     Ok(claim)
 }
@@ -443,5 +505,18 @@ fn probe(o: &Output<'_>) -> Result<(), InputError> {
             dir.display(),
             kind_text(&e)
         ))),
+    }
+}
+
+/// A value for a message or a table: as Rust prints it (the shortest text that reads back to
+/// the same double) where that is short, `1.234568e308` style (seven significant digits) where
+/// the magnitude is extreme (beyond 10^±6), which would otherwise print as a decimal of up to
+/// 300 digits or a run of zeros.
+pub fn number(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-6..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:.6e}")
     }
 }
