@@ -364,9 +364,7 @@ fn check_z_matches(found: &Option<ZAxis>, expected: &Option<ZAxis>, path: &Path)
         return Ok(());
     }
     let (field, found, expected) = match (found, expected) {
-        (Some(f), Some(e)) if f.name == e.name => {
-            axis_difference(&format!("z grid ({})", f.name), &f.values, &e.values)
-        }
+        (Some(f), Some(e)) if f.name == e.name => axis_difference("z grid", &f.values, &e.values),
         _ => ("z grid".into(), show(found), show(expected)),
     };
     Err(StoreError::Mismatch {
@@ -380,8 +378,8 @@ fn check_z_matches(found: &Option<ZAxis>, expected: &Option<ZAxis>, path: &Path)
 /// How two axes that differ bit for bit differ, as `(field, found, expected)` of a
 /// [`StoreError::Mismatch`]: their sizes and ends where those differ, else the first point that
 /// differs, by index, with both values in full (the shortest text that reads back to each
-/// double): "x grid point 17 of 41 (-0.2498..-0.1498) is -0.19980000000000001 in the file but
-/// -0.1998 here".
+/// double): "y grid is point 17 = -0.19980000000000003 in the file but point 17 = -0.1998 here
+/// (of 40 points -0.25..-0.15)".
 fn axis_difference(field: &str, found: &[f64], expected: &[f64]) -> (String, String, String) {
     let desc = |v: &[f64]| {
         format!(
@@ -394,14 +392,9 @@ fn axis_difference(field: &str, found: &[f64], expected: &[f64]) -> (String, Str
     let differs = |i: usize| found[i].to_bits() != expected[i].to_bits();
     match (0..found.len().min(expected.len())).find(|&i| differs(i)) {
         Some(i) if found.len() == expected.len() => (
-            format!(
-                "{field} point {i} of {} ({}..{})",
-                expected.len(),
-                expected[0],
-                expected[expected.len() - 1]
-            ),
-            format!("{:?}", found[i]),
-            format!("{:?}", expected[i]),
+            field.to_string(),
+            format!("point {i} = {:?}", found[i]),
+            format!("point {i} = {:?} (of {})", expected[i], desc(expected)),
         ),
         _ => (field.to_string(), desc(found), desc(expected)),
     }
