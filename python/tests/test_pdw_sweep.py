@@ -692,7 +692,7 @@ def test_mfpt_uniform_and_file_distributions():
         pdw.mfpt("rimless", sd="1deg", mesh=10)
     with pytest.raises(ValueError, match="mesh: 1 must be at least 2"):
         pdw.mfpt("rimless", sd="1deg", chain=True, mesh=1)
-    with pytest.raises(ValueError, match="nodes: 41 must be between 1 and 40"):
+    with pytest.raises(ValueError, match="nodes: 41 must be between 2 and 40"):
         pdw.mfpt("rimless", sd="1deg", chain=True, nodes=41)
     with pytest.raises(ValueError, match="chain: runs at one sd"):
         pdw.mfpt("rimless", sd="0.4deg:0.6deg:3", chain=True)

@@ -732,8 +732,9 @@ pub struct MfptEstimate {
     pub restricted_mean: f64,
     /// Its standard error, the sample standard deviation of `min(T, K)` over `√N`.
     pub restricted_stderr: f64,
-    /// `survival[k]`: the fraction of walkers that completed at least `k` heel strikes
-    /// (k = 0 … K).
+    /// `survival[k]`: the fraction of walkers that completed at least `k` heel strikes, for
+    /// k = 0 … the most heel strikes any walker completed (at most K); 0 beyond. Sized by what
+    /// the walkers did, not by the step limit, which may be far larger than any walk.
     pub survival: Vec<f64>,
     /// Falls by kind (the outcome's name), sorted by name.
     pub failures: Vec<(String, usize)>,
@@ -756,14 +757,21 @@ pub fn estimate(fates: &[Fate], max_steps: usize) -> MfptEstimate {
     } else {
         (sf / ff, (sf * (sf + ff)).sqrt() / ff.powf(1.5))
     };
-    let mut alive = vec![0usize; max_steps + 2];
+    // The curve ends at the longest walk, not at the step limit: a limit of 10^12 steps that
+    // no walker comes near costs nothing (survival is 0 beyond the longest walk).
+    let longest = fates
+        .iter()
+        .map(|f| f.steps.min(max_steps))
+        .max()
+        .unwrap_or(0);
+    let mut alive = vec![0usize; longest + 2];
     for f in fates {
         alive[f.steps.min(max_steps) + 1] += 1;
     }
     // survival[k] = #(T ≥ k) / N: counts of T = j summed from the top
-    let mut survival = vec![0.0; max_steps + 1];
+    let mut survival = vec![0.0; longest + 1];
     let mut acc = 0usize;
-    for k in (0..=max_steps).rev() {
+    for k in (0..=longest).rev() {
         acc += alive[k + 1];
         survival[k] = acc as f64 / n.max(1) as f64;
     }

@@ -149,6 +149,89 @@ pub(crate) fn check_regular(path: &Path) -> Result<()> {
     }
 }
 
+/// The largest text input read whole (a distribution file of `mfpt --dist file:`): 64 MiB,
+/// millions of values; a larger file is refused before it is read.
+pub const MAX_TEXT_INPUT: u64 = 64 << 20;
+
+/// What kind of thing a path that is not a regular file is, in words.
+fn special_kind(m: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = m.file_type();
+    if t.is_dir() {
+        "a directory"
+    } else if t.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Checks an input path before anything opens it for reading, and returns its size in bytes.
+///
+/// An input must be a regular file (links followed): opening a FIFO blocks until someone
+/// writes to it, and a device such as `/dev/zero` never ends, so either would hang or exhaust
+/// memory in the reader. With `max_bytes`, a larger file is refused too (the limit of a text
+/// input read whole). Only the path's metadata is read, so the check itself never blocks.
+/// Every reader of a file named by a user goes through it: this crate's HDF5 readers (basin,
+/// sweep, trajectory, MFPT and design files, `merge`'s shards), the text inputs
+/// ([`read_text_input`]) and the explorer's file list.
+pub fn check_input(path: &Path, max_bytes: Option<u64>) -> Result<u64> {
+    let refuse = |msg: String| StoreError::Io {
+        path: path.to_path_buf(),
+        action: "read the file",
+        source: std::io::Error::other(msg),
+    };
+    let m = std::fs::metadata(path).map_err(|source| StoreError::Io {
+        path: path.to_path_buf(),
+        action: "read the file",
+        source,
+    })?;
+    if !m.is_file() {
+        return Err(refuse(format!(
+            "it is {}; an input must be a regular file",
+            special_kind(&m)
+        )));
+    }
+    match max_bytes {
+        Some(cap) if m.len() > cap => Err(refuse(format!(
+            "it holds {} ({} bytes), more than the {} a text input may hold",
+            human_bytes(m.len()),
+            m.len(),
+            human_bytes(cap)
+        ))),
+        _ => Ok(m.len()),
+    }
+}
+
+/// A text input read whole, after [`check_input`] with the cap `max_bytes`: at most that many
+/// bytes are read even if the file grows meanwhile (then it is refused), and it must be UTF-8.
+pub fn read_text_input(path: &Path, max_bytes: u64) -> Result<String> {
+    use std::io::Read;
+    check_input(path, Some(max_bytes))?;
+    let io = |source| StoreError::Io {
+        path: path.to_path_buf(),
+        action: "read the file",
+        source,
+    };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(max_bytes + 1).read_to_end(&mut bytes))
+        .map_err(io)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(io(std::io::Error::other(format!(
+            "it grew beyond the {} a text input may hold while being read",
+            human_bytes(max_bytes)
+        ))));
+    }
+    String::from_utf8(bytes).map_err(|_| io(std::io::Error::other("it is not UTF-8 text")))
+}
+
 /// Free bytes for an unprivileged writer on the file system holding `path` (its directory if
 /// the file does not exist yet); `None` if it cannot be queried.
 pub(crate) fn free_bytes(path: &Path) -> Option<u64> {
@@ -168,6 +251,24 @@ pub(crate) fn free_bytes(path: &Path) -> Option<u64> {
     (rc == 0).then(|| (st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
 }
 
+/// This process's file-size limit (`RLIMIT_FSIZE`, `ulimit -f`) and the current size of `path`
+/// (0 if it does not exist), or `None` without a limit. A write past the limit fails with EFBIG
+/// (SIGXFSZ is ignored by the CLI), which HDF5 survives no better than a full disk; checked
+/// with the free space before each write ([`ensure_space`]).
+fn size_limit(path: &Path) -> Option<(u64, u64)> {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit with a valid resource and a properly sized out-parameter.
+    let rc = unsafe { libc::getrlimit(libc::RLIMIT_FSIZE, &mut r) };
+    if rc != 0 || r.rlim_cur == libc::RLIM_INFINITY {
+        return None;
+    }
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    Some((r.rlim_cur, len))
+}
+
 /// Head room kept free beyond the data of each write: HDF5 metadata (object headers, chunk
 /// index, attributes) written by the flush that follows.
 pub(crate) const SPACE_MARGIN: u64 = 256 << 10;
@@ -181,6 +282,22 @@ pub(crate) const SPACE_MARGIN: u64 = 256 << 10;
 /// someone else between this check and the write can still reach HDF5's failure path; the
 /// writer then leaves the HDF5 handles unclosed (see [`crate::basin::BasinWriter`]).
 pub(crate) fn ensure_space(path: &Path, bytes: u64) -> Result<()> {
+    if let Some((limit, len)) = size_limit(path) {
+        let need = bytes.saturating_add(SPACE_MARGIN);
+        if limit.saturating_sub(len) < need {
+            return Err(StoreError::Io {
+                path: path.to_path_buf(),
+                action: "write",
+                source: std::io::Error::other(format!(
+                    "File too large: the file-size limit (ulimit -f) is {}, the file holds {}, \
+                     about {} more needed",
+                    human_bytes(limit),
+                    human_bytes(len),
+                    human_bytes(need)
+                )),
+            });
+        }
+    }
     match free_bytes(path) {
         Some(free) if free < bytes.saturating_add(SPACE_MARGIN) => Err(StoreError::Io {
             path: path.to_path_buf(),
@@ -309,6 +426,7 @@ pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
         });
     }
+    check_input(path, None)?;
     check_global_heaps(path)?;
     let mut b = hdf5::File::with_options();
     b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0).file_locking(false));
@@ -320,6 +438,7 @@ pub(crate) fn open_file(path: &Path, rw: bool) -> Result<hdf5::File> {
 /// small annotation and provenance reads and writes, which need no chunk cache.
 pub(crate) fn open_unlocked(path: &Path, rw: bool, action: &'static str) -> Result<hdf5::File> {
     no_close_at_exit();
+    check_input(path, None)?;
     let mut b = hdf5::File::with_options();
     b.with_fapl(|p| p.file_locking(false));
     if rw { b.open_rw(path) } else { b.open(path) }.at(path, action)
@@ -346,6 +465,7 @@ pub(crate) fn lock_existing(path: &Path) -> Result<OutputLock> {
 /// the advisory lock already excludes other writers and would conflict with it).
 pub(crate) fn open_locked(path: &Path, rw: bool) -> Result<hdf5::File> {
     no_close_at_exit();
+    check_input(path, None)?;
     check_global_heaps(path)?;
     let mut b = hdf5::File::with_options();
     b.with_fapl(|p| p.chunk_cache(1021, 32 << 20, 1.0).file_locking(false));
@@ -359,6 +479,42 @@ pub(crate) fn temp_sibling(path: &Path) -> PathBuf {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
     path.with_file_name(format!(".{name}.partial-{}", std::process::id()))
+}
+
+/// Removes the temporary siblings ([`temp_sibling`], `.NAME.partial-PID…`) of `path` that a
+/// process no longer running left behind (killed by SIGKILL, or by a signal it could not
+/// catch, between creating its temporary file and renaming it into place). Called by whoever
+/// holds `path`'s claim: no other live writer of `path` exists then, and a temporary file of a
+/// running process (its PID alive) is left alone all the same. Returns the paths removed.
+pub fn remove_stale_partials(path: &Path) -> Vec<PathBuf> {
+    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return Vec::new();
+    };
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let prefix = format!(".{name}.partial-");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return Vec::new();
+    };
+    let mut removed = Vec::new();
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file.strip_prefix(&prefix) else {
+            continue;
+        };
+        let pid: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+        let Ok(pid) = pid.parse::<u32>() else {
+            continue;
+        };
+        let alive = pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists();
+        let regular = e.file_type().is_ok_and(|t| t.is_file());
+        if !alive && regular && std::fs::remove_file(e.path()).is_ok() {
+            removed.push(e.path());
+        }
+    }
+    removed
 }
 
 /// Renames the finished temporary file onto `path`.

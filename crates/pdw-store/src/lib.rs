@@ -107,6 +107,7 @@ pub use design::{
     DESIGN_FORMAT,
 };
 pub use error::StoreError;
+pub use h5util::{check_input, read_text_input, remove_stale_partials, MAX_TEXT_INPUT};
 pub use mfpt::{
     read_mfpt, read_mfpt_curve, write_mfpt, write_mfpt_curve, MfptCurveData, MfptData,
     MFPT_CURVE_FORMAT, MFPT_FORMAT,

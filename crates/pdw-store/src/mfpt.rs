@@ -16,7 +16,8 @@
 //!                          elapsed_s; with the Markov chain (method "monte carlo + markov
 //!                          chain") also chain_* numbers (chain_mfpt_coarse, chain_mfpt_fine,
 //!                          chain_mesh_coarse, …: see `MfptData::chain`)
-//! /mfpt/survival    f64 [max_steps + 1] fraction of walkers that completed at least k steps
+//! /mfpt/survival    f64 [K + 1] fraction of walkers that completed at least k steps, k = 0 … K,
+//!                   K the longest walk (at most max_steps heel strikes; 0 beyond K)
 //! /mfpt/failures    u64 [F] falls per kind; attr kinds (JSON list of the F kinds' names)
 //! /mfpt/start       f64 [d] the section state the walkers start from; attr names (JSON list)
 //! ```
@@ -64,7 +65,7 @@ pub struct MfptData {
     pub restricted_stderr: f64,
     /// How `mfpt` and `stderr` were estimated, in words.
     pub estimator: String,
-    /// `(max_steps + 1)` survival fractions.
+    /// The survival fractions for k = 0 … K, K the longest walk (at most `max_steps`).
     pub survival: Vec<f64>,
     /// Fall kinds and their counts.
     pub failures: Vec<(String, u64)>,
@@ -80,9 +81,11 @@ impl MfptData {
     /// Checks the counts and the survival curve (from 1, not increasing, in [0, 1]).
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(StoreError::invalid("mfpt", m));
-        if self.survival.len() as u64 != self.max_steps + 1 {
+        // the curve ends at the longest walk (at most max_steps heel strikes)
+        if self.survival.is_empty() || self.survival.len() as u64 > self.max_steps.saturating_add(1)
+        {
             return bad(format!(
-                "survival has {} values for max_steps {}",
+                "survival has {} values for max_steps {} (1 to max_steps + 1 allowed)",
                 self.survival.len(),
                 self.max_steps
             ));

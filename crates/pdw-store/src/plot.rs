@@ -1385,7 +1385,8 @@ where
 
 /// Writes a PNG ([`LINES_PNG_SIZE`]) of named polylines with point markers, optionally on
 /// logarithmic axes (work-precision charts: error vs time). With a log axis, points with a
-/// non-positive coordinate on it are dropped; non-finite points are always dropped.
+/// non-positive coordinate on it are dropped; non-finite points are always dropped. With no
+/// point left the axes are drawn alone and the title ends in "(no finite values to draw)".
 pub fn plot_lines(
     path: impl AsRef<Path>,
     title: &str,
@@ -1413,6 +1414,15 @@ pub fn plot_lines_marked(
     let keep = |p: &(f64, f64)| {
         p.0.is_finite() && p.1.is_finite() && (!log_x || p.0 > 0.0) && (!log_y || p.1 > 0.0)
     };
+    let given_x = || {
+        series
+            .iter()
+            .flat_map(|(_, v)| v.iter())
+            .chain(markers.iter().flat_map(|m| m.points.iter()))
+            .map(|p| p.0)
+            .filter(|x| !log_x || *x > 0.0)
+            .collect::<Vec<f64>>()
+    };
     let series: Vec<(String, Vec<(f64, f64)>)> = series
         .iter()
         .map(|(n, v)| (n.clone(), v.iter().copied().filter(keep).collect()))
@@ -1428,15 +1438,18 @@ pub fn plot_lines_marked(
     let mut placed = series.clone();
     placed.extend(markers.iter().map(|m| (String::new(), m.points.clone())));
     let all = || placed.iter().flat_map(|(_, v)| v.iter().copied());
-    let (xr, yr) = match (range_of(all().map(|p| p.0)), range_of(all().map(|p| p.1))) {
-        (Some(x), Some(y)) => (x, y),
-        _ => {
-            return Err(StoreError::invalid(
-                "line plot",
-                format!("{title}: no finite points to draw"),
-            ))
-        }
+    let unit = |log: bool| if log { (1.0, 10.0) } else { (0.0, 1.0) };
+    let (xr, yr, title) = match (range_of(all().map(|p| p.0)), range_of(all().map(|p| p.1))) {
+        (Some(x), Some(y)) => (x, y, title.to_string()),
+        // Nothing finite to draw (an MFPT where no walker fell is infinite at every value):
+        // the axes alone, over the x values given, and the title says so; the caller says why.
+        _ => (
+            range_of(given_x().into_iter()).unwrap_or(unit(log_x)),
+            unit(log_y),
+            format!("{title} (no finite values to draw)"),
+        ),
     };
+    let title = title.as_str();
     let widen = |(lo, hi): (f64, f64), log: bool| {
         if log {
             (lo / 1.3, hi * 1.3)

@@ -43,6 +43,14 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // A file-size limit (`ulimit -f`) makes the kernel send SIGXFSZ on the write that would
+    // pass it, which kills the process without a word and with its file half written. Ignored,
+    // that write fails with EFBIG instead: the writer reports it (exit 2) and leaves the file as
+    // of its last flush, resumable, as after a full disk.
+    // SAFETY: signal(2) with a valid signal number and SIG_IGN, before any thread is started.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     let cli = cli::Cli::parse();
     match commands::run(cli) {
         Ok(code) => code,

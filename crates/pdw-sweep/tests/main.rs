@@ -18,6 +18,7 @@ mod lock;
 mod mfpt;
 mod mfpt_over;
 mod resume_model;
+mod safety;
 mod search;
 mod self_describing;
 mod simulate;

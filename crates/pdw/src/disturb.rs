@@ -131,7 +131,9 @@ pub fn respond_from(
 /// `fell − survived ≤ tol` (in magnitude), both walked ([`respond_from`]). The bracket grows by
 /// doubling from `tol` until a walk falls (or the model refuses the disturbance, which counts as
 /// a fall; up to `limit`), then bisects. Survival need not be monotone in the disturbance: the
-/// result is the edge of the survived interval that contains 0.
+/// result is the edge of the survived interval that contains 0. A `tol` below the spacing of
+/// doubles at the edge cannot be met: the bisection stops when `survived` and `fell` are
+/// adjacent doubles, and `fell − survived` then exceeds `tol` (the caller can tell, and says so).
 #[allow(clippy::too_many_arguments)]
 pub fn largest(
     m: &BuiltModel,
@@ -168,6 +170,11 @@ pub fn largest(
     }
     while hi - lo > tol {
         let mid = 0.5 * (lo + hi);
+        // lo and hi adjacent doubles: the interval cannot shrink further (a tolerance below
+        // the spacing of doubles at the edge would never be met)
+        if mid <= lo || mid >= hi {
+            break;
+        }
         if falls(sign * mid)? {
             hi = mid;
         } else {

@@ -22,9 +22,11 @@ pub mod gsn;
 pub mod input;
 pub mod integrator;
 pub mod linear;
+pub mod memory;
 pub mod mfpt;
 pub mod mfpt_over;
 pub mod model;
+pub mod output;
 pub mod simulate;
 pub mod sweep;
 

@@ -6,6 +6,7 @@
 use crate::gaits::{model_guesses, no_gait_message, search};
 use crate::input::{self, InputError};
 use crate::model::BuiltModel;
+use crate::output::{number, Format, Planned};
 use pdw_hybrid::Options;
 use pdw_limit::markov::{ChainResult, Frame, SectionBox};
 use pdw_limit::mid_stance;
@@ -14,6 +15,7 @@ use pdw_limit::terrain::{
 };
 use pdw_limit::LimitError;
 use pdw_walkers::Walker;
+use std::path::Path;
 
 /// Residual tolerance of the gait the walkers start from.
 pub const GAIT_TOL: f64 = 1e-12;
@@ -128,6 +130,41 @@ pub fn check_terrain(name: &str, flags: &MfptFlags) -> Result<TerrainKind, Input
     }
 }
 
+/// Every file `mfpt --out OUT` writes, in the order written: the HDF5 file, the MFPT picture
+/// `OUT.png` and, over a parameter (`over`), the MFPT-against-GSN picture `OUT-gsn.png`. The
+/// claim and the writers both take the paths from here.
+pub fn output_files(out: &Path, over: bool) -> Vec<Planned> {
+    let mut files = vec![
+        Planned {
+            flag: "--out",
+            path: out.to_path_buf(),
+            format: Format::Hdf5,
+        },
+        Planned {
+            flag: "--out (its PNG)",
+            path: out.with_extension("png"),
+            format: Format::Png,
+        },
+    ];
+    if over {
+        let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("mfpt");
+        files.push(Planned {
+            flag: "--out (its GSN PNG)",
+            path: out.with_file_name(format!("{stem}-gsn.png")),
+            format: Format::Png,
+        });
+    }
+    files
+}
+
+/// The file `--dist file:PATH` reads, if it names one (an input of the run: never written).
+pub fn dist_input(dist: &str) -> Option<&Path> {
+    dist.trim()
+        .strip_prefix("file:")
+        .filter(|p| !p.is_empty())
+        .map(Path::new)
+}
+
 /// The terrain distribution as typed: `normal`, `uniform` or `file:PATH` ([`TerrainDist`];
 /// a file is read by [`read_values`]).
 pub fn parse_dist(s: &str, flags: &MfptFlags) -> Result<TerrainDist, InputError> {
@@ -148,8 +185,8 @@ pub fn parse_dist(s: &str, flags: &MfptFlags) -> Result<TerrainDist, InputError>
 /// The values of a distribution file: one number per line, blank lines and everything after
 /// a `#` ignored; at least one value, every value finite.
 pub fn read_values(path: &str, flags: &MfptFlags) -> Result<TerrainDist, InputError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError(format!("{}: cannot read '{path}': {e}", flags.dist)))?;
+    let text = pdw_store::read_text_input(Path::new(path), pdw_store::MAX_TEXT_INPUT)
+        .map_err(|e| InputError(format!("{}: {e}", flags.dist)))?;
     let mut values = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let v = line.split('#').next().unwrap_or("").trim();
@@ -270,12 +307,13 @@ pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> 
     let reach = t.dist.max_abs();
     if t.kind == TerrainKind::Slope && t.mean.abs() + reach * t.sd >= std::f64::consts::FRAC_PI_2 {
         return Err(InputError(format!(
-            "{} {} rad with {} {} rad: slopes up to {reach} standard deviations from the mean \
+            "{} {} rad with {} {} rad: slopes up to {} standard deviations from the mean \
              are drawn ({} {}) and must stay within (-pi/2, pi/2) rad",
             flags.sd,
-            t.sd,
+            number(t.sd),
             flags.mean,
-            t.mean,
+            number(t.mean),
+            number(reach),
             flags.dist,
             t.dist.name()
         )));
@@ -311,11 +349,13 @@ pub fn check_heights(m: &BuiltModel, plan: &MfptPlan, flags: &MfptFlags) -> Resu
     for h in [t.mean - reach * t.sd, t.mean + reach * t.sd] {
         if let Err(e) = at(h) {
             return Err(InputError(format!(
-                "{} {} with a mean step down of {}: step heights up to {reach} standard \
-                 deviations from the mean are drawn, and the model refuses {h}: {}",
+                "{} {} with a mean step down of {}: step heights up to {} standard \
+                 deviations from the mean are drawn, and the model refuses {}: {}",
                 flags.sd,
-                t.sd,
-                t.mean,
+                number(t.sd),
+                number(t.mean),
+                number(reach),
+                number(h),
                 limit_message(&e)
             )));
         }
@@ -882,12 +922,21 @@ pub fn dist_words(d: &TerrainDist) -> String {
             let n = v.values.len() as f64;
             let mean = v.values.iter().sum::<f64>() / n;
             let var = v.values.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+            // six decimals, or six significant digits where that would be a long decimal
+            let six = |x: f64| {
+                if x.abs() >= 1e6 {
+                    format!("{x:.6e}")
+                } else {
+                    format!("{x:.6}")
+                }
+            };
             format!(
-                "{} ({} values, mean {mean:.6}, sd {:.6}; each step draws one with equal \
-                 probability, scaled by sd)",
+                "{} ({} values, mean {}, sd {}; each step draws one with equal probability, \
+                 scaled by sd)",
                 d.name(),
                 v.values.len(),
-                var.sqrt()
+                six(mean),
+                six(var.sqrt())
             )
         }
     }
@@ -982,9 +1031,10 @@ pub fn check_chain(
         )));
     }
     let nodes = nodes.unwrap_or(DEFAULT_NODES);
-    if !(1..=40).contains(&nodes) {
+    if !(2..=40).contains(&nodes) {
         return Err(InputError(format!(
-            "{}: {nodes} must be between 1 and 40",
+            "{}: {nodes} must be between 2 and 40 (one node is the mean terrain alone: \
+             deterministic ground, on which the chain sees no fall and has no MFPT)",
             flags.nodes
         )));
     }
@@ -995,6 +1045,82 @@ pub fn check_chain(
         section,
         layout: ChainMesh::Grid,
     })
+}
+
+/// Fixed allowance of an MFPT run beyond what scales with its request: the model, the thread
+/// pool's batches of lanes, the visited box's walkers ([`BOX_WALKERS`] × [`BOX_STEPS`]) and
+/// HDF5's buffers.
+const MFPT_BASE_BYTES: u64 = 96 << 20;
+
+/// Estimated peak memory (bytes) of the Monte Carlo walkers of `plan`: every walker's fate is
+/// kept until the estimate is made; the lanes in flight are a fixed batch per thread. The
+/// survival curve is sized by the longest walk ([`terrain::estimate`]), not by the step limit,
+/// so `max_steps` does not enter.
+pub fn walkers_memory(plan: &MfptPlan) -> u64 {
+    crate::memory::bytes(plan.walkers as u64, std::mem::size_of::<Fate>() as u64)
+        .saturating_add(MFPT_BASE_BYTES)
+}
+
+/// The chain's states on its finer mesh (twice `chain.mesh` nodes per axis, the larger of the
+/// two chains it solves) with `d` section coordinates: one layer of the mesh per terrain node on
+/// the landing section, one mesh at mid-stance; saturating.
+pub fn chain_states(chain: &ChainPlan, d: usize) -> u64 {
+    let fine = (2 * chain.mesh as u64).saturating_pow(d as u32);
+    let layers = match chain.section {
+        ChainSection::Landing => chain.nodes as u64,
+        ChainSection::MidStance => 1,
+    };
+    fine.saturating_mul(layers).saturating_add(1)
+}
+
+/// Estimated peak memory (bytes) of the Markov chain of `chain` for a model with `dim` state
+/// components and `d` section coordinates ([`chain_states`] states): per state its start state,
+/// its transition row (up to one landing per terrain node on each of the 2^d nodes of a cell,
+/// 16 bytes each), its fall and exit probabilities and the solver's vectors.
+pub fn chain_memory(chain: &ChainPlan, d: usize, dim: usize) -> u64 {
+    let per_state = 160 + 8 * dim as u64 + 16 * chain.nodes as u64 * (1u64 << d.min(16));
+    crate::memory::bytes(chain_states(chain, d), per_state).saturating_add(MFPT_BASE_BYTES)
+}
+
+/// Refuses, before any walker walks, an MFPT run whose walkers ([`walkers_memory`]) or chain
+/// ([`chain_memory`]) would not fit in memory ([`crate::memory::check_memory`]), naming the
+/// option, the estimate and the limit. The walkers' fates are released before the chain
+/// runs, so the larger of the two counts.
+pub fn check_memory(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: Option<&ChainPlan>,
+    flags: &MfptFlags,
+    mesh_flag: &str,
+) -> Result<(), InputError> {
+    crate::memory::check_memory(
+        walkers_memory(plan),
+        &format!("{} {}", flags.walkers, plan.walkers),
+        "use fewer walkers (the standard error falls as 1/sqrt(walkers))",
+    )?;
+    if let Some(c) = chain {
+        let d = match c.section {
+            ChainSection::Landing => m.info.section_names.len(),
+            ChainSection::MidStance => m.walker.dim() - 1,
+        };
+        crate::memory::check_memory(
+            chain_memory(c, d, m.walker.dim()),
+            &format!(
+                "{mesh_flag} {} ({} states on the finer mesh of {} nodes per axis, {} \
+                 coordinates{})",
+                c.mesh,
+                chain_states(c, d),
+                2 * c.mesh,
+                d,
+                match c.section {
+                    ChainSection::Landing => format!(", {} terrain nodes", c.nodes),
+                    ChainSection::MidStance => String::new(),
+                }
+            ),
+            "use a smaller mesh (the finer mesh has twice its nodes per axis)",
+        )?;
+    }
+    Ok(())
 }
 
 /// The chain at `chain.mesh` and at twice as many nodes per axis over one box ([`chain_box`]),

@@ -20,8 +20,8 @@ use pdw_limit::basin::{
 };
 use pdw_limit::{AttractorSet, OrbitValidity};
 use pdw_store::{
-    plot_basin_attractors, read_basin_outcome, Attractor, BasinHeader, BasinMetrics, BasinWriter,
-    ShardSpec, StoreError, ZAxis, BLOCK_ROWS,
+    plot_basin_attractors, read_basin, read_basin_outcome, Attractor, BasinHeader, BasinMetrics,
+    BasinWriter, ShardSpec, StoreError, ZAxis, BLOCK_ROWS,
 };
 use pdw_walkers::ModelInfo;
 use std::io::IsTerminal;
@@ -85,7 +85,7 @@ fn memory_estimate(nx: usize, rows: usize, d: usize, dim: usize) -> u64 {
 }
 
 pub(super) fn gib(b: u64) -> String {
-    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+    pdw::memory::gib(b)
 }
 
 /// The grid as written on the command line: `NXxNY` or `NXxNYxNZ`.
@@ -117,18 +117,11 @@ pub(super) fn check_memory(
         )));
     }
     let need = memory_estimate(nx, ny.saturating_mul(nz.unwrap_or(1)), d, dim);
-    // `MemAvailable` and the room under the cgroup's limit, whichever is smaller
-    let have = pdw_limit::resources::memory_available();
-    if need > have * 4 / 5 {
-        return Err(InputError(format!(
-            "--grid {g}: needs about {} of memory, more than the {} available (80 % of \
-             {}); use a smaller grid, or split it with --shard I/N across machines",
-            gib(need),
-            gib(have * 4 / 5),
-            gib(have)
-        )));
-    }
-    Ok(())
+    pdw::memory::check_memory(
+        need,
+        &format!("--grid {g}"),
+        "use a smaller grid, or split it with --shard I/N across machines",
+    )
 }
 
 /// `--x` or `--y` (`flag`), parsed and resolved against the model's section coordinates.
@@ -200,7 +193,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     let (set, seeds) = go!(discover(a, &p, &plan, &pool)?);
     warn_gait_drift(&p, &plan)?;
     let header = header(a, &p, &plan, &set, seeds);
-    let mut writer = go!(open_writer(a, &p, &header, &mut claim)?);
+    let mut writer = go!(open_writer(a, &p, &plan, &header, &mut claim)?);
     let described = describe(a, &p, &plan, &set, &mut writer)?;
     let todo = rows_to_do(&writer, &p);
     warn_slow_attractors(a, &set);
@@ -499,11 +492,14 @@ pub(super) fn fixed_json(
 }
 
 /// Opens `--out` (the basin writer takes the output's lock itself, creating or continuing the
-/// file). A file already complete for this command ends the run with success; an existing
-/// picture is refused when resuming an unfinished file without --force.
+/// file). A file already complete for this command ends the run with success, drawing its
+/// picture first if it is missing (a run killed between finishing the file and renaming the
+/// picture into place); an existing picture is refused when resuming an unfinished file
+/// without --force.
 fn open_writer(
     a: &BasinArgs,
     p: &Parsed,
+    plan: &BasinPlan,
     header: &BasinHeader,
     claim: &mut Claim,
 ) -> anyhow::Result<Step<BasinWriter>> {
@@ -514,7 +510,16 @@ fn open_writer(
     let writer = match BasinWriter::start(&p.out, header, a.resume, a.force) {
         Ok(w) => w,
         Err(StoreError::AlreadyComplete { .. }) => {
-            // A requeued cluster task that had finished: success, nothing to do.
+            // A requeued cluster task that had finished: success, nothing to do but the
+            // picture, if the kill came before it was in place.
+            if p.shard.is_none() && !claim.existed(&p.png) {
+                let attractors = read_basin(&p.out)?.attractors;
+                plot(a, p, &on_picture(described(p, plan), p, plan), &attractors)?;
+                crate::outln!(
+                    "{} was missing: drawn from the complete file",
+                    p.png.display()
+                );
+            }
             crate::outln!(
                 "{} is already complete for this command (checked: same run, every block's \
                  checksum); nothing to do",
@@ -555,6 +560,36 @@ struct Described {
     slice: pdw_store::Slice,
 }
 
+/// The units, axes and slice of the run, as the file records them (before [`on_picture`]).
+fn described(p: &Parsed, plan: &BasinPlan) -> Described {
+    let bx = &plan.bx;
+    let sec_units = super::section_units(&p.m);
+    let gait = plan.gait();
+    let slice = basin_slice(
+        p.names(),
+        &sec_units,
+        plan,
+        gait.map_or(&plan.centre[..], |fp| &fp.section[..]),
+    );
+    Described {
+        sec_units,
+        axes: (bx.x.index, bx.y.index),
+        z: bx.z.as_ref().map(|z| z.index),
+        slice,
+    }
+}
+
+/// `d` for the picture: a 3-D grid's picture is one z-slice, and the gait lies on it only
+/// within half a z-step.
+fn on_picture(mut d: Described, p: &Parsed, plan: &BasinPlan) -> Described {
+    if let Some(i) = d.z {
+        let g = plan.gait().map_or(plan.centre[i], |fp| fp.section[i]);
+        let k = p.slice.unwrap_or(plan.zs.len() / 2);
+        d.slice.on_fixed_point &= near_slice(&plan.zs, k, g);
+    }
+    d
+}
+
 /// Self-description: provenance (every numerical option), units, the slice, dimension scales.
 fn describe(
     a: &BasinArgs,
@@ -564,14 +599,8 @@ fn describe(
     writer: &mut BasinWriter,
 ) -> anyhow::Result<Described> {
     let (opts, bx) = (&plan.opts, &plan.bx);
-    let sec_units = super::section_units(&p.m);
     let gait = plan.gait();
-    let mut slice = basin_slice(
-        p.names(),
-        &sec_units,
-        plan,
-        gait.map_or(&plan.centre[..], |fp| &fp.section[..]),
-    );
+    let d = described(p, plan);
     let mut options = serde_json::json!({
         "integrator": super::integrator_json(&opts.integrator),
         "max_strides": opts.max_strides,
@@ -601,8 +630,8 @@ fn describe(
             "discovery_levels": plan.discovery_levels()});
     }
     let prov = super::provenance(options);
-    let iz = bx.z.as_ref().map(|z| z.index);
-    let units = basin_units(&sec_units, bx.x.index, bx.y.index, iz);
+    let iz = d.z;
+    let units = basin_units(&d.sec_units, bx.x.index, bx.y.index, iz);
     let scales = if iz.is_some() {
         pdw_store::provenance::basin_scales_3d()
     } else {
@@ -612,22 +641,11 @@ fn describe(
     writer.annotate(&pdw_store::Annotations {
         provenance: Some(&prov),
         units: &units,
-        slice: Some(&slice),
+        slice: Some(&d.slice),
         scales: &scales,
         coordinates: Some(&coordinates),
     })?;
-    if let Some(i) = iz {
-        // A 3-D grid's picture is one z-slice: the gait lies on it only within half a z-step.
-        let g = gait.map_or(plan.centre[i], |fp| fp.section[i]);
-        let k = p.slice.unwrap_or(plan.zs.len() / 2);
-        slice.on_fixed_point &= near_slice(&plan.zs, k, g);
-    }
-    Ok(Described {
-        sec_units,
-        axes: (bx.x.index, bx.y.index),
-        z: iz,
-        slice,
-    })
+    Ok(on_picture(d, p, plan))
 }
 
 /// The rows still to compute, warning about rows found damaged on disk (recomputed).
@@ -693,12 +711,13 @@ fn compute_rows(
     let mut interrupted = false;
     let mut secs_per_row: Option<f64> = None;
     let signal_after = signal_after_rows();
+    let stall_after = test_hook("PDW_SWEEP_STALL_AFTER_ROWS");
     while k < todo.len() {
         if stopped() {
             interrupted = true;
             break;
         }
-        let max_rows = match signal_after {
+        let max_rows = match signal_after.or(stall_after) {
             Some(_) => 1,
             None => rows_for_next_call(secs_per_row, nx),
         };
@@ -729,6 +748,12 @@ fn compute_rows(
         rows_written += rows.len();
         if signal_after == Some(rows_written) {
             terminate_self_and_wait(stopped);
+        }
+        if stall_after == Some(rows_written) {
+            // the test kills the process here (SIGKILL: no handler runs, nothing is closed)
+            loop {
+                std::thread::sleep(Duration::from_secs(1));
+            }
         }
     }
     pb.finish_and_clear();
@@ -1065,10 +1090,16 @@ fn print_summary(
 /// stop request; the next row is then never started. A test thereby interrupts a run at an exact
 /// row through the real signal path, on every run. Unset in normal use.
 fn signal_after_rows() -> Option<usize> {
-    std::env::var("PDW_SWEEP_SIGNAL_AFTER_ROWS")
-        .ok()?
-        .parse()
-        .ok()
+    test_hook("PDW_SWEEP_SIGNAL_AFTER_ROWS")
+}
+
+/// A test hook's row count from the environment variable `name`. With
+/// `PDW_SWEEP_STALL_AFTER_ROWS=N` the grid is computed one row per call and the run stops
+/// making progress right after writing its N-th row (the rows of complete blocks flushed),
+/// without exiting: a test waits until the file shows them, then kills the process with
+/// SIGKILL at a known row. Unset in normal use.
+fn test_hook(name: &str) -> Option<usize> {
+    std::env::var(name).ok()?.parse().ok()
 }
 
 /// Raises SIGTERM in this process and waits (at most 30 s) until `stopped()` says the handler

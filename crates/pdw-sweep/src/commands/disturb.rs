@@ -6,6 +6,7 @@ use super::build_model;
 use crate::args::InputError;
 use crate::cli::DisturbArgs;
 use pdw::disturb::{self, Response, RETURN_TOL};
+use pdw::output::number;
 use pdw::BuiltModel;
 use pdw_limit::terrain::TerrainKind;
 use std::process::ExitCode;
@@ -58,12 +59,12 @@ fn report(r: &Response, unit: &str) {
     match r.fall {
         Some(o) => crate::outln!(
             "disturbance {} {unit}: fell after {} heel strikes ({o})",
-            r.disturbance,
+            number(r.disturbance),
             r.steps
         ),
         None => crate::outln!(
             "disturbance {} {unit}: walked all {} steps",
-            r.disturbance,
+            number(r.disturbance),
             r.steps
         ),
     }
@@ -104,6 +105,15 @@ fn largest(
             a.tol,
             a.steps
         );
+        if (fell - ok).abs() > a.tol {
+            crate::outln!(
+                "note: the bisection stopped at the spacing of doubles: {ok:e} and {fell:e} are \
+                 adjacent, {:e} {unit} apart, wider than --tol {:e}; no smaller tolerance can be \
+                 met here",
+                (fell - ok).abs(),
+                a.tol
+            );
+        }
     }
     Ok(())
 }

@@ -53,6 +53,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     mfpt::check_heights(&m, &plan, &FLAGS)?;
     // the chain's request is checked before any walker walks
     let chain = chain_plan(a, &m)?;
+    mfpt::check_memory(&m, &plan, chain.as_ref(), &FLAGS, "--mesh")?;
     let claim = claim_out(a)?;
     if a.over.is_some() {
         if kind != pdw_limit::terrain::TerrainKind::Slope {
@@ -163,29 +164,23 @@ pub(super) fn terrain_unit(m: &BuiltModel, kind: TerrainKind) -> String {
     }
 }
 
-/// Claims `--out` and its PNG (refused if they exist without `--force`).
+/// Claims every file `--out` makes ([`mfpt::output_files`]: the HDF5 file, its picture and,
+/// with `--over`, the GSN picture), against the spec file and the `--dist` file as inputs.
 pub(super) fn claim_out(a: &MfptArgs) -> Result<Option<super::output::Claim>, InputError> {
     let Some(out) = &a.out else {
         return Ok(None);
     };
-    let png = out.with_extension("png");
-    let inputs: Vec<_> = super::output::model_input(&a.model.model)
+    let files = mfpt::output_files(out, a.over.is_some());
+    let mut inputs: Vec<_> = super::output::model_input(&a.model.model)
         .into_iter()
         .collect();
-    let outputs = [
-        super::output::Output {
-            flag: "--out",
-            path: out,
-            format: super::output::Format::Hdf5,
-            may_exist: false,
-        },
-        super::output::Output {
-            flag: "--out (its PNG)",
-            path: &png,
-            format: super::output::Format::Png,
-            may_exist: false,
-        },
-    ];
+    if let Some(path) = mfpt::dist_input(&a.dist) {
+        inputs.push(super::output::Input {
+            flag: "--dist",
+            path,
+        });
+    }
+    let outputs: Vec<_> = files.iter().map(|f| f.output()).collect();
     super::output::claim(&outputs, &inputs, a.force).map(Some)
 }
 
@@ -361,7 +356,7 @@ fn write(
         ),
     };
     pdw_store::plot_lines(
-        out.with_extension("png"),
+        &pdw::mfpt::output_files(out, false)[1].path,
         &title,
         "steps k",
         "fraction still walking after k steps",

@@ -234,7 +234,7 @@ fn write(
         ),
     };
     pdw_store::plot_lines(
-        out.with_extension("png"),
+        &pdw::mfpt::output_files(out, false)[1].path,
         &title,
         &xlabel,
         "MFPT (steps before a fall)",

@@ -240,8 +240,9 @@ fn plots(
         m.info.name,
         d.sd.to_degrees()
     );
+    let files = pdw::mfpt::output_files(out, true);
     pdw_store::plot_lines(
-        out.with_extension("png"),
+        &files[1].path,
         &title,
         name,
         "MFPT (steps before a fall)",
@@ -249,8 +250,6 @@ fn plots(
         false,
         true,
     )?;
-    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("mfpt");
-    let gsn_png = out.with_file_name(format!("{stem}-gsn.png"));
     let title = format!(
         "{}: MFPT against GSN over {name}, Spearman ρ = {:.3}",
         m.info.name, d.spearman
@@ -262,7 +261,7 @@ fn plots(
         shape: pdw_store::MarkerShape::Circle,
     };
     pdw_store::plot_lines_marked(
-        gsn_png,
+        &files[2].path,
         &title,
         "gait sensitivity norm (step time, step length per rad)",
         "MFPT (steps before a fall)",
@@ -270,5 +269,13 @@ fn plots(
         &[marks],
         (false, true),
     )?;
+    if !d.mfpt.iter().any(|v| v.is_finite()) {
+        eprintln!(
+            "note: no walker fell at any value of {name}, so no MFPT is finite (each is above \
+             the steps walked, see the table): {} and {} show empty axes",
+            files[1].path.display(),
+            files[2].path.display()
+        );
+    }
     Ok(())
 }
