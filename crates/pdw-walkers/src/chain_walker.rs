@@ -82,6 +82,7 @@
 //!   knee that becomes the free swing knee is released as a stop's is (its impulse `< −L_Λ`
 //!   instead of `< 0`), so the section has `swing_knee_rate`. A released latch gives no
 //!   impulse (it lets go entirely), so the map jumps where the pull crosses `L_Λ`.
+//!
 //! A swing latch already beyond its limit just after the knee strike lets go at once (the
 //! knee strike's reset returns to the free mode). A stance latch already beyond its limit just
 //! after an impact is not caught (its guard needs a crossing): the gait's stance pull peaks
