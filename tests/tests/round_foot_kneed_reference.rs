@@ -56,7 +56,7 @@
 //! equal.
 
 use faer::Mat;
-use pdw_hybrid::{HybridSystem, Scratch};
+use pdw_hybrid::{HybridSystem, Options, Scratch, Section};
 use pdw_walkers::spec::Num;
 use pdw_walkers::{presets, ChainWalker, Walker, WalkerSpec};
 
@@ -1393,4 +1393,567 @@ fn knee_strike_matches_reference_to_1e_10() {
             "{name}: knee strike differs from the reference by {worst:e} √(g/l)"
         );
     }
+}
+
+// Latches with holding limits (chain walker module docs, "Latches"): the pull a latch must
+// hold, and where it lets go, against the reference's explicit multipliers — the lock torque
+// `τ` of `[M −Gᵀ; G 0] [θ̈; τ] = [Q − c; 0]` and the impulses `Λ` of the impact systems — on
+// Hsu Chen's kneed walker (point feet: the reference with `r = 0`).
+
+/// The kneed preset with its latch's limits (`None`: the ideal latch).
+fn kneed_latch(torque: Option<f64>, impulse: Option<f64>) -> ChainWalker {
+    let text = pdw_walkers::preset_text("kneed").unwrap();
+    let mut spec = WalkerSpec::from_toml(text, "kneed").unwrap();
+    spec.knees[0].latch_torque = torque.map(Num::Value);
+    spec.knees[0].latch_impulse = impulse.map(Num::Value);
+    ChainWalker::from_spec(spec).unwrap()
+}
+
+/// The stance knee's lock torque towards flexion along the reference's stride from the
+/// section point `s` (every knee straight), every `h`: `(t, τ, x)` in the free mode (up to the
+/// knee strike), then in the locked mode (up to the heel strike); the reference's lock torque is
+/// its multiplier on `θ̇₁ − θ̇₀ = 0`, positive towards `q₁` increasing (flexion).
+fn reference_stance_torques(r: &Reference, s: &[f64], h: f64) -> Vec<(f64, f64, [f64; 8])> {
+    let mut out = Vec::new();
+    let mut x = [s[0], 0.0, -2.0 * s[0], 0.0, s[1], 0.0, s[2], 0.0];
+    let mut t = 0.0;
+    // the free mode up to the knee rising through 0 (after it went negative)
+    let mut armed = false;
+    while t < 5.0 {
+        out.push((t, r.dynamics(FREE, &x).lock[0].unwrap(), x));
+        let y = rk4(r, FREE, &x, h);
+        if armed && y[3] >= 0.0 {
+            break;
+        }
+        armed = y[3] < 0.0;
+        x = y;
+        t += h;
+    }
+    out
+}
+
+/// Refines the minimum of a sampled function by the parabola through the smallest sample and
+/// its two neighbours: `(t, value)`.
+fn parabola_min(samples: &[(f64, f64)]) -> (f64, f64) {
+    let j = (1..samples.len() - 1)
+        .min_by(|&a, &b| samples[a].1.total_cmp(&samples[b].1))
+        .unwrap();
+    let ((t0, f0), (t1, f1), (_, f2)) = (samples[j - 1], samples[j], samples[j + 1]);
+    let h = t1 - t0;
+    let (a, b) = ((f0 - 2.0 * f1 + f2) / (2.0 * h * h), (f2 - f0) / (2.0 * h));
+    (t1 - b / (2.0 * a), f1 - b * b / (4.0 * a))
+}
+
+/// The reference's gait of the kneed walker (its own stride map, Newton to 1e-11) and its
+/// stance pull, knee-strike and heel-strike impulses.
+struct KneedGait {
+    section: [f64; 3],
+    x_ks: [f64; 8],
+    x_hs: [f64; 8],
+    /// The smallest stance lock torque over the free mode (N m-like; negative: a pull).
+    min_torque: f64,
+    t_min_torque: f64,
+    ks: KneeStrike,
+    hs: HeelStrike,
+}
+
+fn kneed_gait(r: &Reference, w: &ChainWalker) -> KneedGait {
+    let (x_ks, x_hs, section, res) = reference_gait(r, &w.gait_guesses()[0].section);
+    assert!(res < 1e-10, "reference fixed point residual {res:e}");
+    let samples: Vec<(f64, f64)> = reference_stance_torques(r, &section, 1e-4)
+        .iter()
+        .map(|p| (p.0, p.1))
+        .collect();
+    let (t_min_torque, min_torque) = parabola_min(&samples);
+    KneedGait {
+        section,
+        x_ks,
+        x_hs,
+        min_torque,
+        t_min_torque,
+        ks: r.knee_strike(&x_ks),
+        hs: r.heel_strike(&x_hs),
+    }
+}
+
+/// A latch that holds twice the gait's pulls: validity reports every knee margin as limit −
+/// pull with the reference's pulls (the torque on `m g l`, the impulses on `m l √(g l)`, to
+/// 1e-7 of the scale), and the gait valid where the reference's own loads say so: every
+/// knee's pull within its limit, the stance foot pushed, the striking knee's stop and the new
+/// contact pushing, the trailing foot leaving the ground, the swing foot above the slope.
+#[test]
+fn latch_margins_are_the_limit_minus_the_reference_pull() {
+    let ideal = kneed_latch(None, None);
+    let r = Reference::new(&ideal);
+    let sc = r.scales();
+    let g = kneed_gait(&r, &ideal);
+    let pull_t = -g.min_torque;
+    let pull_i = (-g.ks.stance_knee_impulse)
+        .max(-g.hs.trailing_knee_impulse)
+        .max(-g.hs.new_stance_knee_impulse);
+    eprintln!(
+        "kneed gait {:?}: stance pull {pull_t:.9e} at t = {:.6}, knee strike stance knee \
+         {:.9e}, heel strike trailing knee {:.9e}, new stance knee {:.9e}",
+        g.section,
+        g.t_min_torque,
+        g.ks.stance_knee_impulse,
+        g.hs.trailing_knee_impulse,
+        g.hs.new_stance_knee_impulse
+    );
+    assert!(pull_t > 0.0 && pull_i > 0.0, "Hsu Chen's latch pulls");
+    let (lt, li) = (2.0 * pull_t, 2.0 * pull_i);
+    let w = kneed_latch(Some(lt), Some(li));
+    let mut x0 = vec![0.0; w.dim()];
+    let s4 = [g.section[0], g.section[1], g.section[2], 0.0];
+    w.lift(&s4[..w.section_dim()], &mut x0);
+    let v = pdw_limit::Validity::along_step(&w, &x0).unwrap();
+    let margin = |name: &str| v.margin(name).unwrap_or_else(|| panic!("{name}")).clone();
+    let m = margin("stance_knee_torque");
+    let e = (m.raw - (lt + g.min_torque)).abs() / sc.torque;
+    eprintln!(
+        "stance_knee_torque margin {:.9e} (relative {:.3e}), reference {:.9e}: {e:.1e} m g l",
+        m.raw,
+        m.relative,
+        lt + g.min_torque
+    );
+    assert!(e < 1e-7, "stance latch margin off by {e:e} m g l");
+    assert!((m.relative - m.raw / sc.torque).abs() < 1e-12 * m.raw.abs().max(1e-3));
+    for (name, pull) in [
+        ("knee_strike:stance_knee", g.ks.stance_knee_impulse),
+        ("heel_strike:trailing_knee", g.hs.trailing_knee_impulse),
+        ("heel_strike:new_stance_knee", g.hs.new_stance_knee_impulse),
+    ] {
+        let m = margin(name);
+        let e = (m.raw - (li + pull)).abs() / sc.ang;
+        eprintln!(
+            "{name} margin {:.9e}, reference {:.9e}: {e:.1e} m l sqrt(g l)",
+            m.raw,
+            li + pull
+        );
+        assert!(e < 1e-7, "{name} margin off by {e:e} m l √(g l)");
+        assert!((m.relative - m.raw / sc.ang).abs() < 1e-12);
+    }
+    // the reference's verdict, from its own loads along its own stride: the free swing, then
+    // the locked swing from its knee strike to the swing foot's return to the slope
+    let h = 1e-3;
+    let mut pts: Vec<(usize, [f64; 8])> = reference_stance_torques(&r, &g.section, h)
+        .iter()
+        .map(|p| (FREE, p.2))
+        .collect();
+    let mut x = g.ks.x_post;
+    loop {
+        pts.push((LOCKED, x));
+        x = rk4(&r, LOCKED, &x, h);
+        let th = angles(&x[..4]);
+        let p = r.position(&r.swing_arc, [0.0; 2], &th);
+        if p[0] > 0.0 && p[1] <= 0.0 {
+            break;
+        }
+    }
+    let normal_ok = pts.iter().all(|(m, x)| r.dynamics(*m, x).ground[1] > 0.0);
+    let clear_ok = pts.iter().skip(1).all(|(_, x)| {
+        let th = angles(&x[..4]);
+        r.position(&r.swing_arc, [0.0; 2], &th)[1] > 0.0
+    });
+    let knees_ok = pts.iter().all(|(m, x)| {
+        let lock = r.dynamics(*m, x).lock;
+        // towards flexion: the stance knee's multiplier, the swing knee's negated
+        lock[0].unwrap() + lt > 0.0 && lock[1].is_none_or(|t| -t + lt > 0.0)
+    });
+    let locked_min = pts
+        .iter()
+        .filter(|(m, _)| *m == LOCKED)
+        .map(|(_, x)| r.dynamics(LOCKED, x).lock[0].unwrap())
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        locked_min > g.min_torque,
+        "the stance pull peaks in the free swing"
+    );
+    let ref_valid = normal_ok
+        && clear_ok
+        && knees_ok
+        && lt + g.min_torque > 0.0
+        && li + g.ks.stance_knee_impulse > 0.0
+        && li + g.hs.trailing_knee_impulse > 0.0
+        && li + g.hs.new_stance_knee_impulse > 0.0
+        && g.ks.swing_knee_impulse > 0.0
+        && g.hs.contact_impulse[1] > 0.0
+        && g.hs.trailing_foot_velocity[1] > 0.0;
+    eprintln!(
+        "engine: valid {}, binding {:?}; reference valid {ref_valid}",
+        v.valid(),
+        v.binding()
+    );
+    assert_eq!(
+        v.valid(),
+        ref_valid,
+        "engine and reference verdicts differ: {:?}",
+        v.failures()
+    );
+    // the ideal latch is flagged where it pulls (margin = the torque itself)
+    let mut x3 = vec![0.0; ideal.dim()];
+    ideal.lift(&g.section, &mut x3);
+    let vi = pdw_limit::Validity::along_step(&ideal, &x3).unwrap();
+    assert!(!vi.valid() && vi.knee_unlocks);
+    let e = (vi.margin("stance_knee_torque").unwrap().raw - g.min_torque).abs() / sc.torque;
+    assert!(e < 1e-7, "ideal latch torque off by {e:e}");
+}
+
+/// Limits above every pull of the gait change no bit of the stride map (its first three
+/// coordinates; the released knee's rate is exactly 0) nor the gait Newton finds, and the
+/// multipliers are the ideal latch's and a 0 (the held trailing knee's rate is set to 0).
+#[test]
+fn limits_above_the_peak_pull_leave_the_ideal_latchs_gait_bit_for_bit() {
+    let ideal = kneed_latch(None, None);
+    let r = Reference::new(&ideal);
+    let g = kneed_gait(&r, &ideal);
+    let pull_i = (-g.ks.stance_knee_impulse).max(-g.hs.trailing_knee_impulse);
+    let w = kneed_latch(Some(-2.0 * g.min_torque), Some(2.0 * pull_i));
+    assert_eq!(w.section_dim(), 4);
+    let opts = Options::dop853(1e-12);
+    let (mi, ml) = (
+        pdw_limit::StrideMap::new(&ideal as &dyn Walker, opts).unwrap(),
+        pdw_limit::StrideMap::new(&w as &dyn Walker, opts).unwrap(),
+    );
+    for ds in [0.0, 1e-3, -2e-3] {
+        let s = [
+            g.section[0] + ds,
+            g.section[1] - ds,
+            g.section[2] + 0.5 * ds,
+        ];
+        let (pi, pl) = (
+            mi.stride(&s).unwrap(),
+            ml.stride(&[s[0], s[1], s[2], 0.0]).unwrap(),
+        );
+        assert!(
+            pi.outcome.is_ok() && pl.outcome.is_ok(),
+            "{:?} {:?}",
+            pi.outcome,
+            pl.outcome
+        );
+        for k in 0..3 {
+            assert_eq!(
+                pi.next[k].to_bits(),
+                pl.next[k].to_bits(),
+                "P(s)[{k}] at ds = {ds}"
+            );
+        }
+        assert_eq!(pl.next[3], 0.0);
+        assert_eq!(pi.period.to_bits(), pl.period.to_bits());
+    }
+    let nopts = pdw_limit::NewtonOptions {
+        tol: 1e-12,
+        ..pdw_limit::NewtonOptions::default()
+    };
+    let fi = pdw_limit::find_fixed_point(&mi, &g.section, &nopts).unwrap();
+    let pl = ml
+        .stride(&[fi.section[0], fi.section[1], fi.section[2], 0.0])
+        .unwrap();
+    for k in 0..3 {
+        assert_eq!(
+            pl.next[k].to_bits(),
+            mi.apply(&fi.section).unwrap()[k].to_bits()
+        );
+    }
+    let (_, dp) =
+        pdw_limit::dp_variational(&ml, &[fi.section[0], fi.section[1], fi.section[2], 0.0])
+            .unwrap();
+    let mut lam: Vec<f64> = pdw_limit::multipliers(&dp, 4)
+        .unwrap()
+        .iter()
+        .map(|l| l.re.hypot(l.im))
+        .collect();
+    lam.sort_by(|a, b| b.total_cmp(a));
+    let mut lam_i: Vec<f64> = fi.multipliers.iter().map(|l| l.re.hypot(l.im)).collect();
+    lam_i.sort_by(|a, b| b.total_cmp(a));
+    eprintln!("|λ| ideal {lam_i:?}, limited {lam:?}");
+    for k in 0..3 {
+        assert!(
+            (lam[k] - lam_i[k]).abs() < 1e-9,
+            "|λ{k}| {} vs {}",
+            lam[k],
+            lam_i[k]
+        );
+    }
+    assert!(lam[3].abs() < 1e-12);
+}
+
+/// A torque limit 10 % below the gait's stance pull: the stride ends where the reference's
+/// pull crosses the limit (its RK4 at 1e-4 s, crossing bisected: to 1e-8 s) in the fall "stance
+/// knee buckled" (`stance_latch_releases`), not in a flagged heel strike.
+#[test]
+fn a_torque_limit_below_the_pull_releases_the_stance_knee_where_the_reference_crosses_it() {
+    let ideal = kneed_latch(None, None);
+    let r = Reference::new(&ideal);
+    let g = kneed_gait(&r, &ideal);
+    let lt = -0.9 * g.min_torque;
+    let w = kneed_latch(Some(lt), None);
+    // the reference: the first step where τ + L < 0, bisected
+    let h = 1e-4;
+    let samples = reference_stance_torques(&r, &g.section, h);
+    let j = samples
+        .iter()
+        .position(|p| p.1 + lt < 0.0)
+        .expect("the pull crosses");
+    let (t0, _, x0) = samples[j - 1];
+    let (mut lo, mut hi) = (0.0, h);
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if r.dynamics(FREE, &rk4(&r, FREE, &x0, mid)).lock[0].unwrap() + lt < 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let t_ref = t0 + hi;
+    let map = pdw_limit::StrideMap::new(&w as &dyn Walker, Options::dop853(1e-12)).unwrap();
+    let st = map.stride(&g.section).unwrap();
+    eprintln!(
+        "release: engine {:?} at {:.12}, reference {t_ref:.12}",
+        st.outcome, st.period
+    );
+    match st.outcome {
+        pdw_limit::StrideOutcome::Fall { kind, guard } => {
+            assert_eq!(kind, pdw_hybrid::FallKind::KneeBuckled);
+            assert_eq!(w.guards(FREE)[guard].name, "stance_latch_releases");
+        }
+        o => panic!("the stance latch must let go: {o:?}"),
+    }
+    assert!(
+        (st.period - t_ref).abs() < 1e-8,
+        "release at {} vs {t_ref}",
+        st.period
+    );
+    // 10 % above the pull it holds: the stride reaches the heel strike
+    let w = kneed_latch(Some(-1.1 * g.min_torque), None);
+    let map = pdw_limit::StrideMap::new(&w as &dyn Walker, Options::dop853(1e-12)).unwrap();
+    assert!(map.stride(&g.section).unwrap().outcome.is_ok());
+}
+
+/// The locked swing knee's latch lets go where the reference's swing lock torque crosses the
+/// limit, and the walker goes on with the swing knee free: from random locked states whose
+/// swing knee comes to pull, the engine's event time matches the reference's crossing (1e-8 s),
+/// the mode after it is the free mode, and 0.05 s later the engine's state equals the
+/// reference's free-mode flow from its crossing (1e-8), the knee flexed.
+#[test]
+fn a_swing_latch_below_its_pull_lets_the_swing_knee_swing_free() {
+    let probe = kneed_latch(Some(1.0), None);
+    let r = Reference::new(&probe);
+    let sc = r.scales();
+    let mut rng = Rng(29);
+    let h = 1e-4;
+    let swing_flex = |x: &[f64; 8]| -r.dynamics(LOCKED, x).lock[1].unwrap();
+    let mut checked = 0;
+    for _ in 0..400 {
+        if checked == 3 {
+            break;
+        }
+        let x0 = random_state(&mut rng, LOCKED, sc.rate);
+        // the reference over 0.3 s (or until the swing foot reaches the slope)
+        let (mut x, mut tau) = (x0, vec![(0.0, swing_flex(&x0), x0)]);
+        for i in 1..=3000 {
+            x = rk4(&r, LOCKED, &x, h);
+            let th = angles(&x[..4]);
+            if r.position(&r.swing_arc, [0.0; 2], &th)[1] <= 0.0 || x[0].abs() > 1.2 {
+                break;
+            }
+            tau.push((i as f64 * h, swing_flex(&x), x));
+        }
+        let tmin = tau.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        if !(tmin < 0.0 && tau[0].1 + tmin > 0.0) {
+            continue;
+        }
+        let lt = -0.5 * tmin;
+        let w = kneed_latch(Some(lt), None);
+        let j = tau.iter().position(|p| p.1 + lt < 0.0).unwrap();
+        let (t0, _, xa) = tau[j - 1];
+        let (mut lo, mut hi) = (0.0, h);
+        for _ in 0..80 {
+            let mid = 0.5 * (lo + hi);
+            if swing_flex(&rk4(&r, LOCKED, &xa, mid)) + lt < 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let t_ref = t0 + hi;
+        let x_ref = rk4(&r, LOCKED, &xa, hi);
+        // the engine from x0 in the locked mode
+        let mut integ = pdw_hybrid::Integrator::new(8, Options::dop853(1e-12)).unwrap();
+        let (mut t, mut xe) = (0.0, x0.to_vec());
+        let stop = integ.integrate(&w, LOCKED, &mut t, &mut xe, 0.3);
+        let pdw_hybrid::StopReason::Guard { guard } = stop else {
+            continue;
+        };
+        if w.guards(LOCKED)[guard].name != "swing_latch_releases" {
+            continue;
+        }
+        assert!(
+            (t - t_ref).abs() < 1e-8,
+            "release at {t} vs reference {t_ref}"
+        );
+        let mut ws = Scratch::new();
+        let mut xp = vec![0.0; 8];
+        assert_eq!(w.reset(&mut ws, LOCKED, guard, &xe, &mut xp), FREE);
+        let t_end = t + 0.05;
+        let mut integ = pdw_hybrid::Integrator::new(8, Options::dop853(1e-12)).unwrap();
+        let stop = integ.integrate(&w, FREE, &mut t, &mut xp, t_end);
+        if !matches!(stop, pdw_hybrid::StopReason::EndTime) {
+            // another event within 0.05 s of the release (a knee strike, a fall): not this check
+            continue;
+        }
+        let mut xr = x_ref;
+        for _ in 0..500 {
+            xr = rk4(&r, FREE, &xr, 1e-4);
+        }
+        let e = max_abs_diff(&xp[..4], &xr[..4]).max(max_abs_diff(&xp[4..], &xr[4..]) / sc.rate);
+        eprintln!("swing release at {t_ref:.9} (limit {lt:.4e}): free flow after 0.05 s differs by {e:.1e}; knee {:.4}", xp[3]);
+        assert!(e < 1e-8, "free flow after the release differs by {e:e}");
+        assert!(xp[3] < 0.0, "the released swing knee flexes: {}", xp[3]);
+        checked += 1;
+    }
+    assert_eq!(checked, 3, "three releases checked");
+}
+
+/// An impulse limit below the heel strike's trailing pull: the model's heel strike releases
+/// the trailing knee and equals the reference's impact without that knee's row (1e-10), the
+/// new swing knee leaving flexing; the engine's post-impact state conserves, by the
+/// reference's sums, the walker's angular momentum about the new contact point, the trailing
+/// leg's about the hip and the trailing shank's about the released knee. At the knee strike a
+/// limit below the stance knee's pull buckles the stance leg (the twin guard), one above holds.
+#[test]
+fn an_impulse_limit_below_the_pull_releases_the_knee_as_the_reference_impact() {
+    let ideal = kneed_latch(None, None);
+    let r = Reference::new(&ideal);
+    let sc = r.scales();
+    let g = kneed_gait(&r, &ideal);
+    let pull = -g.hs.trailing_knee_impulse;
+    let w = kneed_latch(None, Some(0.5 * pull));
+    assert!(w.trailing_knee_releases_at(&g.x_hs));
+    let mut ws = Scratch::new();
+    let mut out = [0.0; 8];
+    assert_eq!(w.reset(&mut ws, LOCKED, 0, &g.x_hs, &mut out), FREE);
+    let hu = r.heel_strike_rows(&g.x_hs, false);
+    let e = max_abs_diff(&out[..4], &hu.x_post[..4])
+        .max(max_abs_diff(&out[4..], &hu.x_post[4..]) / sc.rate);
+    eprintln!(
+        "released heel strike: new swing knee rate {:.9} (reference {:.9}), |Δx| {e:.1e}",
+        out[7], hu.x_post[7]
+    );
+    assert!(e < 1e-10, "released heel strike differs by {e:e}");
+    assert!(
+        out[7] < -1e-3 * sc.rate,
+        "the new swing knee flexes: {}",
+        out[7]
+    );
+    // momenta: before, rooted at the old stance foot (at the origin, at rest); after, rooted at
+    // the new stance foot (the old swing foot, at rest): the same points in space
+    let (th, thd) = (angles(&g.x_hs[..4]), angles(&g.x_hs[4..]));
+    let o = r.position(&r.swing_arc, [0.0; 2], &th);
+    let (th2, thd2) = (angles(&out[..4]), angles(&out[4..]));
+    let a2 = o;
+    let hip = r.position(&r.hip, [0.0; 2], &th);
+    // the trailing (old stance) knee: the top of the old stance shank
+    let knee_pt = Point {
+        alpha: [r.hip.alpha[0], 0.0, 0.0, 0.0],
+        beta: [0.0; 4],
+    };
+    let knee = r.position(&knee_pt, [0.0; 2], &th);
+    // old body i is new body 4 − i
+    let before = |b: &[usize], p: [f64; 2]| r.angular_momentum(b, p, [0.0; 2], [0.0; 2], &th, &thd);
+    let after = |b: &[usize], p: [f64; 2]| r.angular_momentum(b, p, a2, [0.0; 2], &th2, &thd2);
+    let hip2 = r.position(&r.hip, a2, &th2);
+    assert!(
+        max_abs_diff(&hip, &hip2) < 1e-12,
+        "the hip is the same point"
+    );
+    for (what, b_old, b_new, p) in [
+        (
+            "walker about the new contact",
+            &[0, 1, 2, 3, 4][..],
+            &[0, 1, 2, 3, 4][..],
+            o,
+        ),
+        ("trailing leg about the hip", &[0, 1][..], &[3, 4][..], hip),
+        ("trailing shank about its knee", &[0][..], &[4][..], knee),
+    ] {
+        let (l0, l1) = (before(b_old, p), after(b_new, p));
+        let e = (l1 - l0).abs() / sc.ang;
+        eprintln!("{what}: {l0:.12e} -> {l1:.12e} ({e:.1e} m l sqrt(g l))");
+        assert!(e < 1e-11, "{what} not conserved: {e:e}");
+    }
+    // knee strike: buckles exactly where the reference's stance knee pulls beyond the limit
+    let pk = -g.ks.stance_knee_impulse;
+    for (f, buckles) in [(0.5, true), (2.0, false)] {
+        let w = kneed_latch(None, Some(f * pk));
+        assert_eq!(
+            w.stance_knee_buckles(FREE, &g.x_ks),
+            buckles,
+            "limit {f} x the pull"
+        );
+        let twin = w
+            .guards(FREE)
+            .iter()
+            .position(|s| s.name == "knee_strike_buckles")
+            .unwrap();
+        assert_eq!(w.admissible(FREE, twin, &g.x_ks), buckles);
+        assert_eq!(w.admissible(FREE, 0, &g.x_ks), !buckles);
+    }
+}
+
+/// Bad knee hardware is a clear error naming the field: a negative limit, a limit on a stop,
+/// an unknown hold, a limited latch on a knee locked all step.
+#[test]
+fn bad_latch_hardware_is_a_clear_error() {
+    let text = pdw_walkers::preset_text("kneed").unwrap();
+    let base = WalkerSpec::from_toml(text, "kneed").unwrap();
+    let err = |f: &dyn Fn(&mut WalkerSpec)| {
+        let mut s = base.clone();
+        f(&mut s);
+        ChainWalker::from_spec(s).unwrap_err().to_string()
+    };
+    let e = err(&|s| s.knees[0].latch_torque = Some(Num::Value(-1.0)));
+    assert!(
+        e.contains("knees[0].latch_torque") && e.contains(">= 0"),
+        "{e}"
+    );
+    let e = err(&|s| s.knees[0].latch_impulse = Some(Num::Value(-1e-3)));
+    assert!(
+        e.contains("knees[0].latch_impulse") && e.contains(">= 0"),
+        "{e}"
+    );
+    let e = err(&|s| {
+        s.knees[0].hold = Some("stop".into());
+        s.knees[0].latch_torque = Some(Num::Value(1.0));
+    });
+    assert!(
+        e.contains("knees[0].latch_torque") && e.contains("hold = \"latch\""),
+        "{e}"
+    );
+    let e = err(&|s| s.knees[0].hold = Some("magnet".into()));
+    assert!(
+        e.contains("knees[0].hold") && e.contains("\"magnet\""),
+        "{e}"
+    );
+    let e = err(&|s| {
+        s.knees[0].mode = "locked".into();
+        s.knees[0].latch_impulse = Some(Num::Value(1.0));
+    });
+    assert!(e.contains("free-swing"), "{e}");
+    let e = err(&|s| s.knees[0].latch_torque = Some(Num::Expr("nope".into())));
+    assert!(e.contains("unknown parameter `nope`"), "{e}");
+    // limits as parameters: `--set` addresses them like any other
+    let toml = text.replace(
+        "hold = \"latch\"",
+        "hold = \"latch\"\nlatch_torque = \"lt\"\nlatch_impulse = \"li\"",
+    ).replace(
+        "[parameters]",
+        "[parameters]\nlt = { value = 0.2, unit = \"M L^2/T^2\" }\nli = { value = 0.005, unit = \"M L^2/T\" }",
+    );
+    let spec = WalkerSpec::from_toml(&toml, "kneed_latched").unwrap();
+    let mut t = spec.param_table();
+    let i = t.names.iter().position(|n| n == "lt").unwrap();
+    t.values[i] = 0.3;
+    let w = ChainWalker::new(spec, &t.values).unwrap();
+    assert_eq!(w.latch_limits(), (Some(0.3), Some(0.005)));
 }

@@ -22,8 +22,11 @@
 //! * `normal_force` — the smallest stance normal force; scale `m g`;
 //! * `friction_required` — the largest `|f_t / f_n|` (reported, not a sign: the ground's friction
 //!   coefficient is the user's, see [`crate::design`]);
-//! * `stance_knee_torque`, `swing_knee_torque` — the smallest lock torque of each locked knee
-//!   (positive towards flexion; negative: the stop would have to pull); scale `m g l`;
+//! * `stance_knee_torque`, `swing_knee_torque` — the smallest lock torque `τ` of each locked knee
+//!   (positive towards flexion; negative: the stop would have to pull) against the pull its
+//!   hardware holds ([`Walker::knee_pull_limits`]): the margin is `τ + L` = limit − pull, with
+//!   `L` a latch's `latch_torque` and `L = 0` for a stop or an ideal latch (flagged wherever it
+//!   pulls); scale `m g l`;
 //! * `swing_clearance` — the swing foot's lowest point above the slope
 //!   ([`Walker::swing_clearance`]); scale `l`. Where it must hold is the model's
 //!   [`ClearanceRule`]: [`ClearanceRule::WholeSwing`] from lift-off to heel strike (any point
@@ -41,8 +44,9 @@
 //! # Impacts
 //! At every reset along the stride the model's [`ImpactReport`] at the pre-impact state is
 //! taken ([`Walker::impact_report`]); every entry's consistency margin
-//! ([`pdw_model::ImpulseEntry::margin`]: the impulse of a constraint that holds, the
-//! separation rate of one that releases) is a criterion named `"<event>:<entry>"`, scaled by
+//! ([`pdw_model::ImpulseEntry::margin`]: the impulse of a constraint that holds plus the pull
+//! its hardware holds — a latch's `latch_impulse`, so limit − pull — and the separation rate of
+//! one that releases) is a criterion named `"<event>:<entry>"`, scaled by
 //! `m √(g l)` (contact impulse), `m l √(g l)` (knee-stop angular impulse), `√(g l)` (contact
 //! separation velocity) or `√(g / l)` (knee flexion rate); a negative one is a violation. The
 //! impact's friction requirement is reported ([`Validity::impact_friction_required`]). A model
@@ -383,14 +387,17 @@ impl Validity {
             v.max_friction_required = -m;
             v.t_max_friction_required = t - t0;
         }
-        // knee-lock torques
+        // knee-lock torques, each against the pull its hardware holds
+        let limits = w.knee_pull_limits();
         for (k, name) in ["stance_knee_torque", "swing_knee_torque"]
             .iter()
             .enumerate()
         {
-            let f_k = move |e: &Eval| e.knee[k];
+            let lim = limits[k];
+            // the margin `τ + L` (limit − pull); a stop's and an ideal latch's is `τ` itself
+            let f_k = move |e: &Eval| e.knee[k].map(|t| if lim > 0.0 { t + lim } else { t });
             if let Some((m, t)) = dense.minimum(&pts, all.clone(), &f_k, false) {
-                v.knee_torque[k] = Some(m);
+                v.knee_torque[k] = Some(if lim > 0.0 { m - lim } else { m });
                 push_margin(&mut v, name, m, sc(Scales::torque), "m g l", t);
                 if m < 0.0 {
                     v.knee_unlocks = true;

@@ -158,15 +158,20 @@ pub struct ImpulseEntry {
     /// Rate after the impact along the constraint's allowed direction (normal separation
     /// velocity, knee flexion rate); 0 where active.
     pub rate_after: f64,
+    /// The pulling impulse the constraint's hardware holds (≥ 0): a latch's `latch_impulse`,
+    /// 0 for contacts, stops and ideal latches (reported where they pull).
+    pub pull_limit: f64,
 }
 
 impl ImpulseEntry {
-    /// The consistency margin: the impulse where the constraint holds, the separation rate
-    /// where it released; `None` for a tangential impulse (see
+    /// The consistency margin: the impulse plus the pull the hardware holds
+    /// ([`ImpulseEntry::pull_limit`], i.e. limit − pull) where the constraint holds, the
+    /// separation rate where it released; `None` for a tangential impulse (see
     /// [`ImpactReport::friction_required`]). Negative: the impact map is not physical.
     pub fn margin(&self) -> Option<f64> {
         match (self.kind, self.active) {
             (ImpulseKind::ContactTangential, _) => None,
+            (_, true) if self.pull_limit > 0.0 => Some(self.impulse + self.pull_limit),
             (_, true) => Some(self.impulse),
             (_, false) => Some(self.rate_after),
         }
@@ -206,6 +211,7 @@ impl ImpactReport {
             active,
             impulse,
             rate_after,
+            pull_limit: 0.0,
         };
         ImpactReport {
             event: event.into(),

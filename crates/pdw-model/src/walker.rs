@@ -112,6 +112,13 @@ pub trait Walker: Section {
     fn scales(&self) -> Option<Scales> {
         None
     }
+    /// The pull each locked knee's hardware holds, `[stance knee, swing knee]` (model torque
+    /// units, ≥ 0): a latch's `latch_torque`, 0 for a stop (pushes only) and for an ideal latch
+    /// (reported where it pulls). A lock torque `τ` (positive towards flexion,
+    /// [`ConstraintForces::knee_torque`]) holds while `τ + limit ≥ 0`.
+    fn knee_pull_limits(&self) -> [f64; 2] {
+        [0.0; 2]
+    }
     /// Height of the swing foot's lowest point above the slope at `(mode, x)` (model length
     /// units), if the model has a swing foot.
     fn swing_clearance(&self, _mode: usize, _x: &[f64]) -> Option<f64> {

@@ -64,6 +64,33 @@
 //! [`Walker::impact_report`]) shows the negative margin and the gait is invalid — never
 //! silently valid.
 //!
+//! # Latches with holding limits
+//! A knee with `hold = "latch"` and `latch_torque = L_τ` / `latch_impulse = L_Λ` (two-segment
+//! legs with a free swing knee; the spec refuses limits elsewhere) holds a pull up to those
+//! limits and lets go beyond them; the model then goes on with the knee released:
+//! - in stance (both modes) the guard `stance_latch_releases` is the stance knee's lock torque
+//!   towards flexion plus `L_τ` (the pseudo joint's locking torque, seed eq. 3.18–3.23, by
+//!   [`pdw_soa::pseudo_joint_dynamics`]), falling through 0 where the pull exceeds `L_τ`. The
+//!   released stance knee buckles under the walker's weight: terminal, the fall
+//!   [`FallKind::KneeBuckled`] the impacts name too;
+//! - in the locked mode the guard `swing_latch_releases` is the swing knee's lock torque plus
+//!   `L_τ`: where it falls through 0 the swing knee swings free again (reset to the free mode,
+//!   the state unchanged) until its next knee strike;
+//! - at an impact the latch is a constraint that may release: the model's map holds it where
+//!   its impulse is `≥ −L_Λ`. A stance knee (at the knee strike) or new stance knee (at heel
+//!   strike) that would pull more buckles its leg (the twin guard, as a stop's); the trailing
+//!   knee that becomes the free swing knee is released as a stop's is (its impulse `< −L_Λ`
+//!   instead of `< 0`), so the section has `swing_knee_rate`. A released latch gives no
+//!   impulse (it lets go entirely), so the map jumps where the pull crosses `L_Λ`.
+//!
+//! A swing latch already beyond its limit just after the knee strike lets go at once (the
+//! knee strike's reset returns to the free mode). A stance latch already beyond its limit just
+//! after an impact is not caught (its guard needs a crossing): the gait's stance pull peaks
+//! inside the stance, and validity reports any pull beyond the limit as a violation.
+//! Without limits a latch is ideal (held both ways at every load), exactly as before limits
+//! existed: no latch guard, no `swing_knee_rate`, the same bits. Margins (pdw-limit's
+//! validity): a torque's `τ + L_τ` on `m g l`, an impulse's `Λ + L_Λ` on `m l √(g l)`.
+//!
 //! # Resets
 //! - Knee strike: plastic lock of the free knee with the stance foot's contact point at rest and
 //!   the other knees held. Point feet: the stance foot pinned, kernel
@@ -175,15 +202,15 @@ const _: () = assert!(2 + 2 * MAX_SEGMENTS <= pdw_soa::derivatives::MAX_DOF);
 const SECTION_NAMES: [&str; 4] = ["stance", "stance_rate", "hip_rate", "swing_knee_rate"];
 
 /// The section coordinates of a chain walker resolved as `r`: `(stance, stance_rate,
-/// hip_rate)`, and `swing_knee_rate` when the swing knee is free and held by a stop (not a
-/// latch) while its leg is the stance leg — its stop may release at heel strike, and the new
-/// swing knee then starts flexing (module docs, "Section").
+/// hip_rate)`, and `swing_knee_rate` when the swing knee is free and held by a stop or by a
+/// latch with a `latch_impulse` while its leg is the stance leg — it may release at heel
+/// strike, and the new swing knee then starts flexing (module docs, "Section", "Latches").
 pub fn section_names_of(r: &Resolved) -> &'static [&'static str] {
     let releases = r
         .free_swing
         .iter()
-        .zip(&r.latched)
-        .any(|(free, latched)| *free && !*latched);
+        .zip(r.latched.iter().zip(&r.latch_impulse))
+        .any(|(free, (latched, limit))| *free && (!*latched || limit.is_some()));
     if releases {
         &SECTION_NAMES
     } else {
@@ -246,6 +273,51 @@ const GUARDS_LOCKED: [GuardSpec; 5] = [
     },
 ];
 
+/// The guard of a stance knee's latch letting go (module docs, "Latches"): its lock torque
+/// plus `latch_torque` falling through 0. The stance leg buckles: a fall.
+const STANCE_LATCH: GuardSpec = GuardSpec {
+    name: "stance_latch_releases",
+    crossing: Crossing::Falling,
+    kind: GuardKind::Terminal(FallKind::KneeBuckled),
+};
+
+/// The guard of the locked swing knee's latch letting go (module docs, "Latches"): reset to
+/// the mode with the swing knee free, the state unchanged.
+const SWING_LATCH: GuardSpec = GuardSpec {
+    name: "swing_latch_releases",
+    crossing: Crossing::Falling,
+    kind: GuardKind::Reset,
+};
+
+/// The free mode's guards of a walker whose latch has a `latch_torque`.
+const GUARDS_FREE_LATCH: [GuardSpec; 7] = [
+    GUARDS_FREE[0],
+    GUARDS_FREE[1],
+    GUARDS_FREE[2],
+    GUARDS_FREE[3],
+    GUARDS_FREE[4],
+    GUARDS_FREE[5],
+    STANCE_LATCH,
+];
+
+/// The locked mode's guards of a walker whose latch has a `latch_torque`.
+const GUARDS_LOCKED_LATCH: [GuardSpec; 7] = [
+    GUARDS_LOCKED[0],
+    GUARDS_LOCKED[1],
+    GUARDS_LOCKED[2],
+    GUARDS_LOCKED[3],
+    GUARDS_LOCKED[4],
+    STANCE_LATCH,
+    SWING_LATCH,
+];
+
+/// Which latch a latch guard watches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LatchGuard {
+    Stance,
+    Swing,
+}
+
 /// Index of the twin of guard 0 (the impact guard) in `mode`: the same function, a fall where the
 /// impact's complementarity problem releases a stance knee (see the module docs).
 const TWIN_FREE: usize = 5;
@@ -279,8 +351,14 @@ pub struct ChainWalker {
     /// per joint: a knee held by a latch (both ways) rather than a stop
     latched: Vec<bool>,
     /// the stance joint of the trailing knee that becomes the free swing knee at heel strike,
-    /// when it is held by a stop (its release at heel strike is a mode change of the model)
+    /// when it is held by a stop or a latch with a `latch_impulse` (its release at heel strike
+    /// is a mode change of the model)
     trailing_free: Option<usize>,
+    /// the latch's `latch_torque` (two-segment legs with a free swing knee only; `None`: a stop
+    /// or an ideal latch)
+    latch_torque: Option<f64>,
+    /// the latch's `latch_impulse` (as `latch_torque`)
+    latch_impulse: Option<f64>,
     state_names: Vec<String>,
     /// inclination `Δ` of the landing line against the stance foot's line (0: the same line;
     /// module docs, "Landing on a tilted line")
@@ -423,7 +501,11 @@ impl ChainWalker {
             .collect();
         let floating_knees = knees.iter().map(|k| k + 2).collect();
         // old stance joint i + 1 becomes new swing joint 2m − 1 − i at the leg swap
-        let trailing_free = free_knee.map(|fk| 2 * m - fk).filter(|j| !latched[*j]);
+        let latch_torque = r.latch_torque.iter().flatten().copied().next();
+        let latch_impulse = r.latch_impulse.iter().flatten().copied().next();
+        let trailing_free = free_knee
+            .map(|fk| 2 * m - fk)
+            .filter(|j| !latched[*j] || latch_impulse.is_some());
         let mut names = vec!["stance".to_string()];
         let knee_name = |side: &str, i: usize| {
             if m == 2 {
@@ -454,6 +536,8 @@ impl ChainWalker {
             floating_knees,
             latched,
             trailing_free,
+            latch_torque,
+            latch_impulse,
             state_names: names,
             tilt: 0.0,
             tilt_sc: (0.0, 1.0),
@@ -736,6 +820,70 @@ impl ChainWalker {
         x[..self.m].iter().sum()
     }
 
+    /// The latch guard guard `k` of `mode` is, if any (module docs, "Latches"): the stance
+    /// latch in both modes, the swing latch in the locked mode, after the model's other guards.
+    fn latch_guard(&self, mode: usize, k: usize) -> Option<LatchGuard> {
+        self.latch_torque?;
+        let first = if self.free_knee.is_some() && mode == FREE {
+            GUARDS_FREE.len()
+        } else {
+            GUARDS_LOCKED.len()
+        };
+        match k.checked_sub(first) {
+            Some(0) => Some(LatchGuard::Stance),
+            Some(1) if mode == LOCKED => Some(LatchGuard::Swing),
+            _ => None,
+        }
+    }
+
+    /// The latch guard's value at `x`: the knee's lock torque towards flexion `τ` (the stance
+    /// knee's kernel torque, the swing knee's negated; [`ChainWalker::constraint_forces_ws`])
+    /// plus the pull the latch holds, `τ + L`: positive while it holds, falling through 0 where
+    /// the pull exceeds `latch_torque`.
+    fn latch_guard_value(&self, ws: &mut Scratch, mode: usize, x: &[f64], g: LatchGuard) -> f64 {
+        let n = self.n;
+        let mut qdd = [0.0; 2 * MAX_SEGMENTS];
+        let mut lock = [0.0; 2 * MAX_SEGMENTS];
+        self.dynamics(ws, mode, x, &mut qdd[..n], &mut lock[..n]);
+        let l = self.latch_torque.unwrap_or(0.0);
+        match g {
+            LatchGuard::Stance => lock[1] + l,
+            LatchGuard::Swing => -lock[n - 1] + l,
+        }
+    }
+
+    /// Gradient of a latch guard (the lock torque): central differences of
+    /// [`ChainWalker::latch_guard_value`], step `ε^(1/3) max(|x_j|, 1)` (relative error
+    /// ~1e-10). The kernel has no derivative of a locking torque; of this model's gradients it
+    /// is the one computed by differences, and a stride map's Jacobian needs it only through
+    /// the swing latch's release (the stance latch's is a fall).
+    fn latch_guard_gradient(
+        &self,
+        ws: &mut Scratch,
+        mode: usize,
+        x: &[f64],
+        g: LatchGuard,
+        grad: &mut [f64],
+    ) {
+        let d = 2 * self.n;
+        let mut xp = [0.0; DMAX];
+        xp[..d].copy_from_slice(&x[..d]);
+        for j in 0..d {
+            let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
+            xp[j] = x[j] + h;
+            let gp = self.latch_guard_value(ws, mode, &xp[..d], g);
+            xp[j] = x[j] - h;
+            let gm = self.latch_guard_value(ws, mode, &xp[..d], g);
+            xp[j] = x[j];
+            grad[j] = (gp - gm) / (2.0 * h);
+        }
+    }
+
+    /// The latch's `latch_torque` and `latch_impulse` (`None`: a stop, an ideal latch).
+    pub fn latch_limits(&self) -> (Option<f64>, Option<f64>) {
+        (self.latch_torque, self.latch_impulse)
+    }
+
     /// The leg swap (seed switch rule, eq. 3.29–3.32) on joint angles `q` and rates `qd`
     /// (length `n` each) into `out` (length `2n`).
     pub fn swap(&self, q: &[f64], qd: &[f64], out: &mut [f64]) {
@@ -836,10 +984,14 @@ impl ChainWalker {
     }
 
     /// Validity flags at one state; a hyper-extended free knee (`q > 0` in the free mode) also
-    /// raises `knee_unlocks`.
+    /// raises `knee_unlocks`. A latch with a `latch_torque` `L` unlocks where its lock torque
+    /// `τ` (positive towards flexion) pulls more than it holds, `τ + L < 0`.
     pub fn check_state_ws(&self, ws: &mut Scratch, mode: usize, x: &[f64]) -> StepFlags {
         let cf = self.constraint_forces_ws(ws, mode, x);
         let mut f = StepFlags::from_state(&cf, self.swing_foot(x), self.leg_length);
+        if let Some(l) = self.latch_torque {
+            f.knee_unlocks = cf.knee_torque.iter().flatten().any(|&t| t + l < 0.0);
+        }
         if let (Some(k), FREE) = (self.free_knee, mode) {
             if x[k] > 1e-9 {
                 f.knee_unlocks = true;
@@ -987,6 +1139,8 @@ struct ImpactProblem {
     items: [pdw_soa::ImpactItem; pdw_soa::unilateral::MAX_ITEMS],
     roles: [Role; pdw_soa::unilateral::MAX_ITEMS],
     hold: [bool; pdw_soa::unilateral::MAX_ITEMS],
+    /// the pulling impulse each item's hardware holds (a latch's `latch_impulse`, else 0)
+    limit: [f64; pdw_soa::unilateral::MAX_ITEMS],
     len: usize,
 }
 
@@ -996,6 +1150,21 @@ impl ImpactProblem {
         self.roles[self.len] = role;
         self.hold[self.len] = hold;
         self.len += 1;
+    }
+
+    /// [`ImpactProblem::push`] of a knee: a stop (unilateral), an ideal latch (bilateral) or
+    /// a latch with `latch_impulse` `limit` (it may release: unilateral for the solver, released
+    /// by the model where it would pull more than `limit`, module docs "Latches").
+    fn push_knee(
+        &mut self,
+        row: pdw_soa::ImpactRow,
+        latched: bool,
+        limit: Option<f64>,
+        role: Role,
+    ) {
+        let i = self.len;
+        self.push(row, !latched || limit.is_some(), true, role);
+        self.limit[i] = limit.filter(|_| latched).unwrap_or(0.0);
     }
 }
 
@@ -1034,6 +1203,9 @@ impl ChainWalker {
     /// ("while `q₀ > γ`", the stance leg behind the vertical) sees the slope; every other
     /// condition measures the walker against the ground line.
     fn admissible_on(&self, mode: usize, k: usize, x: &[f64], slope: f64, h: f64) -> bool {
+        if self.latch_guard(mode, k).is_some() {
+            return true;
+        }
         let free = self.free_knee.is_some() && mode == FREE;
         let lead = if free { 2 } else { 1 };
         let twin = k != 0 && k == self.twin_guard(mode);
@@ -1074,6 +1246,7 @@ impl ChainWalker {
             }; pdw_soa::unilateral::MAX_ITEMS],
             roles: [Role::StanceFoot; pdw_soa::unilateral::MAX_ITEMS],
             hold: [false; pdw_soa::unilateral::MAX_ITEMS],
+            limit: [0.0; pdw_soa::unilateral::MAX_ITEMS],
             len: 0,
         };
         p.q[2..n + 2].copy_from_slice(&x[..n]);
@@ -1095,7 +1268,7 @@ impl ChainWalker {
                     } else {
                         Role::SwingKnee(j)
                     };
-                    p.push(stop(j), !self.latched[j], true, role);
+                    p.push_knee(stop(j), self.latched[j], self.latch_impulse, role);
                 }
             }
             _ => {
@@ -1114,7 +1287,7 @@ impl ChainWalker {
                     } else {
                         Role::NewStanceKnee(j)
                     };
-                    p.push(stop(j), !self.latched[j], true, role);
+                    p.push_knee(stop(j), self.latched[j], self.latch_impulse, role);
                 }
             }
         }
@@ -1125,7 +1298,21 @@ impl ChainWalker {
     /// problem (contacts and stops push only, [`pdw_soa::unilateral_impact`]) releases a knee of
     /// the leg that is the stance leg after the impact. `false` where the problem has no
     /// solution (the reset then reports the failure).
+    ///
+    /// A latch with a `latch_impulse` `L` (module docs, "Latches") buckles where, in the
+    /// model's impact map ([`ChainWalker::impact_map`]: every knee held but a released trailing
+    /// knee), the stance knee's latch would pull more than it holds: impulse `< −L`.
     pub fn stance_knee_buckles(&self, mode: usize, x: &[f64]) -> bool {
+        if self.latch_impulse.is_some() {
+            let mut v = [0.0; FMAX];
+            return match self.impact_map(mode, x, &mut v, None) {
+                Ok((p, sol)) => (0..p.len).any(|i| {
+                    matches!(p.roles[i], Role::StanceKnee(_) | Role::NewStanceKnee(_))
+                        && sol.items[i].impulse[0] < -p.limit[i]
+                }),
+                Err(_) => false,
+            };
+        }
         let p = self.impact_problem(mode, x);
         let stance_knee =
             |i: usize| matches!(p.roles[i], Role::StanceKnee(_) | Role::NewStanceKnee(_));
@@ -1178,10 +1365,10 @@ impl ChainWalker {
         Ok((p, sol))
     }
 
-    /// At a heel strike of a walker whose trailing free knee is held by a stop
-    /// (`trailing_free`): the index of that knee's item in `p` if its stop would have to pull
-    /// with every constraint of the model held (a negative impulse), i.e. if the model releases
-    /// it. The released problem is then consistent for that knee: with the others held, the
+    /// At a heel strike of a walker whose trailing free knee is held by a stop or a latch with
+    /// a `latch_impulse` `L` (`trailing_free`): the index of that knee's item in `p` if it would
+    /// have to pull (more than `L`) with every constraint of the model held (an impulse below
+    /// `−L`; `L = 0` for a stop), i.e. if the model releases it. The released problem is then consistent for that knee: with the others held, the
     /// stop's impulse and the knee's flexion rate after release have opposite signs (the
     /// Schur complement `e 𝓜⁻¹ eᵀ` restricted to the held rows is positive).
     fn trailing_release_item(&self, mode: usize, p: &ImpactProblem) -> Option<usize> {
@@ -1202,7 +1389,7 @@ impl ChainWalker {
             None,
         )
         .ok()?;
-        (sol.items[i].impulse[0] < 0.0).then_some(i)
+        (sol.items[i].impulse[0] < -p.limit[i]).then_some(i)
     }
 
     /// Whether the model releases the trailing free knee at the heel strike at the pre-impact
@@ -1271,6 +1458,7 @@ impl ChainWalker {
                         active: res.active,
                         impulse: impulse[c],
                         rate_after: if res.active { 0.0 } else { rate[c] },
+                        pull_limit: 0.0,
                     });
                 }
             } else {
@@ -1281,6 +1469,7 @@ impl ChainWalker {
                     active: res.active,
                     impulse: impulse[0],
                     rate_after: if res.active { 0.0 } else { rate[0] },
+                    pull_limit: p.limit[i],
                 });
             }
         }
@@ -1394,10 +1583,14 @@ impl HybridSystem for ChainWalker {
     }
 
     fn guards(&self, mode: usize) -> &[GuardSpec] {
-        if self.free_knee.is_some() && mode == FREE {
-            &GUARDS_FREE
-        } else {
-            &GUARDS_LOCKED
+        match (
+            self.free_knee.is_some() && mode == FREE,
+            self.latch_torque.is_some(),
+        ) {
+            (true, false) => &GUARDS_FREE,
+            (false, false) => &GUARDS_LOCKED,
+            (true, true) => &GUARDS_FREE_LATCH,
+            (false, true) => &GUARDS_LOCKED_LATCH,
         }
     }
 
@@ -1438,15 +1631,26 @@ impl HybridSystem for ChainWalker {
     /// time (same bits as [`HybridSystem::guard`]).
     fn guard_batch(
         &self,
-        _ws: &mut Scratch,
+        ws: &mut Scratch,
         mode: usize,
         k: usize,
         x: MatRef<'_, f64>,
         out: &mut [f64],
     ) {
-        let k = self.base_guard(mode, k);
         let n = self.n;
         let lanes = x.nrows();
+        if let Some(g) = self.latch_guard(mode, k) {
+            // a latch's lock torque: lane by lane through the scalar dynamics
+            let mut xi = [0.0; DMAX];
+            for (l, o) in out.iter_mut().enumerate().take(lanes) {
+                for (j, v) in xi.iter_mut().enumerate().take(2 * n) {
+                    *v = x[(l, j)];
+                }
+                *o = self.latch_guard_value(ws, mode, &xi[..2 * n], g);
+            }
+            return;
+        }
+        let k = self.base_guard(mode, k);
         let free = self.free_knee.is_some() && mode == FREE;
         let lead = if free { 2 } else { 1 };
         let column = |j: usize, out: &mut [f64], shift: f64| {
@@ -1541,6 +1745,19 @@ impl HybridSystem for ChainWalker {
                     rk[l] = fc[j][l];
                 }
             };
+            if let Some(lg) = self.latch_guard(mode, k) {
+                // a latch's lock torque, lane by lane; its rate unknown (+∞: the integrator
+                // samples every step's interior for it)
+                let mut xi = [0.0; DMAX];
+                for l in 0..lanes {
+                    for (j, v) in xi.iter_mut().enumerate().take(2 * n) {
+                        *v = xc[j][l];
+                    }
+                    gk[l] = self.latch_guard_value(ws, mode, &xi[..2 * n], lg);
+                    rk[l] = f64::INFINITY;
+                }
+                continue;
+            }
             match (free, self.base_guard(mode, k)) {
                 (true, 0) => copy(self.free_knee.unwrap_or(0), None),
                 (_, k) if k < lead => {
@@ -1559,8 +1776,12 @@ impl HybridSystem for ChainWalker {
         }
     }
 
-    /// Every guard but the swing-foot height is a state coordinate (plus a constant).
+    /// Every guard but the swing-foot height and a latch's lock torque is a state coordinate
+    /// (plus a constant).
     fn guard_is_linear(&self, mode: usize, k: usize) -> bool {
+        if self.latch_guard(mode, k).is_some() {
+            return false;
+        }
         let k = self.base_guard(mode, k);
         let lead = if self.free_knee.is_some() && mode == FREE {
             2
@@ -1581,8 +1802,13 @@ impl HybridSystem for ChainWalker {
         self.admissible_on(mode, k, x, self.r.slope, self.r.step_down)
     }
 
-    fn reset(&self, ws: &mut Scratch, mode: usize, _k: usize, x: &[f64], out: &mut [f64]) -> usize {
+    fn reset(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], out: &mut [f64]) -> usize {
         let n = self.n;
+        if self.latch_guard(mode, k) == Some(LatchGuard::Swing) {
+            // the swing knee's latch lets go: the knee swings free, nothing jumps
+            out[..2 * n].copy_from_slice(&x[..2 * n]);
+            return FREE;
+        }
         if let (Some(knee), FREE) = (self.free_knee, mode) {
             let s = self.scratch(ws);
             let locked = &self.locked[LOCKED];
@@ -1614,6 +1840,14 @@ impl HybridSystem for ChainWalker {
                 }
             } else {
                 out[n..2 * n].fill(f64::NAN);
+            }
+            // a swing latch that must pull more than it holds right after catching the knee
+            // lets go at once: no crossing of its guard would show it
+            if ok
+                && self.latch_torque.is_some()
+                && self.latch_guard_value(ws, LOCKED, &out[..2 * n], LatchGuard::Swing) < 0.0
+            {
+                return FREE;
             }
             return LOCKED;
         }
@@ -1688,14 +1922,10 @@ impl HybridSystem for ChainWalker {
 
     /// Exact gradients: the knee angle, the swing-foot height (kernel tip-position derivatives),
     /// the stance rate, the stance angle.
-    fn guard_gradient(
-        &self,
-        _ws: &mut Scratch,
-        mode: usize,
-        k: usize,
-        x: &[f64],
-        grad: &mut [f64],
-    ) {
+    fn guard_gradient(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], grad: &mut [f64]) {
+        if let Some(g) = self.latch_guard(mode, k) {
+            return self.latch_guard_gradient(ws, mode, x, g, grad);
+        }
         let k = self.base_guard(mode, k);
         let (n, d) = (self.n, 2 * self.n);
         grad[..d].fill(0.0);
@@ -1731,9 +1961,16 @@ impl HybridSystem for ChainWalker {
     /// Exact reset Jacobians: the impact maps' derivatives by dual numbers through the kernel
     /// ([`pdw_soa::joint_lock_impact_derivatives`], [`pdw_soa::tip_impact_derivatives`]), the
     /// leg swap as its matrix.
-    fn reset_jacobian(&self, ws: &mut Scratch, mode: usize, _k: usize, x: &[f64], jac: &mut [f64]) {
+    fn reset_jacobian(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], jac: &mut [f64]) {
         let (n, d) = (self.n, 2 * self.n);
         jac[..d * d].fill(0.0);
+        if self.latch_guard(mode, k) == Some(LatchGuard::Swing) {
+            // the identity: a mode change without a jump
+            for i in 0..d {
+                jac[i * d + i] = 1.0;
+            }
+            return;
+        }
         if let (Some(knee), FREE) = (self.free_knee, mode) {
             let s = self.scratch(ws);
             let locked = &self.locked[LOCKED];
@@ -1860,7 +2097,10 @@ impl HybridSystem for ChainWalker {
 /// drops the level-ground factor; the impacts, the gradients (`h` is a constant) and the lift
 /// of the trailing leg (not part of a stride) do not see it.
 impl StepHeight for ChainWalker {
-    fn guard_at(&self, _ws: &mut Scratch, mode: usize, k: usize, x: &[f64], h: f64) -> f64 {
+    fn guard_at(&self, ws: &mut Scratch, mode: usize, k: usize, x: &[f64], h: f64) -> f64 {
+        if let Some(g) = self.latch_guard(mode, k) {
+            return self.latch_guard_value(ws, mode, x, g);
+        }
         let k = self.base_guard(mode, k);
         let n = self.n;
         let free = self.free_knee.is_some() && mode == FREE;
@@ -1881,7 +2121,7 @@ impl StepHeight for ChainWalker {
 
     fn guards_with_rates_at(
         &self,
-        _ws: &mut Scratch,
+        ws: &mut Scratch,
         mode: usize,
         x: &[f64],
         f: &[f64],
@@ -1894,6 +2134,11 @@ impl StepHeight for ChainWalker {
         let lead = if free { 2 } else { 1 };
         let ng = self.guards(mode).len();
         for k in 0..ng {
+            if let Some(lg) = self.latch_guard(mode, k) {
+                // rate unknown: +∞ (the integrator samples every step's interior for it)
+                (g[k], rate[k]) = (self.latch_guard_value(ws, mode, x, lg), f64::INFINITY);
+                continue;
+            }
             (g[k], rate[k]) = match (free, self.base_guard(mode, k)) {
                 (true, 0) => {
                     let j = self.free_knee.unwrap_or(0);
@@ -2073,9 +2318,17 @@ impl Walker for ChainWalker {
         }
         for (k, (free, latch)) in r.free_swing.iter().zip(&r.latched).enumerate() {
             s.push_str(&format!(
-                "knees[{k}] = free_swing {free}, hold {}\n",
+                "knees[{k}] = free_swing {free}, hold {}",
                 if *latch { "latch" } else { "stop" }
             ));
+            // limits named where declared (an ideal latch's line as before they existed)
+            if let Some(l) = r.latch_torque[k] {
+                s.push_str(&format!(", latch_torque {l:?}"));
+            }
+            if let Some(l) = r.latch_impulse[k] {
+                s.push_str(&format!(", latch_impulse {l:?}"));
+            }
+            s.push('\n');
         }
         s
     }
@@ -2252,6 +2505,10 @@ impl Walker for ChainWalker {
         (guard == 0)
             .then(|| self.impact_report_at(mode, x_pre))
             .flatten()
+    }
+    /// A latch's `latch_torque` for both knees (it is one knee spec), else 0.
+    fn knee_pull_limits(&self) -> [f64; 2] {
+        [self.latch_torque.unwrap_or(0.0); 2]
     }
     /// Total mass (both legs and the hip mass), leg length, gravity.
     fn scales(&self) -> Option<Scales> {

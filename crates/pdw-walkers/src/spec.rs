@@ -30,6 +30,8 @@
 //! [[knees]]                   # one per joint between consecutive segments (foot side first)
 //! mode = "free-swing"         # "locked" | "free-swing" | an expression: 0 locked, 1 free-swing
 //! hold = "stop"               # "stop" (pushes only; default) | "latch" (holds both ways)
+//! # latch_torque = "latch_torque"    # a latch's largest pull in stance and swing (N m, >= 0)
+//! # latch_impulse = "latch_impulse"  # a latch's largest pulling impulse at an impact (N m s)
 //!
 //! [[gaits]]                   # optional starting points of the fixed-point search
 //! name = "stable"
@@ -145,9 +147,22 @@ pub struct KneeSpec {
     /// stop that can only push; where it would have to pull (at an impact) the stance knee
     /// buckles, a fall — or `"latch"` — a latch that holds both ways, the locked knee of the
     /// published kneed walkers (McGeer 1990, Hsu Chen 2007) and of the seed's pseudo joints
-    /// (§3.4). Validity always judges a walker by stops: a latch that pulls is reported as such.
+    /// (§3.4). Validity judges each knee by its hardware: a stop may not pull, a latch may pull
+    /// up to its limits; an ideal latch (no limits) is reported where it pulls.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hold: Option<String>,
+    /// A latch's holding limit in stance and swing: the largest pulling torque (towards
+    /// extension, holding the knee against flexion: what a stop cannot do) it holds, ≥ 0 (N m in
+    /// SI specs; mass × length² / time² in the spec's units). Beyond it the latch lets go and
+    /// the model goes on with the knee released (chain walker module docs, "Latches"). Only
+    /// with `hold = "latch"`; without it the latch is ideal (holds any pull).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub latch_torque: Option<Num>,
+    /// A latch's holding limit at an impact: the largest pulling angular impulse it holds, ≥ 0
+    /// (N m s in SI specs). Beyond it the impact is solved with the knee released. Only with
+    /// `hold = "latch"`; without it the latch holds any impulse.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub latch_impulse: Option<Num>,
 }
 
 /// A starting point for the fixed-point search on the section.
@@ -258,6 +273,12 @@ pub struct Resolved {
     pub free_swing: Vec<bool>,
     /// Per knee (foot side first): held by a latch (both ways) rather than a stop?
     pub latched: Vec<bool>,
+    /// Per knee (foot side first): the latch's largest pulling torque (`None`: a stop, or an
+    /// ideal latch that holds any pull).
+    pub latch_torque: Vec<Option<f64>>,
+    /// Per knee (foot side first): the latch's largest pulling impulse at an impact (`None`: a
+    /// stop, or an ideal latch).
+    pub latch_impulse: Vec<Option<f64>>,
     /// Gait guesses `(name, section, source)` with their sections evaluated.
     pub gaits: Vec<(String, Vec<f64>, String)>,
 }
@@ -721,6 +742,8 @@ impl WalkerSpec {
         }
         let mut free_swing = Vec::with_capacity(self.knees.len());
         let mut latched = Vec::with_capacity(self.knees.len());
+        let mut latch_torque = Vec::with_capacity(self.knees.len());
+        let mut latch_impulse = Vec::with_capacity(self.knees.len());
         for (i, k) in self.knees.iter().enumerate() {
             let free = match k.mode.trim() {
                 "locked" => false,
@@ -745,18 +768,47 @@ impl WalkerSpec {
                 },
             };
             free_swing.push(free);
-            latched.push(match k.hold.as_deref().map(str::trim) {
-                None | Some("stop") => false,
-                Some("latch") => true,
-                Some(h) => {
-                    return Err(self.err(
+            let latch =
+                match k.hold.as_deref().map(str::trim) {
+                    None | Some("stop") => false,
+                    Some("latch") => true,
+                    Some(h) => return Err(self.err(
                         format!("knees[{i}].hold"),
                         format!("\"{h}\""),
                         "\"stop\" (a hyper-extension stop that only pushes) or \"latch\" (holds \
-                         both ways)",
-                    ))
+                         both ways, up to latch_torque and latch_impulse when given)",
+                    )),
+                };
+            latched.push(latch);
+            let limit = |key: &str, n: &Option<Num>| -> Result<Option<f64>, WalkerError> {
+                let Some(n) = n else { return Ok(None) };
+                let field = format!("knees[{i}].{key}");
+                if !latch {
+                    return Err(self.err(
+                        field,
+                        n.to_string(),
+                        "a holding limit belongs to a latch: set hold = \"latch\" (a stop only \
+                         pushes and holds no pull)",
+                    ));
                 }
-            });
+                nonneg(&field, n).map(Some)
+            };
+            latch_torque.push(limit("latch_torque", &k.latch_torque)?);
+            latch_impulse.push(limit("latch_impulse", &k.latch_impulse)?);
+            let limited = latch_torque[i].is_some() || latch_impulse[i].is_some();
+            if limited && (self.segments.len() != 2 || !free) {
+                return Err(self.err(
+                    format!("knees[{i}]"),
+                    format!(
+                        "mode {}, {} segments",
+                        quoted(k.mode.trim()),
+                        self.segments.len()
+                    ),
+                    "a latch with holding limits needs a two-segment leg with a free-swing knee \
+                     (mode = \"free-swing\"): a swing knee that lets go swings free until its \
+                     knee strike; without limits a latch may hold any knee",
+                ));
+            }
         }
         if free_swing.iter().filter(|f| **f).count() > 1 {
             return Err(self.err(
@@ -793,6 +845,8 @@ impl WalkerSpec {
             segments,
             free_swing,
             latched,
+            latch_torque,
+            latch_impulse,
             gaits,
         })
     }
