@@ -779,8 +779,79 @@ fn read_header(path: &Path, f: &File) -> Result<BasinHeader> {
             ));
         }
     }
+    // The header's own digest (files written before it have none; their header rests on the
+    // checks above alone): a damaged axis value, legend name or run attribute that still parses
+    // is refused here instead of being served or resumed as valid.
+    if has_attr(f, "header_digest") {
+        let written: u64 = get_attr(path, KIND, f, "header_digest")?;
+        let read = header_digest(&h);
+        if written != read {
+            return Err(format_err(
+                path,
+                format!(
+                    "the header is damaged: the grid axes, coordinate names, legend or run \
+                     attributes read back with digest {read:#018x}, written as {written:#018x} \
+                     (/header_digest); the file cannot be trusted or resumed"
+                ),
+            ));
+        }
+    }
     h.validate().map_err(|e| format_err(path, e.to_string()))?;
     Ok(h)
+}
+
+/// The root attribute `header_digest`: 64-bit FNV-1a (as [`block_digest`]) over every field of
+/// the header a reader trusts — the run attributes (command, model, slope, params, resolved
+/// model, integrator, tolerances, stride budget), the grid axes' names and values (f64 bits),
+/// the state names, the legend (in code order) and the shard — each length-prefixed so that no two headers
+/// frame to the same bytes. Written when the file is created, checked by every read of the
+/// header (the explorer, `--resume`, `merge`).
+pub(crate) fn header_digest(h: &BasinHeader) -> u64 {
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+    let mut d: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in (bytes.len() as u64).to_le_bytes().iter().chain(bytes) {
+            d ^= b as u64;
+            d = d.wrapping_mul(PRIME);
+        }
+    };
+    for text in [
+        &h.command,
+        &h.model,
+        &h.params,
+        &h.model_resolved,
+        &h.integrator,
+        &h.tolerances,
+        &h.x_name,
+        &h.y_name,
+    ] {
+        eat(text.as_bytes());
+    }
+    eat(&h.slope.to_bits().to_le_bytes());
+    eat(&h.max_strides.to_le_bytes());
+    let bits =
+        |v: &[f64]| -> Vec<u8> { v.iter().flat_map(|x| x.to_bits().to_le_bytes()).collect() };
+    eat(&bits(&h.x));
+    eat(&bits(&h.y));
+    if let Some(z) = &h.z {
+        eat(z.name.as_bytes());
+        eat(&bits(&z.values));
+    }
+    for n in &h.state_names {
+        eat(n.as_bytes());
+    }
+    // in code order: the file keeps the legend as a JSON object, which does not keep the order
+    let mut legend = h.legend.clone();
+    legend.sort();
+    for (code, name) in &legend {
+        eat(&[*code]);
+        eat(name.as_bytes());
+    }
+    if let Some(sh) = h.shard {
+        eat(&(sh.index as u64).to_le_bytes());
+        eat(&(sh.count as u64).to_le_bytes());
+    }
+    d
 }
 
 /// `/grid/z` of a 3-D file (`None` for a 2-D one).
@@ -954,6 +1025,7 @@ impl BasinWriter {
             set_attr(path, &file, "shard_count", &(s.count as u64))?;
         }
         write_grid(path, &file, h, made)?;
+        set_attr(path, &file, "header_digest", &header_digest(h))?;
         let basin = file.create_group("basin").at(path, "creating /basin")?;
         made.push((*basin).clone());
         let (cells, cells_chunk) = lay.dataset(nz, &[nx]);
@@ -1975,11 +2047,36 @@ pub fn read_basin(path: impl AsRef<Path>) -> Result<BasinData> {
     let strides = Array2::from_shape_vec((rows, nx), strides).expect("rows × nx cells");
     let final_state =
         Array3::from_shape_vec((rows, nx, d), final_state).expect("rows × nx × d values");
+    // What a reader is served is what was written: every block with finished rows against its
+    // checksums and digest (as `--resume` checks them), and a complete file with all its own
+    // rows marked (a damaged `rows_done` would serve finished rows as not computed).
+    let complete: bool = get_attr(path, KIND, &f, "complete")?;
+    let own = own_mask(h);
+    if complete && own.iter().zip(&rows_done).any(|(o, d)| *o && !*d) {
+        return Err(format_err(
+            path,
+            "the file says it is complete but /basin/rows_done misses some of its rows: damaged",
+        ));
+    }
+    let bad = damaged_blocks(&f, h, &rows_done);
+    if let Some(&b) = bad.first() {
+        let r = block_range(b, h.ny());
+        return Err(format_err(
+            path,
+            format!(
+                "{} block(s) of rows read back different from what was written (checksum or \
+                 digest), the first rows {}..{}; `basin --resume` recomputes them",
+                bad.len(),
+                r.start,
+                r.end
+            ),
+        ));
+    }
     Ok(BasinData {
         version: get_str(path, KIND, &f, "version")?,
         created: get_str(path, KIND, &f, "created")?,
         elapsed_s: get_attr(path, KIND, &f, "elapsed_s")?,
-        complete: get_attr(path, KIND, &f, "complete")?,
+        complete,
         rows_done,
         metrics: read_metrics(path, &f, &header.legend)?,
         attractors: read_attractors(path, &f)?,

@@ -322,6 +322,70 @@ fn a_byte_flipped_anywhere_is_refused_repaired_or_harmless() {
     assert!(refused + repaired > 0, "no flip was noticed at all");
 }
 
+/// What the explorer reads (`read_basin`: the header — axes, coordinate names, legend, run
+/// attributes — and the cells) is either refused or equal to the intact file, for a byte flipped
+/// anywhere (a fixed stride through the whole file). Before the header's digest, a flipped axis
+/// value or legend letter that still parsed was served as valid.
+#[test]
+fn a_byte_flipped_anywhere_is_never_read_as_a_different_header() {
+    let dir = scratch("flip-header");
+    let clean = dir.join("clean.h5");
+    let p = dir.join("basin.h5");
+    let h = header(23, 50);
+    complete_file(&clean, &h);
+    let intact = read_basin(&clean).unwrap();
+    assert_eq!(intact.header, h, "the intact file reads its own header");
+    let len = std::fs::metadata(&clean).unwrap().len();
+    let (mut refused, mut same) = (0, 0);
+    let stride = (len / 900).max(1);
+    for at in (0..len).step_by(stride as usize) {
+        std::fs::copy(&clean, &p).unwrap();
+        damage(&p, at, 1, 1);
+        match read_basin(&p) {
+            Err(_) => refused += 1,
+            Ok(d) => {
+                assert!(
+                    d.header == intact.header,
+                    "byte {at} of {len}: served a different header: {:?} against {:?}",
+                    d.header,
+                    intact.header
+                );
+                assert!(
+                    d.outcome == intact.outcome,
+                    "byte {at} of {len}: served different outcome codes"
+                );
+                same += 1;
+            }
+        }
+    }
+    eprintln!(
+        "{len} bytes, every {stride}th flipped: {refused} refused, {same} read as the intact file"
+    );
+    assert!(refused > 0, "no flip was noticed at all");
+}
+
+/// The header's digest is what refuses a damaged axis value that still parses: the same value
+/// changed through HDF5 itself (no checksum can see that) is refused, naming the digest.
+#[test]
+fn an_axis_value_changed_after_writing_is_refused_by_the_header_digest() {
+    let dir = scratch("axis-changed");
+    let p = dir.join("basin.h5");
+    let h = header(23, 50);
+    complete_file(&p, &h);
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        let x = f.dataset("grid/x").unwrap();
+        let mut v = x.read_raw::<f64>().unwrap();
+        v[7] += 1e-3;
+        x.write_raw(&v).unwrap();
+    }
+    let e = read_basin(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("header is damaged") && e.contains("header_digest"),
+        "{e}"
+    );
+}
+
 /// A file of another resolved model (same name and parameter values, a different spec line) is
 /// refused, naming the line that differs.
 #[test]
