@@ -1,10 +1,20 @@
 //! Errors of model construction: bad parameter values, unknown names.
 
+/// A value as a message prints it: the shortest round-trip decimal, with an exponent beyond
+/// 10^±6 (`1e308`, not 309 digits).
+fn short(v: &f64) -> String {
+    if v.is_finite() && *v != 0.0 && !(1e-6..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// Why a model could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum WalkerError {
     /// A parameter value outside its allowed range (or not finite).
-    #[error("parameter `{name}` = {value} is invalid: must be {allowed}")]
+    #[error("parameter `{name}` = {} is invalid: must be {allowed}", short(.value))]
     InvalidParam {
         name: &'static str,
         value: f64,
