@@ -1,7 +1,8 @@
 //! The files a command writes (HDF5, PNG, GIF, CSV), claimed before anything is computed.
 //!
-//! Every writer of every command goes through [`claim`] (the CLI's subcommands, and the
-//! explorer's save, which calls it with its one output), which, in this order:
+//! Every writer of the CLI's subcommands goes through [`claim`] (the explorer's save does not
+//! yet: it writes only fresh names in its `--save-dir`, through `BasinWriter::create` without
+//! force, which locks and refuses an existing path itself), which, in this order:
 //! 1. identifies each path by (device, inode) after following links, and a path that does not
 //!    exist yet by its resolved directory and file name;
 //! 2. refuses an output that is the same file as another output or as an input (the `--model`
