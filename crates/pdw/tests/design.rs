@@ -253,7 +253,9 @@ fn a_multi_start_finds_the_global_optimum_a_single_start_misses() {
         .iter()
         .min_by(|x, y| x.cost.total_cmp(&y.cost))
         .unwrap();
-    assert!(b.cost < 1e-8, "best cost {}", b.cost);
+    // B's floor is 0, A's 0.49 or more: a cost this small is B's basin, converged as far as 60
+    // Nelder–Mead evaluations per run go (|p − B| ~ 4e-4)
+    assert!(b.cost < 1e-6, "best cost {}", b.cost);
     assert!((b.params[0] - B[0]).abs() < 1e-3 && (b.params[1] - B[1]).abs() < 1e-3);
     // run 0 is the single search itself (the same designs, in the same order)
     let mut o = bowl_options(60, 0);

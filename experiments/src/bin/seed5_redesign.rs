@@ -455,6 +455,12 @@ fn run_search(setup: &Setup, budget: usize, init: usize) -> anyhow::Result<(Vec<
             step_length: f64::NAN,
             min_relative_margin: j.relative,
             basin_box: [f64::NAN; 2],
+            binding: j.binding.clone(),
+            shortfall: f64::NAN,
+            strides_survived: f64::NAN,
+            probe_residual: f64::NAN,
+            fates: String::new(),
+            run: 0,
         };
         // the stop model's gait, else the latched one, as the neighbours' start
         if let Some(s) = j.section.as_ref().or(j.latched.as_ref()) {
