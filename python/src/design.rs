@@ -175,7 +175,8 @@ fn write_file(
         plan.options.init,
         plan.starts
     );
-    let prov = pdw::provenance(&call, &options);
+    let mut prov = pdw::provenance(&call, &options);
+    prov.model_spec = pdw::model::spec_toml(&plan.model.model).unwrap_or_default();
     pdw::design::write_file(out, (plan, base, &settings), hist, &prov, &[]).map_err(err)
 }
 

@@ -1394,6 +1394,14 @@ fn mfpt_curve<'py>(
     let plan = |sd: f64| mfpt_plan(m, (kind, dist), sd, (walkers, max_steps, seed), stride_map);
     pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(m, &plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
+    pdw::mfpt::check_memory(
+        m,
+        &plan(sds[sds.len() - 1]),
+        None,
+        &MFPT_FLAGS,
+        CHAIN_FLAGS.mesh,
+    )
+    .map_err(err)?;
     let ests = interruptible(py, || -> PyResult<_> {
         let (x0, _) = pdw::mfpt::start(m).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()
@@ -1551,6 +1559,15 @@ fn mfpt<'py>(
     } else {
         None
     };
+    // the same memory estimate as `pdw-sweep mfpt`, before any walker walks
+    pdw::mfpt::check_memory(
+        &m,
+        &plan,
+        chain_plan.as_ref(),
+        &MFPT_FLAGS,
+        CHAIN_FLAGS.mesh,
+    )
+    .map_err(err)?;
     let (est, start, pair) = interruptible(py, || -> PyResult<_> {
         let (x0, section) = pdw::mfpt::start(&m).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()

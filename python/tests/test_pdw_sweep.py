@@ -368,6 +368,16 @@ def test_a_basin_grid_that_does_not_fit_in_memory_is_refused_before_computing():
         pdw.basin(grid=(30000, 30000))
 
 
+def test_mfpt_walkers_that_do_not_fit_in_memory_are_refused_before_walking():
+    # the same estimate as `pdw-sweep mfpt --walkers`: refused at once, not after an abort
+    with pytest.raises(ValueError, match="walkers 1000000000000: needs about .* of memory"):
+        pdw.mfpt(model="rimless", sd=0.01, walkers=10**12)
+    with pytest.raises(ValueError, match="needs about .* of memory"):
+        pdw.mfpt(model="rimless", sd="0.01:0.02:2", walkers=10**12)
+    with pytest.raises(ValueError, match="mesh 100000 .*needs about .* of memory"):
+        pdw.mfpt(model="rimless", sd=0.01, walkers=10, chain=True, mesh=100000)
+
+
 INTERRUPT_SCRIPT = r"""
 import os, signal, sys, threading, time
 import pdw_sweep as pdw

@@ -21,6 +21,9 @@ pub struct DesignFile {
     pub section_units: Vec<String>,
     /// Units of each measure column (in `data.columns`' order).
     pub column_units: Vec<String>,
+    /// The file's resolved walker spec (`/provenance/model_spec`), if it records one: a design
+    /// of a user's own walker walks without its spec file.
+    pub model_spec: Option<String>,
 }
 
 /// A JSON list of units as the file stores them (`["rad","rad/s"]`), or `n` empty ones.
@@ -56,6 +59,7 @@ pub fn load(path: &Path) -> Result<DesignFile, ApiError> {
         section_units: units_list(path, "section", 3),
         column_units,
         data,
+        model_spec: pdw_store::provenance::read_model_spec(path).ok().flatten(),
     })
 }
 
@@ -73,8 +77,8 @@ pub fn status_word(d: &DesignData, code: u8) -> String {
 }
 
 /// The model's section coordinate names, or `section 0..2` when the model does not build.
-fn section_names(model: &str, fixed: &[(String, f64)]) -> Vec<String> {
-    pdw::build(model, fixed)
+fn section_names(model: &str, spec: Option<&str>, fixed: &[(String, f64)]) -> Vec<String> {
+    pdw::build_recorded(model, spec, fixed)
         .map(|m| m.info.section_names.iter().map(|s| s.to_string()).collect())
         .unwrap_or_else(|_| (0..3).map(|i| format!("section {i}")).collect())
 }
@@ -103,7 +107,11 @@ pub fn to_json(f: &DesignFile) -> Result<Value, ApiError> {
     for ((name, v), u) in d.columns.iter().zip(&f.column_units) {
         columns.push(col(name.clone(), u, v.clone()));
     }
-    for (k, n) in section_names(model, &fixed).iter().enumerate().take(3) {
+    for (k, n) in section_names(model, f.model_spec.as_deref(), &fixed)
+        .iter()
+        .enumerate()
+        .take(3)
+    {
         let v = d.section.iter().map(|s| s[k]).collect();
         columns.push(col(format!("gait {n}"), &f.section_units[k], v));
     }
@@ -130,7 +138,8 @@ fn fixed_values(s: &serde_json::Map<String, Value>) -> Vec<(String, f64)> {
 /// Design `i` walked: its model (the file's fixed values, the design's free values on top),
 /// [`STRIDES_WALKED`] strides from its stored gait with `simulate`'s integrator. A design
 /// without a gait is a 422 naming its status and reason.
-pub fn walk(d: &DesignData, i: usize) -> Result<Value, ApiError> {
+pub fn walk(f: &DesignFile, i: usize) -> Result<Value, ApiError> {
+    let d = &f.data;
     let n = d.params.len();
     let p = d
         .params
@@ -155,7 +164,7 @@ pub fn walk(d: &DesignData, i: usize) -> Result<Value, ApiError> {
         .filter(|(n, _)| !d.free_names.contains(n))
         .collect();
     ov.extend(d.free_names.iter().cloned().zip(p.iter().copied()));
-    let m = pdw::build(model, &ov)
+    let m = pdw::build_recorded(model, f.model_spec.as_deref(), &ov)
         .map_err(|e| ApiError::unprocessable(format!("design {i}'s model '{model}': {}", e.0)))?;
     let integ = pdw::simulate::default_integrator();
     let tr = crate::walk::walk_model(&m, integ, &sec, STRIDES_WALKED)?;

@@ -466,16 +466,50 @@ pub enum Computed {
 /// Window `w` of `src` labelled as `pdw-sweep basin` labels that box: the same plan, gaits and
 /// attractor discovery ([`rebuild_with`]), the cells classified row chunk by row chunk and
 /// relabelled by the attractors, on `pool`. `on_phase` is told each phase as it starts; a
-/// `cancel` set is seen between phases and between row chunks.
+/// `cancel` set is seen between phases and between row chunks, and inside a phase under way
+/// (the gait search, the attractor discovery, a chunk of cells) at its next integration call:
+/// every thread of `pool` watches it as a stop request ([`pdw_hybrid::interrupt::watch`]) for
+/// the call, so the walks the server serves meanwhile on other threads go on.
 pub fn compute(
+    src: &BasinSource,
+    w: &Window,
+    pool: &rayon::ThreadPool,
+    cancel: &Arc<AtomicBool>,
+    done: &AtomicUsize,
+    on_phase: &(dyn Fn(Phase) + Sync),
+) -> Result<Computed, ApiError> {
+    /// Unwatches the flag on every thread of the pool when the call ends, however it ends.
+    struct Watching<'a>(&'a rayon::ThreadPool);
+    impl Drop for Watching<'_> {
+        fn drop(&mut self) {
+            self.0.broadcast(|_| pdw_hybrid::interrupt::watch(None));
+        }
+    }
+    pool.broadcast(|_| pdw_hybrid::interrupt::watch(Some(cancel.clone())));
+    let _watching = Watching(pool);
+    let phase = AtomicU8::new(Phase::Model as u8);
+    let computed = compute_watched(src, w, pool, cancel, done, on_phase, &phase);
+    // a phase stopped inside by the cancel ends in an error (an interrupted search) or in a
+    // result that means nothing: either is the cancel's
+    if cancel.load(Ordering::SeqCst) {
+        return Ok(match computed {
+            Ok(Computed::Cancelled(p)) => Computed::Cancelled(p),
+            _ => Computed::Cancelled(Phase::of(phase.load(Ordering::SeqCst))),
+        });
+    }
+    computed
+}
+
+#[allow(clippy::too_many_arguments)]
+fn compute_watched(
     src: &BasinSource,
     w: &Window,
     pool: &rayon::ThreadPool,
     cancel: &AtomicBool,
     done: &AtomicUsize,
     on_phase: &(dyn Fn(Phase) + Sync),
+    phase: &AtomicU8,
 ) -> Result<Computed, ApiError> {
-    let phase = AtomicU8::new(Phase::Model as u8);
     let go_on = |p: Phase| {
         if cancel.load(Ordering::SeqCst) {
             return false;

@@ -155,7 +155,7 @@ async fn design_walk(State(s): St, body: Body) -> ApiResult {
     s.entry(req.file)?;
     let v = blocking(move || {
         let d = s.entry(req.file)?.design()?;
-        crate::design::walk(&d.data, req.design)
+        crate::design::walk(&d, req.design)
     })
     .await?;
     Ok(Json(v))
@@ -215,8 +215,12 @@ async fn gait(State(s): St, body: Body) -> ApiResult {
     let req: GaitRequest = parse(body)?;
     s.entry(req.file)?;
     let v = blocking(move || {
-        let d = s.entry(req.file)?.sweep()?;
-        crate::sweep::gait(&d, req.branch, req.point)
+        let e = s.entry(req.file)?;
+        let d = e.sweep()?;
+        let spec = pdw_store::provenance::read_model_spec(&e.path)
+            .ok()
+            .flatten();
+        crate::sweep::gait(&d, spec.as_deref(), req.branch, req.point)
     })
     .await?;
     Ok(Json(v))

@@ -96,10 +96,35 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
     let g = &w.grid;
     let (nx, ny) = (g.nx(), g.ny());
     let path = fresh_path(dir, &src.data.header.model, nx, ny);
+    // the one claim every writer goes through (pdw::output): the file is not the basin it
+    // refines, the directory takes writes, and no other writer holds the name; then handed to
+    // the basin writer, which locks it itself
+    let mut claim = pdw::output::claim(
+        &[pdw::output::Output {
+            flag: "save",
+            path: &path,
+            format: pdw::output::Format::Hdf5,
+            may_exist: false,
+        }],
+        &[pdw::output::Input {
+            flag: "the explored file",
+            path: &src.path,
+        }],
+        false,
+    )
+    .map_err(|e| ApiError::internal(format!("saving: {}", e.0)))?;
+    claim.hand_over(&path);
     let failed = |e: pdw_store::StoreError| ApiError::internal(format!("saving: {e}"));
     let h = header(src, w);
     let mut writer = BasinWriter::create(&path, &h, false).map_err(failed)?;
-    let prov = pdw::provenance(&h.command, &options(w));
+    let mut prov = pdw::provenance(&h.command, &options(w));
+    prov.model_spec = w
+        .rebuilt
+        .m
+        .info
+        .spec()
+        .map(|s| s.to_toml())
+        .unwrap_or_default();
     let units = units(src, &w.rebuilt);
     let coordinates = w.rebuilt.m.coordinates_json();
     writer

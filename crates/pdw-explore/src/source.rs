@@ -36,6 +36,9 @@ pub struct BasinSource {
     pub coordinates: serde_json::Value,
     /// The provenance's `options` (every numerical option of the run).
     pub options: serde_json::Value,
+    /// The provenance's resolved walker spec (`model_spec`), which rebuilds a user's own walker
+    /// without its spec file; `None` for closed-form models and older files.
+    pub model_spec: Option<String>,
 }
 
 /// Reads the basin file at `path`; a file that is not one (or is damaged) is a clear error.
@@ -46,8 +49,10 @@ pub fn load(path: &Path) -> Result<BasinSource, ApiError> {
     let (prov, coords) =
         pdw_store::provenance::read_run_description(path).map_err(|e| bad(e.to_string()))?;
     let options = prov
+        .as_ref()
         .map(|p| serde_json::from_str(&p.options).unwrap_or_default())
         .unwrap_or_default();
+    let model_spec = prov.map(|p| p.model_spec).filter(|s| !s.is_empty());
     let coordinates = coords
         .and_then(|c| serde_json::from_str(&c).ok())
         .unwrap_or_else(|| serde_json::json!({}));
@@ -67,6 +72,7 @@ pub fn load(path: &Path) -> Result<BasinSource, ApiError> {
         units,
         coordinates,
         options,
+        model_spec,
     })
 }
 
@@ -82,8 +88,13 @@ pub struct Rebuilt {
     pub seeds: usize,
 }
 
-/// The model of header `h` with its parameters, then `extra` on top.
-pub fn model(h: &BasinHeader, extra: &[(String, f64)]) -> Result<BuiltModel, ApiError> {
+/// The model of header `h` (from the file's resolved spec `spec` where it records one,
+/// [`pdw::build_recorded`]) with its parameters, then `extra` on top.
+pub fn model(
+    h: &BasinHeader,
+    spec: Option<&str>,
+    extra: &[(String, f64)],
+) -> Result<BuiltModel, ApiError> {
     let params: serde_json::Map<String, serde_json::Value> = serde_json::from_str(&h.params)
         .map_err(|_| ApiError::unprocessable("the file's params attribute is not a JSON object"))?;
     let mut ov: Vec<(String, f64)> = params
@@ -92,7 +103,7 @@ pub fn model(h: &BasinHeader, extra: &[(String, f64)]) -> Result<BuiltModel, Api
         .filter(|(n, _)| !extra.iter().any(|(e, _)| e == n))
         .collect();
     ov.extend_from_slice(extra);
-    pdw::build(&h.model, &ov).map_err(|e| {
+    pdw::build_recorded(&h.model, spec, &ov).map_err(|e| {
         ApiError::unprocessable(format!(
             "the file's model '{}' cannot be built here: {}",
             h.model, e.0
@@ -205,7 +216,7 @@ pub fn rebuild_with(
     go_on: &dyn Fn(crate::jobs::Phase) -> bool,
 ) -> Result<Option<Rebuilt>, ApiError> {
     use crate::jobs::Phase;
-    let m = model(&src.data.header, &w.overrides)?;
+    let m = model(&src.data.header, src.model_spec.as_deref(), &w.overrides)?;
     let req = request(src, &m, w)?;
     let failed = |e: pdw_limit::LimitError| ApiError::internal(format!("gait search: {e}"));
     if !go_on(Phase::GaitSearch) {

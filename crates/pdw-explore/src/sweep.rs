@@ -32,8 +32,8 @@ pub fn to_json(d: &SweepData) -> Value {
 
 /// The gait at point `i` of branch `branch`: the model rebuilt at that parameter value (the
 /// file's other parameters), and a walk of [`PERIODS_WALKED`] periods from its section state
-/// with `simulate`'s integrator.
-pub fn gait(d: &SweepData, branch: usize, i: usize) -> Result<Value, ApiError> {
+/// with `simulate`'s integrator. `spec`: the file's resolved walker spec, if it records one.
+pub fn gait(d: &SweepData, spec: Option<&str>, branch: usize, i: usize) -> Result<Value, ApiError> {
     let b = d.branches.get(branch).ok_or_else(|| {
         ApiError::not_found(format!("no branch {branch} of {}", d.branches.len()))
     })?;
@@ -52,7 +52,7 @@ pub fn gait(d: &SweepData, branch: usize, i: usize) -> Result<Value, ApiError> {
         .filter_map(|(n, v)| Some((n.clone(), v.as_f64()?)))
         .collect();
     ov.push((d.parameter.clone(), b.parameter[i]));
-    let m = pdw::build(&d.model, &ov)
+    let m = pdw::build_recorded(&d.model, spec, &ov)
         .map_err(|e| ApiError::unprocessable(format!("the file's model '{}': {}", d.model, e.0)))?;
     let steps = PERIODS_WALKED * b.period_strides.max(1) as usize;
     let integ = pdw::simulate::default_integrator();

@@ -14,8 +14,14 @@
 //! guess". Their results are meaningless after a request: a front end that polls the flag
 //! discards them ([`requested`] after the call) and reports the interrupt. The flag stays set until
 //! [`clear`] (the Python package clears it once its interrupted call has returned).
+//!
+//! A front end that runs several computations in one process (the explorer: a refine job beside
+//! the walks of clicked cells) stops one of them without the others with [`watch`]: a flag of
+//! its own that counts as a request on the threads that watch it, and only there.
 
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 static REQUESTED: AtomicBool = AtomicBool::new(false);
 
@@ -29,8 +35,45 @@ pub fn clear() {
     REQUESTED.store(false, Ordering::SeqCst);
 }
 
-/// Whether a stop has been requested.
+thread_local! {
+    static WATCHED: RefCell<Option<Arc<AtomicBool>>> = const { RefCell::new(None) };
+}
+
+/// Makes `flag` (set: stop) count as a request on this thread until the next `watch`
+/// (`None`: none watched). Returns the flag watched before, to restore it. A computation that
+/// spreads over a rayon pool watches on every thread of it
+/// (`pool.broadcast(|_| watch(Some(flag.clone())))`).
+pub fn watch(flag: Option<Arc<AtomicBool>>) -> Option<Arc<AtomicBool>> {
+    WATCHED.with(|w| w.replace(flag))
+}
+
+/// Whether a stop has been requested: for the whole process ([`request`]) or by the flag this
+/// thread watches ([`watch`]).
 #[inline]
 pub fn requested() -> bool {
     REQUESTED.load(Ordering::Relaxed)
+        || WATCHED.with(|w| {
+            w.borrow()
+                .as_ref()
+                .is_some_and(|f| f.load(Ordering::Relaxed))
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A watched flag is a request on the watching thread only, and unwatching restores it.
+    #[test]
+    fn a_watched_flag_stops_only_its_threads() {
+        let flag = Arc::new(AtomicBool::new(false));
+        assert!(watch(Some(flag.clone())).is_none());
+        assert!(!requested());
+        flag.store(true, Ordering::SeqCst);
+        assert!(requested());
+        let other = std::thread::spawn(requested).join().unwrap();
+        assert!(!other, "another thread saw this thread's flag");
+        assert!(watch(None).is_some());
+        assert!(!requested());
+    }
 }

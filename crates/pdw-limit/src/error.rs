@@ -37,7 +37,7 @@ pub enum LimitError {
     #[error("eigenvalue computation of the stride-map Jacobian failed")]
     Eigen,
     /// A model family could not build the model at a parameter value.
-    #[error("cannot build the model at parameter value {param}: {message}")]
+    #[error("cannot build the model at parameter value {}: {message}", shown(*.param))]
     Model { param: f64, message: String },
     /// Invalid solver option.
     #[error("invalid option `{name}` = {value}: {allowed}")]
@@ -46,6 +46,17 @@ pub enum LimitError {
         value: f64,
         allowed: &'static str,
     },
+}
+
+/// A value in a message: as Rust prints it where that is short, with an exponent beyond
+/// 10^±6 (so 1e308 is not printed as 309 digits).
+fn shown(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-6..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:.6e}")
+    }
 }
 
 impl LimitError {

@@ -66,6 +66,11 @@ pub struct Provenance {
     pub command: String,
     /// Every numerical option of the run, as a JSON object text.
     pub options: String,
+    /// The resolved walker spec of a chain walker (its TOML text, parameters included:
+    /// `WalkerSpec::to_toml`), so a reader rebuilds a user's own walker without its file;
+    /// empty for the closed-form models (rebuilt by name) and files from before it existed.
+    /// Written as the attribute `model_spec` when not empty.
+    pub model_spec: String,
 }
 
 impl Provenance {
@@ -80,6 +85,7 @@ impl Provenance {
             host: hostname(),
             command: command.to_string(),
             options: options.to_string(),
+            model_spec: String::new(),
         }
     }
 
@@ -241,6 +247,9 @@ pub fn write_provenance(path: &Path, file: &File, p: &Provenance) -> Result<()> 
     for (k, v) in p.fields() {
         set_str(path, &g, k, v)?;
     }
+    if !p.model_spec.is_empty() {
+        set_str(path, &g, "model_spec", &p.model_spec)?;
+    }
     if !has_attr(&g, "created") {
         set_str(path, &g, "created", &time::now_rfc3339())?;
     }
@@ -289,6 +298,8 @@ fn read_provenance_at(path: &Path, g: &Location) -> Result<Provenance> {
         host: r("host")?,
         command: r("command")?,
         options: r("options")?,
+        // Files from before the attribute existed, and closed-form models: none.
+        model_spec: r("model_spec").unwrap_or_default(),
     })
 }
 
@@ -753,6 +764,15 @@ pub fn shard_provenance(shards: &[&Path]) -> Result<Vec<Option<Provenance>>> {
             read_provenance(p, &f)
         })
         .collect()
+}
+
+/// The resolved walker spec a file records (`/provenance/model_spec`, [`Provenance::model_spec`]):
+/// `None` for a closed-form model, a file without provenance or one from before it existed.
+pub fn read_model_spec(path: &Path) -> Result<Option<String>> {
+    let f = crate::h5util::open_file(path, false)?;
+    Ok(read_provenance(path, &f)?
+        .map(|p| p.model_spec)
+        .filter(|s| !s.is_empty()))
 }
 
 /// What a file says about its own run beyond its header: its `/provenance` (`None` in files

@@ -12,6 +12,7 @@ use std::io::{Read, Write};
 use std::net::{IpAddr, Ipv4Addr, TcpStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A basin file of `model` on `grid` (extra `args`) in `dir`.
@@ -121,7 +122,7 @@ fn refine_equals_basin(
         z_fixed: None,
         overrides: Vec::new(),
     };
-    let (stop, done) = (AtomicBool::new(false), AtomicUsize::new(0));
+    let (stop, done) = (Arc::new(AtomicBool::new(false)), AtomicUsize::new(0));
     let Computed::Done(_, outcome, strides, _) =
         compute(&src, &w, &pool(), &stop, &done, &|_| {}).unwrap()
     else {
@@ -315,11 +316,16 @@ fn refines_cancel_and_save(server: &pdw_explore::Server, dir: &Path) {
     // a dangling link named like the next save: the save takes the next name, the link stays
     let link = dir.join("explore-simplest-40x40-1.h5");
     std::os::unix::fs::symlink(dir.join("nowhere"), &link).unwrap();
+    // ... and a save of that next name killed before its rename left its temporary file (the
+    // pid of no running process): the save's claim removes it, as every writer's does
+    let stale = dir.join(".explore-simplest-40x40-2.h5.partial-4194303");
+    std::fs::write(&stale, b"half a file").unwrap();
     let (st, j) = c.call("POST", "/api/save", &format!(r#"{{"job": {}}}"#, ids[19]));
     assert_eq!(st, 200, "{j}");
     assert_eq!(j["saved"], "explore-simplest-40x40-2.h5");
     assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
     assert!(!dir.join("nowhere").exists());
+    assert!(!stale.exists(), "the killed save's temporary file is left");
     let saved = dir.join(j["saved"].as_str().unwrap());
     let d = pdw_store::read_basin(&saved).unwrap();
     assert_eq!(d.header.nx(), 40);
@@ -938,7 +944,7 @@ fn cancelled_in(src: &source::BasinSource, at: Option<Phase>) -> Computed {
         z_fixed: None,
         overrides: vec![("slope".into(), 0.0095)],
     };
-    let stop = AtomicBool::new(false);
+    let stop = Arc::new(AtomicBool::new(false));
     let done = AtomicUsize::new(0);
     let on_phase = |p: Phase| {
         if Some(p) == at {
@@ -964,6 +970,69 @@ fn a_cancel_stops_a_window_at_each_phase() {
     // the process-wide interrupt is untouched (walks go on): the next window computes
     assert!(!pdw_hybrid::interrupt::requested());
     assert!(matches!(cancelled_in(&src, None), Computed::Done(..)));
+}
+
+/// A cancel reaches a gait search under way: at a slope with no kneed gait the search walks
+/// every start for seconds (then the window's cells are all falls); cancelled 50 ms into it, the window ends as cancelled in the gait
+/// search within a small part of that time (the walks of other threads are not stopped: the
+/// process-wide interrupt stays clear).
+#[test]
+fn a_cancel_reaches_a_gait_search_under_way() {
+    let dir = tempfile::tempdir().unwrap();
+    let k = basin(dir.path(), "kneed", &["--model", "kneed", "--grid", "4x4"]);
+    let src = source::load(&k).unwrap();
+    let w = Window {
+        bounds: None,
+        grid: Some((4, 4)),
+        z_fixed: None,
+        overrides: vec![("slope".into(), 0.002)],
+    };
+    let done = AtomicUsize::new(0);
+    // the whole window, not cancelled: a search for seconds that finds no gait, then cells
+    let t0 = Instant::now();
+    let whole = compute(
+        &src,
+        &w,
+        &pool(),
+        &Arc::new(AtomicBool::new(false)),
+        &done,
+        &|_| {},
+    );
+    let whole_s = t0.elapsed().as_secs_f64();
+    assert!(matches!(whole, Ok(Computed::Done(..))), "not computed");
+    assert!(
+        whole_s > 1.0,
+        "the window took only {whole_s} s: too short to test a cancel in"
+    );
+    // cancelled 50 ms after the search starts
+    let stop = Arc::new(AtomicBool::new(false));
+    let cancelled_at = std::sync::Mutex::new(None);
+    let on_phase = |p: Phase| {
+        if p == Phase::GaitSearch {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(50));
+                stop.store(true, Ordering::SeqCst);
+            });
+            *cancelled_at.lock().unwrap() = Some(Instant::now() + Duration::from_millis(50));
+        }
+    };
+    let got = compute(&src, &w, &pool(), &stop, &done, &on_phase).unwrap();
+    let after = cancelled_at
+        .lock()
+        .unwrap()
+        .unwrap()
+        .elapsed()
+        .as_secs_f64();
+    assert!(
+        matches!(got, Computed::Cancelled(Phase::GaitSearch)),
+        "not cancelled in the gait search"
+    );
+    assert!(
+        after < whole_s / 4.0,
+        "the search went on {after:.2} s after the cancel (whole search {whole_s:.2} s)"
+    );
+    assert!(!pdw_hybrid::interrupt::requested());
 }
 
 #[test]

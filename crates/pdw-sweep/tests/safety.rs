@@ -551,6 +551,13 @@ fn messages_show_extreme_values_briefly_and_name_the_point_that_differs() {
     ]);
     let msg = refused(&o);
     assert!(longest_digits(&msg) < 30, "{msg}");
+    // a disturbance the model refuses, through the stride map's error
+    let o = run(&["disturb", "--once", "1e308"]);
+    let msg = refused(&o);
+    assert!(
+        longest_digits(&msg) < 30 && msg.contains("1.000000e308"),
+        "{msg}"
+    );
     // a file whose y axis differs from the run's at one interior point
     let (r, _) = reference(dir.path());
     let h = pdw_store::read_basin_header(&r).unwrap();

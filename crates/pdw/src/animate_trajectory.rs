@@ -57,8 +57,11 @@ pub fn model(data: &TrajectoryData, path: &Path) -> Result<BuiltModel, InputErro
         .iter()
         .filter_map(|(k, v)| v.as_f64().map(|v| (k.clone(), v)))
         .collect();
+    // the resolved spec the file records (HDF5 files of a chain walker), which rebuilds a
+    // user's own walker without its spec file
+    let spec = pdw_store::provenance::read_model_spec(path).ok().flatten();
     let mut tried = vec![name.to_string()];
-    let mut built = crate::model::build(name, &overrides);
+    let mut built = crate::model::build_recorded(name, spec.as_deref(), &overrides);
     if built.is_err() {
         if let Some(cmd) = command_model(data).filter(|c| c != name) {
             built = crate::model::build(&cmd, &overrides);

@@ -32,7 +32,7 @@ pub mod sweep;
 
 pub use input::InputError;
 pub use integrator::{integrator, integrator_json, integrator_text, IntegratorChoice};
-pub use model::{build, build_model, build_with, BuiltModel, ModelChoice};
+pub use model::{build, build_model, build_recorded, build_with, BuiltModel, ModelChoice};
 
 /// A run's provenance: build (version, commit, profile), the SIMD path chosen at run time and
 /// the numeric contract all paths keep, host, `command` (the command line, or the Python call)

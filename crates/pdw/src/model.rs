@@ -216,6 +216,43 @@ pub fn build_with(choice: &ModelChoice, extra: &[(String, f64)]) -> Result<Built
 /// sweep or Python's `slope=` — draws [`steep_slope_warning`], once per run.
 pub fn build(name: &str, overrides: &[(String, f64)]) -> Result<BuiltModel, InputError> {
     let info = pdw_walkers::model_info(name).map_err(|e| InputError(e.to_string()))?;
+    build_info(info, overrides)
+}
+
+/// The resolved spec of model `name` (a chain walker: a preset or a spec file) as TOML text
+/// ([`pdw_walkers::spec::WalkerSpec::to_toml`], which parses back to an equal spec), for a
+/// file's provenance (`model_spec`); `None` for the closed-form models, which are rebuilt by
+/// name, and for a name that is no model.
+pub fn spec_toml(name: &str) -> Option<String> {
+    pdw_walkers::model_info(name)
+        .ok()?
+        .spec()
+        .map(|s| s.to_toml())
+}
+
+/// Rebuilds the model a file records: from its resolved spec `spec` (the provenance's
+/// `model_spec`, when the file has one) named `name`, else by `name` (a registry model, or a
+/// spec file where the reader runs), with the file's parameter values `overrides`. A user's own
+/// walker is then rebuilt anywhere, without its spec file.
+pub fn build_recorded(
+    name: &str,
+    spec: Option<&str>,
+    overrides: &[(String, f64)],
+) -> Result<BuiltModel, InputError> {
+    match spec.filter(|t| !t.trim().is_empty()) {
+        Some(text) => {
+            let spec = pdw_walkers::spec::WalkerSpec::from_toml(text, name)
+                .map_err(|e| InputError(format!("the recorded spec of model '{name}': {e}")))?;
+            build_info(pdw_walkers::registry::ModelInfo::from_spec(spec), overrides)
+        }
+        None => build(name, overrides),
+    }
+}
+
+fn build_info(
+    info: pdw_walkers::registry::ModelInfo,
+    overrides: &[(String, f64)],
+) -> Result<BuiltModel, InputError> {
     let refs: Vec<(&str, f64)> = overrides.iter().map(|(n, v)| (n.as_str(), *v)).collect();
     let values = info.resolve(&refs).map_err(|e| InputError(e.to_string()))?;
     let walker = info

@@ -1,8 +1,7 @@
 //! The files a command writes (HDF5, PNG, GIF, CSV), claimed before anything is computed.
 //!
-//! Every writer of the CLI's subcommands goes through [`claim`] (the explorer's save does not
-//! yet: it writes only fresh names in its `--save-dir`, through `BasinWriter::create` without
-//! force, which locks and refuses an existing path itself), which, in this order:
+//! Every writer goes through [`claim`] — the CLI's subcommands and the explorer's save (a fresh
+//! name in its `--save-dir`, the explored file its input) —, which, in this order:
 //! 1. identifies each path by (device, inode) after following links, and a path that does not
 //!    exist yet by its resolved directory and file name;
 //! 2. refuses an output that is the same file as another output or as an input (the `--model`

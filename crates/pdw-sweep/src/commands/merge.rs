@@ -60,10 +60,13 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
     }
     // Provenance: the merge's own, each shard's kept in /provenance/shards; the shards' units
     // and slice; the grid's dimension scales.
-    let prov = super::provenance(serde_json::json!({
+    let mut prov = super::provenance(serde_json::json!({
         "shards": a.shards.len(),
         "entropy_box": DEFAULT_ENTROPY_BOX,
     }));
+    // the shards' resolved walker spec (one model: their headers agree), so the merged file
+    // rebuilds a user's own walker as each shard does
+    prov.model_spec = pdw_store::provenance::read_model_spec(&a.shards[0])?.unwrap_or_default();
     pdw_store::provenance::annotate_merged(&a.out, &inputs, &prov)?;
     draw(&a.out, &png, &header)?;
     let nz = header

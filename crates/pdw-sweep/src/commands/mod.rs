@@ -95,5 +95,22 @@ pub fn command_line() -> String {
 /// and the numeric contract all paths keep, host, command line and `options` (every numerical
 /// option of the run, a JSON object).
 pub fn provenance(options: serde_json::Value) -> pdw_store::Provenance {
-    pdw::provenance(&command_line(), &options)
+    let mut p = pdw::provenance(&command_line(), &options);
+    // the resolved spec of a chain walker's `--model`, so that its files rebuild it anywhere
+    p.model_spec = model_arg()
+        .and_then(|m| pdw::model::spec_toml(&m))
+        .unwrap_or_default();
+    p
+}
+
+/// The value of this run's `--model` (`--model X` or `--model=X`), if given.
+fn model_arg() -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .enumerate()
+        .find_map(|(i, a)| match a.strip_prefix("--model") {
+            Some("") => args.get(i + 1).cloned(),
+            Some(rest) => rest.strip_prefix('=').map(str::to_string),
+            None => None,
+        })
 }
