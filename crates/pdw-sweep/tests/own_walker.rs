@@ -122,7 +122,7 @@ fn files_of_a_users_own_walker_rebuild_it_without_its_spec_file() {
         assert_eq!(r.m.info.name, "mk2");
     }
     // a sweep point's gait walks
-    let sw = pdw_store::read_sweep(&d.join("sw.h5")).unwrap();
+    let sw = pdw_store::read_sweep(d.join("sw.h5")).unwrap();
     let spec = pdw_store::provenance::read_model_spec(&d.join("sw.h5")).unwrap();
     pdw_explore::sweep::gait(&sw, spec.as_deref(), 0, 1)
         .unwrap_or_else(|e| panic!("{}", e.message));

@@ -85,14 +85,9 @@ pub fn search(
     on_eval: &mut (dyn FnMut(&DesignEval) + Send),
 ) -> Result<Vec<DesignEval>, LimitError> {
     let guesses = pdw_limit::gaits::model_guesses(base.walker.as_ref());
-    let names = &plan.space.names;
     let on_eval = std::sync::Mutex::new(on_eval);
     let eval = |run: u32, p: &[f64], g: &[(String, Vec<f64>)]| -> DesignEval {
-        let set: Vec<(String, f64)> = names.iter().cloned().zip(p.iter().copied()).collect();
-        let mut ev = match build_with(&plan.model, &set) {
-            Ok(m) => evaluate_design(p, m.walker.as_ref(), g, &plan.options, pool),
-            Err(e) => DesignEval::bad_model(p, e.0),
-        };
+        let mut ev = evaluate(plan, p, g, pool);
         ev.run = run;
         if let Ok(mut f) = on_eval.lock() {
             (*f)(&ev);
@@ -108,6 +103,66 @@ pub fn search(
         &eval,
         pool,
     )
+}
+
+/// Evaluates design `p` (values of the free parameters) of `plan` from guesses `g`
+/// ([`evaluate_design`]). A design without a gait whose knees are held by stops is graded by
+/// its latched twin ([`crate::model::build_latched_twin`]: the same walker with ideal latches):
+/// where the twin walks, the design costs what the twin's gait costs, whose shortfall counts
+/// what the latches pull — exactly what the stops cannot do — so the search climbs towards
+/// designs whose stops need to pull less, and reaches the stop-only gait where the pull falls
+/// to zero (there the stops hold and the two walkers walk alike). The design keeps its status
+/// (`no gait`), and its reason says what the twin found.
+pub fn evaluate(
+    plan: &DesignPlan,
+    p: &[f64],
+    g: &[(String, Vec<f64>)],
+    pool: &rayon::ThreadPool,
+) -> DesignEval {
+    let set: Vec<(String, f64)> = plan
+        .space
+        .names
+        .iter()
+        .cloned()
+        .zip(p.iter().copied())
+        .collect();
+    let mut ev = match build_with(&plan.model, &set) {
+        Ok(m) => evaluate_design(p, m.walker.as_ref(), g, &plan.options, pool),
+        Err(e) => return DesignEval::bad_model(p, e.0),
+    };
+    if ev.status != status::NO_GAIT {
+        return ev;
+    }
+    if let Ok(Some(twin)) = crate::model::build_latched_twin(&plan.model, &set) {
+        let tw = evaluate_design(p, twin.walker.as_ref(), g, &plan.options, pool);
+        if matches!(
+            tw.status,
+            status::FEASIBLE | status::INVALID | status::UNSTABLE
+        ) {
+            // a feasible twin (its latches never pull) costs as a gait at the margin
+            let cost = if tw.status == status::FEASIBLE {
+                pdw_limit::design::graded_cost(pdw_limit::design::Grade::Gait {
+                    rho: tw.rho,
+                    d: 0.0,
+                })
+            } else {
+                tw.cost
+            };
+            ev.cost = cost;
+            ev.reason = format!(
+                "{}; with ideal latches for its stops: {} (max |λ| = {:.4}{})",
+                ev.reason,
+                status::NAMES[tw.status as usize].replace('_', " "),
+                tw.rho,
+                if tw.reason.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {}", tw.reason)
+                }
+            );
+        }
+    }
+    ev
 }
 
 /// The number of local runs: 1 to 10000.
@@ -129,9 +184,13 @@ pub fn closest(hist: &[DesignEval], min_margin: f64) -> Option<(&DesignEval, Opt
             b.binding, b.min_relative_margin, b.shortfall
         )
     } else if !b.fates.is_empty() {
+        let twin = b
+            .reason
+            .find("with ideal latches")
+            .map_or(String::new(), |i| format!("; {}", &b.reason[i..]));
         format!(
             "no gait; the best guess walked {} of {} strides (smallest stride-to-stride change \
-             {:.3e}); {}",
+             {:.3e}); {}{twin}",
             b.strides_survived,
             pdw_limit::design::PROBE_STRIDES,
             b.probe_residual,

@@ -249,6 +249,34 @@ pub fn build_recorded(
     }
 }
 
+/// The model of `choice` (with `extra` overrides on top) with every knee stop replaced by an
+/// ideal latch (`hold = "latch"` without limits: it holds any pull, and validity reports the
+/// pull as a violation), or `None` when the model has no knee stop (a closed-form model, or
+/// every knee latched already). The design search grades a stop-only design without a gait by
+/// this twin's gait: how much its stops would have to pull.
+pub fn build_latched_twin(
+    choice: &ModelChoice,
+    extra: &[(String, f64)],
+) -> Result<Option<BuiltModel>, InputError> {
+    let info = pdw_walkers::model_info(&choice.model).map_err(|e| InputError(e.to_string()))?;
+    let Some(spec) = info.spec() else {
+        return Ok(None);
+    };
+    let is_stop = |h: &Option<String>| h.as_deref().map(str::trim).is_none_or(|h| h == "stop");
+    if !spec.knees.iter().any(|k| is_stop(&k.hold)) {
+        return Ok(None);
+    }
+    let mut twin = spec.clone();
+    for k in &mut twin.knees {
+        if is_stop(&k.hold) {
+            k.hold = Some("latch".into());
+        }
+    }
+    let mut ov = overrides(choice)?;
+    ov.extend_from_slice(extra);
+    build_info(pdw_walkers::registry::ModelInfo::from_spec(twin), &ov).map(Some)
+}
+
 fn build_info(
     info: pdw_walkers::registry::ModelInfo,
     overrides: &[(String, f64)],

@@ -300,3 +300,79 @@ fn a_multi_start_is_the_same_on_one_and_two_threads_and_after_a_resume() {
     let e = pdw_limit::design::search_multi(&square(), &o, 0, &[], Vec::new(), &eval, &pool(1));
     assert!(e.is_err());
 }
+
+/// A stop-only design without a gait is graded by its latched twin: Hsu Chen's walker with
+/// stops (its stance knee buckles at the knee strike) costs exactly what `models/kneed.toml`
+/// — the same walker with ideal latches, evaluated on its own — costs, its gait invalid by the
+/// pull its latches give; and the cost moves with the design (the flat 9.75 of a buckle before).
+#[test]
+fn a_stop_only_design_without_a_gait_costs_what_its_latched_twin_costs() {
+    use pdw::design::{evaluate, DesignPlan};
+    use pdw_limit::design::{status, DesignOptions, Objective};
+    let kneed = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/kneed.toml"
+    ))
+    .unwrap();
+    let stops_text = kneed.replace("hold = \"latch\"", "hold = \"stop\"");
+    assert_ne!(stops_text, kneed);
+    let stops = std::env::temp_dir().join(format!("kneed-stops-{}.toml", std::process::id()));
+    std::fs::write(&stops, stops_text).unwrap();
+    let plan = |model: &str| DesignPlan {
+        model: pdw::ModelChoice {
+            model: model.into(),
+            slope: None,
+            set: Vec::new(),
+        },
+        space: DesignSpace {
+            names: vec!["hip_mass".into()],
+            lo: vec![0.3],
+            hi: vec![0.7],
+        },
+        options: DesignOptions {
+            objective: Objective::Margin,
+            mu: 0.8,
+            knee_margin: 0.0,
+            min_margin: 0.0,
+            budget: 1,
+            seed: 0,
+            start: None,
+            init: 0,
+            basin_grid: 5,
+            basin_box: None,
+            basin: pdw_limit::basin::BasinOptions::default(),
+            newton_tol: 1e-10,
+        },
+        starts: 1,
+    };
+    let base = pdw::build("kneed", &[]).unwrap();
+    let g = pdw_limit::gaits::model_guesses(base.walker.as_ref());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let (stops_plan, latched_plan) = (plan(stops.to_str().unwrap()), plan("kneed"));
+    for hip in [0.5, 0.45] {
+        let with_stops = evaluate(&stops_plan, &[hip], &g, &pool);
+        let latched = evaluate(&latched_plan, &[hip], &g, &pool);
+        assert_eq!(with_stops.status, status::NO_GAIT, "{}", with_stops.reason);
+        assert!(
+            with_stops.fates.contains("stance knee buckled"),
+            "{}",
+            with_stops.fates
+        );
+        assert_eq!(latched.status, status::INVALID, "{}", latched.reason);
+        assert_eq!(with_stops.cost, latched.cost, "hip_mass {hip}");
+        assert!((1.0..4.5).contains(&with_stops.cost), "{}", with_stops.cost);
+        assert!(
+            with_stops
+                .reason
+                .contains("with ideal latches for its stops: invalid"),
+            "{}",
+            with_stops.reason
+        );
+    }
+    let at = |hip: f64| evaluate(&stops_plan, &[hip], &g, &pool).cost;
+    assert_ne!(at(0.5), at(0.45), "the cost does not move with the design");
+    let _ = std::fs::remove_file(&stops);
+}
