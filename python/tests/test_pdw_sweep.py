@@ -375,7 +375,7 @@ def test_mfpt_walkers_that_do_not_fit_in_memory_are_refused_before_walking():
     with pytest.raises(ValueError, match="needs about .* of memory"):
         pdw.mfpt(model="rimless", sd="0.01:0.02:2", walkers=10**12)
     with pytest.raises(ValueError, match="mesh 100000 .*needs about .* of memory"):
-        pdw.mfpt(model="rimless", sd=0.01, walkers=10, chain=True, mesh=100000)
+        pdw.mfpt(model="compass", sd=0.001, walkers=10, chain=True, mesh=100000)
 
 
 INTERRUPT_SCRIPT = r"""
