@@ -134,7 +134,14 @@ pub fn evaluate(
         return ev;
     }
     if let Ok(Some(twin)) = crate::model::build_latched_twin(&plan.model, &set) {
-        let tw = evaluate_design(p, twin.walker.as_ref(), g, &plan.options, pool);
+        // the twin's section has no `swing_knee_rate` (a latched trailing knee is never
+        // released): the guesses' first coordinates (the rate is 0 where a stop held)
+        let dim = twin.walker.section_dim();
+        let g_twin: Vec<(String, Vec<f64>)> = g
+            .iter()
+            .map(|(n, s)| (n.clone(), s[..s.len().min(dim)].to_vec()))
+            .collect();
+        let tw = evaluate_design(p, twin.walker.as_ref(), &g_twin, &plan.options, pool);
         if matches!(
             tw.status,
             status::FEASIBLE | status::INVALID | status::UNSTABLE

@@ -345,15 +345,20 @@ fn a_stop_only_design_without_a_gait_costs_what_its_latched_twin_costs() {
         },
         starts: 1,
     };
-    let base = pdw::build("kneed", &[]).unwrap();
-    let g = pdw_limit::gaits::model_guesses(base.walker.as_ref());
+    // each search's guesses are its own model's (the stops' section has `swing_knee_rate`)
+    let guesses = |m: &str| {
+        let base = pdw::build(m, &[]).unwrap();
+        pdw_limit::gaits::model_guesses(base.walker.as_ref())
+    };
+    let (g_stops, g) = (guesses(stops.to_str().unwrap()), guesses("kneed"));
+    assert_eq!(g_stops[0].1.len(), 4, "{g_stops:?}");
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap();
     let (stops_plan, latched_plan) = (plan(stops.to_str().unwrap()), plan("kneed"));
     for hip in [0.5, 0.45] {
-        let with_stops = evaluate(&stops_plan, &[hip], &g, &pool);
+        let with_stops = evaluate(&stops_plan, &[hip], &g_stops, &pool);
         let latched = evaluate(&latched_plan, &[hip], &g, &pool);
         assert_eq!(with_stops.status, status::NO_GAIT, "{}", with_stops.reason);
         assert!(
@@ -372,7 +377,7 @@ fn a_stop_only_design_without_a_gait_costs_what_its_latched_twin_costs() {
             with_stops.reason
         );
     }
-    let at = |hip: f64| evaluate(&stops_plan, &[hip], &g, &pool).cost;
+    let at = |hip: f64| evaluate(&stops_plan, &[hip], &g_stops, &pool).cost;
     assert_ne!(at(0.5), at(0.45), "the cost does not move with the design");
     let _ = std::fs::remove_file(&stops);
 }
