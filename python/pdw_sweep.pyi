@@ -132,7 +132,7 @@ def basin(
     Returns (outcome codes (ny, nx) uint8, legend {code: name}: exactly the codes the outcome
     can hold — the fixed codes (0 `gait` only when there is a stable period-one gait; falls,
     other, nonfinite, timeout, ...) and one
-    code from 10 up per other attractor (`period-2`, `period-2b`, `chaotic`, ...), metrics):
+    code from 16 up per other attractor (`period-2`, `period-2b`, `chaotic`, ...), metrics):
     metrics has fractions {name: fraction of cells}, basin_entropy, boundary_entropy, box_size,
     x_name, y_name, x (nx,), y (ny,), attractors (list of dicts in discovery order: name, code,
     kind ("periodic" or "chaotic"), period_k (0 if chaotic), points (k × d_s, the orbit in

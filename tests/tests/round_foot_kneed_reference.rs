@@ -1483,7 +1483,42 @@ fn kneed_gait(r: &Reference, w: &ChainWalker) -> KneedGait {
 /// contact pushing, the trailing foot leaving the ground, the swing foot above the slope.
 #[test]
 fn latch_margins_are_the_limit_minus_the_reference_pull() {
-    let ideal = kneed_latch(None, None);
+    latch_margins_against_the_reference(&kneed_latch, &|pt, pi, _| (2.0 * pt, 2.0 * pi), true);
+}
+
+/// `models/seed5_latched.toml` (the seed's walker with a free swing knee at slope 0.1) with the
+/// latch limits replaced by `torque`, `impulse` (`None`: the ideal latch).
+fn seed5_latch(torque: Option<f64>, impulse: Option<f64>) -> ChainWalker {
+    let text = include_str!("../../models/seed5_latched.toml");
+    let mut spec = WalkerSpec::from_toml(text, "seed5_latched").unwrap();
+    spec.knees[0].latch_torque = torque.map(Num::Value);
+    spec.knees[0].latch_impulse = impulse.map(Num::Value);
+    ChainWalker::from_spec(spec).unwrap()
+}
+
+/// The seed's walker (Table 3.1) with its smallest latch: the pulls plus 1 % of their scales,
+/// as `models/seed5_latched.toml` documents. Every latch margin is the reference's limit − pull
+/// and at least 1 %; the gait stays invalid, and the reference says so from its own loads (its
+/// swing foot passes below the slope before the knee strike).
+#[test]
+fn the_seed_walkers_smallest_latch_against_the_reference() {
+    latch_margins_against_the_reference(
+        &seed5_latch,
+        &|pt, pi, sc| (pt + 0.01 * sc.torque, pi + 0.01 * sc.ang),
+        false,
+    );
+}
+
+/// The engine's latch margins and verdict at the reference's gait of the ideal-latch walker
+/// `build(None, None)`, with limits `limits(torque pull, impulse pull, scales)`: every knee
+/// margin limit − the reference's pull (to 1e-7 of its scale) and the verdict the reference's
+/// own loads give (`valid`, which the caller states).
+fn latch_margins_against_the_reference(
+    build: &dyn Fn(Option<f64>, Option<f64>) -> ChainWalker,
+    limits: &dyn Fn(f64, f64, &Scales) -> (f64, f64),
+    valid: bool,
+) {
+    let ideal = build(None, None);
     let r = Reference::new(&ideal);
     let sc = r.scales();
     let g = kneed_gait(&r, &ideal);
@@ -1500,9 +1535,9 @@ fn latch_margins_are_the_limit_minus_the_reference_pull() {
         g.hs.trailing_knee_impulse,
         g.hs.new_stance_knee_impulse
     );
-    assert!(pull_t > 0.0 && pull_i > 0.0, "Hsu Chen's latch pulls");
-    let (lt, li) = (2.0 * pull_t, 2.0 * pull_i);
-    let w = kneed_latch(Some(lt), Some(li));
+    assert!(pull_t > 0.0 && pull_i > 0.0, "the ideal latch pulls");
+    let (lt, li) = limits(pull_t, pull_i, &sc);
+    let w = build(Some(lt), Some(li));
     let mut x0 = vec![0.0; w.dim()];
     let s4 = [g.section[0], g.section[1], g.section[2], 0.0];
     w.lift(&s4[..w.section_dim()], &mut x0);
@@ -1590,6 +1625,7 @@ fn latch_margins_are_the_limit_minus_the_reference_pull() {
         "engine and reference verdicts differ: {:?}",
         v.failures()
     );
+    assert_eq!(ref_valid, valid, "the reference's verdict");
     // the ideal latch is flagged where it pulls (margin = the torque itself)
     let mut x3 = vec![0.0; ideal.dim()];
     ideal.lift(&g.section, &mut x3);

@@ -24,7 +24,9 @@
 //!   (1e-6 and 1e-10) leave four decades. A recurrence of a walker that stands still (below) is
 //!   not an attractor: it is labelled [`Outcome::Fall`].
 //! - **fall** with its kind — a terminal guard of the model fired (the kind comes from the
-//!   guard's code through [`BasinProblem::fall_outcome`]), or no section event occurred within
+//!   guard's code through [`BasinProblem::fall_outcome`]: forward, backward, the swing knee bent
+//!   at the foot strike, a stance knee buckled, a rimless wheel rolling back, each its own class
+//!   by [`Outcome::of_fall`]), or no section event occurred within
 //!   the stride time budget [`Section::max_stride_time`] ([`Outcome::FallNoHeelStrike`]).
 //! - **stands still** ([`Outcome::Fall`]) — where the cell would be labelled by a recurrence or
 //!   time out, the walk has died out ([`stands_still`]): its section state is within `tol_gait`
@@ -101,11 +103,18 @@ pub enum Outcome {
     NonFinite = 8,
     /// The integrator failed (step size collapse, step budget, too many events per stride).
     IntegratorFailure = 9,
+    /// The swing foot struck the ground before the swing knee locked ([`FallKind::KneeBent`]).
+    FallKneeBent = 10,
+    /// A stance knee buckled: its stop would have to pull, or its latch let go
+    /// ([`FallKind::KneeBuckled`]).
+    FallKneeBuckled = 11,
+    /// A rimless wheel rolled back, not reaching its next spoke ([`FallKind::RollsBack`]).
+    FallRollsBack = 12,
 }
 
 impl Outcome {
     /// Every outcome, by code.
-    pub const ALL: [Outcome; 10] = [
+    pub const ALL: [Outcome; 13] = [
         Outcome::Gait,
         Outcome::Other,
         Outcome::FallForward,
@@ -116,6 +125,9 @@ impl Outcome {
         Outcome::Timeout,
         Outcome::NonFinite,
         Outcome::IntegratorFailure,
+        Outcome::FallKneeBent,
+        Outcome::FallKneeBuckled,
+        Outcome::FallRollsBack,
     ];
 
     /// Stable code (the value stored in `/basin/outcome`).
@@ -125,7 +137,7 @@ impl Outcome {
 
     /// Outcome of a code, if it is one.
     pub fn from_code(code: u8) -> Option<Outcome> {
-        Outcome::ALL.get(code as usize).copied()
+        Outcome::ALL.iter().copied().find(|o| o.code() == code)
     }
 
     /// Stable name, e.g. `"gait"`, `"fall_forward"`.
@@ -141,6 +153,9 @@ impl Outcome {
             Outcome::Timeout => "timeout",
             Outcome::NonFinite => "nonfinite",
             Outcome::IntegratorFailure => "integrator_failure",
+            Outcome::FallKneeBent => "fall_knee_bent",
+            Outcome::FallKneeBuckled => "fall_knee_buckled",
+            Outcome::FallRollsBack => "fall_rolls_back",
         }
     }
 
@@ -153,25 +168,30 @@ impl Outcome {
                 | Outcome::FallHipBelowGround
                 | Outcome::FallNoHeelStrike
                 | Outcome::Fall
+                | Outcome::FallKneeBent
+                | Outcome::FallKneeBuckled
+                | Outcome::FallRollsBack
         )
     }
 
-    /// The outcome of a fall of `kind` (the kind a terminal guard carries).
+    /// The outcome of a fall of `kind` (the kind a terminal guard carries): each kind its own
+    /// class, [`FallKind::Other`] the catch-all `fall`.
     pub fn of_fall(kind: FallKind) -> Outcome {
         match kind {
             FallKind::Forward => Outcome::FallForward,
             FallKind::Backward => Outcome::FallBackward,
-            FallKind::KneeBent | FallKind::RollsBack | FallKind::KneeBuckled | FallKind::Other => {
-                Outcome::Fall
-            }
+            FallKind::KneeBent => Outcome::FallKneeBent,
+            FallKind::KneeBuckled => Outcome::FallKneeBuckled,
+            FallKind::RollsBack => Outcome::FallRollsBack,
+            FallKind::Other => Outcome::Fall,
         }
     }
 }
 
 /// First outcome code of the attractors found besides the selected gait (see
 /// [`crate::attractors`]): attractor `i` of them has code `ATTRACTOR_CODE_BASE + i`. Codes below
-/// are the fixed [`Outcome`] codes.
-pub const ATTRACTOR_CODE_BASE: u8 = 10;
+/// are the fixed [`Outcome`] codes (0–12 used, 13–15 kept for fall kinds to come).
+pub const ATTRACTOR_CODE_BASE: u8 = 16;
 
 /// `(code, name)` of every outcome, by code: the legend of a basin file.
 pub fn legend() -> Vec<(u8, &'static str)> {

@@ -493,15 +493,23 @@ where
             s = stride.next;
         }
         let g: Vec<f64> = s.iter().zip(s0).map(|(a, b)| a - b).collect();
+        // G_μ by central differences; where the model cannot be built (or strided) on one side
+        // — at the physical end of a parameter's range, e.g. a mass reaching 0 — by the
+        // one-sided difference on the other (O(dmu) instead of O(dmu²))
         let h = self.opts.dmu;
-        let gp = self.iterate(s0, mu + h)?;
-        let gm = self.iterate(s0, mu - h)?;
+        let (gp, gm) = (self.iterate(s0, mu + h), self.iterate(s0, mu - h));
+        let (hi, lo, width) = match (gp, gm) {
+            (Ok(p), Ok(m)) => (p, m, 2.0 * h),
+            (Ok(p), Err(_)) => (p, s.clone(), h),
+            (Err(_), Ok(m)) => (s.clone(), m, h),
+            (Err(e), Err(_)) => return Err(e),
+        };
         let mut jac = vec![0.0; n * (n + 1)];
         for i in 0..n {
             for j in 0..n {
                 jac[i * (n + 1) + j] = dp[i * n + j] - if i == j { 1.0 } else { 0.0 };
             }
-            jac[i * (n + 1) + n] = (gp[i] - gm[i]) / (2.0 * h);
+            jac[i * (n + 1) + n] = (hi[i] - lo[i]) / width;
         }
         let residual = norm_inf(&g);
         Ok((
@@ -801,6 +809,14 @@ fn run_branch<'m>(
         let (sol, t_new) = match step {
             Ok(v) => v,
             Err(reason) => {
+                // A step that fails beyond the range's end (where the model may not even be
+                // built, e.g. a mass that becomes negative past it) ends the branch at the end
+                // itself when the point there corrects: the range is covered to its end.
+                if let Some(end) = end_point(ctx, &cur, &t_cur, pred[n]) {
+                    let param = end.0.y[n];
+                    points.push(ctx.point(&end.0, end.1)?);
+                    break BranchEnd::ParamBound { param };
+                }
                 ds *= 0.5;
                 if ds < opts.ds_min {
                     let last = points.last().expect("at least the first point");
@@ -893,6 +909,38 @@ fn run_branch<'m>(
         bifurcations: bifs,
         end,
     })
+}
+
+/// Where a step predicted to parameter `mu_pred` beyond the range `[mu_min, mu_max]` failed:
+/// the point at the range's end it crossed, corrected at that parameter (natural constraint)
+/// from the current point `cur` moved along its tangent `t` to it, with its tangent; `None`
+/// when `mu_pred` is inside the range, `cur` is at the end already, or the point does not
+/// correct.
+fn end_point<'m>(
+    ctx: &Ctx<'_, dyn ModelFamily<'m> + '_>,
+    cur: &Solved,
+    t: &[f64],
+    mu_pred: f64,
+) -> Option<(Solved, Vec<f64>)> {
+    let (opts, n) = (&ctx.opts, ctx.n);
+    let mu = cur.y[n];
+    let bound = if mu_pred > opts.mu_max {
+        opts.mu_max
+    } else if mu_pred < opts.mu_min {
+        opts.mu_min
+    } else {
+        return None;
+    };
+    if mu == bound || t[n] == 0.0 || !(opts.mu_min..=opts.mu_max).contains(&mu) {
+        return None;
+    }
+    let along = (bound - mu) / t[n];
+    let pred: Vec<f64> = cur.y.iter().zip(t).map(|(y, ti)| y + ti * along).collect();
+    let mut c = vec![0.0; n + 1];
+    c[n] = 1.0;
+    let sol = ctx.correct(&pred, &c, bound).ok()?;
+    let t_end = ctx.tangent(&sol.jac, t)?;
+    Some((sol, t_end))
 }
 
 /// Eigenvector of `dp` (row-major n × n) for the real eigenvalue closest to `lambda`, by inverse

@@ -39,13 +39,19 @@
 //! `ρ = max |λ|`:
 //!
 //! ```text
-//! stable, d > 0 (invalid):   1 + 3 d / (1 + d) + 0.5 ρ                  in [1, 4.5)
-//! unstable (ρ ≥ 1):          5 + 2 (1 − 1/ρ) + 2 d / (1 + d)           in [5, 9)
+//! stable, d > 0 (invalid):   1 + 3 δ / (1 + δ) + 0.5 ρ                  in [1, 4.5)
+//! unstable (ρ ≥ 1):          5 + 2 (1 − 1/ρ) + 2 δ / (1 + δ)           in [5, 9)
 //! no gait:                   9 + 0.5 (1 − n / N) + 0.5 q / (1 + q)     in [9, 10]
 //! not a model:               11
 //! ```
 //!
-//! where, without a gait, every guess is iterated up to `N` = [`PROBE_STRIDES`] strides
+//! with `δ = d / u` the shortfall in units of `u` = [`SHORTFALL_UNIT`] (one per cent of the
+//! natural scales, the margin asked by default). On that unit a shortfall of a per cent weighs
+//! as much as the stability term at `ρ = 1`, so a local run trades the margin for stability
+//! only where the margin is nearly met: with `d` unscaled (as before) a 2 % pull cost 0.06
+//! against `0.5 ρ`'s 0.3, and the runs bought smaller `ρ` with a larger pull.
+//!
+//! Where, without a gait, every guess is iterated up to `N` = [`PROBE_STRIDES`] strides
 //! ([`probe`]): `n` is the most strides any guess walked before its stride ended otherwise than
 //! at a heel strike, and `q` the smallest relative stride-to-stride change
 //! `‖P(x) − x‖∞ / (1 + ‖x‖∞)` met along the way (the fixed-point residual Newton drives to 0;
@@ -324,12 +330,16 @@ pub enum Grade {
     BadModel,
 }
 
+/// The unit of a gait's shortfall in the graded cost: one per cent of the natural scales (the
+/// default `--min-margin`), module docs.
+pub const SHORTFALL_UNIT: f64 = 0.01;
+
 /// The graded cost of an infeasible design (the bands of the module docs).
 pub fn graded_cost(g: Grade) -> f64 {
     let squash = |x: f64| if x.is_finite() { x / (1.0 + x) } else { 1.0 };
     match g {
-        Grade::Gait { rho, d } if rho < 1.0 => 1.0 + 3.0 * squash(d) + 0.5 * rho,
-        Grade::Gait { rho, d } => 5.0 + 2.0 * (1.0 - 1.0 / rho) + 2.0 * squash(d),
+        Grade::Gait { rho, d } if rho < 1.0 => 1.0 + 3.0 * squash(d / SHORTFALL_UNIT) + 0.5 * rho,
+        Grade::Gait { rho, d } => 5.0 + 2.0 * (1.0 - 1.0 / rho) + 2.0 * squash(d / SHORTFALL_UNIT),
         Grade::NoGait { n, of, q } => {
             let walked = n.min(of) as f64 / of.max(1) as f64;
             9.0 + 0.5 * (1.0 - walked) + 0.5 * squash(q)

@@ -37,18 +37,20 @@ mod attractors {
             got,
             vec![
                 ("gait", 0),
-                ("period-2", 10),
-                ("chaotic", 11),
-                ("period-2b", 12),
-                ("period-1b", 13),
-                ("chaotic-b", 14)
+                ("period-2", 16),
+                ("chaotic", 17),
+                ("period-2b", 18),
+                ("period-1b", 19),
+                ("chaotic-b", 20)
             ]
         );
         let set = AttractorSet { attractors: v };
         let legend = set.legend();
-        assert_eq!(legend.len(), 10 + 5);
+        // the 13 fixed outcomes (0-12), then the attractors from 16
+        assert_eq!(legend.len(), 13 + 5);
         assert_eq!(legend[0], (0, "gait".to_string()));
-        assert_eq!(legend[10], (10, "period-2".to_string()));
+        assert_eq!(legend[12], (12, "fall_rolls_back".to_string()));
+        assert_eq!(legend[13], (16, "period-2".to_string()));
     }
 
     #[test]
@@ -76,8 +78,46 @@ mod attractors {
         ];
         set.relabel(&mut cells);
         let codes: Vec<u8> = cells.iter().map(|c| c.outcome).collect();
-        assert_eq!(codes, vec![10, 1, 11, 7, 2]);
+        assert_eq!(codes, vec![16, 1, 17, 7, 2]);
         assert_eq!(cells[2].outcome(), Outcome::Other);
+    }
+}
+
+mod outcomes {
+    use pdw_hybrid::FallKind;
+    use pdw_limit::basin::{legend, Outcome, ATTRACTOR_CODE_BASE};
+
+    /// Every fall kind a model's terminal guard can carry has its own basin class (the catch-all
+    /// `fall` only for kinds without a name), every code maps back to its outcome, and every
+    /// fixed code lies below the attractors' first.
+    #[test]
+    fn each_fall_kind_is_its_own_class_and_codes_round_trip() {
+        let kinds = [
+            (FallKind::Forward, "fall_forward"),
+            (FallKind::Backward, "fall_backward"),
+            (FallKind::KneeBent, "fall_knee_bent"),
+            (FallKind::KneeBuckled, "fall_knee_buckled"),
+            (FallKind::RollsBack, "fall_rolls_back"),
+            (FallKind::Other, "fall"),
+        ];
+        let mut seen = Vec::new();
+        for (k, name) in kinds {
+            let o = Outcome::of_fall(k);
+            assert_eq!(o.name(), name, "{k:?}");
+            assert!(o.is_fall(), "{k:?}");
+            assert!(!seen.contains(&o.code()), "{k:?} shares a code");
+            seen.push(o.code());
+        }
+        for o in Outcome::ALL {
+            assert_eq!(Outcome::from_code(o.code()), Some(o));
+            assert!(o.code() < ATTRACTOR_CODE_BASE);
+        }
+        for c in [13, 14, 15, ATTRACTOR_CODE_BASE, 255] {
+            assert_eq!(Outcome::from_code(c), None, "{c}");
+        }
+        let l = legend();
+        assert_eq!(l.len(), Outcome::ALL.len());
+        assert_eq!(l[11], (11, "fall_knee_buckled"));
     }
 }
 

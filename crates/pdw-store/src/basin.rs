@@ -660,7 +660,7 @@ pub(crate) fn file_legend_json(legend: &[(u8, String)]) -> String {
 
 /// The `description` attribute of `/basin/final`: what its states are, by outcome.
 pub const FINAL_DESCRIPTION: &str = "section coordinates of the last state of each cell: for \
-gait, every other attractor (codes 10 and up), other and timeout, and for a walk that came to a \
+gait, every other attractor (codes 16 and up), other and timeout, and for a walk that came to a \
 stand (fall, decided on the section), the section state after the last completed stride; for \
 any other fall, nonfinite or integrator_failure the section coordinates of the state where the \
 stride stopped (projected, not on the section); NaN where not computed";

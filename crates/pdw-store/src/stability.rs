@@ -15,8 +15,8 @@
 //!                    C names: the attractors met at any value, by name, then "fall",
 //!                    "timeout", "other"), kinds (JSON list: "attractor", "fall", "timeout",
 //!                    "other"); each row sums to 1
-//! /outcome_fractions f64 [N, 10] the fixed basin outcomes (gait, other, fall_forward, …,
-//!                    integrator_failure, by code) before attractors are told apart; attr columns
+//! /outcome_fractions f64 [N, 13] the fixed basin outcomes (gait, other, fall_forward, …,
+//!                    fall_rolls_back, by code) before attractors are told apart; attr columns
 //! /values/NNN        attrs parameter, attractors (JSON list, one object per attractor found at
 //!                    that value: name, period_strides (0 = chaotic), period_time, points,
 //!                    multipliers [[re, im], …], validity ("valid", "invalid", "not

@@ -350,7 +350,7 @@ fn a_design_without_a_gait_keeps_its_fates_and_the_report_names_the_closest_desi
     );
     // graded by its latched twin (the same walker with ideal latches, models/kneed.toml): a
     // stable gait invalid by its latches' pull, so the cost lies in the band of a stable,
-    // invalid gait, 1 + 3 d/(1 + d) + 0.5 ρ in [1, 4.5), not in the no-gait band [9, 10]
+    // invalid gait, 1 + 3 δ/(1 + δ) + 0.5 ρ in [1, 4.5), not in the no-gait band [9, 10]
     let n = d.column("strides_survived").unwrap()[0];
     let c = d.column("cost").unwrap()[0];
     assert!((1.0..4.5).contains(&c) && n < 10.0, "cost {c}, strides {n}");

@@ -22,6 +22,7 @@ mod own_walker;
 mod resume_model;
 mod safety;
 mod search;
+mod seed5_latched;
 mod self_describing;
 mod simulate;
 mod sweep_output;

@@ -2480,13 +2480,33 @@ impl Walker for ChainWalker {
         }
         pdw_soa::total_energy(&self.chain, &mut s.ws, &x[..n], &x[n..2 * n]).ok()
     }
-    /// The spec's energy unit: J for SI specs (mass × length² / time² in the spec's units).
+    /// The spec's energy unit: J for SI specs, `M L^2/T^2` for a spec in its own units `L`,
+    /// `M`, `T` (Hsu Chen's).
     fn energy_unit(&self) -> &str {
-        "J"
+        match self.spec.unit_system() {
+            crate::units::UnitSystem::Si => "J",
+            crate::units::UnitSystem::Abstract => "M L^2/T^2",
+        }
     }
     /// Time in the unit the spec declares for `max_stride_time` (`"s"` if none); lengths in m
-    /// for a time in s, else in the spec's reference length `l`; forces and torques in N, N m.
+    /// for a time in s, else in the spec's reference length `l`; forces and torques in N, N m
+    /// for SI specs, in `M L/T^2` and `M L^2/T^2` for a spec in its own units `L`, `M`, `T`.
     fn units(&self) -> pdw_model::ModelUnits {
+        if self.spec.unit_system() == crate::units::UnitSystem::Abstract {
+            let time = self
+                .spec
+                .parameters
+                .get("max_stride_time")
+                .map(|p| p.unit.clone())
+                .filter(|u| !u.is_empty())
+                .unwrap_or_else(|| "T".to_string());
+            return pdw_model::ModelUnits {
+                time: time.into(),
+                length: "l".into(),
+                force: "M L/T^2".into(),
+                torque: "M L^2/T^2".into(),
+            };
+        }
         let time = self
             .spec
             .parameters

@@ -453,7 +453,7 @@ fn guard_rates_are_the_derivatives_along_the_flow() {
 /// Units of every preset as its TOML text declares them, read here with the `toml` crate and not
 /// through [`WalkerSpec`]: time in the unit of `max_stride_time` (the kneed preset's `T`, Hsu
 /// Chen's time unit), lengths in m when time is in s and in the leg length `l` otherwise, forces
-/// and torques in N and N m. The kneed preset is named explicitly: its outputs were once
+/// and torques in N and N m (M L/T^2 and M L^2/T^2 for a spec in its own units). The kneed preset is named explicitly: its outputs were once
 /// labelled rad/s and m while its parameters are in Hsu Chen's units.
 #[test]
 fn every_preset_reports_the_units_its_file_declares() {
@@ -467,14 +467,22 @@ fn every_preset_reports_the_units_its_file_declares() {
         assert_eq!(u.time, declared, "{name}: time unit");
         let length = if declared == "s" { "m" } else { "l" };
         assert_eq!(u.length, length, "{name}: length unit");
+        // a spec in its own units L, M, T has no newtons: M L/T^2 and M L^2/T^2
+        let own = declared == "T";
+        let want = if own {
+            ("M L/T^2", "M L^2/T^2", "M L^2/T^2")
+        } else {
+            ("N", "N m", "J")
+        };
         assert_eq!(
-            (u.force.as_ref(), u.torque.as_ref()),
-            ("N", "N m"),
+            (u.force.as_ref(), u.torque.as_ref(), w.energy_unit()),
+            want,
             "{name}"
         );
     }
     let kneed = presets::kneed(&[]).unwrap().units();
     assert_eq!((kneed.time.as_ref(), kneed.length.as_ref()), ("T", "l"));
+    assert_eq!(kneed.torque, "M L^2/T^2");
     let compass = presets::compass(&[]).unwrap().units();
     assert_eq!((compass.time.as_ref(), compass.length.as_ref()), ("s", "m"));
 }

@@ -158,8 +158,8 @@ fn every_shipped_model_keeps_its_numbers_and_units() {
         ChainWalker::from_spec(spec).unwrap();
     }
     assert_eq!(
-        n, 5,
-        "models/ holds compass, kneed, kneed_latched, seed5, seed5_walking"
+        n, 6,
+        "models/ holds compass, kneed, kneed_latched, seed5, seed5_latched, seed5_walking"
     );
     // the example of docs/models.md
     let doc = std::fs::read_to_string(

@@ -90,12 +90,25 @@ use pdw_limit::design::{graded_cost, Grade, Shortfall, PROBE_STRIDES};
 
 #[test]
 fn the_graded_cost_is_the_documented_formula_at_hand_computed_designs() {
-    // stable, invalid: 1 + 3 d/(1 + d) + 0.5 ρ
-    assert!((graded_cost(Grade::Gait { rho: 0.5, d: 1.0 }) - 2.75).abs() < 1e-15);
-    assert!((graded_cost(Grade::Gait { rho: 0.8, d: 0.25 }) - 2.0).abs() < 1e-15);
-    // unstable: 5 + 2 (1 − 1/ρ) + 2 d/(1 + d)
+    // stable, invalid: 1 + 3 δ/(1 + δ) + 0.5 ρ, δ = d / 0.01 (the shortfall in per cent)
+    assert_eq!(pdw_limit::design::SHORTFALL_UNIT, 0.01);
+    assert!((graded_cost(Grade::Gait { rho: 0.5, d: 0.01 }) - 2.75).abs() < 1e-14);
+    assert!(
+        (graded_cost(Grade::Gait {
+            rho: 0.8,
+            d: 0.0025
+        }) - 2.0)
+            .abs()
+            < 1e-14
+    );
+    // a per cent of shortfall outweighs any change of ρ below 1 (1.5 against at most 0.5)
+    assert!(
+        graded_cost(Grade::Gait { rho: 0.99, d: 0.01 })
+            < graded_cost(Grade::Gait { rho: 0.0, d: 0.02 })
+    );
+    // unstable: 5 + 2 (1 − 1/ρ) + 2 δ/(1 + δ)
     assert!((graded_cost(Grade::Gait { rho: 2.0, d: 0.0 }) - 6.0).abs() < 1e-15);
-    assert!((graded_cost(Grade::Gait { rho: 1.25, d: 3.0 }) - 6.9).abs() < 1e-14);
+    assert!((graded_cost(Grade::Gait { rho: 1.25, d: 0.03 }) - 6.9).abs() < 1e-14);
     // no gait: 9 + 0.5 (1 − n/N) + 0.5 q/(1 + q); nothing walked and no stride is the old 10
     let ng = |n, q| graded_cost(Grade::NoGait { n, of: 10, q });
     assert!((ng(5, 1.0) - 9.5).abs() < 1e-15);

@@ -97,7 +97,7 @@ fn the_basin_at_gamma_0_016_holds_the_period_two_gait() {
     // Exactly one attractor: the stable period-2 gait, named and coded as documented.
     assert_eq!(s.set.attractors.len(), 1, "{:?}", s.set.attractors);
     let a = &s.set.attractors[0];
-    assert_eq!((a.name.as_str(), a.code, a.period_k), ("period-2", 10, 2));
+    assert_eq!((a.name.as_str(), a.code, a.period_k), ("period-2", 16, 2));
     assert_eq!(a.kind, AttractorKind::Periodic);
     assert!(s.set.gait().is_none());
     assert!(a.multipliers.iter().all(|l| l.modulus() < 1.0));
@@ -114,10 +114,10 @@ fn the_basin_at_gamma_0_016_holds_the_period_two_gait() {
     }
     // Cells are labelled with the period-2 code; some of them walk on, none is `gait`.
     let r = labels(&m, &s, &s.cells, 2);
-    let n2 = r.iter().filter(|c| c.outcome == 10).count();
+    let n2 = r.iter().filter(|c| c.outcome == 16).count();
     assert!(n2 > 0, "no cell labelled period-2");
     assert!(r.iter().all(|c| c.outcome() != Outcome::Gait));
-    for c in r.iter().filter(|c| c.outcome == 10) {
+    for c in r.iter().filter(|c| c.outcome == 16) {
         assert_eq!(c.attractor, 0);
         assert!(dist(&c.final_state, &a.points[0]).min(dist(&c.final_state, &a.points[1])) < 1e-6);
     }
@@ -158,7 +158,7 @@ fn gamma_0_0189_is_chaotic_and_its_walking_cells_are_labelled_chaotic() {
     let s = setup(&m, 2, 40);
     assert_eq!(s.set.attractors.len(), 1, "{:?}", s.set.attractors);
     let a = &s.set.attractors[0];
-    assert_eq!((a.name.as_str(), a.code, a.period_k), ("chaotic", 10, 0));
+    assert_eq!((a.name.as_str(), a.code, a.period_k), ("chaotic", 16, 0));
     assert_eq!(a.kind, AttractorKind::Chaotic);
     assert!(a.multipliers.is_empty() && a.period_time.is_nan());
     // Independent evidence of chaos on the sample, with the tight integrator: (1) no
@@ -181,7 +181,7 @@ fn gamma_0_0189_is_chaotic_and_its_walking_cells_are_labelled_chaotic() {
     assert!(le > 0.02, "largest Lyapunov exponent {le} per stride");
     // Cells labelled chaotic walked the whole budget and ended near the sample.
     let r = labels(&m, &s, &s.cells, 2);
-    let chaotic: Vec<&CellResult> = r.iter().filter(|c| c.outcome == 10).collect();
+    let chaotic: Vec<&CellResult> = r.iter().filter(|c| c.outcome == 16).collect();
     assert!(!chaotic.is_empty());
     for c in &chaotic {
         assert_eq!(c.strides, BasinOptions::default().max_strides);
