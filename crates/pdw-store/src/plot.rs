@@ -109,13 +109,16 @@ pub(crate) fn rgb(c: [u8; 3]) -> RGBColor {
 /// `fall` reds and oranges (in legend order), `timeout` grey, `nonfinite` black, anything else
 /// purple/teal/pink. Returned in legend order as `(code, [r, g, b])`.
 pub fn outcome_colours(legend: &[(u8, String)]) -> Vec<(u8, [u8; 3])> {
-    const FALLS: [[u8; 3]; 6] = [
+    // one per fall class of the basin's fixed outcomes (eight), so that none shares a colour
+    const FALLS: [[u8; 3]; 8] = [
         [214, 39, 40],
         [255, 127, 14],
         [166, 54, 3],
         [250, 170, 100],
         [140, 20, 40],
         [240, 90, 70],
+        [200, 30, 120],
+        [230, 190, 40],
     ];
     const OTHERS: [[u8; 3]; 4] = [
         [148, 103, 189],

@@ -709,3 +709,35 @@ fn a_long_survival_curve_is_compressed_and_reads_back_exactly() {
     let back = pdw_store::read_mfpt(&path).unwrap();
     assert_eq!(back.survival, survival);
 }
+
+/// Every fixed outcome of a basin file (codes 0–12: eight fall classes among them) has its own
+/// colour, so a picture never paints two outcomes alike.
+#[test]
+fn every_fixed_outcome_has_its_own_colour() {
+    let names = [
+        "gait",
+        "other",
+        "fall_forward",
+        "fall_backward",
+        "fall_hip_below_ground",
+        "fall_no_heel_strike",
+        "fall",
+        "timeout",
+        "nonfinite",
+        "integrator_failure",
+        "fall_knee_bent",
+        "fall_knee_buckled",
+        "fall_rolls_back",
+    ];
+    let legend: Vec<(u8, String)> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (i as u8, n.to_string()))
+        .collect();
+    let c = outcome_colours(&legend);
+    for i in 0..c.len() {
+        for j in 0..i {
+            assert_ne!(c[i].1, c[j].1, "{} and {}", names[i], names[j]);
+        }
+    }
+}
