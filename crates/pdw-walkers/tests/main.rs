@@ -8,6 +8,7 @@ mod chain_walker;
 mod common;
 mod compass;
 mod impacts;
+mod internals;
 mod kneed;
 mod rimless_physics;
 mod round_feet;
