@@ -363,6 +363,17 @@ fn disturb_prints_the_response_and_refuses_what_it_cannot_do() {
     assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
     let o = run(&["disturb", "--model", "rimless"]);
     assert!(!o.status.success());
+    // the steps walked are bounded (each is kept and integrated): 0, a million and one and the
+    // largest count clap takes are refused with the bound named, before any model is built
+    for steps in ["0", "1000001", "18446744073709551615"] {
+        let o = run(&["disturb", "--once", "0", "--steps", steps]);
+        assert_eq!(o.status.code(), Some(2), "{steps}");
+        let e = stderr(&o);
+        assert!(
+            e.contains("--steps") && e.contains("outside 1..=1000000"),
+            "{e}"
+        );
+    }
 }
 
 #[test]

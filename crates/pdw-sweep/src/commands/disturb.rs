@@ -11,6 +11,9 @@ use pdw::BuiltModel;
 use pdw_limit::terrain::TerrainKind;
 use std::process::ExitCode;
 
+/// The most steps `--steps` accepts.
+const MAX_STEPS: usize = 1_000_000;
+
 /// The names of `disturb`'s options in messages.
 const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
     terrain: "--terrain",
@@ -22,14 +25,20 @@ const FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
 };
 
 pub fn run(a: &DisturbArgs) -> anyhow::Result<ExitCode> {
+    // every step's deviation is kept (8 bytes a step) and each step is a stride to integrate:
+    // a million bounds both (8 MB; minutes for the slowest walker)
+    if !(1..=MAX_STEPS).contains(&a.steps) {
+        return Err(InputError(format!(
+            "--steps: {} is outside 1..={MAX_STEPS} (steps walked after the disturbance)",
+            a.steps
+        ))
+        .into());
+    }
     let kind = pdw::mfpt::check_terrain(&a.terrain, &FLAGS)?;
     let integrator = super::integrator(&a.integrator, pdw::mfpt::default_integrator())?;
     let m = build_model(&a.model)?;
     disturb::check(&m, kind)?;
     pdw::integrator::check_integrator(&m, &integrator)?;
-    if a.steps == 0 {
-        return Err(InputError("--steps: 0 must be an integer >= 1".into()).into());
-    }
     let unit = super::mfpt::terrain_unit(&m, kind);
     crate::outln!(
         "model {}  nominal {} {} {unit}; one disturbed step, then {} nominal steps at most",
