@@ -4,38 +4,14 @@
 //! against the independent Lagrange model in `tests/tests/round_foot_kneed_reference.rs`); the
 //! latched walker is judged by its own limits, built and released by the hybrid model.
 
-use crate::common::{json, run, stderr};
+use crate::common::{
+    first_gait as gait, raw, run, stderr, LATCH_IMPULSES as IMPULSES, LATCH_TORQUES as TORQUES,
+};
 
 const LATCHED: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../models/kneed_latched.toml"
 );
-
-/// The first gait's validity of `fixedpoint --json` with `args`.
-fn gait(args: &[&str]) -> serde_json::Value {
-    let mut a = vec!["fixedpoint", "--json"];
-    a.extend_from_slice(args);
-    json(&run(&a))["fixed_points"][0].clone()
-}
-
-/// The raw margin named `name` of a gait's validity.
-fn raw(g: &serde_json::Value, name: &str) -> f64 {
-    g["validity"]["margins"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["name"] == name)
-        .unwrap_or_else(|| panic!("no margin {name}"))["raw"]
-        .as_f64()
-        .unwrap()
-}
-
-const TORQUES: [&str; 2] = ["stance_knee_torque", "swing_knee_torque"];
-const IMPULSES: [&str; 3] = [
-    "knee_strike:stance_knee",
-    "heel_strike:trailing_knee",
-    "heel_strike:new_stance_knee",
-];
 
 #[test]
 fn a_latched_kneed_walker_is_valid_and_its_smallest_latch_is_the_pull() {

@@ -6,7 +6,10 @@
 //! seed's own walker: the same gait in other units. The latch margins against an independent
 //! Lagrange model: `tests/tests/round_foot_kneed_reference.rs`.
 
-use crate::common::{json, run, stderr};
+use crate::common::{
+    first_gait as gait, json, margin, raw, run, stderr, LATCH_IMPULSES as IMPULSES,
+    LATCH_TORQUES as TORQUES,
+};
 
 const MODEL: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -16,32 +19,6 @@ const HOMOTOPY: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../experiments/results/seed5_latched/homotopy.toml"
 );
-
-fn gait(args: &[&str]) -> serde_json::Value {
-    let mut a = vec!["fixedpoint", "--json"];
-    a.extend_from_slice(args);
-    json(&run(&a))["fixed_points"][0].clone()
-}
-
-fn margin<'a>(g: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
-    g["validity"]["margins"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["name"] == name)
-        .unwrap_or_else(|| panic!("no margin {name}"))
-}
-
-fn raw(g: &serde_json::Value, name: &str) -> f64 {
-    margin(g, name)["raw"].as_f64().unwrap()
-}
-
-const TORQUES: [&str; 2] = ["stance_knee_torque", "swing_knee_torque"];
-const IMPULSES: [&str; 3] = [
-    "knee_strike:stance_knee",
-    "heel_strike:trailing_knee",
-    "heel_strike:new_stance_knee",
-];
 
 /// The ideal latch's gait of the seed's walker with a free swing knee at slope 0.1.
 fn ideal() -> serde_json::Value {

@@ -2492,33 +2492,25 @@ impl Walker for ChainWalker {
     /// for a time in s, else in the spec's reference length `l`; forces and torques in N, N m
     /// for SI specs, in `M L/T^2` and `M L^2/T^2` for a spec in its own units `L`, `M`, `T`.
     fn units(&self) -> pdw_model::ModelUnits {
-        if self.spec.unit_system() == crate::units::UnitSystem::Abstract {
-            let time = self
-                .spec
-                .parameters
-                .get("max_stride_time")
-                .map(|p| p.unit.clone())
-                .filter(|u| !u.is_empty())
-                .unwrap_or_else(|| "T".to_string());
-            return pdw_model::ModelUnits {
-                time: time.into(),
-                length: "l".into(),
-                force: "M L/T^2".into(),
-                torque: "M L^2/T^2".into(),
-            };
-        }
+        let own = self.spec.unit_system() == crate::units::UnitSystem::Abstract;
         let time = self
             .spec
             .parameters
             .get("max_stride_time")
             .map(|p| p.unit.clone())
             .filter(|u| !u.is_empty())
-            .unwrap_or_else(|| "s".to_string());
-        let length = if time == "s" { "m" } else { "l" };
+            .unwrap_or_else(|| if own { "T" } else { "s" }.to_string());
+        let length = if time == "s" && !own { "m" } else { "l" };
+        let (force, torque) = if own {
+            ("M L/T^2", "M L^2/T^2")
+        } else {
+            ("N", "N m")
+        };
         pdw_model::ModelUnits {
             time: time.into(),
             length: length.into(),
-            ..pdw_model::ModelUnits::SI
+            force: force.into(),
+            torque: torque.into(),
         }
     }
     fn impact_report(&self, mode: usize, guard: usize, x_pre: &[f64]) -> Option<ImpactReport> {

@@ -38,3 +38,34 @@ pub fn json(o: &Output) -> serde_json::Value {
     assert!(o.status.success(), "{}", stderr(o));
     serde_json::from_slice(&o.stdout).expect("stdout is JSON")
 }
+
+/// The first gait of `fixedpoint --json` with `args` (the model's knee hardware tests).
+pub fn first_gait(args: &[&str]) -> serde_json::Value {
+    let mut a = vec!["fixedpoint", "--json"];
+    a.extend_from_slice(args);
+    json(&run(&a))["fixed_points"][0].clone()
+}
+
+/// The margin named `name` of a gait's validity.
+pub fn margin<'a>(g: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    g["validity"]["margins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == name)
+        .unwrap_or_else(|| panic!("no margin {name}"))
+}
+
+/// The raw value of the margin named `name`.
+pub fn raw(g: &serde_json::Value, name: &str) -> f64 {
+    margin(g, name)["raw"].as_f64().unwrap()
+}
+
+/// The knee-lock torque margins a latch is judged by.
+pub const LATCH_TORQUES: [&str; 2] = ["stance_knee_torque", "swing_knee_torque"];
+/// The knee impulse margins a latch is judged by.
+pub const LATCH_IMPULSES: [&str; 3] = [
+    "knee_strike:stance_knee",
+    "heel_strike:trailing_knee",
+    "heel_strike:new_stance_knee",
+];
