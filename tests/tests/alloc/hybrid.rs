@@ -1,41 +1,13 @@
 //! The integration loops allocate nothing: the scalar integrator allocates only when it is built
 //! (and when a system with more guards first shows up), a batch only when it starts — not per
-//! step. Checked with a counting global allocator (this test binary only).
+//! step. Checked with a counting global allocator (the binary's counter, per thread).
 
-mod common;
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
-use common::*;
+use crate::allocs;
+use crate::common::*;
 use pdw_hybrid::{
     run_batch, BatchOptions, Control, Crossing, HybridSystem, Integrator, LaneDriver, Options,
     Scratch, StopReason,
 };
-
-struct Counting;
-
-thread_local! {
-    /// Allocations made by this thread (tests run on separate threads).
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(l) }
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocs() -> usize {
-    ALLOCS.with(|c| c.get())
-}
 
 #[test]
 fn scalar_integration_does_not_allocate() {

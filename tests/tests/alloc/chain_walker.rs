@@ -1,32 +1,14 @@
 //! The chain walker allocates nothing per right-hand side (scalar or batched), flow Jacobian,
 //! guard, guard gradient, admissibility, reset, reset Jacobian or trajectory sample (constraint forces, step
-//! flags, energy) once its scratch is filled; body points allocate only the value they return. (One test in this
-//! binary: the allocation counter is global.)
+//! flags, energy) once its scratch is filled; body points allocate only the value they return.
 
+use crate::allocs;
+use crate::chain_common::{all_presets, random_state};
 use faer::Mat;
 use pdw_hybrid::{HybridSystem, Scratch};
 use pdw_model::Walker;
-mod chain_common;
-
-use chain_common::{all_presets, random_state};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(l) }
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) }
-    }
-}
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
@@ -49,33 +31,33 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
         let mut counts = [0usize; 9];
         let mut run = |ws: &mut Scratch, counts: &mut [usize; 9]| {
             let tick = |i: usize, c: &mut [usize; 9], before: usize| {
-                c[i] += ALLOCS.load(Ordering::SeqCst) - before;
+                c[i] += allocs() - before;
             };
             for &m in &modes {
-                let b = ALLOCS.load(Ordering::SeqCst);
+                let b = allocs();
                 w.flow_batch(ws, m, xs[m].as_ref(), dx.as_mut());
                 tick(0, counts, b);
                 for s in &states[m][..4] {
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     w.flow(ws, m, s, &mut f);
                     tick(1, counts, b);
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     w.flow_jacobian(ws, m, s, &mut jac);
                     tick(2, counts, b);
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     w.guard(ws, m, 0, s);
                     tick(3, counts, b);
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     w.reset(ws, m, 0, s, &mut out);
                     tick(4, counts, b);
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     w.reset_jacobian(ws, m, 0, s, &mut jac);
                     tick(5, counts, b);
                     let mut g = [0.0; 16];
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     w.guard_gradient(ws, m, 0, s, &mut g[..d]);
                     tick(6, counts, b);
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     let sample = (
                         w.constraint_forces_in(ws, m, s),
                         w.step_flags_in(ws, m, s),
@@ -85,7 +67,7 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
                     assert!(sample.0.is_some() && sample.1.is_some() && sample.2.is_some());
                     // admissibility of every guard: the impact's complementarity problem for
                     // a stance knee's buckling at the impact guard
-                    let b = ALLOCS.load(Ordering::SeqCst);
+                    let b = allocs();
                     for k in 0..w.guards(m).len() {
                         std::hint::black_box(w.admissible(m, k, s));
                     }
@@ -104,19 +86,19 @@ fn flow_jacobian_and_resets_allocate_nothing_after_the_first_call() {
         // allocates (its point list, its name list and one string per name), while the call
         // without a scratch also builds a kernel workspace
         let x = &states[0][0];
-        let b = ALLOCS.load(Ordering::SeqCst);
+        let b = allocs();
         let bp = w
             .body_points_in(&mut ws, x)
             .expect("chain walkers give body points");
-        let used = ALLOCS.load(Ordering::SeqCst) - b;
+        let used = allocs() - b;
         assert_eq!(
             used,
             2 + bp.names.len(),
             "{name}: body_points_in allocations"
         );
-        let b = ALLOCS.load(Ordering::SeqCst);
+        let b = allocs();
         let fresh = w.body_points(x).expect("chain walkers give body points");
-        let used_fresh = ALLOCS.load(Ordering::SeqCst) - b;
+        let used_fresh = allocs() - b;
         assert!(used_fresh > used + 10, "{name}: {used_fresh} vs {used}");
         assert_eq!(fresh.names, bp.names);
         let bits = |p: &[[f64; 2]]| p.iter().map(|v| v.map(f64::to_bits)).collect::<Vec<_>>();

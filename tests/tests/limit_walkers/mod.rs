@@ -1,8 +1,6 @@
 //! pdw-limit's analysis on the walker models (simplest, rimless, compass, kneed, seed5, spec
-//! files), built as one test binary: one link and one set of generic instantiations instead of
-//! one per file. Each file is a module; run one with
-//! `cargo test --release --workspace --test limit_walkers <file>::`.
-//! Built apart: `simd_paths` (switches the process-wide instruction-set path).
+//! files), a module per file of the `end_to_end` binary; run one with
+//! `cargo test --release --workspace --test end_to_end limit_walkers::<file>::`.
 
 mod attractors_simplest;
 mod basin_simplest;

@@ -1,26 +1,9 @@
 //! Sampling a compass-gait stride allocates nothing per sample: the model's forces, flags and
 //! energy run in one reused scratch, so a walk's allocations grow only with the doublings of the
-//! recorded series (logarithmic in the sample count), not with the samples. (One test in this
-//! binary: the allocation counter is global.)
+//! recorded series (logarithmic in the sample count), not with the samples.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
+use crate::allocs;
 use pdw_limit::trajectory::{initial_state, simulate, TrajectoryOptions};
-
-struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(l) }
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) }
-    }
-}
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn trajectory_samples_allocate_nothing_per_sample() {
@@ -30,9 +13,9 @@ fn trajectory_samples_allocate_nothing_per_sample() {
     let run = |dt: f64| {
         let mut o = TrajectoryOptions::new(1);
         o.dt_out = Some(dt);
-        let before = ALLOCS.load(Ordering::SeqCst);
+        let before = allocs();
         let tr = simulate(w.as_ref(), &x0, &o).expect("the stride simulates");
-        let used = ALLOCS.load(Ordering::SeqCst) - before;
+        let used = allocs() - before;
         assert!(tr.forces.is_some() && tr.flags.is_some() && tr.energy.is_some());
         (used, tr.len())
     };
