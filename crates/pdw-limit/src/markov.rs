@@ -37,8 +37,10 @@
 
 use crate::error::LimitError;
 pub use crate::section_frame::{Frame, SectionBox};
-use crate::terrain::SlopeWalk;
+use crate::terrain::{SlopeWalk, TerrainKind};
 use pdw_hybrid::{run_batch_par, BatchOptions, Section};
+use pdw_model::{ClosedEnd, Ground};
+use rayon::prelude::*;
 
 /// Nodes `z_i` and weights `w_i` of the `n`-point Gauss–Hermite rule for the standard normal
 /// density (`Σ w_i f(z_i) ≈ E f(Z)`, exact for polynomials of degree < 2n), by Golub & Welsch
@@ -367,16 +369,16 @@ fn layered_landings(
 }
 
 /// Every start `(s_from, x)` (full state in the frame of line `s_from`) carried to the frame of
-/// line `s_to` and run one stride of the model at `s_to`, batched: the post-heel-strike state
-/// in `s_to`'s frame, or `None` for a stride that did not reach it.
+/// line `s_to` and run one stride of the model at `s_to`: the post-heel-strike state in
+/// `s_to`'s frame, or `None` for a stride that did not reach it. In closed form where the walk
+/// asks for it and the model has one ([`SlopeWalk::with_closed_form`]), every other stride
+/// integrated, batched.
 fn strides_onto(
     walk: &SlopeWalk,
     s_to: f64,
     starts: &[(f64, Vec<f64>)],
     pool: &rayon::ThreadPool,
 ) -> Result<Vec<Option<Vec<f64>>>, LimitError> {
-    let w = walk.model(s_to)?;
-    let map = crate::StrideMap::new(w.as_ref(), walk.options())?;
     let items: Vec<Vec<f64>> = starts
         .iter()
         .map(|(s_from, x)| {
@@ -385,6 +387,54 @@ fn strides_onto(
             y
         })
         .collect();
+    let base = walk.model(walk.mean())?;
+    let closed = walk.closed_form().then(|| base.closed_stride()).flatten();
+    let Some(closed) = closed else {
+        return integrated_strides(walk, s_to, &items, pool);
+    };
+    let ground = match walk.kind() {
+        TerrainKind::Slope => Ground::Slope(s_to),
+        TerrainKind::StepDown => Ground::StepDown(s_to),
+    };
+    // `Err(())`: the closed form does not cover the start (integrated below)
+    let mut ends: Vec<Result<Option<Vec<f64>>, ()>> = pool.install(|| {
+        items
+            .par_iter()
+            .with_min_len(256)
+            .map(|y| {
+                let mut out = vec![0.0; y.len()];
+                match closed.stride_on(ground, y, &mut out) {
+                    ClosedEnd::Landed => Ok(Some(out)),
+                    ClosedEnd::Terminal { .. } => Ok(None),
+                    ClosedEnd::Outside => Err(()),
+                }
+            })
+            .collect()
+    });
+    let outside: Vec<usize> = (0..ends.len()).filter(|&i| ends[i].is_err()).collect();
+    walk.report(items.len() - outside.len());
+    if !outside.is_empty() {
+        let rest: Vec<Vec<f64>> = outside.iter().map(|&i| items[i].clone()).collect();
+        for (i, end) in outside
+            .into_iter()
+            .zip(integrated_strides(walk, s_to, &rest, pool)?)
+        {
+            ends[i] = Ok(end);
+        }
+    }
+    Ok(ends.into_iter().map(|e| e.unwrap_or(None)).collect())
+}
+
+/// One integrated stride of the model at `s_to` from each of `items` (full states in `s_to`'s
+/// frame), batched: the post-heel-strike state, or `None` for a stride that did not reach it.
+fn integrated_strides(
+    walk: &SlopeWalk,
+    s_to: f64,
+    items: &[Vec<f64>],
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<Option<Vec<f64>>>, LimitError> {
+    let w = walk.model(s_to)?;
+    let map = crate::StrideMap::new(w.as_ref(), walk.options())?;
     let opts = BatchOptions {
         lanes: 256,
         integrator: walk.options(),
@@ -393,7 +443,7 @@ fn strides_onto(
     let ends = run_batch_par(
         map.system(),
         &map.driver(),
-        &items,
+        items,
         &opts,
         pool,
         1024,

@@ -315,6 +315,9 @@ pub struct SlopeWalk<'a> {
     /// Told the number of strides each batched call of a chain has finished since it last
     /// told ([`SlopeWalk::with_progress`]).
     progress: Option<&'a (dyn Fn(usize) + Sync)>,
+    /// The Markov chains take their strides in closed form where the model has one
+    /// ([`SlopeWalk::with_closed_form`]).
+    closed_form: bool,
 }
 
 impl<'a> SlopeWalk<'a> {
@@ -361,6 +364,7 @@ impl<'a> SlopeWalk<'a> {
             tilted,
             integrator,
             progress: None,
+            closed_form: false,
         })
     }
 
@@ -396,6 +400,7 @@ impl<'a> SlopeWalk<'a> {
             tilted: true,
             integrator,
             progress: None,
+            closed_form: false,
         })
     }
 
@@ -405,6 +410,22 @@ impl<'a> SlopeWalk<'a> {
     pub fn with_progress(mut self, progress: &'a (dyn Fn(usize) + Sync)) -> Self {
         self.progress = Some(progress);
         self
+    }
+
+    /// The walk whose Markov chain on the landing section ([`crate::markov`]) takes each stride
+    /// in closed form where the model has one ([`Walker::closed_stride`], the rimless wheel),
+    /// as the Monte Carlo walkers of [`monte_carlo_closed_form`] do: the same strides, no
+    /// tolerance, and no integration. A start the closed form does not cover is integrated.
+    /// Off by default (every stride integrated with [`SlopeWalk::options`]).
+    pub fn with_closed_form(mut self, on: bool) -> Self {
+        self.closed_form = on;
+        self
+    }
+
+    /// Whether the chains take their strides in closed form where the model has one
+    /// ([`SlopeWalk::with_closed_form`]).
+    pub fn closed_form(&self) -> bool {
+        self.closed_form
     }
 
     /// `strides` more strides run ([`SlopeWalk::with_progress`]).

@@ -823,7 +823,14 @@ pub fn chain_in(
 ) -> Result<pdw_limit::markov::ChainResult, LimitError> {
     use pdw_limit::markov;
     let at = model_at_param(m, plan.terrain.kind.param());
-    let walk = walk_of(&at, plan)?.with_progress(progress);
+    // the chain's strides as the walkers': in closed form where `--stride-map` takes them so
+    let closed = plan
+        .stride_map
+        .closed_form(m, "stride map")
+        .unwrap_or(false);
+    let walk = walk_of(&at, plan)?
+        .with_progress(progress)
+        .with_closed_form(closed);
     let slopes = terrain_nodes(plan, chain.nodes);
     let mesh = markov::Mesh {
         lo: bounds.0.clone(),

@@ -531,3 +531,51 @@ fn a_file_of_minus_one_and_one_is_the_two_point_distribution() {
         mc.restricted_mean
     );
 }
+
+/// The chain whose strides are taken in closed form (`--stride-map auto` on the rimless wheel,
+/// [`pdw_limit::terrain::SlopeWalk::with_closed_form`]) against the same chain with every stride
+/// integrated: the same quadrature, mesh and box, so they differ only by the integrator's
+/// tolerance (1e-10 here) in each landing, far below the chain's own discretisation.
+#[test]
+fn the_chain_in_closed_form_strides_equals_the_integrated_chain() {
+    let m = pdw::build("rimless", &[("slope".to_string(), MEAN)]).unwrap();
+    let (x0, _) = mfpt::start(&m).unwrap();
+    let pool = pool();
+    let integrated = plan();
+    let closed = MfptPlan {
+        stride_map: mfpt::StrideMap::ClosedForm,
+        ..plan()
+    };
+    let bounds = mfpt::visited_box(&m, &integrated, &x0, &pool).unwrap();
+    let c = mfpt::ChainPlan {
+        nodes: 11,
+        mesh: 400,
+        bounds: None,
+        section: Default::default(),
+        layout: Default::default(),
+    };
+    let a = mfpt::chain(&m, &integrated, &c, &bounds, &x0, &pool).unwrap();
+    let b = mfpt::chain(&m, &closed, &c, &bounds, &x0, &pool).unwrap();
+    eprintln!("integrated {a:?}\nclosed form {b:?}");
+    assert_eq!(a.states, b.states);
+    assert!(
+        (a.mfpt - b.mfpt).abs() < 1e-6 * a.mfpt,
+        "{} vs {}",
+        a.mfpt,
+        b.mfpt
+    );
+    assert!(
+        (a.lambda - b.lambda).abs() < 1e-9,
+        "{} vs {}",
+        a.lambda,
+        b.lambda
+    );
+    assert!(
+        (a.fall_per_step - b.fall_per_step).abs() < 1e-6 * a.fall_per_step,
+        "{} vs {}",
+        a.fall_per_step,
+        b.fall_per_step
+    );
+    // the closed-form chain is not a copy of the integrated one: some landing moved
+    assert_ne!(a.mfpt.to_bits(), b.mfpt.to_bits());
+}
