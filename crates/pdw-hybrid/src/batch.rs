@@ -422,6 +422,9 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
         )
     }
 
+    /// The lockstep loop: step sizes, stages, error norms, guards at x₁ as column passes over the
+    /// active lanes, then the per-lane pass (accept or reject, events, the driver) and the
+    /// commits left to columns, until no lane is active.
     #[inline(always)]
     fn run_lockstep(&mut self) -> Result<(), HybridError> {
         // Phase clock (`phases`; no code without the `phase-timing` feature).
@@ -434,31 +437,11 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
         }
         self.partition();
         lap(phases::DRIVER, &mut tt);
-        let stride = self.st.stride;
-        let d = self.st.dim;
-        let blk = self.st.blk();
-        let n_stages = self.tab.n_stages;
         loop {
             if crate::interrupt::requested() {
                 return Err(HybridError::Interrupted);
             }
-            // Next step size of every active lane; lanes that cannot step are stopped here.
-            let n_active = self.range[self.n_modes];
-            for l in 0..n_active {
-                loop {
-                    if self.target[l] == self.n_modes {
-                        self.st.h[l] = 0.0;
-                        break;
-                    }
-                    match engine::prepare(&self.opts, &mut self.ctl[l]) {
-                        Ok(h) => {
-                            self.st.h[l] = h;
-                            break;
-                        }
-                        Err(r) => self.handle_stop(l, r)?,
-                    }
-                }
-            }
+            self.step_sizes()?;
             if self.dirty {
                 self.partition();
             }
@@ -467,31 +450,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             if n_active == 0 {
                 break;
             }
-            // Stages: column kernels over all active lanes, one flow_batch per mode range.
-            for q in 1..n_stages {
-                engine::stage_input(&mut self.st, self.tab, n_active, q);
-                let st = &mut self.st;
-                let input: &[f64] = if q + 1 == n_stages { &st.xn } else { &st.y };
-                let kq = &mut st.k[q * blk..(q + 1) * blk];
-                for m in 0..self.n_modes {
-                    let (a, b) = (self.range[m], self.range[m + 1]);
-                    if b > a {
-                        let xv = MatRef::from_column_major_slice_with_stride(
-                            &input[a..],
-                            b - a,
-                            d,
-                            stride,
-                        );
-                        let kv = MatMut::from_column_major_slice_with_stride_mut(
-                            &mut kq[a..],
-                            b - a,
-                            d,
-                            stride,
-                        );
-                        self.sys.flow_batch(&mut self.sc.ev.model, m, xv, kv);
-                    }
-                }
-            }
+            self.stages(n_active);
             lap(phases::STAGES, &mut tt);
             engine::error_norm(
                 &mut self.st,
@@ -501,40 +460,7 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
                 n_active,
             );
             lap(phases::ERROR_NORM, &mut tt);
-            // Guard values and rates at x₁, one call per mode range, then the column test of
-            // which lanes may see a crossing inside the step.
-            let last = n_stages - 1;
-            for m in 0..self.n_modes {
-                let (a, b) = (self.range[m], self.range[m + 1]);
-                let ng = self.sys.guards(m).len();
-                if b > a && ng > 0 {
-                    let Store { xn, k, g1, r1, .. } = &mut self.st;
-                    fn view(v: &[f64], a: usize, n: usize, d: usize, s: usize) -> MatRef<'_, f64> {
-                        MatRef::from_column_major_slice_with_stride(&v[a..], n, d, s)
-                    }
-                    let gv = MatMut::from_column_major_slice_with_stride_mut(
-                        &mut g1[a..],
-                        b - a,
-                        ng,
-                        stride,
-                    );
-                    let rv = MatMut::from_column_major_slice_with_stride_mut(
-                        &mut r1[a..],
-                        b - a,
-                        ng,
-                        stride,
-                    );
-                    self.sys.guards_with_rates_batch(
-                        &mut self.sc.ev.model,
-                        m,
-                        view(xn, a, b - a, d, stride),
-                        view(&k[last * blk..(last + 1) * blk], a, b - a, d, stride),
-                        gv,
-                        rv,
-                    );
-                    engine::mark_near(&mut self.st, self.sys.guards(m), a, b);
-                }
-            }
+            self.guards_at_end();
             lap(phases::GUARDS, &mut tt);
             // Per-lane accept/reject, events, commit; stopped lanes go to the driver.
             for l in 0..n_active {
@@ -569,6 +495,96 @@ impl<'a, S: HybridSystem + ?Sized, D: LaneDriver<S>> Batch<'a, S, D> {
             self.stats += c.stats;
         }
         Ok(())
+    }
+
+    /// Next step size of every active lane into `st.h` (0 for an idle lane); lanes that cannot
+    /// step are stopped here and handed to the driver.
+    #[inline(always)]
+    fn step_sizes(&mut self) -> Result<(), HybridError> {
+        let n_active = self.range[self.n_modes];
+        for l in 0..n_active {
+            loop {
+                if self.target[l] == self.n_modes {
+                    self.st.h[l] = 0.0;
+                    break;
+                }
+                match engine::prepare(&self.opts, &mut self.ctl[l]) {
+                    Ok(h) => {
+                        self.st.h[l] = h;
+                        break;
+                    }
+                    Err(r) => self.handle_stop(l, r)?,
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The stages of one attempt of the first `n_active` lanes: column kernels over the lanes
+    /// for the stage inputs, one `flow_batch` per mode range and stage.
+    #[inline(always)]
+    fn stages(&mut self, n_active: usize) {
+        let (stride, d, blk) = (self.st.stride, self.st.dim, self.st.blk());
+        let n_stages = self.tab.n_stages;
+        for q in 1..n_stages {
+            engine::stage_input(&mut self.st, self.tab, n_active, q);
+            let st = &mut self.st;
+            let input: &[f64] = if q + 1 == n_stages { &st.xn } else { &st.y };
+            let kq = &mut st.k[q * blk..(q + 1) * blk];
+            for m in 0..self.n_modes {
+                let (a, b) = (self.range[m], self.range[m + 1]);
+                if b > a {
+                    let xv =
+                        MatRef::from_column_major_slice_with_stride(&input[a..], b - a, d, stride);
+                    let kv = MatMut::from_column_major_slice_with_stride_mut(
+                        &mut kq[a..],
+                        b - a,
+                        d,
+                        stride,
+                    );
+                    self.sys.flow_batch(&mut self.sc.ev.model, m, xv, kv);
+                }
+            }
+        }
+    }
+
+    /// Guard values and rates at x₁, one call per mode range, then the column test of which
+    /// lanes may see a crossing inside the step (`engine::mark_near`).
+    #[inline(always)]
+    fn guards_at_end(&mut self) {
+        let (stride, d, blk) = (self.st.stride, self.st.dim, self.st.blk());
+        let last = self.tab.n_stages - 1;
+        for m in 0..self.n_modes {
+            let (a, b) = (self.range[m], self.range[m + 1]);
+            let ng = self.sys.guards(m).len();
+            if b > a && ng > 0 {
+                let Store { xn, k, g1, r1, .. } = &mut self.st;
+                fn view(v: &[f64], a: usize, n: usize, d: usize, s: usize) -> MatRef<'_, f64> {
+                    MatRef::from_column_major_slice_with_stride(&v[a..], n, d, s)
+                }
+                let gv = MatMut::from_column_major_slice_with_stride_mut(
+                    &mut g1[a..],
+                    b - a,
+                    ng,
+                    stride,
+                );
+                let rv = MatMut::from_column_major_slice_with_stride_mut(
+                    &mut r1[a..],
+                    b - a,
+                    ng,
+                    stride,
+                );
+                self.sys.guards_with_rates_batch(
+                    &mut self.sc.ev.model,
+                    m,
+                    view(xn, a, b - a, d, stride),
+                    view(&k[last * blk..(last + 1) * blk], a, b - a, d, stride),
+                    gv,
+                    rv,
+                );
+                engine::mark_near(&mut self.st, self.sys.guards(m), a, b);
+            }
+        }
     }
 
     /// Put the next item of the queue into lane `l` and start its first segment; `Ok(None)` if

@@ -25,7 +25,9 @@ use crate::tableau::{self, Tableau};
 use crate::{Crossing, HybridSystem};
 
 /// The tableau of a method.
-pub(crate) fn tableau_of(method: Method) -> &'static Tableau {
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub fn tableau_of(method: Method) -> &'static Tableau {
     match method {
         Method::Rk4 { .. } => &tableau::RK4,
         Method::Dopri5 => &tableau::DOPRI5,
@@ -42,7 +44,9 @@ pub(crate) fn tableau_for(opts: &Options) -> &'static Tableau {
 }
 
 /// Lane-major block storage for one batch (or one scalar integrator: `lanes = stride = 1`).
-pub(crate) struct Store {
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub struct Store {
     pub dim: usize,
     /// Components `0..err_dim` enter the error norm and the starting step
     /// ([`HybridSystem::error_dim`], clamped to `1..=dim`; set by the runner for its system).

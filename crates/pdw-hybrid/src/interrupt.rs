@@ -58,22 +58,3 @@ pub fn requested() -> bool {
                 .is_some_and(|f| f.load(Ordering::Relaxed))
         })
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A watched flag is a request on the watching thread only, and unwatching restores it.
-    #[test]
-    fn a_watched_flag_stops_only_its_threads() {
-        let flag = Arc::new(AtomicBool::new(false));
-        assert!(watch(Some(flag.clone())).is_none());
-        assert!(!requested());
-        flag.store(true, Ordering::SeqCst);
-        assert!(requested());
-        let other = std::thread::spawn(requested).join().unwrap();
-        assert!(!other, "another thread saw this thread's flag");
-        assert!(watch(None).is_some());
-        assert!(!requested());
-    }
-}

@@ -45,7 +45,9 @@
 //!   `guards_with_rates_batch` agree bit for bit with `flow` and `guards_with_rates`.
 
 pub mod batch;
-mod engine;
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub mod engine;
 pub mod error;
 pub mod event;
 pub mod integrator;
@@ -53,7 +55,9 @@ pub mod interrupt;
 pub mod options;
 pub mod phases;
 pub mod system;
-mod tableau;
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub mod tableau;
 
 pub use batch::{
     run_batch, run_batch_counted, run_batch_par, run_scalar, run_scalar_with, BatchOptions,

@@ -15,7 +15,9 @@
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
 /// Method-specific constants: stage rows, error weights, dense-output weights, controller.
-pub(crate) struct Tableau {
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub struct Tableau {
     /// Number of stage blocks evaluated per attempt, including `k₀` and the final `f(x₁)`.
     pub n_stages: usize,
     /// `a[q]` = row q of the stage matrix (length q), for q = 1..n_stages; `a[0]` is empty.
@@ -41,7 +43,9 @@ pub(crate) const RK4_A3: [f64; 3] = [0.0, 0.0, 1.0];
 pub(crate) const RK4_A4: [f64; 4] = [1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0];
 
 /// Classical fourth-order Runge–Kutta (c = 0, ½, ½, 1; b = ⅙, ⅓, ⅓, ⅙).
-pub(crate) static RK4: Tableau = Tableau {
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub static RK4: Tableau = Tableau {
     n_stages: 5,
     a: &[&[], &RK4_A1, &RK4_A2, &RK4_A3, &RK4_A4],
     hinit_order: 4.0,
@@ -78,7 +82,9 @@ pub(crate) const DP5_A6: [f64; 6] = [
 ];
 
 /// Dormand–Prince 5(4) (HNW I, Table II.5.2). The 7th row equals b (FSAL).
-pub(crate) static DOPRI5: Tableau = Tableau {
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub static DOPRI5: Tableau = Tableau {
     n_stages: 7,
     a: &[&[], &DP5_A1, &DP5_A2, &DP5_A3, &DP5_A4, &DP5_A5, &DP5_A6],
     hinit_order: 5.0,
@@ -105,7 +111,9 @@ pub(crate) static DOPRI5_ELEMENTARY: Tableau = Tableau {
 };
 
 /// DOPRI5 error weights e = b − b̂ over k₀..k₆ (HNW I, Table II.5.2).
-pub(crate) const DOPRI5_E: [f64; 7] = [
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub const DOPRI5_E: [f64; 7] = [
     71.0 / 57600.0,
     0.0,
     -71.0 / 16695.0,
@@ -203,7 +211,9 @@ pub(crate) const DOP_A11: [f64; 11] = [
 pub(crate) const DOP_A12: [f64; 12] = [B1, 0.0, 0.0, 0.0, 0.0, B6, B7, B8, B9, B10, B11, B12];
 
 /// Dormand–Prince 8(5,3): 12 stages plus `f(x₁)` (the 13th block, FSAL).
-pub(crate) static DOP853: Tableau = Tableau {
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub static DOP853: Tableau = Tableau {
     n_stages: 13,
     a: &[
         &[],
@@ -230,10 +240,14 @@ pub(crate) static DOP853: Tableau = Tableau {
 };
 
 /// DOP853 weights b over k₀..k₁₁ (the last stage row).
-pub(crate) const DOP853_B: [f64; 12] = DOP_A12;
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub const DOP853_B: [f64; 12] = DOP_A12;
 
 /// DOP853 fifth-order error weights over k₀..k₁₁.
-pub(crate) const DOP853_ER: [f64; 12] = [
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub const DOP853_ER: [f64; 12] = [
     0.1312004499419488073250102996e-01,
     0.0,
     0.0,
@@ -249,7 +263,9 @@ pub(crate) const DOP853_ER: [f64; 12] = [
 ];
 
 /// DOP853 third-order embedded weights on k₀, k₈, k₁₁ (the `bhh` of the code).
-pub(crate) const DOP853_BHH: [f64; 3] = [
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub const DOP853_BHH: [f64; 3] = [
     0.244094488188976377952755905512e+00,
     0.733846688281611857341361741547e+00,
     0.220588235294117647058823529412e-01,
@@ -308,8 +324,9 @@ pub(crate) const DOP853_DENSE_A15: [f64; 15] = [
 ];
 
 /// The three rows above as slices (row r computes stage 13 + r).
-pub(crate) const DOP853_DENSE_A: [&[f64]; 3] =
-    [&DOP853_DENSE_A13, &DOP853_DENSE_A14, &DOP853_DENSE_A15];
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub const DOP853_DENSE_A: [&[f64]; 3] = [&DOP853_DENSE_A13, &DOP853_DENSE_A14, &DOP853_DENSE_A15];
 
 /// Weights of the four higher dense-output coefficients over k₀..k₁₅ (the `d` of HNW §II.10).
 pub(crate) const DOP853_D: [[f64; 16]; 4] = [
@@ -386,76 +403,3 @@ pub(crate) const DOP853_D: [[f64; 16]; 4] = [
         -0.14972683625798562581422125276e+03,
     ],
 ];
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Published nodes c of DOP853 (Hairer–Wanner's table), stages 1..12 then 14..16.
-    const DOP853_C: [f64; 12] = [
-        0.0,
-        0.526001519587677318785587544488e-01,
-        0.789002279381515978178381316732e-01,
-        0.118350341907227396726757197510e+00,
-        0.281649658092772603273242802490e+00,
-        0.333333333333333333333333333333e+00,
-        0.25e+00,
-        0.307692307692307692307692307692e+00,
-        0.651282051282051282051282051282e+00,
-        0.6e+00,
-        0.857142857142857142857142857142e+00,
-        1.0,
-    ];
-
-    fn row_sum(r: &[f64]) -> f64 {
-        r.iter().sum()
-    }
-
-    #[test]
-    fn stage_rows_sum_to_the_published_nodes() {
-        let dopri5_c = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
-        for (q, &c) in dopri5_c.iter().enumerate().skip(1) {
-            assert!((row_sum(DOPRI5.a[q]) - c).abs() < 1e-15, "DOPRI5 row {q}");
-        }
-        for (q, &c) in DOP853_C.iter().enumerate().skip(1) {
-            assert!((row_sum(DOP853.a[q]) - c).abs() < 1e-14, "DOP853 row {q}");
-        }
-        for (r, c) in [0.1, 0.2, 7.0 / 9.0].iter().enumerate() {
-            assert!(
-                (row_sum(DOP853_DENSE_A[r]) - c).abs() < 1e-14,
-                "DOP853 dense row {r}"
-            );
-        }
-        let rk4_c = [0.0, 0.5, 0.5, 1.0, 1.0];
-        for (q, &c) in rk4_c.iter().enumerate().skip(1) {
-            assert!((row_sum(RK4.a[q]) - c).abs() < 1e-15, "RK4 row {q}");
-        }
-    }
-
-    /// Quadrature order conditions Σ b_i c_i^(m−1) = 1/m for m = 1..p (HNW I, §II.2).
-    #[test]
-    fn weights_satisfy_the_quadrature_order_conditions() {
-        let dopri5_c: [f64; 6] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0];
-        let b5 = DOPRI5.a[6];
-        for m in 1..=5 {
-            let s: f64 = b5
-                .iter()
-                .zip(&dopri5_c)
-                .map(|(b, c)| b * c.powi(m - 1))
-                .sum();
-            assert!((s - 1.0 / m as f64).abs() < 1e-15, "DOPRI5 m = {m}: {s}");
-        }
-        for m in 1..=8 {
-            let s: f64 = DOP853_B
-                .iter()
-                .zip(&DOP853_C)
-                .map(|(b, c)| b * c.powi(m - 1))
-                .sum();
-            assert!((s - 1.0 / m as f64).abs() < 1e-14, "DOP853 m = {m}: {s}");
-        }
-        // Error weights are differences of two consistent weight vectors: they sum to 0.
-        assert!(DOPRI5_E.iter().sum::<f64>().abs() < 1e-16);
-        assert!(DOP853_ER.iter().sum::<f64>().abs() < 1e-14);
-        assert!((DOP853_BHH.iter().sum::<f64>() - 1.0).abs() < 1e-15);
-    }
-}

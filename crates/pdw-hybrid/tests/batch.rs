@@ -266,13 +266,26 @@ fn parallel_batches_are_identical_for_any_thread_count_and_chunk_size() {
     }
 }
 
-/// The [`Bouncer`] that notes which pool thread started each item, and holds each start until
-/// a second pool thread has started one too (so a thread left idle shows: the wait then ends at
-/// its bound, 10 s, and the test sees one thread — a bound against hanging, not a timing).
+/// Which pool threads have started an item, and whether the wait for a second one is over.
+#[derive(Default)]
+struct Seen {
+    threads: std::collections::BTreeSet<usize>,
+    /// The probe ran out of pool work to do with no second thread seen: stop waiting.
+    released: bool,
+    /// The probe has been spawned (once, by the first start).
+    probing: bool,
+}
+
+/// The [`Bouncer`] that notes which pool thread started each item, and holds each start until a
+/// second pool thread has started one too: a thread that would finish both worker batches
+/// alone while the other is still waking up cannot, so the test does not depend on when the
+/// pool's threads are scheduled. The first start also spawns a probe into the pool: the only
+/// other thread runs it, and it first takes every piece of pool work there is (the second
+/// batch, which starts an item and ends the wait); only when there is none — the call made one
+/// batch — does it end the wait, and the test sees one thread. Events only, no timeout.
 struct Noted {
     inner: Bouncer,
-    threads: std::sync::Mutex<std::collections::BTreeSet<usize>>,
-    both: std::sync::Condvar,
+    seen: std::sync::Arc<(std::sync::Mutex<Seen>, std::sync::Condvar)>,
 }
 
 impl<S: HybridSystem + ?Sized> LaneDriver<S> for Noted {
@@ -282,12 +295,24 @@ impl<S: HybridSystem + ?Sized> LaneDriver<S> for Noted {
 
     fn start(&self, sys: &S, item: &Item, lane: &mut LaneLog, x: &mut [f64]) -> (usize, f64) {
         if let Some(i) = rayon::current_thread_index() {
-            let mut seen = self.threads.lock().unwrap();
-            seen.insert(i);
-            self.both.notify_all();
-            let _unused = self
-                .both
-                .wait_timeout_while(seen, std::time::Duration::from_secs(10), |s| s.len() < 2)
+            let (lock, cond) = &*self.seen;
+            let mut seen = lock.lock().unwrap();
+            seen.threads.insert(i);
+            cond.notify_all();
+            if !seen.probing {
+                seen.probing = true;
+                let shared = self.seen.clone();
+                // Pushed onto this thread's deque, behind the second batch: a thief takes that
+                // first, and the probe then runs every other pending job before it gives up.
+                rayon::spawn(move || {
+                    while let Some(rayon::Yield::Executed) = rayon::yield_now() {}
+                    let (lock, cond) = &*shared;
+                    lock.lock().unwrap().released = true;
+                    cond.notify_all();
+                });
+            }
+            let _seen = cond
+                .wait_while(seen, |s| s.threads.len() < 2 && !s.released)
                 .unwrap();
         }
         LaneDriver::<S>::start(&self.inner, sys, item, lane, x)
@@ -324,8 +349,7 @@ fn a_call_smaller_than_one_block_runs_on_every_thread() {
             max_events: 8,
             start_mode: 0,
         },
-        threads: Default::default(),
-        both: Default::default(),
+        seen: Default::default(),
     };
     let its = items(200, 29);
     let opts = BatchOptions {
@@ -339,8 +363,17 @@ fn a_call_smaller_than_one_block_runs_on_every_thread() {
         .unwrap();
     let out = run_batch_par(dynsys(&sys), &drv, &its, &opts, &pool, 1024, &|_| {}).unwrap();
     assert!(out == reference);
-    let threads = drv.threads.into_inner().unwrap();
-    assert_eq!(threads.len(), 2, "items started on threads {threads:?}");
+    // The probe has run (it ends the wait when no second thread comes): the pool is idle.
+    let (lock, cond) = &*drv.seen;
+    let seen = cond
+        .wait_while(lock.lock().unwrap(), |s| !s.released)
+        .unwrap();
+    assert_eq!(
+        seen.threads.len(),
+        2,
+        "items started on threads {:?}",
+        seen.threads
+    );
 }
 
 #[test]

@@ -26,22 +26,36 @@
 //! subnormal `x` is scaled into the normal range first. `a` must be finite.
 
 /// ln 2 with its last 21 mantissa bits zero: `e·LN2_HI` is exact for `|e| < 2¹¹`.
-const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
 /// ln 2 − LN2_HI, rounded.
-const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
-const LN2: f64 = std::f64::consts::LN_2;
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const LN2: f64 = std::f64::consts::LN_2;
 /// ln 2/64 with its last 21 mantissa bits zero: `k·STEP_HI` is exact for `|k| < 2²¹`.
-const STEP_HI: f64 = f64::from_bits(0x3f86_2e42_fee0_0000);
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const STEP_HI: f64 = f64::from_bits(0x3f86_2e42_fee0_0000);
 /// ln 2/64 − STEP_HI, rounded.
-const STEP_LO: f64 = f64::from_bits(0x3d8a_39ef_3579_3c76);
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const STEP_LO: f64 = f64::from_bits(0x3d8a_39ef_3579_3c76);
 /// 64/ln 2, rounded.
-const INV_STEP: f64 = f64::from_bits(0x4057_1547_652b_82fe);
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const INV_STEP: f64 = f64::from_bits(0x4057_1547_652b_82fe);
 const ROUND: f64 = 6_755_399_441_055_744.0;
 
 // Tables (bit patterns of f64), generated with 60-digit decimal arithmetic:
 // `INV_C[i]` = the f64 nearest 1/cᵢ, cᵢ = 1 + (i + ½)/128; `LN_C[i]` = ln(1/INV_C[i]) rounded;
 // `EXP2_J[j]` = 2^(j/64) rounded.
-const INV_C: [u64; 128] = [
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const INV_C: [u64; 128] = [
     0x3fefe01fe01fe020,
     0x3fefa11caa01fa12,
     0x3fef6310aca0dbb5,
@@ -171,7 +185,9 @@ const INV_C: [u64; 128] = [
     0x3fe0182436517a37,
     0x3fe0080402010080,
 ];
-const LN_C: [u64; 128] = [
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const LN_C: [u64; 128] = [
     0x3f6ff00aa2b10ba0,
     0x3f87dc475f810a69,
     0x3f93cea44346a584,
@@ -301,7 +317,9 @@ const LN_C: [u64; 128] = [
     0x3fe5fe1edad18919,
     0x3fe61e3efda46467,
 ];
-const EXP2_J: [u64; 64] = [
+// Public, hidden from the docs, for the integration tests (crates/pdw-hybrid/tests/simd.rs).
+#[doc(hidden)]
+pub const EXP2_J: [u64; 64] = [
     0x3ff0000000000000,
     0x3ff02c9a3e778061,
     0x3ff059b0d3158574,
@@ -442,113 +460,5 @@ pub fn powr(x: f64, a: f64) -> f64 {
         }
     } else {
         f64::NAN
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ln2_split_is_exact_in_its_high_part() {
-        assert_eq!(LN2_HI.to_bits() & 0x1f_ffff, 0);
-        assert!((LN2_HI + LN2_LO - LN2).abs() <= f64::EPSILON * LN2);
-        assert!((LN2_LO - 1.908_214_929_270_587_7e-10).abs() < 1e-25);
-    }
-
-    #[test]
-    fn agrees_with_libm_pow_over_the_range() {
-        let mut worst: f64 = 0.0;
-        for a in [0.2, 0.17, 0.04, 0.125, 1.0 / 3.0, 0.25, -0.2, 1.5] {
-            let mut x = 1e-300_f64;
-            while x < 1e300 {
-                for f in [1.0, 1.234_567_89, 3.3, 7.77] {
-                    let xv = x * f;
-                    let (p, q) = (powr(xv, a), xv.powf(a));
-                    if q.is_finite() && q > 1e-300 {
-                        let scale = 4.0 * f64::EPSILON * (a * xv.ln()).abs().max(1.0);
-                        worst = worst.max(((p - q) / q).abs() / scale);
-                    }
-                }
-                x *= 10.0;
-            }
-        }
-        assert!(
-            worst <= 1.0,
-            "worst relative error {worst} × 4ε·max(1, |a ln x|)"
-        );
-        // Near 1, where ln x is small: relative accuracy of the result holds too.
-        for i in 1..2000 {
-            let x = 1.0 + (i as f64 - 1000.0) * 1e-6;
-            let (p, q) = (powr(x, 0.2), x.powf(0.2));
-            assert!(((p - q) / q).abs() < 1e-15, "x = {x}: {p} vs {q}");
-        }
-    }
-
-    /// The tables against libm (an independent evaluation): each entry within an ulp, every
-    /// reduced argument `r = m·ĉᵢ − 1` inside the bound the log1p polynomial is built for, and
-    /// the split of ln 2/64 exact in its high part.
-    #[test]
-    fn tables_and_reductions_hold_their_bounds() {
-        let ulp = |v: f64| f64::EPSILON * v.abs();
-        for i in 0..128 {
-            let ic = f64::from_bits(INV_C[i]);
-            let c = 1.0 + (i as f64 + 0.5) / 128.0;
-            assert!((ic - 1.0 / c).abs() <= ulp(ic), "INV_C[{i}]");
-            let lc = f64::from_bits(LN_C[i]);
-            assert!((lc + ic.ln()).abs() <= ulp(lc) + 1e-300, "LN_C[{i}]");
-            for m in [
-                1.0 + i as f64 / 128.0,
-                1.0 + (i as f64 + 1.0) / 128.0 - 1e-16,
-            ] {
-                assert!((m * ic - 1.0).abs() < 0.0039, "r at m = {m}");
-            }
-        }
-        for (j, &b) in EXP2_J.iter().enumerate() {
-            let v = f64::from_bits(b);
-            assert!(
-                (v - (j as f64 / 64.0).exp2()).abs() <= ulp(v),
-                "EXP2_J[{j}]"
-            );
-        }
-        assert_eq!(STEP_HI.to_bits() & 0x1f_ffff, 0);
-        assert!((STEP_HI + STEP_LO - LN2 / 64.0).abs() <= f64::EPSILON * LN2 / 64.0);
-        assert!((INV_STEP - 64.0 / LN2).abs() <= f64::EPSILON * INV_STEP);
-    }
-
-    /// The controller's range, densely: error norms 1e−12 … 1e12 at the exponents DOPRI5 and
-    /// DOP853 use (±α, ±α/2, β), within 4ε·max(1, |a ln x|) of libm.
-    #[test]
-    fn controller_arguments_densely() {
-        let mut worst: f64 = 0.0;
-        let mut x = 1e-12_f64;
-        while x < 1e12 {
-            for a in [-0.085, -0.1, 0.17, 0.2, 0.04, -0.0625, 0.125, 1.0 / 5.0] {
-                let (p, q) = (powr(x, a), x.powf(a));
-                let scale = 4.0 * f64::EPSILON * (a * x.ln()).abs().max(1.0);
-                worst = worst.max(((p - q) / q).abs() / scale);
-            }
-            x *= 1.000_37;
-        }
-        eprintln!("worst relative error {worst:.3} × 4ε·max(1, |a ln x|)");
-        assert!(worst <= 1.0, "worst {worst}");
-    }
-
-    #[test]
-    fn subnormals_edges_and_invalid_inputs() {
-        let x = 5e-320_f64;
-        let scale = 4.0 * f64::EPSILON * (0.2 * x.ln()).abs();
-        assert!(((powr(x, 0.2) - x.powf(0.2)) / x.powf(0.2)).abs() < scale);
-        assert_eq!(powr(0.0, 0.2), 0.0);
-        assert_eq!(powr(0.0, 0.0), 1.0);
-        assert_eq!(powr(0.0, -0.2), f64::INFINITY);
-        assert_eq!(powr(f64::INFINITY, 0.2), f64::INFINITY);
-        assert_eq!(powr(f64::INFINITY, -0.2), 0.0);
-        assert!(powr(f64::NAN, 0.2).is_nan());
-        assert!(powr(-1.0, 0.2).is_nan());
-        assert_eq!(powr(1.0, 0.2), 1.0);
-        assert_eq!(powr(2.0, 1.0), 2.0);
-        assert_eq!(powr(1e300, 2.0), f64::INFINITY);
-        assert_eq!(powr(1e-300, 2.0), 0.0);
     }
 }

@@ -100,6 +100,16 @@ fn build(
     let n = chain.dof();
     check_len("naive workspace dof", n, nws.n)?;
     kin_pass(chain, ws, q, Some(qd))?;
+    fill_operators(chain, ws, nws);
+    form_products(nws, c);
+    Ok(())
+}
+
+/// The dense operators at the state of the kinematic pass in `ws`: Φ (seed eq. 2.16, 2.19), H,
+/// the block-diagonal M, the stacked biases a (gravity folded into a_1, seed eq. 2.64) and b
+/// (in `nws.v`), and Φ_t.
+fn fill_operators(chain: &Chain, ws: &Workspace, nws: &mut NaiveWorkspace) {
+    let n = chain.dof();
     nws.phi.fill(0.0);
     nws.h.fill(0.0);
     nws.m.fill(0.0);
@@ -158,6 +168,11 @@ fn build(
     nws.phit[(2, r + 2)] = 1.0;
     nws.phit[(1, r)] = -ws.tip_d[1];
     nws.phit[(2, r)] = ws.tip_d[0];
+}
+
+/// The products of the operators [`fill_operators`] wrote: `X = Φ H`, `M X`, `𝓜 = Xᵀ M X`,
+/// `C = Xᵀ (M Φ a + b)` (into `c`), `J = Φ_t X`.
+fn form_products(nws: &mut NaiveWorkspace, c: &mut [f64]) {
     let par = Par::Seq;
     matmul(
         nws.phih.as_mut(),
@@ -219,7 +234,6 @@ fn build(
         1.0,
         par,
     );
-    Ok(())
 }
 
 /// The mass matrix `𝓜 = Hᵀ Φᵀ M Φ H` formed from the dense operators (O(n³)).

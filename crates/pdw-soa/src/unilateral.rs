@@ -148,6 +148,59 @@ pub fn unilateral_impact(
     jac: Option<&mut [f64]>,
 ) -> Result<ImpactSolution, SoaError> {
     let n = chain.dof();
+    check_arguments(chain, q, qd, items, hold, qd_post, jac.as_deref())?;
+    let k64 = kin::<f64>(chain, q, None);
+    let mut mass = [[0.0; MAX_DOF]; MAX_DOF];
+    mass_matrix(chain, &k64, &mut mass);
+    let all_rows = item_rows(chain, &k64, items);
+    let mut mfac = mass;
+    ldl(&mut mfac, n).ok_or(SoaError::MassMatrixNotPositiveDefinite)?;
+    let set = ActiveSet {
+        n,
+        items,
+        all: &all_rows,
+        mass: &mass,
+        mfac: &mfac,
+        qd,
+    };
+    // the chosen set's violation: known from the search, computed for an imposed set
+    let (chosen_at, violated) = match hold {
+        Some(h) => set.imposed(h)?,
+        None => set.search()?,
+    };
+    let chosen = &chosen_at[..items.len()];
+    let complementary = violated.ok_or(SoaError::SingularConstraint {
+        what: "A 𝓜⁻¹ Aᵀ (impact)",
+    })? == 0.0;
+    // the map, and its Jacobian if asked for, for the chosen set (without it, duals of width
+    // 0: the value arithmetic of every width, hence the same bits, without the derivatives)
+    let mut lam = [0.0; MAX_DOF];
+    match jac {
+        Some(j) => by_dof!(
+            n,
+            1,
+            solve_w(chain, q, qd, items, chosen, qd_post, &mut lam, Some(j))
+        )?,
+        None => solve_w::<0>(chain, q, qd, items, chosen, qd_post, &mut lam, None)?,
+    }
+    let mut sol = set.results(chosen, &lam, qd_post);
+    sol.complementary = complementary;
+    Ok(sol)
+}
+
+/// The argument checks of [`unilateral_impact`], in the order its errors are reported (lengths,
+/// the item count, each item's joint, sign and radius, the hold mask's and the Jacobian's
+/// lengths).
+fn check_arguments(
+    chain: &Chain,
+    q: &[f64],
+    qd: &[f64],
+    items: &[ImpactItem],
+    hold: Option<&[bool]>,
+    qd_post: &[f64],
+    jac: Option<&[f64]>,
+) -> Result<(), SoaError> {
+    let n = chain.dof();
     check_dof(n)?;
     check_len("q", n, q.len())?;
     check_len("qd_minus", n, qd.len())?;
@@ -189,120 +242,122 @@ pub fn unilateral_impact(
     if let Some(h) = hold {
         check_len("hold", items.len(), h.len())?;
     }
-    if let Some(j) = jac.as_deref() {
+    if let Some(j) = jac {
         check_len("jac (n x 2n)", 2 * n * n, j.len())?;
     }
-    // candidate active sets: the imposed one, or every subset of the unilateral items (their
-    // indices on the stack: no call allocates)
-    let (mut uni_at, mut n_uni) = ([0usize; MAX_ITEMS], 0);
-    for (i, it) in items.iter().enumerate() {
-        if it.unilateral {
-            uni_at[n_uni] = i;
-            n_uni += 1;
+    Ok(())
+}
+
+/// An impact problem on the values: the items, every item's rows, the mass matrix 𝓜 and its
+/// LDLᵀ factors, the pre-impact rates.
+struct ActiveSet<'a> {
+    n: usize,
+    items: &'a [ImpactItem],
+    /// Every item's rows ([`item_rows`]).
+    all: &'a Mat8<f64>,
+    mass: &'a Mat8<f64>,
+    mfac: &'a Mat8<f64>,
+    qd: &'a [f64],
+}
+
+impl ActiveSet<'_> {
+    /// The imposed active set `h` and its violation (`None`: dependent rows); bilateral items
+    /// must be held.
+    fn imposed(&self, h: &[bool]) -> Result<([bool; MAX_ITEMS], Option<f64>), SoaError> {
+        let items = self.items;
+        for (i, it) in items.iter().enumerate() {
+            if !it.unilateral && !h[i] {
+                return Err(SoaError::DimensionMismatch {
+                    what: "hold mask (bilateral items must be held)",
+                    expected: "true".into(),
+                    got: format!("false at item {i}"),
+                });
+            }
+        }
+        let mut chosen_at = [false; MAX_ITEMS];
+        chosen_at[..items.len()].copy_from_slice(h);
+        let v = violation(self.n, items, self.all, self.mass, self.mfac, h, self.qd);
+        Ok((chosen_at, v))
+    }
+
+    /// The active set by complementarity: every subset of the unilateral items (their indices
+    /// on the stack: no call allocates), all of them active first, then fewer; the first
+    /// without violation, else the least violated. Errors when every candidate has dependent
+    /// rows.
+    fn search(&self) -> Result<([bool; MAX_ITEMS], Option<f64>), SoaError> {
+        let items = self.items;
+        let (mut uni_at, mut n_uni) = ([0usize; MAX_ITEMS], 0);
+        for (i, it) in items.iter().enumerate() {
+            if it.unilateral {
+                uni_at[n_uni] = i;
+                n_uni += 1;
+            }
+        }
+        let uni = &uni_at[..n_uni];
+        let mut best: Option<(f64, [bool; MAX_ITEMS])> = None;
+        for code in (0..1usize << uni.len()).rev() {
+            let mut act = [true; MAX_ITEMS];
+            for (b, &i) in uni.iter().enumerate() {
+                act[i] = code >> b & 1 == 1;
+            }
+            let act_items = &act[..items.len()];
+            let Some(v) = violation(
+                self.n, items, self.all, self.mass, self.mfac, act_items, self.qd,
+            ) else {
+                continue;
+            };
+            if v == 0.0 {
+                best = Some((0.0, act));
+                break;
+            }
+            if best.as_ref().is_none_or(|b| v < b.0) {
+                best = Some((v, act));
+            }
+        }
+        match best {
+            Some((v, a)) => Ok((a, Some(v))),
+            None => Err(SoaError::SingularConstraint {
+                what: "A 𝓜⁻¹ Aᵀ (every active set of the impact)",
+            }),
         }
     }
-    let uni = &uni_at[..n_uni];
-    let k64 = kin::<f64>(chain, q, None);
-    let mut mass = [[0.0; MAX_DOF]; MAX_DOF];
-    mass_matrix(chain, &k64, &mut mass);
-    let all_rows = item_rows(chain, &k64, items);
-    let mut mfac = mass;
-    ldl(&mut mfac, n).ok_or(SoaError::MassMatrixNotPositiveDefinite)?;
-    let mut chosen_at = [false; MAX_ITEMS];
-    // the chosen set's violation: known from the search, computed for an imposed set
-    let violated = match hold {
-        Some(h) => {
-            for (i, it) in items.iter().enumerate() {
-                if !it.unilateral && !h[i] {
-                    return Err(SoaError::DimensionMismatch {
-                        what: "hold mask (bilateral items must be held)",
-                        expected: "true".into(),
-                        got: format!("false at item {i}"),
-                    });
+
+    /// Per-item results on the values (activity, impulse from the chosen set's multipliers
+    /// `lam`, post-impact rates of the item's rows) and the kinetic energy lost,
+    /// `½ Δq̇ᵀ 𝓜 Δq̇`; `complementary` is left false for the caller.
+    fn results(&self, chosen: &[bool], lam: &[f64], qd_post: &[f64]) -> ImpactSolution {
+        let (n, items, qd) = (self.n, self.items, self.qd);
+        let mut sol = ImpactSolution {
+            items: [ItemResult::default(); MAX_ITEMS],
+            n_items: items.len(),
+            energy_lost: 0.0,
+            complementary: false,
+        };
+        let (mut r, mut a) = (0, 0);
+        for (i, it) in items.iter().enumerate() {
+            let nr = it.row.rows();
+            let res = &mut sol.items[i];
+            res.active = chosen[i];
+            for k in 0..nr {
+                res.rate[k] = dot(&self.all[r + k][..n], qd_post);
+                if chosen[i] {
+                    res.impulse[k] = lam[a + k];
                 }
             }
-            chosen_at[..items.len()].copy_from_slice(h);
-            violation(n, items, &all_rows, &mass, &mfac, h, qd)
-        }
-        None => {
-            let mut best: Option<(f64, [bool; MAX_ITEMS])> = None;
-            // all unilateral items active first, then fewer
-            for code in (0..1usize << uni.len()).rev() {
-                let mut act = [true; MAX_ITEMS];
-                for (b, &i) in uni.iter().enumerate() {
-                    act[i] = code >> b & 1 == 1;
-                }
-                let act_items = &act[..items.len()];
-                let Some(v) = violation(n, items, &all_rows, &mass, &mfac, act_items, qd) else {
-                    continue;
-                };
-                if v == 0.0 {
-                    best = Some((0.0, act));
-                    break;
-                }
-                if best.as_ref().is_none_or(|b| v < b.0) {
-                    best = Some((v, act));
-                }
-            }
-            match best {
-                Some((v, a)) => {
-                    chosen_at = a;
-                    Some(v)
-                }
-                None => {
-                    return Err(SoaError::SingularConstraint {
-                        what: "A 𝓜⁻¹ Aᵀ (every active set of the impact)",
-                    })
-                }
-            }
-        }
-    };
-    let chosen = &chosen_at[..items.len()];
-    let complementary = violated.ok_or(SoaError::SingularConstraint {
-        what: "A 𝓜⁻¹ Aᵀ (impact)",
-    })? == 0.0;
-    // the map, and its Jacobian if asked for, for the chosen set (without it, duals of width
-    // 0: the value arithmetic of every width, hence the same bits, without the derivatives)
-    let mut lam = [0.0; MAX_DOF];
-    match jac {
-        Some(j) => by_dof!(
-            n,
-            1,
-            solve_w(chain, q, qd, items, chosen, qd_post, &mut lam, Some(j))
-        )?,
-        None => solve_w::<0>(chain, q, qd, items, chosen, qd_post, &mut lam, None)?,
-    }
-    // per-item results on the values
-    let mut sol = ImpactSolution {
-        items: [ItemResult::default(); MAX_ITEMS],
-        n_items: items.len(),
-        energy_lost: 0.0,
-        complementary,
-    };
-    let (mut r, mut a) = (0, 0);
-    for (i, it) in items.iter().enumerate() {
-        let nr = it.row.rows();
-        let res = &mut sol.items[i];
-        res.active = chosen[i];
-        for k in 0..nr {
-            res.rate[k] = dot(&all_rows[r + k][..n], qd_post);
             if chosen[i] {
-                res.impulse[k] = lam[a + k];
+                a += nr;
+            }
+            r += nr;
+        }
+        let mut e = 0.0;
+        for i in 0..n {
+            for k in 0..n {
+                e += (qd_post[i] - qd[i]) * self.mass[i][k] * (qd_post[k] - qd[k]);
             }
         }
-        if chosen[i] {
-            a += nr;
-        }
-        r += nr;
+        sol.energy_lost = 0.5 * e;
+        sol
     }
-    let mut e = 0.0;
-    for i in 0..n {
-        for k in 0..n {
-            e += (qd_post[i] - qd[i]) * mass[i][k] * (qd_post[k] - qd[k]);
-        }
-    }
-    sol.energy_lost = 0.5 * e;
-    Ok(sol)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

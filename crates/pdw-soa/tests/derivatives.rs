@@ -2,11 +2,10 @@
 //! kernel's forward dynamics, impacts and tip position, their Jacobians equal
 //! Richardson-extrapolated central differences of those kernel functions, and no call allocates.
 
-mod common;
-
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
+use crate::common;
 use common::*;
 use faer::Mat;
 use pdw_soa::derivatives::MAX_DOF;
@@ -14,6 +13,8 @@ use pdw_soa::*;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
+/// The test binary's allocator: the system's, counting per thread what the tests on that thread
+/// allocate (the other tests of the binary run on threads of their own and count nothing here).
 struct Counting;
 
 thread_local! {

@@ -57,6 +57,9 @@ mod rolling;
 
 pub use aba::aba_derivatives;
 pub use impact::{contact_impact, joint_lock_impact_derivatives, tip_impact_derivatives};
+// Public, hidden from the docs, for the integration tests (tests/internals.rs).
+#[doc(hidden)]
+pub use impact::FAER_SCRATCH;
 pub(crate) use impact::{impact_in_duals, mass_matrix};
 pub use kinematics::tip_position_derivatives;
 pub(crate) use kinematics::{kin, positions, Kin};
