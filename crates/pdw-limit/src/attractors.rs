@@ -317,20 +317,7 @@ pub fn discover(
     fall_outcome: &(dyn Fn(FallKind) -> Outcome + Sync),
     pool: &rayon::ThreadPool,
 ) -> Result<AttractorSet, LimitError> {
-    if disc.seed_strides == 0 || disc.cloud_points == 0 {
-        return Err(LimitError::InvalidOption {
-            name: "seed_strides",
-            value: 0.0,
-            allowed: "seed_strides and cloud_points must be >= 1",
-        });
-    }
-    if !(disc.chaos_radius.is_finite() && disc.chaos_radius > 0.0) {
-        return Err(LimitError::InvalidOption {
-            name: "chaos_radius",
-            value: disc.chaos_radius,
-            allowed: "must be finite and > 0",
-        });
-    }
+    disc.validate()?;
     let max_att = disc
         .max_attractors
         .min(usize::from(u8::MAX - 1 - ATTRACTOR_CODE_BASE));
@@ -405,30 +392,7 @@ pub fn discover(
                     continue;
                 }
                 if let Some(cloud) = sample_orbit(sys, basin, f, disc.cloud_points) {
-                    let extent = (0..f.len())
-                        .map(|j| {
-                            let (lo, hi) = cloud
-                                .iter()
-                                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                                    (lo.min(p[j]), hi.max(p[j]))
-                                });
-                            hi - lo
-                        })
-                        .fold(0.0, f64::max);
-                    let floor = cloud
-                        .last()
-                        .map_or(basin.tol_gait, |p| basin.tol_gait * state_scale(p));
-                    found.push(Attractor {
-                        name: String::new(),
-                        code: 0,
-                        kind: AttractorKind::Chaotic,
-                        period_k: 0,
-                        points: cloud,
-                        multipliers: Vec::new(),
-                        period_time: f64::NAN,
-                        radius: (disc.chaos_radius * extent).max(floor),
-                        validity: OrbitValidity::Unchecked,
-                    });
+                    found.push(Attractor::chaotic(cloud, f.len(), basin, disc));
                 }
             }
             _ => {}
@@ -436,6 +400,66 @@ pub fn discover(
     }
     name_and_code(&mut found);
     Ok(AttractorSet { attractors: found })
+}
+
+impl DiscoveryOptions {
+    /// Checks the options of [`discover`]: at least one seed stride and one cloud point, and a
+    /// finite positive chaos radius.
+    fn validate(&self) -> Result<(), LimitError> {
+        let disc = self;
+        if disc.seed_strides == 0 || disc.cloud_points == 0 {
+            return Err(LimitError::InvalidOption {
+                name: "seed_strides",
+                value: 0.0,
+                allowed: "seed_strides and cloud_points must be >= 1",
+            });
+        }
+        if !(disc.chaos_radius.is_finite() && disc.chaos_radius > 0.0) {
+            return Err(LimitError::InvalidOption {
+                name: "chaos_radius",
+                value: disc.chaos_radius,
+                allowed: "must be finite and > 0",
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Attractor {
+    /// The chaotic attractor sampled by `cloud` (points of dimension `d`): its radius is
+    /// `chaos_radius` times the cloud's largest extent along a coordinate, at least the gait
+    /// tolerance on the scale of the cloud's last point.
+    fn chaotic(
+        cloud: Vec<Vec<f64>>,
+        d: usize,
+        basin: &BasinOptions,
+        disc: &DiscoveryOptions,
+    ) -> Self {
+        let extent = (0..d)
+            .map(|j| {
+                let (lo, hi) = cloud
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(p[j]), hi.max(p[j]))
+                    });
+                hi - lo
+            })
+            .fold(0.0, f64::max);
+        let floor = cloud
+            .last()
+            .map_or(basin.tol_gait, |p| basin.tol_gait * state_scale(p));
+        Attractor {
+            name: String::new(),
+            code: 0,
+            kind: AttractorKind::Chaotic,
+            period_k: 0,
+            points: cloud,
+            multipliers: Vec::new(),
+            period_time: f64::NAN,
+            radius: (disc.chaos_radius * extent).max(floor),
+            validity: OrbitValidity::Unchecked,
+        }
+    }
 }
 
 /// The point a basin grid's default box is centred on (and whose other section coordinates the

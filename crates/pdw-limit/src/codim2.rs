@@ -519,6 +519,66 @@ fn solve_point(
         *opts,
         &failure,
     );
+    let (y, iters) = run_newton(sys, y0, opts, &failure)?;
+    // Independent checks: the fixed point with a fresh stride, the critical multiplier.
+    let sys = Codim2System::new(
+        family,
+        kind,
+        p_step,
+        b.to_vec(),
+        c.to_vec(),
+        *opts,
+        &failure,
+    );
+    let ev = sys.evaluate(&y)?;
+    let p = y[n];
+    let model = build2(family, p_step, p)?;
+    let map = StrideMap::new(model.section(), opts.integrator).map_err(|e| from_limit(e, p))?;
+    let next = map.apply(&y[..n]).map_err(|e| from_limit(e, p))?;
+    let residual = norm_inf(
+        &next
+            .iter()
+            .zip(&y[..n])
+            .map(|(a, b)| a - b)
+            .collect::<Vec<_>>(),
+    );
+    if residual.is_nan() || residual > 10.0 * opts.newton_tol * residual_scale(&y) {
+        return Err(LostReason::NotCritical {
+            detail: format!(
+                "a fresh stride gives ‖P(x) − x‖∞ = {residual:.3e}, above the tolerance"
+            ),
+        });
+    }
+    let mult = multipliers(&ev.dp, n).map_err(|e| from_limit(e, p))?;
+    let critical = critical_multiplier(&mult, kind, opts)?;
+    Ok(Solved {
+        point: CurvePoint {
+            p_step,
+            p_free: p,
+            section: y[..n].to_vec(),
+            state: map.lift(&y[..n]),
+            multipliers: mult,
+            critical,
+            period: ev.period,
+            test_value: ev.f[n],
+            residual,
+            newton_iters: iters,
+        },
+        b: normalized(&ev.w),
+        c: normalized(&ev.v),
+        y,
+    })
+}
+
+/// Newton (argmin) on the augmented system `sys` from `y0`: the converged point and the
+/// iterations taken. A run that did not converge is lost, as the fall or the leaving of the
+/// free parameter's domain its last trials met (`failure`) where there was one.
+fn run_newton(
+    sys: Codim2System<'_, '_, '_>,
+    y0: &[f64],
+    opts: &Codim2Options,
+    failure: &RefCell<Option<LostReason>>,
+) -> Result<(Vec<f64>, u64), LostReason> {
     let solver =
         Newton::new(opts.newton_tol, opts.max_backtracks).map_err(|e| LostReason::Failed {
             message: e.to_string(),
@@ -569,68 +629,31 @@ fn solve_point(
             residual: state.get_cost(),
         });
     }
-    // Independent checks: the fixed point with a fresh stride, the critical multiplier.
-    let sys = Codim2System::new(
-        family,
-        kind,
-        p_step,
-        b.to_vec(),
-        c.to_vec(),
-        *opts,
-        &failure,
-    );
-    let ev = sys.evaluate(&y)?;
-    let p = y[n];
-    let model = build2(family, p_step, p)?;
-    let map = StrideMap::new(model.section(), opts.integrator).map_err(|e| from_limit(e, p))?;
-    let next = map.apply(&y[..n]).map_err(|e| from_limit(e, p))?;
-    let residual = norm_inf(
-        &next
-            .iter()
-            .zip(&y[..n])
-            .map(|(a, b)| a - b)
-            .collect::<Vec<_>>(),
-    );
-    if residual.is_nan() || residual > 10.0 * opts.newton_tol * residual_scale(&y) {
-        return Err(LostReason::NotCritical {
-            detail: format!(
-                "a fresh stride gives ‖P(x) − x‖∞ = {residual:.3e}, above the tolerance"
-            ),
-        });
-    }
-    let mult = multipliers(&ev.dp, n).map_err(|e| from_limit(e, p))?;
+    Ok((y, iters))
+}
+
+/// The real multiplier of `mult` nearest the critical value of `kind` (+1 for a fold, −1 for
+/// a period doubling); lost when none is within `critical_tol` of it.
+fn critical_multiplier(
+    mult: &[Multiplier],
+    kind: Codim2Kind,
+    opts: &Codim2Options,
+) -> Result<f64, LostReason> {
     let lc = kind.critical();
     let critical = mult
         .iter()
         .filter(|m| m.im == 0.0)
         .map(|m| m.re)
         .min_by(|a, b| (a - lc).abs().total_cmp(&(b - lc).abs()));
-    let Some(critical) = critical.filter(|l| (l - lc).abs() <= opts.critical_tol) else {
-        return Err(LostReason::NotCritical {
+    critical
+        .filter(|l| (l - lc).abs() <= opts.critical_tol)
+        .ok_or_else(|| LostReason::NotCritical {
             detail: format!(
                 "no real multiplier within {:e} of {lc} (multipliers {:?})",
                 opts.critical_tol,
                 mult.iter().map(|m| (m.re, m.im)).collect::<Vec<_>>()
             ),
-        });
-    };
-    Ok(Solved {
-        point: CurvePoint {
-            p_step,
-            p_free: p,
-            section: y[..n].to_vec(),
-            state: map.lift(&y[..n]),
-            multipliers: mult,
-            critical,
-            period: ev.period,
-            test_value: ev.f[n],
-            residual,
-            newton_iters: iters,
-        },
-        b: normalized(&ev.w),
-        c: normalized(&ev.v),
-        y,
-    })
+        })
 }
 
 /// Follow the curve of `kind` points through `start` (near the curve at `step_values[0]`) over
@@ -670,41 +693,8 @@ fn follow_erased(
             got: start.dp.len(),
         });
     }
-    if step_values.is_empty() || !step_values.iter().all(|v| v.is_finite()) {
-        return Err(LimitError::InvalidOption {
-            name: "step_values",
-            value: step_values.len() as f64,
-            allowed: "need at least one finite value",
-        });
-    }
-    let dir = if step_values.len() > 1 {
-        (step_values[1] - step_values[0]).signum()
-    } else {
-        1.0
-    };
-    if step_values
-        .windows(2)
-        .any(|w| (w[1] - w[0]) * dir <= 0.0 || !(w[1] - w[0]).is_finite())
-    {
-        return Err(LimitError::InvalidOption {
-            name: "step_values",
-            value: f64::NAN,
-            allowed: "must be strictly monotone",
-        });
-    }
-    let lc = kind.critical();
-    let mut dpt = vec![0.0; n * n];
-    for i in 0..n {
-        for j in 0..n {
-            dpt[i * n + j] = start.dp[j * n + i];
-        }
-    }
-    let c0 = real_eigenvector(&start.dp, n, lc).ok_or(LimitError::Singular {
-        at: start.section.clone(),
-    })?;
-    let b0 = real_eigenvector(&dpt, n, lc).ok_or(LimitError::Singular {
-        at: start.section.clone(),
-    })?;
+    let dir = step_direction(step_values)?;
+    let (b0, c0) = start_borders(start, kind)?;
     let mut y0 = start.section.clone();
     y0.push(start.p_free);
     let mut solves = 1;
@@ -743,15 +733,7 @@ fn follow_erased(
         } else {
             cur + dir * step
         };
-        let pred: Vec<f64> = match hist.len() {
-            0 | 1 => hist[hist.len() - 1].1.clone(),
-            k => {
-                let (t0, y0) = &hist[k - 2];
-                let (t1, y1) = &hist[k - 1];
-                let s = (to - t1) / (t1 - t0);
-                y1.iter().zip(y0).map(|(a, b)| a + s * (a - b)).collect()
-            }
-        };
+        let pred = secant_prediction(&hist, to);
         solves += 1;
         match solve_point(family, kind, to, &pred, &b, &c, opts) {
             Ok(sol) => {
@@ -786,6 +768,68 @@ fn follow_erased(
         end,
         solves,
     })
+}
+
+/// The direction (±1) of the stepped parameter's values `step_values`, checked: at least one
+/// value, all finite, strictly monotone.
+fn step_direction(step_values: &[f64]) -> Result<f64, LimitError> {
+    if step_values.is_empty() || !step_values.iter().all(|v| v.is_finite()) {
+        return Err(LimitError::InvalidOption {
+            name: "step_values",
+            value: step_values.len() as f64,
+            allowed: "need at least one finite value",
+        });
+    }
+    let dir = if step_values.len() > 1 {
+        (step_values[1] - step_values[0]).signum()
+    } else {
+        1.0
+    };
+    if step_values
+        .windows(2)
+        .any(|w| (w[1] - w[0]) * dir <= 0.0 || !(w[1] - w[0]).is_finite())
+    {
+        return Err(LimitError::InvalidOption {
+            name: "step_values",
+            value: f64::NAN,
+            allowed: "must be strictly monotone",
+        });
+    }
+    Ok(dir)
+}
+
+/// The borders of the first corrector at `start`: the left (`b`) and right (`c`) real
+/// eigenvectors of its `DP` for the critical multiplier of `kind`.
+fn start_borders(start: &CurveStart, kind: Codim2Kind) -> Result<(Vec<f64>, Vec<f64>), LimitError> {
+    let n = start.section.len();
+    let lc = kind.critical();
+    let mut dpt = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..n {
+            dpt[i * n + j] = start.dp[j * n + i];
+        }
+    }
+    let c0 = real_eigenvector(&start.dp, n, lc).ok_or(LimitError::Singular {
+        at: start.section.clone(),
+    })?;
+    let b0 = real_eigenvector(&dpt, n, lc).ok_or(LimitError::Singular {
+        at: start.section.clone(),
+    })?;
+    Ok((b0, c0))
+}
+
+/// The predictor at `to` from the accepted points `hist` (`(p_step, y)`, the last two):
+/// linear extrapolation through both (secant), or the last point alone.
+fn secant_prediction(hist: &[(f64, Vec<f64>)], to: f64) -> Vec<f64> {
+    match hist.len() {
+        0 | 1 => hist[hist.len() - 1].1.clone(),
+        k => {
+            let (t0, y0) = &hist[k - 2];
+            let (t1, y1) = &hist[k - 1];
+            let s = (to - t1) / (t1 - t0);
+            y1.iter().zip(y0).map(|(a, b)| a + s * (a - b)).collect()
+        }
+    }
 }
 
 /// What the stride map does in one cell of a [`region_map`].

@@ -667,6 +667,119 @@ where
         let (sol, mult, f) = best.expect("at least one iteration");
         Ok((sol, mult, f, (mu_hi - mu_lo).abs()))
     }
+
+    /// The predictor from the corrected point `cur` with tangent `t_cur` and step `ds`, with
+    /// its constraint `c · y = sigma`: a step of `ds` in μ along the tangent at fixed-μ
+    /// constraint (natural continuation), or a step of `ds` along the tangent on the
+    /// pseudo-arclength constraint `t_cur · y = t_cur · y_cur + ds` (Keller 1977).
+    fn predict(&self, cur: &Solved, t_cur: &[f64], ds: f64) -> (Vec<f64>, Vec<f64>, f64) {
+        let n = self.n;
+        let mu = cur.y[n];
+        if self.opts.method == ContinuationMethod::Natural {
+            let dmu = ds * t_cur[n].signum();
+            let slope = 1.0 / t_cur[n];
+            let pred: Vec<f64> = cur
+                .y
+                .iter()
+                .zip(t_cur)
+                .map(|(y, t)| y + t * slope * dmu)
+                .collect();
+            let mut c = vec![0.0; n + 1];
+            c[n] = 1.0;
+            (pred, c, mu + dmu)
+        } else {
+            let pred: Vec<f64> = cur.y.iter().zip(t_cur).map(|(y, t)| y + ds * t).collect();
+            let sigma = dot(t_cur, &cur.y) + ds;
+            (pred, t_cur.to_vec(), sigma)
+        }
+    }
+
+    /// The corrected point from the predictor `pred` on the constraint `c · y = sigma`, with
+    /// its tangent oriented along `t_cur`; an error when the tangent turned by more than
+    /// `max_turn` (pseudo-arclength) or the parameter turned (natural: a fold between steps).
+    fn step(
+        &self,
+        pred: &[f64],
+        c: &[f64],
+        sigma: f64,
+        t_cur: &[f64],
+    ) -> Result<(Solved, Vec<f64>), String> {
+        let n = self.n;
+        let natural = self.opts.method == ContinuationMethod::Natural;
+        let cos_turn = self.opts.max_turn.cos();
+        let sol = self.correct(pred, c, sigma)?;
+        let t = self
+            .tangent(&sol.jac, t_cur)
+            .ok_or_else(|| "singular tangent system".to_string())?;
+        if !natural && dot(&t, t_cur) < cos_turn {
+            return Err(format!(
+                "tangent turned by {:.3} rad (> max_turn)",
+                dot(&t, t_cur).clamp(-1.0, 1.0).acos()
+            ));
+        }
+        if natural && t[n].signum() != t_cur[n].signum() {
+            return Err("the parameter turned (fold) between natural steps".to_string());
+        }
+        Ok((sol, t))
+    }
+
+    /// The bifurcations between the accepted points `ya` and `yb` (constraint `c`, tangent
+    /// `t_ref`) where a test function changes sign (`psi`: the tests at both), each located
+    /// (see [`Self::locate`]) and numbered `index`. A sign change of the Neimark–Sacker test
+    /// without a complex pair on the unit circle is a neutral saddle and is dropped.
+    fn detect(
+        &self,
+        ya: &[f64],
+        yb: &[f64],
+        c: &[f64],
+        t_ref: &[f64],
+        psi: (&[f64; 4], &[f64; 4]),
+        index: usize,
+    ) -> Vec<Bifurcation> {
+        let n = self.n;
+        let natural = self.opts.method == ContinuationMethod::Natural;
+        let (psi, psi_new) = psi;
+        let sign_change = |i: usize| (psi[i] > 0.0) != (psi_new[i] > 0.0) && psi[i] != 0.0;
+        let mut found: Vec<(BifurcationKind, usize)> = Vec::new();
+        if sign_change(0) {
+            found.push((BifurcationKind::PeriodDoubling, 0));
+        }
+        if !natural && sign_change(1) {
+            found.push((BifurcationKind::Fold, 1));
+        } else if sign_change(2) {
+            found.push((BifurcationKind::BranchPoint, 2));
+        }
+        if sign_change(3) {
+            found.push((BifurcationKind::NeimarkSacker, 3));
+        }
+        let mut bifs = Vec::new();
+        for (kind, which) in found {
+            let located = self.locate(ya, yb, c, t_ref, which, psi[which], psi_new[which]);
+            let Ok((lsol, lmult, f, bracket)) = located else {
+                continue;
+            };
+            if kind == BifurcationKind::NeimarkSacker {
+                let pair = lmult
+                    .iter()
+                    .any(|m| m.im.abs() > 1e-8 && (m.modulus() - 1.0).abs() < 1e-4);
+                if !pair {
+                    continue; // a neutral saddle (λ_i λ_j = 1 with real λ), not a bifurcation
+                }
+            }
+            bifs.push(Bifurcation {
+                kind,
+                param: lsol.y[n],
+                param_bracket: bracket,
+                section: lsol.y[..n].to_vec(),
+                multipliers: lmult,
+                test_value: f,
+                index,
+                period_strides: self.k,
+                dp: lsol.dp.clone(),
+            });
+        }
+        bifs
+    }
 }
 
 fn check_start(s: &[f64], model: &dyn Section) -> Result<(), LimitError> {
@@ -764,7 +877,6 @@ fn run_branch<'m>(
     let mut psi = ctx.tests(&cur.dp, &p0.multipliers, &t_cur);
     points.push(p0);
     let mut ds = opts.ds_init;
-    let cos_turn = opts.max_turn.cos();
     let end = loop {
         if points.len() >= opts.max_points {
             break BranchEnd::MaxPoints;
@@ -773,40 +885,8 @@ fn run_branch<'m>(
         if mu < opts.mu_min || mu > opts.mu_max {
             break BranchEnd::ParamBound { param: mu };
         }
-        // Predictor and constraint.
-        let (pred, c, sigma) = if natural {
-            let dmu = ds * t_cur[n].signum();
-            let slope = 1.0 / t_cur[n];
-            let pred: Vec<f64> = cur
-                .y
-                .iter()
-                .zip(&t_cur)
-                .map(|(y, t)| y + t * slope * dmu)
-                .collect();
-            let mut c = vec![0.0; n + 1];
-            c[n] = 1.0;
-            (pred, c, mu + dmu)
-        } else {
-            let pred: Vec<f64> = cur.y.iter().zip(&t_cur).map(|(y, t)| y + ds * t).collect();
-            let sigma = dot(&t_cur, &cur.y) + ds;
-            (pred, t_cur.clone(), sigma)
-        };
-        let step = ctx.correct(&pred, &c, sigma).and_then(|sol| {
-            let t = ctx
-                .tangent(&sol.jac, &t_cur)
-                .ok_or_else(|| "singular tangent system".to_string())?;
-            if !natural && dot(&t, &t_cur) < cos_turn {
-                return Err(format!(
-                    "tangent turned by {:.3} rad (> max_turn)",
-                    dot(&t, &t_cur).clamp(-1.0, 1.0).acos()
-                ));
-            }
-            if natural && t[n].signum() != t_cur[n].signum() {
-                return Err("the parameter turned (fold) between natural steps".to_string());
-            }
-            Ok((sol, t))
-        });
-        let (sol, t_new) = match step {
+        let (pred, c, sigma) = ctx.predict(&cur, &t_cur, ds);
+        let (sol, t_new) = match ctx.step(&pred, &c, sigma, &t_cur) {
             Ok(v) => v,
             Err(reason) => {
                 // A step that fails beyond the range's end (where the model may not even be
@@ -820,20 +900,7 @@ fn run_branch<'m>(
                 ds *= 0.5;
                 if ds < opts.ds_min {
                     let last = points.last().expect("at least the first point");
-                    let near_one = last
-                        .multipliers
-                        .iter()
-                        .filter(|m| m.im == 0.0)
-                        .map(|m| m.re)
-                        .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()));
-                    break match near_one {
-                        Some(l) if natural && (l - 1.0).abs() < 0.1 => BranchEnd::FoldSuspected {
-                            param: mu,
-                            multiplier: l,
-                            reason,
-                        },
-                        _ => BranchEnd::CorrectorFailed { param: mu, reason },
-                    };
+                    break failed_end(last, natural, mu, reason);
                 }
                 continue;
             }
@@ -842,45 +909,7 @@ fn run_branch<'m>(
         let psi_new = ctx.tests(&sol.dp, &pt.multipliers, &t_new);
         let index = points.len();
         if opts.detect {
-            let sign_change = |i: usize| (psi[i] > 0.0) != (psi_new[i] > 0.0) && psi[i] != 0.0;
-            let mut found: Vec<(BifurcationKind, usize)> = Vec::new();
-            if sign_change(0) {
-                found.push((BifurcationKind::PeriodDoubling, 0));
-            }
-            if !natural && sign_change(1) {
-                found.push((BifurcationKind::Fold, 1));
-            } else if sign_change(2) {
-                found.push((BifurcationKind::BranchPoint, 2));
-            }
-            if sign_change(3) {
-                found.push((BifurcationKind::NeimarkSacker, 3));
-            }
-            for (kind, which) in found {
-                let (ya, yb) = (&cur.y, &sol.y);
-                let located = ctx.locate(ya, yb, &c, &t_cur, which, psi[which], psi_new[which]);
-                let Ok((lsol, lmult, f, bracket)) = located else {
-                    continue;
-                };
-                if kind == BifurcationKind::NeimarkSacker {
-                    let pair = lmult
-                        .iter()
-                        .any(|m| m.im.abs() > 1e-8 && (m.modulus() - 1.0).abs() < 1e-4);
-                    if !pair {
-                        continue; // a neutral saddle (λ_i λ_j = 1 with real λ), not a bifurcation
-                    }
-                }
-                bifs.push(Bifurcation {
-                    kind,
-                    param: lsol.y[n],
-                    param_bracket: bracket,
-                    section: lsol.y[..n].to_vec(),
-                    multipliers: lmult,
-                    test_value: f,
-                    index,
-                    period_strides: ctx.k,
-                    dp: lsol.dp.clone(),
-                });
-            }
+            bifs.extend(ctx.detect(&cur.y, &sol.y, &c, &t_cur, (&psi, &psi_new), index));
         }
         let iters = sol.iters;
         cur = sol;
@@ -895,13 +924,7 @@ fn run_branch<'m>(
                 };
             }
         }
-        if iters <= 2 {
-            ds = (ds * 1.5).min(opts.ds_max);
-        } else if iters <= 4 {
-            ds = (ds * 1.2).min(opts.ds_max);
-        } else if iters >= 7 {
-            ds = (ds * 0.7).max(opts.ds_min);
-        }
+        ds = adapted_step(ds, iters, &opts);
     };
     Ok(Branch {
         period_strides: ctx.k,
@@ -909,6 +932,41 @@ fn run_branch<'m>(
         bifurcations: bifs,
         end,
     })
+}
+
+/// How a branch ends when its step size fell below `ds_min` at parameter `mu` after the
+/// corrector failed for `reason`: a suspected fold when natural continuation stopped with a
+/// real multiplier of the `last` point within 0.1 of +1 (the parameter cannot pass a fold),
+/// else the corrector's failure.
+fn failed_end(last: &BranchPoint, natural: bool, mu: f64, reason: String) -> BranchEnd {
+    let near_one = last
+        .multipliers
+        .iter()
+        .filter(|m| m.im == 0.0)
+        .map(|m| m.re)
+        .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()));
+    match near_one {
+        Some(l) if natural && (l - 1.0).abs() < 0.1 => BranchEnd::FoldSuspected {
+            param: mu,
+            multiplier: l,
+            reason,
+        },
+        _ => BranchEnd::CorrectorFailed { param: mu, reason },
+    }
+}
+
+/// The next step size after a step whose corrector took `iters` iterations: grown after a
+/// quick convergence, shrunk after a slow one, within `[ds_min, ds_max]`.
+fn adapted_step(ds: f64, iters: usize, opts: &ContinuationOptions) -> f64 {
+    if iters <= 2 {
+        (ds * 1.5).min(opts.ds_max)
+    } else if iters <= 4 {
+        (ds * 1.2).min(opts.ds_max)
+    } else if iters >= 7 {
+        (ds * 0.7).max(opts.ds_min)
+    } else {
+        ds
+    }
 }
 
 /// Where a step predicted to parameter `mu_pred` beyond the range `[mu_min, mu_max]` failed:

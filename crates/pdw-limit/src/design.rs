@@ -589,17 +589,7 @@ fn validity_shortfall(
     }
     // the torque scale m g l of the model's natural scales; without them, the potential energy
     // of the upright walker at rest (about weight × half the leg length)
-    let mgl = match v.scales.as_ref() {
-        Some(s) if (s.mass * s.gravity * s.length).is_finite() => s.mass * s.gravity * s.length,
-        _ => {
-            let mut up = vec![0.0; walker.dim()];
-            walker.lift(&vec![0.0; walker.section_dim()], &mut up);
-            walker
-                .energy(&up)
-                .filter(|e| e.is_finite() && *e > 0.0)
-                .unwrap_or(1.0)
-        }
-    };
+    let mgl = torque_scale(walker, &v);
     let mu_req = if v.impact_friction_required.is_finite() {
         v.max_friction_required.max(v.impact_friction_required)
     } else {
@@ -623,6 +613,36 @@ fn validity_shortfall(
         (tau, opts.knee_margin, mgl),
         discrete,
     );
+    why.extend(criteria_failures(&v, opts));
+    // a flag the margins do not carry (none of the criteria below its requirement, yet the
+    // model flags the stride): one discrete failure
+    if !why.is_empty() && sf.total() == 0.0 {
+        sf.discrete += 1;
+    }
+    (sf.total(), why)
+}
+
+/// The torque scale `m g l` of the model's natural scales in `v`; without them, the potential
+/// energy of the upright `walker` at rest (about weight × half the leg length), else 1.
+fn torque_scale(walker: &dyn Walker, v: &Validity) -> f64 {
+    match v.scales.as_ref() {
+        Some(s) if (s.mass * s.gravity * s.length).is_finite() => s.mass * s.gravity * s.length,
+        _ => {
+            let mut up = vec![0.0; walker.dim()];
+            walker.lift(&vec![0.0; walker.section_dim()], &mut up);
+            walker
+                .energy(&up)
+                .filter(|e| e.is_finite() && *e > 0.0)
+                .unwrap_or(1.0)
+        }
+    }
+}
+
+/// What fails of the criteria in `v` against the requirements of `opts`, in words: a pulling
+/// ground, friction beyond `mu` (stance and impacts), a knee torque below its margin, a scuff,
+/// an impact that needs a pulling contact or stop, and a binding margin below `min_margin`.
+fn criteria_failures(v: &Validity, opts: &DesignOptions) -> Vec<String> {
+    let mut why = Vec::new();
     if v.normal_force_negative || v.min_normal_force <= 0.0 {
         why.push(format!("normal force {:.3} N", v.min_normal_force));
     }
@@ -670,12 +690,7 @@ fn validity_shortfall(
             b.name, b.relative, b.scale_name, opts.min_margin
         ));
     }
-    // a flag the margins do not carry (none of the criteria below its requirement, yet the
-    // model flags the stride): one discrete failure
-    if !why.is_empty() && sf.total() == 0.0 {
-        sf.discrete += 1;
-    }
-    (sf.total(), why)
+    why
 }
 
 /// The free parameters and their bounds.

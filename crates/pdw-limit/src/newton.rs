@@ -52,8 +52,8 @@ use crate::metrics::GaitMetrics;
 use crate::stride::StrideMap;
 use crate::variational::ErrorControl;
 use argmin::core::{
-    Error as ArgminError, Executor, IterState, Jacobian, Operator, Problem, Solver, State,
-    TerminationReason, TerminationStatus, KV,
+    Error as ArgminError, Executor, IterState, Jacobian, Operator, OptimizationResult, Problem,
+    Solver, State, TerminationReason, TerminationStatus, KV,
 };
 use faer::prelude::*;
 use faer::Mat;
@@ -435,49 +435,7 @@ pub fn find_fixed_point(
     opts: &NewtonOptions,
 ) -> Result<FixedPoint, LimitError> {
     map.check_dim(guess)?;
-    let problem = FixedPointProblem::new(map, opts.dp);
-    let solver = Newton::new(opts.tol, opts.max_backtracks)?;
-    let guess_v = guess.to_vec();
-    let run = Executor::new(problem, solver)
-        .configure(|s| s.param(guess_v).max_iters(opts.max_iters))
-        .timer(false)
-        .run();
-    if pdw_hybrid::interrupt::requested() {
-        return Err(LimitError::interrupted());
-    }
-    let res = match run {
-        Ok(r) => r,
-        Err(e) => {
-            // The guess itself did not give a complete stride (init failed).
-            return Err(match e.downcast::<LimitError>() {
-                // A stride from an iterate far smaller than the guess: the iterates collapsed
-                // towards standing still (see "Degenerate gaits").
-                Ok(LimitError::StrideFailed { from, outcome })
-                    if norm_inf(&from) < 0.25 * norm_inf(guess) =>
-                {
-                    LimitError::NoConvergence {
-                        reason: format!(
-                            "degenerate: the iterates shrink towards standing still (‖s‖∞ from \
-                             {:.3e} at the guess to {:.3e}, where the stride fails: {outcome}), \
-                             so there is no gait to converge to",
-                            norm_inf(guess),
-                            norm_inf(&from)
-                        ),
-                        iterations: 0,
-                        last: from,
-                        history: Vec::new(),
-                    }
-                }
-                Ok(le) => le,
-                Err(e) => LimitError::NoConvergence {
-                    reason: e.to_string(),
-                    iterations: 0,
-                    last: guess.to_vec(),
-                    history: Vec::new(),
-                },
-            });
-        }
-    };
+    let res = run_newton(map, guess, opts)?;
     let RunEnd {
         mut iterations,
         converged,
@@ -487,33 +445,14 @@ pub fn find_fixed_point(
     } = RunEnd::of(&res, guess);
     // The iterates collapsed towards the standing state s = 0 (a level floor has no gait).
     let shrunk = norm_inf(&last) < 0.25 * norm_inf(guess);
-    let collapsed =
-        |why: String, last: &[f64], iterations: u64, history: &[f64]| LimitError::NoConvergence {
-            reason: format!(
-                "degenerate: the iterates shrink towards standing still (‖s‖∞ from {:.3e} at \
-                 the guess to {:.3e}), so there is no gait to converge to ({why})",
-                norm_inf(guess),
-                norm_inf(last)
-            ),
-            iterations,
-            last: last.to_vec(),
-            history: history.to_vec(),
-        };
     // Independent check on the plain stride map, with a fresh integrator.
     let mut check = match map.stride(&last) {
         Ok(c) => c,
-        Err(e) if shrunk => return Err(collapsed(e.to_string(), &last, iterations, &history)),
-        Err(e) => return Err(e),
-    };
-    let plain_residual = |c: &crate::stride::Stride, s: &[f64]| {
-        if c.outcome.is_ok() {
-            c.next
-                .iter()
-                .zip(s)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-        } else {
-            f64::INFINITY
+        Err(e) if shrunk => {
+            let why = e.to_string();
+            return Err(collapsed(guess, why, &last, iterations, &history));
         }
+        Err(e) => return Err(e),
     };
     let mut residual = plain_residual(&check, &last);
     // The solver converged on the variational integration's map, the plain map's bit for bit
@@ -566,20 +505,16 @@ pub fn find_fixed_point(
     }
     if !accepted {
         // Say so when the iterates were shrinking towards standing still (no gait exists).
-        let at_guess = map
-            .stride(guess)
-            .ok()
-            .filter(|g| g.outcome.is_ok())
-            .and_then(|g| g.step_length)
-            .map(f64::abs);
-        let reason = match (at_guess, step) {
-            (Some(g), Some(l)) if l < 0.25 * g => format!(
+        let reason = match shrinking_steps(map, guess, step) {
+            Some((g, l)) => format!(
                 "degenerate: the iterates shrink towards standing still (step length {g:.3e} at \
                  the guess, {l:.3e} at the last iterate), so there is no gait to converge to \
                  ({termination})"
             ),
-            _ if shrunk => return Err(collapsed(termination, &last, iterations, &history)),
-            _ => termination,
+            None if shrunk => {
+                return Err(collapsed(guess, termination, &last, iterations, &history))
+            }
+            None => termination,
         };
         return Err(LimitError::NoConvergence {
             reason,
@@ -608,4 +543,106 @@ pub fn find_fixed_point(
         termination,
         residual_history: history,
     })
+}
+
+/// The argmin run of [`Newton`] on `map` from `guess`. A guess that gives no complete stride
+/// (the run's init failed) is an error, named degenerate when the stride failed from an
+/// iterate far smaller than the guess.
+fn run_newton<'m, 'a>(
+    map: &'m StrideMap<'a>,
+    guess: &[f64],
+    opts: &NewtonOptions,
+) -> Result<OptimizationResult<FixedPointProblem<'m, 'a>, Newton, NewtonState>, LimitError> {
+    let problem = FixedPointProblem::new(map, opts.dp);
+    let solver = Newton::new(opts.tol, opts.max_backtracks)?;
+    let guess_v = guess.to_vec();
+    let run = Executor::new(problem, solver)
+        .configure(|s| s.param(guess_v).max_iters(opts.max_iters))
+        .timer(false)
+        .run();
+    if pdw_hybrid::interrupt::requested() {
+        return Err(LimitError::interrupted());
+    }
+    match run {
+        Ok(r) => Ok(r),
+        Err(e) => {
+            // The guess itself did not give a complete stride (init failed).
+            Err(match e.downcast::<LimitError>() {
+                // A stride from an iterate far smaller than the guess: the iterates collapsed
+                // towards standing still (see "Degenerate gaits").
+                Ok(LimitError::StrideFailed { from, outcome })
+                    if norm_inf(&from) < 0.25 * norm_inf(guess) =>
+                {
+                    LimitError::NoConvergence {
+                        reason: format!(
+                            "degenerate: the iterates shrink towards standing still (‖s‖∞ from \
+                             {:.3e} at the guess to {:.3e}, where the stride fails: {outcome}), \
+                             so there is no gait to converge to",
+                            norm_inf(guess),
+                            norm_inf(&from)
+                        ),
+                        iterations: 0,
+                        last: from,
+                        history: Vec::new(),
+                    }
+                }
+                Ok(le) => le,
+                Err(e) => LimitError::NoConvergence {
+                    reason: e.to_string(),
+                    iterations: 0,
+                    last: guess.to_vec(),
+                    history: Vec::new(),
+                },
+            })
+        }
+    }
+}
+
+/// The error of a run whose iterates collapsed towards the standing state `s = 0` (a level
+/// floor has no gait): from `guess` to `last`, after `iterations`, failing for `why`.
+fn collapsed(
+    guess: &[f64],
+    why: String,
+    last: &[f64],
+    iterations: u64,
+    history: &[f64],
+) -> LimitError {
+    LimitError::NoConvergence {
+        reason: format!(
+            "degenerate: the iterates shrink towards standing still (‖s‖∞ from {:.3e} at \
+             the guess to {:.3e}), so there is no gait to converge to ({why})",
+            norm_inf(guess),
+            norm_inf(last)
+        ),
+        iterations,
+        last: last.to_vec(),
+        history: history.to_vec(),
+    }
+}
+
+/// `‖P(s) − s‖∞` of the plain stride `c` from `s`; infinite when the stride did not complete.
+fn plain_residual(c: &crate::stride::Stride, s: &[f64]) -> f64 {
+    if c.outcome.is_ok() {
+        c.next
+            .iter()
+            .zip(s)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The step lengths `(at the guess, at the last iterate)` when the last iterate's `step` is
+/// under a quarter of the guess's: the iterates were shrinking towards standing still.
+fn shrinking_steps(map: &StrideMap<'_>, guess: &[f64], step: Option<f64>) -> Option<(f64, f64)> {
+    let at_guess = map
+        .stride(guess)
+        .ok()
+        .filter(|g| g.outcome.is_ok())
+        .and_then(|g| g.step_length)
+        .map(f64::abs);
+    match (at_guess, step) {
+        (Some(g), Some(l)) if l < 0.25 * g => Some((g, l)),
+        _ => None,
+    }
 }

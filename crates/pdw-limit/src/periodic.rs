@@ -22,11 +22,12 @@ use crate::floquet::{is_stable, multipliers, Multiplier};
 use crate::jacobian::{dp_finite_difference, dp_variational_with};
 use crate::metrics::GaitMetrics;
 use crate::newton::{
-    chord_polish, residual_scale, DpMethod, KeptJacobian, Newton, NewtonOptions, RunEnd,
+    chord_polish, residual_scale, DpMethod, KeptJacobian, Newton, NewtonOptions, NewtonState,
+    RunEnd,
 };
 use crate::stride::StrideMap;
 use crate::variational::ErrorControl;
-use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator};
+use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, OptimizationResult};
 use faer::Mat;
 
 /// The argmin problem `F(s) = P^K(s) − s` with Jacobian `DP^K(s) − I`.
@@ -253,26 +254,7 @@ pub fn find_periodic_orbit(
         });
     }
     map.check_dim(guess)?;
-    let problem = PeriodKProblem::new(map, k, opts.dp);
-    let solver = Newton::new(opts.tol, opts.max_backtracks)?;
-    let run = Executor::new(problem, solver)
-        .configure(|s| s.param(guess.to_vec()).max_iters(opts.max_iters))
-        .timer(false)
-        .run();
-    let res = match run {
-        Ok(r) => r,
-        Err(e) => {
-            return Err(match e.downcast::<LimitError>() {
-                Ok(le) => le,
-                Err(e) => LimitError::NoConvergence {
-                    reason: e.to_string(),
-                    iterations: 0,
-                    last: guess.to_vec(),
-                    history: Vec::new(),
-                },
-            })
-        }
-    };
+    let res = run_period_k(map, guess, k, opts)?;
     let RunEnd {
         mut iterations,
         converged,
@@ -366,6 +348,34 @@ pub fn find_periodic_orbit(
         termination,
         residual_history: history,
     })
+}
+
+/// The argmin run of [`Newton`] on `P^k − id` from `guess`; a run that could not start (the
+/// guess gives no complete `k` strides) is an error.
+fn run_period_k<'m, 'a>(
+    map: &'m StrideMap<'a>,
+    guess: &[f64],
+    k: usize,
+    opts: &NewtonOptions,
+) -> Result<OptimizationResult<PeriodKProblem<'m, 'a>, Newton, NewtonState>, LimitError> {
+    let problem = PeriodKProblem::new(map, k, opts.dp);
+    let solver = Newton::new(opts.tol, opts.max_backtracks)?;
+    let run = Executor::new(problem, solver)
+        .configure(|s| s.param(guess.to_vec()).max_iters(opts.max_iters))
+        .timer(false)
+        .run();
+    match run {
+        Ok(r) => Ok(r),
+        Err(e) => Err(match e.downcast::<LimitError>() {
+            Ok(le) => le,
+            Err(e) => LimitError::NoConvergence {
+                reason: e.to_string(),
+                iterations: 0,
+                last: guess.to_vec(),
+                history: Vec::new(),
+            },
+        }),
+    }
 }
 
 /// True if orbits `a` and `b` are the same cycle: `b`'s first point is within

@@ -305,6 +305,38 @@ struct Recorder<'a> {
     ws: Scratch,
 }
 
+impl<'a> Recorder<'a> {
+    /// An empty recorder of a walk of `w` under `opts`.
+    fn new(w: &'a dyn Walker, opts: &TrajectoryOptions) -> Self {
+        let energy = model_energy(w);
+        let units = units(w, energy.as_deref().unwrap_or(""));
+        Recorder {
+            w,
+            energy: energy.is_some(),
+            tr: Trajectory {
+                state_names: w.state_names().iter().map(|s| s.to_string()).collect(),
+                t: Vec::new(),
+                x: Vec::new(),
+                mode: Vec::new(),
+                step: Vec::new(),
+                forces: None,
+                flags: None,
+                energy: None,
+                events: Vec::new(),
+                outcome: StrideOutcome::Ok,
+                steps_done: 0,
+                section: Vec::new(),
+                units,
+            },
+            forces_ok: true,
+            flags_ok: true,
+            max_samples: opts.max_samples.max(1),
+            full: false,
+            ws: Scratch::new(),
+        }
+    }
+}
+
 impl Recorder<'_> {
     fn push(&mut self, t: f64, x: &[f64], mode: usize, step: usize) {
         if self.tr.t.len() >= self.max_samples {
@@ -373,93 +405,30 @@ pub fn simulate(
             w.name()
         )));
     }
-    let energy = model_energy(w);
-    let units = units(w, energy.as_deref().unwrap_or(""));
-    let mut rec = Recorder {
-        w,
-        energy: energy.is_some(),
-        tr: Trajectory {
-            state_names: w.state_names().iter().map(|s| s.to_string()).collect(),
-            t: Vec::new(),
-            x: Vec::new(),
-            mode: Vec::new(),
-            step: Vec::new(),
-            forces: None,
-            flags: None,
-            energy: None,
-            events: Vec::new(),
-            outcome: StrideOutcome::Ok,
-            steps_done: 0,
-            section: Vec::new(),
-            units,
-        },
-        forces_ok: true,
-        flags_ok: true,
-        max_samples: opts.max_samples.max(1),
-        full: false,
-        ws: Scratch::new(),
+    let mut rec = Recorder::new(w, opts);
+    let mut walk = Walk {
+        integ: Integrator::new(d, opts.integrator).map_err(LimitError::from)?,
+        t: 0.0,
+        x: x0.to_vec(),
+        mode: w.section_mode(),
+        buf: vec![0.0; d],
+        s: vec![0.0; w.section_dim()],
+        k_out: 0,
+        resume: false,
+        sample_events: opts.dt_out.is_some() && opts.event_samples,
     };
-    let mut integ = Integrator::new(d, opts.integrator).map_err(LimitError::from)?;
-    let (mut t, mut x, mut mode) = (0.0, x0.to_vec(), w.section_mode());
-    let mut buf = vec![0.0; d];
-    let mut s = vec![0.0; w.section_dim()];
-    // Next output time (index k of t = k h) when sampling on a grid.
-    let mut k_out: u64 = 0;
-    // Every segment after the first continues the same trajectory (`Integrator::resume`).
-    let mut resume = false;
-    // Both sides of every event among the grid's samples (without a grid they always are).
-    let sample_events = opts.dt_out.is_some() && opts.event_samples;
     match opts.dt_out {
-        None => rec.push(t, &x, mode, 0),
+        None => rec.push(walk.t, &walk.x, walk.mode, 0),
         Some(_) => {
-            rec.push(t, &x, mode, 0);
-            k_out = 1;
+            rec.push(walk.t, &walk.x, walk.mode, 0);
+            walk.k_out = 1;
         }
     }
     'steps: for step in 0..opts.steps {
-        let t_budget = t + w.max_stride_time();
+        let t_budget = walk.t + w.max_stride_time();
         let mut events = 0;
         loop {
-            let stop = match opts.dt_out {
-                None => {
-                    let mut first = true;
-                    let m0 = mode;
-                    // A full recorder ends the call (a walk over the sample bound stops
-                    // there instead of integrating on to the end of its stride).
-                    let mut obs = |ts: f64, xs: &[f64]| {
-                        if !std::mem::take(&mut first) {
-                            rec.push(ts, xs, m0, step);
-                        }
-                        !rec.full
-                    };
-                    if std::mem::replace(&mut resume, true) {
-                        integ.resume_observed_while(w, mode, &mut t, &mut x, t_budget, &mut obs)
-                    } else {
-                        integ.integrate_observed_while(w, mode, &mut t, &mut x, t_budget, &mut obs)
-                    }
-                }
-                Some(h) => loop {
-                    let t_next = k_out as f64 * h;
-                    let t_end = t_next.min(t_budget);
-                    let stop = if std::mem::replace(&mut resume, true) {
-                        integ.resume(w, mode, &mut t, &mut x, t_end)
-                    } else {
-                        integ.integrate(w, mode, &mut t, &mut x, t_end)
-                    };
-                    if stop != StopReason::EndTime || t_end == t_budget {
-                        break stop;
-                    }
-                    // A grid time on an event already sampled (a gait's period / N) is not
-                    // sampled twice.
-                    if !(sample_events && rec.tr.t.last() == Some(&t)) {
-                        rec.push(t, &x, mode, step);
-                    }
-                    k_out += 1;
-                    if rec.full {
-                        break stop;
-                    }
-                },
-            };
+            let stop = walk.segment(w, &mut rec, opts.dt_out, t_budget, step);
             if rec.full {
                 return Err(TrajectoryError::TooManySamples {
                     max_samples: opts.max_samples,
@@ -468,39 +437,10 @@ pub fn simulate(
                     steps: opts.steps,
                 });
             }
-            let outcome = match StrideStop::of(stop, w.guards(mode)) {
+            let outcome = match StrideStop::of(stop, w.guards(walk.mode)) {
                 StrideStop::Reset { guard } => {
-                    let spec = w.guards(mode)[guard];
-                    let new_mode = w.reset(integ.scratch(), mode, guard, &x, &mut buf);
-                    let ends_step = (mode, guard) == w.section_guard();
-                    if sample_events && rec.tr.t.last() != Some(&t) {
-                        rec.push(t, &x, mode, step);
-                    }
-                    rec.tr.events.push(TrajectoryEvent {
-                        t,
-                        step,
-                        kind: spec.name.to_string(),
-                        ends_step,
-                        fall: false,
-                        guard,
-                        mode_before: mode,
-                        mode_after: new_mode,
-                        pre: x.clone(),
-                        post: buf.clone(),
-                    });
-                    x.copy_from_slice(&buf);
-                    mode = new_mode;
-                    if ends_step {
-                        rec.tr.steps_done = step + 1;
-                        w.project(&x, &mut s);
-                        rec.tr.section.extend_from_slice(&s);
-                        if opts.dt_out.is_none() || sample_events {
-                            rec.push(t, &x, mode, step + 1);
-                        }
+                    if walk.reset(w, &mut rec, opts.dt_out, guard, step) {
                         continue 'steps;
-                    }
-                    if opts.dt_out.is_none() || sample_events {
-                        rec.push(t, &x, mode, step);
                     }
                     events += 1;
                     if events > MAX_EVENTS_PER_STRIDE {
@@ -511,24 +451,24 @@ pub fn simulate(
                 }
                 StrideStop::End(StrideOutcome::Fall { kind: fall, guard }) => {
                     rec.tr.events.push(TrajectoryEvent {
-                        t,
+                        t: walk.t,
                         step,
                         kind: fall.name().to_string(),
                         ends_step: false,
                         fall: true,
                         guard,
-                        mode_before: mode,
-                        mode_after: mode,
-                        pre: x.clone(),
-                        post: x.clone(),
+                        mode_before: walk.mode,
+                        mode_after: walk.mode,
+                        pre: walk.x.clone(),
+                        post: walk.x.clone(),
                     });
                     StrideOutcome::Fall { kind: fall, guard }
                 }
                 StrideStop::End(outcome) => outcome,
             };
-            if opts.dt_out.is_some() && rec.tr.t.last() != Some(&t) {
+            if opts.dt_out.is_some() && rec.tr.t.last() != Some(&walk.t) {
                 // The stop point closes the series.
-                rec.push(t, &x, mode, step);
+                rec.push(walk.t, &walk.x, walk.mode, step);
             }
             rec.tr.outcome = outcome;
             break 'steps;
@@ -543,6 +483,138 @@ pub fn simulate(
         });
     }
     Ok(rec.tr)
+}
+
+/// The state of a walk being simulated: the integrator, where the walk is, and the output
+/// grid's bookkeeping.
+struct Walk {
+    integ: Integrator,
+    t: f64,
+    x: Vec<f64>,
+    mode: usize,
+    /// The post-impact state of a reset.
+    buf: Vec<f64>,
+    /// The section coordinates of a completed stride.
+    s: Vec<f64>,
+    /// Next output time (index k of t = k h) when sampling on a grid.
+    k_out: u64,
+    /// Every segment after the first continues the same trajectory (`Integrator::resume`).
+    resume: bool,
+    /// Both sides of every event among the grid's samples (without a grid they always are).
+    sample_events: bool,
+}
+
+impl Walk {
+    /// Integrates the current mode of stride `step` on to its next event or to `t_budget`,
+    /// sampling into `rec` every accepted step (`dt_out = None`) or at the grid times `k h`
+    /// (`dt_out = Some(h)`).
+    fn segment(
+        &mut self,
+        w: &dyn Walker,
+        rec: &mut Recorder<'_>,
+        dt_out: Option<f64>,
+        t_budget: f64,
+        step: usize,
+    ) -> StopReason {
+        match dt_out {
+            None => {
+                let mut first = true;
+                let m0 = self.mode;
+                // A full recorder ends the call (a walk over the sample bound stops
+                // there instead of integrating on to the end of its stride).
+                let mut obs = |ts: f64, xs: &[f64]| {
+                    if !std::mem::take(&mut first) {
+                        rec.push(ts, xs, m0, step);
+                    }
+                    !rec.full
+                };
+                let (t, x) = (&mut self.t, &mut self.x);
+                if std::mem::replace(&mut self.resume, true) {
+                    self.integ
+                        .resume_observed_while(w, self.mode, t, x, t_budget, &mut obs)
+                } else {
+                    self.integ
+                        .integrate_observed_while(w, self.mode, t, x, t_budget, &mut obs)
+                }
+            }
+            Some(h) => loop {
+                let t_next = self.k_out as f64 * h;
+                let t_end = t_next.min(t_budget);
+                let stop = if std::mem::replace(&mut self.resume, true) {
+                    self.integ
+                        .resume(w, self.mode, &mut self.t, &mut self.x, t_end)
+                } else {
+                    self.integ
+                        .integrate(w, self.mode, &mut self.t, &mut self.x, t_end)
+                };
+                if stop != StopReason::EndTime || t_end == t_budget {
+                    break stop;
+                }
+                // A grid time on an event already sampled (a gait's period / N) is not
+                // sampled twice.
+                if !(self.sample_events && rec.tr.t.last() == Some(&self.t)) {
+                    rec.push(self.t, &self.x, self.mode, step);
+                }
+                self.k_out += 1;
+                if rec.full {
+                    break stop;
+                }
+            },
+        }
+    }
+
+    /// The reset by `guard` of the current mode in stride `step`: the event recorded (both
+    /// sides sampled without a grid or where the options ask for it) and the walk moved to the
+    /// post-impact state; true when the reset ends the stride (the section guard).
+    fn reset(
+        &mut self,
+        w: &dyn Walker,
+        rec: &mut Recorder<'_>,
+        dt_out: Option<f64>,
+        guard: usize,
+        step: usize,
+    ) -> bool {
+        let spec = w.guards(self.mode)[guard];
+        let new_mode = w.reset(
+            self.integ.scratch(),
+            self.mode,
+            guard,
+            &self.x,
+            &mut self.buf,
+        );
+        let ends_step = (self.mode, guard) == w.section_guard();
+        if self.sample_events && rec.tr.t.last() != Some(&self.t) {
+            rec.push(self.t, &self.x, self.mode, step);
+        }
+        rec.tr.events.push(TrajectoryEvent {
+            t: self.t,
+            step,
+            kind: spec.name.to_string(),
+            ends_step,
+            fall: false,
+            guard,
+            mode_before: self.mode,
+            mode_after: new_mode,
+            pre: self.x.clone(),
+            post: self.buf.clone(),
+        });
+        self.x.copy_from_slice(&self.buf);
+        self.mode = new_mode;
+        let sampled = dt_out.is_none() || self.sample_events;
+        if ends_step {
+            rec.tr.steps_done = step + 1;
+            w.project(&self.x, &mut self.s);
+            rec.tr.section.extend_from_slice(&self.s);
+            if sampled {
+                rec.push(self.t, &self.x, self.mode, step + 1);
+            }
+            return true;
+        }
+        if sampled {
+            rec.push(self.t, &self.x, self.mode, step);
+        }
+        false
+    }
 }
 
 pub use crate::validity::Validity;

@@ -312,29 +312,7 @@ impl Validity {
         }
         tr.forces.as_ref()?;
         let d = tr.dim();
-        // samples of the stride, in segments between events
-        let idx: Vec<usize> = (0..tr.len())
-            .filter(|&i| tr.step[i] as usize == step)
-            .collect();
-        let mut segs: Vec<Seg> = Vec::new();
-        for &i in &idx {
-            let new = match segs.last() {
-                None => true,
-                Some(s) => {
-                    s.mode != tr.mode[i] as usize || s.t.last().is_some_and(|&t| t >= tr.t[i])
-                }
-            };
-            if new {
-                segs.push(Seg {
-                    mode: tr.mode[i] as usize,
-                    t: Vec::new(),
-                    x: Vec::new(),
-                });
-            }
-            let s = segs.last_mut().expect("pushed");
-            s.t.push(tr.t[i]);
-            s.x.push(tr.state(i).to_vec());
-        }
+        let (idx, segs) = stride_segments(tr, step);
         let t0 = *segs.first()?.t.first()?;
         let t_event = tr
             .events
@@ -357,35 +335,63 @@ impl Validity {
             impact_friction_required: f64::NAN,
             ..Self::default()
         };
-        let sc = |f: fn(&Scales) -> f64| scales.as_ref().map_or(f64::NAN, f);
-        let push_margin = |v: &mut Validity, name: &str, raw, scale: f64, sn, t: f64| {
-            v.margins.push(Margin {
-                name: name.to_string(),
-                raw,
-                scale,
-                scale_name: sn,
-                relative: raw / scale,
-                t: t - t0,
-            })
-        };
-        let all = 0..pts.len();
+        v.check_loads(w, &mut dense, &pts, t0);
+        // a free knee's hyper-extension is the model's own flag
+        if let Some(flags) = &tr.flags {
+            v.knee_unlocks |= idx
+                .iter()
+                .any(|&i| flags[i] & crate::trajectory::FLAG_KNEE_UNLOCKS != 0);
+        }
+        v.check_clearance(w, &mut dense, &pts, t_event, t0);
+        v.check_impacts(w, tr, step, t0);
+        v.evaluations = dense.evaluations;
+        Some(v)
+    }
 
+    /// Records the margin `raw` of criterion `name` on `scale` (named `scale_name`), located
+    /// at time `t` of a stride that starts at `t0`.
+    fn push_margin(
+        &mut self,
+        name: &str,
+        raw: f64,
+        scale: f64,
+        scale_name: &'static str,
+        t: f64,
+        t0: f64,
+    ) {
+        self.margins.push(Margin {
+            name: name.to_string(),
+            raw,
+            scale,
+            scale_name,
+            relative: raw / scale,
+            t: t - t0,
+        })
+    }
+
+    /// The stance loads along the dense points `pts` of a stride that starts at `t0`: the
+    /// smallest normal force, the largest friction requirement and each locked knee's smallest
+    /// lock torque against the pull its hardware holds, with their margins and violations.
+    fn check_loads(&mut self, w: &dyn Walker, dense: &mut Dense<'_>, pts: &[Pt], t0: f64) {
+        let scales = self.scales;
+        let sc = |f: fn(&Scales) -> f64| scales.as_ref().map_or(f64::NAN, f);
+        let all = 0..pts.len();
         // stance normal force (both sides of every event: segment ends included)
         let f_n = |e: &Eval| Some(e.normal);
-        if let Some((m, t)) = dense.minimum(&pts, all.clone(), &f_n, false) {
-            v.min_normal_force = m;
-            v.t_min_normal_force = t - t0;
-            push_margin(&mut v, "normal_force", m, sc(Scales::force), "m g", t);
+        if let Some((m, t)) = dense.minimum(pts, all.clone(), &f_n, false) {
+            self.min_normal_force = m;
+            self.t_min_normal_force = t - t0;
+            self.push_margin("normal_force", m, sc(Scales::force), "m g", t, t0);
             if m < 0.0 {
-                v.normal_force_negative = true;
-                dense.violations(&pts, all.clone(), &f_n, 0.0, "normal_force", t0, &mut v);
+                self.normal_force_negative = true;
+                dense.violations(pts, all.clone(), &f_n, 0.0, "normal_force", t0, self);
             }
         }
         // friction needed: the largest |f_t / f_n|
         let f_mu = |e: &Eval| Some(-e.friction);
-        if let Some((m, t)) = dense.minimum(&pts, all.clone(), &f_mu, false) {
-            v.max_friction_required = -m;
-            v.t_max_friction_required = t - t0;
+        if let Some((m, t)) = dense.minimum(pts, all.clone(), &f_mu, false) {
+            self.max_friction_required = -m;
+            self.t_max_friction_required = t - t0;
         }
         // knee-lock torques, each against the pull its hardware holds
         let limits = w.knee_pull_limits();
@@ -396,89 +402,103 @@ impl Validity {
             let lim = limits[k];
             // the margin `τ + L` (limit − pull); a stop's and an ideal latch's is `τ` itself
             let f_k = move |e: &Eval| e.knee[k].map(|t| if lim > 0.0 { t + lim } else { t });
-            if let Some((m, t)) = dense.minimum(&pts, all.clone(), &f_k, false) {
-                v.knee_torque[k] = Some(if lim > 0.0 { m - lim } else { m });
-                push_margin(&mut v, name, m, sc(Scales::torque), "m g l", t);
+            if let Some((m, t)) = dense.minimum(pts, all.clone(), &f_k, false) {
+                self.knee_torque[k] = Some(if lim > 0.0 { m - lim } else { m });
+                self.push_margin(name, m, sc(Scales::torque), "m g l", t, t0);
                 if m < 0.0 {
-                    v.knee_unlocks = true;
-                    dense.violations(&pts, all.clone(), &f_k, 0.0, name, t0, &mut v);
+                    self.knee_unlocks = true;
+                    dense.violations(pts, all.clone(), &f_k, 0.0, name, t0, self);
                 }
             }
         }
-        v.min_knee_torque = v.knee_torque.iter().flatten().copied().reduce(f64::min);
-        // a free knee's hyper-extension is the model's own flag
-        if let Some(flags) = &tr.flags {
-            v.knee_unlocks |= idx
-                .iter()
-                .any(|&i| flags[i] & crate::trajectory::FLAG_KNEE_UNLOCKS != 0);
-        }
+        self.min_knee_torque = self.knee_torque.iter().flatten().copied().reduce(f64::min);
+    }
 
-        // swing-foot clearance, over the swing (up to the pre-impact side of the heel strike)
+    /// The swing foot's clearance over the swing (the dense points `pts` up to the pre-impact
+    /// side of the heel strike at `t_event`) of a stride that starts at `t0`: the depth of any
+    /// scuff over the whole swing, and the margin and violations where the model's
+    /// [`ClearanceRule`] checks it.
+    fn check_clearance(
+        &mut self,
+        w: &dyn Walker,
+        dense: &mut Dense<'_>,
+        pts: &[Pt],
+        t_event: f64,
+        t0: f64,
+    ) {
         let swing = 0..pts.iter().take_while(|p| p.t <= t_event).count();
         let f_c = |e: &Eval| e.clearance;
-        if pts[swing.clone()].iter().all(|p| p.ev.clearance.is_some()) && swing.len() > 2 {
-            let rule = w.clearance_rule();
-            v.clearance_rule = Some(rule);
-            let l = scales.map_or(1.0, |s| s.length);
-            let tol = CLEARANCE_TOL * l;
-            // the whole swing: depth below the slope and where
-            if let Some((m, _)) = dense.minimum(&pts, swing.clone(), &f_c, true) {
-                if m < -tol {
-                    v.scuff_depth = -m;
-                    let mut whole = Validity::default();
-                    let name = "swing_clearance";
-                    dense.violations(&pts, swing.clone(), &f_c, tol, name, t0, &mut whole);
-                    v.scuff_intervals = whole
-                        .violations
-                        .iter()
-                        .map(|x| (x.t_start, x.t_end))
-                        .collect();
-                }
-            }
-            // the checked part
-            let checked = match rule {
-                ClearanceRule::WholeSwing => Some((swing.clone(), None)),
-                ClearanceRule::AfterMidStance => dense
-                    .mid_stance(&pts, swing.clone())
-                    .map(|(j, pt)| (j..swing.end, Some(pt))),
-            };
-            if let Some((range, start)) = checked {
-                let mut cpts: Vec<Pt> = Vec::new();
-                if let Some(p) = start {
-                    v.t_mid_stance = Some(p.t - t0);
-                    cpts.push(p);
-                }
-                cpts.extend(pts[range].iter().cloned());
-                let r = 0..cpts.len();
-                let mut m_c = dense.minimum(&cpts, r.clone(), &f_c, true);
-                if let (Some(p), ClearanceRule::AfterMidStance) = (cpts.first(), rule) {
-                    // the foot passes the stance foot below the slope: ahead and below
-                    let c = p.ev.clearance.unwrap_or(0.0);
-                    if c < -tol && m_c.is_none_or(|(m, _)| c < m) {
-                        m_c = Some((c, p.t));
-                    }
-                }
-                if let Some((m, t)) = m_c {
-                    v.min_clearance = Some(m);
-                    v.t_min_clearance = t - t0;
-                    push_margin(&mut v, "swing_clearance", m, l, "l", t);
-                    if m < -tol {
-                        v.swing_foot_scuffs = true;
-                        dense.violations(&cpts, r, &f_c, tol, "swing_clearance", t0, &mut v);
-                    }
-                }
+        if !pts[swing.clone()].iter().all(|p| p.ev.clearance.is_some()) || swing.len() <= 2 {
+            return;
+        }
+        let rule = w.clearance_rule();
+        self.clearance_rule = Some(rule);
+        let l = self.scales.map_or(1.0, |s| s.length);
+        let tol = CLEARANCE_TOL * l;
+        // the whole swing: depth below the slope and where
+        if let Some((m, _)) = dense.minimum(pts, swing.clone(), &f_c, true) {
+            if m < -tol {
+                self.scuff_depth = -m;
+                let mut whole = Validity::default();
+                let name = "swing_clearance";
+                dense.violations(pts, swing.clone(), &f_c, tol, name, t0, &mut whole);
+                self.scuff_intervals = whole
+                    .violations
+                    .iter()
+                    .map(|x| (x.t_start, x.t_end))
+                    .collect();
             }
         }
+        // the checked part
+        let checked = match rule {
+            ClearanceRule::WholeSwing => Some((swing.clone(), None)),
+            ClearanceRule::AfterMidStance => dense
+                .mid_stance(pts, swing.clone())
+                .map(|(j, pt)| (j..swing.end, Some(pt))),
+        };
+        let Some((range, start)) = checked else {
+            return;
+        };
+        let mut cpts: Vec<Pt> = Vec::new();
+        if let Some(p) = start {
+            self.t_mid_stance = Some(p.t - t0);
+            cpts.push(p);
+        }
+        cpts.extend(pts[range].iter().cloned());
+        let r = 0..cpts.len();
+        let mut m_c = dense.minimum(&cpts, r.clone(), &f_c, true);
+        if let (Some(p), ClearanceRule::AfterMidStance) = (cpts.first(), rule) {
+            // the foot passes the stance foot below the slope: ahead and below
+            let c = p.ev.clearance.unwrap_or(0.0);
+            if c < -tol && m_c.is_none_or(|(m, _)| c < m) {
+                m_c = Some((c, p.t));
+            }
+        }
+        if let Some((m, t)) = m_c {
+            self.min_clearance = Some(m);
+            self.t_min_clearance = t - t0;
+            self.push_margin("swing_clearance", m, l, "l", t, t0);
+            if m < -tol {
+                self.swing_foot_scuffs = true;
+                dense.violations(&cpts, r, &f_c, tol, "swing_clearance", t0, self);
+            }
+        }
+    }
 
-        // impacts
+    /// Every reset of stride `step` of `tr` (a stride that starts at `t0`), with the model's
+    /// impact report at its pre-impact state: each entry's consistency margin, a violation
+    /// where it is negative, and the largest friction an impact needs.
+    fn check_impacts(&mut self, w: &dyn Walker, tr: &Trajectory, step: usize, t0: f64) {
+        let scales = self.scales;
+        let sc = |f: fn(&Scales) -> f64| scales.as_ref().map_or(f64::NAN, f);
         for e in tr.events.iter().filter(|e| e.step == step && !e.fall) {
             let report = w.impact_report(e.mode_before, e.guard, &e.pre);
             if let Some(r) = &report {
                 if !r.friction_required.is_nan() {
-                    v.impact_friction_required = if v.impact_friction_required.is_nan() {
+                    self.impact_friction_required = if self.impact_friction_required.is_nan() {
                         r.friction_required
                     } else {
-                        v.impact_friction_required.max(r.friction_required)
+                        self.impact_friction_required.max(r.friction_required)
                     };
                 }
                 for en in &r.entries {
@@ -492,10 +512,10 @@ impl Validity {
                         (_, false) => (sc(Scales::speed), "sqrt(g l)"),
                     };
                     let name = format!("{}:{}", r.event, en.name);
-                    push_margin(&mut v, &name, m, scale, sn, e.t);
+                    self.push_margin(&name, m, scale, sn, e.t, t0);
                     if m < 0.0 {
-                        v.impact_violation = true;
-                        v.violations.push(Violation {
+                        self.impact_violation = true;
+                        self.violations.push(Violation {
                             criterion: name,
                             t_start: e.t - t0,
                             t_end: e.t - t0,
@@ -504,7 +524,7 @@ impl Validity {
                     }
                 }
             }
-            v.impacts.push(ImpactCheck {
+            self.impacts.push(ImpactCheck {
                 t: e.t - t0,
                 event: e.kind.clone(),
                 mode: e.mode_before,
@@ -512,9 +532,34 @@ impl Validity {
                 report,
             });
         }
-        v.evaluations = dense.evaluations;
-        Some(v)
     }
+}
+
+/// The samples of stride `step` of `tr` (their indices in `tr`) and the segments they split
+/// into: a new segment at every change of mode and wherever the time does not increase (both
+/// sides of an event).
+fn stride_segments(tr: &Trajectory, step: usize) -> (Vec<usize>, Vec<Seg>) {
+    let idx: Vec<usize> = (0..tr.len())
+        .filter(|&i| tr.step[i] as usize == step)
+        .collect();
+    let mut segs: Vec<Seg> = Vec::new();
+    for &i in &idx {
+        let new = match segs.last() {
+            None => true,
+            Some(s) => s.mode != tr.mode[i] as usize || s.t.last().is_some_and(|&t| t >= tr.t[i]),
+        };
+        if new {
+            segs.push(Seg {
+                mode: tr.mode[i] as usize,
+                t: Vec::new(),
+                x: Vec::new(),
+            });
+        }
+        let s = segs.last_mut().expect("pushed");
+        s.t.push(tr.t[i]);
+        s.x.push(tr.state(i).to_vec());
+    }
+    (idx, segs)
 }
 
 /// The loads and the clearance at one state.

@@ -85,6 +85,45 @@ fn pseudo_arclength_passes_the_saddle_node_fold_and_natural_continuation_reports
         "fold at μ = {}",
         folds[0].param
     );
+    // The fold from the branch's own points, independently of the test function that located
+    // it. The fixed points of x ↦ x + μ − x² satisfy x + μ − x² = x, i.e. μ = x²: along the
+    // branch (x decreasing from 0.5) μ falls to its minimum 0 at x = 0 and rises again, and the
+    // multiplier d/dx (x + μ − x²) = 1 − 2x is below +1 before the turn (x > 0) and above it
+    // after (x < 0).
+    let pts = &branch.points;
+    for p in pts {
+        let x = p.section[0];
+        assert!((p.param - x * x).abs() <= 1e-9, "μ − x² at {p:?}");
+    }
+    let turn = (0..pts.len())
+        .min_by(|&a, &b| pts[a].param.total_cmp(&pts[b].param))
+        .unwrap();
+    assert!(
+        turn > 0 && turn + 1 < pts.len(),
+        "turn at {turn} of {}",
+        pts.len()
+    );
+    assert!(pts[..=turn].windows(2).all(|w| w[1].param < w[0].param));
+    assert!(pts[turn..].windows(2).all(|w| w[1].param > w[0].param));
+    assert!(
+        pts[turn].param.abs() < 1e-3,
+        "turning point μ = {}",
+        pts[turn].param
+    );
+    for p in &pts[..turn] {
+        assert!(p.section[0] > 0.0 && p.multipliers[0].re < 1.0, "{p:?}");
+    }
+    for p in &pts[turn + 1..] {
+        assert!(p.section[0] < 0.0 && p.multipliers[0].re > 1.0, "{p:?}");
+    }
+    // the located fold lies on the step across the turn, at a parameter no larger than either
+    // neighbour's
+    assert!(
+        folds[0].index == turn || folds[0].index == turn + 1,
+        "{:?}",
+        folds[0]
+    );
+    assert!(folds[0].param <= pts[turn - 1].param.min(pts[turn + 1].param));
     // Past the fold: the other branch x = −√μ, unstable with multiplier 1 + 2√μ.
     let last = branch.points.last().unwrap();
     assert!(
