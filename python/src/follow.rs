@@ -10,7 +10,7 @@ use pyo3::types::PyDict;
 
 use crate::{err, interruptible, rows_to_array, THREADS};
 use pdw::follow::{FollowFlags, FollowPlan, GaitChoice, StartSearch};
-use pdw_limit::{Bifurcation, Curve, CurveEnd, Region, RegionOptions};
+use pdw::limit::{Bifurcation, Curve, CurveEnd, Region, RegionOptions};
 
 /// How Python names a curve's inputs in messages.
 const FLAGS: FollowFlags = FollowFlags {
@@ -133,7 +133,7 @@ fn follow_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let pts = &f.curve.points;
     let n = pts.len();
-    let col = |g: &dyn Fn(&pdw_limit::CurvePoint) -> f64| {
+    let col = |g: &dyn Fn(&pdw::limit::CurvePoint) -> f64| {
         pts.iter().map(g).collect::<Vec<_>>().into_pyarray(py)
     };
     let d = PyDict::new(py);

@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::{build_kw, err, find_gaits, interruptible, no_gait_error, rows_to_array};
-use pdw_limit::gsn::Indicator;
+use pdw::limit::gsn::Indicator;
 
 /// The indicators as a comma-separated string or a list of names.
 fn indicator_list(v: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Indicator>> {

@@ -1,6 +1,6 @@
 //! `pdw_sweep`: the Python face of pdw-sweep (numpy in and out).
 //!
-//! Every function builds the model from the registry ([`pdw_walkers::model_info`]) with the
+//! Every function builds the model from the registry ([`pdw::walkers::model_info`]) with the
 //! same parameter names as the CLI's `--set`, calls the library crates (pdw-limit), and converts
 //! the result to Python objects. Computation runs on a worker thread with the interpreter
 //! released (`interruptible`), while the calling thread watches for signals: Ctrl-C raises
@@ -15,12 +15,12 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use pdw::basin::{BasinPlan, BasinRequest};
+use pdw::limit::basin::{self as lbasin, BasinOptions, Outcome};
+use pdw::limit::gaits::{self, Found};
+use pdw::limit::trajectory::{self, Trajectory, Validity};
+use pdw::limit::{Attractor, AttractorKind, AttractorSet};
+use pdw::limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome};
 use pdw::simulate::{GaitKind, SimulateFlags, Start, StartError};
-use pdw_limit::basin::{self as lbasin, BasinOptions, Outcome};
-use pdw_limit::gaits::{self, Found};
-use pdw_limit::trajectory::{self, Trajectory, Validity};
-use pdw_limit::{Attractor, AttractorKind, AttractorSet};
-use pdw_limit::{Bifurcation, Branch, GridBranch, MeasuredPoint, StrideMap, StrideOutcome};
 
 mod animate;
 mod basin_over;
@@ -43,7 +43,7 @@ const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(20);
 /// Runs `f` on a scoped worker thread with the interpreter released, and checks for signals
 /// ([`Python::check_signals`], which runs Python's handlers) every [`SIGNAL_POLL`]. When a
 /// handler raises (Ctrl-C's `KeyboardInterrupt`), the computation is asked to stop
-/// ([`pdw_hybrid::interrupt`]: every integration polls it), its partial result is dropped once
+/// ([`pdw::hybrid::interrupt`]: every integration polls it), its partial result is dropped once
 /// the worker has returned (milliseconds later), the request is withdrawn and the handler's
 /// exception is raised. A computation that ends interrupted without a pending signal here
 /// (the request came from a call in another thread) raises `KeyboardInterrupt` as well, never
@@ -72,16 +72,16 @@ where
                 break;
             }
             if let Err(e) = py.check_signals() {
-                pdw_hybrid::interrupt::request();
+                pdw::hybrid::interrupt::request();
                 let _ = worker.join();
-                pdw_hybrid::interrupt::clear();
+                pdw::hybrid::interrupt::clear();
                 return Err(e);
             }
         }
         let r = worker.join().unwrap_or_else(Err);
         // the models built on the worker (a sweep's) may have warned
         give_warnings(py)?;
-        if pdw_hybrid::interrupt::requested() {
+        if pdw::hybrid::interrupt::requested() {
             return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
                 "interrupted: the computation was stopped by an interrupt",
             ));
@@ -109,7 +109,7 @@ fn check_basin_memory(grid: &[usize], d: usize) -> PyResult<()> {
     let per_cell = 2 * (24 + 16 + 8 * d as u64) + 8 + 2;
     let cells = grid.iter().fold(1u64, |a, &n| a.saturating_mul(n as u64));
     let need = cells.saturating_mul(per_cell).saturating_add(64 << 20);
-    let have = pdw_limit::resources::memory_available();
+    let have = pdw::limit::resources::memory_available();
     if need > have / 5 * 4 {
         let g = grid
             .iter()
@@ -272,7 +272,7 @@ pub(crate) fn rows_to_array<'py>(
     Ok(a.into_pyarray(py).into_any())
 }
 
-fn complex_array<'py>(py: Python<'py>, m: &[pdw_limit::Multiplier]) -> Bound<'py, PyAny> {
+fn complex_array<'py>(py: Python<'py>, m: &[pdw::limit::Multiplier]) -> Bound<'py, PyAny> {
     m.iter()
         .map(|l| Complex64::new(l.re, l.im))
         .collect::<Vec<_>>()
@@ -284,7 +284,7 @@ fn complex_array<'py>(py: Python<'py>, m: &[pdw_limit::Multiplier]) -> Bound<'py
 #[pyfunction]
 fn models(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     let out = PyList::empty(py);
-    for m in pdw_walkers::models() {
+    for m in pdw::walkers::models() {
         let d = PyDict::new(py);
         d.set_item("name", &m.name)?;
         d.set_item("description", &m.description)?;
@@ -314,7 +314,7 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
     d.set_item("normal_force_negative", v.normal_force_negative)?;
     d.set_item("knee_unlocks", v.knee_unlocks)?;
     d.set_item("swing_foot_scuffs", v.swing_foot_scuffs)?;
-    // located on the dense solution (pdw_limit::validity): margins, clearance, impacts
+    // located on the dense solution (pdw::limit::validity): margins, clearance, impacts
     d.set_item("impact_violation", v.impact_violation)?;
     d.set_item("continuous", v.continuous)?;
     d.set_item("fell", v.fell.clone())?;
@@ -327,8 +327,8 @@ fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDi
     d.set_item(
         "clearance_rule",
         v.clearance_rule.map(|r| match r {
-            pdw_walkers::ClearanceRule::WholeSwing => "whole_swing",
-            pdw_walkers::ClearanceRule::AfterMidStance => "after_mid_stance",
+            pdw::walkers::ClearanceRule::WholeSwing => "whole_swing",
+            pdw::walkers::ClearanceRule::AfterMidStance => "after_mid_stance",
         }),
     )?;
     d.set_item("min_clearance", v.min_clearance)?;
@@ -539,7 +539,7 @@ fn check_gait_and_tol(gait: &str, tol: f64) -> PyResult<()> {
 fn fixed_point_dict<'py>(
     py: Python<'py>,
     m: &Model,
-    fp: &pdw_limit::FixedPoint,
+    fp: &pdw::limit::FixedPoint,
     label: &str,
     v: Option<&Validity>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -621,7 +621,7 @@ fn scan_gaits<'py>(
 fn scan_dict<'py>(
     py: Python<'py>,
     m: &Model,
-    sc: &pdw_limit::scan::Scan,
+    sc: &pdw::limit::scan::Scan,
     gait: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let keep = |stable: bool| match gait {
@@ -675,7 +675,7 @@ fn scan_dict<'py>(
     d.set_item("fates", fates)?;
     d.set_item(
         "fates_text",
-        pdw_limit::scan::fates_text(sc.starts, &sc.fates()),
+        pdw::limit::scan::fates_text(sc.starts, &sc.fates()),
     )?;
     d.set_item("near_gait_starts", sc.near_gait_starts)?;
     d.set_item("box", bx)?;
@@ -827,7 +827,7 @@ fn stride_outcomes<'py>(
     let mut seen = Vec::new();
     for mode in 0..m.walker.n_modes() {
         for g in m.walker.guards(mode) {
-            if let pdw_hybrid::GuardKind::Terminal(kind) = g.kind {
+            if let pdw::hybrid::GuardKind::Terminal(kind) = g.kind {
                 if !seen.contains(&kind) {
                     seen.push(kind);
                     d.set_item(16u8.saturating_add(kind.code()), kind.name())?;
@@ -869,7 +869,7 @@ fn stride_map<'py>(
     }
     let strides = interruptible(py, || -> PyResult<_> {
         let w = m.walker.as_ref();
-        let map = StrideMap::new(w, pdw_hybrid::Options::dop853(STRIDE_TOL)).map_err(err)?;
+        let map = StrideMap::new(w, pdw::hybrid::Options::dop853(STRIDE_TOL)).map_err(err)?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(THREADS)
             .build()
@@ -912,9 +912,9 @@ fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, Py
     d.set_item("radius", a.radius)?;
     // Physical validity of the orbit: True, False, or None (not checked).
     let (valid, reasons): (Option<bool>, Vec<&str>) = match &a.validity {
-        pdw_limit::OrbitValidity::Unchecked => (None, Vec::new()),
-        pdw_limit::OrbitValidity::Valid => (Some(true), Vec::new()),
-        pdw_limit::OrbitValidity::Invalid(r) => (Some(false), r.clone()),
+        pdw::limit::OrbitValidity::Unchecked => (None, Vec::new()),
+        pdw::limit::OrbitValidity::Valid => (Some(true), Vec::new()),
+        pdw::limit::OrbitValidity::Invalid(r) => (Some(false), r.clone()),
     };
     d.set_item("valid", valid)?;
     d.set_item("invalid", reasons)?;
@@ -1320,7 +1320,7 @@ fn continuation<'py>(
     give_warnings(py)?;
     let m0 = m0.map_err(err)?;
     let ds = m0.walker.section_dim();
-    let result = interruptible(py, || -> PyResult<pdw_limit::Sweep> {
+    let result = interruptible(py, || -> PyResult<pdw::limit::Sweep> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -1329,7 +1329,7 @@ fn continuation<'py>(
             Ok(s) => s,
             Err(none) => return Err(no_start_error(&m0, &plan, gait, &none)),
         };
-        let silent = &pdw_limit::sweep::Silent;
+        let silent = &pdw::limit::sweep::Silent;
         pdw::sweep::continuation(&plan, &s.section, s.param, &pool, silent).map_err(err)
     })?;
     for w in &result.warnings {
@@ -1383,8 +1383,8 @@ fn mfpt_curve<'py>(
     m: &Model,
     sds: &[f64],
     (kind, dist): (
-        pdw_limit::terrain::TerrainKind,
-        &pdw_limit::terrain::TerrainDist,
+        pdw::limit::terrain::TerrainKind,
+        &pdw::limit::terrain::TerrainDist,
     ),
     (walkers, max_steps, seed, threads): (usize, usize, u64, usize),
     stride_map: pdw::mfpt::StrideMap,
@@ -1418,7 +1418,7 @@ fn mfpt_curve<'py>(
     })?;
     let d = PyDict::new(py);
     d.set_item("sd", sds.to_vec().into_pyarray(py))?;
-    type Column = fn(&pdw_limit::terrain::MfptEstimate) -> f64;
+    type Column = fn(&pdw::limit::terrain::MfptEstimate) -> f64;
     let columns: [(&str, Column); 6] = [
         ("mfpt", |e| e.mfpt),
         ("stderr", |e| e.stderr),
@@ -1438,7 +1438,7 @@ fn mfpt_curve<'py>(
 }
 
 /// The terrain's mean: the model's slope, or its `step_down` (0 where it has none).
-fn terrain_mean(m: &Model, kind: pdw_limit::terrain::TerrainKind) -> f64 {
+fn terrain_mean(m: &Model, kind: pdw::limit::terrain::TerrainKind) -> f64 {
     let p = kind.param();
     m.params.iter().find(|q| q.0 == p).map_or(0.0, |q| q.1)
 }
@@ -1448,15 +1448,15 @@ fn terrain_mean(m: &Model, kind: pdw_limit::terrain::TerrainKind) -> f64 {
 fn mfpt_plan(
     m: &Model,
     (kind, dist): (
-        pdw_limit::terrain::TerrainKind,
-        &pdw_limit::terrain::TerrainDist,
+        pdw::limit::terrain::TerrainKind,
+        &pdw::limit::terrain::TerrainDist,
     ),
     sd: f64,
     (walkers, max_steps, seed): (usize, usize, u64),
     stride_map: pdw::mfpt::StrideMap,
 ) -> pdw::mfpt::MfptPlan {
     pdw::mfpt::MfptPlan {
-        terrain: pdw_limit::terrain::SlopeTerrain {
+        terrain: pdw::limit::terrain::SlopeTerrain {
             mean: terrain_mean(m, kind),
             sd,
             seed,
@@ -1593,7 +1593,7 @@ fn mfpt<'py>(
 /// `sd` of `mfpt(...)`: a number or a string, one value or a range `A:B:N`.
 fn mfpt_sds(
     sd: Option<&Bound<'_, PyAny>>,
-    kind: pdw_limit::terrain::TerrainKind,
+    kind: pdw::limit::terrain::TerrainKind,
 ) -> PyResult<Vec<f64>> {
     let parse = |s: &str| pdw::mfpt::parse_sd_values_for(s, kind, &MFPT_FLAGS).map_err(err);
     match sd {
@@ -1611,7 +1611,7 @@ fn mfpt_sds(
 /// The Monte Carlo estimate of `mfpt(...)` as a dict.
 fn estimate_dict<'py>(
     py: Python<'py>,
-    est: &pdw_limit::terrain::MfptEstimate,
+    est: &pdw::limit::terrain::MfptEstimate,
     plan: &pdw::mfpt::MfptPlan,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -1657,10 +1657,10 @@ fn chain_dict<'py>(
     plan: &pdw::mfpt::MfptPlan,
     c: &pdw::mfpt::ChainPlan,
     pair: &pdw::mfpt::ChainPair,
-    est: &pdw_limit::terrain::MfptEstimate,
+    est: &pdw::limit::terrain::MfptEstimate,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    type Column = fn(&pdw_limit::markov::ChainResult) -> f64;
+    type Column = fn(&pdw::limit::markov::ChainResult) -> f64;
     let columns: [(&str, Column); 7] = [
         ("mfpt", |r| r.mfpt),
         ("lambda", |r| r.lambda),
@@ -1756,7 +1756,7 @@ fn disturb<'py>(
     slope: Option<&Bound<'py, PyAny>>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use pdw_limit::terrain::TerrainKind;
+    use pdw::limit::terrain::TerrainKind;
     let kind = pdw::mfpt::check_terrain(terrain, &MFPT_FLAGS).map_err(err)?;
     let m = build_kw(model, slope, params)?;
     pdw::disturb::check(&m, kind).map_err(err)?;

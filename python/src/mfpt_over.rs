@@ -6,8 +6,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::{err, interruptible};
+use pdw::limit::gsn::Indicator;
 use pdw::mfpt_over::{self as over, OverRow};
-use pdw_limit::gsn::Indicator;
 
 /// `mfpt_over(over, model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000,
 /// seed=0, threads=2, dist="normal", **params)`: at each value of `over` ("hip_mass=4:16:7")
@@ -50,11 +50,11 @@ pub(crate) fn mfpt_over<'py>(
     };
     let ov = crate::overrides(crate::slope_arg(slope)?, params)?;
     let plan = pdw::mfpt::MfptPlan {
-        terrain: pdw_limit::terrain::SlopeTerrain {
+        terrain: pdw::limit::terrain::SlopeTerrain {
             mean: 0.0,
             sd,
             seed,
-            kind: pdw_limit::terrain::TerrainKind::Slope,
+            kind: pdw::limit::terrain::TerrainKind::Slope,
             dist,
         },
         walkers,
@@ -78,7 +78,7 @@ pub(crate) fn mfpt_over<'py>(
     })?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&OverRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
-    let est = |f: &dyn Fn(&pdw_limit::terrain::MfptEstimate) -> f64| {
+    let est = |f: &dyn Fn(&pdw::limit::terrain::MfptEstimate) -> f64| {
         col(&|r| r.est.as_ref().map_or(f64::NAN, f))
     };
     d.set_item("param", &sw.name)?;

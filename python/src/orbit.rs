@@ -8,8 +8,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::{err, give_warnings, interruptible, no_gait_error, overrides, THREADS};
+use pdw::limit::{OrbitColumn, StrideOutcome};
 use pdw::sweep::{StartChoice, SweepPlan};
-use pdw_limit::{OrbitColumn, StrideOutcome};
 
 /// The plan of a sweep of `parameter` over `start..stop` (`points` values) from the `gait`
 /// (`stable`/`unstable`), the other parameters from `params`.
@@ -90,7 +90,7 @@ pub(crate) fn orbit_diagram<'py>(
             .num_threads(threads)
             .build()
             .map_err(err)?;
-        let quiet = &pdw_limit::sweep::Silent;
+        let quiet = &pdw::limit::sweep::Silent;
         let sweep = pdw::sweep::continuation(&plan, &s, plan.grid.lo, &pool, quiet).map_err(err)?;
         let cols = pdw::sweep::orbit_diagram(&plan, &sweep, &s, &pool, quiet).map_err(err)?;
         Ok((sweep.params, cols))

@@ -7,9 +7,9 @@ use super::build_model;
 use crate::args::InputError;
 use crate::cli::MfptArgs;
 use indicatif::ProgressBar;
+use pdw::limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use pdw::mfpt::{self, MfptFlags, MfptPlan, StrideMap};
 use pdw::BuiltModel;
-use pdw_limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -56,7 +56,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     mfpt::check_memory(&m, &plan, chain.as_ref(), &FLAGS, "--mesh")?;
     let claim = claim_out(a)?;
     if a.over.is_some() {
-        if kind != pdw_limit::terrain::TerrainKind::Slope {
+        if kind != pdw::limit::terrain::TerrainKind::Slope {
             return Err(InputError(
                 "--over: runs on random slopes only (its gait sensitivity norm is against the \
                  landing line's slope); use --terrain slope"
@@ -246,7 +246,7 @@ pub(super) const ESTIMATOR: &str =
 
 /// The file's `method`: the Monte Carlo, and the chain on its section where it ran; `legs`:
 /// the mid-stance section is the legs together (step heights on a model with legs,
-/// `pdw_limit::mid_stance::plane`).
+/// `pdw::limit::mid_stance::plane`).
 fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>, legs: bool) -> &'static str {
     use mfpt::{ChainMesh, ChainSection};
     match (chain, legs) {
@@ -269,7 +269,7 @@ fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>, legs: bool) -
 
 /// Whether the chain's mid-stance section is the legs together for `m` on `plan`'s terrain.
 fn legs_together(m: &BuiltModel, plan: &mfpt::MfptPlan) -> bool {
-    pdw_limit::mid_stance::legs_together_on(m.walker.as_ref(), plan.terrain.kind).is_some()
+    pdw::limit::mid_stance::legs_together_on(m.walker.as_ref(), plan.terrain.kind).is_some()
 }
 
 /// Writes the HDF5 file (with provenance and units) and the survival curve's PNG next to it.
@@ -283,7 +283,7 @@ fn write(
     (chain, method): (Vec<(String, f64)>, &str),
 ) -> anyhow::Result<()> {
     let t = &plan.terrain;
-    let data = pdw_store::MfptData {
+    let data = pdw::store::MfptData {
         command: super::command_line(),
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
@@ -316,13 +316,13 @@ fn write(
         chain,
     };
     // the claim refused an existing file without --force; its placeholder is replaced
-    pdw_store::write_mfpt(out, true, &data)?;
+    pdw::store::write_mfpt(out, true, &data)?;
     let prov = provenance(m, plan);
     let start_units = super::units_list(&super::section_units(m));
     let coordinates = m.coordinates_json();
-    pdw_store::annotate(
+    pdw::store::annotate(
         out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: Some(&prov),
             units: &|p: &str| match p {
                 "mfpt/survival" | "mfpt/failures" => Some("1".into()),
@@ -355,7 +355,7 @@ fn write(
             terrain_unit(m, t.kind)
         ),
     };
-    pdw_store::plot_lines(
+    pdw::store::plot_lines(
         &pdw::mfpt::output_files(out, false)[1].path,
         &title,
         "steps k",
@@ -369,7 +369,7 @@ fn write(
 }
 
 /// The run's options as every MFPT file's provenance records them.
-pub(super) fn provenance(m: &BuiltModel, plan: &MfptPlan) -> pdw_store::Provenance {
+pub(super) fn provenance(m: &BuiltModel, plan: &MfptPlan) -> pdw::store::Provenance {
     super::provenance(serde_json::json!({
         "stride_map": plan.stride_map.describe(m),
         "integrator": super::integrator_json(&plan.integrator),
@@ -485,7 +485,7 @@ pub(super) fn run_chain(
 /// One mesh's result (mesh `n`, built and solved in `secs`) printed (`how`: what else to say
 /// of it) and its numbers added to `out` with the suffix `label`.
 fn report_mesh(
-    r: &pdw_limit::markov::ChainResult,
+    r: &pdw::limit::markov::ChainResult,
     (n, secs): (usize, f64),
     label: &str,
     how: &str,
@@ -617,7 +617,7 @@ pub(super) fn agreement_warning(chain: &[(String, f64)], est: &MfptEstimate) -> 
 
 /// A warning when the chain's absorption is more than 1 % landings outside the mesh rather
 /// than falls: its MFPT is then the time to leave the box, an underestimate of the time to fall.
-pub(super) fn box_warning(r: &pdw_limit::markov::ChainResult) -> Option<String> {
+pub(super) fn box_warning(r: &pdw::limit::markov::ChainResult) -> Option<String> {
     let absorbed = r.out_of_mesh + r.fall_per_step;
     (absorbed > 0.0 && r.out_of_mesh > 0.01 * absorbed).then(|| {
         format!(
@@ -634,7 +634,7 @@ pub(super) fn box_warning(r: &pdw_limit::markov::ChainResult) -> Option<String> 
 #[cfg(test)]
 mod tests {
     use super::agreement_warning;
-    use pdw_limit::terrain::MfptEstimate;
+    use pdw::limit::terrain::MfptEstimate;
 
     fn est(mean: f64, se: f64, censored: usize) -> MfptEstimate {
         MfptEstimate {
