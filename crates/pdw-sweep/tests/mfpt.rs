@@ -684,3 +684,56 @@ fn the_zero_height_node_warning_is_printed_once_and_only_for_an_odd_rule() {
         assert_eq!(warned, 0, "{mesh}: {out}");
     }
 }
+
+/// An MFPT estimate of 4000 walkers with mean `mean`, standard error `se` and `censored` walkers
+/// censored.
+fn est(mean: f64, se: f64, censored: usize) -> pdw::limit::terrain::MfptEstimate {
+    pdw::limit::terrain::MfptEstimate {
+        walkers: 4000,
+        falls: 4000 - censored,
+        censored,
+        total_steps: 42_906,
+        mfpt: mean,
+        stderr: se,
+        restricted_mean: mean,
+        restricted_stderr: se,
+        survival: Vec::new(),
+        failures: Vec::new(),
+    }
+}
+
+/// A chain's MFPTs on its two meshes as the `mfpt` file keeps them.
+fn chain(coarse: f64, fine: f64) -> Vec<(String, f64)> {
+    vec![
+        ("mfpt_coarse".to_string(), coarse),
+        ("mfpt_fine".to_string(), fine),
+    ]
+}
+
+/// The warning `pdw-sweep mfpt` prints when its chain and its walkers disagree.
+fn agreement_warning(
+    chain: &[(String, f64)],
+    est: &pdw::limit::terrain::MfptEstimate,
+) -> Option<String> {
+    mfpt::chain_agreement_warning(chain, est, "--nodes")
+}
+
+/// The simplest walker on step heights (docs/cli.md): 11.2061 / 11.2818 against
+/// 10.7265 ± 0.1122 is 4.9 standard errors, the refinement 0.08 — warned; within 3 standard
+/// errors plus the refinement, with censored walkers, or without a chain — silent.
+#[test]
+fn the_chain_is_flagged_where_it_and_the_walkers_disagree_beyond_its_refinement() {
+    let w = agreement_warning(&chain(11.2061, 11.2818), &est(10.7265, 0.1122, 0)).unwrap();
+    assert!(
+        w.starts_with("WARNING") && w.contains("4.9 standard errors"),
+        "{w}"
+    );
+    assert!(w.contains("--nodes"), "{w}");
+    // within 3 standard errors
+    assert!(agreement_warning(&chain(11.2, 11.05), &est(10.7265, 0.1122, 0)).is_none());
+    // beyond them, but the refinement moved the chain as much
+    assert!(agreement_warning(&chain(12.2, 11.28), &est(10.7265, 0.1122, 0)).is_none());
+    // censored walkers: the restricted mean is not the MFPT
+    assert!(agreement_warning(&chain(11.2, 11.28), &est(10.7265, 0.1122, 3)).is_none());
+    assert!(agreement_warning(&[], &est(10.7265, 0.1122, 0)).is_none());
+}

@@ -91,7 +91,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
         ),
         None => (Vec::new(), method_of(None, false)),
     };
-    if let Some(w) = agreement_warning(&chain, &est) {
+    if let Some(w) = mfpt::chain_agreement_warning(&chain, &est, "--nodes") {
         crate::outln!("{w}");
     }
     if let (Some(out), Some(_claim)) = (&a.out, claim) {
@@ -608,13 +608,6 @@ fn mesh_box_text(cb: &mfpt::ChainBox) -> String {
     )
 }
 
-/// [`mfpt::agreement_warning`] of the chain's numbers as the file keeps them (`mfpt_coarse`,
-/// `mfpt_fine`; none without a chain).
-pub(super) fn agreement_warning(chain: &[(String, f64)], est: &MfptEstimate) -> Option<String> {
-    let get = |k: &str| chain.iter().find(|(n, _)| n == k).map(|(_, v)| *v);
-    mfpt::agreement_warning(get("mfpt_coarse")?, get("mfpt_fine")?, est, "--nodes")
-}
-
 /// A warning when the chain's absorption is more than 1 % landings outside the mesh rather
 /// than falls: its MFPT is then the time to leave the box, an underestimate of the time to fall.
 pub(super) fn box_warning(r: &pdw::limit::markov::ChainResult) -> Option<String> {
@@ -629,52 +622,4 @@ pub(super) fn box_warning(r: &pdw::limit::markov::ChainResult) -> Option<String>
             r.fall_per_step
         )
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::agreement_warning;
-    use pdw::limit::terrain::MfptEstimate;
-
-    fn est(mean: f64, se: f64, censored: usize) -> MfptEstimate {
-        MfptEstimate {
-            walkers: 4000,
-            falls: 4000 - censored,
-            censored,
-            total_steps: 42_906,
-            mfpt: mean,
-            stderr: se,
-            restricted_mean: mean,
-            restricted_stderr: se,
-            survival: Vec::new(),
-            failures: Vec::new(),
-        }
-    }
-
-    fn chain(coarse: f64, fine: f64) -> Vec<(String, f64)> {
-        vec![
-            ("mfpt_coarse".to_string(), coarse),
-            ("mfpt_fine".to_string(), fine),
-        ]
-    }
-
-    /// The simplest walker on step heights (docs/cli.md): 11.2061 / 11.2818 against
-    /// 10.7265 ± 0.1122 is 4.9 standard errors, the refinement 0.08 — warned; within 3 standard
-    /// errors plus the refinement, with censored walkers, or without a chain — silent.
-    #[test]
-    fn the_chain_is_flagged_where_it_and_the_walkers_disagree_beyond_its_refinement() {
-        let w = agreement_warning(&chain(11.2061, 11.2818), &est(10.7265, 0.1122, 0)).unwrap();
-        assert!(
-            w.starts_with("WARNING") && w.contains("4.9 standard errors"),
-            "{w}"
-        );
-        assert!(w.contains("--nodes"), "{w}");
-        // within 3 standard errors
-        assert!(agreement_warning(&chain(11.2, 11.05), &est(10.7265, 0.1122, 0)).is_none());
-        // beyond them, but the refinement moved the chain as much
-        assert!(agreement_warning(&chain(12.2, 11.28), &est(10.7265, 0.1122, 0)).is_none());
-        // censored walkers: the restricted mean is not the MFPT
-        assert!(agreement_warning(&chain(11.2, 11.28), &est(10.7265, 0.1122, 3)).is_none());
-        assert!(agreement_warning(&[], &est(10.7265, 0.1122, 0)).is_none());
-    }
 }
