@@ -7,7 +7,8 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{err, interruptible, THREADS};
+use crate::errors::err;
+use crate::{interruptible, THREADS};
 use pdw::design::DesignPlan;
 use pdw::limit::basin::BasinOptions;
 use pdw::limit::design::{status, DesignEval, DesignOptions};

@@ -5,7 +5,8 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{err, interruptible};
+use crate::errors::err;
+use crate::interruptible;
 use pdw::limit::gsn::Indicator;
 use pdw::mfpt_over::{self as over, OverRow};
 
@@ -34,7 +35,7 @@ pub(crate) fn mfpt_over<'py>(
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
-    let dist = pdw::mfpt::parse_dist(dist, &crate::MFPT_FLAGS).map_err(err)?;
+    let dist = pdw::mfpt::parse_dist(dist, &crate::mfpt::MFPT_FLAGS).map_err(err)?;
     let sw = pdw::input::parse_range_count(over, "over").map_err(err)?;
     let sd = match sd {
         None => {
@@ -43,8 +44,8 @@ pub(crate) fn mfpt_over<'py>(
             ))
         }
         Some(v) => match v.extract::<f64>() {
-            Ok(x) => pdw::mfpt::parse_sd(&x.to_string(), &crate::MFPT_FLAGS),
-            Err(_) => pdw::mfpt::parse_sd(&v.extract::<String>()?, &crate::MFPT_FLAGS),
+            Ok(x) => pdw::mfpt::parse_sd(&x.to_string(), &crate::mfpt::MFPT_FLAGS),
+            Err(_) => pdw::mfpt::parse_sd(&v.extract::<String>()?, &crate::mfpt::MFPT_FLAGS),
         }
         .map_err(err)?,
     };
@@ -70,7 +71,7 @@ pub(crate) fn mfpt_over<'py>(
         let mut rows = Vec::new();
         for v in over::values(&sw) {
             let m = over::model_with(model, &ov, &sw.name, v).map_err(err)?;
-            let p = over::plan_at(&m, &plan, &crate::MFPT_FLAGS).map_err(err)?;
+            let p = over::plan_at(&m, &plan, &crate::mfpt::MFPT_FLAGS).map_err(err)?;
             let (r, _) = over::row(&m, v, &p, &Indicator::DEFAULT, &pool, &|_| {}).map_err(err)?;
             rows.push(r);
         }

@@ -7,7 +7,8 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{err, give_warnings, interruptible, no_gait_error, overrides, THREADS};
+use crate::errors::{err, no_gait_error};
+use crate::{give_warnings, interruptible, overrides, THREADS};
 use pdw::limit::{OrbitColumn, StrideOutcome};
 use pdw::sweep::{StartChoice, SweepPlan};
 
@@ -20,8 +21,8 @@ pub(crate) fn sweep_plan(
     tol: f64,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<SweepPlan> {
-    crate::check_sweep_request(start, stop, points, gait)?;
-    crate::check_gait_and_tol("all", tol)?;
+    crate::continuation::check_sweep_request(start, stop, points, gait)?;
+    crate::fixed_point::check_gait_and_tol("all", tol)?;
     let mut fixed = overrides(None, params)?;
     if let Some((_, v)) = fixed.iter().find(|(n, _)| n == parameter) {
         return Err(err(format!(
