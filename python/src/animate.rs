@@ -4,7 +4,8 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{build_kw, err, interruptible};
+use crate::errors::err;
+use crate::{build_kw, interruptible};
 use pdw::animate::AnimOptions;
 
 /// `animate(model="simplest", slope=None, out="gait.gif", force=False, steps=2, fps=None,
@@ -56,7 +57,12 @@ pub(crate) fn animate<'py>(
     let (fp, warnings, frames) = interruptible(py, || -> PyResult<_> {
         let (gait, failed) = pdw::animate::gait(&m).map_err(err)?;
         let Some(fp) = gait else {
-            return Err(crate::no_gait_error(&m, "all", failed.len(), &failed));
+            return Err(crate::errors::no_gait_error(
+                &m,
+                "all",
+                failed.len(),
+                &failed,
+            ));
         };
         let mut warnings = Vec::new();
         if !fp.stable {

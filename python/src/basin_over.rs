@@ -6,10 +6,13 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::{attractor_dict, build_kw, err, interruptible, overrides, GivenAxis, THREADS};
+use crate::basin::GivenAxis;
+use crate::convert::attractor_dict;
+use crate::errors::err;
+use crate::{build_kw, interruptible, overrides, THREADS};
 use pdw::basin::{AxisFlags, BasinRequest};
 use pdw::basin_over::{AtValue, OverPlan};
-use pdw_limit::basin::{BasinOptions, Outcome};
+use pdw::limit::basin::{BasinOptions, Outcome};
 
 /// The names of the axes in messages.
 const FLAGS: AxisFlags = AxisFlags {
@@ -68,9 +71,9 @@ pub(crate) fn basin_over<'py>(
     }
     let max_strides = pdw::basin::check_max_strides(max_strides, "max_strides").map_err(err)?;
     pdw::input::check_threads(threads, "threads").map_err(err)?;
-    let info = pdw_walkers::model_info(model).map_err(err)?;
+    let info = pdw::walkers::model_info(model).map_err(err)?;
     pdw::basin::check_section(&info, "box").map_err(err)?;
-    crate::check_basin_memory(&[nx, ny], info.section_names.len())?;
+    crate::basin::check_basin_memory(&[nx, ny], info.section_names.len())?;
     let ov = overrides(crate::slope_arg(slope)?, params)?;
     let (given, fixed) = pdw::basin::split_overrides(ov, &info.section_names);
     pdw::basin_over::check_over(&info, &given, &range, "over").map_err(err)?;

@@ -7,10 +7,11 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{err, interruptible, THREADS};
+use crate::errors::err;
+use crate::{interruptible, THREADS};
 use pdw::design::DesignPlan;
-use pdw_limit::basin::BasinOptions;
-use pdw_limit::design::{status, DesignEval, DesignOptions};
+use pdw::limit::basin::BasinOptions;
+use pdw::limit::design::{status, DesignEval, DesignOptions};
 
 /// `free` as `NAME=LO:HI` texts: a dict `{name: (lo, hi)}`, a list of such texts, or one text.
 fn free_texts(free: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
@@ -73,7 +74,7 @@ fn options(
 /// knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2,
 /// out=None, force=False, slope=None, starts=1, **params)`. `basin_box=None` scales the box
 /// with each design's gait; `starts` local runs of the multi-start share `budget`
-/// ([`pdw_limit::design::search_multi`]); `out` writes the design file `pdw-sweep design`
+/// ([`pdw::limit::design::search_multi`]); `out` writes the design file `pdw-sweep design`
 /// writes (an existing one only with `force=True`). The dict's `best` is the closest design
 /// (the smallest graded cost) with `closest_because` when nothing is feasible; `fates` and
 /// `bindings` give every design's gait-search fates and binding criterion.

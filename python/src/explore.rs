@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
-use crate::err;
+use crate::errors::err;
 
 /// The servers started from Python: they serve until the interpreter exits.
 static SERVERS: Mutex<Vec<pdw_explore::Server>> = Mutex::new(Vec::new());

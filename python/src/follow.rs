@@ -8,9 +8,11 @@ use numpy::{Complex64, IntoPyArray};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{err, interruptible, rows_to_array, THREADS};
+use crate::convert::rows_to_array;
+use crate::errors::err;
+use crate::{interruptible, THREADS};
 use pdw::follow::{FollowFlags, FollowPlan, GaitChoice, StartSearch};
-use pdw_limit::{Bifurcation, Curve, CurveEnd, Region, RegionOptions};
+use pdw::limit::{Bifurcation, Curve, CurveEnd, Region, RegionOptions};
 
 /// How Python names a curve's inputs in messages.
 const FLAGS: FollowFlags = FollowFlags {
@@ -65,7 +67,7 @@ pub(crate) fn follow<'py>(
     };
     let step = pdw::input::parse_sweep(sweep).map_err(err)?;
     let free = pdw::follow::parse_free(free, "free").map_err(err)?;
-    crate::check_gait_and_tol(gait, tol)?;
+    crate::fixed_point::check_gait_and_tol(gait, tol)?;
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     if let Some((nx, ny)) = map_grid {
         if nx < 2 || ny < 2 || nx * ny > 250_000 {
@@ -133,7 +135,7 @@ fn follow_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let pts = &f.curve.points;
     let n = pts.len();
-    let col = |g: &dyn Fn(&pdw_limit::CurvePoint) -> f64| {
+    let col = |g: &dyn Fn(&pdw::limit::CurvePoint) -> f64| {
         pts.iter().map(g).collect::<Vec<_>>().into_pyarray(py)
     };
     let d = PyDict::new(py);

@@ -5,8 +5,11 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{build_kw, err, find_gaits, interruptible, no_gait_error, rows_to_array};
-use pdw_limit::gsn::Indicator;
+use crate::convert::rows_to_array;
+use crate::errors::{err, no_gait_error};
+use crate::fixed_point::find_gaits;
+use crate::{build_kw, interruptible};
+use pdw::limit::gsn::Indicator;
 
 /// The indicators as a comma-separated string or a list of names.
 fn indicator_list(v: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Indicator>> {

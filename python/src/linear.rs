@@ -6,7 +6,9 @@ use numpy::{Complex64, IntoPyArray};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::{build_kw, err, interruptible, rows_to_array};
+use crate::convert::rows_to_array;
+use crate::errors::err;
+use crate::{build_kw, interruptible};
 use pdw::linear::{Eigenpair, Impact};
 
 /// Strides of the Lyapunov exponents `fixed_point(jacobian=True)` reports.
@@ -99,9 +101,9 @@ pub(crate) fn lyapunov<'py>(
         let s = match state {
             Some(s) => s,
             None => {
-                let (found, failed, n) = crate::find_gaits(&m, None, 1e-12)?;
+                let (found, failed, n) = crate::fixed_point::find_gaits(&m, None, 1e-12)?;
                 let Some(f) = pdw::gaits::selected(&found) else {
-                    return Err(crate::no_gait_error(&m, "all", n, &failed));
+                    return Err(crate::errors::no_gait_error(&m, "all", n, &failed));
                 };
                 f.fp.section.clone()
             }

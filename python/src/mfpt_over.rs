@@ -5,9 +5,10 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{err, interruptible};
+use crate::errors::err;
+use crate::interruptible;
+use pdw::limit::gsn::Indicator;
 use pdw::mfpt_over::{self as over, OverRow};
-use pdw_limit::gsn::Indicator;
 
 /// `mfpt_over(over, model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000,
 /// seed=0, threads=2, dist="normal", **params)`: at each value of `over` ("hip_mass=4:16:7")
@@ -34,7 +35,7 @@ pub(crate) fn mfpt_over<'py>(
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
-    let dist = pdw::mfpt::parse_dist(dist, &crate::MFPT_FLAGS).map_err(err)?;
+    let dist = pdw::mfpt::parse_dist(dist, &crate::mfpt::MFPT_FLAGS).map_err(err)?;
     let sw = pdw::input::parse_range_count(over, "over").map_err(err)?;
     let sd = match sd {
         None => {
@@ -43,18 +44,18 @@ pub(crate) fn mfpt_over<'py>(
             ))
         }
         Some(v) => match v.extract::<f64>() {
-            Ok(x) => pdw::mfpt::parse_sd(&x.to_string(), &crate::MFPT_FLAGS),
-            Err(_) => pdw::mfpt::parse_sd(&v.extract::<String>()?, &crate::MFPT_FLAGS),
+            Ok(x) => pdw::mfpt::parse_sd(&x.to_string(), &crate::mfpt::MFPT_FLAGS),
+            Err(_) => pdw::mfpt::parse_sd(&v.extract::<String>()?, &crate::mfpt::MFPT_FLAGS),
         }
         .map_err(err)?,
     };
     let ov = crate::overrides(crate::slope_arg(slope)?, params)?;
     let plan = pdw::mfpt::MfptPlan {
-        terrain: pdw_limit::terrain::SlopeTerrain {
+        terrain: pdw::limit::terrain::SlopeTerrain {
             mean: 0.0,
             sd,
             seed,
-            kind: pdw_limit::terrain::TerrainKind::Slope,
+            kind: pdw::limit::terrain::TerrainKind::Slope,
             dist,
         },
         walkers,
@@ -70,7 +71,7 @@ pub(crate) fn mfpt_over<'py>(
         let mut rows = Vec::new();
         for v in over::values(&sw) {
             let m = over::model_with(model, &ov, &sw.name, v).map_err(err)?;
-            let p = over::plan_at(&m, &plan, &crate::MFPT_FLAGS).map_err(err)?;
+            let p = over::plan_at(&m, &plan, &crate::mfpt::MFPT_FLAGS).map_err(err)?;
             let (r, _) = over::row(&m, v, &p, &Indicator::DEFAULT, &pool, &|_| {}).map_err(err)?;
             rows.push(r);
         }
@@ -78,7 +79,7 @@ pub(crate) fn mfpt_over<'py>(
     })?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&OverRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
-    let est = |f: &dyn Fn(&pdw_limit::terrain::MfptEstimate) -> f64| {
+    let est = |f: &dyn Fn(&pdw::limit::terrain::MfptEstimate) -> f64| {
         col(&|r| r.est.as_ref().map_or(f64::NAN, f))
     };
     d.set_item("param", &sw.name)?;

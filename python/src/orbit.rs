@@ -7,9 +7,10 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{err, give_warnings, interruptible, no_gait_error, overrides, THREADS};
+use crate::errors::{err, no_gait_error};
+use crate::{give_warnings, interruptible, overrides, THREADS};
+use pdw::limit::{OrbitColumn, StrideOutcome};
 use pdw::sweep::{StartChoice, SweepPlan};
-use pdw_limit::{OrbitColumn, StrideOutcome};
 
 /// The plan of a sweep of `parameter` over `start..stop` (`points` values) from the `gait`
 /// (`stable`/`unstable`), the other parameters from `params`.
@@ -20,8 +21,8 @@ pub(crate) fn sweep_plan(
     tol: f64,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<SweepPlan> {
-    crate::check_sweep_request(start, stop, points, gait)?;
-    crate::check_gait_and_tol("all", tol)?;
+    crate::continuation::check_sweep_request(start, stop, points, gait)?;
+    crate::fixed_point::check_gait_and_tol("all", tol)?;
     let mut fixed = overrides(None, params)?;
     if let Some((_, v)) = fixed.iter().find(|(n, _)| n == parameter) {
         return Err(err(format!(
@@ -90,7 +91,7 @@ pub(crate) fn orbit_diagram<'py>(
             .num_threads(threads)
             .build()
             .map_err(err)?;
-        let quiet = &pdw_limit::sweep::Silent;
+        let quiet = &pdw::limit::sweep::Silent;
         let sweep = pdw::sweep::continuation(&plan, &s, plan.grid.lo, &pool, quiet).map_err(err)?;
         let cols = pdw::sweep::orbit_diagram(&plan, &sweep, &s, &pool, quiet).map_err(err)?;
         Ok((sweep.params, cols))

@@ -5,7 +5,7 @@
 //! [`pdw::design::search`]) and a few strides simulated from the stored gait.
 
 use crate::error::ApiError;
-use pdw_store::DesignData;
+use pdw::store::DesignData;
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -28,7 +28,7 @@ pub struct DesignFile {
 
 /// A JSON list of units as the file stores them (`["rad","rad/s"]`), or `n` empty ones.
 fn units_list(path: &Path, ds: &str, n: usize) -> Vec<String> {
-    pdw_store::provenance::read_units(path, ds)
+    pdw::store::provenance::read_units(path, ds)
         .ok()
         .flatten()
         .and_then(|u| serde_json::from_str::<Vec<String>>(&u).ok())
@@ -41,14 +41,14 @@ pub fn load(path: &Path) -> Result<DesignFile, ApiError> {
     let present: Vec<&str> = pdw::design::COLUMNS
         .iter()
         .copied()
-        .filter(|c| pdw_store::provenance::read_units(path, c).is_ok())
+        .filter(|c| pdw::store::provenance::read_units(path, c).is_ok())
         .collect();
-    let data = pdw_store::read_design(path, &present)
+    let data = pdw::store::read_design(path, &present)
         .map_err(|e| ApiError::unprocessable(e.to_string()))?;
     let column_units = present
         .iter()
         .map(|c| {
-            pdw_store::provenance::read_units(path, c)
+            pdw::store::provenance::read_units(path, c)
                 .ok()
                 .flatten()
                 .unwrap_or_default()
@@ -59,7 +59,7 @@ pub fn load(path: &Path) -> Result<DesignFile, ApiError> {
         section_units: units_list(path, "section", 3),
         column_units,
         data,
-        model_spec: pdw_store::provenance::read_model_spec(path).ok().flatten(),
+        model_spec: pdw::store::provenance::read_model_spec(path).ok().flatten(),
     })
 }
 

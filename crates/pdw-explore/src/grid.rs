@@ -1,7 +1,7 @@
 //! A labelled grid as the page draws it — a file's basin or a refined window — and its JSON:
 //! axes with names, units and values, outcome codes and strides (row-major, row = y index, the
 //! rows of a 3-D grid its (z, y) pairs), the legend with pdw-store's palette
-//! ([`pdw_store::outcome_colours`], the colours of the PNG), the attractors' orbit points, and
+//! ([`pdw::store::outcome_colours`], the colours of the PNG), the attractors' orbit points, and
 //! the model's parameters (the sliders).
 
 use crate::source::{BasinSource, Rebuilt};
@@ -132,15 +132,15 @@ impl Grid {
     fn legend_json(&self) -> Vec<Value> {
         let mut legend = self.legend.clone();
         legend.push((
-            pdw_store::NOT_COMPUTED,
-            pdw_store::basin::NOT_COMPUTED_NAME.to_string(),
+            pdw::store::NOT_COMPUTED,
+            pdw::store::basin::NOT_COMPUTED_NAME.to_string(),
         ));
-        let colours = pdw_store::outcome_colours(&legend);
+        let colours = pdw::store::outcome_colours(&legend);
         legend
             .iter()
             .zip(colours)
             .map(|((c, n), (_, rgb))| {
-                let rgb = if *c == pdw_store::NOT_COMPUTED {
+                let rgb = if *c == pdw::store::NOT_COMPUTED {
                     [255, 255, 255]
                 } else {
                     rgb

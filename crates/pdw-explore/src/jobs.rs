@@ -17,7 +17,7 @@
 use crate::error::ApiError;
 use crate::grid::{Grid, GridAxis};
 use crate::source::{rebuild_with, BasinSource, Rebuilt, Window};
-use pdw_limit::basin::{classify_cells, Outcome};
+use pdw::limit::basin::{classify_cells, Outcome};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicU8, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc, Condvar, Mutex};
@@ -468,7 +468,7 @@ pub enum Computed {
 /// relabelled by the attractors, on `pool`. `on_phase` is told each phase as it starts; a
 /// `cancel` set is seen between phases and between row chunks, and inside a phase under way
 /// (the gait search, the attractor discovery, a chunk of cells) at its next integration call:
-/// every thread of `pool` watches it as a stop request ([`pdw_hybrid::interrupt::watch`]) for
+/// every thread of `pool` watches it as a stop request ([`pdw::hybrid::interrupt::watch`]) for
 /// the call, so the walks the server serves meanwhile on other threads go on.
 pub fn compute(
     src: &BasinSource,
@@ -482,10 +482,10 @@ pub fn compute(
     struct Watching<'a>(&'a rayon::ThreadPool);
     impl Drop for Watching<'_> {
         fn drop(&mut self) {
-            self.0.broadcast(|_| pdw_hybrid::interrupt::watch(None));
+            self.0.broadcast(|_| pdw::hybrid::interrupt::watch(None));
         }
     }
-    pool.broadcast(|_| pdw_hybrid::interrupt::watch(Some(cancel.clone())));
+    pool.broadcast(|_| pdw::hybrid::interrupt::watch(Some(cancel.clone())));
     let _watching = Watching(pool);
     let phase = AtomicU8::new(Phase::Model as u8);
     let computed = compute_watched(src, w, pool, cancel, done, on_phase, &phase);

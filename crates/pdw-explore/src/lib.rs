@@ -99,7 +99,7 @@ pub struct Entry {
     pub path: PathBuf,
     source: OnceLock<Result<Arc<BasinSource>, ApiError>>,
     rebuilt: OnceLock<Result<Arc<Rebuilt>, ApiError>>,
-    sweep: OnceLock<Result<Arc<pdw_store::SweepData>, ApiError>>,
+    sweep: OnceLock<Result<Arc<pdw::store::SweepData>, ApiError>>,
     design: OnceLock<Result<Arc<design::DesignFile>, ApiError>>,
 }
 
@@ -112,7 +112,7 @@ impl Entry {
     }
 
     /// The file read as a sweep or continuation file (once).
-    pub fn sweep(&self) -> Result<Arc<pdw_store::SweepData>, ApiError> {
+    pub fn sweep(&self) -> Result<Arc<pdw::store::SweepData>, ApiError> {
         self.sweep
             .get_or_init(|| sweep::load(&self.path).map(Arc::new))
             .clone()

@@ -217,7 +217,7 @@ async fn gait(State(s): St, body: Body) -> ApiResult {
     let v = blocking(move || {
         let e = s.entry(req.file)?;
         let d = e.sweep()?;
-        let spec = pdw_store::provenance::read_model_spec(&e.path)
+        let spec = pdw::store::provenance::read_model_spec(&e.path)
             .ok()
             .flatten();
         crate::sweep::gait(&d, spec.as_deref(), req.branch, req.point)
@@ -293,7 +293,7 @@ fn walk_json(
         .iter()
         .find(|(c, _)| *c == stored_code)
         .map_or_else(
-            || pdw_store::basin::NOT_COMPUTED_NAME.to_string(),
+            || pdw::store::basin::NOT_COMPUTED_NAME.to_string(),
             |(_, n)| n.clone(),
         );
     let steps = (usize::from(res.strides) + 1)

@@ -7,15 +7,15 @@
 use crate::error::ApiError;
 use crate::jobs::Refined;
 use crate::source::BasinSource;
-use pdw_limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
-use pdw_store::{Attractor, BasinHeader, BasinMetrics, BasinWriter};
+use pdw::limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
+use pdw::store::{Attractor, BasinHeader, BasinMetrics, BasinWriter};
 use std::path::{Path, PathBuf};
 
 /// The header of window `w`: the run's model, integrator and options (the attractor
 /// discovery's among them, as `pdw-sweep basin` writes them), the window's grid.
 pub fn header(src: &BasinSource, w: &Refined) -> BasinHeader {
     let (r, g) = (&w.rebuilt, &w.grid);
-    let disc = pdw_limit::attractors::DiscoveryOptions::default();
+    let disc = pdw::limit::attractors::DiscoveryOptions::default();
     let h = &src.data.header;
     let opts = &r.plan.opts;
     let names = &r.m.info.section_names;
@@ -114,7 +114,7 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
     )
     .map_err(|e| ApiError::internal(format!("saving: {}", e.0)))?;
     claim.hand_over(&path);
-    let failed = |e: pdw_store::StoreError| ApiError::internal(format!("saving: {e}"));
+    let failed = |e: pdw::store::StoreError| ApiError::internal(format!("saving: {e}"));
     let h = header(src, w);
     let mut writer = BasinWriter::create(&path, &h, false).map_err(failed)?;
     let mut prov = pdw::provenance(&h.command, &options(w));
@@ -128,11 +128,11 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
     let units = units(src, &w.rebuilt);
     let coordinates = w.rebuilt.m.coordinates_json();
     writer
-        .annotate(&pdw_store::Annotations {
+        .annotate(&pdw::store::Annotations {
             provenance: Some(&prov),
             units: &units,
             slice: None,
-            scales: &pdw_store::provenance::basin_scales(),
+            scales: &pdw::store::provenance::basin_scales(),
             coordinates: Some(&coordinates),
         })
         .map_err(failed)?;
@@ -164,9 +164,9 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
         .map(pdw::basin::store_attractor)
         .collect();
     writer.finish(&metrics, &attractors).map_err(failed)?;
-    pdw_store::annotate(
+    pdw::store::annotate(
         &path,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: None,
             units: &units,
             slice: None,

@@ -1,6 +1,6 @@
 //! A basin file as the explorer serves it, and its run rebuilt from the file alone.
 //!
-//! The file is read with pdw-store's own readers ([`pdw_store::read_basin`], the run's
+//! The file is read with pdw-store's own readers ([`pdw::store::read_basin`], the run's
 //! provenance and `coordinates`); a shard reads as its part (rows it does not own are
 //! `not_computed`). The run is rebuilt the way `pdw-sweep basin` builds it: the model by name
 //! with the file's parameters ([`pdw::build`]), the integrator from the provenance's
@@ -13,10 +13,10 @@
 use crate::error::ApiError;
 use pdw::basin::{Axis, AxisFlags, BasinPlan, BasinRequest};
 use pdw::input::AxisRange;
+use pdw::limit::basin::BasinOptions;
+use pdw::limit::AttractorSet;
+use pdw::store::{BasinData, BasinHeader};
 use pdw::BuiltModel;
-use pdw_limit::basin::BasinOptions;
-use pdw_limit::AttractorSet;
-use pdw_store::{BasinData, BasinHeader};
 use std::path::{Path, PathBuf};
 
 /// Axis names in the explorer's messages.
@@ -45,9 +45,9 @@ pub struct BasinSource {
 pub fn load(path: &Path) -> Result<BasinSource, ApiError> {
     // The store's messages name the file already.
     let bad = ApiError::unprocessable;
-    let data = pdw_store::read_basin(path).map_err(|e| bad(e.to_string()))?;
+    let data = pdw::store::read_basin(path).map_err(|e| bad(e.to_string()))?;
     let (prov, coords) =
-        pdw_store::provenance::read_run_description(path).map_err(|e| bad(e.to_string()))?;
+        pdw::store::provenance::read_run_description(path).map_err(|e| bad(e.to_string()))?;
     let options = prov
         .as_ref()
         .map(|p| serde_json::from_str(&p.options).unwrap_or_default())
@@ -63,7 +63,7 @@ pub fn load(path: &Path) -> Result<BasinSource, ApiError> {
         &["grid/x", "grid/y"][..]
     };
     for ds in axes {
-        let u = pdw_store::provenance::read_units(path, ds).map_err(|e| bad(e.to_string()))?;
+        let u = pdw::store::provenance::read_units(path, ds).map_err(|e| bad(e.to_string()))?;
         units.push(u.unwrap_or_default());
     }
     Ok(BasinSource {
@@ -113,7 +113,7 @@ pub fn model(
 
 /// The cells' integrator from the provenance's `integrator` object, through the CLI's route
 /// ([`pdw::integrator()`] on [`BasinOptions::default_integrator`]).
-pub fn integrator(options: &serde_json::Value) -> Result<pdw_hybrid::Options, ApiError> {
+pub fn integrator(options: &serde_json::Value) -> Result<pdw::hybrid::Options, ApiError> {
     let j = &options["integrator"];
     let method = j["method"].as_str().ok_or_else(|| {
         ApiError::unprocessable("the file has no provenance integrator; it cannot be rebuilt")
@@ -218,7 +218,7 @@ pub fn rebuild_with(
     use crate::jobs::Phase;
     let m = model(&src.data.header, src.model_spec.as_deref(), &w.overrides)?;
     let req = request(src, &m, w)?;
-    let failed = |e: pdw_limit::LimitError| ApiError::internal(format!("gait search: {e}"));
+    let failed = |e: pdw::limit::LimitError| ApiError::internal(format!("gait search: {e}"));
     if !go_on(Phase::GaitSearch) {
         return Ok(None);
     }

@@ -3,7 +3,7 @@
 //! from its section state, by the file's model at that parameter value.
 
 use crate::error::ApiError;
-use pdw_store::SweepData;
+use pdw::store::SweepData;
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -12,7 +12,7 @@ pub const PERIODS_WALKED: usize = 4;
 
 /// Reads the sweep file at `path`.
 pub fn load(path: &Path) -> Result<SweepData, ApiError> {
-    pdw_store::read_sweep(path).map_err(|e| ApiError::unprocessable(e.to_string()))
+    pdw::store::read_sweep(path).map_err(|e| ApiError::unprocessable(e.to_string()))
 }
 
 /// The page's JSON of the branches (parameter, section states, stability, multipliers, period).

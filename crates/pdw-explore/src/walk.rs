@@ -5,10 +5,10 @@
 
 use crate::error::ApiError;
 use crate::source::Rebuilt;
+use pdw::limit::basin::{classify_cells, CellResult, Outcome};
+use pdw::limit::trajectory::Trajectory;
 use pdw::simulate::{DtOut, SimulateFlags, Start};
 use pdw::BuiltModel;
-use pdw_limit::basin::{classify_cells, CellResult, Outcome};
-use pdw_limit::trajectory::Trajectory;
 use serde_json::{json, Value};
 
 /// Most steps a walk shows: a slowly converging cell needs up to the stride budget, but the
@@ -62,7 +62,7 @@ pub fn walk(r: &Rebuilt, cell: &[f64], steps: usize) -> Result<Trajectory, ApiEr
 /// The walk of `steps` steps of model `m` from section state `cell` with `integrator`.
 pub fn walk_model(
     m: &BuiltModel,
-    integrator: pdw_hybrid::Options,
+    integrator: pdw::hybrid::Options,
     cell: &[f64],
     steps: usize,
 ) -> Result<Trajectory, ApiError> {
@@ -91,7 +91,7 @@ fn points(m: &BuiltModel, tr: &Trajectory) -> (Vec<String>, Vec<f32>, String) {
     }
     let (mut names, mut pts) = (Vec::new(), Vec::new());
     // one kernel scratch for every sample
-    let mut ws = pdw_hybrid::Scratch::new();
+    let mut ws = pdw::hybrid::Scratch::new();
     for i in 0..tr.len() {
         let Some(b) = w.body_points_in(&mut ws, tr.state(i)) else {
             return (Vec::new(), Vec::new(), "none".into());

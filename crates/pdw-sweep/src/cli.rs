@@ -1,7 +1,7 @@
 //! Command-line definitions (clap derive). The contract is docs/cli.md.
 
 use clap::{Args, Parser, Subcommand};
-use pdw_limit::design::Objective;
+use pdw::limit::design::Objective;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]

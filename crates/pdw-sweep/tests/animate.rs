@@ -82,7 +82,7 @@ fn animate_from_a_trajectory_draws_the_stored_states() {
         s(&t),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let data = pdw_store::read_trajectory_h5(&t).unwrap();
+    let data = pdw::store::read_trajectory_h5(&t).unwrap();
     let m = pdw::animate_trajectory::model(&data, &t).unwrap();
     assert_eq!(m.info.name, "compass");
     let opts = pdw::animate::AnimOptions {
@@ -171,7 +171,7 @@ fn animate_from_a_walk_that_falls_ends_on_the_fall() {
         s(&t),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let data = pdw_store::read_trajectory_h5(&t).unwrap();
+    let data = pdw::store::read_trajectory_h5(&t).unwrap();
     let fell = pdw::animate_trajectory::fall(&data).expect("the walk falls");
     let m = pdw::animate_trajectory::model(&data, &t).unwrap();
     let frames = pdw::animate_trajectory::frames(&m, &data, &Default::default(), &t).unwrap();

@@ -29,21 +29,21 @@ fn compass_basin(dir: &Path, name: &str, grid: &str, extra: &[&str]) -> PathBuf 
     out
 }
 
-fn read(p: &Path) -> pdw_store::BasinData {
-    pdw_store::read_basin(p).expect("readable basin file")
+fn read(p: &Path) -> pdw::store::BasinData {
+    pdw::store::read_basin(p).expect("readable basin file")
 }
 
 /// The outcome names by code.
-fn names(d: &pdw_store::BasinData) -> BTreeMap<u8, String> {
+fn names(d: &pdw::store::BasinData) -> BTreeMap<u8, String> {
     d.header.legend.iter().cloned().collect()
 }
 
 /// Every cell's outcome (by name), strides and final state (bits) of the rows `rows`.
-fn cells(d: &pdw_store::BasinData, rows: std::ops::Range<usize>) -> Vec<(String, u16, Vec<u64>)> {
+fn cells(d: &pdw::store::BasinData, rows: std::ops::Range<usize>) -> Vec<(String, u16, Vec<u64>)> {
     let n = names(d);
     rows.flat_map(|r| (0..d.header.nx()).map(move |j| (r, j)))
         .map(|(r, j)| {
-            let f = d.final_state.slice(pdw_store::ndarray::s![r, j, ..]);
+            let f = d.final_state.slice(pdw::store::ndarray::s![r, j, ..]);
             (
                 n[&d.outcome[[r, j]]].clone(),
                 d.strides[[r, j]],

@@ -22,7 +22,7 @@ const BOX: [&str; 6] = [
 /// Fractions of a plain basin file by column: an attractor's name (the gait, codes ≥ 10),
 /// `fall` (every fall kind), `timeout`, `other` (the rest), counted from its outcome grid.
 fn plain_fractions(path: &Path) -> Vec<(String, f64)> {
-    let d = pdw_store::read_basin(path).unwrap();
+    let d = pdw::store::read_basin(path).unwrap();
     let name_of = |code: u8| -> String {
         let n = d
             .header
@@ -73,7 +73,7 @@ fn basin_stability_equals_plain_basin_runs_and_sums_to_one() {
     let o = run(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let d = pdw_store::read_stability(&out).unwrap();
+    let d = pdw::store::read_stability(&out).unwrap();
     assert_eq!(d.values, vec![0.013, 0.015, 0.017]);
     assert_eq!(d.parameter, "slope");
     assert!(dir.path().join("bs.png").exists());
@@ -142,7 +142,7 @@ fn basin_stability_equals_plain_basin_runs_and_sums_to_one() {
     args.extend(BOX);
     let o = run(&args);
     assert!(o.status.success(), "{}", stderr(&o));
-    let d2 = pdw_store::read_stability(&out2).unwrap();
+    let d2 = pdw::store::read_stability(&out2).unwrap();
     assert_eq!((d2.columns, d2.fractions), (d.columns, d.fractions));
 }
 
@@ -282,7 +282,7 @@ fn basin_over_names_a_physically_invalid_gait_and_outlines_its_band() {
         s(&traj),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let tr = pdw_store::read_trajectory_h5(&traj).unwrap();
+    let tr = pdw::store::read_trajectory_h5(&traj).unwrap();
     let min_torque = tr
         .column("knee_torque")
         .unwrap()
@@ -292,7 +292,7 @@ fn basin_over_names_a_physically_invalid_gait_and_outlines_its_band() {
         .filter(|v| !v.is_nan())
         .fold(f64::INFINITY, f64::min);
     assert!(min_torque < 0.0, "the stride's knee torque {min_torque}");
-    let d = pdw_store::read_stability(&out).unwrap();
+    let d = pdw::store::read_stability(&out).unwrap();
     let gait = d.attractors[1]
         .iter()
         .find(|a| a.name == "gait")

@@ -37,7 +37,7 @@ fn max_period_four_writes_every_branch_of_the_cascade() {
     assert_eq!(names, ["period-1", "period-2", "period-4"]);
     // The file holds the same branches, each with its period, and the located doublings of
     // every branch (1→2 near Garcia's 0.0151; then 2→4 and 4→8 above it).
-    let d = pdw_store::read_sweep(&out).unwrap();
+    let d = pdw::store::read_sweep(&out).unwrap();
     let periods: Vec<u32> = d.branches.iter().map(|b| b.period_strides).collect();
     assert_eq!(periods, [1, 2, 4]);
     let pd: Vec<(usize, f64)> = d

@@ -236,11 +236,11 @@ fn basin_grid(dir: &Path, name: &str, grid: &str, extra: &[&str]) -> (Output, Pa
     (o, out)
 }
 
-fn read(path: &Path) -> pdw_store::BasinData {
-    pdw_store::read_basin(path).expect("readable basin file")
+fn read(path: &Path) -> pdw::store::BasinData {
+    pdw::store::read_basin(path).expect("readable basin file")
 }
 
-fn same_cells(a: &pdw_store::BasinData, b: &pdw_store::BasinData) {
+fn same_cells(a: &pdw::store::BasinData, b: &pdw::store::BasinData) {
     assert_eq!(a.outcome, b.outcome);
     assert_eq!(a.strides, b.strides);
     let (fa, fb) = (&a.final_state, &b.final_state);
@@ -352,7 +352,7 @@ fn shards_merged_equal_a_single_run() {
 /// itself right after handing its 37th row to the writer (`PDW_SWEEP_SIGNAL_AFTER_ROWS`, a hook
 /// in the basin command that raises a real SIGTERM and waits for the handler), so the cut is
 /// mid-grid, at the same row, on every run. The cut is inside a block of
-/// [`pdw_store::BLOCK_ROWS`] rows: the writer writes the rows of that incomplete block when the
+/// [`pdw::store::BLOCK_ROWS`] rows: the writer writes the rows of that incomplete block when the
 /// run stops, so exactly the rows before the signal are done, and the resume completes the
 /// block.
 #[test]
@@ -360,7 +360,7 @@ fn interrupted_basin_resumes_to_the_same_file() {
     const GRID: &str = "50x50";
     // Not a multiple of the writer's row block: the rows of the incomplete block are kept too.
     const CUT: usize = 37;
-    assert_ne!(CUT % pdw_store::BLOCK_ROWS, 0);
+    assert_ne!(CUT % pdw::store::BLOCK_ROWS, 0);
     let dir = tempfile::tempdir().unwrap();
     let (o, reference) = basin_grid(dir.path(), "ref.h5", GRID, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -449,7 +449,7 @@ fn sweep_locates_garcia_period_doubling_and_writes_hdf5_and_png() {
         s(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let data = pdw_store::read_sweep(&out).unwrap();
+    let data = pdw::store::read_sweep(&out).unwrap();
     assert_eq!(data.parameter, "slope");
     let pd: Vec<f64> = data
         .bifurcations
@@ -792,7 +792,7 @@ fn basin_names_a_physically_invalid_gait_as_its_trajectory_shows() {
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
         let text = String::from_utf8_lossy(&o.stdout).into_owned();
-        let gait = pdw_store::read_basin(&out).unwrap().attractors[0].clone();
+        let gait = pdw::store::read_basin(&out).unwrap().attractors[0].clone();
         assert_eq!(gait.name, "gait");
         let traj = p(d, &format!("{model}_t.h5"));
         let o = run(&[
@@ -809,7 +809,7 @@ fn basin_names_a_physically_invalid_gait_as_its_trajectory_shows() {
             s(&traj),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
-        let tr = pdw_store::read_trajectory_h5(&traj).unwrap();
+        let tr = pdw::store::read_trajectory_h5(&traj).unwrap();
         let min = |name: &str| {
             tr.column(name)
                 .unwrap()
@@ -835,7 +835,7 @@ fn basin_names_a_physically_invalid_gait_as_its_trajectory_shows() {
                 "{text}"
             );
         } else {
-            assert_eq!(gait.validity, pdw_store::OrbitCheck::Valid);
+            assert_eq!(gait.validity, pdw::store::OrbitCheck::Valid);
             assert!(!text.contains("physically invalid"), "{text}");
         }
     }

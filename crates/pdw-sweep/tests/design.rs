@@ -31,7 +31,7 @@ fn search(out: &Path, budget: &str, seed: &str) -> Output {
     ])
 }
 
-fn bits(d: &pdw_store::DesignData) -> Vec<u64> {
+fn bits(d: &pdw::store::DesignData) -> Vec<u64> {
     let mut v: Vec<u64> = d.params.iter().flatten().map(|x| x.to_bits()).collect();
     for c in COLS {
         v.extend(d.column(c).unwrap().iter().map(|x| x.to_bits()));
@@ -54,19 +54,19 @@ fn seeded_search_is_reproducible_and_resumes_to_the_same_designs() {
     let o = search(&b, "14", "7");
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
     let (da, db) = (
-        pdw_store::read_design(&a, &COLS).unwrap(),
-        pdw_store::read_design(&b, &COLS).unwrap(),
+        pdw::store::read_design(&a, &COLS).unwrap(),
+        pdw::store::read_design(&b, &COLS).unwrap(),
     );
     assert_eq!(da.params.len(), 14);
     assert_eq!(bits(&da), bits(&db), "same seed, same designs");
     // interrupted after 6 designs, continued to 14 on the same file
     let o = search(&c, "6", "7");
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
-    assert_eq!(pdw_store::read_design(&c, &COLS).unwrap().params.len(), 6);
+    assert_eq!(pdw::store::read_design(&c, &COLS).unwrap().params.len(), 6);
     let o = search(&c, "14", "7");
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("(8 new)"));
-    let dc = pdw_store::read_design(&c, &COLS).unwrap();
+    let dc = pdw::store::read_design(&c, &COLS).unwrap();
     assert_eq!(bits(&da), bits(&dc), "resumed run = uninterrupted run");
     // every design found a gait (the kneed walker walks across these bounds) and the knee
     // torque is measured along the stride
@@ -84,7 +84,7 @@ fn seeded_search_is_reproducible_and_resumes_to_the_same_designs() {
     let d = dir.path().join("d.h5");
     let o = search(&d, "3", "8");
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
-    let dd = pdw_store::read_design(&d, &COLS).unwrap();
+    let dd = pdw::store::read_design(&d, &COLS).unwrap();
     assert_eq!(dd.params[0], da.params[0]);
     assert_ne!(dd.params[1], da.params[1]);
     // a rerun with other settings is refused, naming them
@@ -159,13 +159,13 @@ fn min_margin_rejects_a_design_below_it() {
     let cols = ["min_relative_margin"];
     let (o, out) = design("zero.h5", &[]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let d = pdw_store::read_design(&out, &cols).unwrap();
+    let d = pdw::store::read_design(&out, &cols).unwrap();
     let m0 = d.column("min_relative_margin").unwrap()[0];
     assert!(m0 > 0.0 && m0 < 0.9, "smallest relative margin {m0}");
     assert_eq!(d.status[0], 0, "feasible");
     let (o, out) = design("high.h5", &["--min-margin", "0.9"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let d = pdw_store::read_design(&out, &cols).unwrap();
+    let d = pdw::store::read_design(&out, &cols).unwrap();
     assert_eq!(d.status[0], 1, "invalid");
     assert_eq!(d.column("min_relative_margin").unwrap()[0], m0);
     assert!(d.reasons[0].contains("min margin 0.9"), "{}", d.reasons[0]);
@@ -205,7 +205,7 @@ fn the_default_basin_box_follows_each_gait_and_is_not_saturated() {
         "basin_box_stance",
         "basin_box_stance_rate",
     ];
-    let d = pdw_store::read_design(&out, &cols).unwrap();
+    let d = pdw::store::read_design(&out, &cols).unwrap();
     let frac = d.column("basin_fraction").unwrap();
     let (b0, b1) = (
         d.column("basin_box_stance").unwrap(),
@@ -279,7 +279,7 @@ fn a_multi_start_is_the_same_on_one_and_two_threads_and_after_a_resume() {
     ok(&multi_start(&path("one.h5"), "8", "1"));
     ok(&multi_start(&path("two.h5"), "8", "2"));
     let cols = ["cost", "rho", "min_knee_torque", "run"];
-    let read = |n: &str| pdw_store::read_design(path(n), &cols).unwrap();
+    let read = |n: &str| pdw::store::read_design(path(n), &cols).unwrap();
     let (one, two) = (read("one.h5"), read("two.h5"));
     assert_eq!(one.params.len(), 8);
     let runs = one.column("run").unwrap();
@@ -287,7 +287,7 @@ fn a_multi_start_is_the_same_on_one_and_two_threads_and_after_a_resume() {
     assert_eq!(runs.iter().filter(|r| **r == 1.0).count(), 4);
     // run 1 starts elsewhere than the model's own values (run 0's first design)
     assert_ne!(one.params[0], one.params[4]);
-    let bits4 = |d: &pdw_store::DesignData| {
+    let bits4 = |d: &pdw::store::DesignData| {
         let mut v = bits(d);
         v.extend(d.column("run").unwrap().iter().map(|x| x.to_bits()));
         v
@@ -341,7 +341,7 @@ fn a_design_without_a_gait_keeps_its_fates_and_the_report_names_the_closest_desi
         out.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let d = pdw_store::read_design(&out, &["cost", "strides_survived"]).unwrap();
+    let d = pdw::store::read_design(&out, &["cost", "strides_survived"]).unwrap();
     assert_eq!(d.status[0], 3, "no gait: {}", d.reasons[0]);
     assert!(
         d.fates[0].contains("stance knee buckled"),

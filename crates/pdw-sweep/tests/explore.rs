@@ -5,9 +5,9 @@
 //! cancels and rapid refines).
 
 use crate::common::run;
+use pdw::limit::trajectory::Trajectory;
 use pdw_explore::jobs::{compute, Computed, Phase};
 use pdw_explore::source::{self, Window};
-use pdw_limit::trajectory::Trajectory;
 use std::io::{Read, Write};
 use std::net::{IpAddr, Ipv4Addr, TcpStream};
 use std::path::{Path, PathBuf};
@@ -36,7 +36,7 @@ fn pool() -> rayon::ThreadPool {
 
 /// Whether a walk fell (its trajectory ended on a terminal guard).
 fn fell(tr: &Trajectory) -> bool {
-    matches!(tr.outcome, pdw_limit::StrideOutcome::Fall { .. })
+    matches!(tr.outcome, pdw::limit::StrideOutcome::Fall { .. })
 }
 
 /// Every `step`-th cell of the file walks to the outcome the file records: the engine's label
@@ -135,7 +135,7 @@ fn refine_equals_basin(
     let mut args = vec!["--x", &x, "--y", &y, "--grid", &grid];
     args.extend_from_slice(cli);
     let b = basin(dir, "box", &args);
-    let d = pdw_store::read_basin(&b).unwrap();
+    let d = pdw::store::read_basin(&b).unwrap();
     assert_eq!(outcome, d.outcome.iter().copied().collect::<Vec<_>>());
     assert_eq!(strides, d.strides.iter().copied().collect::<Vec<_>>());
     assert_eq!(done.load(std::sync::atomic::Ordering::SeqCst), n.0 * n.1);
@@ -160,7 +160,7 @@ fn a_refined_window_is_basin_on_that_box() {
     );
     std::fs::remove_file(dir.path().join("box.h5")).unwrap();
     std::fs::remove_file(dir.path().join("box.png")).unwrap();
-    let h = pdw_store::read_basin_header(&c).unwrap();
+    let h = pdw::store::read_basin_header(&c).unwrap();
     let (x0, x1) = (h.x[0], h.x[h.nx() - 1]);
     let (y0, y1) = (h.y[0], h.y[h.ny() - 1]);
     let bx = (x0, 0.5 * (x0 + x1), 0.5 * (y0 + y1), y1);
@@ -327,7 +327,7 @@ fn refines_cancel_and_save(server: &pdw_explore::Server, dir: &Path) {
     assert!(!dir.join("nowhere").exists());
     assert!(!stale.exists(), "the killed save's temporary file is left");
     let saved = dir.join(j["saved"].as_str().unwrap());
-    let d = pdw_store::read_basin(&saved).unwrap();
+    let d = pdw::store::read_basin(&saved).unwrap();
     assert_eq!(d.header.nx(), 40);
     assert!(d.complete);
     // the saved window's header is `basin`'s on that box, the discovery's settings included
@@ -335,7 +335,7 @@ fn refines_cancel_and_save(server: &pdw_explore::Server, dir: &Path) {
     let x = format!("{}={}:{}", h.x_name, h.x[0], h.x[h.nx() - 1]);
     let y = format!("{}={}:{}", h.y_name, h.y[0], h.y[h.ny() - 1]);
     let b = basin(dir, "box40", &["--x", &x, "--y", &y, "--grid", "40x40"]);
-    let cli = pdw_store::read_basin_header(&b).unwrap();
+    let cli = pdw::store::read_basin_header(&b).unwrap();
     let tol = |t: &str| serde_json::from_str::<serde_json::Value>(t).unwrap();
     let (mine, theirs) = (tol(&h.tolerances), tol(&cli.tolerances));
     for k in [
@@ -419,7 +419,7 @@ fn a_sweep_point_walks_its_gait_with_the_files_period() {
     assert_eq!(files["files"][0]["kind"], "sweep");
     let (st, s) = c.call("GET", "/api/sweep/0", "");
     assert_eq!(st, 200, "{s}");
-    let d = pdw_store::read_sweep(&out).unwrap();
+    let d = pdw::store::read_sweep(&out).unwrap();
     let b = d
         .branches
         .iter()
@@ -505,14 +505,14 @@ fn a_design_files_table_is_the_files_and_a_design_walks_its_gait() {
     let dir = tempfile::tempdir().unwrap();
     let out = design_file(dir.path());
     let cols: Vec<&str> = pdw::design::COLUMNS.to_vec();
-    let d = pdw_store::read_design(&out, &cols).unwrap();
+    let d = pdw::store::read_design(&out, &cols).unwrap();
     // the same search with design 1 recorded as having no gait
     let mut nog = d.clone();
-    nog.status[1] = pdw_limit::design::status::NO_GAIT;
+    nog.status[1] = pdw::limit::design::status::NO_GAIT;
     nog.section[1] = [f64::NAN; 3];
     nog.reasons[1] = "no gait found".into();
     let out2 = dir.path().join("nogait.h5");
-    pdw_store::write_design(&out2, &nog).unwrap();
+    pdw::store::write_design(&out2, &nog).unwrap();
     let server =
         pdw_explore::start(pdw_explore::Config::local(vec![out.clone(), out2], 0)).unwrap();
     let c = Client::of(&server);
@@ -968,7 +968,7 @@ fn a_cancel_stops_a_window_at_each_phase() {
         }
     }
     // the process-wide interrupt is untouched (walks go on): the next window computes
-    assert!(!pdw_hybrid::interrupt::requested());
+    assert!(!pdw::hybrid::interrupt::requested());
     assert!(matches!(cancelled_in(&src, None), Computed::Done(..)));
 }
 
@@ -1032,7 +1032,7 @@ fn a_cancel_reaches_a_gait_search_under_way() {
         after < whole_s / 4.0,
         "the search went on {after:.2} s after the cancel (whole search {whole_s:.2} s)"
     );
-    assert!(!pdw_hybrid::interrupt::requested());
+    assert!(!pdw::hybrid::interrupt::requested());
 }
 
 #[test]

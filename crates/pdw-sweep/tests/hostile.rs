@@ -65,12 +65,12 @@ fn refused(o: &Output) -> String {
 
 fn same_cells(a: &Path, b: &Path) {
     let (a, b) = (
-        pdw_store::read_basin(a).unwrap(),
-        pdw_store::read_basin(b).unwrap(),
+        pdw::store::read_basin(a).unwrap(),
+        pdw::store::read_basin(b).unwrap(),
     );
     assert_eq!(a.outcome, b.outcome);
     assert_eq!(a.strides, b.strides);
-    let bits = |d: &pdw_store::BasinData| {
+    let bits = |d: &pdw::store::BasinData| {
         d.final_state
             .iter()
             .map(|v| v.to_bits())
@@ -143,9 +143,9 @@ fn an_output_never_replaces_another_output_or_an_input() {
     // basin --resume of an unfinished file does not overwrite an existing picture
     let full = d.join("full.h5");
     assert!(basin(&full, &[]).status.success());
-    let h = pdw_store::read_basin_header(&full).unwrap();
+    let h = pdw::store::read_basin_header(&full).unwrap();
     let part = d.join("part.h5");
-    pdw_store::BasinWriter::create(&part, &h, false)
+    pdw::store::BasinWriter::create(&part, &h, false)
         .unwrap()
         .close()
         .unwrap();
@@ -193,7 +193,7 @@ fn resume_never_reports_a_damaged_file_complete() {
             // success only with a file that reads back whole and equals the undamaged run
             Some(0) => {
                 same_cells(&p, &full);
-                assert!(pdw_store::read_basin(&p).unwrap().complete);
+                assert!(pdw::store::read_basin(&p).unwrap().complete);
                 if err(&o).contains("recomputing") {
                     repaired += 1;
                 }
@@ -213,7 +213,7 @@ fn resume_never_reports_a_damaged_file_complete() {
 fn no_gait_on_a_level_floor() {
     // Every spelling of a level floor on the simplest walker; the compass once: its guesses fail
     // as the simplest walker's do, and the scan that follows costs ~40 s of one core (a start
-    // of its 256 whose Newton strides run long: see the note on `pdw_limit::scan`).
+    // of its 256 whose Newton strides run long: see the note on `pdw::limit::scan`).
     for (model, slopes) in [
         ("simplest", &["0", "-0", "1e-320"][..]),
         ("compass", &["0"][..]),
@@ -252,7 +252,7 @@ fn small_grid_entropy_is_not_defined_and_loose_tolerances_are_refused() {
     let o = basin_grid(&dir.path().join("b.h5"), "4x4", &[]);
     assert!(o.status.success(), "{}", err(&o));
     assert!(out(&o).contains("not defined"), "{}", out(&o));
-    let m = pdw_store::read_basin(dir.path().join("b.h5"))
+    let m = pdw::store::read_basin(dir.path().join("b.h5"))
         .unwrap()
         .metrics
         .unwrap();
@@ -750,8 +750,8 @@ fn a_rimless_wheel_whose_spoke_would_pull_the_ground_is_no_valid_gait() {
 }
 
 /// The outcome codes and strides of a basin file, row-major, and the file.
-fn basin_codes(p: &Path) -> (Vec<u8>, Vec<u16>, pdw_store::BasinData) {
-    let d = pdw_store::read_basin(p).unwrap();
+fn basin_codes(p: &Path) -> (Vec<u8>, Vec<u16>, pdw::store::BasinData) {
+    let d = pdw::store::read_basin(p).unwrap();
     let codes = d.outcome.iter().copied().collect();
     let strides = d.strides.iter().copied().collect();
     (codes, strides, d)

@@ -35,12 +35,12 @@ fn refused(o: &Output) -> String {
 
 fn same_cells(a: &Path, b: &Path) {
     let (a, b) = (
-        pdw_store::read_basin(a).unwrap(),
-        pdw_store::read_basin(b).unwrap(),
+        pdw::store::read_basin(a).unwrap(),
+        pdw::store::read_basin(b).unwrap(),
     );
     assert_eq!(a.outcome, b.outcome);
     assert_eq!(a.strides, b.strides);
-    let bits = |d: &pdw_store::BasinData| {
+    let bits = |d: &pdw::store::BasinData| {
         d.final_state
             .iter()
             .map(|v| v.to_bits())
@@ -54,11 +54,11 @@ fn a_second_run_on_a_file_being_written_is_refused_and_the_first_keeps_its_file(
     let dir = tempfile::tempdir().unwrap();
     let full = dir.path().join("full.h5");
     assert!(basin(&full, &[]).status.success());
-    let h = pdw_store::read_basin_header(&full).unwrap();
+    let h = pdw::store::read_basin_header(&full).unwrap();
     // A writer of this process holds busy.h5 (as a running basin job would).
     let busy = dir.path().join("busy.h5");
-    let mut w = pdw_store::BasinWriter::create(&busy, &h, false).unwrap();
-    let data = pdw_store::read_basin(&full).unwrap();
+    let mut w = pdw::store::BasinWriter::create(&busy, &h, false).unwrap();
+    let data = pdw::store::read_basin(&full).unwrap();
     let (nx, d) = (h.nx(), h.d());
     let rows = |r0: usize, r1: usize| {
         (

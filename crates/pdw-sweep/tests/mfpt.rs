@@ -1,13 +1,13 @@
 //! `pdw-sweep mfpt`: the file holds exactly what the library computes, describes itself, and
 //! the run's result does not depend on the thread count.
 
+use pdw::limit::terrain::SlopeTerrain;
 use pdw::mfpt::{self, MfptPlan};
-use pdw_limit::terrain::SlopeTerrain;
 
 use super::common::{h5_open, run, stderr};
 
 /// The library's run of the same request.
-fn library(walkers: usize, max_steps: usize) -> pdw_limit::terrain::MfptEstimate {
+fn library(walkers: usize, max_steps: usize) -> pdw::limit::terrain::MfptEstimate {
     let m = pdw::build("simplest", &[("slope".to_string(), 0.009)]).unwrap();
     let (x0, _) = mfpt::start(&m).unwrap();
     let plan = MfptPlan {
@@ -15,7 +15,7 @@ fn library(walkers: usize, max_steps: usize) -> pdw_limit::terrain::MfptEstimate
             mean: 0.009,
             sd: 0.1f64.to_radians(),
             seed: 3,
-            kind: pdw_limit::terrain::TerrainKind::Slope,
+            kind: pdw::limit::terrain::TerrainKind::Slope,
             dist: Default::default(),
         },
         walkers,
@@ -62,7 +62,7 @@ fn the_mfpt_file_holds_the_library_estimate_with_units_and_provenance() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(text.contains("MFPT") || text.contains("no fall"), "{text}");
-    let d = pdw_store::read_mfpt(&out).unwrap();
+    let d = pdw::store::read_mfpt(&out).unwrap();
     let e = library(30, 50);
     assert_eq!(d.mfpt.to_bits(), e.mfpt.to_bits());
     assert_eq!(d.survival, e.survival);
@@ -82,7 +82,7 @@ fn the_mfpt_file_holds_the_library_estimate_with_units_and_provenance() {
     let out1 = dir.path().join("m1.h5");
     let o = args("1", out1.to_str().unwrap());
     assert!(o.status.success(), "{}", stderr(&o));
-    let d1 = pdw_store::read_mfpt(&out1).unwrap();
+    let d1 = pdw::store::read_mfpt(&out1).unwrap();
     assert_eq!(
         (d1.mfpt.to_bits(), &d1.survival),
         (d.mfpt.to_bits(), &d.survival)
@@ -101,7 +101,7 @@ fn mfpt_takes_round_feet_on_both_terrains_and_refuses_a_negative_sd_clearly() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--terrain"), "{}", stderr(&o));
     let dir = tempfile::tempdir().unwrap();
-    let text = pdw_walkers::registry::preset_text("compass").unwrap();
+    let text = pdw::walkers::registry::preset_text("compass").unwrap();
     let spec = dir.path().join("round.toml");
     std::fs::write(
         &spec,
@@ -126,7 +126,7 @@ fn mfpt_takes_round_feet_on_both_terrains_and_refuses_a_negative_sd_clearly() {
         slopes.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let d = pdw_store::read_mfpt(&slopes).unwrap();
+    let d = pdw::store::read_mfpt(&slopes).unwrap();
     assert_eq!(d.terrain, "slope");
     assert!(d.falls > 50 && d.falls + d.censored == 100, "{}", d.falls);
     assert_eq!(d.mfpt, d.total_steps as f64 / d.falls as f64);
@@ -169,7 +169,7 @@ fn mfpt_takes_round_feet_on_both_terrains_and_refuses_a_negative_sd_clearly() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let d = pdw_store::read_mfpt(&out).unwrap();
+    let d = pdw::store::read_mfpt(&out).unwrap();
     assert_eq!(
         d.method,
         "monte carlo + markov chain on the mid-stance section at the legs together"
@@ -202,7 +202,7 @@ fn an_mfpt_curve_is_the_single_runs_at_each_standard_deviation() {
     let o = run(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.with_extension("png").exists());
-    let c = pdw_store::read_mfpt_curve(&out).unwrap();
+    let c = pdw::store::read_mfpt_curve(&out).unwrap();
     assert_eq!(c.sd.len(), 3);
     assert_eq!(c.sd[0], 0.4f64.to_radians());
     assert_eq!(c.sd[2], 0.6f64.to_radians());
@@ -213,7 +213,7 @@ fn an_mfpt_curve_is_the_single_runs_at_each_standard_deviation() {
         args.extend(["--sd", &sd_text, "--out", single.to_str().unwrap()]);
         let o = run(&args);
         assert!(o.status.success(), "{}", stderr(&o));
-        let s = pdw_store::read_mfpt(&single).unwrap();
+        let s = pdw::store::read_mfpt(&single).unwrap();
         assert_eq!(s.sd, *sd);
         assert_eq!(
             (s.total_steps, s.falls, s.censored),
@@ -266,7 +266,7 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let d = pdw_store::read_mfpt(&out).unwrap();
+    let d = pdw::store::read_mfpt(&out).unwrap();
     assert_eq!(
         (d.terrain.as_str(), d.terrain_unit.as_str()),
         ("step-down", "m")
@@ -279,7 +279,7 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
             mean: 0.001,
             sd: 0.01,
             seed: 0,
-            kind: pdw_limit::terrain::TerrainKind::StepDown,
+            kind: pdw::limit::terrain::TerrainKind::StepDown,
             dist: Default::default(),
         },
         walkers: 50,
@@ -346,7 +346,7 @@ fn disturb_prints_the_response_and_refuses_what_it_cannot_do() {
     let m = pdw::build("rimless", &[]).unwrap();
     let r = pdw::disturb::respond(
         &m,
-        pdw_limit::terrain::TerrainKind::StepDown,
+        pdw::limit::terrain::TerrainKind::StepDown,
         -0.01,
         60,
         mfpt::default_integrator(),
@@ -400,7 +400,7 @@ fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("draws uniform on [-sqrt 3, sqrt 3]"));
-    let d = pdw_store::read_mfpt(&out).unwrap();
+    let d = pdw::store::read_mfpt(&out).unwrap();
     assert!(d.distribution.starts_with("uniform"), "{}", d.distribution);
     // the library's walk on the same uniform draws
     let m = pdw::build("rimless", &[]).unwrap();
@@ -410,8 +410,8 @@ fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
             mean: d.mean,
             sd: 0.5f64.to_radians(),
             seed: 2,
-            kind: pdw_limit::terrain::TerrainKind::Slope,
-            dist: pdw_limit::terrain::TerrainDist::Uniform,
+            kind: pdw::limit::terrain::TerrainKind::Slope,
+            dist: pdw::limit::terrain::TerrainDist::Uniform,
         },
         walkers: 40,
         max_steps: 200,
@@ -446,7 +446,7 @@ fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
             mean: m.params.iter().find(|p| p.0 == "slope").unwrap().1,
             sd: 0.5f64.to_radians(),
             seed: 1,
-            kind: pdw_limit::terrain::TerrainKind::Slope,
+            kind: pdw::limit::terrain::TerrainKind::Slope,
             dist: Default::default(),
         },
         walkers: 50,
@@ -494,7 +494,7 @@ fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
         assert!(o.status.success(), "{}", stderr(&o));
         let text = String::from_utf8_lossy(&o.stdout).into_owned();
         assert!(text.contains("mid-stance section"), "{text}");
-        let d = pdw_store::read_mfpt(&out).unwrap();
+        let d = pdw::store::read_mfpt(&out).unwrap();
         assert_eq!(d.method, method);
         let get = |k: &str| d.chain.iter().find(|c| c.0 == k).map(|c| c.1);
         assert_eq!(get("mid_stance"), Some(1.0));
@@ -598,7 +598,7 @@ fn the_stride_map_is_chosen_recorded_and_refused_clearly() {
         (
             text,
             v["stride_map"].clone(),
-            pdw_store::read_mfpt(out).unwrap(),
+            pdw::store::read_mfpt(out).unwrap(),
         )
     };
     let (text, map, auto) = go("auto", &dir.path().join("a.h5"));
@@ -683,4 +683,57 @@ fn the_zero_height_node_warning_is_printed_once_and_only_for_an_odd_rule() {
         let (warned, _, out) = chain("6", mesh);
         assert_eq!(warned, 0, "{mesh}: {out}");
     }
+}
+
+/// An MFPT estimate of 4000 walkers with mean `mean`, standard error `se` and `censored` walkers
+/// censored.
+fn est(mean: f64, se: f64, censored: usize) -> pdw::limit::terrain::MfptEstimate {
+    pdw::limit::terrain::MfptEstimate {
+        walkers: 4000,
+        falls: 4000 - censored,
+        censored,
+        total_steps: 42_906,
+        mfpt: mean,
+        stderr: se,
+        restricted_mean: mean,
+        restricted_stderr: se,
+        survival: Vec::new(),
+        failures: Vec::new(),
+    }
+}
+
+/// A chain's MFPTs on its two meshes as the `mfpt` file keeps them.
+fn chain(coarse: f64, fine: f64) -> Vec<(String, f64)> {
+    vec![
+        ("mfpt_coarse".to_string(), coarse),
+        ("mfpt_fine".to_string(), fine),
+    ]
+}
+
+/// The warning `pdw-sweep mfpt` prints when its chain and its walkers disagree.
+fn agreement_warning(
+    chain: &[(String, f64)],
+    est: &pdw::limit::terrain::MfptEstimate,
+) -> Option<String> {
+    mfpt::chain_agreement_warning(chain, est, "--nodes")
+}
+
+/// The simplest walker on step heights (docs/cli.md): 11.2061 / 11.2818 against
+/// 10.7265 ± 0.1122 is 4.9 standard errors, the refinement 0.08 — warned; within 3 standard
+/// errors plus the refinement, with censored walkers, or without a chain — silent.
+#[test]
+fn the_chain_is_flagged_where_it_and_the_walkers_disagree_beyond_its_refinement() {
+    let w = agreement_warning(&chain(11.2061, 11.2818), &est(10.7265, 0.1122, 0)).unwrap();
+    assert!(
+        w.starts_with("WARNING") && w.contains("4.9 standard errors"),
+        "{w}"
+    );
+    assert!(w.contains("--nodes"), "{w}");
+    // within 3 standard errors
+    assert!(agreement_warning(&chain(11.2, 11.05), &est(10.7265, 0.1122, 0)).is_none());
+    // beyond them, but the refinement moved the chain as much
+    assert!(agreement_warning(&chain(12.2, 11.28), &est(10.7265, 0.1122, 0)).is_none());
+    // censored walkers: the restricted mean is not the MFPT
+    assert!(agreement_warning(&chain(11.2, 11.28), &est(10.7265, 0.1122, 3)).is_none());
+    assert!(agreement_warning(&[], &est(10.7265, 0.1122, 0)).is_none());
 }

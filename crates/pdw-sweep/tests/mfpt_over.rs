@@ -39,7 +39,7 @@ fn mfpt_over_a_parameter_is_the_single_runs_and_marks_missing_gaits() {
     assert!(text.contains("Spearman"), "{text}");
     assert!(out.with_extension("png").exists());
     assert!(dir.path().join("over-gsn.png").exists());
-    let d = pdw_store::read_mfpt_over(&out).unwrap();
+    let d = pdw::store::read_mfpt_over(&out).unwrap();
     assert_eq!(d.values, vec![-0.02, 0.02, 0.06]);
     assert_eq!(d.param, "slope");
     assert_eq!(d.stable[0], 0);
@@ -53,7 +53,7 @@ fn mfpt_over_a_parameter_is_the_single_runs_and_marks_missing_gaits() {
         args.extend(["--slope", &v, "--out", single.to_str().unwrap()]);
         let o = run(&args);
         assert!(o.status.success(), "{}", stderr(&o));
-        let s = pdw_store::read_mfpt(&single).unwrap();
+        let s = pdw::store::read_mfpt(&single).unwrap();
         assert_eq!((s.total_steps, s.falls), (d.total_steps[i], d.falls[i]));
         // the GSN of the over run is fixedpoint --gsn's
         let o = run(&[
@@ -79,9 +79,9 @@ fn mfpt_over_a_parameter_is_the_single_runs_and_marks_missing_gaits() {
     );
     // the store's own round trip
     let again = dir.path().join("again.h5");
-    pdw_store::write_mfpt_over(&again, false, &d).unwrap();
-    assert_eq!(pdw_store::read_mfpt_over(&again).unwrap().values, d.values);
-    let mut back = pdw_store::read_mfpt_over(&again).unwrap();
+    pdw::store::write_mfpt_over(&again, false, &d).unwrap();
+    assert_eq!(pdw::store::read_mfpt_over(&again).unwrap().values, d.values);
+    let mut back = pdw::store::read_mfpt_over(&again).unwrap();
     back.command.clear();
     let mut orig = d.clone();
     orig.command.clear();

@@ -77,7 +77,7 @@ fn files_of_a_users_own_walker_rebuild_it_without_its_spec_file() {
     std::fs::remove_file(d.join("mk2.toml")).unwrap();
     // every file names the spec's model and records its resolved spec
     for f in ["b.h5", "t.h5", "sw.h5"] {
-        let spec = pdw_store::provenance::read_model_spec(&d.join(f)).unwrap();
+        let spec = pdw::store::provenance::read_model_spec(&d.join(f)).unwrap();
         assert!(
             spec.is_some_and(|s| s.contains("mk2")),
             "{f} records no spec"
@@ -99,8 +99,8 @@ fn files_of_a_users_own_walker_rebuild_it_without_its_spec_file() {
     // folder, with no spec file anywhere; likewise the merged file
     // (the explorer does not rebuild a merged file's run: merge records no integrator)
     assert_eq!(
-        pdw_store::provenance::read_model_spec(&m).unwrap(),
-        pdw_store::provenance::read_model_spec(&s0).unwrap()
+        pdw::store::provenance::read_model_spec(&m).unwrap(),
+        pdw::store::provenance::read_model_spec(&s0).unwrap()
     );
     {
         let f = d.join("b.h5");
@@ -122,8 +122,8 @@ fn files_of_a_users_own_walker_rebuild_it_without_its_spec_file() {
         assert_eq!(r.m.info.name, "mk2");
     }
     // a sweep point's gait walks
-    let sw = pdw_store::read_sweep(d.join("sw.h5")).unwrap();
-    let spec = pdw_store::provenance::read_model_spec(&d.join("sw.h5")).unwrap();
+    let sw = pdw::store::read_sweep(d.join("sw.h5")).unwrap();
+    let spec = pdw::store::provenance::read_model_spec(&d.join("sw.h5")).unwrap();
     pdw_explore::sweep::gait(&sw, spec.as_deref(), 0, 1)
         .unwrap_or_else(|e| panic!("{}", e.message));
     // the trajectory animates

@@ -57,13 +57,13 @@ fn basin(out: &Path, extra: &[&str]) -> Output {
 
 fn same_cells(a: &Path, b: &Path) {
     let (a, b) = (
-        pdw_store::read_basin(a).unwrap(),
-        pdw_store::read_basin(b).unwrap(),
+        pdw::store::read_basin(a).unwrap(),
+        pdw::store::read_basin(b).unwrap(),
     );
     assert!(a.complete && b.complete);
     assert_eq!(a.outcome, b.outcome);
     assert_eq!(a.strides, b.strides);
-    let bits = |d: &pdw_store::BasinData| {
+    let bits = |d: &pdw::store::BasinData| {
         d.final_state
             .iter()
             .map(|v| v.to_bits())
@@ -560,15 +560,15 @@ fn messages_show_extreme_values_briefly_and_name_the_point_that_differs() {
     );
     // a file whose y axis differs from the run's at one interior point
     let (r, _) = reference(dir.path());
-    let h = pdw_store::read_basin_header(&r).unwrap();
+    let h = pdw::store::read_basin_header(&r).unwrap();
     let f = dir.path().join("part.h5");
-    pdw_store::BasinWriter::create(&f, &h, false)
+    pdw::store::BasinWriter::create(&f, &h, false)
         .unwrap()
         .close()
         .unwrap();
     let mut other = h.clone();
     other.y[17] = f64::from_bits(other.y[17].to_bits() + 1);
-    let e = pdw_store::BasinWriter::resume(&f, &other)
+    let e = pdw::store::BasinWriter::resume(&f, &other)
         .unwrap_err()
         .to_string();
     assert!(

@@ -84,8 +84,8 @@ fn check_provenance(f: &hdf5::File, command_has: &str) -> serde_json::Value {
         }
     );
     // The path the run chose (this process would choose the same on this CPU) and the contract.
-    assert_eq!(attr_str(&p, "simd_path"), pdw_simd::path().name());
-    assert_eq!(attr_str(&p, "numerics"), pdw_simd::NUMERICS);
+    assert_eq!(attr_str(&p, "simd_path"), pdw::simd::path().name());
+    assert_eq!(attr_str(&p, "numerics"), pdw::simd::NUMERICS);
     assert!(!attr_str(&p, "host").is_empty());
     assert!(attr_str(&p, "command").contains(command_has));
     assert!(!attr_str(&p, "created").is_empty());
@@ -363,7 +363,7 @@ fn merge_accepts_shards_from_any_simd_path_and_refuses_other_builds_unless_force
     let dir = tempfile::tempdir().unwrap();
     let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
     // Shard 0 on the baseline path, shard 1 on the best one: one build, the same bits.
-    for (i, path) in [(0, "baseline"), (1, pdw_simd::best_path().name())] {
+    for (i, path) in [(0, "baseline"), (1, pdw::simd::best_path().name())] {
         let o = Command::new(env!("CARGO_BIN_EXE_pdw-sweep"))
             .env("PDW_SIMD", path)
             .args(["basin", "--grid", "16x16", "--quiet", "--shard"])
@@ -469,7 +469,7 @@ fn design_file_carries_units_and_the_commands_of_every_run() {
     assert_eq!(commands.len(), 2, "{commands:?}");
     assert!(commands[0].contains("--budget 2") && commands[1].contains("--budget 3"));
     assert_eq!(
-        pdw_store::read_design(&out, &["cost"])
+        pdw::store::read_design(&out, &["cost"])
             .unwrap()
             .params
             .len(),

@@ -1,7 +1,7 @@
 //! `pdw-sweep simulate`: the files hold exactly what the library computes.
 
-use pdw_limit::gaits;
-use pdw_limit::trajectory::{self, TrajectoryOptions};
+use pdw::limit::gaits;
+use pdw::limit::trajectory::{self, TrajectoryOptions};
 use std::process::Command;
 
 fn simulate(args: &[&str]) -> std::process::Output {
@@ -13,8 +13,8 @@ fn simulate(args: &[&str]) -> std::process::Output {
 }
 
 /// The library's trajectory of the compass walker's stable gait, 3 steps.
-fn library_compass() -> pdw_limit::Trajectory {
-    let w = pdw_walkers::build("compass", &[]).unwrap();
+fn library_compass() -> pdw::limit::Trajectory {
+    let w = pdw::walkers::build("compass", &[]).unwrap();
     let (found, _) = gaits::search(w.as_ref(), &gaits::model_guesses(w.as_ref()), 1e-12).unwrap();
     let fp = &found.iter().find(|f| f.fp.stable).unwrap().fp;
     trajectory::simulate(w.as_ref(), &fp.state, &TrajectoryOptions::new(3)).unwrap()
@@ -39,7 +39,7 @@ fn hdf5_and_csv_hold_the_library_trajectory() {
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    let d = pdw::store::read_trajectory_h5(&h5).unwrap();
     assert_eq!(d.column("t").unwrap().values, tr.t);
     assert_eq!(d.column("t").unwrap().units, "s");
     for (j, name) in tr.state_names.iter().enumerate() {
@@ -135,7 +135,7 @@ fn walks_that_would_not_fit_in_memory_are_refused() {
         assert!(!out.exists(), "{args:?}: nothing written");
     }
     // the library's bound: a 3-step walk of every accepted step, at most 40 samples
-    let w = pdw_walkers::build("compass", &[]).unwrap();
+    let w = pdw::walkers::build("compass", &[]).unwrap();
     let (found, _) = gaits::search(w.as_ref(), &gaits::model_guesses(w.as_ref()), 1e-12).unwrap();
     let fp = &found.iter().find(|f| f.fp.stable).unwrap().fp;
     let full = trajectory::simulate(w.as_ref(), &fp.state, &TrajectoryOptions::new(3)).unwrap();
@@ -161,7 +161,7 @@ fn walks_that_would_not_fit_in_memory_are_refused() {
     // there; before, the stride was integrated to its end with the samples dropped.
     let opts = TrajectoryOptions {
         max_samples: 40,
-        integrator: pdw_hybrid::Options::rk4(1e-10),
+        integrator: pdw::hybrid::Options::rk4(1e-10),
         ..TrajectoryOptions::new(3)
     };
     match trajectory::simulate(w.as_ref(), &fp.state, &opts) {
@@ -198,7 +198,7 @@ fn fixed_frame_energy_drops_by_the_heel_strike_loss() {
     let h5 = dir.path().join("s.h5");
     let o = simulate(&["--steps", "3", "--out", h5.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    let d = pdw::store::read_trajectory_h5(&h5).unwrap();
     let col = |n: &str| d.column(n).unwrap().values.clone();
     let (e, fixed, step) = (col("energy"), col("energy_fixed_frame"), col("step"));
     assert_eq!(d.column("energy_fixed_frame").unwrap().units, "M g l");
@@ -260,7 +260,7 @@ fn the_default_output_is_a_hundred_samples_per_step() {
             h5.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+        let d = pdw::store::read_trajectory_h5(&h5).unwrap();
         let (t, step) = (
             &d.column("t").unwrap().values,
             &d.column("step").unwrap().values,
@@ -303,7 +303,7 @@ fn the_default_output_is_a_hundred_samples_per_step() {
         h5.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    let d = pdw::store::read_trajectory_h5(&h5).unwrap();
     assert_eq!(d.len(), tr.len());
     let f = crate::common::h5_open(&h5).unwrap();
     assert_eq!(root_attr(&f, "dt_out"), "every accepted step and event");
@@ -327,7 +327,7 @@ fn the_files_hold_the_walkers_positions() {
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    let d = pdw_store::read_trajectory_h5(&h5).unwrap();
+    let d = pdw::store::read_trajectory_h5(&h5).unwrap();
     let f = crate::common::h5_open(&h5).unwrap();
     assert_eq!(
         root_attr(&f, "point_names"),

@@ -27,7 +27,7 @@ const RANGE: &str = "slope=0.0135:0.0175:9";
 const N: usize = 9;
 
 /// Runs the sweep of [`RANGE`] with `threads` threads, writing HDF5, CSV and printing JSON.
-fn sweep(dir: &Path, tag: &str, threads: &str) -> (pdw_store::SweepData, serde_json::Value) {
+fn sweep(dir: &Path, tag: &str, threads: &str) -> (pdw::store::SweepData, serde_json::Value) {
     let out = dir.join(format!("{tag}.h5"));
     let csv = dir.join(format!("{tag}.csv"));
     let o = run(&[
@@ -44,11 +44,11 @@ fn sweep(dir: &Path, tag: &str, threads: &str) -> (pdw_store::SweepData, serde_j
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
-    (pdw_store::read_sweep(&out).unwrap(), json)
+    (pdw::store::read_sweep(&out).unwrap(), json)
 }
 
-fn stride_map_at(slope: f64) -> Box<dyn pdw_walkers::Walker> {
-    pdw_walkers::build("simplest", &[("slope", slope)]).unwrap()
+fn stride_map_at(slope: f64) -> Box<dyn pdw::walkers::Walker> {
+    pdw::walkers::build("simplest", &[("slope", slope)]).unwrap()
 }
 
 #[test]
@@ -123,7 +123,7 @@ fn sweep_output_points_json_csv_and_threads() {
     // Iterating the stride map (a fresh DOP853 at 1e-13) maps each point onto the other.
     let w = stride_map_at(0.0165);
     let step = |x: &[f64]| w.step_length(x);
-    let map = pdw_limit::StrideMap::new(w.as_ref(), pdw_hybrid::Options::dop853(1e-13))
+    let map = pdw::limit::StrideMap::new(w.as_ref(), pdw::hybrid::Options::dop853(1e-13))
         .unwrap()
         .with_step_length(&step);
     let s0 = map.stride(&orbit[0]).unwrap();
@@ -258,8 +258,8 @@ fn sweep_output_points_json_csv_and_threads() {
 
     // ---- the same sweep on 2 threads: identical results
     let (two, _) = sweep(dir.path(), "two", "2");
-    let strip = |d: &pdw_store::SweepData| {
-        let mut j = pdw_store::sweep_json(d);
+    let strip = |d: &pdw::store::SweepData| {
+        let mut j = pdw::store::sweep_json(d);
         j["elapsed_s"] = serde_json::Value::Null;
         j["settings"]["threads"] = serde_json::Value::Null;
         j
@@ -280,14 +280,14 @@ fn a_decreasing_sweep_gives_its_n_values_in_its_own_order_and_bad_threads_are_re
         "--quiet",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let d = pdw_store::read_sweep(&out).unwrap();
+    let d = pdw::store::read_sweep(&out).unwrap();
     assert_eq!(d.branches.len(), 1, "no period doubling below 0.012");
     assert_eq!(d.branches[0].parameter, grid(0.012, 0.004, 5));
     // Each point is a fixed point of the stride map at its own slope.
     for (g, x) in d.branches[0].parameter.iter().zip(&d.branches[0].section) {
         let w = stride_map_at(*g);
         let map =
-            pdw_limit::StrideMap::new(w.as_ref(), pdw_hybrid::Options::dop853(1e-13)).unwrap();
+            pdw::limit::StrideMap::new(w.as_ref(), pdw::hybrid::Options::dop853(1e-13)).unwrap();
         let p = map.apply(x).unwrap();
         assert!(
             p.iter().zip(x).all(|(a, b)| (a - b).abs() < 1e-9),
@@ -354,7 +354,7 @@ fn sweep_console_counts_and_names_physically_invalid_points() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    let data = pdw_store::read_sweep(&out).unwrap();
+    let data = pdw::store::read_sweep(&out).unwrap();
     let b = &data.branches[0];
     let invalid = b
         .validity

@@ -30,6 +30,22 @@ pub mod output;
 pub mod simulate;
 pub mod sweep;
 
+// The crates under this one, re-exported: every front end (the CLI, the explorer, the Python
+// package) depends on `pdw` alone and names their items as `pdw::store::…`, `pdw::limit::…` and
+// so on — one dependency for every front end, one version of each crate they see.
+// `tools/check-front-end-deps` fails when a front end depends on one of them directly.
+
+/// The hybrid-system integrator and its events (`pdw-hybrid`).
+pub use pdw_hybrid as hybrid;
+/// Fixed points, continuation, basins and trajectories (`pdw-limit`).
+pub use pdw_limit as limit;
+/// The SIMD path chosen at run time and the numeric contract (`pdw-simd`).
+pub use pdw_simd as simd;
+/// The HDF5 files, their provenance and the plots (`pdw-store`).
+pub use pdw_store as store;
+/// The walker models and their spec files (`pdw-walkers`).
+pub use pdw_walkers as walkers;
+
 pub use input::InputError;
 pub use integrator::{integrator, integrator_json, integrator_text, IntegratorChoice};
 pub use model::{build, build_model, build_recorded, build_with, BuiltModel, ModelChoice};

@@ -919,6 +919,17 @@ pub fn agreement_warning(
     })
 }
 
+/// [`agreement_warning`] of a chain's MFPTs as an MFPT file keeps them, by name (`mfpt_coarse`,
+/// `mfpt_fine`); `None` without them (no chain was run).
+pub fn chain_agreement_warning(
+    chain: &[(String, f64)],
+    est: &MfptEstimate,
+    nodes_flag: &str,
+) -> Option<String> {
+    let get = |k: &str| chain.iter().find(|(n, _)| n == k).map(|(_, v)| *v);
+    agreement_warning(get("mfpt_coarse")?, get("mfpt_fine")?, est, nodes_flag)
+}
+
 /// The terrain distribution in words, for reports and files: its name, and for a list of
 /// values how many there are, their mean and standard deviation.
 pub fn dist_words(d: &TerrainDist) -> String {

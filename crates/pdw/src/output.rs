@@ -349,15 +349,32 @@ pub fn claim(
     inputs: &[Input<'_>],
     force: bool,
 ) -> Result<Claim, InputError> {
-    // 0. every input that exists is a regular file: a FIFO would block its reader, a device
-    // such as /dev/zero never end (missing inputs are left to their reader to report)
+    check_inputs(inputs)?;
+    let mut ids = identities(outputs, inputs)?;
+    let leftover = check_being_written(outputs, &mut ids)?;
+    check_overwrites_and_formats(outputs, &ids, force)?;
+    lock_outputs(outputs, &ids, leftover)
+}
+
+/// Step 0 of [`claim`]: every input that exists is a regular file — a FIFO would block its
+/// reader, a device such as /dev/zero never end (missing inputs are left to their reader to
+/// report).
+fn check_inputs(inputs: &[Input<'_>]) -> Result<(), InputError> {
     for i in inputs {
         if std::fs::metadata(i.path).is_ok() {
             pdw_store::check_input(i.path, None)
                 .map_err(|e| InputError(format!("{}: {e}", i.flag)))?;
         }
     }
-    // 1-2. identities: no output is another output or an input
+    Ok(())
+}
+
+/// Steps 1-2 of [`claim`]: each output's identity and whether it exists; refused when an
+/// output is another output or an input.
+fn identities(
+    outputs: &[Output<'_>],
+    inputs: &[Input<'_>],
+) -> Result<Vec<(Identity, bool)>, InputError> {
     let mut ids: Vec<(Identity, bool)> = Vec::with_capacity(outputs.len());
     for o in outputs {
         let id = output_identity(o)?;
@@ -371,31 +388,49 @@ pub fn claim(
                 outputs[j].path.display()
             )));
         }
-        for i in inputs {
-            let Ok(m) = std::fs::metadata(i.path) else {
-                continue;
-            };
-            if id.0
-                == (Identity::File {
-                    dev: m.dev(),
-                    ino: m.ino(),
-                })
-            {
-                return Err(InputError(format!(
-                    "{}: '{}' is also an input ({} '{}', the same file); writing it would \
-                     destroy the input, so it is refused even with --force",
-                    o.flag,
-                    o.path.display(),
-                    i.flag,
-                    i.path.display()
-                )));
-            }
-        }
+        check_not_an_input(o, &id.0, inputs)?;
         ids.push(id);
     }
-    // A file being written is reported as such, whatever else holds (in the outputs' order). An
-    // empty file where a continued output is expected is a placeholder left by a killed run
-    // (see the module docs): claimed as a new output.
+    Ok(ids)
+}
+
+/// Refuses output `o` (of identity `id`) when it is one of the `inputs`, even with --force.
+fn check_not_an_input(
+    o: &Output<'_>,
+    id: &Identity,
+    inputs: &[Input<'_>],
+) -> Result<(), InputError> {
+    for i in inputs {
+        let Ok(m) = std::fs::metadata(i.path) else {
+            continue;
+        };
+        if *id
+            == (Identity::File {
+                dev: m.dev(),
+                ino: m.ino(),
+            })
+        {
+            return Err(InputError(format!(
+                "{}: '{}' is also an input ({} '{}', the same file); writing it would \
+                 destroy the input, so it is refused even with --force",
+                o.flag,
+                o.path.display(),
+                i.flag,
+                i.path.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A file being written is reported as such, whatever else holds (in the outputs' order). An
+/// empty file where a continued output is expected is a placeholder left by a killed run (see
+/// the module docs): claimed as a new output (marked not existing in `ids`). Which outputs are
+/// such leftovers.
+fn check_being_written(
+    outputs: &[Output<'_>],
+    ids: &mut [(Identity, bool)],
+) -> Result<Vec<bool>, InputError> {
     let mut leftover = vec![false; outputs.len()];
     for (k, (o, (_, exists))) in outputs.iter().zip(ids.iter_mut()).enumerate() {
         if !*exists {
@@ -409,8 +444,17 @@ pub fn claim(
             leftover[k] = true;
         }
     }
-    // 3-4. overwriting and formats
-    for (o, (_, exists)) in outputs.iter().zip(&ids) {
+    Ok(leftover)
+}
+
+/// Steps 3-4 of [`claim`]: an existing output is overwritten only with `force` (or where it
+/// may exist), and every output's name ends in its format's extension.
+fn check_overwrites_and_formats(
+    outputs: &[Output<'_>],
+    ids: &[(Identity, bool)],
+    force: bool,
+) -> Result<(), InputError> {
+    for (o, (_, exists)) in outputs.iter().zip(ids) {
         if *exists && !force && !o.may_exist {
             let empty = std::fs::metadata(o.path).is_ok_and(|m| m.len() == 0);
             return Err(InputError(format!(
@@ -439,33 +483,21 @@ pub fn claim(
             )));
         }
     }
-    // 5-6. writable directories, locks
+    Ok(())
+}
+
+/// Steps 5-6 of [`claim`]: each output's directory takes new files, each output is opened (a
+/// new one created as its placeholder) and locked; the stale partial files of killed writers
+/// beside it are removed.
+fn lock_outputs(
+    outputs: &[Output<'_>],
+    ids: &[(Identity, bool)],
+    leftover: Vec<bool>,
+) -> Result<Claim, InputError> {
     let mut claim = Claim { held: Vec::new() };
-    for ((o, (_, exists)), leftover) in outputs.iter().zip(&ids).zip(leftover) {
+    for ((o, (_, exists)), leftover) in outputs.iter().zip(ids).zip(leftover) {
         probe(o)?;
-        let (file, placeholder) = if *exists {
-            (open_for_lock(o.path, o.flag)?, None)
-        } else if leftover {
-            let f = open_for_lock(o.path, o.flag)?;
-            let ino = f.metadata().map(|m| m.ino()).ok();
-            (f, ino)
-        } else {
-            let f = std::fs::OpenOptions::new()
-                .read(true)
-                .write(true)
-                .create_new(true)
-                .open(o.path)
-                .map_err(|e| {
-                    InputError(format!(
-                        "{}: cannot create '{}': {}",
-                        o.flag,
-                        o.path.display(),
-                        kind_text(&e)
-                    ))
-                })?;
-            let ino = f.metadata().map(|m| m.ino()).ok();
-            (f, ino)
-        };
+        let (file, placeholder) = open_output(o, *exists, leftover)?;
         let held = Held {
             path: o.path.to_path_buf(),
             file: None,
@@ -481,6 +513,38 @@ pub fn claim(
         pdw_store::remove_stale_partials(o.path);
     }
     Ok(claim)
+}
+
+/// Output `o` opened for its lock: an existing file as it is; a leftover placeholder (`leftover`)
+/// or a new file (created here) with its inode, the placeholder a refusal removes.
+fn open_output(
+    o: &Output<'_>,
+    exists: bool,
+    leftover: bool,
+) -> Result<(File, Option<u64>), InputError> {
+    Ok(if exists {
+        (open_for_lock(o.path, o.flag)?, None)
+    } else if leftover {
+        let f = open_for_lock(o.path, o.flag)?;
+        let ino = f.metadata().map(|m| m.ino()).ok();
+        (f, ino)
+    } else {
+        let f = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(o.path)
+            .map_err(|e| {
+                InputError(format!(
+                    "{}: cannot create '{}': {}",
+                    o.flag,
+                    o.path.display(),
+                    kind_text(&e)
+                ))
+            })?;
+        let ino = f.metadata().map(|m| m.ino()).ok();
+        (f, ino)
+    })
 }
 
 /// Creates and removes a file beside `o.path`: its directory takes new files (renaming a

@@ -8,7 +8,7 @@ use super::fixedpoint::report_failure;
 use super::{build_model, BuiltModel};
 use crate::cli::AnimateArgs;
 use pdw::animate::AnimOptions;
-use pdw_limit::FixedPoint;
+use pdw::limit::FixedPoint;
 use std::path::Path;
 use std::process::ExitCode;
 

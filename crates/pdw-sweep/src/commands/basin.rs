@@ -14,16 +14,16 @@ use crate::args::{self, InputError};
 use crate::cli::BasinArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::basin::{AxisFlags, BasinPlan, BasinRequest};
-use pdw_limit::attractors::DiscoveryOptions;
-use pdw_limit::basin::{
+use pdw::limit::attractors::DiscoveryOptions;
+use pdw::limit::basin::{
     basin_metrics_slices, classify_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX,
 };
-use pdw_limit::{AttractorSet, OrbitValidity};
-use pdw_store::{
+use pdw::limit::{AttractorSet, OrbitValidity};
+use pdw::store::{
     plot_basin_attractors, read_basin, read_basin_outcome, Attractor, BasinHeader, BasinMetrics,
     BasinWriter, ShardSpec, StoreError, ZAxis, BLOCK_ROWS,
 };
-use pdw_walkers::ModelInfo;
+use pdw::walkers::ModelInfo;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -179,11 +179,11 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
     }
     let t0 = Instant::now();
     // Signals first: Ctrl-C or SIGTERM at any moment exits 130, leaving a resumable file. The
-    // handler sets the process-wide stop flag (pdw_hybrid::interrupt), which every integration
+    // handler sets the process-wide stop flag (pdw::hybrid::interrupt), which every integration
     // polls: the gait search, attractor discovery and a block of cells in progress end within
     // milliseconds, and their partial results are thrown away. A second handler cannot be
     // installed in tests that call run() twice; ignore that.
-    let _ = ctrlc::set_handler(pdw_hybrid::interrupt::request);
+    let _ = ctrlc::set_handler(pdw::hybrid::interrupt::request);
     let p = parse(a)?;
     let mut claim = claim_outputs(a, &p)?;
     let plan = go!(plan(a, &p)?);
@@ -211,7 +211,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
 
 /// The stop request of an interrupt (see [`run`]).
 fn stopped() -> bool {
-    pdw_hybrid::interrupt::requested()
+    pdw::hybrid::interrupt::requested()
 }
 
 /// An interrupt before the file was opened: nothing written, exit 130.
@@ -232,7 +232,7 @@ fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
         }
         None => None,
     };
-    let info = pdw_walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
+    let info = pdw::walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
     pdw::basin::check_section(&info, "grid")?;
     check_memory(
         grid.0,
@@ -309,7 +309,7 @@ fn slice_index(
             r.lo, r.hi
         )));
     }
-    let zs = pdw_limit::basin::linspace(r.lo, r.hi, nz);
+    let zs = pdw::limit::basin::linspace(r.lo, r.hi, nz);
     let k = (0..nz)
         .min_by(|&i, &j| (zs[i] - v).abs().total_cmp(&(zs[j] - v).abs()))
         .unwrap_or(0);
@@ -392,7 +392,7 @@ fn plan(a: &BasinArgs, p: &Parsed) -> anyhow::Result<Step<BasinPlan>> {
 }
 
 /// Every attractor reached from the grid's box, found up front from a fixed seed set
-/// (identical for every shard and thread count; see [`pdw_limit::attractors`]), with the
+/// (identical for every shard and thread count; see [`pdw::limit::attractors`]), with the
 /// number of seeds.
 fn discover(
     a: &BasinArgs,
@@ -557,7 +557,7 @@ struct Described {
     axes: (usize, usize),
     /// The section coordinate along z (3-D grids).
     z: Option<usize>,
-    slice: pdw_store::Slice,
+    slice: pdw::store::Slice,
 }
 
 /// The units, axes and slice of the run, as the file records them (before [`on_picture`]).
@@ -614,7 +614,7 @@ fn describe(
         "x": {"name": bx.x.range.name, "lo": bx.x.range.lo, "hi": bx.x.range.hi},
         "y": {"name": bx.y.range.name, "lo": bx.y.range.lo, "hi": bx.y.range.hi},
         "fixed_point": gait.map(|fp| serde_json::json!({
-            "integrator": super::integrator_json(&pdw_limit::gaits::default_integrator(pdw::basin::GAIT_NEWTON_TOL)),
+            "integrator": super::integrator_json(&pdw::limit::gaits::default_integrator(pdw::basin::GAIT_NEWTON_TOL)),
             "newton_tol": pdw::basin::GAIT_NEWTON_TOL,
             "residual": fp.residual,
             "section": fp.section,
@@ -633,12 +633,12 @@ fn describe(
     let iz = d.z;
     let units = basin_units(&d.sec_units, bx.x.index, bx.y.index, iz);
     let scales = if iz.is_some() {
-        pdw_store::provenance::basin_scales_3d()
+        pdw::store::provenance::basin_scales_3d()
     } else {
-        pdw_store::provenance::basin_scales()
+        pdw::store::provenance::basin_scales()
     };
     let coordinates = p.m.coordinates_json();
-    writer.annotate(&pdw_store::Annotations {
+    writer.annotate(&pdw::store::Annotations {
         provenance: Some(&prov),
         units: &units,
         slice: Some(&d.slice),
@@ -805,9 +805,9 @@ fn write_results(
     writer.finish(&metrics, &attractors)?;
     // The attractors exist now: their datasets get units too.
     let (ix, iy) = described.axes;
-    pdw_store::annotate(
+    pdw::store::annotate(
         &p.out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: None,
             units: &basin_units(&described.sec_units, ix, iy, described.z),
             slice: None,
@@ -882,26 +882,26 @@ fn near_slice(zs: &[f64], k: usize, g: f64) -> bool {
 }
 
 /// Slice `k` of a 3-D basin's (rows × nx) `outcome`, written into the file's `/slice`
-/// ([`pdw_store::provenance::write_slice_view`]), and its label for the picture's title
+/// ([`pdw::store::provenance::write_slice_view`]), and its label for the picture's title
 /// (`hip_rate = 0.3 rad/s`, `unit` the z coordinate's).
 pub(super) fn slice_view(
     path: &std::path::Path,
     h: &BasinHeader,
-    outcome: &pdw_store::ndarray::Array2<u8>,
+    outcome: &pdw::store::ndarray::Array2<u8>,
     k: usize,
     unit: &str,
-) -> anyhow::Result<(pdw_store::ndarray::Array2<u8>, String)> {
+) -> anyhow::Result<(pdw::store::ndarray::Array2<u8>, String)> {
     let z = h.z.as_ref().expect("a 3-D grid");
     let ny = h.ny();
     let view = outcome
-        .slice(pdw_store::ndarray::s![k * ny..(k + 1) * ny, ..])
+        .slice(pdw::store::ndarray::s![k * ny..(k + 1) * ny, ..])
         .to_owned();
     let v = z.values[k];
-    pdw_store::provenance::write_slice_view(path, &z.name, k, v, view.view())?;
+    pdw::store::provenance::write_slice_view(path, &z.name, k, v, view.view())?;
     let label = format!(
         "{} = {} {unit} (slice {} of {})",
         z.name,
-        pdw_store::provenance::short(v),
+        pdw::store::provenance::short(v),
         k + 1,
         z.values.len()
     );
@@ -915,7 +915,7 @@ fn basin_slice(
     units: &[String],
     plan: &BasinPlan,
     gait: &[f64],
-) -> pdw_store::Slice {
+) -> pdw::store::Slice {
     let (ix, iy, base) = (plan.bx.x.index, plan.bx.y.index, &plan.base);
     let iz = plan.bx.z.as_ref().map(|z| z.index);
     let off_axes = || (0..names.len()).filter(move |&i| i != ix && i != iy && Some(i) != iz);
@@ -935,7 +935,7 @@ fn basin_slice(
         })
         .collect();
     let on = off_axes().all(|i| (base[i] - gait[i]).abs() <= 1e-12 * (1.0 + gait[i].abs()));
-    pdw_store::Slice {
+    pdw::store::Slice {
         x: names[ix].clone(),
         y: names[iy].clone(),
         fixed,
@@ -976,10 +976,10 @@ pub fn basin_title(
     model: &str,
     slope: f64,
     max_strides: u32,
-    slice: &pdw_store::Slice,
+    slice: &pdw::store::Slice,
     z: Option<&str>,
 ) -> String {
-    let slope = pdw_store::provenance::short(slope);
+    let slope = pdw::store::provenance::short(slope);
     if slice.fixed.is_empty() && z.is_none() {
         return format!("{model} walker basin, slope {slope} rad, {max_strides} strides");
     }
@@ -996,7 +996,7 @@ pub fn basin_title(
 }
 
 /// The header with units in the axis names, for the picture's axis labels.
-fn labelled(h: &pdw_store::BasinHeader, ux: &str, uy: &str) -> pdw_store::BasinHeader {
+fn labelled(h: &pdw::store::BasinHeader, ux: &str, uy: &str) -> pdw::store::BasinHeader {
     let mut h = h.clone();
     h.x_name = format!("{} [{ux}]", h.x_name);
     h.y_name = format!("{} [{uy}]", h.y_name);
@@ -1007,7 +1007,7 @@ fn labelled(h: &pdw_store::BasinHeader, ux: &str, uy: &str) -> pdw_store::BasinH
 /// `legend` (attractor codes named by it). The entropies are NaN ("not defined") when no box of
 /// the entropy's size fits the `nx × ny` grid.
 pub fn store_metrics(
-    m: &pdw_limit::basin::BasinMetrics,
+    m: &pdw::limit::basin::BasinMetrics,
     legend: &[(u8, String)],
     nx: usize,
     ny: usize,
@@ -1111,7 +1111,7 @@ fn terminate_self_and_wait(stopped: fn() -> bool) {
         libc::raise(libc::SIGTERM);
     }
     #[cfg(not(unix))]
-    pdw_hybrid::interrupt::request();
+    pdw::hybrid::interrupt::request();
     let t0 = Instant::now();
     while !stopped() && t0.elapsed() < Duration::from_secs(30) {
         std::thread::sleep(Duration::from_millis(1));

@@ -19,10 +19,10 @@ use crate::args::{self, InputError, Sweep};
 use crate::cli::BasinArgs;
 use pdw::basin::BasinRequest;
 use pdw::basin_over::{AtValue, OverPlan};
-use pdw_limit::basin::{BasinOptions, Outcome};
-use pdw_limit::{Attractor, AttractorKind, OrbitValidity};
-use pdw_store::{StabilityAttractor, StabilityData};
-use pdw_walkers::ModelInfo;
+use pdw::limit::basin::{BasinOptions, Outcome};
+use pdw::limit::{Attractor, AttractorKind, OrbitValidity};
+use pdw::store::{StabilityAttractor, StabilityData};
+use pdw::walkers::ModelInfo;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -34,7 +34,7 @@ pub const DEFAULT_OVER_GRID: &str = "41x41";
 struct Parsed {
     over: Sweep,
     grid: (usize, usize),
-    integrator: pdw_hybrid::Options,
+    integrator: pdw::hybrid::Options,
     /// The model as named (its section coordinates name the box's axes).
     info: ModelInfo,
     /// Model parameters set on the command line (not the one varied).
@@ -91,7 +91,7 @@ fn parse(a: &BasinArgs) -> anyhow::Result<Parsed> {
     let over = args::parse_range_count(a.over.as_deref().unwrap_or_default(), "--over")?;
     let grid = args::parse_grid(a.grid.as_deref().unwrap_or(DEFAULT_OVER_GRID))?;
     let integrator = super::integrator(&a.integrator, BasinOptions::default_integrator())?;
-    let info = pdw_walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
+    let info = pdw::walkers::model_info(&a.model.model).map_err(|e| InputError(e.to_string()))?;
     pdw::basin::check_section(&info, "box")?;
     check_memory(
         grid.0,
@@ -274,13 +274,13 @@ fn write(
         elapsed_s: t0.elapsed().as_secs_f64(),
     };
     // the claim refused an existing file without --force; its placeholder is replaced
-    pdw_store::write_stability(&p.out, true, &data)?;
+    pdw::store::write_stability(&p.out, true, &data)?;
     annotate(&p.out, options, &unit, &plan.models[0].coordinates_json())?;
     let title = format!(
         "{} walker: basin stability, {}x{} box {} x {}",
         p.info.name, bx.nx, bx.ny, x.name, y.name
     );
-    pdw_store::plot_basin_stability(&p.png, &data, &format!("{} [{unit}]", over.name), &title)?;
+    pdw::store::plot_basin_stability(&p.png, &data, &format!("{} [{unit}]", over.name), &title)?;
     Ok(Written {
         data,
         box_json,
@@ -305,9 +305,9 @@ fn annotate(
             _ => None,
         }
     };
-    pdw_store::annotate(
+    pdw::store::annotate(
         out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: Some(&prov),
             units: &units,
             slice: None,

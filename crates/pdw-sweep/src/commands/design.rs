@@ -1,6 +1,6 @@
 //! `pdw-sweep design`: search free design parameters of a walker for the most robust (or most
 //! stable) passive gait that is physically valid along the whole stride
-//! ([`pdw_limit::design`]); every evaluated design in an HDF5 file that a rerun continues.
+//! ([`pdw::limit::design`]); every evaluated design in an HDF5 file that a rerun continues.
 //!
 //! [`run`] reads as the command does: the free parameters checked against the model
 //! ([`parse`]; the other values are checked by clap), the outputs claimed, the plan made
@@ -14,9 +14,9 @@ use crate::args::InputError;
 use crate::cli::DesignArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::design::DesignPlan;
-use pdw_limit::basin::BasinOptions;
-use pdw_limit::design::{status, DesignEval, DesignOptions, DesignSpace};
-use pdw_store::{read_design, read_design_commands, MarkerShape, Markers};
+use pdw::limit::basin::BasinOptions;
+use pdw::limit::design::{status, DesignEval, DesignOptions, DesignSpace};
+use pdw::store::{read_design, read_design_commands, MarkerShape, Markers};
 use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
@@ -244,7 +244,7 @@ fn plot(png: &Path, base: &BuiltModel, plan: &DesignPlan, s: &Searched) -> anyho
         })
         .filter(|m| !m.points.is_empty())
         .collect();
-    pdw_store::plot_lines_marked(
+    pdw::store::plot_lines_marked(
         png,
         &format!(
             "design search, {} ({}): cost < 1 feasible; 1-4.5 invalid; 5-9 unstable; 9-10 no gait",
@@ -381,7 +381,7 @@ fn settings_differ(out: &Path, stored: &str, now: &str) -> String {
             .unwrap_or("")
             .to_string()
     };
-    if let Some((f, e)) = pdw_store::first_line_difference(&model(&s), &model(&n)) {
+    if let Some((f, e)) = pdw::store::first_line_difference(&model(&s), &model(&n)) {
         let shown = |t: String| {
             if t.is_empty() {
                 "(absent)".to_string()

@@ -6,9 +6,9 @@ use super::build_model;
 use crate::args::InputError;
 use crate::cli::DisturbArgs;
 use pdw::disturb::{self, Response, RETURN_TOL};
+use pdw::limit::terrain::TerrainKind;
 use pdw::output::number;
 use pdw::BuiltModel;
-use pdw_limit::terrain::TerrainKind;
 use std::process::ExitCode;
 
 /// The most steps `--steps` accepts.
@@ -99,7 +99,7 @@ fn largest(
     a: &DisturbArgs,
     m: &BuiltModel,
     kind: TerrainKind,
-    integrator: pdw_hybrid::Options,
+    integrator: pdw::hybrid::Options,
     unit: &str,
 ) -> anyhow::Result<()> {
     let (names, limit) = match kind {

@@ -25,7 +25,7 @@ pub fn run(a: &ExploreArgs) -> anyhow::Result<ExitCode> {
             }
             std::process::exit(0);
         }
-        pdw_hybrid::interrupt::request();
+        pdw::hybrid::interrupt::request();
     });
     pdw_explore::check_save_dir(&a.save_dir).map_err(crate::args::InputError)?;
     let addr = a.bind.unwrap_or(IpAddr::V4(Ipv4Addr::LOCALHOST));

@@ -4,18 +4,18 @@
 use super::{build_model, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::FixedpointArgs;
-use pdw_limit::scan::Scan;
-use pdw_limit::{FixedPoint, LimitError, PeriodicOrbit};
+use pdw::limit::scan::Scan;
+use pdw::limit::{FixedPoint, LimitError, PeriodicOrbit};
 use std::process::ExitCode;
 
-pub use pdw_limit::gaits::{Found, FoundOrbit};
-use pdw_limit::gsn::{GsnError, Indicator};
-use pdw_limit::Validity;
+pub use pdw::limit::gaits::{Found, FoundOrbit};
+use pdw::limit::gsn::{GsnError, Indicator};
+use pdw::limit::Validity;
 
 pub use pdw::gaits::search_with;
 
 /// Constraint loads, swing-foot clearance and impacts along one step of a gait, located on
-/// the dense solution ([`Validity::along_step`], module docs of [`pdw_limit::validity`]).
+/// the dense solution ([`Validity::along_step`], module docs of [`pdw::limit::validity`]).
 pub fn validity(m: &BuiltModel, fp: &FixedPoint) -> Option<Validity> {
     Validity::along_step(m.walker.as_ref(), &fp.state)
 }
@@ -30,7 +30,7 @@ fn num(x: f64) -> serde_json::Value {
 }
 
 /// One margin of [`Validity::margins`] as JSON.
-fn margin_json(m: &pdw_limit::Margin) -> serde_json::Value {
+fn margin_json(m: &pdw::limit::Margin) -> serde_json::Value {
     serde_json::json!({
         "name": m.name,
         "raw": num(m.raw),
@@ -42,10 +42,10 @@ fn margin_json(m: &pdw_limit::Margin) -> serde_json::Value {
 }
 
 /// The name of a clearance rule in outputs.
-pub fn clearance_rule_name(r: pdw_walkers::ClearanceRule) -> &'static str {
+pub fn clearance_rule_name(r: pdw::walkers::ClearanceRule) -> &'static str {
     match r {
-        pdw_walkers::ClearanceRule::WholeSwing => "whole_swing",
-        pdw_walkers::ClearanceRule::AfterMidStance => "after_mid_stance",
+        pdw::walkers::ClearanceRule::WholeSwing => "whole_swing",
+        pdw::walkers::ClearanceRule::AfterMidStance => "after_mid_stance",
     }
 }
 
@@ -117,7 +117,8 @@ pub fn run(a: &FixedpointArgs) -> anyhow::Result<ExitCode> {
     if a.follow.is_some() || a.free.is_some() || a.map_grid.is_some() {
         return super::follow::run(a);
     }
-    let integrator = super::integrator(&a.integrator, pdw_limit::gaits::default_integrator(a.tol))?;
+    let integrator =
+        super::integrator(&a.integrator, pdw::limit::gaits::default_integrator(a.tol))?;
     if a.sweep.is_some() {
         if a.period != 1 {
             return Err(InputError(format!(
@@ -156,7 +157,7 @@ fn run_period_one(
     a: &FixedpointArgs,
     m: &BuiltModel,
     guesses: &[(String, Vec<f64>)],
-    integrator: &pdw_hybrid::Options,
+    integrator: &pdw::hybrid::Options,
 ) -> anyhow::Result<ExitCode> {
     let indicators = a
         .gsn
@@ -224,7 +225,7 @@ fn run_period_one(
     Ok(ExitCode::SUCCESS)
 }
 
-type GsnResult = Result<(pdw_limit::gsn::Linearisation, pdw_limit::gsn::Gsn), GsnError>;
+type GsnResult = Result<(pdw::limit::gsn::Linearisation, pdw::limit::gsn::Gsn), GsnError>;
 
 /// `--gsn`: the gait sensitivity norm of a gait ([`pdw::gsn`]); an unstable gait's is the
 /// unstable-gait error (reported, not a failure of the run), any other failure is an error.
@@ -260,7 +261,7 @@ fn run_search(
     a: &FixedpointArgs,
     m: &BuiltModel,
     starts: usize,
-    integrator: &pdw_hybrid::Options,
+    integrator: &pdw::hybrid::Options,
 ) -> anyhow::Result<ExitCode> {
     let b = pdw::gaits::scan_box(m, &a.search_box, "--search-box")?;
     let pool = rayon::ThreadPoolBuilder::new()
@@ -309,7 +310,7 @@ fn run_search(
             gait_adjective(&a.gait),
             m.info.name,
             m.slope(),
-            pdw_limit::scan::fates_text(sc.starts, &sc.fates()),
+            pdw::limit::scan::fates_text(sc.starts, &sc.fates()),
             advice(m)
         );
         return Ok(ExitCode::from(2));
@@ -327,7 +328,7 @@ fn near_text(n: usize) -> String {
 }
 
 /// The first line of a gait report: model, slope (rad and degrees), integrator.
-fn print_model_line(m: &BuiltModel, integrator: &pdw_hybrid::Options) {
+fn print_model_line(m: &BuiltModel, integrator: &pdw::hybrid::Options) {
     crate::outln!(
         "model {}  slope {} rad ({:.4} deg)  integrator {}",
         m.info.name,
@@ -338,7 +339,7 @@ fn print_model_line(m: &BuiltModel, integrator: &pdw_hybrid::Options) {
 }
 
 /// The scan's first lines: the model, the box and what became of the starts.
-fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options) {
+fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw::hybrid::Options) {
     print_model_line(m, integrator);
     let b = &sc.scan_box;
     let ranges: Vec<String> = m
@@ -360,12 +361,12 @@ fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options
         sc.orbits.len(),
         sc.fell,
         sc.unsettled,
-        pdw_limit::scan::MAX_PERIOD,
+        pdw::limit::scan::MAX_PERIOD,
         sc.near_gait_starts
     );
     crate::outln!(
         "  by fate: {}",
-        pdw_limit::scan::fates_text(sc.starts, &sc.fates())
+        pdw::limit::scan::fates_text(sc.starts, &sc.fates())
     );
 }
 
@@ -374,9 +375,9 @@ fn print_scan_header(m: &BuiltModel, sc: &Scan, integrator: &pdw_hybrid::Options
 fn scan_json(
     m: &BuiltModel,
     sc: &Scan,
-    gaits: &[&pdw_limit::scan::ScanGait],
-    orbits: &[&pdw_limit::scan::ScanOrbit],
-    integrator: &pdw_hybrid::Options,
+    gaits: &[&pdw::limit::scan::ScanGait],
+    orbits: &[&pdw::limit::scan::ScanOrbit],
+    integrator: &pdw::hybrid::Options,
 ) -> serde_json::Value {
     let found: Vec<Found> = gaits
         .iter()
@@ -420,7 +421,7 @@ fn scan_json(
         "fates": sc.fates().iter().map(|(f, n)| serde_json::json!({"fate": f, "starts": n}))
             .collect::<Vec<_>>(),
         "near_gait_starts": sc.near_gait_starts,
-        "near_gait_offset": pdw_limit::scan::NEAR_GAIT_OFFSET,
+        "near_gait_offset": pdw::limit::scan::NEAR_GAIT_OFFSET,
     });
     j
 }
@@ -449,13 +450,13 @@ fn warn_inaccurate(
     a: &FixedpointArgs,
     m: &BuiltModel,
     found: &[Found],
-    integrator: &pdw_hybrid::Options,
+    integrator: &pdw::hybrid::Options,
 ) -> anyhow::Result<()> {
     let o = &a.integrator;
     if !(o.integrator.is_some() || o.rtol.is_some() || o.atol.is_some() || o.rk4_step.is_some()) {
         return Ok(());
     }
-    let accurate = pdw_limit::gaits::default_integrator(a.tol);
+    let accurate = pdw::limit::gaits::default_integrator(a.tol);
     for f in found {
         let s = &f.fp.section;
         let scale = s.iter().fold(0.0, |n: f64, x| n.max(x.abs())).min(1.0);
@@ -482,7 +483,7 @@ fn warn_inaccurate(
 fn gaits_json(
     m: &BuiltModel,
     selected: &[&Found],
-    integrator: &pdw_hybrid::Options,
+    integrator: &pdw::hybrid::Options,
 ) -> serde_json::Value {
     let fps: Vec<serde_json::Value> = selected
         .iter()
@@ -698,10 +699,10 @@ fn print_validity(m: &BuiltModel, v: &Validity) {
         }
         if v.scuff_depth > 0.0 {
             let name = match rule {
-                pdw_walkers::ClearanceRule::AfterMidStance => {
+                pdw::walkers::ClearanceRule::AfterMidStance => {
                     "mid-stance scuff (ignored by the convention, Garcia et al. 1998)"
                 }
-                pdw_walkers::ClearanceRule::WholeSwing => "below the slope",
+                pdw::walkers::ClearanceRule::WholeSwing => "below the slope",
             };
             line += &format!(", {name}: depth {:.6} {lu}", v.scuff_depth);
         }
@@ -714,9 +715,9 @@ pub fn report_failure(label: &str, guess: &[f64], e: &LimitError) {
     eprintln!("  guess '{label}' {guess:?}: {e}");
 }
 
-/// `fixedpoint --period K` with K > 1: period-K orbits ([`pdw_limit::gaits::search_periodic`]).
+/// `fixedpoint --period K` with K > 1: period-K orbits ([`pdw::limit::gaits::search_periodic`]).
 /// `section`, `state` refer to the orbit's first point (its smallest, see
-/// [`pdw_limit::periodic::canonical_start`]), `period` to the K strides together, `multipliers`
+/// [`pdw::limit::periodic::canonical_start`]), `period` to the K strides together, `multipliers`
 /// to the K-step map; `orbit` lists the K section points in stride order.
 fn run_period_k(
     a: &FixedpointArgs,
@@ -724,7 +725,7 @@ fn run_period_k(
     guesses: &[(String, Vec<f64>)],
 ) -> anyhow::Result<ExitCode> {
     let k = a.period;
-    let (found, failed) = pdw_limit::gaits::search_periodic(m.walker.as_ref(), guesses, k, a.tol)?;
+    let (found, failed) = pdw::limit::gaits::search_periodic(m.walker.as_ref(), guesses, k, a.tol)?;
     let selected: Vec<&FoundOrbit> = found
         .iter()
         .filter(|f| wanted(&a.gait, f.orbit.stable))

@@ -1,6 +1,6 @@
 //! `pdw-sweep fixedpoint --follow pd|fold --sweep NAME=A:B:N --free NAME[=LO:HI]`: the curve of
 //! period doublings or folds of the period-one gait in two parameters
-//! ([`pdw_limit::codim2`]; the steps are the library's, [`pdw::follow`]).
+//! ([`pdw::limit::codim2`]; the steps are the library's, [`pdw::follow`]).
 //!
 //! [`run`] reads as the command does: the flags checked ([`parse`]), the plan made from the
 //! model's own values ([`plan`]), the outputs claimed, the corners, integrator and guess checked
@@ -12,12 +12,12 @@ use super::BuiltModel;
 use crate::args::{self, InputError, Sweep};
 use crate::cli::FixedpointArgs;
 use pdw::follow::{kind_long, FollowFlags, FollowPlan, Free, GaitChoice, StartSearch};
-use pdw_hybrid::Options;
-use pdw_limit::{
+use pdw::hybrid::Options;
+use pdw::limit::{
     Bifurcation, Codim2Kind, Codim2Options, ContinuationOptions, Curve, CurveEnd, Region,
     RegionOptions,
 };
-use pdw_store::{CurveData, RegionMap};
+use pdw::store::{CurveData, RegionMap};
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -300,7 +300,7 @@ fn compute_map(
 fn write(a: &FixedpointArgs, out: &Path, p: &Planned, c: &Computed) -> anyhow::Result<()> {
     let (plan, m) = (&p.plan, &p.m_a);
     let data = curve_data(m, &plan.step.name, &plan.free, &c.curve, c.map.clone());
-    pdw_store::write_curve(out, true, &data)?;
+    pdw::store::write_curve(out, true, &data)?;
     annotate(
         out,
         m,
@@ -312,7 +312,7 @@ fn write(a: &FixedpointArgs, out: &Path, p: &Planned, c: &Computed) -> anyhow::R
     )?;
     if let Some(png) = &a.png {
         let label = |n: &str| format!("{n} [{}]", super::param_unit(m, n));
-        pdw_store::plot_curve(
+        pdw::store::plot_curve(
             png,
             &data,
             &label(&plan.step.name),
@@ -560,9 +560,9 @@ fn annotate(
             _ => return None,
         })
     };
-    pdw_store::annotate(
+    pdw::store::annotate(
         out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: Some(&prov),
             units: &units,
             slice: None,

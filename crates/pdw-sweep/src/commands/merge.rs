@@ -1,11 +1,11 @@
 //! `pdw-sweep merge`: join the shard files of one basin run into one file (a copy; see
-//! `pdw_store::shard` for why not a virtual dataset), with whole-grid metrics and the PNG.
+//! `pdw::store::shard` for why not a virtual dataset), with whole-grid metrics and the PNG.
 
 use super::basin::store_metrics;
 use super::output::{Format, Input, Output};
 use crate::cli::MergeArgs;
-use pdw_limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
-use pdw_store::{merge, plot_basin_attractors, read_basin, BasinHeader, BasinMetrics};
+use pdw::limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
+use pdw::store::{merge, plot_basin_attractors, read_basin, BasinHeader, BasinMetrics};
 use std::process::ExitCode;
 
 pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
@@ -66,8 +66,8 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
     }));
     // the shards' resolved walker spec (one model: their headers agree), so the merged file
     // rebuilds a user's own walker as each shard does
-    prov.model_spec = pdw_store::provenance::read_model_spec(&a.shards[0])?.unwrap_or_default();
-    pdw_store::provenance::annotate_merged(&a.out, &inputs, &prov)?;
+    prov.model_spec = pdw::store::provenance::read_model_spec(&a.shards[0])?.unwrap_or_default();
+    pdw::store::provenance::annotate_merged(&a.out, &inputs, &prov)?;
     draw(&a.out, &png, &header)?;
     let nz = header
         .z
@@ -87,7 +87,7 @@ pub fn run(a: &MergeArgs) -> anyhow::Result<ExitCode> {
 /// The merged file's picture (a 3-D grid's: its middle z-slice, recorded in `/slice`).
 fn draw(out: &std::path::Path, png: &std::path::Path, header: &BasinHeader) -> anyhow::Result<()> {
     let data = read_basin(out)?;
-    let slice = pdw_store::provenance::read_slice(out)?;
+    let slice = pdw::store::provenance::read_slice(out)?;
     // Orbit points are drawn only where the slice passes through the gait (files without
     // /slice: as before): off the slice their projection would mislead.
     let on_slice = slice.as_ref().is_none_or(|s| s.on_fixed_point);
@@ -97,13 +97,13 @@ fn draw(out: &std::path::Path, png: &std::path::Path, header: &BasinHeader) -> a
         (&mut labelled.x_name, "grid/x"),
         (&mut labelled.y_name, "grid/y"),
     ] {
-        if let Some(u) = pdw_store::provenance::read_units(out, ds)? {
+        if let Some(u) = pdw::store::provenance::read_units(out, ds)? {
             *name = format!("{name} [{u}]");
         }
     }
     let (view, label) = match &header.z {
         Some(z) => {
-            let unit = pdw_store::provenance::read_units(out, "grid/z")?.unwrap_or_default();
+            let unit = pdw::store::provenance::read_units(out, "grid/z")?.unwrap_or_default();
             let k = z.values.len() / 2;
             let (view, label) = super::basin::slice_view(out, header, &data.outcome, k, &unit)?;
             (view, Some(label))
@@ -135,8 +135,8 @@ fn draw(out: &std::path::Path, png: &std::path::Path, header: &BasinHeader) -> a
 /// differently by each: refuse to join them unless `--force`. Every instruction-set path of one
 /// build gives the same bits (tested), so differing `simd_path`s alone are accepted.
 fn check_same_numerics(shards: &[&std::path::Path], force: bool) -> anyhow::Result<()> {
-    let provs = pdw_store::provenance::shard_provenance(shards)?;
-    let key = |p: &Option<pdw_store::Provenance>| {
+    let provs = pdw::store::provenance::shard_provenance(shards)?;
+    let key = |p: &Option<pdw::store::Provenance>| {
         p.as_ref().map(|p| {
             (
                 p.crate_version.clone(),

@@ -7,9 +7,9 @@ use super::build_model;
 use crate::args::InputError;
 use crate::cli::MfptArgs;
 use indicatif::ProgressBar;
+use pdw::limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use pdw::mfpt::{self, MfptFlags, MfptPlan, StrideMap};
 use pdw::BuiltModel;
-use pdw_limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -56,7 +56,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
     mfpt::check_memory(&m, &plan, chain.as_ref(), &FLAGS, "--mesh")?;
     let claim = claim_out(a)?;
     if a.over.is_some() {
-        if kind != pdw_limit::terrain::TerrainKind::Slope {
+        if kind != pdw::limit::terrain::TerrainKind::Slope {
             return Err(InputError(
                 "--over: runs on random slopes only (its gait sensitivity norm is against the \
                  landing line's slope); use --terrain slope"
@@ -91,7 +91,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
         ),
         None => (Vec::new(), method_of(None, false)),
     };
-    if let Some(w) = agreement_warning(&chain, &est) {
+    if let Some(w) = mfpt::chain_agreement_warning(&chain, &est, "--nodes") {
         crate::outln!("{w}");
     }
     if let (Some(out), Some(_claim)) = (&a.out, claim) {
@@ -246,7 +246,7 @@ pub(super) const ESTIMATOR: &str =
 
 /// The file's `method`: the Monte Carlo, and the chain on its section where it ran; `legs`:
 /// the mid-stance section is the legs together (step heights on a model with legs,
-/// `pdw_limit::mid_stance::plane`).
+/// `pdw::limit::mid_stance::plane`).
 fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>, legs: bool) -> &'static str {
     use mfpt::{ChainMesh, ChainSection};
     match (chain, legs) {
@@ -269,7 +269,7 @@ fn method_of(chain: Option<(mfpt::ChainSection, mfpt::ChainMesh)>, legs: bool) -
 
 /// Whether the chain's mid-stance section is the legs together for `m` on `plan`'s terrain.
 fn legs_together(m: &BuiltModel, plan: &mfpt::MfptPlan) -> bool {
-    pdw_limit::mid_stance::legs_together_on(m.walker.as_ref(), plan.terrain.kind).is_some()
+    pdw::limit::mid_stance::legs_together_on(m.walker.as_ref(), plan.terrain.kind).is_some()
 }
 
 /// Writes the HDF5 file (with provenance and units) and the survival curve's PNG next to it.
@@ -283,7 +283,7 @@ fn write(
     (chain, method): (Vec<(String, f64)>, &str),
 ) -> anyhow::Result<()> {
     let t = &plan.terrain;
-    let data = pdw_store::MfptData {
+    let data = pdw::store::MfptData {
         command: super::command_line(),
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
@@ -316,13 +316,13 @@ fn write(
         chain,
     };
     // the claim refused an existing file without --force; its placeholder is replaced
-    pdw_store::write_mfpt(out, true, &data)?;
+    pdw::store::write_mfpt(out, true, &data)?;
     let prov = provenance(m, plan);
     let start_units = super::units_list(&super::section_units(m));
     let coordinates = m.coordinates_json();
-    pdw_store::annotate(
+    pdw::store::annotate(
         out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: Some(&prov),
             units: &|p: &str| match p {
                 "mfpt/survival" | "mfpt/failures" => Some("1".into()),
@@ -355,7 +355,7 @@ fn write(
             terrain_unit(m, t.kind)
         ),
     };
-    pdw_store::plot_lines(
+    pdw::store::plot_lines(
         &pdw::mfpt::output_files(out, false)[1].path,
         &title,
         "steps k",
@@ -369,7 +369,7 @@ fn write(
 }
 
 /// The run's options as every MFPT file's provenance records them.
-pub(super) fn provenance(m: &BuiltModel, plan: &MfptPlan) -> pdw_store::Provenance {
+pub(super) fn provenance(m: &BuiltModel, plan: &MfptPlan) -> pdw::store::Provenance {
     super::provenance(serde_json::json!({
         "stride_map": plan.stride_map.describe(m),
         "integrator": super::integrator_json(&plan.integrator),
@@ -485,7 +485,7 @@ pub(super) fn run_chain(
 /// One mesh's result (mesh `n`, built and solved in `secs`) printed (`how`: what else to say
 /// of it) and its numbers added to `out` with the suffix `label`.
 fn report_mesh(
-    r: &pdw_limit::markov::ChainResult,
+    r: &pdw::limit::markov::ChainResult,
     (n, secs): (usize, f64),
     label: &str,
     how: &str,
@@ -608,16 +608,9 @@ fn mesh_box_text(cb: &mfpt::ChainBox) -> String {
     )
 }
 
-/// [`mfpt::agreement_warning`] of the chain's numbers as the file keeps them (`mfpt_coarse`,
-/// `mfpt_fine`; none without a chain).
-pub(super) fn agreement_warning(chain: &[(String, f64)], est: &MfptEstimate) -> Option<String> {
-    let get = |k: &str| chain.iter().find(|(n, _)| n == k).map(|(_, v)| *v);
-    mfpt::agreement_warning(get("mfpt_coarse")?, get("mfpt_fine")?, est, "--nodes")
-}
-
 /// A warning when the chain's absorption is more than 1 % landings outside the mesh rather
 /// than falls: its MFPT is then the time to leave the box, an underestimate of the time to fall.
-pub(super) fn box_warning(r: &pdw_limit::markov::ChainResult) -> Option<String> {
+pub(super) fn box_warning(r: &pdw::limit::markov::ChainResult) -> Option<String> {
     let absorbed = r.out_of_mesh + r.fall_per_step;
     (absorbed > 0.0 && r.out_of_mesh > 0.01 * absorbed).then(|| {
         format!(
@@ -629,52 +622,4 @@ pub(super) fn box_warning(r: &pdw_limit::markov::ChainResult) -> Option<String> 
             r.fall_per_step
         )
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::agreement_warning;
-    use pdw_limit::terrain::MfptEstimate;
-
-    fn est(mean: f64, se: f64, censored: usize) -> MfptEstimate {
-        MfptEstimate {
-            walkers: 4000,
-            falls: 4000 - censored,
-            censored,
-            total_steps: 42_906,
-            mfpt: mean,
-            stderr: se,
-            restricted_mean: mean,
-            restricted_stderr: se,
-            survival: Vec::new(),
-            failures: Vec::new(),
-        }
-    }
-
-    fn chain(coarse: f64, fine: f64) -> Vec<(String, f64)> {
-        vec![
-            ("mfpt_coarse".to_string(), coarse),
-            ("mfpt_fine".to_string(), fine),
-        ]
-    }
-
-    /// The simplest walker on step heights (docs/cli.md): 11.2061 / 11.2818 against
-    /// 10.7265 ± 0.1122 is 4.9 standard errors, the refinement 0.08 — warned; within 3 standard
-    /// errors plus the refinement, with censored walkers, or without a chain — silent.
-    #[test]
-    fn the_chain_is_flagged_where_it_and_the_walkers_disagree_beyond_its_refinement() {
-        let w = agreement_warning(&chain(11.2061, 11.2818), &est(10.7265, 0.1122, 0)).unwrap();
-        assert!(
-            w.starts_with("WARNING") && w.contains("4.9 standard errors"),
-            "{w}"
-        );
-        assert!(w.contains("--nodes"), "{w}");
-        // within 3 standard errors
-        assert!(agreement_warning(&chain(11.2, 11.05), &est(10.7265, 0.1122, 0)).is_none());
-        // beyond them, but the refinement moved the chain as much
-        assert!(agreement_warning(&chain(12.2, 11.28), &est(10.7265, 0.1122, 0)).is_none());
-        // censored walkers: the restricted mean is not the MFPT
-        assert!(agreement_warning(&chain(11.2, 11.28), &est(10.7265, 0.1122, 3)).is_none());
-        assert!(agreement_warning(&[], &est(10.7265, 0.1122, 0)).is_none());
-    }
 }

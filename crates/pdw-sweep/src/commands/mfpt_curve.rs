@@ -7,9 +7,9 @@ use super::basin::progress_bar;
 use super::mfpt::{chain_plan, run_chain, ESTIMATOR};
 use super::output::Claim;
 use crate::cli::MfptArgs;
+use pdw::limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use pdw::mfpt::{self, MfptPlan};
 use pdw::BuiltModel;
-use pdw_limit::terrain::{MfptEstimate, SlopeTerrain, TerrainKind};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -137,7 +137,7 @@ fn table(m: &BuiltModel, plan: &MfptPlan, section: &[f64], rows: &[Row], secs: f
     crate::outln!("{secs:.1} s");
 }
 
-/// The HDF5 file ([`pdw_store::MfptCurveData`], with provenance) and its PNG: MFPT against σ
+/// The HDF5 file ([`pdw::store::MfptCurveData`], with provenance) and its PNG: MFPT against σ
 /// (degrees) on a logarithmic MFPT axis, the Monte Carlo and, where it ran, the chain.
 fn write(
     out: &std::path::Path,
@@ -149,7 +149,7 @@ fn write(
     let unit = super::mfpt::terrain_unit(m, plan.terrain.kind);
     let col = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
     let cnt = |f: &dyn Fn(&Row) -> u64| rows.iter().map(f).collect::<Vec<u64>>();
-    let data = pdw_store::MfptCurveData {
+    let data = pdw::store::MfptCurveData {
         command: super::command_line(),
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
@@ -173,12 +173,12 @@ fn write(
         total_steps: cnt(&|r| r.est.total_steps),
     };
     // the claim refused an existing file without --force; its placeholder is replaced
-    pdw_store::write_mfpt_curve(out, true, &data)?;
+    pdw::store::write_mfpt_curve(out, true, &data)?;
     let prov = super::mfpt::provenance(m, plan);
     let coordinates = m.coordinates_json();
-    pdw_store::annotate(
+    pdw::store::annotate(
         out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: Some(&prov),
             units: &|p: &str| match p {
                 "curve/sd" => Some(unit.clone()),
@@ -233,7 +233,7 @@ fn write(
             format!("step-down standard deviation ({unit})"),
         ),
     };
-    pdw_store::plot_lines(
+    pdw::store::plot_lines(
         &pdw::mfpt::output_files(out, false)[1].path,
         &title,
         &xlabel,

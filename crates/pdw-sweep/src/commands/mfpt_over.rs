@@ -7,10 +7,10 @@ use super::mfpt::{chain_plan, run_chain, ESTIMATOR};
 use super::output::Claim;
 use crate::args::InputError;
 use crate::cli::MfptArgs;
+use pdw::limit::gsn::Indicator;
 use pdw::mfpt::{MfptFlags, MfptPlan};
 use pdw::mfpt_over::{self, OverRow};
 use pdw::ModelChoice;
-use pdw_limit::gsn::Indicator;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -138,7 +138,7 @@ fn table(name: &str, plan: &MfptPlan, rows: &[OverRow], rho: f64, secs: f64) {
     crate::outln!("{secs:.1} s");
 }
 
-/// The HDF5 file ([`pdw_store::MfptOverData`], with provenance) and its two PNGs.
+/// The HDF5 file ([`pdw::store::MfptOverData`], with provenance) and its two PNGs.
 fn write(
     out: &std::path::Path,
     m: &pdw::BuiltModel,
@@ -149,17 +149,17 @@ fn write(
     rho: f64,
 ) -> anyhow::Result<()> {
     let col = |f: &dyn Fn(&OverRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
-    let est = |f: &dyn Fn(&pdw_limit::terrain::MfptEstimate) -> u64| {
+    let est = |f: &dyn Fn(&pdw::limit::terrain::MfptEstimate) -> u64| {
         rows.iter()
             .map(|r| r.est.as_ref().map_or(0, f))
             .collect::<Vec<u64>>()
     };
-    let estf = |f: &dyn Fn(&pdw_limit::terrain::MfptEstimate) -> f64| {
+    let estf = |f: &dyn Fn(&pdw::limit::terrain::MfptEstimate) -> f64| {
         rows.iter()
             .map(|r| r.est.as_ref().map_or(f64::NAN, f))
             .collect::<Vec<f64>>()
     };
-    let data = pdw_store::MfptOverData {
+    let data = pdw::store::MfptOverData {
         command: super::command_line(),
         model: m.info.name.clone(),
         params: m.params_json().to_string(),
@@ -187,7 +187,7 @@ fn write(
         censored: est(&|e| e.censored as u64),
         total_steps: est(&|e| e.total_steps),
     };
-    pdw_store::write_mfpt_over(out, true, &data)?;
+    pdw::store::write_mfpt_over(out, true, &data)?;
     annotate(out, m, plan)?;
     plots(out, m, name, &data)
 }
@@ -196,9 +196,9 @@ fn write(
 fn annotate(out: &std::path::Path, m: &pdw::BuiltModel, plan: &MfptPlan) -> anyhow::Result<()> {
     let prov = super::mfpt::provenance(m, plan);
     let coordinates = m.coordinates_json();
-    pdw_store::annotate(
+    pdw::store::annotate(
         out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: Some(&prov),
             units: &|p: &str| match p {
                 "over/mean" => Some("rad".into()),
@@ -225,7 +225,7 @@ fn plots(
     out: &std::path::Path,
     m: &pdw::BuiltModel,
     name: &str,
-    d: &pdw_store::MfptOverData,
+    d: &pdw::store::MfptOverData,
 ) -> anyhow::Result<()> {
     let pts = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| (*a, *b)).collect::<Vec<_>>();
     let mut lines = vec![("Monte Carlo".to_string(), pts(&d.values, &d.mfpt))];
@@ -241,7 +241,7 @@ fn plots(
         d.sd.to_degrees()
     );
     let files = pdw::mfpt::output_files(out, true);
-    pdw_store::plot_lines(
+    pdw::store::plot_lines(
         &files[1].path,
         &title,
         name,
@@ -254,13 +254,13 @@ fn plots(
         "{}: MFPT against GSN over {name}, Spearman ρ = {:.3}",
         m.info.name, d.spearman
     );
-    let marks = pdw_store::Markers {
+    let marks = pdw::store::Markers {
         name: format!("one per {name} value"),
         points: pts(&d.gsn, &d.mfpt),
         colour: [31, 119, 180],
-        shape: pdw_store::MarkerShape::Circle,
+        shape: pdw::store::MarkerShape::Circle,
     };
-    pdw_store::plot_lines_marked(
+    pdw::store::plot_lines_marked(
         &files[2].path,
         &title,
         "gait sensitivity norm (step time, step length per rad)",

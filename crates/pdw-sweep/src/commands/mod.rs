@@ -21,7 +21,7 @@ mod sweep;
 
 use crate::args::InputError;
 use crate::cli::{Cli, Command, IntegratorOpts, ModelOpts};
-use pdw_hybrid::Options;
+use pdw::hybrid::Options;
 use std::process::ExitCode;
 
 pub use pdw::model::{
@@ -94,7 +94,7 @@ pub fn command_line() -> String {
 /// This run's provenance: build (version, commit, profile), the SIMD path chosen at run time
 /// and the numeric contract all paths keep, host, command line and `options` (every numerical
 /// option of the run, a JSON object).
-pub fn provenance(options: serde_json::Value) -> pdw_store::Provenance {
+pub fn provenance(options: serde_json::Value) -> pdw::store::Provenance {
     let mut p = pdw::provenance(&command_line(), &options);
     // the resolved spec of a chain walker's `--model`, so that its files rebuild it anywhere
     p.model_spec = model_arg()

@@ -1,19 +1,19 @@
 //! `pdw-sweep models`: every model, its parameters (units, defaults) and coordinates.
 
 use crate::cli::ModelsArgs;
-use pdw_walkers::models;
+use pdw::walkers::models;
 use std::process::ExitCode;
 
 pub fn run(a: &ModelsArgs) -> anyhow::Result<ExitCode> {
     if let Some(name) = &a.spec {
-        return match pdw_walkers::preset_text(name) {
+        return match pdw::walkers::preset_text(name) {
             Some(text) => {
                 crate::outln!("{}", text.trim_end());
                 Ok(ExitCode::SUCCESS)
             }
             None => Err(crate::args::InputError(format!(
                 "`{name}` is not a chain-walker preset; presets with a spec file: {}",
-                pdw_walkers::PRESETS
+                pdw::walkers::PRESETS
                     .iter()
                     .map(|p| p.0)
                     .collect::<Vec<_>>()
@@ -27,7 +27,7 @@ pub fn run(a: &ModelsArgs) -> anyhow::Result<ExitCode> {
     let described: Vec<(Vec<String>, Vec<String>)> = all
         .iter()
         .map(|m| {
-            pdw_walkers::build(&m.name, &[])
+            pdw::walkers::build(&m.name, &[])
                 .map(|w| (w.coordinate_meanings(), w.mode_names()))
                 .unwrap_or_default()
         })

@@ -10,9 +10,9 @@ use super::fixedpoint::report_failure;
 use super::{build_model, BuiltModel};
 use crate::args::{self, InputError};
 use crate::cli::SimulateArgs;
+use pdw::limit::trajectory::{self, Trajectory, TrajectoryOptions};
 use pdw::simulate::{self, DtOut, GaitKind, SimulateFlags, Spacing, Start, StartError, Walk};
-use pdw_limit::trajectory::{self, Trajectory, TrajectoryOptions};
-use pdw_store::{TrajColumn, TrajEvents, TrajectoryData};
+use pdw::store::{TrajColumn, TrajEvents, TrajectoryData};
 use std::process::ExitCode;
 
 /// Output formats by file extension.
@@ -152,10 +152,10 @@ fn write(
     match format {
         Format::Hdf5 => {
             // the claim refused an existing file without --force; its placeholder is replaced
-            pdw_store::write_trajectory_h5(&a.out, true, &data)?;
-            pdw_store::annotate(
+            pdw::store::write_trajectory_h5(&a.out, true, &data)?;
+            pdw::store::annotate(
                 &a.out,
-                &pdw_store::Annotations {
+                &pdw::store::Annotations {
                     provenance: Some(&prov),
                     units: &|p: &str| match p {
                         "events/kind" | "events/step" | "events/mode_before"
@@ -180,7 +180,7 @@ fn write(
             ] {
                 data.attrs.push((k.to_string(), v.clone()));
             }
-            pdw_store::write_trajectory_csv(&a.out, true, &data)?
+            pdw::store::write_trajectory_csv(&a.out, true, &data)?
         }
     }
     Ok(())
@@ -212,7 +212,7 @@ fn summary(a: &SimulateArgs, m: &BuiltModel, walk: &Walk, tr: &Trajectory) {
 /// How a walk that stopped early ended, with the fall named.
 fn outcome_name(tr: &Trajectory) -> String {
     match tr.outcome {
-        pdw_limit::StrideOutcome::Fall { kind, .. } => format!("fell ({})", kind.name()),
+        pdw::limit::StrideOutcome::Fall { kind, .. } => format!("fell ({})", kind.name()),
         o => o.to_string(),
     }
 }

@@ -5,7 +5,7 @@
 //! A has no gait), both ways from a gait inside the range; plus a brute-force orbit diagram over
 //! the N parameter values; written to HDF5 and drawn as a PNG bifurcation diagram.
 //!
-//! The output holds exactly the N requested values per branch ([`pdw_limit::branch_at_params`]
+//! The output holds exactly the N requested values per branch ([`pdw::limit::branch_at_params`]
 //! corrects the branch at each), every point measured (all K orbit points, the K-stride
 //! period, step lengths, speed, validity along each stride, signed complex multipliers);
 //! `--json` prints the same data, `--csv FILE` writes it as one row per orbit point.
@@ -21,11 +21,11 @@ use super::BuiltModel;
 use crate::args::{self, InputError, Sweep};
 use crate::cli::FixedpointArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use pdw::sweep::{StartChoice, SweepPlan};
-use pdw_limit::{ContinuationOptions, GridBranch, MeasuredPoint, OrbitColumn, Validity};
-use pdw_store::{
+use pdw::limit::{ContinuationOptions, GridBranch, MeasuredPoint, OrbitColumn, Validity};
+use pdw::store::{
     plot_bifurcation, write_sweep, Bifurcation, OrbitDiagram, StrideValidity, SweepData,
 };
+use pdw::sweep::{StartChoice, SweepPlan};
 use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
@@ -57,7 +57,7 @@ fn store_validity(v: &Option<Validity>) -> StrideValidity {
         })
 }
 
-/// The binding criterion of `v` as a [`pdw_store::BINDING_CRITERIA`] code (every impact entry
+/// The binding criterion of `v` as a [`pdw::store::BINDING_CRITERIA`] code (every impact entry
 /// is `impact`).
 pub fn binding_code(v: &Validity) -> u8 {
     let name = v.binding().map_or("none", |m| {
@@ -67,20 +67,20 @@ pub fn binding_code(v: &Validity) -> u8 {
             m.name.as_str()
         }
     });
-    pdw_store::BINDING_CRITERIA
+    pdw::store::BINDING_CRITERIA
         .iter()
         .position(|n| *n == name)
         .unwrap_or(0) as u8
 }
 
 /// `"; N physically invalid (what fails)"` for a branch with points whose orbit needs a
-/// pulling contact, knee lock or impact, or scuffs ([`pdw_store::invalid_reasons`], as the PNG
+/// pulling contact, knee lock or impact, or scuffs ([`pdw::store::invalid_reasons`], as the PNG
 /// rings them); empty when every point is valid or unchecked.
-fn invalid_summary(b: &pdw_store::Branch) -> String {
+fn invalid_summary(b: &pdw::store::Branch) -> String {
     let mut reasons: Vec<&str> = Vec::new();
     let mut n = 0;
     for i in 0..b.parameter.len() {
-        if let Some(r) = pdw_store::invalid_reasons(b, i) {
+        if let Some(r) = pdw::store::invalid_reasons(b, i) {
             n += 1;
             for what in r {
                 if !reasons.contains(&what) {
@@ -96,9 +96,9 @@ fn invalid_summary(b: &pdw_store::Branch) -> String {
 }
 
 /// The branch in the file's form, from its measured points on the output grid.
-fn store_branch(b: &GridBranch) -> pdw_store::Branch {
+fn store_branch(b: &GridBranch) -> pdw::store::Branch {
     let pts = &b.points;
-    pdw_store::Branch {
+    pdw::store::Branch {
         name: b.name.clone(),
         period_strides: b.period_k as u32,
         parameter: pts.iter().map(|p| p.point.param).collect(),
@@ -183,7 +183,7 @@ impl Progress {
     }
 }
 
-impl pdw_limit::SweepProgress for Progress {
+impl pdw::limit::SweepProgress for Progress {
     fn stage(&self, msg: &str, len: u64, range: Option<(f64, f64)>) {
         Progress::stage(self, msg, len, range);
     }
@@ -202,7 +202,7 @@ impl pdw::sweep::Progress for Progress {
 struct Computed {
     /// The value of the swept parameter the start gait was at.
     from: f64,
-    sweep: pdw_limit::Sweep,
+    sweep: pdw::limit::Sweep,
     columns: Vec<OrbitColumn>,
 }
 
@@ -320,7 +320,7 @@ fn plan(
         || o.atol.is_some()
         || o.rk4_step.is_some()
         || o.controller.is_some())
-    .then(|| super::integrator(o, pdw_limit::gaits::default_integrator(a.tol)))
+    .then(|| super::integrator(o, pdw::limit::gaits::default_integrator(a.tol)))
     .transpose()?;
     if let Some(i) = &plan.integrator {
         pdw::integrator::check_integrator(&m0, i).map_err(|e| InputError(e.to_string()))?;
@@ -460,7 +460,7 @@ fn write(
     plot_bifurcation(f.png, &shown, 0)?;
     if let Some(c) = f.csv {
         let comments = csv_comments(m0, name);
-        pdw_store::write_sweep_csv(c, true, data, &comments)?;
+        pdw::store::write_sweep_csv(c, true, data, &comments)?;
     }
     Ok(())
 }
@@ -478,7 +478,7 @@ fn report(
     let (sw, threads) = (&plan.grid, a.threads.unwrap_or(2));
     let pu = super::param_unit(m0, &sw.name);
     if a.json {
-        let mut j = pdw_store::sweep_json(data);
+        let mut j = pdw::store::sweep_json(data);
         j["parameter_unit"] = serde_json::json!(pu);
         j["section_units"] = serde_json::json!(super::section_units(m0));
         j["time_unit"] = serde_json::json!(super::time_unit(m0));
@@ -510,7 +510,7 @@ fn report(
     for (b, (_, cb)) in data.branches.iter().zip(&c.sweep.continued) {
         // Down the cascade (period 4 and more) a branch may end inside the range: say why.
         let end = match &cb.end {
-            pdw_limit::BranchEnd::ParamBound { .. } => String::new(),
+            pdw::limit::BranchEnd::ParamBound { .. } => String::new(),
             e if cb.period_strides >= 4 => format!(" (the branch ended: {e})"),
             _ => String::new(),
         };
@@ -706,9 +706,9 @@ fn annotate_sweep(
             _ => None,
         }
     };
-    pdw_store::annotate(
+    pdw::store::annotate(
         out,
-        &pdw_store::Annotations {
+        &pdw::store::Annotations {
             provenance: Some(&prov),
             units: &units,
             slice: None,
