@@ -1,7 +1,7 @@
 //! Building a chain walker from its spec: the kernel chains (rooted at the stance foot, and
 //! floating for impacts and round feet), the knees' modes and holds, the state's names, and the
-//! walker on a tilted landing line (module docs, "Chain, frame, coordinates and signs", "Modes",
-//! "Landing on a tilted line").
+//! walker on a tilted landing line (chain walker docs, "Chain, frame, coordinates and signs",
+//! "Modes", "Landing on a tilted line").
 
 use super::{ChainWalker, FLOATING_BASE_MASS, MAX_SEGMENTS};
 use crate::error::WalkerError;
@@ -92,8 +92,8 @@ impl ChainWalker {
 
 /// Refuses a step down the walker cannot take: a height of the hip's reach or more — a leg
 /// length for point feet, the length from the hip to the foot's arc centre (`L − r`) for round
-/// feet (module docs, "Step down": the swing foot never reaches a foothold that far below, nor
-/// the trailing foot one that far above).
+/// feet (chain walker docs, "Step down": the swing foot never reaches a foothold that far below,
+/// nor the trailing foot one that far above).
 fn check_step_down(spec: &WalkerSpec, r: &Resolved) -> Result<(), WalkerError> {
     let h = r.step_down;
     if h == 0.0 {
@@ -149,7 +149,7 @@ fn check_segment_count(spec: &WalkerSpec, m: usize) -> Result<(), WalkerError> {
     Ok(())
 }
 
-/// The kernel chain's links (module docs, "Chain, frame, coordinates and signs"): the stance
+/// The kernel chain's links (chain walker docs, "Chain, frame, coordinates and signs"): the stance
 /// segments from the foot up, the top one carrying the hip mass at its upper end, then the swing
 /// segments from the hip down.
 fn chain_links(r: &Resolved) -> Vec<Link> {
@@ -224,7 +224,7 @@ fn build_chains(
     Ok((chain, floating))
 }
 
-/// The knees of a resolved spec as the walker's joints (module docs, "Modes", "Latches with
+/// The knees of a resolved spec as the walker's joints (chain walker docs, "Modes", "Latches with
 /// holding limits"): knee `i` (foot side first) is stance joint `i + 1` and swing joint
 /// `2m − 1 − i`.
 struct KneeLayout {

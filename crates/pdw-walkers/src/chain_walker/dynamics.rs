@@ -1,6 +1,6 @@
 //! The stance dynamics: joint accelerations with the mode's knees locked (pseudo joints, seed
 //! §3.4; the rolling base for round feet), the constraint forces and validity flags they give,
-//! and the batched flow over all lanes (module docs, "Modes", "Round feet").
+//! and the batched flow over all lanes (chain walker docs, "Modes", "Round feet").
 
 use super::{ChainWalker, FMAX, FREE, MAX_SEGMENTS};
 use crate::validity::{ConstraintForces, StepFlags};

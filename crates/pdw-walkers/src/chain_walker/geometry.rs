@@ -1,7 +1,7 @@
 //! The walker's geometry: the swing foot's position, height and rate (scalar and four lanes at a
 //! time), the foothold and landing lines the swing-foot guards measure against, the trailing
-//! leg's angle after a step down and the leg swap (module docs, "Step down", "Landing on a tilted
-//! line", "Resets").
+//! leg's angle after a step down and the leg swap (chain walker docs, "Step down", "Landing on a
+//! tilted line", "Resets").
 
 use super::{ChainWalker, MAX_SEGMENTS};
 use faer::MatRef;
@@ -18,7 +18,7 @@ impl ChainWalker {
         }
     }
 
-    /// Height of the swing arc's lowest point over the tilted landing line (module docs,
+    /// Height of the swing arc's lowest point over the tilted landing line (chain walker docs,
     /// "Landing on a tilted line"), from the swing arc centre `p` relative to the stance arc
     /// centre: `p·n + r (cos Δ − 1)`; its rate from `ṗ`.
     #[inline]
@@ -162,8 +162,8 @@ impl ChainWalker {
     }
 
     /// A swing-foot height over the stance foot's line as the height over the next foothold
-    /// `h` below, `z + h` (module docs, "Step down"); `z` itself on level ground (`h = 0`, bit
-    /// for bit).
+    /// `h` below, `z + h` (chain walker docs, "Step down"); `z` itself on level ground (`h = 0`,
+    /// bit for bit).
     #[inline(always)]
     pub(super) fn above_foothold(z: f64, h: f64) -> f64 {
         if h == 0.0 {
@@ -192,7 +192,7 @@ impl ChainWalker {
     /// The absolute angle `ψ` of the straight trailing leg just after a heel strike onto a
     /// foothold `h` below, when the new stance leg's angle is `q₀`: the trailing foot is `h`
     /// above the new stance foot, `ℓ cos q₀ − ℓ cos ψ = h`, behind it: `ψ = −acos(cos q₀ − h/ℓ)`
-    /// (module docs, "Step down"; the simplest walker's lift). `ℓ` is the length from the hip
+    /// (chain walker docs, "Step down"; the simplest walker's lift). `ℓ` is the length from the hip
     /// to the point that stays a fixed height above the ground: the foot (`ℓ = L`, the leg
     /// length) for point feet, the foot's arc centre (`ℓ = L − r`) for round feet, whose arc
     /// centres both stand `r` above their lines.

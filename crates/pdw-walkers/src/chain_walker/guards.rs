@@ -1,5 +1,5 @@
-//! The guards of each mode (module docs, "Guards", "Latches with holding limits"): their specs,
-//! the impact guards' twins, the latch guards' values and gradients, and admissibility.
+//! The guards of each mode (chain walker docs, "Guards", "Latches with holding limits"): their
+//! specs, the impact guards' twins, the latch guards' values and gradients, and admissibility.
 
 use super::{ChainWalker, DMAX, FREE, LOCKED, MAX_SEGMENTS};
 #[cfg(doc)]
@@ -61,7 +61,7 @@ pub(super) const GUARDS_LOCKED: [GuardSpec; 5] = [
     },
 ];
 
-/// The guard of a stance knee's latch letting go (module docs, "Latches"): its lock torque
+/// The guard of a stance knee's latch letting go (chain walker docs, "Latches"): its lock torque
 /// plus `latch_torque` falling through 0. The stance leg buckles: a fall.
 const STANCE_LATCH: GuardSpec = GuardSpec {
     name: "stance_latch_releases",
@@ -69,7 +69,7 @@ const STANCE_LATCH: GuardSpec = GuardSpec {
     kind: GuardKind::Terminal(FallKind::KneeBuckled),
 };
 
-/// The guard of the locked swing knee's latch letting go (module docs, "Latches"): reset to
+/// The guard of the locked swing knee's latch letting go (chain walker docs, "Latches"): reset to
 /// the mode with the swing knee free, the state unchanged.
 const SWING_LATCH: GuardSpec = GuardSpec {
     name: "swing_latch_releases",
@@ -107,12 +107,12 @@ pub(super) enum LatchGuard {
 }
 
 /// Index of the twin of guard 0 (the impact guard) in `mode`: the same function, a fall where the
-/// impact's complementarity problem releases a stance knee (see the module docs).
+/// impact's complementarity problem releases a stance knee (see the chain walker docs).
 const TWIN_FREE: usize = 5;
 const TWIN_LOCKED: usize = 4;
 
 impl ChainWalker {
-    /// The latch guard guard `k` of `mode` is, if any (module docs, "Latches"): the stance
+    /// The latch guard guard `k` of `mode` is, if any (chain walker docs, "Latches"): the stance
     /// latch in both modes, the swing latch in the locked mode, after the model's other guards.
     pub(super) fn latch_guard(&self, mode: usize, k: usize) -> Option<LatchGuard> {
         self.latch_torque?;

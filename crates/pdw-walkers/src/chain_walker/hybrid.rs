@@ -354,7 +354,7 @@ impl HybridSystem for ChainWalker {
     }
 }
 
-/// The chain walker at any step height (module docs, "Step down"): the swing-foot guards
+/// The chain walker at any step height (chain walker docs, "Step down"): the swing-foot guards
 /// measure the foot's height over the foothold's line and the heel strike's admissibility
 /// drops the level-ground factor; the impacts, the gradients (`h` is a constant) and the lift
 /// of the trailing leg (not part of a stride) do not see it.

@@ -1,5 +1,5 @@
-//! The impacts (module docs, "Impacts", "Resets"): the heel strike's kernel impact, the impact
-//! problem of each reset with its unilateral contacts and stops, whether it buckles a stance
+//! The impacts (chain walker docs, "Impacts", "Resets"): the heel strike's kernel impact, the
+//! impact problem of each reset with its unilateral contacts and stops, whether it buckles a stance
 //! knee or releases the trailing knee, and the impact report.
 
 use super::{ChainWalker, FMAX, FREE};
@@ -29,7 +29,7 @@ enum Role {
     NewStanceKnee(usize),
 }
 
-/// The impact problem of a reset (module docs, "Impacts"): the floating chain's configuration
+/// The impact problem of a reset (chain walker docs, "Impacts"): the floating chain's configuration
 /// and pre-impact rates, the constraints, the model's active set and which releases are a fall.
 pub(super) struct ImpactProblem {
     q: [f64; FMAX],
@@ -52,7 +52,7 @@ impl ImpactProblem {
 
     /// [`ImpactProblem::push`] of a knee: a stop (unilateral), an ideal latch (bilateral) or
     /// a latch with `latch_impulse` `limit` (it may release: unilateral for the solver, released
-    /// by the model where it would pull more than `limit`, module docs "Latches").
+    /// by the model where it would pull more than `limit`, chain walker docs "Latches").
     fn push_knee(
         &mut self,
         row: pdw_soa::ImpactRow,
@@ -117,7 +117,7 @@ impl ChainWalker {
     }
 
     /// The impact of the reset of `mode` (the knee strike in the free mode, the heel strike in
-    /// the locked mode) at the pre-impact state `x`, on the floating chain (module docs).
+    /// the locked mode) at the pre-impact state `x`, on the floating chain (chain walker docs).
     fn impact_problem(&self, mode: usize, x: &[f64]) -> ImpactProblem {
         use pdw_soa::ImpactRow::{BaseContact, Stop, TipContact};
         let (n, m, r) = (self.n, self.m, self.radius);
@@ -140,7 +140,7 @@ impl ChainWalker {
         p.qd[2..n + 2].copy_from_slice(&x[n..2 * n]);
         // the stance arc centre rolls: ẏ = −r q̇₀ (0 for point feet)
         p.qd[0] = -r * x[n];
-        // a stance knee flexes with q > 0, a swing knee with q < 0 (module docs)
+        // a stance knee flexes with q > 0, a swing knee with q < 0 (chain walker docs)
         let stop = |j: usize| Stop {
             joint: j + 2,
             sign: if j < m { 1.0 } else { -1.0 },
@@ -186,7 +186,7 @@ impl ChainWalker {
     /// the leg that is the stance leg after the impact. `false` where the problem has no
     /// solution (the reset then reports the failure).
     ///
-    /// A latch with a `latch_impulse` `L` (module docs, "Latches") buckles where, in the
+    /// A latch with a `latch_impulse` `L` (chain walker docs, "Latches") buckles where, in the
     /// model's impact map ([`ChainWalker::impact_map`]: every knee held but a released trailing
     /// knee), the stance knee's latch would pull more than it holds: impulse `< −L`.
     pub fn stance_knee_buckles(&self, mode: usize, x: &[f64]) -> bool {

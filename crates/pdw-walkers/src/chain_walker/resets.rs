@@ -1,4 +1,4 @@
-//! The resets and their exact Jacobians (module docs, "Resets", "Impacts"): the knee strike's
+//! The resets and their exact Jacobians (chain walker docs, "Resets", "Impacts"): the knee strike's
 //! plastic lock of the free knee, the heel strike's impact at the swing foot followed by the leg
 //! swap (seed eq. 3.29–3.32), and their derivatives by dual numbers through the kernel.
 

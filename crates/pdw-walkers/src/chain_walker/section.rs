@@ -1,5 +1,5 @@
-//! The Poincaré section just after heel strike (module docs, "Section"): its coordinates, lift
-//! and projection.
+//! The Poincaré section just after heel strike (chain walker docs, "Section"): its coordinates,
+//! lift and projection.
 
 use super::ChainWalker;
 use crate::spec::Resolved;
@@ -10,7 +10,7 @@ const SECTION_NAMES: [&str; 4] = ["stance", "stance_rate", "hip_rate", "swing_kn
 /// The section coordinates of a chain walker resolved as `r`: `(stance, stance_rate,
 /// hip_rate)`, and `swing_knee_rate` when the swing knee is free and held by a stop or by a
 /// latch with a `latch_impulse` while its leg is the stance leg — it may release at heel
-/// strike, and the new swing knee then starts flexing (module docs, "Section", "Latches").
+/// strike, and the new swing knee then starts flexing (chain walker docs, "Section", "Latches").
 pub fn section_names_of(r: &Resolved) -> &'static [&'static str] {
     let releases = r
         .free_swing

@@ -34,8 +34,9 @@ impl ChainWalker {
 }
 
 impl Walker for ChainWalker {
-    /// `q₀` is the one absolute angle (Garcia's θ, module docs "Coordinates"; gravity enters as
-    /// the base acceleration of slope γ, so the stance leg's world angle is `q₀ − γ`): it grows by
+    /// `q₀` is the one absolute angle (Garcia's θ, chain walker docs "Coordinates"; gravity enters
+    /// as the base acceleration of slope γ, so the stance leg's world angle is `q₀ − γ`): it grows
+    /// by
     /// `s' − s`. Round feet: `None` — the stance arc's contact point moves along the line, so a
     /// change of line is not a rotation about the contact point.
     fn terrain_frame(&self) -> Option<(usize, f64)> {
@@ -51,11 +52,11 @@ impl Walker for ChainWalker {
     fn legs_together(&self) -> Option<usize> {
         (self.masks.len() == 1).then_some(self.m)
     }
-    /// Point and round feet (module docs, "Step down").
+    /// Point and round feet (chain walker docs, "Step down").
     fn step_height(&self) -> Option<&dyn StepHeight> {
         Some(self as &dyn StepHeight)
     }
-    /// [`ChainWalker::with_tilt`] (module docs, "Landing on a tilted line").
+    /// [`ChainWalker::with_tilt`] (chain walker docs, "Landing on a tilted line").
     fn on_tilted_line(&self, delta: f64) -> Option<Result<Box<dyn Walker>, String>> {
         Some(
             self.with_tilt(delta)
@@ -333,7 +334,7 @@ impl Walker for ChainWalker {
     /// centres are `r` above their feet's lowest points (the stance one on the slope), so it is
     /// the height of the chain's tip over its root, as for point feet.
     /// With a step down (`h > 0`) the ground ahead of the stance foot is the foothold's line
-    /// `h` lower (module docs, "Step down"), so a swing foot ahead is measured from there.
+    /// `h` lower (chain walker docs, "Step down"), so a swing foot ahead is measured from there.
     fn swing_clearance(&self, _mode: usize, x: &[f64]) -> Option<f64> {
         let [y, z] = self.swing_foot(x);
         if self.tilt != 0.0 && self.swing_ahead(x) {
@@ -353,7 +354,7 @@ impl Walker for ChainWalker {
     }
 }
 
-/// What a chain walker's state component `name` measures (module docs, "Coordinates").
+/// What a chain walker's state component `name` measures (chain walker docs, "Coordinates").
 fn chain_coordinate(name: &str) -> String {
     if let Some(base) = name.strip_suffix("_rate") {
         return format!("rate of {base} (rad per time unit)");
