@@ -7,9 +7,11 @@ use ndarray::ArrayView2;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use plotters::coord::types::RangedCoordf64;
+
 use super::{
-    cell_extent, nearest, outcome_colours, pe, register_fonts, rgb, tick, BASIN_PNG_SIZE, FONT,
-    INVALID_RING,
+    cell_extent, draw_swatches, outcome_colours, paint_cells, pe, register_fonts, rgb, tick,
+    BASIN_PNG_SIZE, FONT, INVALID_RING,
 };
 use crate::basin::{Attractor, BasinHeader, NOT_COMPUTED};
 use crate::h5util::Staged;
@@ -163,25 +165,38 @@ fn plot_basin_marked(
     for (c, col) in &colours {
         lut[*c as usize] = *col;
     }
-    // One pixel at a time: each pixel shows the cell whose centre is nearest (works for grids
-    // coarser or finer than the picture).
-    {
-        let area = chart.plotting_area();
-        let (pxr, pyr) = area.get_pixel_range();
-        let (w, h) = ((pxr.end - pxr.start) as f64, (pyr.end - pyr.start) as f64);
-        let pix = area.strip_coord_spec();
-        let cols: Vec<usize> = (0..w as i32)
-            .map(|i| nearest(&header.x, x0 + (i as f64 + 0.5) / w * (x1 - x0)))
-            .collect();
-        for j in 0..h as i32 {
-            let row = nearest(&header.y, y1 - (j as f64 + 0.5) / h * (y1 - y0));
-            for (i, &col) in cols.iter().enumerate() {
-                let c = lut[outcome[[row, col]] as usize];
-                pix.draw_pixel((i as i32, j), &rgb(c))
-                    .map_err(|x| pe(path, x))?;
-            }
-        }
-    }
+    paint_cells(
+        chart.plotting_area(),
+        (&header.x, &header.y),
+        ((x0, x1), (y0, y1)),
+        |row, col| lut[outcome[[row, col]] as usize],
+        path,
+    )?;
+    draw_marks(&mut chart, marks, ((x0, x1), (y0, y1)), path)?;
+
+    let entries = outcome_entries(header, outcome, &colours, marks);
+    let legend_top = 60;
+    draw_swatches(&right, &entries, legend_top, 16, path)?;
+    draw_mark_legend(
+        &right,
+        marks,
+        legend_top + 30 * entries.len() as i32 + 10,
+        path,
+    )?;
+    let below = legend_top + 30 * (entries.len() + marks.len()) as i32 + 20;
+    draw_invalid_reasons(&right, marks, below, path)?;
+    root.present().map_err(|x| pe(path, x))?;
+    pic.commit(path)
+}
+
+/// The marks inside the box `((x0, x1), (y0, y1))` on the heatmap: a chaotic sample as small
+/// black dots, a periodic orbit's points as ringed crosses ([`mark_style`]).
+fn draw_marks<'a, 'b: 'a>(
+    chart: &mut ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    marks: &[Marks],
+    ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64)),
+    path: &Path,
+) -> Result<()> {
     let inside = |&(x, y): &(f64, f64)| {
         x.is_finite() && y.is_finite() && (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
     };
@@ -207,8 +222,18 @@ fn plot_basin_marked(
                 .map_err(|x| pe(path, x))?;
         }
     }
+    Ok(())
+}
 
-    // Legend: outcomes present, with their fraction of computed cells.
+/// The legend's outcome entries: each outcome present with its percentage of the cells
+/// (` (invalid)` for the basin of a physically invalid orbit), then the cells not computed, if
+/// any, in white.
+fn outcome_entries(
+    header: &BasinHeader,
+    outcome: ArrayView2<u8>,
+    colours: &[(u8, [u8; 3])],
+    marks: &[Marks],
+) -> Vec<(String, [u8; 3])> {
     let total = outcome.len().max(1) as f64;
     let mut counts = [0usize; 256];
     outcome.iter().for_each(|&c| counts[c as usize] += 1);
@@ -237,58 +262,41 @@ fn plot_basin_marked(
             [255, 255, 255],
         ));
     }
-    let legend_top = 60;
-    for (k, (label, col)) in entries.iter().enumerate() {
-        let y = legend_top + 30 * k as i32;
-        right
-            .draw(&Rectangle::new([(10, y), (32, y + 20)], rgb(*col).filled()))
-            .map_err(|x| pe(path, x))?;
-        right
-            .draw(&Rectangle::new(
-                [(10, y), (32, y + 20)],
-                BLACK.stroke_width(1),
-            ))
-            .map_err(|x| pe(path, x))?;
-        right
-            .draw(&Text::new(
-                label.clone(),
-                (40, y + 2),
-                (FONT, 16).into_font(),
-            ))
-            .map_err(|x| pe(path, x))?;
-    }
+    entries
+}
+
+/// One legend entry per mark, from `top` down (30 px apart): three dots for a chaotic sample,
+/// a ringed cross ([`mark_style`]) for an orbit, then its label.
+fn draw_mark_legend(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    marks: &[Marks],
+    top: i32,
+    path: &Path,
+) -> Result<()> {
     for (k, mk) in marks.iter().enumerate() {
-        let y = legend_top + 30 * (entries.len() + k) as i32 + 10;
+        let y = top + 30 * k as i32;
         if mk.cloud {
             for d in [-6, 0, 6] {
-                right
-                    .draw(&Circle::new((21 + d, y + 10 + d / 2), 2, BLACK.filled()))
+                area.draw(&Circle::new((21 + d, y + 10 + d / 2), 2, BLACK.filled()))
                     .map_err(|x| pe(path, x))?;
             }
         } else {
             let (fill, ring) = mark_style(mk);
-            right
-                .draw(&Circle::new((21, y + 10), 8, fill.filled()))
+            area.draw(&Circle::new((21, y + 10), 8, fill.filled()))
                 .map_err(|x| pe(path, x))?;
-            right
-                .draw(&Circle::new((21, y + 10), 8, ring.stroke_width(2)))
+            area.draw(&Circle::new((21, y + 10), 8, ring.stroke_width(2)))
                 .map_err(|x| pe(path, x))?;
-            right
-                .draw(&Cross::new((21, y + 10), 5, BLACK.stroke_width(2)))
+            area.draw(&Cross::new((21, y + 10), 5, BLACK.stroke_width(2)))
                 .map_err(|x| pe(path, x))?;
         }
-        right
-            .draw(&Text::new(
-                mk.label.clone(),
-                (40, y + 2),
-                (FONT, 16).into_font(),
-            ))
-            .map_err(|x| pe(path, x))?;
+        area.draw(&Text::new(
+            mk.label.clone(),
+            (40, y + 2),
+            (FONT, 16).into_font(),
+        ))
+        .map_err(|x| pe(path, x))?;
     }
-    let below = legend_top + 30 * (entries.len() + marks.len()) as i32 + 20;
-    draw_invalid_reasons(&right, marks, below, path)?;
-    root.present().map_err(|x| pe(path, x))?;
-    pic.commit(path)
+    Ok(())
 }
 
 /// Fill and ring of a periodic orbit's marks: its basin's colour (white without one) ringed in

@@ -12,10 +12,12 @@
 use std::path::Path;
 use std::sync::Once;
 
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
-use crate::StoreError;
+use crate::{Result, StoreError};
 
 mod animation;
 mod basin;
@@ -206,6 +208,61 @@ pub(crate) fn cell_extent(g: &[f64]) -> (f64, f64) {
     let half = if half > 0.0 { half } else { 0.5 };
     (lo - half, hi + half)
 }
+/// Paints the plotting area of a heatmap pixel by pixel: each pixel shows the grid cell whose
+/// centre is nearest (grids `xs` across, `ys` up, over the extent `((x0, x1), (y0, y1))`), in
+/// `colour(row, col)`; works for grids coarser or finer than the picture.
+pub(crate) fn paint_cells(
+    area: &DrawingArea<BitMapBackend<'_>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    (xs, ys): (&[f64], &[f64]),
+    ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64)),
+    colour: impl Fn(usize, usize) -> [u8; 3],
+    path: &Path,
+) -> Result<()> {
+    let (pxr, pyr) = area.get_pixel_range();
+    let (w, h) = ((pxr.end - pxr.start) as f64, (pyr.end - pyr.start) as f64);
+    let pix = area.strip_coord_spec();
+    let cols: Vec<usize> = (0..w as i32)
+        .map(|i| nearest(xs, x0 + (i as f64 + 0.5) / w * (x1 - x0)))
+        .collect();
+    for j in 0..h as i32 {
+        let row = nearest(ys, y1 - (j as f64 + 0.5) / h * (y1 - y0));
+        for (i, &col) in cols.iter().enumerate() {
+            let c = colour(row, col);
+            pix.draw_pixel((i as i32, j), &rgb(c))
+                .map_err(|x| pe(path, x))?;
+        }
+    }
+    Ok(())
+}
+
+/// A heatmap's legend of colour swatches: from `top` down, 30 px apart, a filled square with a
+/// black border and its label at `font_px`.
+pub(crate) fn draw_swatches(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    entries: &[(String, [u8; 3])],
+    top: i32,
+    font_px: u32,
+    path: &Path,
+) -> Result<()> {
+    for (k, (label, col)) in entries.iter().enumerate() {
+        let y = top + 30 * k as i32;
+        area.draw(&Rectangle::new([(10, y), (32, y + 20)], rgb(*col).filled()))
+            .map_err(|x| pe(path, x))?;
+        area.draw(&Rectangle::new(
+            [(10, y), (32, y + 20)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(|x| pe(path, x))?;
+        area.draw(&Text::new(
+            label.clone(),
+            (40, y + 2),
+            (FONT, font_px).into_font(),
+        ))
+        .map_err(|x| pe(path, x))?;
+    }
+    Ok(())
+}
+
 /// Ring colour of a physically invalid orbit's marks.
 const INVALID_RING: RGBColor = RGBColor(200, 0, 0);
 /// Colours of the branches of a bifurcation diagram and of the polylines of [`plot_lines`]
