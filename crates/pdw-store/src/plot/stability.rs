@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
@@ -11,6 +12,7 @@ use super::{
     STABILITY_PNG_SIZE,
 };
 use crate::h5util::Staged;
+use crate::stability::StabilityData;
 use crate::Result;
 
 /// Writes a two-panel PNG ([`STABILITY_PNG_SIZE`]) of basin stability against the parameter.
@@ -24,7 +26,7 @@ use crate::Result;
 /// value, its own scale), since basins are often a few per cent of the box.
 pub fn plot_basin_stability(
     path: impl AsRef<Path>,
-    data: &crate::stability::StabilityData,
+    data: &StabilityData,
     x_label: &str,
     title: &str,
 ) -> Result<()> {
@@ -40,7 +42,34 @@ pub fn plot_basin_stability(
         range_of(data.values.iter().copied()).unwrap_or((0.0, 1.0)),
         0.0,
     );
-    let mut chart = ChartBuilder::on(&panels[0])
+    // Stable colours by name: the basin picture's palette over the column names.
+    let legend: Vec<(u8, String)> = data
+        .columns
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (i as u8, n.clone()))
+        .collect();
+    let colours = outcome_colours(&legend);
+    let labels = (title, x_label);
+    draw_stacked_fractions(&panels[0], data, xr, labels, &colours, path)?;
+    draw_attractor_fractions(&panels[1], data, xr, x_label, &colours, path)?;
+    root.present().map_err(|x| pe(path, x))?;
+    pic.commit(path)
+}
+
+/// Top panel of [`plot_basin_stability`]: the columns' fractions stacked as filled bands in
+/// their colours (a physically invalid attractor's outlined, [`draw_invalid_band`]), the
+/// parameter values as ticks on the top edge, the legend upper left. `(title, x_label)` label
+/// the panel.
+fn draw_stacked_fractions(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    data: &StabilityData,
+    xr: (f64, f64),
+    (title, x_label): (&str, &str),
+    colours: &[(u8, [u8; 3])],
+    path: &Path,
+) -> Result<()> {
+    let mut chart = ChartBuilder::on(area)
         .caption(title, (FONT, 20))
         .margin(14)
         .x_label_area_size(50)
@@ -59,14 +88,6 @@ pub fn plot_basin_stability(
         .axis_desc_style((FONT, 17))
         .draw()
         .map_err(|x| pe(path, x))?;
-    // Stable colours by name: the basin picture's palette over the column names.
-    let legend: Vec<(u8, String)> = data
-        .columns
-        .iter()
-        .enumerate()
-        .map(|(i, n)| (i as u8, n.clone()))
-        .collect();
-    let colours = outcome_colours(&legend);
     let n = data.values.len();
     let mut lower = vec![0.0; n];
     for (c, name) in data.columns.iter().enumerate() {
@@ -105,7 +126,21 @@ pub fn plot_basin_stability(
         .position(SeriesLabelPosition::UpperLeft)
         .draw()
         .map_err(|x| pe(path, x))?;
-    // Bottom: the attractors' fractions on their own scale.
+    Ok(())
+}
+
+/// Bottom panel of [`plot_basin_stability`]: each attractor's fraction alone, a line with a
+/// marker per value, on a scale up to 1.15 times the largest (at most 1), the legend upper
+/// right.
+fn draw_attractor_fractions(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    data: &StabilityData,
+    xr: (f64, f64),
+    x_label: &str,
+    colours: &[(u8, [u8; 3])],
+    path: &Path,
+) -> Result<()> {
+    let n = data.values.len();
     let att: Vec<usize> = (0..data.columns.len())
         .filter(|&c| data.kinds[c] == "attractor")
         .collect();
@@ -118,7 +153,7 @@ pub fn plot_basin_stability(
     } else {
         1.0
     };
-    let mut bot = ChartBuilder::on(&panels[1])
+    let mut bot = ChartBuilder::on(area)
         .caption("basin stability of each attractor", (FONT, 18))
         .margin(14)
         .x_label_area_size(50)
@@ -157,12 +192,11 @@ pub fn plot_basin_stability(
             .draw()
             .map_err(|x| pe(path, x))?;
     }
-    root.present().map_err(|x| pe(path, x))?;
-    pic.commit(path)
+    Ok(())
 }
 
 /// The legend name of column `c`: suffixed ` (invalid)` for a physically invalid attractor.
-fn stability_label(data: &crate::stability::StabilityData, c: usize) -> String {
+fn stability_label(data: &StabilityData, c: usize) -> String {
     let name = &data.columns[c];
     if data.invalid_column(name) {
         format!("{name} (invalid)")
