@@ -2,6 +2,12 @@
 //!
 //! A basin grid assigns each cell `(x[j], y[i])` of two section coordinates an outcome code (see
 //! the `legend`), the number of strides until it was classified and the last section state.
+//!
+//! The file's parts, one submodule each: the run's [`BasinHeader`] and its checks (`header`),
+//! the chunk-block layout of the datasets (`layout`), the metrics and attractors a finished
+//! file holds (`results`), the checksums of header and blocks (`digest`), the streaming
+//! [`BasinWriter`] (`writer`), [`BasinWriter::resume`] (`resume`) and the readers (`read`).
+//!
 //! # Crash safety
 //! Rows are produced in any order by the engine and handed to [`BasinWriter::write_rows`] in
 //! any grouping. The writer buffers them until a whole chunk block ([`BLOCK_ROWS`] rows) is
@@ -28,11 +34,6 @@
 //! recomputation), and reports the rows still to compute; a kill during that copy leaves the
 //! old file as it was. Since the engine's labels do not depend on batch size, thread count or
 //! order, a resumed run yields the same datasets as an uninterrupted one.
-//!
-//! The file's parts, one submodule each: the run's [`BasinHeader`] and its checks (`header`),
-//! the chunk-block layout of the datasets (`layout`), the metrics and attractors a finished
-//! file holds (`results`), the checksums of header and blocks (`digest`), the streaming
-//! [`BasinWriter`] (`writer`) and its `resume` (`resume`), and the readers (`read`).
 
 use std::path::Path;
 
