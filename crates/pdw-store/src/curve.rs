@@ -25,12 +25,13 @@ use std::path::Path;
 
 use hdf5::File;
 use ndarray::Array2;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::h5util::{
     get_str, matrix, open_file, put, set_attr, set_str, write_h5_atomically, At, Staged,
 };
-use crate::plot::{cell_extent, nearest, pe, register_fonts, rgb, tick, FONT};
+use crate::plot::{cell_extent, draw_swatches, paint_cells, pe, register_fonts, tick, FONT};
 use crate::{time, Result, StoreError};
 
 /// Value of the root attribute `format` of a curve file.
@@ -258,32 +259,7 @@ pub fn plot_curve(
     let root = BitMapBackend::new(&tmp, CURVE_PNG_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| pe(path, x))?;
     let (left, right) = root.split_horizontally(CURVE_PNG_SIZE.0 - 300);
-    let finite = |v: &[f64]| -> Option<(f64, f64)> {
-        let (lo, hi) = v
-            .iter()
-            .filter(|x| x.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        lo.is_finite().then_some((lo, hi))
-    };
-    let widen = |(lo, hi): (f64, f64)| {
-        if hi > lo {
-            (lo, hi)
-        } else {
-            let d = 0.05 * lo.abs().max(1e-3);
-            (lo - d, hi + d)
-        }
-    };
-    let ((x0, x1), (y0, y1)) = match &data.map {
-        Some(m) => (cell_extent(&m.step), cell_extent(&m.free)),
-        None => {
-            let xs = widen(finite(&data.p_step).unwrap_or((0.0, 1.0)));
-            let ys = widen(finite(&data.p_free).unwrap_or((0.0, 1.0)));
-            let pad = 0.1 * (ys.1 - ys.0);
-            (xs, (ys.0 - pad, ys.1 + pad))
-        }
-    };
+    let ((x0, x1), (y0, y1)) = curve_extent(data);
     let mut chart = ChartBuilder::on(&left)
         .caption(title, (FONT, 20))
         .margin(12)
@@ -308,31 +284,14 @@ pub fn plot_curve(
         for (c, name) in &m.legend {
             lut[*c as usize] = region_colour(name);
         }
-        let area = chart.plotting_area();
-        let (pxr, pyr) = area.get_pixel_range();
-        let (w, h) = ((pxr.end - pxr.start) as f64, (pyr.end - pyr.start) as f64);
-        let pix = area.strip_coord_spec();
-        let cols: Vec<usize> = (0..w as i32)
-            .map(|i| nearest(&m.step, x0 + (i as f64 + 0.5) / w * (x1 - x0)))
-            .collect();
-        for j in 0..h as i32 {
-            let row = nearest(&m.free, y1 - (j as f64 + 0.5) / h * (y1 - y0));
-            for (i, &col) in cols.iter().enumerate() {
-                let c = lut[m.region[row][col] as usize];
-                pix.draw_pixel((i as i32, j), &rgb(c))
-                    .map_err(|x| pe(path, x))?;
-            }
-        }
-        let total = (m.step.len() * m.free.len()).max(1) as f64;
-        for (c, name) in &m.legend {
-            let k = m.region.iter().flatten().filter(|&&v| v == *c).count();
-            if k > 0 {
-                entries.push((
-                    format!("{name} {:.1}%", 100.0 * k as f64 / total),
-                    region_colour(name),
-                ));
-            }
-        }
+        paint_cells(
+            chart.plotting_area(),
+            (&m.step, &m.free),
+            ((x0, x1), (y0, y1)),
+            |row, col| lut[m.region[row][col] as usize],
+            path,
+        )?;
+        entries = region_entries(m);
     }
     let pts: Vec<(f64, f64)> = data
         .p_step
@@ -348,46 +307,90 @@ pub fn plot_curve(
         .draw_series(pts.iter().map(|&p| Circle::new(p, 4, BLACK.filled())))
         .map_err(|x| pe(path, x))?;
     let legend_top = 60;
-    for (k, (label, col)) in entries.iter().enumerate() {
-        let y = legend_top + 30 * k as i32;
-        right
-            .draw(&Rectangle::new([(10, y), (32, y + 20)], rgb(*col).filled()))
-            .map_err(|x| pe(path, x))?;
-        right
-            .draw(&Rectangle::new(
-                [(10, y), (32, y + 20)],
-                BLACK.stroke_width(1),
-            ))
-            .map_err(|x| pe(path, x))?;
-        right
-            .draw(&Text::new(
-                label.clone(),
-                (40, y + 2),
-                (FONT, 14).into_font(),
-            ))
-            .map_err(|x| pe(path, x))?;
-    }
-    let y = legend_top + 30 * entries.len() as i32 + 10;
-    right
-        .draw(&PathElement::new(
-            vec![(10, y + 10), (32, y + 10)],
-            BLACK.stroke_width(3),
-        ))
-        .map_err(|x| pe(path, x))?;
-    let curve_name = match data.kind.as_str() {
-        "pd" => "period-doubling curve",
-        "fold" => "fold curve",
-        _ => "curve",
-    };
-    right
-        .draw(&Text::new(
-            curve_name.to_string(),
-            (40, y + 2),
-            (FONT, 14).into_font(),
-        ))
-        .map_err(|x| pe(path, x))?;
+    draw_swatches(&right, &entries, legend_top, 14, path)?;
+    draw_curve_entry(
+        &right,
+        &data.kind,
+        legend_top + 30 * entries.len() as i32 + 10,
+        path,
+    )?;
     root.present().map_err(|x| pe(path, x))?;
     drop(chart);
     drop(root);
     pic.commit(path)
+}
+
+/// The axes of [`plot_curve`]: the region map's cells, or else the curve's finite points (a
+/// degenerate range widened by 5 % of its value, at least 10⁻³ of it), with 10 % of the free
+/// parameter's range added above and below.
+fn curve_extent(data: &CurveData) -> ((f64, f64), (f64, f64)) {
+    let finite = |v: &[f64]| -> Option<(f64, f64)> {
+        let (lo, hi) = v
+            .iter()
+            .filter(|x| x.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        lo.is_finite().then_some((lo, hi))
+    };
+    let widen = |(lo, hi): (f64, f64)| {
+        if hi > lo {
+            (lo, hi)
+        } else {
+            let d = 0.05 * lo.abs().max(1e-3);
+            (lo - d, hi + d)
+        }
+    };
+    match &data.map {
+        Some(m) => (cell_extent(&m.step), cell_extent(&m.free)),
+        None => {
+            let xs = widen(finite(&data.p_step).unwrap_or((0.0, 1.0)));
+            let ys = widen(finite(&data.p_free).unwrap_or((0.0, 1.0)));
+            let pad = 0.1 * (ys.1 - ys.0);
+            (xs, (ys.0 - pad, ys.1 + pad))
+        }
+    }
+}
+
+/// The legend entries of a region map: each region present with its percentage of the map, in
+/// its colour ([`region_colour`]).
+fn region_entries(m: &RegionMap) -> Vec<(String, [u8; 3])> {
+    let mut entries = Vec::new();
+    let total = (m.step.len() * m.free.len()).max(1) as f64;
+    for (c, name) in &m.legend {
+        let k = m.region.iter().flatten().filter(|&&v| v == *c).count();
+        if k > 0 {
+            entries.push((
+                format!("{name} {:.1}%", 100.0 * k as f64 / total),
+                region_colour(name),
+            ));
+        }
+    }
+    entries
+}
+
+/// The curve's legend entry at `y`: a thick black line and the curve's kind in words.
+fn draw_curve_entry(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    kind: &str,
+    y: i32,
+    path: &Path,
+) -> Result<()> {
+    area.draw(&PathElement::new(
+        vec![(10, y + 10), (32, y + 10)],
+        BLACK.stroke_width(3),
+    ))
+    .map_err(|x| pe(path, x))?;
+    let curve_name = match kind {
+        "pd" => "period-doubling curve",
+        "fold" => "fold curve",
+        _ => "curve",
+    };
+    area.draw(&Text::new(
+        curve_name.to_string(),
+        (40, y + 2),
+        (FONT, 14).into_font(),
+    ))
+    .map_err(|x| pe(path, x))?;
+    Ok(())
 }

@@ -95,6 +95,8 @@ pub mod shard;
 pub mod stability;
 pub mod sweep;
 mod time;
+#[doc(hidden)] // pub for the crate's tests (tests/internals.rs), not part of the API
+pub use time::rfc3339;
 pub mod trajectory;
 
 pub use basin::{

@@ -464,31 +464,8 @@ unsafe fn write_fixed_str(id: hid_t, name: &str, value: &str) -> bool {
 /// specification (attributes `CLASS`, `NAME`, `REFERENCE_LIST`, `DIMENSION_LIST`). Each call
 /// rewrites those attributes whole for the datasets it names.
 pub fn attach_scales(path: &Path, file: &File, scales: &[ScaleAttach]) -> Result<()> {
-    #[repr(C)]
-    struct RefEntry {
-        dataset: hobj_ref_t,
-        dimension: i32,
-    }
     let open = |p: &str| -> Result<Dataset> { file.dataset(p).at(path, "opening a dataset") };
     let fid = file.id();
-    let obj_ref = |p: &str| -> Result<hobj_ref_t> {
-        let c = cstr(&format!("/{p}"));
-        let mut r: hobj_ref_t = 0;
-        // SAFETY: `r` is a valid hobj_ref_t buffer; `fid` is the open file.
-        let e = unsafe {
-            H5Rcreate(
-                (&mut r as *mut hobj_ref_t).cast(),
-                fid,
-                c.as_ptr(),
-                H5R_type_t::H5R_OBJECT1,
-                -1,
-            )
-        };
-        if e < 0 {
-            return Err(h5_err(path, &format!("a reference to /{p}")));
-        }
-        Ok(r)
-    };
     // Scales: CLASS, NAME, REFERENCE_LIST.
     let mut scale_names: Vec<&str> = scales.iter().map(|s| s.scale.as_str()).collect();
     scale_names.sort();
@@ -500,7 +477,7 @@ pub fn attach_scales(path: &Path, file: &File, scales: &[ScaleAttach]) -> Result
             .filter(|s| s.scale == *sc)
             .map(|s| {
                 Ok(RefEntry {
-                    dataset: obj_ref(&s.data)?,
+                    dataset: object_ref(path, fid, &s.data)?,
                     dimension: s.dim as i32,
                 })
             })
@@ -515,40 +492,7 @@ pub fn attach_scales(path: &Path, file: &File, scales: &[ScaleAttach]) -> Result
         let name = coord
             .as_deref()
             .unwrap_or_else(|| sc.rsplit('/').next().unwrap_or(sc));
-        let ok = hdf5::sync::sync(|| {
-            // SAFETY: identifiers opened here and closed before leaving; the compound type
-            // matches `RefEntry`'s C layout; HDF5's lock is held by `sync`.
-            unsafe {
-                let id = ds.id();
-                let mut ok = write_fixed_str(id, "CLASS", "DIMENSION_SCALE");
-                ok &= write_fixed_str(id, "NAME", name);
-                let t = h5t::H5Tcreate(
-                    h5t::H5T_class_t::H5T_COMPOUND,
-                    std::mem::size_of::<RefEntry>(),
-                );
-                let f1 = cstr("dataset");
-                let f2 = cstr("dimension");
-                h5t::H5Tinsert(
-                    t,
-                    f1.as_ptr(),
-                    std::mem::offset_of!(RefEntry, dataset),
-                    *h5t::H5T_STD_REF_OBJ,
-                );
-                h5t::H5Tinsert(
-                    t,
-                    f2.as_ptr(),
-                    std::mem::offset_of!(RefEntry, dimension),
-                    *h5t::H5T_NATIVE_INT,
-                );
-                let n = [entries.len() as hsize_t];
-                let sp = h5s::H5Screate_simple(1, n.as_ptr(), std::ptr::null());
-                ok &= write_raw_attr(id, "REFERENCE_LIST", t, sp, entries.as_ptr().cast());
-                h5s::H5Sclose(sp);
-                h5t::H5Tclose(t);
-                ok
-            }
-        });
-        if !ok {
+        if !write_scale_attrs(&ds, name, &entries) {
             return Err(h5_err(path, &format!("making /{sc} a dimension scale")));
         }
     }
@@ -567,37 +511,111 @@ pub fn attach_scales(path: &Path, file: &File, scales: &[ScaleAttach]) -> Result
                     format!("/{d} has {rank} dimensions, no dimension {}", s.dim),
                 ));
             }
-            lists[s.dim].push(obj_ref(&s.scale)?);
+            lists[s.dim].push(object_ref(path, fid, &s.scale)?);
         }
-        let mut vl: Vec<h5t::hvl_t> = lists
-            .iter_mut()
-            .map(|l| h5t::hvl_t {
-                len: l.len(),
-                p: if l.is_empty() {
-                    std::ptr::null_mut()
-                } else {
-                    l.as_mut_ptr().cast()
-                },
-            })
-            .collect();
-        let ok = hdf5::sync::sync(|| {
-            // SAFETY: `vl` points into `lists`, alive for the call; identifiers are closed
-            // before leaving; HDF5's lock is held by `sync`.
-            unsafe {
-                let t = h5t::H5Tvlen_create(*h5t::H5T_STD_REF_OBJ);
-                let n = [rank as hsize_t];
-                let sp = h5s::H5Screate_simple(1, n.as_ptr(), std::ptr::null());
-                let ok = write_raw_attr(ds.id(), "DIMENSION_LIST", t, sp, vl.as_mut_ptr().cast());
-                h5s::H5Sclose(sp);
-                h5t::H5Tclose(t);
-                ok
-            }
-        });
-        if !ok {
+        if !write_dimension_list(&ds, &mut lists) {
             return Err(h5_err(path, &format!("attaching scales to /{d}")));
         }
     }
     Ok(())
+}
+
+/// One entry of a dimension scale's `REFERENCE_LIST`: a dataset the scale is attached to and
+/// the dimension (the C layout of the compound type H5DS writes).
+#[repr(C)]
+struct RefEntry {
+    dataset: hobj_ref_t,
+    dimension: i32,
+}
+
+/// An object reference to the dataset `/p` of the open file `fid`.
+fn object_ref(path: &Path, fid: hid_t, p: &str) -> Result<hobj_ref_t> {
+    let c = cstr(&format!("/{p}"));
+    let mut r: hobj_ref_t = 0;
+    // SAFETY: `r` is a valid hobj_ref_t buffer; `fid` is the open file.
+    let e = unsafe {
+        H5Rcreate(
+            (&mut r as *mut hobj_ref_t).cast(),
+            fid,
+            c.as_ptr(),
+            H5R_type_t::H5R_OBJECT1,
+            -1,
+        )
+    };
+    if e < 0 {
+        return Err(h5_err(path, &format!("a reference to /{p}")));
+    }
+    Ok(r)
+}
+
+/// Makes `ds` a dimension scale: `CLASS` = `DIMENSION_SCALE`, `NAME` = `name`, and
+/// `REFERENCE_LIST` = `entries` (the datasets and dimensions it is attached to). False if HDF5
+/// refused a write.
+fn write_scale_attrs(ds: &Dataset, name: &str, entries: &[RefEntry]) -> bool {
+    hdf5::sync::sync(|| {
+        // SAFETY: identifiers opened here and closed before leaving; the compound type
+        // matches `RefEntry`'s C layout; HDF5's lock is held by `sync`.
+        unsafe {
+            let id = ds.id();
+            let mut ok = write_fixed_str(id, "CLASS", "DIMENSION_SCALE");
+            ok &= write_fixed_str(id, "NAME", name);
+            let t = h5t::H5Tcreate(
+                h5t::H5T_class_t::H5T_COMPOUND,
+                std::mem::size_of::<RefEntry>(),
+            );
+            let f1 = cstr("dataset");
+            let f2 = cstr("dimension");
+            h5t::H5Tinsert(
+                t,
+                f1.as_ptr(),
+                std::mem::offset_of!(RefEntry, dataset),
+                *h5t::H5T_STD_REF_OBJ,
+            );
+            h5t::H5Tinsert(
+                t,
+                f2.as_ptr(),
+                std::mem::offset_of!(RefEntry, dimension),
+                *h5t::H5T_NATIVE_INT,
+            );
+            let n = [entries.len() as hsize_t];
+            let sp = h5s::H5Screate_simple(1, n.as_ptr(), std::ptr::null());
+            ok &= write_raw_attr(id, "REFERENCE_LIST", t, sp, entries.as_ptr().cast());
+            h5s::H5Sclose(sp);
+            h5t::H5Tclose(t);
+            ok
+        }
+    })
+}
+
+/// Writes the data dataset `ds`'s `DIMENSION_LIST`: for each of its dimensions, the list of
+/// references to the scales attached to it (`lists`, one per dimension). False if HDF5 refused
+/// the write.
+fn write_dimension_list(ds: &Dataset, lists: &mut [Vec<hobj_ref_t>]) -> bool {
+    let rank = lists.len();
+    let mut vl: Vec<h5t::hvl_t> = lists
+        .iter_mut()
+        .map(|l| h5t::hvl_t {
+            len: l.len(),
+            p: if l.is_empty() {
+                std::ptr::null_mut()
+            } else {
+                l.as_mut_ptr().cast()
+            },
+        })
+        .collect();
+    hdf5::sync::sync(|| {
+        // SAFETY: `vl` points into `lists`, alive for the call; identifiers are closed
+        // before leaving; HDF5's lock is held by `sync`.
+        unsafe {
+            let t = h5t::H5Tvlen_create(*h5t::H5T_STD_REF_OBJ);
+            let n = [rank as hsize_t];
+            let sp = h5s::H5Screate_simple(1, n.as_ptr(), std::ptr::null());
+            let ok = write_raw_attr(ds.id(), "DIMENSION_LIST", t, sp, vl.as_mut_ptr().cast());
+            h5s::H5Sclose(sp);
+            h5t::H5Tclose(t);
+            ok
+        }
+    })
 }
 
 /// Annotates a merged basin file: its own provenance (the merge command), each shard's in

@@ -124,10 +124,6 @@ pub fn merge<P: AsRef<Path>>(
         });
     }
     let out_canon = std::fs::canonicalize(out).ok();
-    struct Shard {
-        header: BasinHeader,
-        elapsed: f64,
-    }
     let mut list: Vec<Shard> = Vec::new();
     let mut attractors = None;
     for p in shards {
@@ -138,62 +134,9 @@ pub fn merge<P: AsRef<Path>>(
                 format!("output {} is also one of the shards", out.display()),
             ));
         }
-        let f = open_file(p, false)?;
-        let header = crate::basin::read_basin_header(p)?;
-        let spec = header.shard.ok_or_else(|| StoreError::Coverage {
-            detail: format!(
-                "{} is not a shard file (no shard_index/shard_count)",
-                p.display()
-            ),
-        })?;
-        let done = f
-            .dataset("basin/rows_done")
-            .and_then(|d| d.read_raw::<u8>())
-            .at(p, "reading /basin/rows_done")?;
-        let own = grid_shard_rows(header.ny(), header.nz(), spec.index, spec.count)?;
-        let n_done = own.iter().filter(|&&r| done[r] != 0).count();
-        let complete: bool = get_attr(p, "pdw-sweep basin", &f, "complete")?;
-        if n_done != own.len() || !complete {
-            return Err(StoreError::Incomplete {
-                path: p.to_path_buf(),
-                done: n_done,
-                expected: own.len(),
-            });
-        }
-        let att = read_attractors(p, &f)?;
+        let (f, header, spec, att) = open_complete_shard(p)?;
         if let Some(first) = list.first() {
-            let first_count = first.header.shard.map_or(0, |s| s.count);
-            if spec.count != first_count {
-                return Err(StoreError::Mismatch {
-                    path: p.to_path_buf(),
-                    field: "shard".into(),
-                    found: spec.to_string(),
-                    expected: format!("a shard of {first_count}"),
-                });
-            }
-            let mut want = first.header.clone();
-            want.shard = header.shard;
-            want.check_matches(&header, p)?;
-            let same = attractors.as_ref().is_some_and(|a: &Vec<Attractor>| {
-                a.len() == att.len() && a.iter().zip(&att).all(|(x, y)| x.same_as(y))
-            });
-            if !same {
-                let list = |v: &[Attractor]| {
-                    format!(
-                        "[{}] (or different values)",
-                        v.iter()
-                            .map(Attractor::summary)
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                };
-                return Err(StoreError::Mismatch {
-                    path: p.to_path_buf(),
-                    field: "attractors".into(),
-                    found: list(&att),
-                    expected: list(attractors.as_deref().unwrap_or_default()),
-                });
-            }
+            check_same_run(first, attractors.as_deref(), &header, spec, &att, p)?;
         } else {
             attractors = Some(att);
         }
@@ -246,6 +189,88 @@ pub fn merge<P: AsRef<Path>>(
     let h = result?;
     staged.commit(out)?;
     Ok(h)
+}
+
+/// A shard accepted by [`merge`]: its header and its computing time.
+struct Shard {
+    header: BasinHeader,
+    elapsed: f64,
+}
+
+/// Opens the shard file `p`: its header, shard spec and attractors, refused unless it is a
+/// shard file with every one of its rows on disk and `complete` set.
+fn open_complete_shard(p: &Path) -> Result<(hdf5::File, BasinHeader, ShardSpec, Vec<Attractor>)> {
+    let f = open_file(p, false)?;
+    let header = crate::basin::read_basin_header(p)?;
+    let spec = header.shard.ok_or_else(|| StoreError::Coverage {
+        detail: format!(
+            "{} is not a shard file (no shard_index/shard_count)",
+            p.display()
+        ),
+    })?;
+    let done = f
+        .dataset("basin/rows_done")
+        .and_then(|d| d.read_raw::<u8>())
+        .at(p, "reading /basin/rows_done")?;
+    let own = grid_shard_rows(header.ny(), header.nz(), spec.index, spec.count)?;
+    let n_done = own.iter().filter(|&&r| done[r] != 0).count();
+    let complete: bool = get_attr(p, "pdw-sweep basin", &f, "complete")?;
+    if n_done != own.len() || !complete {
+        return Err(StoreError::Incomplete {
+            path: p.to_path_buf(),
+            done: n_done,
+            expected: own.len(),
+        });
+    }
+    let att = read_attractors(p, &f)?;
+    Ok((f, header, spec, att))
+}
+
+/// Checks that shard `p` (`header`, `spec`, attractors `att`) belongs to the run of the first
+/// shard accepted (`first`, whose attractors are `attractors`): the same shard count, every
+/// header field as [`BasinHeader::check_matches`] compares it, and the same attractors bit for
+/// bit ([`Attractor::same_as`]).
+fn check_same_run(
+    first: &Shard,
+    attractors: Option<&[Attractor]>,
+    header: &BasinHeader,
+    spec: ShardSpec,
+    att: &[Attractor],
+    p: &Path,
+) -> Result<()> {
+    let first_count = first.header.shard.map_or(0, |s| s.count);
+    if spec.count != first_count {
+        return Err(StoreError::Mismatch {
+            path: p.to_path_buf(),
+            field: "shard".into(),
+            found: spec.to_string(),
+            expected: format!("a shard of {first_count}"),
+        });
+    }
+    let mut want = first.header.clone();
+    want.shard = header.shard;
+    want.check_matches(header, p)?;
+    let same = attractors.is_some_and(|a: &[Attractor]| {
+        a.len() == att.len() && a.iter().zip(att).all(|(x, y)| x.same_as(y))
+    });
+    if !same {
+        let list = |v: &[Attractor]| {
+            format!(
+                "[{}] (or different values)",
+                v.iter()
+                    .map(Attractor::summary)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        };
+        return Err(StoreError::Mismatch {
+            path: p.to_path_buf(),
+            field: "attractors".into(),
+            found: list(att),
+            expected: list(attractors.unwrap_or_default()),
+        });
+    }
+    Ok(())
 }
 
 /// Copies the blocks of shard `spec` (file `p`, complete and checked) into the merged file's

@@ -5,6 +5,7 @@
 mod basin_file;
 mod common;
 mod integrity;
+mod internals;
 mod kill_resume;
 mod shard_merge;
 mod sweep_and_plots;
