@@ -2,7 +2,7 @@
 //! seed 1), 200 walkers × at most 50 steps on a 2-thread pool, from its stable period-one gait
 //! (DOP853 at 1e-9, the basin's integrator), against the basin of the same model:
 //! - `mfpt/compass_lockstep`: the walkers as lanes of the batched engine
-//!   (`pdw_limit::lockstep`, as `pdw-sweep mfpt` runs them);
+//!   (`pdw_limit::ensemble`, as `pdw-sweep mfpt` runs them);
 //! - `mfpt/compass_scalar`: one walker at a time per thread, the model rebuilt at each line's
 //!   slope (`terrain::monte_carlo_scalar`, the reference walk);
 //! - `mfpt/compass_basin`: the compass basin on a 41 × 41 grid of (θ, θ̇) around the gait
@@ -35,7 +35,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use pdw_hybrid::Options;
-use pdw_limit::lockstep::{monte_carlo_lockstep, Lockstep};
+use pdw_limit::ensemble::{monte_carlo_lockstep, Lockstep};
 use pdw_limit::terrain::{self, Fate, SlopeTerrain, SlopeWalk, TerrainKind};
 use pdw_limit::{
     classify_cells, find_fixed_point, grid_cells, linspace, BasinOptions, BasinProblem, LimitError,

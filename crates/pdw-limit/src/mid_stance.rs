@@ -77,8 +77,8 @@
 //! section's, and [`MidStance::new`] refuses it.
 
 use crate::cloud::Cloud;
+use crate::ensemble::{flow_batch_with_constants, flow_with_constants};
 use crate::error::LimitError;
-use crate::lockstep::{flow_batch_with_constants, flow_with_constants};
 use crate::markov::{Mesh, Transitions};
 use crate::stride::{EventDriver, StrideOutcome};
 use crate::terrain::{SlopeTerrain, SlopeWalk, TerrainKind};

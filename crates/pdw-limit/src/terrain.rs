@@ -52,8 +52,8 @@
 //! ([`standard_normal`], [`standard_uniform`], [`pick`] for a list of values:
 //! [`TerrainDist`]), so a walk is the same on any thread count or shard.
 
+use crate::ensemble::{monte_carlo_lockstep, Lockstep};
 use crate::error::LimitError;
-use crate::lockstep::{monte_carlo_lockstep, Lockstep};
 use crate::stride::{StrideMap, StrideOutcome, StrideStop};
 use pdw_hybrid::{run_scalar_with, Integrator, Options, StopReason};
 use pdw_model::{ClosedEnd, Ground, Walker};
@@ -594,7 +594,7 @@ pub fn walk_one(
 
 /// `walkers` walkers (0, 1, …) from `x0` on `pool`, in walker order; identical for any thread
 /// count, lane count and chunk size (each walker's slopes are its own counter-based draws).
-/// Both terrains run in batched lockstep ([`crate::lockstep`], lanes and chunks of
+/// Both terrains run in batched lockstep ([`crate::ensemble`], lanes and chunks of
 /// [`Lockstep::for_pool`]); step heights on a model without [`Walker::step_height`], and random
 /// slopes on tilted landing lines ([`SlopeWalk::tilted`]: round feet, whose flow depends on the
 /// line the stance foot rolls on), run one walker at a time ([`monte_carlo_scalar`]).
@@ -669,7 +669,7 @@ pub fn monte_carlo_closed_form(
         ),
     };
     let closed = model.closed_stride().ok_or_else(no_form)?;
-    crate::lockstep::check_walk(walk, terrain, x0, model.as_ref())?;
+    crate::ensemble::check_walk(walk, terrain, x0, model.as_ref())?;
     let guards = model.guards(model.section_mode());
     let done = AtomicUsize::new(0);
     pool.install(|| {

@@ -12,7 +12,7 @@
 
 use pdw::mfpt::{self, MfptPlan, StrideMap};
 use pdw_hybrid::FallKind;
-use pdw_limit::lockstep::{monte_carlo_lockstep, Lockstep};
+use pdw_limit::ensemble::{monte_carlo_lockstep, Lockstep};
 use pdw_limit::stride::StrideOutcome;
 use pdw_limit::terrain::{self, Fate, SlopeTerrain, SlopeWalk, TerrainKind};
 

@@ -5,7 +5,7 @@
 //! within its standard error, the same fall kinds.
 
 use pdw::mfpt;
-use pdw_limit::lockstep::{monte_carlo_lockstep, Lockstep};
+use pdw_limit::ensemble::{monte_carlo_lockstep, Lockstep};
 use pdw_limit::terrain::{self, Fate, SlopeTerrain, SlopeWalk, TerrainKind};
 
 fn pool(n: usize) -> rayon::ThreadPool {

@@ -1,5 +1,5 @@
-//! The Monte Carlo walk on random slopes in batched lockstep: every walker is a lane of the
-//! batched engine ([`pdw_hybrid::run_batch_par`]), as a basin's cells are; a lane that
+//! The Monte Carlo ensemble of walkers on random ground, in batched lockstep: every walker is a
+//! lane of the batched engine ([`pdw_hybrid::run_batch_par`]), as a basin's cells are; a lane that
 //! completes a stride starts the walker's next one on its own line, and a lane whose walker
 //! fell or reached the step limit takes the next walker of the queue.
 //!
