@@ -226,7 +226,9 @@ def mfpt(
     "uniform" of unit variance, "file:PATH" of values), in words as `dist`. `chain=True` (one
     sd) adds `chain`: the Markov chain at mesh and 2 mesh (arrays of two: mesh, mfpt, lambda,
     mfpt_lambda, mfpt_quasi_stationary, fall_per_step, out_of_mesh, states), refinement_change,
-    warning (None when converged), nodes, quadrature, box (corner, edges, widening_passes,
+    warning (None when converged), quadrature_nodes, quadrature_mfpt, quadrature_change,
+    quadrature_warning (the coarse mesh with twice the nodes; None within 0.5 %, all None on a
+    cloud), nodes, quadrature, box (corner, edges, widening_passes,
     out_share), section (`chain_section`: "landing", or "mid-stance": no layers, one-mode
     models), layout (`chain_mesh`: "grid", or "cloud": the visited mid-stance states thinned to
     the grid's spacing and closed under their landings, with cloud: cell, seeds, nodes, passes

@@ -289,7 +289,10 @@ fn estimate_dict<'py>(
 
 /// The chain's results as `mfpt(..., chain=True)["chain"]`: per mesh (arrays of two: `mesh`,
 /// `mfpt`, `lambda`, `mfpt_lambda` = 1/(1 − λ) − 1, `mfpt_quasi_stationary`, `fall_per_step`,
-/// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged),
+/// `out_of_mesh`, `states`), `refinement_change`, `warning` (None when converged), on a grid the
+/// coarse mesh's chain with twice the terrain's nodes (`quadrature_nodes`, `quadrature_mfpt`,
+/// `quadrature_change`, `quadrature_warning`: None when the quadrature is converged; all None on
+/// a cloud),
 /// `agreement` (the chain against the walkers `est`, None when they agree), `node_warning` (a
 /// node of the rule at a step height of exactly 0, else None), `nodes`,
 /// `quadrature`, `section` (`landing` or `mid-stance`), `layout` (`grid` or `cloud`), and
@@ -329,6 +332,12 @@ fn chain_dict<'py>(
     )?;
     d.set_item("refinement_change", pair.change)?;
     d.set_item("warning", pair.warning.clone())?;
+    // the coarse mesh with twice the terrain's nodes (on a grid; None on a cloud)
+    let q = pair.quadrature.as_ref();
+    d.set_item("quadrature_nodes", q.map(|q| q.nodes))?;
+    d.set_item("quadrature_mfpt", q.map(|q| q.mfpt))?;
+    d.set_item("quadrature_change", q.map(|q| q.change))?;
+    d.set_item("quadrature_warning", q.and_then(|q| q.warning.clone()))?;
     let [coarse, fine] = &pair.results;
     d.set_item(
         "agreement",

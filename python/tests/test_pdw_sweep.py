@@ -617,6 +617,11 @@ def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
     assert abs(c["refinement_change"] - change) < 1e-12
     assert (c["warning"] is None) == (change <= 0.1)
     assert c["agreement"] is None and c["node_warning"] is None
+    # the quadrature check: the coarse mesh with twice the nodes, its warning by the 0.5 % rule
+    assert c["quadrature_nodes"] == 22 and np.isfinite(c["quadrature_mfpt"])
+    q = abs(c["quadrature_mfpt"] - c["mfpt"][0]) / max(c["quadrature_mfpt"], c["mfpt"][0])
+    assert abs(c["quadrature_change"] - q) < 1e-12
+    assert (c["quadrature_warning"] is None) == (q <= 0.005)
     # a quadrature of 4 nodes: the chain's 83.7 against the walkers' 115.8 ± 2.6 is flagged,
     # by the rule the docs give (3 standard errors plus the refinement's change)
     r4 = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True,
@@ -702,8 +707,8 @@ def test_mfpt_uniform_and_file_distributions():
         pdw.mfpt("rimless", sd="1deg", mesh=10)
     with pytest.raises(ValueError, match="mesh: 1 must be at least 2"):
         pdw.mfpt("rimless", sd="1deg", chain=True, mesh=1)
-    with pytest.raises(ValueError, match="nodes: 41 must be between 2 and 40"):
-        pdw.mfpt("rimless", sd="1deg", chain=True, nodes=41)
+    with pytest.raises(ValueError, match="nodes: 81 must be between 2 and 80"):
+        pdw.mfpt("rimless", sd="1deg", chain=True, nodes=81)
     with pytest.raises(ValueError, match="chain: runs at one sd"):
         pdw.mfpt("rimless", sd="0.4deg:0.6deg:3", chain=True)
 

@@ -737,3 +737,59 @@ fn the_chain_is_flagged_where_it_and_the_walkers_disagree_beyond_its_refinement(
     assert!(agreement_warning(&chain(11.2, 11.28), &est(10.7265, 0.1122, 3)).is_none());
     assert!(agreement_warning(&[], &est(10.7265, 0.1122, 0)).is_none());
 }
+
+/// `--chain` on a grid reports its quadrature check and keeps it in the file; at the default 11
+/// nodes the rimless wheel's chain (mesh 200) is not converged in its terrain quadrature and the
+/// warning names the `--nodes` to try (the verdict is checked against a converged closed-form
+/// chain in crates/pdw/tests/rimless_chain.rs); with `--nodes 40` (checked against 80) it passes
+/// and nothing warns.
+#[test]
+fn the_chain_checks_its_quadrature_and_names_the_nodes_that_converge() {
+    let dir = tempfile::tempdir().unwrap();
+    for (nodes, warns) in [(None, true), (Some("40"), false)] {
+        let out = dir.path().join(format!("q{}.h5", nodes.unwrap_or("11")));
+        let mut args = vec![
+            "mfpt",
+            "--model",
+            "rimless",
+            "--sd",
+            "0.5deg",
+            "--walkers",
+            "200",
+            "--chain",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if let Some(n) = nodes {
+            args.extend(["--nodes", n]);
+        }
+        let o = run(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout);
+        let doubled = if warns { "22" } else { "80" };
+        assert!(
+            text.contains(&format!(
+                "quadrature check: mesh 200 with --nodes {doubled}:"
+            )),
+            "{text}"
+        );
+        let warning = text
+            .lines()
+            .find(|l| l.contains("the terrain's quadrature is not converged"));
+        assert_eq!(warning.is_some(), warns, "{text}");
+        if let Some(w) = warning {
+            assert!(w.contains("give --nodes 22 or more"), "{w}");
+        }
+        let f = h5_open(&out).unwrap();
+        let g = f.group("mfpt").unwrap();
+        let get = |k: &str| g.attr(k).unwrap().read_scalar::<f64>().unwrap();
+        assert_eq!(
+            get("chain_quadrature_nodes"),
+            doubled.parse::<f64>().unwrap()
+        );
+        let change = get("chain_quadrature_change");
+        assert_eq!(change > mfpt::QUADRATURE_MAX, warns, "{change}");
+        assert!(get("chain_quadrature_mfpt").is_finite());
+    }
+}

@@ -472,7 +472,7 @@ fn no_fall_runs_are_reported_honestly() {
         "1",
     ]));
     assert!(
-        msg.contains("--nodes: 1") && msg.contains("between 2 and 40"),
+        msg.contains("--nodes: 1") && msg.contains("between 2 and 80"),
         "{msg}"
     );
     let dir = tempfile::tempdir().unwrap();

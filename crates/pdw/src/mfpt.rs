@@ -1005,9 +1005,14 @@ pub fn zero_height_node_warning(plan: &MfptPlan, nodes: usize, flag: &str) -> Op
 /// Default quadrature nodes of the chain.
 pub const DEFAULT_NODES: usize = 11;
 
+/// Most quadrature nodes a chain takes: twice the 40 that converge the rimless wheel's chain
+/// at σ = 0.5° (within 0.4 % of 80 at mesh 200), so that [`quadrature_check`]'s advice to
+/// double them can be followed.
+pub const MAX_NODES: usize = 80;
+
 /// The chain's plan for `m` on `section`, checked: `mesh` nodes per axis (default by the
 /// section's dimension: 200, 60, 12 just after heel strike; 200, 60, 24 at mid-stance, which
-/// has no layers; at least 2), `nodes` quadrature nodes (1 … 40, default [`DEFAULT_NODES`]);
+/// has no layers; at least 2), `nodes` quadrature nodes (2 … [`MAX_NODES`], default [`DEFAULT_NODES`]);
 /// refused for a section of more than 3 coordinates, and at mid-stance for a model without it
 /// ([`pdw_limit::mid_stance::unsupported`]).
 pub fn check_chain(
@@ -1049,9 +1054,9 @@ pub fn check_chain(
         )));
     }
     let nodes = nodes.unwrap_or(DEFAULT_NODES);
-    if !(2..=40).contains(&nodes) {
+    if !(2..=MAX_NODES).contains(&nodes) {
         return Err(InputError(format!(
-            "{}: {nodes} must be between 2 and 40 (one node is the mean terrain alone: \
+            "{}: {nodes} must be between 2 and {MAX_NODES} (one node is the mean terrain alone: \
              deterministic ground, on which the chain sees no fall and has no MFPT)",
             flags.nodes
         )));
@@ -1152,6 +1157,76 @@ pub struct ChainPair {
     pub warning: Option<String>,
     /// On a cloud ([`ChainMesh::Cloud`]): the coarse and the fine cloud's closure.
     pub clouds: Option<[CloudStats; 2]>,
+    /// On a grid: the coarse mesh's chain checked against twice the terrain's nodes
+    /// ([`quadrature_check`]).
+    pub quadrature: Option<QuadratureCheck>,
+}
+
+/// Relative change of the chain's MFPT between its terrain quadrature and one of twice as many
+/// nodes above which [`quadrature_check`] warns: 0.5 %.
+pub const QUADRATURE_MAX: f64 = 0.005;
+
+/// The chain's terrain quadrature checked against one of twice as many nodes, on the same mesh
+/// and box ([`quadrature_check`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct QuadratureCheck {
+    /// The doubled quadrature's nodes and the mesh both chains were built on.
+    pub nodes: usize,
+    pub mesh: usize,
+    /// The chain's MFPT with the doubled quadrature.
+    pub mfpt: f64,
+    /// `|doubled − base| / max` ([`refinement_change`]).
+    pub change: f64,
+    /// Above [`QUADRATURE_MAX`]: the quadrature is not converged, and the warning names the
+    /// `--nodes` that is.
+    pub warning: Option<String>,
+}
+
+/// The chain of `chain` on its coarse mesh over `cb` with twice `chain.nodes` terrain nodes,
+/// against `base`, the same chain with `chain.nodes`: a quadrature too coarse for the terrain
+/// (the rimless wheel at σ = 0.5°: 11 nodes give 116.1 steps where 22 and 40 give 118.6 and
+/// 118.4) shows as a change above [`QUADRATURE_MAX`], which warns and names the option
+/// (`nodes_flag`) with the doubled count. The box is the base chain's; landings of the extra
+/// nodes outside it are absorbed as out of the mesh, as the base chain's are.
+#[allow(clippy::too_many_arguments)]
+pub fn quadrature_check(
+    m: &BuiltModel,
+    plan: &MfptPlan,
+    chain: &ChainPlan,
+    cb: &ChainBox,
+    base: &ChainResult,
+    x0: &[f64],
+    pool: &rayon::ThreadPool,
+    progress: &Progress,
+    nodes_flag: &str,
+) -> Result<QuadratureCheck, LimitError> {
+    let doubled = ChainPlan {
+        nodes: 2 * chain.nodes,
+        ..chain.clone()
+    };
+    let r = chain_in(m, plan, &doubled, &cb.frame, &cb.bounds, x0, pool, progress)?;
+    let change = refinement_change(base, &r);
+    let warning = (change > QUADRATURE_MAX).then(|| {
+        format!(
+            "WARNING: the chain's MFPT changed by {:.1} % from {nodes_flag} {} to {nodes_flag} {} \
+             ({:.4} to {:.4} at mesh {}): the terrain's quadrature is not converged; give \
+             {nodes_flag} {} or more",
+            100.0 * change,
+            chain.nodes,
+            doubled.nodes,
+            base.mfpt,
+            r.mfpt,
+            chain.mesh,
+            doubled.nodes
+        )
+    });
+    Ok(QuadratureCheck {
+        nodes: doubled.nodes,
+        mesh: chain.mesh,
+        mfpt: r.mfpt,
+        change,
+        warning,
+    })
 }
 
 /// How a cloud of the chain was built ([`pdw_limit::mid_stance::cloud_transitions`]).
@@ -1234,10 +1309,12 @@ pub fn cloud_pair(
         change,
         warning,
         clouds: Some([c0, c1]),
+        quadrature: None,
     })
 }
 
-/// The chain of `chain` at its mesh and twice as fine, from `x0` ([`ChainPair`]).
+/// The chain of `chain` at its mesh and twice as fine, from `x0`, and on a grid its quadrature
+/// checked ([`ChainPair`]; the quadrature's option named `nodes`, as in Python).
 pub fn chain_pair(
     m: &BuiltModel,
     plan: &MfptPlan,
@@ -1260,11 +1337,23 @@ pub fn chain_pair(
     let results = [at(chain.mesh)?, at(2 * chain.mesh)?];
     let change = refinement_change(&results[0], &results[1]);
     let warning = refinement_warning(&results[0], &results[1], chain.mesh);
+    let quadrature = quadrature_check(
+        m,
+        plan,
+        chain,
+        &cb,
+        &results[0],
+        x0,
+        pool,
+        progress,
+        "nodes",
+    )?;
     Ok(ChainPair {
         chain_box: cb,
         results,
         change,
         warning,
         clouds: None,
+        quadrature: Some(quadrature),
     })
 }

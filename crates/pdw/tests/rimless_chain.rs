@@ -579,3 +579,66 @@ fn the_chain_in_closed_form_strides_equals_the_integrated_chain() {
     // the closed-form chain is not a copy of the integrated one: some landing moved
     assert_ne!(a.mfpt.to_bits(), b.mfpt.to_bits());
 }
+
+/// The quadrature check's verdict ([`mfpt::quadrature_check`]: the coarse mesh with twice the
+/// terrain's nodes) against the converged MFPT of the closed-form chain written here (its own
+/// map, grid and solve; 41 nodes on 1301 rates, 118.395, which 2601 rates move by 0.02 % and 44
+/// nodes by 0.08 %): the engine warns at the default 11 nodes, whose MFPT is more than
+/// [`mfpt::QUADRATURE_MAX`] from the converged one (1.4 %), and not at 22, whose MFPT is within
+/// it; with 11 the doubled quadrature's MFPT is the closer of the two. (The closed-form chain's
+/// own change under doubling is no verdict for the engine's: its grid spans rates down to the
+/// wheel's roll-back, where linear interpolation across the jump makes its quadrature converge
+/// more slowly — 2.5 % from 11 to 22 nodes and 1.5 % from 22 to 44, against the engine's 1.5 %
+/// and 0.3 % on the walkers' box.)
+#[test]
+fn the_quadrature_check_warns_where_the_chain_is_not_converged_in_its_nodes() {
+    let m = pdw::build("rimless", &[("slope".to_string(), MEAN)]).unwrap();
+    let wheel = Wheel::of(&m);
+    let (x0, s0) = mfpt::start(&m).unwrap();
+    let converged = ClosedChain::new(41, 1301, 0.5, 1.8).mfpt(&wheel, s0[0]);
+    let plan = MfptPlan {
+        stride_map: mfpt::StrideMap::ClosedForm,
+        ..plan()
+    };
+    let pool = pool();
+    let mut warned = Vec::new();
+    for nodes in [11, 22] {
+        let c = mfpt::ChainPlan {
+            nodes,
+            mesh: 400,
+            bounds: None,
+            section: Default::default(),
+            layout: Default::default(),
+        };
+        let pair = mfpt::chain_pair(&m, &plan, &c, &x0, &pool, &|_| {}).unwrap();
+        let q = pair
+            .quadrature
+            .expect("a grid's chain checks its quadrature");
+        let base = pair.results[0].mfpt;
+        let off = (base - converged).abs() / converged;
+        eprintln!(
+            "{nodes} nodes: engine {base} -> {} ({:.4}); converged {converged} ({off:.4} off) {:?}",
+            q.mfpt, q.change, q.warning
+        );
+        assert_eq!((q.nodes, q.mesh), (2 * nodes, 400));
+        assert_eq!(
+            q.warning.is_some(),
+            off > mfpt::QUADRATURE_MAX,
+            "{nodes} nodes: {off} from the converged chain, check change {}",
+            q.change
+        );
+        if let Some(w) = &q.warning {
+            assert!(
+                w.contains(&format!("give nodes {} or more", 2 * nodes)),
+                "{w}"
+            );
+            assert!((q.mfpt - converged).abs() < (base - converged).abs());
+        }
+        warned.push(q.warning.is_some());
+    }
+    assert_eq!(
+        warned,
+        [true, false],
+        "11 nodes not converged, 22 converged"
+    );
+}

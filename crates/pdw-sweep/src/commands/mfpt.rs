@@ -473,10 +473,29 @@ pub(super) fn run_chain(
         pb.suspend(|| report_mesh(&r, (n, secs), label, &format!("{secs:.1} s"), &mut out));
         results.push(r);
     }
+    pb.set_message(format!("mesh {}, --nodes {}", c.mesh, 2 * c.nodes));
+    let t0 = Instant::now();
+    let q = mfpt::quadrature_check(m, plan, c, &cb, &results[0], x0, pool, &tell, "--nodes")?;
     pb.finish_and_clear();
+    crate::outln!(
+        "  quadrature check: mesh {} with --nodes {}: MFPT {:.4} steps, {:.2} % from --nodes {}; \
+         {:.1} s",
+        q.mesh,
+        q.nodes,
+        q.mfpt,
+        100.0 * q.change,
+        c.nodes,
+        t0.elapsed().as_secs_f64()
+    );
     let change = mfpt::refinement_change(&results[0], &results[1]);
     out.push(("refinement_change".to_string(), change));
+    out.push(("quadrature_nodes".to_string(), q.nodes as f64));
+    out.push(("quadrature_mfpt".to_string(), q.mfpt));
+    out.push(("quadrature_change".to_string(), q.change));
     if let Some(w) = mfpt::refinement_warning(&results[0], &results[1], c.mesh) {
+        crate::outln!("  {w}");
+    }
+    if let Some(w) = &q.warning {
         crate::outln!("  {w}");
     }
     Ok(out)
