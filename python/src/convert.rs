@@ -192,3 +192,52 @@ pub(crate) fn coordinates_dict<'py>(py: Python<'py>, m: &Model) -> PyResult<Boun
     }
     Ok(d)
 }
+
+/// A report of the library's pipeline ([`pdw::pipeline::Report::json`]) as Python objects: an
+/// object a dict, a list of floats a NumPy array (a list of anything else a list), a string a
+/// str, an integer an int, a float a float, null `None`. The CLI's `--json` and Python's dict
+/// then hold the same fields under the same names.
+pub(crate) fn json_to_py<'py>(
+    py: Python<'py>,
+    v: &serde_json::Value,
+) -> PyResult<Bound<'py, PyAny>> {
+    use pyo3::IntoPyObjectExt;
+    use serde_json::Value;
+    Ok(match v {
+        Value::Null => py.None().into_bound(py),
+        Value::Bool(b) => b.into_bound_py_any(py)?,
+        Value::Number(n) => match (n.as_u64(), n.as_i64()) {
+            (Some(u), _) => u.into_bound_py_any(py)?,
+            (None, Some(i)) => i.into_bound_py_any(py)?,
+            _ => n.as_f64().unwrap_or(f64::NAN).into_bound_py_any(py)?,
+        },
+        Value::String(s) => s.into_bound_py_any(py)?,
+        Value::Array(items) => {
+            let floats: Option<Vec<f64>> = items
+                .iter()
+                .map(|x| {
+                    x.as_number()
+                        .filter(|n| n.is_f64())
+                        .and_then(|n| n.as_f64())
+                })
+                .collect();
+            match floats {
+                Some(f) if !f.is_empty() => f.into_pyarray(py).into_any(),
+                _ => {
+                    let l = PyList::empty(py);
+                    for x in items {
+                        l.append(json_to_py(py, x)?)?;
+                    }
+                    l.into_any()
+                }
+            }
+        }
+        Value::Object(map) => {
+            let d = PyDict::new(py);
+            for (k, x) in map {
+                d.set_item(k, json_to_py(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}

@@ -7,11 +7,13 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::convert::json_to_py;
 use crate::errors::err;
 use crate::{interruptible, THREADS};
 use pdw::design::DesignPlan;
-use pdw::limit::basin::BasinOptions;
-use pdw::limit::design::{status, DesignEval, DesignOptions};
+use pdw::design_command::DesignInput;
+use pdw::limit::design::{status, DesignEval};
+use pdw::pipeline::{Report, Silent, Spelling};
 
 /// `free` as `NAME=LO:HI` texts: a dict `{name: (lo, hi)}`, a list of such texts, or one text.
 fn free_texts(free: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
@@ -34,54 +36,21 @@ fn free_texts(free: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
     })
 }
 
-/// The search's options from the keyword arguments, each checked as the CLI checks its flag.
-#[allow(clippy::too_many_arguments)]
-fn options(
-    objective: &str,
-    budget: i64,
-    seed: u64,
-    init: usize,
-    (mu, knee_margin, min_margin): (f64, f64, f64),
-    basin_grid: i64,
-    basin_box: Option<(f64, f64)>,
-    max_strides: i64,
-) -> PyResult<DesignOptions> {
-    let basin_box = basin_box
-        .map(|(a, b)| {
-            pdw::design::check_basin_box(&[a, b], &format!("{a},{b}"), "basin_box").map_err(err)
-        })
-        .transpose()?;
-    Ok(DesignOptions {
-        objective: pdw::design::parse_objective(objective, "objective").map_err(err)?,
-        mu: pdw::design::check_mu(mu, "mu").map_err(err)?,
-        knee_margin: pdw::design::check_knee_margin(knee_margin, "knee_margin").map_err(err)?,
-        min_margin: pdw::design::check_min_margin(min_margin, "min_margin").map_err(err)?,
-        budget: pdw::design::check_budget(budget, "budget").map_err(err)?,
-        seed,
-        start: None,
-        init,
-        basin_grid: pdw::design::check_basin_grid(basin_grid, "basin_grid").map_err(err)?,
-        basin_box,
-        basin: BasinOptions {
-            max_strides: pdw::design::check_max_strides(max_strides, "max_strides").map_err(err)?,
-            ..BasinOptions::default()
-        },
-        newton_tol: 1e-10,
-    })
-}
-
 /// `design(model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6,
 /// knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2,
-/// out=None, force=False, slope=None, starts=1, **params)`. `basin_box=None` scales the box
-/// with each design's gait; `starts` local runs of the multi-start share `budget`
+/// out=None, png=None, force=False, slope=None, starts=1, **params)`: `pdw-sweep design` — the
+/// same plan, search, files and report ([`pdw::design_command`]). `basin_box=None` scales the
+/// box with each design's gait; `starts` local runs of the multi-start share `budget`
 /// ([`pdw::limit::design::search_multi`]); `out` writes the design file `pdw-sweep design`
-/// writes (an existing one only with `force=True`). The dict's `best` is the closest design
-/// (the smallest graded cost) with `closest_because` when nothing is feasible; `fates` and
-/// `bindings` give every design's gait-search fates and binding criterion.
+/// writes, and its picture (`png`, default beside it); an existing `out` of the same settings
+/// continues its search, as the CLI does (`force=True` starts over). The dict holds the
+/// report's fields (those of the CLI's `design --json`: `counts`, `best` — the closest design
+/// with `closest_because` when nothing is feasible —, …) and every design as arrays; `fates`
+/// and `bindings` give every design's gait-search fates and binding criterion.
 #[pyfunction]
 #[pyo3(
-    signature = (model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=THREADS, out=None, force=false, slope=None, starts=1, **params),
-    text_signature = "(model='compass', free=None, objective='basin', budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2, out=None, force=False, slope=None, starts=1, **params)"
+    signature = (model="compass", free=None, objective="basin", budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=THREADS, out=None, png=None, force=false, slope=None, starts=1, **params),
+    text_signature = "(model='compass', free=None, objective='basin', budget=60, seed=0, init=0, mu=0.6, knee_margin=0.1, min_margin=0.0, basin_grid=15, basin_box=None, max_strides=40, threads=2, out=None, png=None, force=False, slope=None, starts=1, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn design<'py>(
@@ -100,86 +69,59 @@ pub(crate) fn design<'py>(
     max_strides: i64,
     threads: usize,
     out: Option<std::path::PathBuf>,
+    png: Option<std::path::PathBuf>,
     force: bool,
     slope: Option<&Bound<'py, PyAny>>,
     starts: i64,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let starts = pdw::design::check_starts(starts, "starts").map_err(err)?;
     let free = match free {
         Some(f) => free_texts(f)?,
         None => Vec::new(),
     };
-    let mut options = options(
-        objective,
+    let input = DesignInput {
+        model: crate::model_choice(model, slope, params)?,
+        command: format!(
+            "python: pdw_sweep.design(model='{model}', free=[{}], budget={budget}, \
+             seed={seed}, init={init}, starts={starts})",
+            free.join(", ")
+        ),
+        free,
+        objective: objective.to_string(),
         budget,
         seed,
         init,
-        (mu, knee_margin, min_margin),
-        basin_grid,
-        basin_box,
-        max_strides,
-    )?;
-    pdw::input::check_threads(threads, "threads").map_err(err)?;
-    if let Some(o) = out.as_ref().filter(|o| o.exists() && !force) {
-        return Err(err(format!(
-            "out: '{}' exists; pass force=True to replace it",
-            o.display()
-        )));
-    }
-    let choice = crate::model_choice(model, slope, params)?;
-    let base = pdw::build_model(&choice).map_err(err)?;
-    crate::give_warnings(py)?;
-    pdw::design::check_model(&base, "model").map_err(err)?;
-    let space = pdw::design::space(&choice, &base, &free, "free").map_err(err)?;
-    options.start = Some(pdw::design::start(&base, &space));
-    let plan = DesignPlan {
-        model: choice,
-        space,
-        options,
         starts,
+        mu,
+        knee_margin,
+        min_margin,
+        basin_grid,
+        basin_box: basin_box.map(|(a, b)| [a, b]),
+        max_strides,
+        out,
+        png,
+        threads,
+        force,
     };
-    let hist = interruptible(py, || -> PyResult<_> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(err)?;
-        pdw::design::search(&plan, &base, Vec::new(), &pool, &mut |_: &DesignEval| {}).map_err(err)
-    })?;
-    if let Some(o) = &out {
-        write_file(o, &plan, &base, &hist, threads)?;
+    let command = pdw::design_command::plan(&input, Spelling::Python).map_err(err)?;
+    crate::give_warnings(py)?;
+    let run = interruptible(py, || command.run(&Silent).map_err(err))?;
+    let d = design_dict(py, &command.plan, &run.designs)?;
+    if let serde_json::Value::Object(fields) = run.report.json() {
+        for (k, v) in &fields {
+            d.set_item(k, json_to_py(py, v)?)?;
+        }
     }
-    let d = design_dict(py, &plan, &hist)?;
+    // A feasible best design on a face of the box is warned about (an infeasible one says
+    // nothing about an optimum beyond the bound).
+    for w in run.report.best.iter().flat_map(|b| &b.on_bound) {
+        crate::queue_warning(w);
+    }
     crate::give_warnings(py)?;
     Ok(d)
 }
 
 use pdw::design::{measures, COLUMNS};
-
-/// `out`: the design file of the search, as `pdw-sweep design` writes it
-/// ([`pdw::design::write_file`]), its provenance naming the Python call.
-fn write_file(
-    out: &std::path::Path,
-    plan: &DesignPlan,
-    base: &pdw::BuiltModel,
-    hist: &[DesignEval],
-    threads: usize,
-) -> PyResult<()> {
-    let settings = pdw::design::settings(plan, base);
-    let options = pdw::design::run_options(&settings, threads);
-    let call = format!(
-        "python: pdw_sweep.design(model='{}', free=[{}], budget={}, seed={}, init={}, starts={})",
-        plan.model.model,
-        plan.space.names.join(", "),
-        plan.options.budget,
-        plan.options.seed,
-        plan.options.init,
-        plan.starts
-    );
-    let mut prov = pdw::provenance(&call, &options);
-    prov.model_spec = pdw::model::spec_toml(&plan.model.model).unwrap_or_default();
-    pdw::design::write_file(out, (plan, base, &settings), hist, &prov, &[]).map_err(err)
-}
 
 /// The dict `design` returns: every design evaluated (in order) and the best one.
 fn design_dict<'py>(
@@ -216,47 +158,5 @@ fn design_dict<'py>(
         let col: Vec<f64> = hist.iter().map(|e| measures(e)[i]).collect();
         d.set_item(*name, col.into_pyarray(py))?;
     }
-    d.set_item("best", best_dict(py, plan, hist)?)?;
     Ok(d)
-}
-
-/// The best design (smallest cost; `None` without designs): its parameters by name, status,
-/// reason, measures and whether it is feasible.
-fn best_dict<'py>(
-    py: Python<'py>,
-    plan: &DesignPlan,
-    hist: &[DesignEval],
-) -> PyResult<Option<Bound<'py, PyDict>>> {
-    let Some((b, why)) = pdw::design::closest(hist, plan.options.min_margin) else {
-        return Ok(None);
-    };
-    let d = PyDict::new(py);
-    let params = PyDict::new(py);
-    for (n, v) in plan.space.names.iter().zip(&b.params) {
-        params.set_item(n, v)?;
-    }
-    d.set_item("params", params)?;
-    d.set_item("index", hist.iter().position(|e| std::ptr::eq(e, b)))?;
-    d.set_item("status", status::NAMES[b.status as usize])?;
-    d.set_item("feasible", b.feasible())?;
-    d.set_item("reason", &b.reason)?;
-    d.set_item("section", b.section.to_vec().into_pyarray(py))?;
-    for (name, v) in COLUMNS.iter().zip(measures(b)) {
-        d.set_item(*name, v)?;
-    }
-    d.set_item("binding", &b.binding)?;
-    d.set_item("fates", &b.fates)?;
-    d.set_item("closest_because", why)?;
-    // A feasible best design on a face of the box: named in `on_bound` and warned about (an
-    // infeasible one says nothing about an optimum beyond the bound).
-    let on_bound = if b.feasible() {
-        pdw::design::bound_warnings(&plan.space, &b.params)
-    } else {
-        Vec::new()
-    };
-    for w in &on_bound {
-        crate::queue_warning(w);
-    }
-    d.set_item("on_bound", on_bound)?;
-    Ok(Some(d))
 }

@@ -155,7 +155,7 @@ pub(crate) fn queue_warning(msg: &str) {
 
 /// Gives the queued warnings through `warnings.warn` (`UserWarning`; Python's filters decide
 /// whether and how often they show), and lets the library warn again in the next call.
-fn give_warnings(py: Python<'_>) -> PyResult<()> {
+pub(crate) fn give_warnings(py: Python<'_>) -> PyResult<()> {
     let queued = PENDING_WARNINGS
         .lock()
         .map(|mut q| std::mem::take(&mut *q))
@@ -180,7 +180,7 @@ fn warn_all(py: Python<'_>, msgs: &[String]) -> PyResult<()> {
 
 /// The model and its overrides (`slope` and the keyword arguments, checked) as the library's
 /// [`pdw::ModelChoice`], for the plans that build models with further values on top.
-fn model_choice(
+pub(crate) fn model_choice(
     model: &str,
     slope: Option<&Bound<'_, PyAny>>,
     params: Option<&Bound<'_, PyDict>>,

@@ -1,22 +1,27 @@
-//! `simulate`: a walk of N steps as a dict of arrays — states, events, the walker's points,
+//! `simulate`: a walk of N strides as a dict of arrays — states, events, the walker's points,
 //! units — as `pdw-sweep simulate` ([`pdw::simulate`]).
 
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::rows_to_array;
-use crate::errors::{err, no_gait_error};
-use crate::{build_kw, interruptible, Model};
+use crate::convert::{json_to_py, rows_to_array};
+use crate::errors::err;
+use crate::{interruptible, model_choice, Model};
 use pdw::limit::trajectory::{self, Trajectory};
-use pdw::limit::StrideOutcome;
-use pdw::simulate::{GaitKind, SimulateFlags, Start, StartError};
+use pdw::pipeline::{Report, Silent, Spelling};
+use pdw::simulate::SimulateInput;
 
-/// `simulate(model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params)`.
+/// `simulate(model="simplest", slope=None, state=None, gait="stable", strides=10, dt_out=None,
+/// out=None, force=False, **params)`: the walk of `pdw-sweep simulate` as a dict — the report's
+/// fields (`model`, `slope`, `start`, `strides`, `strides_done`, `samples`, `events`,
+/// `outcome`, `fell`, `dt_out`, `dt_out_source`, `out`) and the arrays. With `out` the same
+/// file as the CLI's `--out` is written. `steps` is the old spelling of `strides`, and
+/// `steps_done` of `strides_done`.
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, state=None, gait="stable", steps=10, dt_out=None, **params),
-    text_signature = "(model='simplest', slope=None, state=None, gait='stable', steps=10, dt_out=None, **params)"
+    signature = (model="simplest", slope=None, state=None, gait=None, strides=10, dt_out=None, out=None, force=false, steps=None, **params),
+    text_signature = "(model='simplest', slope=None, state=None, gait='stable', strides=10, dt_out=None, out=None, force=False, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate<'py>(
@@ -24,51 +29,42 @@ pub(crate) fn simulate<'py>(
     model: &str,
     slope: Option<&Bound<'py, PyAny>>,
     state: Option<Vec<f64>>,
-    gait: &str,
-    steps: usize,
+    gait: Option<String>,
+    strides: i64,
     dt_out: Option<&Bound<'py, PyAny>>,
+    out: Option<std::path::PathBuf>,
+    force: bool,
+    steps: Option<i64>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    const FLAGS: SimulateFlags = SimulateFlags {
-        steps: "steps",
-        dt_out: "dt_out",
-        state: "state",
-        gait: "gait",
-        rk4_step: "rk4_step",
+    let strides = steps.unwrap_or(strides);
+    let input = SimulateInput {
+        model: model_choice(model, slope, params)?,
+        integrator: Default::default(),
+        // a negative count is refused by the plan as 0 is
+        strides: usize::try_from(strides).unwrap_or(0),
+        dt_out: dt_out_of(dt_out)?,
+        state,
+        gait,
+        out,
+        force,
+        command: format!("pdw_sweep.simulate(model={model:?}, …)"),
     };
-    let which = GaitKind::parse(gait, "gait").map_err(err)?;
-    let asked = dt_out_of(dt_out)?;
-    pdw::simulate::check_request(steps, asked.every(), &FLAGS).map_err(err)?;
-    let m = build_kw(model, slope, params)?;
-    let tr = interruptible(py, || -> PyResult<_> {
-        let start = match state {
-            Some(v) => Start::State(v),
-            None => Start::Gait(which),
-        };
-        let walk = pdw::simulate::start(&m, &start, &FLAGS).map_err(|e| match e {
-            StartError::Input(e) => err(e),
-            StartError::Limit(e) => err(e),
-            StartError::NoGait {
-                which,
-                tried,
-                failed,
-            } => no_gait_error(&m, which.name(), tried, &failed),
-        })?;
-        let sp = pdw::simulate::spacing(&m, &walk, asked);
-        let opts =
-            pdw::simulate::options_spaced(&m, steps, &sp, pdw::simulate::default_integrator());
-        pdw::simulate::check_samples(&walk, &opts, &FLAGS).map_err(err)?;
-        Ok((pdw::simulate::run(&m, &walk, &opts).map_err(err)?, sp))
-    })?;
-    let (tr, sp) = tr;
-    let d = trajectory_dict(py, &m, &tr)?;
-    d.set_item("dt_out", sp.dt_out)?;
-    d.set_item("dt_out_source", sp.source)?;
-    positions_items(py, &d, &m, &tr)?;
+    let plan = pdw::simulate::plan(&input, Spelling::Python).map_err(err)?;
+    crate::give_warnings(py)?;
+    let run = interruptible(py, || plan.run(&Silent).map_err(err))?;
+    let m = &plan.model;
+    let d = trajectory_dict(py, m, &run.trajectory)?;
+    if let serde_json::Value::Object(fields) = run.report.json() {
+        for (k, v) in &fields {
+            d.set_item(k, json_to_py(py, v)?)?;
+        }
+    }
+    d.set_item("steps_done", run.report.strides_done)?;
+    positions_items(py, &d, m, &run.trajectory)?;
     Ok(d)
 }
 
-/// `simulate`'s `dt_out`: `None` (the default spacing), `"steps"` or a time step.
 fn dt_out_of(v: Option<&Bound<'_, PyAny>>) -> PyResult<pdw::simulate::DtOut> {
     use pdw::simulate::DtOut;
     let Some(v) = v.filter(|v| !v.is_none()) else {
@@ -150,15 +146,6 @@ fn trajectory_dict<'py>(
     d.set_item(
         "section",
         rows_to_array(py, tr.section.clone(), m.walker.section_dim())?,
-    )?;
-    d.set_item("steps_done", tr.steps_done)?;
-    d.set_item(
-        "outcome",
-        match tr.outcome {
-            StrideOutcome::Ok => "ok".to_string(),
-            StrideOutcome::Fall { kind, .. } => kind.name().to_string(),
-            o => o.to_string(),
-        },
     )?;
     d.set_item("units", units_dict(py, tr)?)?;
     Ok(d)

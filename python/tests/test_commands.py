@@ -219,9 +219,29 @@ def test_design_out_writes_the_cli_file():
                     assert fa[k].attrs.get("units") == fb[k].attrs.get("units")
             np.testing.assert_array_equal(fb["cost"][()], got["cost"])
             assert "pdw_sweep.design" in fb["provenance"].attrs["command"]
-        with pytest.raises(ValueError, match="exists"):
+        # the picture beside it, as the CLI draws it
+        assert os.path.getsize(os.path.join(d, "py.png")) > 0
+        assert got["out"] == b and got["png"] == os.path.join(d, "py.png")
+        # the same file continues its search, as the CLI's rerun does: the 3 stored designs
+        # replayed, one more evaluated
+        more = pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=4,
+                          objective="margin", out=b)
+        assert more["designs"] == 4 and more["new"] == 1
+        np.testing.assert_array_equal(more["cost"][:3], got["cost"])
+        # other settings are refused naming the Python option, force starts over
+        with pytest.raises(ValueError, match="out: .* other settings.*pass force"):
             pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=1, out=b)
-        pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=1, out=b, force=True)
+        again = pdw.design("compass", free={"hip_mass": (5.0, 15.0)}, budget=1, out=b,
+                           force=True)
+        assert again["designs"] == 1
+        # the report is the CLI's --json
+        j = json.loads(run_cli("design", "--model", "compass", "--free", "hip_mass=5:15",
+                               "--budget", "3", "--objective", "margin", "--quiet", "--json",
+                               "--out", a, "--force"))
+        for k in ("designs", "new", "counts", "objective", "free_names"):
+            assert j[k] == got[k], k
+        assert j["best"]["params"] == got["best"]["params"]
+        assert j["best"]["reproduce"] == got["best"]["reproduce"]
 
 
 def gif_header(path):

@@ -240,8 +240,9 @@ def test_continuation_finds_garcia_period_doubling():
 
 
 def test_simulate_conserves_energy_between_impacts_and_repeats_the_gait():
-    tr = pdw.simulate("simplest", slope=0.009, steps=4)
-    assert tr["outcome"] == "ok" and tr["steps_done"] == 4
+    tr = pdw.simulate("simplest", slope=0.009, strides=4)
+    assert tr["outcome"] == "ok" and tr["strides_done"] == 4 and not tr["fell"]
+    assert tr["samples"] == tr["t"].size and tr["event_count"] == tr["events"]["t"].size == 4
     assert tr["x"].shape == (tr["t"].size, 4) and tr["units"]["t"] == "sqrt(l/g)"
     e, step = tr["energy"], tr["step"]
     for k in range(4):
@@ -252,15 +253,33 @@ def test_simulate_conserves_energy_between_impacts_and_repeats_the_gait():
     np.testing.assert_allclose(e, 0.5 * thd**2 + np.cos(th - 0.009), rtol=0, atol=1e-15)
     np.testing.assert_allclose(tr["section"], [[GARCIA_THETA, GARCIA_THETADOT]] * 4, atol=1e-8)
     assert list(tr["events"]["kind"]) == ["heel_strike"] * 4
-    grid = pdw.simulate("simplest", steps=1, dt_out=0.5)
+    grid = pdw.simulate("simplest", strides=1, dt_out=0.5)
     np.testing.assert_array_equal(grid["t"], 0.5 * np.arange(grid["t"].size))
 
 
 def test_simulate_a_fall_is_an_outcome():
-    tr = pdw.simulate("simplest", state=[0.3, -0.1], steps=3)
-    assert tr["steps_done"] == 0 and tr["outcome"] == "fell backward"
+    tr = pdw.simulate("simplest", state=[0.3, -0.1], strides=3)
+    assert tr["strides_done"] == 0 and tr["outcome"] == "fell backward" and tr["fell"]
+    # the old spellings: steps= for strides=, steps_done for strides_done
+    old = pdw.simulate("simplest", state=[0.3, -0.1], steps=3)
+    assert old["steps_done"] == 0 and old["strides"] == 3
     with pytest.raises(ValueError, match="3 values given"):
         pdw.simulate("simplest", state=[0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match="give state or gait"):
+        pdw.simulate("simplest", state=[0.3, -0.1], gait="stable")
+
+
+def test_simulate_writes_the_cli_file(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    out = tmp_path / "walk.h5"
+    tr = pdw.simulate("simplest", strides=2, out=str(out))
+    assert tr["out"] == str(out)
+    with h5py.File(out, "r") as f:
+        np.testing.assert_array_equal(f["t"][:], tr["t"])
+        assert f.attrs["steps_done"] == "2"
+    with pytest.raises(ValueError, match="exists"):
+        pdw.simulate("simplest", strides=2, out=str(out))
+    assert pdw.simulate("simplest", strides=2, out=str(out), force=True)["strides_done"] == 2
 
 
 def test_period_two_orbit_matches_the_cli():
@@ -714,16 +733,28 @@ def test_mfpt_uniform_and_file_distributions():
 
 
 def test_disturb_once_and_largest():
-    r = pdw.disturb("rimless", once=-0.01, steps=60)
-    assert not r["fell"] and r["steps"] == 60
-    dev = r["deviation"]
-    # the wheel's multiplier cos² 2α = 1/2 (8 spokes) per step, once the start's offset is gone
+    r = pdw.disturb("rimless", once=-0.01, strides=60)
+    once = r["once"]
+    assert not once["fell"] and once["strides"] == 60 and r["strides"] == 60
+    dev = once["deviation"]
+    # the wheel's multiplier cos² 2α = 1/2 (8 spokes) per stride, once the start's offset is gone
     assert abs(dev[5] / dev[4] - 0.5) < 0.02
-    assert dev[r["returned_after"] - 1] < 1e-6
-    big = pdw.disturb("simplest", largest=True, tol=1e-6, steps=100)
-    ok, fell = big["down"]
+    assert dev[once["returned_after"] - 1] < once["return_tol"] == 1e-6
+    # the old spelling of strides gives the same walk
+    old = pdw.disturb("rimless", once=-0.01, steps=60)["once"]
+    assert old["strides"] == 60 and list(old["deviation"]) == list(dev)
+    big = pdw.disturb("simplest", largest=True, tol=1e-6, strides=100)
+    down = big["largest"][0]
+    assert down["direction"] == "step down" and big["tol"] == 1e-6
+    ok, fell = down["survived"], down["falls_at"]
     assert 0 < ok < fell <= ok + 1e-6
-    assert not pdw.disturb("simplest", once=ok, steps=100)["fell"]
-    assert pdw.disturb("simplest", once=fell, steps=100)["fell"]
-    with pytest.raises(ValueError, match="once"):
+    assert not pdw.disturb("simplest", once=ok, strides=100)["once"]["fell"]
+    assert pdw.disturb("simplest", once=fell, strides=100)["once"]["fell"]
+    up = big["largest"][1]
+    assert up["direction"] == "step up" and up["falls_at"] < up["survived"] < 0
+    with pytest.raises(ValueError, match="give once D or largest"):
         pdw.disturb("rimless")
+    with pytest.raises(ValueError, match="strides: 0 is outside"):
+        pdw.disturb("rimless", once=0.0, strides=0)
+    with pytest.raises(ValueError, match="strides: 2000000 is outside"):
+        pdw.disturb("rimless", once=0.0, strides=2_000_000)

@@ -85,12 +85,15 @@ pub struct DisturbArgs {
     /// and shallower).
     #[arg(long, conflicts_with = "once")]
     pub largest: bool,
-    /// Steps walked after the disturbance counts as surviving it.
-    #[arg(long, default_value_t = 200)]
-    pub steps: usize,
+    /// Strides walked after the disturbance that count as surviving it (old spelling: --steps).
+    #[arg(long, alias = "steps", default_value_t = 200)]
+    pub strides: usize,
     /// With --largest: the bisection's tolerance (the disturbance's unit).
     #[arg(long, default_value_t = 1e-5)]
     pub tol: f64,
+    /// Print the report as one JSON object (the fields of Python's `disturb`).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Options shared by every command that builds a model.
@@ -514,9 +517,9 @@ pub struct SimulateArgs {
     /// Start on the model's stable or unstable gait (found as `fixedpoint` finds it).
     #[arg(long, value_parser = ["stable", "unstable"], conflicts_with = "state")]
     pub gait: Option<String>,
-    /// Steps to simulate (heel strike to heel strike).
-    #[arg(long, default_value_t = 10)]
-    pub steps: usize,
+    /// Strides to simulate, heel strike to heel strike (old spelling: --steps).
+    #[arg(long, alias = "steps", default_value_t = 10)]
+    pub strides: usize,
     /// Output time step (model time units), or `steps`: a sample at every accepted integrator
     /// step and both sides of every event. Default: 100 samples per step from a gait (its
     /// period / 100), T/50 from --state (T = sqrt(L/g)), and both sides of every event.
@@ -528,6 +531,10 @@ pub struct SimulateArgs {
     /// Overwrite an existing --out.
     #[arg(long)]
     pub force: bool,
+    /// Print the report as one JSON object (the fields of Python's `simulate` besides the
+    /// arrays).
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -592,6 +599,9 @@ pub struct DesignArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Print the report as one JSON object (the fields of Python's `design` besides its arrays).
+    #[arg(long)]
+    pub json: bool,
 }
 
 // ---- value checks clap runs while parsing (a bad value exits with code 2 before anything runs;

@@ -417,3 +417,64 @@ fn a_scan_that_finds_nothing_reports_every_start_by_fate() {
         );
     }
 }
+
+/// `--json`: the report as one object whose counts and best design are those of the file, and
+/// the text's lines carry the same values.
+#[test]
+fn the_json_report_is_the_file_s_search() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
+    let args = |out: &Path, json: bool| {
+        let mut v = vec![
+            "design",
+            "--model",
+            "compass",
+            "--free",
+            "hip_mass=5:15",
+            "--objective",
+            "margin",
+            "--budget",
+            "4",
+            "--quiet",
+            "--out",
+        ];
+        v.push(out.to_str().unwrap());
+        if json {
+            v.push("--json");
+        }
+        v.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let (ja, tb) = (args(&a, true), args(&b, false));
+    let o = run(&ja.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let d = pdw::store::read_design(&a, &COLS).unwrap();
+    assert_eq!(j["designs"], d.params.len());
+    assert_eq!(j["new"], d.params.len());
+    let feasible = d.status.iter().filter(|&&s| s == 0).count();
+    assert_eq!(j["counts"]["feasible"], feasible);
+    let costs = d.column("cost").unwrap();
+    let k = (0..costs.len())
+        .min_by(|&x, &y| costs[x].total_cmp(&costs[y]))
+        .unwrap();
+    assert_eq!(j["best"]["index"], k);
+    assert_eq!(j["best"]["cost"].as_f64().unwrap(), costs[k]);
+    assert_eq!(
+        j["best"]["params"]["hip_mass"].as_f64().unwrap(),
+        d.params[k][0]
+    );
+    assert_eq!(o.status.code() == Some(0), j["best"]["feasible"] == true);
+    // the text of the same search: its first line counts the same designs
+    let o = run(&tb.iter().map(String::as_str).collect::<Vec<_>>());
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        text.starts_with(&format!(
+            "4 designs (4 new) from 1 start: {feasible} feasible"
+        )),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("hip_mass = {}", d.params[k][0])),
+        "{text}"
+    );
+}

@@ -335,11 +335,17 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
     assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
 }
 
-/// `disturb`: the library's response printed, and the requests it refuses.
+/// `disturb`: the library's response printed, as text and as JSON, and the requests it refuses.
 #[test]
 fn disturb_prints_the_response_and_refuses_what_it_cannot_do() {
     let o = run(&[
-        "disturb", "--model", "rimless", "--once", "-0.01", "--steps", "60",
+        "disturb",
+        "--model",
+        "rimless",
+        "--once",
+        "-0.01",
+        "--strides",
+        "60",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
@@ -354,23 +360,34 @@ fn disturb_prints_the_response_and_refuses_what_it_cannot_do() {
     .unwrap();
     let k = r.returned_after.unwrap();
     assert!(
-        text.contains(&format!("back within 1e-6 of the gait after {k} steps")),
+        text.contains(&format!("back within 1e-6 of the gait after {k} strides")),
         "{text}"
     );
-    assert!(text.contains("walked all 60 steps"), "{text}");
+    assert!(text.contains("walked all 60 strides"), "{text}");
+    // --json: the same walk as one object (the old spelling --steps still counts strides)
+    let o = run(&[
+        "disturb", "--model", "rimless", "--once", "-0.01", "--steps", "60", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["strides"], 60);
+    assert_eq!(j["once"]["returned_after"], k);
+    assert_eq!(j["once"]["fell"], false);
+    let dev: Vec<f64> = serde_json::from_value(j["once"]["deviation"].clone()).unwrap();
+    assert_eq!(dev, r.deviation);
     let o = run(&["disturb", "--model", "compass", "--once", "1.5"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("step_down"), "{}", stderr(&o));
     let o = run(&["disturb", "--model", "rimless"]);
     assert!(!o.status.success());
-    // the steps walked are bounded (each is kept and integrated): 0, a million and one and the
+    // the strides walked are bounded (each is kept and integrated): 0, a million and one and the
     // largest count clap takes are refused with the bound named, before any model is built
-    for steps in ["0", "1000001", "18446744073709551615"] {
-        let o = run(&["disturb", "--once", "0", "--steps", steps]);
-        assert_eq!(o.status.code(), Some(2), "{steps}");
+    for strides in ["0", "1000001", "18446744073709551615"] {
+        let o = run(&["disturb", "--once", "0", "--strides", strides]);
+        assert_eq!(o.status.code(), Some(2), "{strides}");
         let e = stderr(&o);
         assert!(
-            e.contains("--steps") && e.contains("outside 1..=1000000"),
+            e.contains("--strides") && e.contains("outside 1..=1000000"),
             "{e}"
         );
     }

@@ -30,7 +30,7 @@ fn hdf5_and_csv_hold_the_library_trajectory() {
         let o = simulate(&[
             "--model",
             "compass",
-            "--steps",
+            "--strides",
             "3",
             "--dt-out",
             "steps",
@@ -88,7 +88,7 @@ fn bad_input_names_the_value() {
     let out = out.to_str().unwrap();
     for (args, needle) in [
         (vec!["--state", "1,2,3", "--out", out], "3 values given"),
-        (vec!["--steps", "0", "--out", out], "--steps"),
+        (vec!["--strides", "0", "--out", out], "--strides"),
         (vec!["--dt-out=-1", "--out", out], "--dt-out"),
         (vec!["--dt-out", "0", "--out", out], "--dt-out"),
         (vec!["--dt-out", "fast", "--out", out], "nor the word steps"),
@@ -115,7 +115,7 @@ fn walks_that_would_not_fit_in_memory_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("t.h5");
     for args in [
-        &["--steps", "10", "--dt-out", "1e-12"][..],
+        &["--strides", "10", "--dt-out", "1e-12"][..],
         &[
             "--integrator",
             "rk4",
@@ -196,7 +196,7 @@ fn walks_that_would_not_fit_in_memory_are_refused() {
 fn fixed_frame_energy_drops_by_the_heel_strike_loss() {
     let dir = tempfile::tempdir().unwrap();
     let h5 = dir.path().join("s.h5");
-    let o = simulate(&["--steps", "3", "--out", h5.to_str().unwrap()]);
+    let o = simulate(&["--strides", "3", "--out", h5.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let d = pdw::store::read_trajectory_h5(&h5).unwrap();
     let col = |n: &str| d.column(n).unwrap().values.clone();
@@ -254,7 +254,7 @@ fn the_default_output_is_a_hundred_samples_per_step() {
         let o = simulate(&[
             "--model",
             model,
-            "--steps",
+            "--strides",
             "3",
             "--out",
             h5.to_str().unwrap(),
@@ -295,7 +295,7 @@ fn the_default_output_is_a_hundred_samples_per_step() {
     let o = simulate(&[
         "--model",
         "compass",
-        "--steps",
+        "--strides",
         "3",
         "--dt-out",
         "steps",
@@ -320,7 +320,7 @@ fn the_files_hold_the_walkers_positions() {
         let o = simulate(&[
             "--model",
             "compass",
-            "--steps",
+            "--strides",
             "2",
             "--out",
             p.to_str().unwrap(),
@@ -355,4 +355,31 @@ fn the_files_hold_the_walkers_positions() {
             "{c} missing from {header}"
         );
     }
+}
+
+/// `--json`: the report as one object whose counts are those of the file written, and the old
+/// spelling `--steps` walks the same strides.
+#[test]
+fn the_json_report_counts_what_the_file_holds() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
+    let o = simulate(&["--strides", "4", "--json", "--out", a.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let d = pdw::store::read_trajectory_h5(&a).unwrap();
+    assert_eq!(j["strides"], 4);
+    assert_eq!(j["strides_done"], 4);
+    assert_eq!(j["outcome"], "ok");
+    assert_eq!(j["fell"], false);
+    assert_eq!(j["samples"], d.column("t").unwrap().values.len());
+    assert_eq!(j["event_count"], d.events.t.len());
+    assert_eq!(j["out"], a.to_str().unwrap());
+    assert!(j["start"].as_str().unwrap().starts_with("stable gait"));
+    let o = simulate(&["--steps", "4", "--out", b.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(text.contains("4 of 4 strides"), "{text}");
+    let e = pdw::store::read_trajectory_h5(&b).unwrap();
+    assert_eq!(d.column("t").unwrap().values, e.column("t").unwrap().values);
+    assert_eq!(d.events.pre, e.events.pre);
 }

@@ -12,10 +12,13 @@
 
 use crate::input::InputError;
 use crate::mfpt::{model_at_param, start};
-use crate::model::BuiltModel;
+use crate::model::{BuiltModel, ModelChoice};
+use crate::pipeline::{CommandError, Report, Sink, Spelling};
+use crate::IntegratorChoice;
 use pdw_hybrid::Options;
 use pdw_limit::terrain::{SlopeWalk, TerrainKind};
 use pdw_limit::{LimitError, StrideOutcome};
+use serde::Serialize;
 
 /// The deviation from the gait (∞-norm over the section coordinates) below which the walker
 /// counts as back on it.
@@ -182,4 +185,303 @@ pub fn largest(
         }
     }
     Ok((sign * lo, sign * hi))
+}
+
+// ---- the command: plan → run → report (crate::pipeline)
+
+/// The most strides a walk accepts: every stride's deviation is kept (8 bytes a stride) and each
+/// is a stride to integrate — a million bounds both (8 MB; minutes for the slowest walker).
+pub const MAX_STRIDES: usize = 1_000_000;
+
+/// How far `--largest` looks, on each terrain: 1.5 rad of slope, 1000 length units of step.
+fn reach(kind: TerrainKind) -> f64 {
+    match kind {
+        TerrainKind::Slope => 1.5,
+        TerrainKind::StepDown => 1e3,
+    }
+}
+
+/// The two directions `--largest` bisects, by sign (+1 first).
+fn directions(kind: TerrainKind) -> [&'static str; 2] {
+    match kind {
+        TerrainKind::Slope => ["steeper", "shallower"],
+        TerrainKind::StepDown => ["step down", "step up"],
+    }
+}
+
+/// The unit of the terrain parameter: radians of slope, the model's length of step.
+pub fn terrain_unit(m: &BuiltModel, kind: TerrainKind) -> String {
+    match kind {
+        TerrainKind::Slope => "rad".into(),
+        TerrainKind::StepDown => m.walker.units().length.to_string(),
+    }
+}
+
+/// `disturb`'s inputs as the user gave them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisturbInput {
+    pub model: ModelChoice,
+    pub integrator: IntegratorChoice,
+    /// `step-down` or `slope`.
+    pub terrain: String,
+    /// The disturbance of stride 1 as typed (a slope may carry its unit, `0.5deg`); `None` with
+    /// `largest`.
+    pub once: Option<String>,
+    /// Bisect for the largest disturbance survived, both ways.
+    pub largest: bool,
+    /// Strides walked after the disturbance that count as surviving it.
+    pub strides: usize,
+    /// With `largest`: the bisection's tolerance (the disturbance's unit).
+    pub tol: f64,
+}
+
+impl Default for DisturbInput {
+    /// The CLI's and Python's defaults: the simplest walker, a step down, 200 strides, 1e-5.
+    fn default() -> Self {
+        DisturbInput {
+            model: ModelChoice {
+                model: "simplest".into(),
+                slope: None,
+                set: Vec::new(),
+            },
+            integrator: IntegratorChoice::default(),
+            terrain: TerrainKind::StepDown.name().into(),
+            once: None,
+            largest: false,
+            strides: 200,
+            tol: 1e-5,
+        }
+    }
+}
+
+/// What a planned `disturb` does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Asked {
+    Once(f64),
+    Largest { tol: f64 },
+}
+
+/// A checked `disturb`: the model built, the terrain, the integrator, what to walk.
+pub struct DisturbPlan {
+    pub model: BuiltModel,
+    pub kind: TerrainKind,
+    pub integrator: Options,
+    pub strides: usize,
+    asked: Asked,
+}
+
+/// Checks `input` and builds its model; messages name the options as `sp` spells them.
+pub fn plan(input: &DisturbInput, sp: Spelling) -> Result<DisturbPlan, CommandError> {
+    let f = |name: &str| sp.flag(name);
+    if !(1..=MAX_STRIDES).contains(&input.strides) {
+        return Err(InputError(format!(
+            "{}: {} is outside 1..={MAX_STRIDES} (strides walked after the disturbance)",
+            f("strides"),
+            input.strides
+        ))
+        .into());
+    }
+    let kind = crate::mfpt::parse_terrain(&input.terrain, &f("terrain"))?;
+    let once = match (&input.once, input.largest) {
+        (Some(s), false) => Some(match kind {
+            TerrainKind::Slope => crate::input::parse_slope_for(s, &f("once"))?,
+            TerrainKind::StepDown => crate::mfpt::parse_height(s, &f("once"))?,
+        }),
+        (None, true) => None,
+        _ => {
+            return Err(InputError(format!(
+                "give {} D or {} (one of them)",
+                f("once"),
+                f("largest")
+            ))
+            .into())
+        }
+    };
+    let integrator = crate::integrator(&input.integrator, crate::mfpt::default_integrator())?;
+    let model = crate::build_model(&input.model)?;
+    check(&model, kind)?;
+    crate::integrator::check_integrator(&model, &integrator)?;
+    let asked = match once {
+        Some(d) => Asked::Once(d),
+        None if input.tol.is_finite() && input.tol > 0.0 => Asked::Largest { tol: input.tol },
+        None => return Err(InputError(format!("{}: {} must be > 0", f("tol"), input.tol)).into()),
+    };
+    Ok(DisturbPlan {
+        model,
+        kind,
+        integrator,
+        strides: input.strides,
+        asked,
+    })
+}
+
+/// One disturbance's outcome, as reported.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OnceReport {
+    /// The disturbance of stride 1.
+    pub disturbance: f64,
+    /// Fell within the walk.
+    pub fell: bool,
+    /// Heel strikes completed (the disturbed one included) before the fall, or all strides.
+    pub strides: usize,
+    /// How the fall happened (`None`: walked all strides).
+    pub fall: Option<String>,
+    /// The deviation from the gait after each heel strike (∞-norm of the section coordinates).
+    pub deviation: Vec<f64>,
+    /// The first heel strike after which the deviation is below `return_tol`.
+    pub returned_after: Option<usize>,
+    /// [`RETURN_TOL`].
+    pub return_tol: f64,
+}
+
+/// The largest disturbance survived one way, as reported.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LargestReport {
+    /// `step down`, `step up`, `steeper` or `shallower`.
+    pub direction: &'static str,
+    /// The largest disturbance survived (signed).
+    pub survived: f64,
+    /// The nearest disturbance found that falls (signed); `|falls_at − survived| ≤ tol` unless
+    /// `at_double_spacing`.
+    pub falls_at: f64,
+    /// The bisection stopped at adjacent doubles, wider apart than `tol`.
+    pub at_double_spacing: bool,
+}
+
+/// `disturb`'s report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DisturbReport {
+    pub model: String,
+    /// `step-down` or `slope`.
+    pub terrain: &'static str,
+    /// The terrain parameter's nominal value ([`nominal`]) and its name and unit.
+    pub parameter: &'static str,
+    pub nominal: f64,
+    pub unit: String,
+    /// Strides that count as surviving.
+    pub strides: usize,
+    /// With `once`: the response.
+    pub once: Option<OnceReport>,
+    /// With `largest`: both directions, and the tolerance.
+    pub largest: Vec<LargestReport>,
+    pub tol: Option<f64>,
+}
+
+impl DisturbPlan {
+    /// Walks the disturbance, or bisects both ways (two phases of bisection steps on `sink`).
+    pub fn run(&self, _sink: &dyn Sink) -> Result<DisturbReport, InputError> {
+        let m = &self.model;
+        let mut report = DisturbReport {
+            model: m.info.name.to_string(),
+            terrain: self.kind.name(),
+            parameter: self.kind.param(),
+            nominal: nominal(m, self.kind),
+            unit: terrain_unit(m, self.kind),
+            strides: self.strides,
+            once: None,
+            largest: Vec::new(),
+            tol: None,
+        };
+        match self.asked {
+            Asked::Once(d) => {
+                let r = respond(m, self.kind, d, self.strides, self.integrator)?;
+                report.once = Some(OnceReport {
+                    disturbance: r.disturbance,
+                    fell: !r.survived(),
+                    strides: r.steps,
+                    fall: r.fall.map(|o| o.to_string()),
+                    deviation: r.deviation,
+                    returned_after: r.returned_after,
+                    return_tol: RETURN_TOL,
+                });
+            }
+            Asked::Largest { tol } => {
+                report.tol = Some(tol);
+                for (direction, sign) in directions(self.kind).into_iter().zip([1.0, -1.0]) {
+                    let (survived, falls_at) = largest(
+                        m,
+                        self.kind,
+                        sign,
+                        tol,
+                        reach(self.kind),
+                        self.strides,
+                        self.integrator,
+                    )?;
+                    report.largest.push(LargestReport {
+                        direction,
+                        survived,
+                        falls_at,
+                        at_double_spacing: (falls_at - survived).abs() > tol,
+                    });
+                }
+            }
+        }
+        Ok(report)
+    }
+}
+
+impl Report for DisturbReport {
+    fn text(&self) -> String {
+        let unit = &self.unit;
+        let mut t = format!(
+            "model {}  nominal {} {} {unit}; one disturbed stride, then {} nominal strides at \
+             most\n",
+            self.model,
+            self.parameter,
+            self.nominal,
+            self.strides - 1
+        );
+        if let Some(r) = &self.once {
+            once_text(&mut t, r, unit);
+        }
+        let tol = self.tol.unwrap_or(0.0);
+        for l in &self.largest {
+            t += &format!(
+                "largest {} survived: {:.6e} {unit} (falls at {:.6e}; tolerance {tol:e}, \
+                 surviving = {} strides without a fall)\n",
+                l.direction, l.survived, l.falls_at, self.strides
+            );
+            if l.at_double_spacing {
+                t += &format!(
+                    "note: the bisection stopped at the spacing of doubles: {:e} and {:e} are \
+                     adjacent, {:e} {unit} apart, wider than the tolerance {tol:e}; no smaller \
+                     tolerance can be met here\n",
+                    l.survived,
+                    l.falls_at,
+                    (l.falls_at - l.survived).abs()
+                );
+            }
+        }
+        t
+    }
+}
+
+/// One disturbance's lines: the outcome, the return, the first deviations.
+fn once_text(t: &mut String, r: &OnceReport, unit: &str) {
+    let d = crate::output::number(r.disturbance);
+    *t += &match &r.fall {
+        Some(o) => format!(
+            "disturbance {d} {unit}: fell after {} heel strikes ({o})\n",
+            r.strides
+        ),
+        None => format!("disturbance {d} {unit}: walked all {} strides\n", r.strides),
+    };
+    *t += &match r.returned_after {
+        Some(k) => format!(
+            "back within {:e} of the gait after {k} strides\n",
+            r.return_tol
+        ),
+        None => format!("not back within {:e} of the gait\n", r.return_tol),
+    };
+    let shown: Vec<String> = r
+        .deviation
+        .iter()
+        .take(12)
+        .map(|d| format!("{d:.2e}"))
+        .collect();
+    *t += &format!(
+        "deviation from the gait after each stride (section, inf-norm): {}{}\n",
+        shown.join(" "),
+        if r.deviation.len() > 12 { " …" } else { "" }
+    );
 }

@@ -15,6 +15,7 @@ pub mod animate_trajectory;
 pub mod basin;
 pub mod basin_over;
 pub mod design;
+pub mod design_command;
 pub mod disturb;
 pub mod follow;
 pub mod gaits;
@@ -27,7 +28,9 @@ pub mod mfpt;
 pub mod mfpt_over;
 pub mod model;
 pub mod output;
+pub mod pipeline;
 pub mod simulate;
+pub mod simulate_file;
 pub mod sweep;
 
 // The crates under this one, re-exported: every front end (the CLI, the explorer, the Python

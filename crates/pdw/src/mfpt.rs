@@ -117,14 +117,19 @@ pub fn default_integrator() -> Options {
 
 /// The terrain's name checked: `slope` or `step-down` ([`TerrainKind`]).
 pub fn check_terrain(name: &str, flags: &MfptFlags) -> Result<TerrainKind, InputError> {
+    parse_terrain(name, flags.terrain)
+}
+
+/// The terrain kind named `name` (`slope` or `step-down`); anything else is refused naming
+/// `flag`.
+pub fn parse_terrain(name: &str, flag: &str) -> Result<TerrainKind, InputError> {
     if name == TerrainKind::Slope.name() {
         Ok(TerrainKind::Slope)
     } else if name == TerrainKind::StepDown.name() {
         Ok(TerrainKind::StepDown)
     } else {
         Err(InputError(format!(
-            "{}: '{name}' is not one of {}",
-            flags.terrain,
+            "{flag}: '{name}' is not one of {}",
             TERRAINS.join(", ")
         )))
     }

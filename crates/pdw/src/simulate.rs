@@ -7,10 +7,14 @@
 
 use crate::gaits::{model_guesses, search, Failed};
 use crate::input::InputError;
-use crate::model::BuiltModel;
+use crate::model::{BuiltModel, ModelChoice};
+use crate::pipeline::{CommandError, Preview, Report, Sink, Spelling};
+use crate::IntegratorChoice;
 use pdw_hybrid::{Method, Options};
 use pdw_limit::trajectory::{self, Trajectory, TrajectoryOptions};
 use pdw_limit::LimitError;
+use serde::Serialize;
+use std::path::PathBuf;
 
 /// Residual tolerance of the gait a walk starts from.
 pub const GAIT_TOL: f64 = 1e-12;
@@ -451,4 +455,280 @@ pub fn positions(m: &BuiltModel, tr: &Trajectory) -> Result<Positions, String> {
         points,
         com,
     })
+}
+
+// ---- the command: plan → run → report (crate::pipeline)
+
+/// The names of `simulate`'s options on the command line.
+const CLI_FLAGS: SimulateFlags = SimulateFlags {
+    steps: "--strides",
+    dt_out: "--dt-out",
+    state: "--state",
+    gait: "--gait",
+    rk4_step: "--rk4-step",
+};
+
+/// The names of `simulate`'s keyword arguments in Python.
+const PYTHON_FLAGS: SimulateFlags = SimulateFlags {
+    steps: "strides",
+    dt_out: "dt_out",
+    state: "state",
+    gait: "gait",
+    rk4_step: "rk4_step",
+};
+
+/// The option names of front end `sp`.
+pub fn flags(sp: Spelling) -> &'static SimulateFlags {
+    match sp {
+        Spelling::Cli => &CLI_FLAGS,
+        Spelling::Python => &PYTHON_FLAGS,
+    }
+}
+
+/// `simulate`'s inputs as the user gave them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimulateInput {
+    pub model: ModelChoice,
+    pub integrator: IntegratorChoice,
+    /// Strides to walk (heel strike to heel strike).
+    pub strides: usize,
+    /// The output spacing.
+    pub dt_out: DtOut,
+    /// Section coordinates, or a full state just after a heel strike; `None`: from `gait`.
+    pub state: Option<Vec<f64>>,
+    /// `stable` or `unstable` (`None`: stable); not with `state`.
+    pub gait: Option<String>,
+    /// The file to write (`.h5`, `.hdf5` or `.csv`); `None`: none (Python returns the arrays).
+    pub out: Option<PathBuf>,
+    /// Replace an existing `out`.
+    pub force: bool,
+    /// The command as run (the CLI's command line, Python's call), for the file.
+    pub command: String,
+}
+
+/// A checked `simulate`: the model built, the integrator, where the walk starts, the file.
+pub struct SimulatePlan {
+    pub model: BuiltModel,
+    pub integrator: Options,
+    pub strides: usize,
+    pub dt_out: DtOut,
+    pub start: Start,
+    out: Option<(PathBuf, crate::simulate_file::Format)>,
+    force: bool,
+    command: String,
+    model_name: String,
+    spelling: Spelling,
+    flags: &'static SimulateFlags,
+}
+
+/// Checks `input` and builds its model, naming the options as `sp` spells them.
+pub fn plan(input: &SimulateInput, sp: Spelling) -> Result<SimulatePlan, CommandError> {
+    let flags = flags(sp);
+    let out = match &input.out {
+        Some(p) => Some((
+            p.clone(),
+            crate::simulate_file::Format::of(p, &sp.flag("out"))?,
+        )),
+        None => None,
+    };
+    check_request(input.strides, input.dt_out.every(), flags)?;
+    let start = match (&input.state, &input.gait) {
+        (Some(v), None) => Start::State(v.clone()),
+        (None, g) => Start::Gait(GaitKind::parse(
+            g.as_deref().unwrap_or("stable"),
+            flags.gait,
+        )?),
+        (Some(_), Some(_)) => {
+            return Err(InputError(format!(
+                "give {} or {} (one of them)",
+                flags.state, flags.gait
+            ))
+            .into())
+        }
+    };
+    let integrator = crate::integrator(&input.integrator, default_integrator())?;
+    let model = crate::build_model(&input.model)?;
+    crate::integrator::check_integrator(&model, &integrator)?;
+    Ok(SimulatePlan {
+        model,
+        integrator,
+        strides: input.strides,
+        dt_out: input.dt_out,
+        start,
+        out,
+        force: input.force,
+        command: input.command.clone(),
+        model_name: input.model.model.clone(),
+        spelling: sp,
+        flags,
+    })
+}
+
+impl SimulatePlan {
+    /// What the plan states before the walk: the file it writes.
+    pub fn preview(&self) -> Preview {
+        Preview {
+            outputs: self.out.iter().map(|(p, _)| p.clone()).collect(),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Claims the file, finds the start (a gait: Newton from the model's guesses), checks the
+    /// samples fit, walks and writes. A fall is an outcome of the walk (the report's
+    /// `outcome`), not an error; no gait of the kind asked is an input error naming the
+    /// option that gives a start instead.
+    pub fn run(&self, _sink: &dyn Sink) -> Result<SimulateRun, CommandError> {
+        let m = &self.model;
+        let _claim = self.claim()?;
+        let walk = match start(m, &self.start, self.flags) {
+            Ok(walk) => walk,
+            Err(StartError::Input(e)) => return Err(e.into()),
+            Err(StartError::Limit(e)) => return Err(e.into()),
+            Err(StartError::NoGait {
+                which,
+                tried,
+                failed,
+            }) => {
+                let msg = crate::gaits::no_gait_message(m, which.name(), tried, &failed);
+                let hint = format!("; give a starting point with {}", self.flags.state);
+                // the hint goes on the first line, before the failed guesses
+                let msg = match msg.split_once('\n') {
+                    Some((first, rest)) => format!("{first}{hint}\n{rest}"),
+                    None => msg + &hint,
+                };
+                return Err(InputError(msg).into());
+            }
+        };
+        let spacing = spacing(m, &walk, self.dt_out);
+        let opts = options_spaced(m, self.strides, &spacing, self.integrator);
+        check_samples(&walk, &opts, self.flags)?;
+        let trajectory = run(m, &walk, &opts)?;
+        if let Some((path, format)) = &self.out {
+            let data = crate::simulate_file::to_store(
+                m,
+                &trajectory,
+                &opts,
+                &spacing,
+                &walk.label,
+                &self.command,
+            );
+            let mut prov = crate::provenance(
+                &self.command,
+                &crate::simulate_file::options_json(&opts, &spacing),
+            );
+            prov.model_spec = crate::model::spec_toml(&self.model_name).unwrap_or_default();
+            crate::simulate_file::write(path, *format, data, &trajectory, &prov)
+                .map_err(|e| InputError(e.to_string()))?;
+        }
+        let report = SimulateReport::of(self, &walk, &trajectory, &spacing);
+        Ok(SimulateRun {
+            report,
+            trajectory,
+            spacing,
+        })
+    }
+
+    /// Claims `out` (refused if it exists without `force`, or if it is the model's spec file).
+    fn claim(&self) -> Result<Option<crate::output::Claim>, InputError> {
+        let Some((path, format)) = &self.out else {
+            return Ok(None);
+        };
+        let inputs: Vec<_> = crate::output::model_input(&self.model_name)
+            .into_iter()
+            .collect();
+        crate::output::claim(
+            &[crate::output::Output {
+                flag: match self.spelling {
+                    Spelling::Cli => "--out",
+                    Spelling::Python => "out",
+                },
+                path,
+                format: format.claimed(),
+                may_exist: false,
+            }],
+            &inputs,
+            self.force,
+        )
+        .map(Some)
+    }
+}
+
+/// A walk's result: the report, and the trajectory and its spacing for a front end that
+/// returns the arrays (Python).
+pub struct SimulateRun {
+    pub report: SimulateReport,
+    pub trajectory: Trajectory,
+    pub spacing: Spacing,
+}
+
+/// `simulate`'s report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SimulateReport {
+    pub model: String,
+    pub slope: f64,
+    /// Where the walk started (`stable gait [..]`, `state [..]`).
+    pub start: String,
+    /// Strides asked and done.
+    pub strides: usize,
+    pub strides_done: usize,
+    /// Samples and events recorded.
+    pub samples: usize,
+    pub event_count: usize,
+    /// `ok`, or how the walk ended early (a fall by name).
+    pub outcome: String,
+    /// The walk ended in a fall.
+    pub fell: bool,
+    /// The output spacing and where it came from.
+    pub dt_out: Option<f64>,
+    pub dt_out_source: String,
+    /// The file written.
+    pub out: Option<PathBuf>,
+}
+
+impl SimulateReport {
+    fn of(p: &SimulatePlan, walk: &Walk, tr: &Trajectory, sp: &Spacing) -> Self {
+        SimulateReport {
+            model: p.model.info.name.to_string(),
+            slope: p.model.slope(),
+            start: walk.label.clone(),
+            strides: p.strides,
+            strides_done: tr.steps_done,
+            samples: tr.len(),
+            event_count: tr.events.len(),
+            outcome: match tr.outcome {
+                pdw_limit::StrideOutcome::Ok => "ok".to_string(),
+                pdw_limit::StrideOutcome::Fall { kind, .. } => kind.name().to_string(),
+                o => o.to_string(),
+            },
+            fell: matches!(tr.outcome, pdw_limit::StrideOutcome::Fall { .. }),
+            dt_out: sp.dt_out,
+            dt_out_source: sp.source.clone(),
+            out: p.out.as_ref().map(|(path, _)| path.clone()),
+        }
+    }
+}
+
+impl Report for SimulateReport {
+    fn text(&self) -> String {
+        let ended = match self.outcome.as_str() {
+            "ok" => "all strides done".to_string(),
+            o if self.fell => format!("fell ({o})"),
+            o => o.to_string(),
+        };
+        let mut t = format!(
+            "model {}  slope {} rad  from {}\n{} of {} strides, {} samples, {} events; ended: \
+             {ended}\n",
+            self.model,
+            self.slope,
+            self.start,
+            self.strides_done,
+            self.strides,
+            self.samples,
+            self.event_count
+        );
+        if let Some(p) = &self.out {
+            t += &format!("wrote {}\n", p.display());
+        }
+        t
+    }
 }

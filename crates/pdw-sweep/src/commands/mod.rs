@@ -17,6 +17,7 @@ mod mfpt_over;
 mod models;
 mod output;
 mod simulate;
+mod sink;
 mod sweep;
 
 use crate::args::InputError;
@@ -64,26 +65,34 @@ pub fn build_model(opts: &ModelOpts) -> Result<BuiltModel, InputError> {
     pdw::build_model(&choice(opts))
 }
 
-/// Builds the model with the command-line overrides and then `extra` overrides on top.
-pub fn build_with(opts: &ModelOpts, extra: &[(String, f64)]) -> Result<BuiltModel, InputError> {
-    pdw::build_with(&choice(opts), extra)
-}
-
 /// The integrator of a command from `--integrator`, `--rtol`, `--atol`, `--rk4-step`,
 /// `--controller`, `--cold-restarts` on top of the command's `default`; see
 /// [`pdw::integrator()`].
 pub fn integrator(o: &IntegratorOpts, default: Options) -> Result<Options, InputError> {
-    pdw::integrator(
-        &pdw::IntegratorChoice {
-            integrator: o.integrator.clone(),
-            rtol: o.rtol,
-            atol: o.atol,
-            rk4_step: o.rk4_step,
-            cold_restarts: o.cold_restarts,
-            controller: o.controller.clone(),
-        },
-        default,
-    )
+    pdw::integrator(&integrator_choice(o), default)
+}
+
+/// `--integrator`, `--rtol`, `--atol`, `--rk4-step`, `--controller`, `--cold-restarts` as the
+/// library's [`pdw::IntegratorChoice`].
+fn integrator_choice(o: &IntegratorOpts) -> pdw::IntegratorChoice {
+    pdw::IntegratorChoice {
+        integrator: o.integrator.clone(),
+        rtol: o.rtol,
+        atol: o.atol,
+        rk4_step: o.rk4_step,
+        cold_restarts: o.cold_restarts,
+        controller: o.controller.clone(),
+    }
+}
+
+/// Prints a command's report: its text, or with `--json` its JSON object on one line.
+fn print_report<R: pdw::pipeline::Report>(r: &R, json: bool) -> anyhow::Result<()> {
+    if json {
+        crate::outln!("{}", serde_json::to_string(&r.json())?);
+    } else {
+        crate::out(&r.text());
+    }
+    Ok(())
 }
 
 /// The command line as run.
