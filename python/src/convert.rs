@@ -33,109 +33,10 @@ pub(crate) fn complex_array<'py>(
         .into_any()
 }
 
-pub(crate) fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("valid", v.valid())?;
-    d.set_item("min_normal_force", v.min_normal_force)?;
-    d.set_item("max_friction_required", v.max_friction_required)?;
-    d.set_item("min_knee_torque", v.min_knee_torque)?;
-    d.set_item("normal_force_negative", v.normal_force_negative)?;
-    d.set_item("knee_unlocks", v.knee_unlocks)?;
-    d.set_item("swing_foot_scuffs", v.swing_foot_scuffs)?;
-    // located on the dense solution (pdw::limit::validity): margins, clearance, impacts
-    d.set_item("impact_violation", v.impact_violation)?;
-    d.set_item("continuous", v.continuous)?;
-    d.set_item("fell", v.fell.clone())?;
-    d.set_item("t_min_normal_force", v.t_min_normal_force)?;
-    d.set_item("t_max_friction_required", v.t_max_friction_required)?;
-    let knees = PyDict::new(py);
-    knees.set_item("stance", v.knee_torque[0])?;
-    knees.set_item("swing", v.knee_torque[1])?;
-    d.set_item("knee_torque", knees)?;
-    d.set_item(
-        "clearance_rule",
-        v.clearance_rule.map(|r| match r {
-            pdw::walkers::ClearanceRule::WholeSwing => "whole_swing",
-            pdw::walkers::ClearanceRule::AfterMidStance => "after_mid_stance",
-        }),
-    )?;
-    d.set_item("min_clearance", v.min_clearance)?;
-    d.set_item("scuff_depth", v.scuff_depth)?;
-    d.set_item(
-        "t_min_clearance",
-        v.min_clearance.map(|_| v.t_min_clearance),
-    )?;
-    let intervals: Vec<[f64; 2]> = v.scuff_intervals.iter().map(|&(a, b)| [a, b]).collect();
-    d.set_item("scuff_intervals", intervals)?;
-    d.set_item("t_mid_stance", v.t_mid_stance)?;
-    d.set_item("impact_friction_required", v.impact_friction_required)?;
-    let impacts = PyList::empty(py);
-    for i in &v.impacts {
-        let e = PyDict::new(py);
-        e.set_item("event", &i.event)?;
-        e.set_item("t", i.t)?;
-        e.set_item("checked", i.report.is_some())?;
-        for k in ["friction_required", "energy_lost", "min_margin", "entries"] {
-            e.set_item(k, py.None())?;
-        }
-        if let Some(r) = &i.report {
-            e.set_item("friction_required", r.friction_required)?;
-            e.set_item("energy_lost", r.energy_lost)?;
-            e.set_item("min_margin", r.min_margin().map(|m| m.0))?;
-            let entries = PyList::empty(py);
-            for en in &r.entries {
-                let x = PyDict::new(py);
-                x.set_item("name", &en.name)?;
-                x.set_item("kind", format!("{:?}", en.kind))?;
-                x.set_item("unilateral", en.unilateral)?;
-                x.set_item("active", en.active)?;
-                x.set_item("impulse", en.impulse)?;
-                x.set_item("rate_after", en.rate_after)?;
-                x.set_item("margin", en.margin())?;
-                entries.append(x)?;
-            }
-            e.set_item("entries", entries)?;
-        }
-        impacts.append(e)?;
-    }
-    d.set_item("impacts", impacts)?;
-    d.set_item(
-        "scales",
-        v.scales
-            .map(|s| {
-                let x = PyDict::new(py);
-                x.set_item("mass", s.mass)?;
-                x.set_item("length", s.length)?;
-                x.set_item("gravity", s.gravity)?;
-                Ok::<_, PyErr>(x)
-            })
-            .transpose()?,
-    )?;
-    let margins = PyList::empty(py);
-    for m in &v.margins {
-        let x = PyDict::new(py);
-        x.set_item("name", &m.name)?;
-        x.set_item("raw", m.raw)?;
-        x.set_item("scale", m.scale)?;
-        x.set_item("scale_name", m.scale_name)?;
-        x.set_item("relative", m.relative)?;
-        x.set_item("t", m.t)?;
-        margins.append(x)?;
-    }
-    d.set_item("margins", margins)?;
-    d.set_item("binding", v.binding().map(|m| m.name.clone()))?;
-    d.set_item("min_relative_margin", v.min_relative_margin())?;
-    let violations = PyList::empty(py);
-    for x in &v.violations {
-        let y = PyDict::new(py);
-        y.set_item("criterion", &x.criterion)?;
-        y.set_item("t_start", x.t_start)?;
-        y.set_item("t_end", x.t_end)?;
-        y.set_item("worst", x.worst)?;
-        violations.append(y)?;
-    }
-    d.set_item("violations", violations)?;
-    Ok(d)
+/// A gait's validity as the dict of the CLI's `validity` ([`pdw::validity::validity_json`]):
+/// the same keys, `None` where the CLI writes null (a number not defined, e.g. no knees).
+pub(crate) fn validity_dict<'py>(py: Python<'py>, v: &Validity) -> PyResult<Bound<'py, PyAny>> {
+    json_to_py_lists(py, &pdw::validity::validity_json(v))
 }
 
 pub(crate) fn attractor_dict<'py>(py: Python<'py>, a: &Attractor) -> PyResult<Bound<'py, PyDict>> {
@@ -201,6 +102,23 @@ pub(crate) fn json_to_py<'py>(
     py: Python<'py>,
     v: &serde_json::Value,
 ) -> PyResult<Bound<'py, PyAny>> {
+    json_value(py, v, true)
+}
+
+/// [`json_to_py`] with every list a list (numbers and all): the nested objects a front end
+/// compares with the CLI's JSON as they are (a gait's validity).
+pub(crate) fn json_to_py_lists<'py>(
+    py: Python<'py>,
+    v: &serde_json::Value,
+) -> PyResult<Bound<'py, PyAny>> {
+    json_value(py, v, false)
+}
+
+fn json_value<'py>(
+    py: Python<'py>,
+    v: &serde_json::Value,
+    arrays: bool,
+) -> PyResult<Bound<'py, PyAny>> {
     use pyo3::IntoPyObjectExt;
     use serde_json::Value;
     Ok(match v {
@@ -213,20 +131,24 @@ pub(crate) fn json_to_py<'py>(
         },
         Value::String(s) => s.into_bound_py_any(py)?,
         Value::Array(items) => {
-            let floats: Option<Vec<f64>> = items
-                .iter()
-                .map(|x| {
-                    x.as_number()
-                        .filter(|n| n.is_f64())
-                        .and_then(|n| n.as_f64())
-                })
-                .collect();
+            let floats: Option<Vec<f64>> = if arrays {
+                items
+                    .iter()
+                    .map(|x| {
+                        x.as_number()
+                            .filter(|n| n.is_f64())
+                            .and_then(|n| n.as_f64())
+                    })
+                    .collect()
+            } else {
+                None
+            };
             match floats {
                 Some(f) if !f.is_empty() => f.into_pyarray(py).into_any(),
                 _ => {
                     let l = PyList::empty(py);
                     for x in items {
-                        l.append(json_to_py(py, x)?)?;
+                        l.append(json_value(py, x, arrays)?)?;
                     }
                     l.into_any()
                 }
@@ -235,7 +157,7 @@ pub(crate) fn json_to_py<'py>(
         Value::Object(map) => {
             let d = PyDict::new(py);
             for (k, x) in map {
-                d.set_item(k, json_to_py(py, x)?)?;
+                d.set_item(k, json_value(py, x, arrays)?)?;
             }
             d.into_any()
         }

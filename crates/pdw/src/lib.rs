@@ -32,6 +32,7 @@ pub mod pipeline;
 pub mod simulate;
 pub mod simulate_file;
 pub mod sweep;
+pub mod validity;
 
 // The crates under this one, re-exported: every front end (the CLI, the explorer, the Python
 // package) depends on `pdw` alone and names their items as `pdw::store::…`, `pdw::limit::…` and
