@@ -36,7 +36,7 @@
 //! stages, same steps, same guard values and event location, same resets), so the `x` part —
 //! the stride map `P(s)` — is the plain map's bit for bit (tested); `Φ` carries the local
 //! errors of a step sequence chosen for `x`, measured against the fully controlled `Φ` and
-//! finite differences in the tests, in docs/cli.md (`fixedpoint`) and in
+//! finite differences in the tests, in experiments/cli-measurements.md (`fixedpoint`) and in
 //! experiments/results/benchmarks/README.md.
 
 use pdw_hybrid::{GuardSpec, HybridSystem, Scratch};

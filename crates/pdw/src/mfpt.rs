@@ -987,7 +987,7 @@ pub struct ChainFlags {
 /// step height of exactly 0: there the model is level ground, whose heel-strike rule is the step
 /// model's limit from below only, and a walker's map can change sharply for the smallest steps
 /// down — the simplest walker's chain gives 11.80 with 11 nodes against 11.21 with 12 (its
-/// walkers 10.73 ± 0.11, docs/cli.md). `None` on slopes, with no node at 0, or without spread.
+/// walkers 10.73 ± 0.11, experiments/cli-measurements.md). `None` on slopes, with no node at 0, or without spread.
 pub fn zero_height_node_warning(plan: &MfptPlan, nodes: usize, flag: &str) -> Option<String> {
     let t = &plan.terrain;
     if t.kind != TerrainKind::StepDown || t.sd <= 0.0 {

@@ -259,7 +259,7 @@ fn on_a_cloud_the_compass_chain_agrees_with_the_walkers() {
 }
 
 /// The simplest walker at Garcia's slope, σ = 0.04°: the grid just after heel strike stays
-/// 2.4 % (4 standard errors of 20 000 walkers) short at every mesh (docs/cli.md); on a cloud of
+/// 2.4 % (4 standard errors of 20 000 walkers) short at every mesh (experiments/cli-measurements.md); on a cloud of
 /// its mid-stance section at the spacing of a 120-node grid the chain agrees with 20 000
 /// walkers.
 #[test]
