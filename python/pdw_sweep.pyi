@@ -240,40 +240,47 @@ def mfpt(
 def disturb(
     model: str = "simplest",
     terrain: str = "step-down",
-    once: Optional[float] = None,
+    once: Optional[Union[float, str]] = None,
     largest: bool = False,
-    steps: int = 200,
+    strides: int = 200,
     tol: float = 1e-5,
     slope: Optional[Union[float, str]] = None,
     **params: float,
 ) -> dict[str, Any]:
-    """One disturbance from the stable gait (`pdw-sweep disturb`): with `once=d` step 1's
-    foothold is d lower (terrain "slope": its line d rad steeper), then nominal ground; returns
-    fell, steps, fall, deviation (per step, section ∞-norm from the gait), returned_after (first
-    step within 1e-6, or None). With `largest=True` the largest disturbance survived for `steps`
-    steps each way, `(survived, fell)` pairs under down/up (steeper/shallower), to `tol`."""
+    """One disturbance from the stable gait (`pdw-sweep disturb`, the dict of its `--json`):
+    model, terrain, parameter, nominal, unit, strides, and with `once=d` (stride 1's foothold d
+    lower; terrain "slope": its line d rad steeper, or a string with its unit) under `once`:
+    disturbance, fell, strides, fall, deviation (per stride, section ∞-norm from the gait),
+    returned_after (first stride within return_tol, or None), return_tol; with `largest=True`
+    under `largest` one dict per direction (direction, survived, falls_at, at_double_spacing),
+    bisected to `tol`. `steps=` is the old spelling of `strides=`."""
     ...
 
 def simulate(
     model: str = "simplest",
     slope: Optional[Union[float, str]] = None,
     state: Optional[Sequence[float]] = None,
-    gait: str = "stable",
-    steps: int = 10,
+    gait: Optional[str] = None,
+    strides: int = 10,
     dt_out: Union[float, str, None] = None,
+    out: Optional[Union[str, "os.PathLike[str]"]] = None,
+    force: bool = False,
     **params: float,
 ) -> dict[str, Any]:
-    """A walk of `steps` steps from `state` (section coordinates or a full state just after a
-    heel strike) or from the model's `gait`; the `pdw-sweep simulate` series as arrays: t (n,),
-    x (n, d), state_names, mode, step, normal_force, tangential_force, friction_required,
-    knee_torque (n, 2; NaN where a knee is free or absent), flags, energy (where defined),
-    events (dict of arrays: t, kind, step, ends_step, mode_before, mode_after, pre, post),
-    section (steps_done, d_s), steps_done, outcome ("ok" or how it ended), units (dict),
-    positions (n, P, 2) of the points point_names and com (n, 2) in the walk's fixed slope frame
-    (positions_frame; none for round feet), dt_out and dt_out_source (the spacing used).
-    dt_out=None: 100 samples per step from a gait (T/50, T = sqrt(L/g), from a state) and both
-    sides of every event; "steps": every accepted integrator step and event; a number: exactly
-    at t = k dt_out. Docs: docs/python.md."""
+    """A walk of `strides` strides from `state` (section coordinates or a full state just after a
+    heel strike) or from the model's `gait` (default "stable"): the report of `pdw-sweep simulate
+    --json` (model, slope, start, strides, strides_done, samples, event_count, outcome "ok" or
+    how it ended, fell, dt_out, dt_out_source, out) and the series as arrays: t (n,), x (n, d),
+    state_names, mode, step, normal_force, tangential_force, friction_required, knee_torque (n, 2;
+    NaN where a knee is free or absent), flags, energy (where defined), events (dict of arrays:
+    t, kind, step, ends_step, mode_before, mode_after, pre, post), section (strides_done, d_s),
+    units (dict), positions (n, P, 2) of the points point_names and com (n, 2) in the walk's fixed
+    slope frame (positions_frame; none for round feet). With `out` (.h5, .hdf5, .csv) the CLI's
+    file is written too (an existing one only with force=True). dt_out=None: 100 samples per
+    stride from a gait (T/50, T = sqrt(L/g), from a state) and both sides of every event;
+    "steps": every accepted integrator step and event; a number: exactly at t = k dt_out.
+    `steps=` is the old spelling of `strides=` (and the key steps_done of strides_done).
+    Docs: docs/python.md."""
 
 def orbit_diagram(
     model: str = "simplest",
@@ -348,16 +355,21 @@ def design(
     max_strides: int = 40,
     threads: int = 2,
     out: Optional[Union[str, "os.PathLike[str]"]] = None,
+    png: Optional[Union[str, "os.PathLike[str]"]] = None,
     force: bool = False,
     slope: Optional[Union[float, str]] = None,
+    starts: int = 1,
     **params: float,
 ) -> dict[str, Any]:
     """The design search of `pdw-sweep design` (free={name: (lo, hi)} or "NAME=LO:HI" texts;
-    basin_box=None scales the box with each design's gait; out= writes the CLI's design file, an
-    existing one only with force=True). Keys: free_names, objective, params (n, k), status,
-    status_names, reasons, section (n, 3), cost, basin_fraction, rho, min_normal_force,
-    max_friction, min_knee_torque, period, step_length, min_relative_margin, basin_box_stance,
-    basin_box_stance_rate, best. Docs: docs/python.md."""
+    basin_box=None scales the box with each design's gait). out= writes the CLI's design file
+    and its picture (png=, default beside it); an existing one of the same settings continues
+    its search (force=True starts over). Keys: the report of `design --json` (designs, new,
+    starts, counts, min_margin, best, out, png) and every design as arrays: free_names,
+    objective, params (n, k), status, status_names, reasons, bindings, fates, section (n, 3),
+    cost, basin_fraction, rho, min_normal_force, max_friction, min_knee_torque, period,
+    step_length, min_relative_margin, basin_box_stance, basin_box_stance_rate, ….
+    Docs: docs/python.md."""
 
 def explore(
     path: Union[str, "os.PathLike[str]", List[Union[str, "os.PathLike[str]"]]],

@@ -21,7 +21,7 @@ use pdw::simulate::SimulateInput;
 #[pyfunction]
 #[pyo3(
     signature = (model="simplest", slope=None, state=None, gait=None, strides=10, dt_out=None, out=None, force=false, steps=None, **params),
-    text_signature = "(model='simplest', slope=None, state=None, gait='stable', strides=10, dt_out=None, out=None, force=False, **params)"
+    text_signature = "(model='simplest', slope=None, state=None, gait=None, strides=10, dt_out=None, out=None, force=False, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate<'py>(

@@ -6,6 +6,7 @@ import inspect
 import warnings
 import json
 import os
+import pathlib
 import subprocess
 import tempfile
 
@@ -297,3 +298,30 @@ def test_animate_options_and_from_file_equal_the_cli():
                           (dict(from_file=t, slope=0.01), "from_file")]:
             with pytest.raises(ValueError, match=says):
                 pdw.animate("compass", out=os.path.join(d, "bad.gif"), **bad)
+
+
+def test_the_stub_file_has_every_function_s_signature():
+    """python/pdw_sweep.pyi (what editors show) names every function with the parameters and
+    defaults of the compiled one."""
+    import ast
+    stub = pathlib.Path(__file__).resolve().parent.parent / "pdw_sweep.pyi"
+    tree = ast.parse(stub.read_text())
+    defs = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}
+    for name, f in functions().items():
+        assert name in defs, name
+        a = defs[name].args
+        params = a.posonlyargs + a.args + a.kwonlyargs
+        defaults = [None] * (len(a.posonlyargs + a.args) - len(a.defaults)) + a.defaults
+        defaults += a.kw_defaults
+        want = {p.name: p for p in inspect.signature(f).parameters.values()
+                if p.kind is not inspect.Parameter.VAR_KEYWORD}
+        got = [p.arg for p in params]
+        assert got == list(want), (name, got, list(want))
+        for p, d in zip(params, defaults):
+            if d is None:
+                continue
+            try:
+                value = ast.literal_eval(d)
+            except ValueError:
+                continue  # a name (THREADS) rather than a literal
+            assert value == want[p.arg].default, (name, p.arg, value, want[p.arg].default)
