@@ -277,7 +277,7 @@ def test_simulate_writes_the_cli_file(tmp_path):
     with h5py.File(out, "r") as f:
         np.testing.assert_array_equal(f["t"][:], tr["t"])
         assert f.attrs["steps_done"] == "2"
-    with pytest.raises(ValueError, match="exists"):
+    with pytest.raises(ValueError, match="exists; pass force=True"):
         pdw.simulate("simplest", strides=2, out=str(out))
     assert pdw.simulate("simplest", strides=2, out=str(out), force=True)["strides_done"] == 2
 

@@ -447,6 +447,16 @@ fn check_being_written(
     Ok(leftover)
 }
 
+/// The option that overwrites, as the front end of `flag` spells it: `--force` on the command
+/// line (`--out`), `force=True` in Python (`out`).
+fn force_flag(flag: &str) -> &'static str {
+    if flag.starts_with("--") {
+        "--force"
+    } else {
+        "force=True"
+    }
+}
+
 /// Steps 3-4 of [`claim`]: an existing output is overwritten only with `force` (or where it
 /// may exist), and every output's name ends in its format's extension.
 fn check_overwrites_and_formats(
@@ -458,14 +468,15 @@ fn check_overwrites_and_formats(
         if *exists && !force && !o.may_exist {
             let empty = std::fs::metadata(o.path).is_ok_and(|m| m.len() == 0);
             return Err(InputError(format!(
-                "{}: '{}' exists{}; pass --force to overwrite it",
+                "{}: '{}' exists{}; pass {} to overwrite it",
                 o.flag,
                 o.path.display(),
                 if empty {
                     " (empty: perhaps left by an interrupted run)"
                 } else {
                     ""
-                }
+                },
+                force_flag(o.flag)
             )));
         }
         if !o.format.matches(o.path) {
