@@ -3,7 +3,7 @@
 //! every item declared as always present is there, and every dataset carries its `units`.
 
 use crate::common::run;
-use pdw::store::format::{inventory, Format, Unit, BASIN, DESIGN, MFPT};
+use pdw::store::format::{inventory, Format, Unit, BASIN, DESIGN, MFPT, SWEEP};
 use std::path::Path;
 
 fn ok(args: &[&str]) {
@@ -114,4 +114,19 @@ fn mfpt_and_design_files_hold_exactly_their_declared_items() {
         String::from_utf8_lossy(&o.stderr)
     );
     holds_exactly(&design, &DESIGN);
+}
+
+#[test]
+fn sweep_files_hold_exactly_the_declared_sweep_items() {
+    let dir = tempfile::tempdir().unwrap();
+    let bif = dir.path().join("bif.h5");
+    ok(&[
+        "fixedpoint",
+        "--sweep",
+        "slope=0.005:0.012:4",
+        "--out",
+        bif.to_str().unwrap(),
+    ]);
+    let items = holds_exactly(&bif, &SWEEP);
+    assert!(items.iter().any(|i| i == "orbit/points@units"));
 }

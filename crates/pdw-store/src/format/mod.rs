@@ -129,8 +129,6 @@ pub enum Unit {
     FreeParameters,
     /// The unit of the swept parameter.
     Parameter,
-    /// The unit of the section coordinate the orbit diagram samples.
-    Sampled,
 }
 
 /// A quantity of the model whose unit depends on its unit system (e.g. `s` or `sqrt(l/g)`).
@@ -140,6 +138,8 @@ pub enum Quantity {
     Length,
     Force,
     Torque,
+    /// Length per time (`{length}/{time}`).
+    Speed,
 }
 
 /// The units of one run, from its model: what the [`Unit`] rules resolve against. Fields a
@@ -159,8 +159,6 @@ pub struct UnitContext {
     pub free_parameters: Vec<String>,
     /// Unit of the swept parameter (sweep).
     pub parameter: String,
-    /// The section coordinate the orbit diagram samples (sweep), by index into `section`.
-    pub sampled: Option<usize>,
 }
 
 impl Unit {
@@ -176,18 +174,15 @@ impl Unit {
             Unit::Section => Some(list(&c.section)),
             Unit::Axis(k) => section(c.axes.get(*k)),
             Unit::SectionCoordinate(i) => Some(c.section.get(*i).cloned().unwrap_or_default()),
-            Unit::Model(q) => Some(
-                match q {
-                    Quantity::Time => &c.time,
-                    Quantity::Length => &c.length,
-                    Quantity::Force => &c.force,
-                    Quantity::Torque => &c.torque,
-                }
-                .clone(),
-            ),
+            Unit::Model(q) => Some(match q {
+                Quantity::Time => c.time.clone(),
+                Quantity::Length => c.length.clone(),
+                Quantity::Force => c.force.clone(),
+                Quantity::Torque => c.torque.clone(),
+                Quantity::Speed => format!("{}/{}", c.length, c.time),
+            }),
             Unit::FreeParameters => Some(list(&c.free_parameters)),
             Unit::Parameter => Some(c.parameter.clone()),
-            Unit::Sampled => section(c.sampled.as_ref()),
         }
     }
 
@@ -203,7 +198,6 @@ impl Unit {
             Unit::Model(q) => format!("model {}", format!("{q:?}").to_lowercase()),
             Unit::FreeParameters => "free parameters' units (JSON list)".into(),
             Unit::Parameter => "the swept parameter's".into(),
-            Unit::Sampled => "the sampled coordinate's".into(),
         }
     }
 }

@@ -317,11 +317,258 @@ pub const BASIN: Format = Format {
     parts: &[BASIN_ITEMS, PROVENANCE],
 };
 
-/// Placeholder until declared.
+const SWEEP_ITEMS: &[Item] = &[
+    Item::attr("@format", "str", "`pdw-sweep sweep v2`"),
+    Item::attr("@parameter", "str", "the parameter swept"),
+    Item::attr("@section_names", "json", "the d section coordinates"),
+    Item::attr("@elapsed_s", "f64", "wall time of the computation (s)"),
+    Item::attr(
+        "@setting_<name>",
+        "json",
+        "one per setting of the run (continuation, grid, integrator, threads, tolerances)",
+    ),
+    Item::group("branches", "one group per branch"),
+    Item::group("branches/<n>", "a branch (000, 001, …)"),
+    Item::attr("branches/<n>@name", "str", "e.g. `period-1`"),
+    Item::attr(
+        "branches/<n>@period_strides",
+        "u32",
+        "its period K in strides",
+    ),
+    Item::new(
+        "branches/<n>/parameter",
+        "f64",
+        "[n]",
+        Unit::Parameter,
+        "the parameter at each point",
+    ),
+    Item::new(
+        "branches/<n>/section",
+        "f64",
+        "[n, d]",
+        Unit::Section,
+        "the orbit's first section point",
+    ),
+    Item::new(
+        "branches/<n>/multipliers_re",
+        "f64",
+        "[n, m]",
+        Unit::One,
+        "real parts of the K-stride map's multipliers, by decreasing modulus",
+    ),
+    Item::new(
+        "branches/<n>/multipliers_im",
+        "f64",
+        "[n, m]",
+        Unit::One,
+        "imaginary parts",
+    ),
+    Item::new(
+        "branches/<n>/stable",
+        "u8",
+        "[n]",
+        Unit::One,
+        "1 = all multipliers inside the unit circle",
+    ),
+    Item::new(
+        "branches/<n>/orbit",
+        "f64",
+        "[n, K, d]",
+        Unit::Section,
+        "the K section points in stride order",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/period",
+        "f64",
+        "[n]",
+        Unit::Model(Quantity::Time),
+        "the K strides' time",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/step_length",
+        "f64",
+        "[n, K]",
+        Unit::Model(Quantity::Length),
+        "per stride (NaN if the model reports none)",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/speed",
+        "f64",
+        "[n]",
+        Unit::Model(Quantity::Speed),
+        "K step lengths / period",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/validity_checked",
+        "u8",
+        "[n, K]",
+        Unit::One,
+        "per stride, 1 = yes",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/valid",
+        "u8",
+        "[n, K]",
+        Unit::One,
+        "per stride, 1 = yes",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/normal_force_negative",
+        "u8",
+        "[n, K]",
+        Unit::One,
+        "per stride, 1 = yes",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/knee_unlocks",
+        "u8",
+        "[n, K]",
+        Unit::One,
+        "per stride, 1 = yes",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/swing_foot_scuffs",
+        "u8",
+        "[n, K]",
+        Unit::One,
+        "per stride, 1 = yes",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/impact_violation",
+        "u8",
+        "[n, K]",
+        Unit::One,
+        "per stride, 1 = yes",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/min_normal_force",
+        "f64",
+        "[n, K]",
+        Unit::Model(Quantity::Force),
+        "per stride (NaN where not defined)",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/max_friction_required",
+        "f64",
+        "[n, K]",
+        Unit::One,
+        "friction coefficient needed, per stride",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/min_knee_torque",
+        "f64",
+        "[n, K]",
+        Unit::Model(Quantity::Torque),
+        "smallest knee-lock torque, per stride",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/min_clearance",
+        "f64",
+        "[n, K]",
+        Unit::Model(Quantity::Length),
+        "smallest swing-foot clearance, per stride",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/scuff_depth",
+        "f64",
+        "[n, K]",
+        Unit::Model(Quantity::Length),
+        "deepest scuff, per stride",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/min_impact_margin",
+        "f64",
+        "[n, K]",
+        Unit::Fixed("model units of the binding impact entry"),
+        "smallest impact margin, per stride",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/min_relative_margin",
+        "f64",
+        "[n, K]",
+        Unit::One,
+        "smallest relative margin of the validity criteria, per stride",
+    )
+    .only("measured branches"),
+    Item::new(
+        "branches/<n>/binding_criterion",
+        "u8",
+        "[n, K]",
+        Unit::One,
+        "the binding criterion, per stride",
+    )
+    .only("measured branches"),
+    Item::attr(
+        "branches/<n>/binding_criterion@legend",
+        "json",
+        "code → criterion name",
+    )
+    .only("measured branches"),
+    Item::group("bifurcations", "one group per detected bifurcation"),
+    Item::group("bifurcations/<n>", "a bifurcation (000, 001, …)").only("detected bifurcations"),
+    Item::attr(
+        "bifurcations/<n>@kind",
+        "str",
+        "`period-doubling`, `fold`, `neimark-sacker`, …",
+    )
+    .only("detected bifurcations"),
+    Item::attr("bifurcations/<n>@parameter", "f64", "where").only("detected bifurcations"),
+    Item::attr("bifurcations/<n>@branch", "u64", "on which branch (index)")
+        .only("detected bifurcations"),
+    Item::new(
+        "bifurcations/<n>/section",
+        "f64",
+        "[d]",
+        Unit::Section,
+        "the section point",
+    )
+    .only("detected bifurcations"),
+    Item::group("orbit", "the brute-force orbit diagram").only("an orbit diagram"),
+    Item::attr(
+        "orbit@coordinate",
+        "str",
+        "the section coordinate sampled (the first)",
+    )
+    .only("an orbit diagram"),
+    Item::new(
+        "orbit/parameter",
+        "f64",
+        "[n]",
+        Unit::Parameter,
+        "parameter values",
+    )
+    .only("an orbit diagram"),
+    Item::new(
+        "orbit/points",
+        "f64",
+        "[n, s]",
+        Unit::SectionCoordinate(0),
+        "s section samples after transients (NaN where the walker fell)",
+    )
+    .only("an orbit diagram"),
+];
+
+/// The sweep file of `pdw-sweep fixedpoint --sweep` (`format = "pdw-sweep sweep v2"`).
 pub const SWEEP: Format = Format {
     name: "sweep",
     format: crate::sweep::SWEEP_FORMAT,
-    parts: &[PROVENANCE],
+    parts: &[SWEEP_ITEMS, RUN, PROVENANCE],
 };
 
 /// The root attributes every file but the basin and design files starts with.
