@@ -8,50 +8,30 @@ use crate::error::ApiError;
 use crate::jobs::Refined;
 use crate::source::BasinSource;
 use pdw::limit::basin::{basin_metrics_slices, DEFAULT_ENTROPY_BOX};
+use pdw::store::format::{UnitContext, BASIN};
 use pdw::store::{Attractor, BasinHeader, BasinMetrics, BasinWriter};
 use std::path::{Path, PathBuf};
 
 /// The header of window `w`: the run's model, integrator and options (the attractor
-/// discovery's among them, as `pdw-sweep basin` writes them), the window's grid.
+/// discovery's among them), the window's grid: the header `pdw-sweep basin` writes
+/// ([`pdw::basin::file_header`]).
 pub fn header(src: &BasinSource, w: &Refined) -> BasinHeader {
     let (r, g) = (&w.rebuilt, &w.grid);
-    let disc = pdw::limit::attractors::DiscoveryOptions::default();
-    let h = &src.data.header;
-    let opts = &r.plan.opts;
-    let names = &r.m.info.section_names;
-    let fixed: serde_json::Map<String, serde_json::Value> = r
-        .plan
-        .fixed
-        .iter()
-        .map(|(i, v)| (names[*i].clone(), serde_json::json!(v)))
-        .collect();
-    BasinHeader {
-        command: format!("pdw-sweep explore: a window of {}", file_name(&src.path)),
-        model: h.model.clone(),
-        slope: r.m.slope(),
-        params: r.m.params_json().to_string(),
-        model_resolved: r.m.walker.fingerprint(),
-        integrator: pdw::integrator_text(&opts.integrator),
-        tolerances: serde_json::json!({
-            "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
-            "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
-            "confirm": opts.confirm, "max_period": opts.max_period,
-            "fixed_point_residual": r.plan.gait().map(|fp| fp.residual),
-            "attractor_seeds": r.seeds, "seed_strides": disc.seed_strides,
-            "chaos_radius": disc.chaos_radius, "chaos_sample": disc.cloud_points,
-            "fixed": fixed,
-        })
-        .to_string(),
-        max_strides: u32::from(opts.max_strides),
-        x_name: g.x.name.clone(),
-        x: g.x.values.clone(),
-        y_name: g.y.name.clone(),
-        y: g.y.values.clone(),
-        z: None,
-        state_names: names.clone(),
-        legend: r.set.legend(),
-        shard: None,
-    }
+    pdw::basin::file_header(
+        (
+            format!("pdw-sweep explore: a window of {}", file_name(&src.path)),
+            src.data.header.model.clone(),
+        ),
+        &r.m,
+        &r.plan,
+        (&r.set, r.seeds),
+        pdw::basin::FileGrid {
+            x: (g.x.name.clone(), g.x.values.clone()),
+            y: (g.y.name.clone(), g.y.values.clone()),
+            z: None,
+        },
+        None,
+    )
 }
 
 /// The file name of `p` alone (no directories).
@@ -125,12 +105,12 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
         .spec()
         .map(|s| s.to_toml())
         .unwrap_or_default();
-    let units = units(src, &w.rebuilt);
+    let units = units(w);
     let coordinates = w.rebuilt.m.coordinates_json();
     writer
         .annotate(&pdw::store::Annotations {
             provenance: Some(&prov),
-            units: &units,
+            units: &BASIN.units(&units),
             slice: None,
             scales: &pdw::store::provenance::basin_scales(),
             coordinates: Some(&coordinates),
@@ -168,7 +148,7 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
         &path,
         &pdw::store::Annotations {
             provenance: None,
-            units: &units,
+            units: &BASIN.units(&units),
             slice: None,
             scales: &[],
             coordinates: None,
@@ -178,23 +158,10 @@ pub fn save(src: &BasinSource, w: &Refined, dir: &Path) -> Result<PathBuf, ApiEr
     Ok(path)
 }
 
-/// The unit of every dataset of the saved file, by path (as `basin` labels them).
-fn units(src: &BasinSource, r: &crate::source::Rebuilt) -> impl Fn(&str) -> Option<String> {
-    let sec = pdw::model::section_units(&r.m);
-    let list = pdw::model::units_list(&sec);
-    let (ux, uy) = (
-        src.units.first().cloned().unwrap_or_default(),
-        src.units.get(1).cloned().unwrap_or_default(),
-    );
-    move |p: &str| match p {
-        "grid/x" => Some(ux.clone()),
-        "grid/y" => Some(uy.clone()),
-        "basin/outcome" | "basin/strides" | "basin/rows_done" | "basin/block_digest" => {
-            Some("1".into())
-        }
-        "basin/final" => Some(list.clone()),
-        _ if p.starts_with("attractors/") && p.ends_with("/section") => Some(list.clone()),
-        _ if p.starts_with("attractors/") && p.contains("/multipliers_") => Some("1".into()),
-        _ => None,
-    }
+/// The units of the saved file ([`pdw::store::format::BASIN`]'s rules, as `basin` labels them).
+fn units(w: &Refined) -> UnitContext {
+    let names = &w.rebuilt.m.info.section_names;
+    let axis = |n: &str| names.iter().position(|s| s == n).unwrap_or(usize::MAX);
+    let axes = [axis(&w.grid.x.name), axis(&w.grid.y.name)];
+    pdw::basin::file_units(&w.rebuilt.m, &axes)
 }

@@ -23,30 +23,11 @@
 //! kernel's tests never wait for HDF5. Plots take the same plain types, so they can be redrawn
 //! from a file without linking the kernel.
 //!
-//! # Basin file schema (`format = "pdw-sweep basin v1"`)
-//! ```text
-//! /                 attrs: format, version, command, created (RFC 3339, UTC), model, slope,
-//!                          params (JSON object), integrator, tolerances (JSON object),
-//!                          max_strides, elapsed_s, complete (bool);
-//!                          shard_index, shard_count (shard files only)
-//! /provenance       attrs crate_version, git_commit, build_profile, simd_path, host, command,
-//!                   options (JSON), created, commands (see [`provenance`])
-//! /slice            attrs x, y, fixed (JSON), one f64 per fixed coordinate, on_fixed_point
-//! /grid/x, /grid/y  f64 [nx], [ny]; attr `name` (a section coordinate, e.g. "theta");
-//!                   dimension scales of outcome, strides and final (dimensions 1 and 0)
-//! /basin/outcome    u8  [ny, nx]; attr `legend` = JSON object code → name, with the fill
-//!                   value 255 = "not_computed"
-//! /basin/strides    u16 [ny, nx]; strides until classified
-//! /basin/final      f64 [ny, nx, d]; section coordinates of the last state (after the last
-//!                   completed stride; for a fall, of the state where it stopped, except for
-//!                   a walk that came to a stand, decided on the section); attrs
-//!                   `names` = JSON list of the d section coordinate names, `description`
-//! /basin/rows_done  u8  [ny]; 1 once a row is on disk (what `--resume` skips)
-//! /attractors/NAME  attrs period_strides, period_time; section f64 [k, d] (the k points of the
-//!                   orbit on the section), multipliers_re / multipliers_im f64 [m]
-//! /metrics          attrs basin_entropy, boundary_entropy, entropy_box, fractions (JSON object
-//!                   name → fraction), fraction_NAME (one f64 per outcome)
-//! ```
+//! # File formats
+//! Every format is declared once, in [`format`]: each dataset and attribute with its type,
+//! unit, meaning and the digest covering it ([`format::BASIN`], …). The `units` attributes are
+//! written from it ([`format::Format::units`]) and `docs/hdf5.md`'s tables are generated from it.
+//!
 //! A 3-D grid ([`BasinHeader::z`]) adds `/grid/z` (f64 `[nz]`, attr `name`; the scale of
 //! dimension 0) and stores its cells in z, y, x order: outcome and strides [nz, ny, nx], final
 //! [nz, ny, nx, d], chunked by blocks of [`BLOCK_ROWS`] rows within one z-slice; rows_done is
@@ -55,7 +36,7 @@
 //! `z_index`, `z_value`; dataset `outcome` [ny, nx]; see
 //! [`provenance::write_slice_view`]).
 //! Every dataset carries a `units` attribute (written by the caller through
-//! [`provenance::annotate`]; the writers do not know the model).
+//! [`provenance::annotate`] with [`format::Format::units`]: the writers do not know the model).
 //! `outcome`, `strides` and `final` are chunked by blocks of [`BLOCK_ROWS`] rows and
 //! deflate-compressed (`strides` and `final` byte-shuffled first). Row `i` of every 2-D dataset
 //! belongs to `y[i]`, column `j` to `x[j]`. Files are created with HDF5's file-space strategy
@@ -86,6 +67,7 @@ pub use ndarray;
 pub mod curve;
 pub mod design;
 mod error;
+pub mod format;
 mod h5util;
 pub mod mfpt;
 pub mod mfpt_over;

@@ -4,6 +4,7 @@
 
 mod basin_file;
 mod common;
+mod formats;
 mod integrity;
 mod internals;
 mod kill_resume;

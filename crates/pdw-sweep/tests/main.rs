@@ -12,6 +12,7 @@ mod common;
 mod design;
 mod explore;
 mod follow;
+mod formats;
 mod hostile;
 mod integrator_check;
 mod kneed_latched;

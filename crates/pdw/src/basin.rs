@@ -476,3 +476,70 @@ pub fn store_attractor(a: &Attractor) -> pdw_store::Attractor {
         },
     }
 }
+
+/// The grid a basin file covers: its axes' coordinates and values (a CLI run's box, or an
+/// explorer's window).
+pub struct FileGrid {
+    pub x: (String, Vec<f64>),
+    pub y: (String, Vec<f64>),
+    pub z: Option<pdw_store::ZAxis>,
+}
+
+/// The basin file's header of a run on `m` under `plan`, the attractors `set` found from
+/// `seeds` seeds, on `grid`: the one header of every basin file, whichever front end writes it
+/// (`pdw-sweep basin`, the explorer's saved window), so that all carry the same fields.
+/// `model` is the model's name, `command` what made the file, `shard` the shard it holds.
+pub fn file_header(
+    (command, model): (String, String),
+    m: &BuiltModel,
+    plan: &BasinPlan,
+    (set, seeds): (&AttractorSet, usize),
+    grid: FileGrid,
+    shard: Option<pdw_store::ShardSpec>,
+) -> pdw_store::BasinHeader {
+    let (opts, names) = (&plan.opts, &m.info.section_names);
+    let disc = pdw_limit::attractors::DiscoveryOptions::default();
+    let fixed: std::collections::BTreeMap<String, f64> = plan
+        .fixed
+        .iter()
+        .map(|(i, v)| (names[*i].clone(), *v))
+        .collect();
+    pdw_store::BasinHeader {
+        command,
+        model,
+        slope: m.slope(),
+        params: m.params_json().to_string(),
+        model_resolved: m.walker.fingerprint(),
+        integrator: crate::integrator_text(&opts.integrator),
+        tolerances: serde_json::json!({
+            "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
+            "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
+            "confirm": opts.confirm, "max_period": opts.max_period,
+            "fixed_point_residual": plan.gait().map(|fp| fp.residual),
+            "attractor_seeds": seeds, "seed_strides": disc.seed_strides,
+            "chaos_radius": disc.chaos_radius, "chaos_sample": disc.cloud_points,
+            "fixed": fixed,
+        })
+        .to_string(),
+        max_strides: u32::from(opts.max_strides),
+        x_name: grid.x.0,
+        x: grid.x.1,
+        y_name: grid.y.0,
+        y: grid.y.1,
+        z: grid.z,
+        state_names: names.clone(),
+        legend: set.legend(),
+        shard,
+    }
+}
+
+/// The units of a basin file of `m` whose grid runs along the section coordinates `axes`
+/// (x, y and, for a 3-D grid, z): what [`pdw_store::format::BASIN`]'s unit rules resolve
+/// against.
+pub fn file_units(m: &BuiltModel, axes: &[usize]) -> pdw_store::format::UnitContext {
+    pdw_store::format::UnitContext {
+        section: crate::model::section_units(m),
+        axes: axes.to_vec(),
+        ..Default::default()
+    }
+}

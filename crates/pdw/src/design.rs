@@ -10,7 +10,6 @@
 //! front end's flag in their messages.
 
 use crate::input::{AxisRange, InputError};
-use crate::model::units_list;
 use crate::model::{build_with, BuiltModel, ModelChoice};
 use pdw_limit::design::{
     evaluate_design, status, DesignEval, DesignOptions, DesignSpace, Objective,
@@ -526,38 +525,15 @@ pub fn from_data(d: &DesignData) -> Vec<DesignEval> {
         .collect()
 }
 
-/// The units of the design file's datasets, by name, for the model `base` and the free
-/// parameters `names`.
-pub fn units(base: &BuiltModel, names: &[String]) -> impl Fn(&str) -> Option<String> {
-    use crate::model::{length_unit, model_units, param_unit, section_units, time_unit};
-    let param_units = units_list(
-        &names
+/// The units of the design file's datasets ([`pdw_store::format::DESIGN`]'s rules) for the
+/// model `base` and the free parameters `names`.
+pub fn units(base: &BuiltModel, names: &[String]) -> pdw_store::format::UnitContext {
+    pdw_store::format::UnitContext {
+        free_parameters: names
             .iter()
-            .map(|n| param_unit(base, n))
-            .collect::<Vec<_>>(),
-    );
-    let sec = section_units(base);
-    let section_units = units_list(&sec);
-    let box_units = (
-        sec.first().cloned().unwrap_or_default(),
-        sec.get(1).cloned().unwrap_or_default(),
-    );
-    let mu = model_units(base);
-    let (tu, lu) = (time_unit(base), length_unit(base));
-    move |ds: &str| -> Option<String> {
-        Some(match ds {
-            "params" => param_units.clone(),
-            "section" => section_units.clone(),
-            "min_normal_force" => mu.force.clone(),
-            "min_knee_torque" => mu.torque.clone(),
-            "period" => tu.clone(),
-            "step_length" => lu.clone(),
-            "basin_box_stance" => box_units.0.clone(),
-            "basin_box_stance_rate" => box_units.1.clone(),
-            // strides, run indices, relative changes and shortfalls are counts and ratios
-            // codes, fractions, multiplier moduli, friction coefficients, costs, the reasons' text
-            _ => "1".into(),
-        })
+            .map(|n| crate::model::param_unit(base, n))
+            .collect(),
+        ..crate::model::unit_context(base)
     }
 }
 
@@ -575,7 +551,7 @@ pub fn write_file(
     let coordinates = base.coordinates_json();
     let ann = pdw_store::Annotations {
         provenance: Some(prov),
-        units: &units,
+        units: &pdw_store::format::DESIGN.units(&units),
         slice: None,
         scales: &[],
         coordinates: Some(&coordinates),

@@ -369,6 +369,21 @@ pub fn param_unit(m: &BuiltModel, name: &str) -> String {
         .unwrap_or_default()
 }
 
+/// The units of a file of `m` that the formats' unit rules ([`pdw_store::format::Unit`])
+/// resolve against: the section coordinates' and the model's time, length, force and torque
+/// units (a format's own fields, grid axes or free parameters, are the caller's to add).
+pub fn unit_context(m: &BuiltModel) -> pdw_store::format::UnitContext {
+    let u = model_units(m);
+    pdw_store::format::UnitContext {
+        section: section_units(m),
+        time: u.time,
+        length: length_unit(m),
+        force: u.force,
+        torque: u.torque,
+        ..Default::default()
+    }
+}
+
 /// A JSON list of units, the form of a `units` attribute on a dataset whose last axis runs
 /// over components of different units.
 pub fn units_list(u: &[String]) -> String {

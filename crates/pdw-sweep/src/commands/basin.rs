@@ -14,11 +14,11 @@ use crate::args::{self, InputError};
 use crate::cli::BasinArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pdw::basin::{AxisFlags, BasinPlan, BasinRequest};
-use pdw::limit::attractors::DiscoveryOptions;
 use pdw::limit::basin::{
     basin_metrics_slices, classify_cells, BasinOptions, Outcome, DEFAULT_ENTROPY_BOX,
 };
 use pdw::limit::{AttractorSet, OrbitValidity};
+use pdw::store::format::{UnitContext, BASIN};
 use pdw::store::{
     plot_basin_attractors, read_basin, read_basin_outcome, Attractor, BasinHeader, BasinMetrics,
     BasinWriter, ShardSpec, StoreError, ZAxis, BLOCK_ROWS,
@@ -192,7 +192,7 @@ pub fn run(a: &BasinArgs) -> anyhow::Result<ExitCode> {
         .build()?;
     let (set, seeds) = go!(discover(a, &p, &plan, &pool)?);
     warn_gait_drift(&p, &plan)?;
-    let header = header(a, &p, &plan, &set, seeds);
+    let header = header(&p, &plan, &set, seeds);
     let mut writer = go!(open_writer(a, &p, &plan, &header, &mut claim)?);
     let described = describe(a, &p, &plan, &set, &mut writer)?;
     let todo = rows_to_do(&writer, &p);
@@ -441,46 +441,24 @@ fn warn_gait_drift(p: &Parsed, plan: &BasinPlan) -> anyhow::Result<()> {
 }
 
 /// The file's header: the run (command, model, integrator and tolerances), the grid and the
-/// legend of the attractors.
-fn header(
-    a: &BasinArgs,
-    p: &Parsed,
-    plan: &BasinPlan,
-    set: &AttractorSet,
-    seeds: usize,
-) -> BasinHeader {
-    let (opts, names) = (&plan.opts, p.names());
-    let disc = DiscoveryOptions::default();
-    BasinHeader {
-        command: super::command_line(),
-        model: p.info.name.to_string(),
-        slope: p.m.slope(),
-        params: p.m.params_json().to_string(),
-        model_resolved: p.m.walker.fingerprint(),
-        integrator: super::integrator_text(&opts.integrator),
-        tolerances: serde_json::json!({
-            "rtol": opts.integrator.rtol, "atol": opts.integrator.atol,
-            "tol_gait": opts.tol_gait, "tol_recur": opts.tol_recur,
-            "confirm": opts.confirm, "max_period": opts.max_period,
-            "fixed_point_residual": plan.gait().map(|fp| fp.residual),
-            "attractor_seeds": seeds, "seed_strides": disc.seed_strides,
-            "chaos_radius": disc.chaos_radius, "chaos_sample": disc.cloud_points,
-            "fixed": fixed_json(names, &plan.fixed),
-        })
-        .to_string(),
-        max_strides: u32::from(a.max_strides),
-        x_name: plan.bx.x.range.name.clone(),
-        x: plan.xs.clone(),
-        y_name: plan.bx.y.range.name.clone(),
-        y: plan.ys.clone(),
+/// legend of the attractors ([`pdw::basin::file_header`], the explorer's too).
+fn header(p: &Parsed, plan: &BasinPlan, set: &AttractorSet, seeds: usize) -> BasinHeader {
+    let grid = pdw::basin::FileGrid {
+        x: (plan.bx.x.range.name.clone(), plan.xs.clone()),
+        y: (plan.bx.y.range.name.clone(), plan.ys.clone()),
         z: plan.bx.z.as_ref().map(|z| ZAxis {
             name: z.range.name.clone(),
             values: plan.zs.clone(),
         }),
-        state_names: names.to_vec(),
-        legend: set.legend(),
-        shard: p.shard,
-    }
+    };
+    pdw::basin::file_header(
+        (super::command_line(), p.info.name.to_string()),
+        &p.m,
+        plan,
+        (set, seeds),
+        grid,
+        p.shard,
+    )
 }
 
 /// The fixed section coordinates by name.
@@ -631,7 +609,7 @@ fn describe(
     }
     let prov = super::provenance(options);
     let iz = d.z;
-    let units = basin_units(&d.sec_units, bx.x.index, bx.y.index, iz);
+    let units = basin_units(&p.m, bx.x.index, bx.y.index, iz);
     let scales = if iz.is_some() {
         pdw::store::provenance::basin_scales_3d()
     } else {
@@ -640,7 +618,7 @@ fn describe(
     let coordinates = p.m.coordinates_json();
     writer.annotate(&pdw::store::Annotations {
         provenance: Some(&prov),
-        units: &units,
+        units: &BASIN.units(&units),
         slice: Some(&d.slice),
         scales: &scales,
         coordinates: Some(&coordinates),
@@ -809,7 +787,7 @@ fn write_results(
         &p.out,
         &pdw::store::Annotations {
             provenance: None,
-            units: &basin_units(&described.sec_units, ix, iy, described.z),
+            units: &BASIN.units(&basin_units(&p.m, ix, iy, described.z)),
             slice: None,
             scales: &[],
             coordinates: None,
@@ -943,30 +921,11 @@ fn basin_slice(
     }
 }
 
-/// The unit of every dataset of a basin file, by path (`iz`: the z coordinate of a 3-D grid).
-fn basin_units(
-    units: &[String],
-    ix: usize,
-    iy: usize,
-    iz: Option<usize>,
-) -> impl Fn(&str) -> Option<String> {
-    let (ux, uy) = (units[ix].clone(), units[iy].clone());
-    let uz = iz.map(|i| units[i].clone());
-    let list = super::units_list(units);
-    move |p: &str| -> Option<String> {
-        match p {
-            "grid/x" => Some(ux.clone()),
-            "grid/y" => Some(uy.clone()),
-            "grid/z" => uz.clone(),
-            "basin/outcome" | "basin/strides" | "basin/rows_done" | "basin/block_digest" => {
-                Some("1".into())
-            }
-            "basin/final" => Some(list.clone()),
-            _ if p.starts_with("attractors/") && p.ends_with("/section") => Some(list.clone()),
-            _ if p.starts_with("attractors/") && p.contains("/multipliers_") => Some("1".into()),
-            _ => None,
-        }
-    }
+/// The units of a basin file by path ([`pdw::store::format::BASIN`]'s rules; `iz`: the z
+/// coordinate of a 3-D grid).
+fn basin_units(m: &pdw::BuiltModel, ix: usize, iy: usize, iz: Option<usize>) -> UnitContext {
+    let axes: Vec<usize> = [ix, iy].into_iter().chain(iz).collect();
+    pdw::basin::file_units(m, &axes)
 }
 
 /// The picture's title: model, slope, stride budget, and the slice when the section has more

@@ -318,17 +318,13 @@ fn write(
     // the claim refused an existing file without --force; its placeholder is replaced
     pdw::store::write_mfpt(out, true, &data)?;
     let prov = provenance(m, plan);
-    let start_units = super::units_list(&super::section_units(m));
+    let units = pdw::model::unit_context(m);
     let coordinates = m.coordinates_json();
     pdw::store::annotate(
         out,
         &pdw::store::Annotations {
             provenance: Some(&prov),
-            units: &|p: &str| match p {
-                "mfpt/survival" | "mfpt/failures" => Some("1".into()),
-                "mfpt/start" => Some(start_units.clone()),
-                _ => None,
-            },
+            units: &pdw::store::format::MFPT.units(&units),
             slice: None,
             scales: &[],
             coordinates: Some(&coordinates),

@@ -674,43 +674,15 @@ fn annotate_sweep(
         },
     });
     let prov = super::provenance(options);
-    let pu = super::param_unit(m, parameter);
-    let su = super::section_units(m);
-    let list = super::units_list(&su);
-    let first = su.first().cloned().unwrap_or_default();
-    let (tu, lu) = (super::time_unit(m), super::length_unit(m));
-    let mu = super::model_units(m);
-    let units = move |p: &str| -> Option<String> {
-        let leaf = p.rsplit('/').next().unwrap_or(p);
-        match leaf {
-            "parameter" => Some(pu.clone()),
-            "section" | "orbit" => Some(list.clone()),
-            "period" => Some(tu.clone()),
-            "step_length" => Some(lu.clone()),
-            "speed" => Some(format!("{lu}/{tu}")),
-            "min_normal_force" => Some(mu.force.clone()),
-            "min_knee_torque" => Some(mu.torque.clone()),
-            "min_clearance" | "scuff_depth" => Some(lu.clone()),
-            "min_impact_margin" => Some("model units of the binding impact entry".into()),
-            "max_friction_required"
-            | "validity_checked"
-            | "valid"
-            | "normal_force_negative"
-            | "knee_unlocks"
-            | "swing_foot_scuffs"
-            | "impact_violation"
-            | "min_relative_margin"
-            | "binding_criterion" => Some("1".into()),
-            "multipliers_re" | "multipliers_im" | "stable" => Some("1".into()),
-            "points" if p.starts_with("orbit") => Some(first.clone()),
-            _ => None,
-        }
+    let units = pdw::store::format::UnitContext {
+        parameter: super::param_unit(m, parameter),
+        ..pdw::model::unit_context(m)
     };
     pdw::store::annotate(
         out,
         &pdw::store::Annotations {
             provenance: Some(&prov),
-            units: &units,
+            units: &pdw::store::format::SWEEP.units(&units),
             slice: None,
             scales: &[],
             coordinates: Some(&m.coordinates_json()),
