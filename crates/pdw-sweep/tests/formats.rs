@@ -3,7 +3,7 @@
 //! every item declared as always present is there, and every dataset carries its `units`.
 
 use crate::common::run;
-use pdw::store::format::{inventory, Format, Unit, BASIN, DESIGN, MFPT, SWEEP};
+use pdw::store::format::{inventory, Format, Unit, BASIN, DESIGN, MFPT, SWEEP, TRAJECTORY};
 use std::path::Path;
 
 fn ok(args: &[&str]) {
@@ -129,4 +129,21 @@ fn sweep_files_hold_exactly_the_declared_sweep_items() {
     ]);
     let items = holds_exactly(&bif, &SWEEP);
     assert!(items.iter().any(|i| i == "orbit/points@units"));
+}
+
+#[test]
+fn trajectory_files_hold_exactly_the_declared_trajectory_items() {
+    let dir = tempfile::tempdir().unwrap();
+    let traj = dir.path().join("traj.h5");
+    ok(&[
+        "simulate",
+        "--model",
+        "compass",
+        "--steps",
+        "2",
+        "--out",
+        traj.to_str().unwrap(),
+    ]);
+    let items = holds_exactly(&traj, &TRAJECTORY);
+    assert!(items.iter().any(|i| i == "events/pre@units"));
 }

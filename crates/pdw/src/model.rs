@@ -376,6 +376,7 @@ pub fn unit_context(m: &BuiltModel) -> pdw_store::format::UnitContext {
     let u = model_units(m);
     pdw_store::format::UnitContext {
         section: section_units(m),
+        state: u.state,
         time: u.time,
         length: length_unit(m),
         force: u.force,

@@ -129,6 +129,10 @@ pub enum Unit {
     FreeParameters,
     /// The unit of the swept parameter.
     Parameter,
+    /// A JSON list of the units of the state components, in order.
+    State,
+    /// Written by the writer with the data (a trajectory column's own unit); not annotated.
+    Own,
 }
 
 /// A quantity of the model whose unit depends on its unit system (e.g. `s` or `sqrt(l/g)`).
@@ -159,6 +163,8 @@ pub struct UnitContext {
     pub free_parameters: Vec<String>,
     /// Unit of the swept parameter (sweep).
     pub parameter: String,
+    /// Unit of each state component, in order (trajectory).
+    pub state: Vec<String>,
 }
 
 impl Unit {
@@ -183,6 +189,8 @@ impl Unit {
             }),
             Unit::FreeParameters => Some(list(&c.free_parameters)),
             Unit::Parameter => Some(c.parameter.clone()),
+            Unit::State => Some(list(&c.state)),
+            Unit::Own => None,
         }
     }
 
@@ -198,6 +206,8 @@ impl Unit {
             Unit::Model(q) => format!("model {}", format!("{q:?}").to_lowercase()),
             Unit::FreeParameters => "free parameters' units (JSON list)".into(),
             Unit::Parameter => "the swept parameter's".into(),
+            Unit::State => "state units (JSON list)".into(),
+            Unit::Own => "its own (written with it)".into(),
         }
     }
 }

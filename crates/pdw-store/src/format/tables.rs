@@ -836,9 +836,109 @@ pub const DESIGN: Format = Format {
     parts: &[DESIGN_ITEMS, PROVENANCE],
 };
 
-/// Placeholder until declared.
+const TRAJECTORY_ITEMS: &[Item] = &[
+    Item::attr("@format", "str", "`pdw-sweep trajectory v1`"),
+    Item::attr("@slope", "str", "slope γ (rad), as text"),
+    Item::attr("@integrator", "str", "integrator of the walk"),
+    Item::attr("@steps", "str", "steps asked for"),
+    Item::attr("@steps_done", "str", "steps completed"),
+    Item::attr("@outcome", "str", "how the walk ended (`ok`, a fall…)"),
+    Item::attr("@start", "str", "the start state and where it came from"),
+    Item::attr("@state_names", "json", "the state components"),
+    Item::attr(
+        "@dt_out",
+        "str",
+        "the sample spacing, or every accepted step and event",
+    ),
+    Item::attr("@dt_out_source", "str", "where the spacing came from"),
+    Item::attr(
+        "@flags_legend",
+        "json",
+        "bit → what the `flags` column flags",
+    ),
+    Item::attr("@mode_legend", "json", "mode code → name"),
+    Item::attr(
+        "@point_names",
+        "json",
+        "the named points of `pos_<point>` (`[]` for round feet)",
+    ),
+    Item::attr(
+        "@positions_frame",
+        "str",
+        "the frame of the positions, or why there are none",
+    ),
+    Item::group("events", "the events along the walk"),
+    Item::new("events/t", "f64", "[m]", Unit::Own, "event times"),
+    Item::new(
+        "events/kind",
+        "u8",
+        "[m]",
+        Unit::One,
+        "event kind (`legend`)",
+    ),
+    Item::attr(
+        "events/kind@legend",
+        "json",
+        "code → name (`heel_strike`, a fall…)",
+    ),
+    Item::new(
+        "events/step",
+        "u32",
+        "[m]",
+        Unit::One,
+        "step during which it happened, from 0",
+    ),
+    Item::new(
+        "events/mode_before",
+        "u32",
+        "[m]",
+        Unit::One,
+        "mode before the event",
+    ),
+    Item::new(
+        "events/mode_after",
+        "u32",
+        "[m]",
+        Unit::One,
+        "mode after it",
+    ),
+    Item::new(
+        "events/pre",
+        "f64",
+        "[m, d]",
+        Unit::State,
+        "state just before the event",
+    ),
+    Item::new(
+        "events/post",
+        "f64",
+        "[m, d]",
+        Unit::State,
+        "state just after it",
+    ),
+];
+
+/// The trajectory's columns: last, since `<column>` matches any name at the root.
+const TRAJECTORY_COLUMNS: &[Item] = &[
+    Item::attr(
+        "<column>@components",
+        "json",
+        "the k component names of a 2-D column",
+    ),
+    Item::new(
+        "<column>",
+        "f64 or u32",
+        "[n] or [n, k]",
+        Unit::Own,
+        "one dataset per column at the root, row = sample: `t`, each state component, `mode`, \
+         `step`, forces, `flags`, `energy`, `energy_fixed_frame`, `pos_<point>` and `com` [n, 2]",
+    ),
+];
+
+/// The trajectory file of `pdw-sweep simulate` (`format = "pdw-sweep trajectory v1"`). Its
+/// columns carry their own units, written with them; [`Format::units`] gives the events'.
 pub const TRAJECTORY: Format = Format {
     name: "trajectory",
     format: crate::trajectory::TRAJECTORY_FORMAT,
-    parts: &[PROVENANCE],
+    parts: &[TRAJECTORY_ITEMS, RUN, PROVENANCE, TRAJECTORY_COLUMNS],
 };
