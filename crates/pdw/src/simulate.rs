@@ -617,7 +617,7 @@ impl SimulatePlan {
                 &crate::simulate_file::options_json(&opts, &spacing),
             );
             prov.model_spec = crate::model::spec_toml(&self.model_name).unwrap_or_default();
-            crate::simulate_file::write(path, *format, data, &trajectory, &prov)
+            crate::simulate_file::write(path, *format, data, m, &prov)
                 .map_err(|e| InputError(e.to_string()))?;
         }
         let report = SimulateReport::of(self, &walk, &trajectory, &spacing);

@@ -50,23 +50,19 @@ pub fn write(
     out: &Path,
     format: Format,
     mut data: TrajectoryData,
-    tr: &Trajectory,
+    m: &BuiltModel,
     prov: &Provenance,
 ) -> Result<(), StoreError> {
-    let state_units = crate::model::units_list(&tr.units.state);
     match format {
         Format::Hdf5 => {
             pdw_store::write_trajectory_h5(out, true, &data)?;
+            let context = crate::model::unit_context(m);
+            let units = pdw_store::format::TRAJECTORY.units(&context);
             pdw_store::annotate(
                 out,
                 &pdw_store::Annotations {
                     provenance: Some(prov),
-                    units: &|p: &str| match p {
-                        "events/kind" | "events/step" | "events/mode_before"
-                        | "events/mode_after" => Some("1".into()),
-                        "events/pre" | "events/post" => Some(state_units.clone()),
-                        _ => None,
-                    },
+                    units: &units,
                     slice: None,
                     scales: &[],
                     coordinates: None,
