@@ -19,6 +19,12 @@
 //!   thinned to the spacing of a 12-node grid and closed under their landings (at most 8
 //!   passes), 11 nodes, and the solve; the strides counted on a first run and printed.
 //!
+//! - `mfpt/rimless_chain`: the rimless wheel's Markov chain just after heel strike (0.08 rad,
+//!   σ = 0.5°, 40 Gauss–Hermite nodes, strides in closed form): a mesh of 1 000 rates × 40
+//!   layers — its transitions (the strides, the weights, the rows) and its solve (BiCGSTAB and
+//!   the power iteration), as `pdw-sweep mfpt --model rimless --mean 0.08 --sd 0.5deg --chain
+//!   --nodes 40` builds them; throughput in chain states.
+//!
 //! - `mfpt/rimless_closed_form` and `mfpt/rimless_lockstep`: Byl & Tedrake's rimless wheel (8
 //!   spokes, 8°, σ = 2°, seed 1), 200 walkers × at most 500 steps from its rolling gait, in
 //!   closed form (`terrain::monte_carlo_closed_form`, `pdw-sweep mfpt`'s default for the wheel)
@@ -139,6 +145,7 @@ fn mfpt(c: &mut Criterion) {
         &pool,
     );
     rimless(&mut group, &pool);
+    rimless_chain(&mut group, &pool);
     group.finish();
 }
 
@@ -181,6 +188,42 @@ fn rimless(
     group.bench_function("rimless_closed_form", |b| b.iter(|| black_box(closed())));
     group.throughput(Throughput::Elements(strides(&b)));
     group.bench_function("rimless_lockstep", |b| b.iter(|| black_box(lockstep())));
+}
+
+/// The rimless wheel's layered chain in closed form, transitions and solve (module docs).
+fn rimless_chain(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    pool: &rayon::ThreadPool,
+) {
+    let slope = 0.08;
+    let at = model_at("rimless");
+    let fp = stable_gait(at(slope).expect("registry model").as_ref());
+    let walk = SlopeWalk::new(&at, slope, BasinOptions::default_integrator())
+        .expect("terrain walk")
+        .with_closed_form(true);
+    let sd = 0.5f64.to_radians();
+    let (z, w) = markov::gauss_hermite(40);
+    let nodes: Vec<(f64, f64)> = z
+        .iter()
+        .zip(&w)
+        .map(|(z, w)| (slope + sd * z, *w))
+        .collect();
+    // the walkers' padded box of `pdw-sweep mfpt --model rimless --mean 0.08 --sd 0.5deg`
+    let mesh = markov::Mesh {
+        lo: vec![0.9709],
+        hi: vec![1.2308],
+        n: 1000,
+        frame: markov::Frame::identity(1),
+    };
+    let x0 = fp.state.clone();
+    let chain = || {
+        let t = markov::transitions(&walk, &nodes, &mesh, &x0, pool).expect("rimless chain");
+        pool.install(|| markov::solve_chain(&t))
+    };
+    let r = chain();
+    eprintln!("rimless chain: {} states, MFPT {:.4}", r.states, r.mfpt);
+    group.throughput(Throughput::Elements(r.states as u64));
+    group.bench_function("rimless_chain", |b| b.iter(|| black_box(chain())));
 }
 
 /// A mesh of `n` nodes per axis over `centre ± half`.
@@ -233,7 +276,10 @@ fn chains(
         let mut c = seeds.clone();
         let cc = mid_stance::cloud_transitions(walk, &nodes, &mut c, x0, sense, 8, pool)
             .expect("cloud chain");
-        (markov::solve_chain(&cc.transitions), cc.nodes)
+        (
+            pool.install(|| markov::solve_chain(&cc.transitions)),
+            cc.nodes,
+        )
     };
     let n_cloud = (cloud().1 * nodes.len() + 1) as u64;
     eprintln!(

@@ -37,6 +37,45 @@
 use crate::error::LimitError;
 use crate::section_frame::Frame;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A multiply–rotate hash of a cube's integer coordinates. A landing's weights look up to
+/// `(2⌈REACH⌉ + 1)^d` cubes (125 in 3-D), and with the standard library's SipHash those lookups
+/// were most of the time of a cloud's weights; the keys are the walk's own states, not chosen
+/// by an adversary, so a hash without SipHash's resistance to chosen keys is enough.
+#[derive(Default)]
+struct CubeHasher(u64);
+
+impl CubeHasher {
+    fn add(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(23) ^ v).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+}
+
+impl Hasher for CubeHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut b = [0u8; 8];
+            b[..chunk.len()].copy_from_slice(chunk);
+            self.add(u64::from_le_bytes(b));
+        }
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.add(v);
+    }
+
+    fn write_usize(&mut self, v: usize) {
+        self.add(v as u64);
+    }
+
+    /// The high bits folded into the low ones (the table indexes by the low bits).
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 29)
+    }
+}
+
+type Cubes = HashMap<Vec<i64>, u32, BuildHasherDefault<CubeHasher>>;
 
 /// A landing is outside the cloud when its nearest node is farther than `REACH` cells.
 pub const REACH: f64 = 2.0;
@@ -55,7 +94,7 @@ pub struct Cloud {
     nodes: Vec<f64>,
     /// Their metric coordinates, node-major.
     coords: Vec<f64>,
-    cubes: HashMap<Vec<i64>, u32>,
+    cubes: Cubes,
 }
 
 /// The metric of `points` (module docs, "Metric"): their principal frame and the standard
@@ -140,7 +179,7 @@ impl Cloud {
             d,
             nodes: Vec::new(),
             coords: Vec::new(),
-            cubes: HashMap::new(),
+            cubes: Cubes::default(),
         })
     }
 
@@ -221,16 +260,37 @@ impl Cloud {
         let u = self.to_metric(p);
         let base = self.cube(&u);
         let reach2 = (REACH * self.cell).powi(2);
-        // every node within REACH cells lies in a cube at most ceil(REACH) cubes away per axis
+        // every node within REACH cells lies in a cube at most ceil(REACH) cubes away per axis;
+        // a cube whose nearest point is farther than REACH cells holds none (skipped: the
+        // nodes found, and so the weights, are those of the whole search)
         let r = REACH.ceil() as i64;
         let span = (2 * r + 1) as usize;
+        // gap[a][o + r]: squared distance along axis a from u to the cubes at offset o
+        let gap: Vec<f64> = (0..self.d)
+            .flat_map(|a| {
+                let f = u[a] / self.cell - base[a] as f64;
+                (-r..=r).map(move |o| {
+                    let g = match o {
+                        0 => 0.0,
+                        o if o > 0 => o as f64 - f,
+                        o => f - o as f64 - 1.0,
+                    };
+                    (g.max(0.0) * self.cell).powi(2)
+                })
+            })
+            .collect();
         let mut near: Vec<(f64, usize)> = Vec::new();
         let mut key = base.clone();
         for c in 0..span.pow(self.d as u32) {
-            let mut rest = c;
+            let (mut rest, mut lower) = (c, 0.0);
             for (a, k) in key.iter_mut().enumerate() {
-                *k = base[a] + (rest % span) as i64 - r;
+                let o = rest % span;
+                *k = base[a] + o as i64 - r;
+                lower += gap[a * span + o];
                 rest /= span;
+            }
+            if lower > reach2 * (1.0 + 1e-9) {
+                continue;
             }
             if let Some(&j) = self.cubes.get(&key) {
                 let j = j as usize;

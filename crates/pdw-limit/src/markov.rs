@@ -262,8 +262,17 @@ pub fn transitions(
     };
     for (l, (s_l, w_l)) in slopes.iter().enumerate() {
         let landed = strides_onto(walk, *s_l, &starts, pool)?;
-        for (i, end) in landed.into_iter().enumerate() {
-            add_landing(&mut t, i, l, *w_l, end, mesh, base.as_ref());
+        // each landing's weights in parallel, then added in the states' order (the rows as a
+        // serial loop builds them)
+        let spread: Vec<Spread> = pool.install(|| {
+            landed
+                .into_par_iter()
+                .with_min_len(256)
+                .map(|end| spread_on(end, mesh, base.as_ref()))
+                .collect()
+        });
+        for (i, sp) in spread.into_iter().enumerate() {
+            add_spread(&mut t, i, l, *w_l, sp, mesh.len());
         }
     }
     Ok(t)
@@ -455,26 +464,27 @@ fn integrated_strides(
         .collect())
 }
 
-/// Row `i`'s landing on slope node `l` (probability `w_l`): its section point spread over
-/// layer `l`'s mesh, or counted as a fall / out of the mesh.
-fn add_landing(
-    t: &mut Transitions,
-    i: usize,
-    l: usize,
-    w_l: f64,
-    end: Option<Vec<f64>>,
-    mesh: &Mesh,
-    base: &dyn Section,
-) {
-    let Some(post) = end else {
-        t.fall[i] += w_l;
-        return;
-    };
+/// Where a stride's landing went: `None` a fall, `Some(None)` outside the mesh, else its
+/// weights on the mesh's nodes.
+type Spread = Option<Option<Vec<(usize, f64)>>>;
+
+/// A landing (`None`: a fall) spread over the mesh.
+fn spread_on(end: Option<Vec<f64>>, mesh: &Mesh, base: &dyn Section) -> Spread {
+    let post = end?;
     let mut s = vec![0.0; base.section_dim()];
     base.project(&post, &mut s);
-    match mesh.weights(&s) {
-        Some(ws) => t.rows[i].extend(ws.into_iter().map(|(k, w)| (l * mesh.len() + k, w_l * w))),
-        None => t.out[i] += w_l,
+    Some(mesh.weights(&s))
+}
+
+/// Row `i`'s landing on slope node `l` (probability `w_l`, layers of `per_layer` nodes): its
+/// weights on layer `l`'s mesh, or counted as a fall / out of the mesh.
+fn add_spread(t: &mut Transitions, i: usize, l: usize, w_l: f64, sp: Spread, per_layer: usize) {
+    match sp {
+        None => t.fall[i] += w_l,
+        Some(None) => t.out[i] += w_l,
+        Some(Some(ws)) => {
+            t.rows[i].extend(ws.into_iter().map(|(k, w)| (l * per_layer + k, w_l * w)))
+        }
     }
 }
 
@@ -503,21 +513,56 @@ pub struct ChainResult {
     pub states: usize,
 }
 
-/// `y = Q x` (the start's row, last, excluded).
+/// `y = Q x` (the start's row, last, excluded), the rows in parallel (each row's sum in its
+/// entries' order, as serially).
 fn matvec(t: &Transitions, n: usize, x: &[f64], y: &mut [f64]) {
-    for (i, yi) in y.iter_mut().enumerate().take(n) {
-        *yi = t.rows[i].iter().map(|(j, q)| q * x[*j]).sum();
-    }
+    y[..n]
+        .par_iter_mut()
+        .with_min_len(4096)
+        .zip(&t.rows[..n])
+        .for_each(|(yi, row)| *yi = row.iter().map(|(j, q)| q * x[*j]).sum());
 }
 
-/// `y = x Q` (row vector times Q).
-fn vecmat(t: &Transitions, n: usize, x: &[f64], y: &mut [f64]) {
-    y.fill(0.0);
-    for (i, xi) in x.iter().enumerate().take(n) {
-        for (j, q) in &t.rows[i] {
-            y[*j] += xi * q;
+/// `Qᵀ` of the first `n` rows and columns, by rows (compressed sparse rows: row `j` holds the
+/// entries `(i, q_ij)` of column `j` of `Q`, in increasing `i`), so that `x Q` is a gather per
+/// column that runs in parallel.
+struct Transposed {
+    start: Vec<usize>,
+    entries: Vec<(usize, f64)>,
+}
+
+fn transpose(t: &Transitions, n: usize) -> Transposed {
+    let mut start = vec![0usize; n + 1];
+    for row in &t.rows[..n] {
+        for (j, _) in row {
+            start[j + 1] += 1;
         }
     }
+    for j in 0..n {
+        start[j + 1] += start[j];
+    }
+    let mut fill = start.clone();
+    let mut entries = vec![(0, 0.0); start[n]];
+    for (i, row) in t.rows[..n].iter().enumerate() {
+        for (j, q) in row {
+            entries[fill[*j]] = (i, *q);
+            fill[*j] += 1;
+        }
+    }
+    Transposed { start, entries }
+}
+
+/// `y = x Q` (row vector times Q) by the transpose.
+fn vecmat(qt: &Transposed, x: &[f64], y: &mut [f64]) {
+    y.par_iter_mut()
+        .with_min_len(4096)
+        .enumerate()
+        .for_each(|(j, yj)| {
+            *yj = qt.entries[qt.start[j]..qt.start[j + 1]]
+                .iter()
+                .map(|(i, q)| x[*i] * q)
+                .sum();
+        });
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -587,11 +632,12 @@ fn dominant(t: &Transitions, n: usize) -> (Vec<f64>, f64) {
         .zip(&t.out[..n])
         .map(|(f, o)| f + o)
         .collect();
+    let qt = transpose(t, n);
     let mut pi = vec![1.0 / n as f64; n];
     let mut next = vec![0.0; n];
     let (mut lambda, mut rate) = (0.0, f64::INFINITY);
     for _ in 0..100_000 {
-        vecmat(t, n, &pi, &mut next);
+        vecmat(&qt, &pi, &mut next);
         let l: f64 = next.iter().sum();
         if l <= 0.0 {
             return (pi, 0.0);

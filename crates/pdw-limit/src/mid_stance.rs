@@ -448,11 +448,16 @@ pub fn transitions(
         strikes: Some(vec![0.0; n + 1]),
     };
     for (v, w) in nodes {
-        for (i, l) in map_onto(walk, *v, sense, &starts, pool)?
-            .into_iter()
-            .enumerate()
-        {
-            add(&mut t, i, *w, l, mesh);
+        let ls = map_onto(walk, *v, sense, &starts, pool)?;
+        // the weights in parallel, added in the states' order (as a serial loop adds them)
+        let spread: Vec<_> = pool.install(|| {
+            ls.par_iter()
+                .with_min_len(256)
+                .map(|l| l.point.as_ref().map(|p| mesh.weights(p)))
+                .collect()
+        });
+        for (i, (l, sp)) in ls.into_iter().zip(spread).enumerate() {
+            add_spread(&mut t, i, *w, l.strikes, sp);
         }
     }
     let first = first_mid_stance(walk, sense, x0)?;
@@ -512,6 +517,89 @@ pub fn cloud_transitions(
     passes: usize,
     pool: &rayon::ThreadPool,
 ) -> Result<CloudChain, LimitError> {
+    let mut cache = LandingCache::default();
+    cloud_transitions_cached(walk, nodes, cloud, x0, sense, passes, pool, &mut cache)
+}
+
+/// Landings already mapped, by the bits of their start (a mid-stance section point): one per
+/// terrain node, for one walk, sense and list of terrain nodes. A lane's result does not
+/// depend on the batch it ran in (module docs of [`pdw_hybrid::batch`]), so a start met again
+/// — the two clouds of a pair share most of the visited states they are thinned from — is
+/// answered from here bit for bit. Records only while [`LandingCache::record`] is set.
+#[derive(Clone, Debug, Default)]
+pub struct LandingCache {
+    pub record: bool,
+    map: std::collections::HashMap<Vec<u64>, Vec<Landing>>,
+    /// Starts answered from the cache.
+    pub hits: usize,
+}
+
+impl LandingCache {
+    /// An empty cache that records.
+    pub fn recording() -> Self {
+        Self {
+            record: true,
+            ..Self::default()
+        }
+    }
+}
+
+fn start_key(p: &[f64]) -> Vec<u64> {
+    p.iter().map(|v| v.to_bits()).collect()
+}
+
+/// Every start of `new` mapped onto every terrain node of `nodes` (`out[l][k]`: start `k`
+/// onto node `l`), the starts the cache holds answered from it.
+fn map_cached(
+    walk: &SlopeWalk,
+    nodes: &[(f64, f64)],
+    sense: f64,
+    new: &[Vec<f64>],
+    pool: &rayon::ThreadPool,
+    cache: &mut LandingCache,
+) -> Result<Vec<Vec<Landing>>, LimitError> {
+    let todo: Vec<&Vec<f64>> = new
+        .iter()
+        .filter(|p| !cache.map.contains_key(&start_key(p)))
+        .collect();
+    cache.hits += new.len() - todo.len();
+    let fresh: Vec<Vec<f64>> = todo.iter().map(|p| p.to_vec()).collect();
+    let mut mapped: Vec<std::vec::IntoIter<Landing>> = Vec::with_capacity(nodes.len());
+    for (v, _) in nodes {
+        mapped.push(map_onto(walk, *v, sense, &fresh, pool)?.into_iter());
+    }
+    let mut fresh_of = std::collections::HashMap::new();
+    for p in &fresh {
+        let ls: Vec<Landing> = mapped.iter_mut().filter_map(Iterator::next).collect();
+        fresh_of.insert(start_key(p), ls);
+    }
+    let mut out: Vec<Vec<Landing>> = vec![Vec::with_capacity(new.len()); nodes.len()];
+    for p in new {
+        let key = start_key(p);
+        let ls = fresh_of.get(&key).or_else(|| cache.map.get(&key));
+        for (o, l) in out.iter_mut().zip(ls.into_iter().flatten()) {
+            o.push(l.clone());
+        }
+    }
+    if cache.record {
+        cache.map.extend(fresh_of);
+    }
+    Ok(out)
+}
+
+/// [`cloud_transitions`] with the strides of starts already mapped taken from `cache`, and
+/// the new ones recorded there where it records ([`LandingCache`]).
+#[allow(clippy::too_many_arguments)]
+pub fn cloud_transitions_cached(
+    walk: &SlopeWalk,
+    nodes: &[(f64, f64)],
+    cloud: &mut Cloud,
+    x0: &[f64],
+    sense: f64,
+    passes: usize,
+    pool: &rayon::ThreadPool,
+    cache: &mut LandingCache,
+) -> Result<CloudChain, LimitError> {
     let seeds = cloud.len();
     let mut land: Vec<Vec<Landing>> = vec![Vec::new(); nodes.len()];
     let (mut mapped, mut run) = (0, 0);
@@ -519,8 +607,11 @@ pub fn cloud_transitions(
         let new: Vec<Vec<f64>> = (mapped..cloud.len())
             .map(|k| cloud.node(k).to_vec())
             .collect();
-        for (l, (v, _)) in nodes.iter().enumerate() {
-            land[l].extend(map_onto(walk, *v, sense, &new, pool)?);
+        for (l, ls) in map_cached(walk, nodes, sense, &new, pool, cache)?
+            .into_iter()
+            .enumerate()
+        {
+            land[l].extend(ls);
         }
         if run == passes {
             break;

@@ -851,7 +851,8 @@ pub fn chain_in(
             mid_stance::transitions(&walk, &slopes, &mesh, x0, sense, pool)?
         }
     };
-    Ok(markov::solve_chain(&tr))
+    // the solve's products run on the pool
+    Ok(pool.install(|| markov::solve_chain(&tr)))
 }
 
 /// Relative change of the chain's MFPT between two meshes above which [`refinement_warning`]
@@ -1275,10 +1276,12 @@ pub fn cloud_pair(
     let (pts, frame, bounds) =
         mid_stance_points(m, plan, x0, (CLOUD_WALKERS, CLOUD_STEPS), pool, progress)?;
     let slopes = terrain_nodes(plan, chain.nodes);
-    let run = |n: usize| -> Result<(ChainResult, CloudStats), LimitError> {
+    // the fine cloud's starts that the coarse one mapped are taken from it (bit for bit)
+    let mut cache = mid_stance::LandingCache::recording();
+    let mut run = |n: usize| -> Result<(ChainResult, CloudStats), LimitError> {
         let t0 = std::time::Instant::now();
         let mut cloud = pdw_limit::cloud::Cloud::thinned(&pts, n)?;
-        let cc = mid_stance::cloud_transitions(
+        let cc = mid_stance::cloud_transitions_cached(
             &walk,
             &slopes,
             &mut cloud,
@@ -1286,8 +1289,10 @@ pub fn cloud_pair(
             sense,
             CLOUD_PASSES,
             pool,
+            &mut cache,
         )?;
-        let r = pdw_limit::markov::solve_chain(&cc.transitions);
+        cache.record = false;
+        let r = pool.install(|| pdw_limit::markov::solve_chain(&cc.transitions));
         let stats = CloudStats {
             mesh: n,
             cell: cloud.cell(),
