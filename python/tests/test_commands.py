@@ -257,9 +257,9 @@ def gif_header(path):
 def test_animate_options_and_from_file_equal_the_cli():
     with tempfile.TemporaryDirectory() as d:
         a, b = os.path.join(d, "cli.gif"), os.path.join(d, "py.gif")
-        run_cli("animate", "--model", "compass", "--steps", "1", "--fps", "25", "--size",
+        run_cli("animate", "--model", "compass", "--strides", "1", "--fps", "25", "--size",
                 "320x240", "--out", a)
-        pdw.animate("compass", steps=1, fps=25, size=(320, 240), out=b)
+        pdw.animate("compass", strides=1, fps=25, size=(320, 240), out=b)
         with open(a, "rb") as fa, open(b, "rb") as fb:
             assert fa.read() == fb.read()
         # 25 fps: 4 cs; one stride of about 0.734 s: round(0.734 / 0.04) = 18 frames, + 1
