@@ -60,7 +60,7 @@ def test_signature_defaults_are_the_cli_defaults():
     assert d["basin_box"].default is None and d["max_strides"].default == 40
     assert d["out"].default is None and d["force"].default is False
     a = inspect.signature(pdw.animate).parameters
-    assert a["steps"].default == 2 and a["fps"].default is None
+    assert a["strides"].default == 2 and a["steps"].default is None and a["fps"].default is None
     assert a["size"].default == (640, 400) and a["from_file"].default is None
     assert inspect.signature(pdw.basin_over).parameters["grid"].default == (41, 41)
 
@@ -271,7 +271,8 @@ def test_animate_options_and_from_file_equal_the_cli():
         pdw.animate(from_file=t, out=p)
         with open(c, "rb") as fa, open(p, "rb") as fb:
             assert fa.read() == fb.read()
-        for bad, says in [(dict(steps=0), "steps"), (dict(fps=60.0), "fps"),
+        for bad, says in [(dict(strides=0), "strides: 0 strides"), (dict(steps=0), "strides"),
+                          (dict(fps=60.0), "fps"),
                           (dict(size=(10, 10)), "size"),
                           (dict(from_file=os.path.join(d, "none.h5")), "none.h5"),
                           (dict(from_file=t, slope=0.01), "from_file")]:
