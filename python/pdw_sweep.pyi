@@ -98,14 +98,23 @@ def stride_map(
     slope: Optional[Union[float, str]] = None,
     **params: float,
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.uint8], npt.NDArray[np.float64]]:
-    """One step of the stride map from each row of `states` (N, d_s section coordinates),
-    batched on the engine (2 threads, interpreter released). Returns (next states (N, d_s),
-    outcome codes (N,) — legend in `stride_outcomes(model)`, 0 = reached the next heel strike —,
-    step durations (N,)). Identical to N one-row calls."""
+    """One stride of the stride map (heel strike to heel strike) from each row of `states`
+    (N, d_s section coordinates), batched on the engine (2 threads, interpreter released).
+    Returns (next states (N, d_s), end codes (N,), stride durations (N,)). The codes are those
+    of a basin file's /basin/outcome for the same ends (legend in `stride_outcomes(model)`):
+    13 heel_strike (reached the next heel strike: a complete stride), 2 fall_forward,
+    3 fall_backward, 10 fall_knee_bent, 11 fall_knee_buckled, 12 fall_rolls_back, 6 fall (a
+    fall of another kind), 5 fall_no_heel_strike (no heel strike within the stride time
+    budget), 8 nonfinite, 9 integrator_failure (the step size collapsed, the integrator's step
+    budget ran out, or more than 64 events in one stride: the three are one class, as in a
+    basin). Identical to N one-row calls. (Older builds used other codes: 0 ok, 1 timeout,
+    2 nonfinite, 3 step_too_small, 4 max_steps, 5 too_many_events, 16 + k a fall of kind k.)"""
 
 def stride_outcomes(model: str = "simplest", **params: float) -> dict[int, str]:
-    """Legend of `stride_map`'s outcome codes: 0 ok, 1 timeout, 2 nonfinite, 3 step_too_small,
-    4 max_steps, 5 too_many_events, 16 + k the model's fall of kind k (by name)."""
+    """Legend of `stride_map`'s codes, {code: name}, for the ends a stride of `model` can have:
+    heel_strike, fall_no_heel_strike, nonfinite, integrator_failure and the model's fall kinds
+    (its terminal guards). Codes and names are the one table of ends, the basin file's legend
+    for the same ends (`heel_strike`, 13, is a stride's end only, never a basin cell's)."""
 
 def basin(
     model: str = "simplest",
@@ -199,7 +208,7 @@ def mfpt(
     slope: Optional[Union[float, str]] = None,
     sd: Optional[Union[float, str]] = None,
     walkers: int = 1000,
-    max_steps: int = 1000,
+    max_strides: int = 1000,
     seed: int = 0,
     threads: int = 2,
     terrain: str = "slope",
@@ -210,14 +219,17 @@ def mfpt(
     chain_section: str = "landing",
     chain_mesh: str = "grid",
     stride_map: str = "auto",
+    max_steps: Optional[int] = None,
     **params: float,
 ) -> dict[str, Any]:
     """Mean first-passage time on a random slope per step (`pdw-sweep mfpt`, Monte Carlo):
     walkers start on the stable gait of the mean slope `slope`; every landing line has a slope
     drawn from N(slope, sd²) (`sd` in rad or '1deg'). Returns mfpt and stderr (steps / falls,
     the maximum-likelihood estimate), restricted_mean and restricted_stderr (mean of
-    min(T, max_steps)), walkers, falls, censored, total_steps, survival (max_steps + 1,),
+    min(T, max_strides)), walkers, falls, censored, total_steps, survival (max_strides + 1,),
     failures (fall kind → count), start (section state), mean, sd. The same on any `threads`.
+    `max_strides`: heel strikes at most per walker (censored beyond); `max_steps` is its old
+    spelling, still accepted.
     With `sd="A:B:N"` (e.g. "0.3deg:0.7deg:5", as `mfpt --sd A:B:N`): one run per standard
     deviation with the same seed, a dict of arrays sd, mfpt, stderr, restricted_mean, falls,
     censored, total_steps (one value per σ) and mean. `terrain="step-down"`: a random foothold
@@ -387,13 +399,14 @@ def animate(
     slope: Optional[Union[float, str]] = None,
     out: Union[str, "os.PathLike[str]"] = "gait.gif",
     force: bool = False,
-    steps: int = 2,
+    strides: int = 2,
     fps: Optional[float] = None,
     size: Tuple[int, int] = (640, 400),
     from_file: Optional[Union[str, "os.PathLike[str]"]] = None,
+    steps: Optional[int] = None,
     **params: float,
 ) -> Any:
-    """Writes the GIF of `pdw-sweep animate` (`steps` strides of the gait at `fps` frames per
+    """Writes the GIF of `pdw-sweep animate` (`strides` strides (`steps`: the old spelling) of the gait at `fps` frames per
     second, default 16.7, one GIF second per model time unit; or, with from_file, a trajectory
     file of `pdw-sweep simulate`, its model rebuilt from the file) to `out` (an existing file
     only with force=True) and returns its path."""
@@ -415,10 +428,11 @@ def mfpt_over(
     slope: Optional[Union[float, str]] = None,
     sd: Optional[Union[float, str]] = None,
     walkers: int = 1000,
-    max_steps: int = 1000,
+    max_strides: int = 1000,
     seed: int = 0,
     threads: int = 2,
     dist: str = "normal",
+    max_steps: Optional[int] = None,
     **params: float,
 ) -> dict[str, Any]:
     """MFPT and gait sensitivity norm over a model parameter, as `pdw-sweep mfpt --over`

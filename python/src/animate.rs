@@ -8,16 +8,17 @@ use crate::errors::err;
 use crate::{build_kw, interruptible};
 use pdw::animate::AnimOptions;
 
-/// `animate(model="simplest", slope=None, out="gait.gif", force=False, steps=2, fps=None,
-/// size=(640, 400), from_file=None, **params)`: writes the GIF of `steps` strides of the gait
+/// `animate(model="simplest", slope=None, out="gait.gif", force=False, strides=2, fps=None,
+/// size=(640, 400), from_file=None, steps=None, **params)`: writes the GIF of `strides` strides
+/// of the gait
 /// (or, with `from_file`, of a trajectory file written by `pdw-sweep simulate`, its model
 /// rebuilt from the file) to `out` (refusing an existing file unless `force`) and returns its
 /// path. `fps` defaults to 16.7 (a 60 ms delay); one GIF second is one model time unit. Warns
 /// (`UserWarning`) when the gait drawn is unstable or physically invalid.
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, out=std::path::PathBuf::from("gait.gif"), force=false, steps=2, fps=None, size=(640, 400), from_file=None, **params),
-    text_signature = "(model='simplest', slope=None, out='gait.gif', force=False, steps=2, fps=None, size=(640, 400), from_file=None, **params)"
+    signature = (model="simplest", slope=None, out=std::path::PathBuf::from("gait.gif"), force=false, strides=2, fps=None, size=(640, 400), from_file=None, steps=None, **params),
+    text_signature = "(model='simplest', slope=None, out='gait.gif', force=False, strides=2, fps=None, size=(640, 400), from_file=None, steps=None, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn animate<'py>(
@@ -26,10 +27,11 @@ pub(crate) fn animate<'py>(
     slope: Option<&Bound<'py, PyAny>>,
     out: std::path::PathBuf,
     force: bool,
-    steps: i64,
+    strides: i64,
     fps: Option<f64>,
     size: (u32, u32),
     from_file: Option<std::path::PathBuf>,
+    steps: Option<i64>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<std::path::PathBuf> {
     if out.exists() && !force {
@@ -39,7 +41,11 @@ pub(crate) fn animate<'py>(
         )));
     }
     let opts = AnimOptions {
-        steps: pdw::animate::check_steps(steps, "steps").map_err(err)?,
+        strides: pdw::animate::check_strides(
+            crate::old_spelling(strides, 2, steps, "strides", "steps")?,
+            "strides",
+        )
+        .map_err(err)?,
         fps: pdw::animate::check_fps(fps.unwrap_or(pdw::animate::DEFAULT_FPS), "fps")
             .map_err(err)?,
         size: pdw::animate::check_size(size, "size").map_err(err)?,

@@ -152,12 +152,15 @@ fn over_dict<'py>(
     )?;
     d.set_item(
         "outcome_columns",
-        Outcome::ALL.iter().map(|o| o.name()).collect::<Vec<_>>(),
+        Outcome::CELL_ENDS
+            .iter()
+            .map(|o| o.name())
+            .collect::<Vec<_>>(),
     )?;
     let outcomes: Vec<f64> = results.iter().flat_map(|r| r.outcomes.clone()).collect();
     d.set_item(
         "outcome_fractions",
-        Array2::from_shape_vec((n, Outcome::ALL.len()), outcomes)
+        Array2::from_shape_vec((n, Outcome::CELL_ENDS.len()), outcomes)
             .map_err(err)?
             .into_pyarray(py),
     )?;

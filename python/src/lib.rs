@@ -142,6 +142,27 @@ pub(crate) fn slope_arg(slope: Option<&Bound<'_, PyAny>>) -> PyResult<Option<f64
     )))
 }
 
+/// A keyword renamed to say what it counts (`strides`, `max_strides`), with its old spelling
+/// still accepted: the old keyword's value when it was given (the new one left at its
+/// `default` or equal to it), else the new one's; both given with different values is an
+/// error.
+pub(crate) fn old_spelling<T: PartialEq + Copy + std::fmt::Display>(
+    new: T,
+    default: T,
+    old: Option<T>,
+    new_name: &str,
+    old_name: &str,
+) -> PyResult<T> {
+    match old {
+        None => Ok(new),
+        Some(o) if new == default || new == o => Ok(o),
+        Some(o) => Err(errors::err(format!(
+            "{old_name}={o} and {new_name}={new}: {old_name} is the old spelling of \
+             {new_name}; give one"
+        ))),
+    }
+}
+
 /// The library's warnings of the current call, given to Python by [`give_warnings`].
 static PENDING_WARNINGS: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
 

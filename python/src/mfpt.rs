@@ -15,7 +15,7 @@ pub(crate) const MFPT_FLAGS: pdw::mfpt::MfptFlags = pdw::mfpt::MfptFlags {
     sd: "sd",
     mean: "slope",
     walkers: "walkers",
-    max_steps: "max_steps",
+    max_steps: "max_strides",
     dist: "dist",
 };
 
@@ -29,12 +29,20 @@ fn mfpt_curve<'py>(
         pdw::limit::terrain::TerrainKind,
         &pdw::limit::terrain::TerrainDist,
     ),
-    (walkers, max_steps, seed, threads): (usize, usize, u64, usize),
+    (walkers, max_strides, seed, threads): (usize, usize, u64, usize),
     stride_map: pdw::mfpt::StrideMap,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
     pdw::mfpt::check_model_for(m, kind).map_err(err)?;
-    let plan = |sd: f64| mfpt_plan(m, (kind, dist), sd, (walkers, max_steps, seed), stride_map);
+    let plan = |sd: f64| {
+        mfpt_plan(
+            m,
+            (kind, dist),
+            sd,
+            (walkers, max_strides, seed),
+            stride_map,
+        )
+    };
     pdw::mfpt::check_plan(&plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_heights(m, &plan(sds[sds.len() - 1]), &MFPT_FLAGS).map_err(err)?;
     pdw::mfpt::check_memory(
@@ -95,7 +103,7 @@ fn mfpt_plan(
         &pdw::limit::terrain::TerrainDist,
     ),
     sd: f64,
-    (walkers, max_steps, seed): (usize, usize, u64),
+    (walkers, max_strides, seed): (usize, usize, u64),
     stride_map: pdw::mfpt::StrideMap,
 ) -> pdw::mfpt::MfptPlan {
     pdw::mfpt::MfptPlan {
@@ -107,7 +115,7 @@ fn mfpt_plan(
             dist: dist.clone(),
         },
         walkers,
-        max_steps,
+        max_strides,
         integrator: pdw::mfpt::default_integrator(),
         stride_map,
     }
@@ -121,7 +129,7 @@ const CHAIN_FLAGS: pdw::mfpt::ChainFlags = pdw::mfpt::ChainFlags {
     section: "chain_section",
 };
 
-/// `mfpt(model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000, seed=0,
+/// `mfpt(model="simplest", slope=None, sd=..., walkers=1000, max_strides=1000, seed=0,
 /// threads=2, terrain="slope", chain=False, mesh=None, nodes=None, dist="normal", **params)`:
 /// the Monte Carlo of `pdw-sweep mfpt` (the slope is the mean slope; with
 /// `terrain="step-down"` the model's `step_down` is the mean step down and `sd` a plain
@@ -135,8 +143,8 @@ const CHAIN_FLAGS: pdw::mfpt::ChainFlags = pdw::mfpt::ChainFlags {
 /// arrays; without the chain).
 #[pyfunction]
 #[pyo3(
-    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", chain_section="landing", chain_mesh="grid", stride_map="auto", **params),
-    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', chain_section='landing', chain_mesh='grid', stride_map='auto', **params)"
+    signature = (model="simplest", slope=None, sd=None, walkers=1000, max_strides=1000, seed=0, threads=2, terrain="slope", chain=false, mesh=None, nodes=None, dist="normal", chain_section="landing", chain_mesh="grid", stride_map="auto", max_steps=None, **params),
+    text_signature = "(model='simplest', slope=None, sd=None, walkers=1000, max_strides=1000, seed=0, threads=2, terrain='slope', chain=False, mesh=None, nodes=None, dist='normal', chain_section='landing', chain_mesh='grid', stride_map='auto', max_steps=None, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn mfpt<'py>(
@@ -145,7 +153,7 @@ pub(crate) fn mfpt<'py>(
     slope: Option<&Bound<'py, PyAny>>,
     sd: Option<&Bound<'py, PyAny>>,
     walkers: usize,
-    max_steps: usize,
+    max_strides: usize,
     seed: u64,
     threads: usize,
     terrain: &str,
@@ -156,9 +164,12 @@ pub(crate) fn mfpt<'py>(
     chain_section: &str,
     chain_mesh: &str,
     stride_map: &str,
+    max_steps: Option<usize>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
+    let max_strides =
+        crate::old_spelling(max_strides, 1000, max_steps, "max_strides", "max_steps")?;
     let kind = pdw::mfpt::check_terrain(terrain, &MFPT_FLAGS).map_err(err)?;
     let stride_map = pdw::mfpt::StrideMap::parse(stride_map, "stride_map").map_err(err)?;
     let section =
@@ -181,7 +192,7 @@ pub(crate) fn mfpt<'py>(
             &m,
             &sds,
             (kind, &dist),
-            (walkers, max_steps, seed, threads),
+            (walkers, max_strides, seed, threads),
             stride_map,
         );
     }
@@ -190,7 +201,7 @@ pub(crate) fn mfpt<'py>(
         &m,
         (kind, &dist),
         sds[0],
-        (walkers, max_steps, seed),
+        (walkers, max_strides, seed),
         stride_map,
     );
     pdw::mfpt::check_plan(&plan, &MFPT_FLAGS).map_err(err)?;

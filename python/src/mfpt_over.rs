@@ -10,15 +10,15 @@ use crate::interruptible;
 use pdw::limit::gsn::Indicator;
 use pdw::mfpt_over::{self as over, OverRow};
 
-/// `mfpt_over(over, model="simplest", slope=None, sd=..., walkers=1000, max_steps=1000,
+/// `mfpt_over(over, model="simplest", slope=None, sd=..., walkers=1000, max_strides=1000,
 /// seed=0, threads=2, dist="normal", **params)`: at each value of `over` ("hip_mass=4:16:7")
 /// the stable gait's MFPT (the same walkers and seed at every value) and GSN; values without a
 /// stable gait have `stable` False and NaN. `dist`: the standardised draws' distribution, as
 /// `mfpt`'s (`normal`, `uniform`, `file:PATH`).
 #[pyfunction]
 #[pyo3(
-    signature = (over, model="simplest", slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, dist="normal", **params),
-    text_signature = "(over, model='simplest', slope=None, sd=None, walkers=1000, max_steps=1000, seed=0, threads=2, dist='normal', **params)"
+    signature = (over, model="simplest", slope=None, sd=None, walkers=1000, max_strides=1000, seed=0, threads=2, dist="normal", max_steps=None, **params),
+    text_signature = "(over, model='simplest', slope=None, sd=None, walkers=1000, max_strides=1000, seed=0, threads=2, dist='normal', max_steps=None, **params)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn mfpt_over<'py>(
@@ -28,13 +28,16 @@ pub(crate) fn mfpt_over<'py>(
     slope: Option<&Bound<'py, PyAny>>,
     sd: Option<&Bound<'py, PyAny>>,
     walkers: usize,
-    max_steps: usize,
+    max_strides: usize,
     seed: u64,
     threads: usize,
     dist: &str,
+    max_steps: Option<usize>,
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     pdw::input::check_threads(threads, "threads").map_err(err)?;
+    let max_strides =
+        crate::old_spelling(max_strides, 1000, max_steps, "max_strides", "max_steps")?;
     let dist = pdw::mfpt::parse_dist(dist, &crate::mfpt::MFPT_FLAGS).map_err(err)?;
     let sw = pdw::input::parse_range_count(over, "over").map_err(err)?;
     let sd = match sd {
@@ -59,7 +62,7 @@ pub(crate) fn mfpt_over<'py>(
             dist,
         },
         walkers,
-        max_steps,
+        max_strides,
         integrator: pdw::mfpt::default_integrator(),
         stride_map: Default::default(),
     };

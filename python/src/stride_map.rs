@@ -1,5 +1,6 @@
 //! `stride_map` and `stride_outcomes`: one stride from each of many states, batched on the
-//! pool, with the outcome codes and their legend.
+//! pool, with the codes of how each stride ended and their legend: the one table of ends
+//! (`pdw::limit::End`), whose codes are those of `/basin/outcome`.
 
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLike2};
 use pyo3::prelude::*;
@@ -9,25 +10,14 @@ use crate::convert::rows_to_array;
 use crate::errors::err;
 use crate::{build_kw, interruptible, THREADS};
 use pdw::limit::basin::BasinOptions;
-use pdw::limit::{StrideMap, StrideOutcome};
+use pdw::limit::{End, StrideMap};
 
 /// Integration tolerance (DOP853) of `stride_map`, the basin engine's default.
 const STRIDE_TOL: f64 = 1e-10;
 
-/// Outcome code of one stride (see `stride_outcomes`).
-fn stride_code(o: StrideOutcome) -> u8 {
-    match o {
-        StrideOutcome::Ok => 0,
-        StrideOutcome::Timeout => 1,
-        StrideOutcome::NonFinite => 2,
-        StrideOutcome::StepTooSmall => 3,
-        StrideOutcome::MaxSteps => 4,
-        StrideOutcome::TooManyEvents => 5,
-        StrideOutcome::Fall { kind, .. } => 16u8.saturating_add(kind.code()),
-    }
-}
-
-/// `stride_outcomes(model="simplest", **params)`: legend of `stride_map`'s outcome codes.
+/// `stride_outcomes(model="simplest", **params)`: legend of `stride_map`'s codes, `{code:
+/// name}` for every end a stride of the model can have (names and codes of the one table,
+/// `End::ALL`: the basin file's for the same ends).
 #[pyfunction]
 #[pyo3(signature = (model="simplest", **params), text_signature = "(model='simplest', **params)")]
 pub(crate) fn stride_outcomes<'py>(
@@ -36,27 +26,24 @@ pub(crate) fn stride_outcomes<'py>(
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = build_kw(model, None, params)?;
-    let d = PyDict::new(py);
-    for (c, n) in [
-        (0u8, "ok"),
-        (1, "timeout"),
-        (2, "nonfinite"),
-        (3, "step_too_small"),
-        (4, "max_steps"),
-        (5, "too_many_events"),
-    ] {
-        d.set_item(c, n)?;
-    }
-    let mut seen = Vec::new();
+    let mut ends = vec![
+        End::HeelStrike,
+        End::FallNoHeelStrike,
+        End::NonFinite,
+        End::IntegratorFailure,
+    ];
     for mode in 0..m.walker.n_modes() {
         for g in m.walker.guards(mode) {
             if let pdw::hybrid::GuardKind::Terminal(kind) = g.kind {
-                if !seen.contains(&kind) {
-                    seen.push(kind);
-                    d.set_item(16u8.saturating_add(kind.code()), kind.name())?;
-                }
+                ends.push(End::of_fall(kind));
             }
         }
+    }
+    ends.sort_unstable();
+    ends.dedup();
+    let d = PyDict::new(py);
+    for e in ends {
+        d.set_item(e.code(), e.name())?;
     }
     Ok(d)
 }
@@ -106,7 +93,7 @@ pub(crate) fn stride_map<'py>(
         .iter()
         .flat_map(|s| s.next.iter().copied())
         .collect();
-    let codes: Vec<u8> = strides.iter().map(|s| stride_code(s.outcome)).collect();
+    let codes: Vec<u8> = strides.iter().map(|s| s.outcome.end().code()).collect();
     let times: Vec<f64> = strides.iter().map(|s| s.period).collect();
     debug_assert_eq!(next.len(), n * ds);
     Ok((

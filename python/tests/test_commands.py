@@ -61,7 +61,7 @@ def test_signature_defaults_are_the_cli_defaults():
     assert d["basin_box"].default is None and d["max_strides"].default == 40
     assert d["out"].default is None and d["force"].default is False
     a = inspect.signature(pdw.animate).parameters
-    assert a["steps"].default == 2 and a["fps"].default is None
+    assert a["strides"].default == 2 and a["steps"].default is None and a["fps"].default is None
     assert a["size"].default == (640, 400) and a["from_file"].default is None
     assert inspect.signature(pdw.basin_over).parameters["grid"].default == (41, 41)
 
@@ -278,9 +278,9 @@ def gif_header(path):
 def test_animate_options_and_from_file_equal_the_cli():
     with tempfile.TemporaryDirectory() as d:
         a, b = os.path.join(d, "cli.gif"), os.path.join(d, "py.gif")
-        run_cli("animate", "--model", "compass", "--steps", "1", "--fps", "25", "--size",
+        run_cli("animate", "--model", "compass", "--strides", "1", "--fps", "25", "--size",
                 "320x240", "--out", a)
-        pdw.animate("compass", steps=1, fps=25, size=(320, 240), out=b)
+        pdw.animate("compass", strides=1, fps=25, size=(320, 240), out=b)
         with open(a, "rb") as fa, open(b, "rb") as fb:
             assert fa.read() == fb.read()
         # 25 fps: 4 cs; one stride of about 0.734 s: round(0.734 / 0.04) = 18 frames, + 1
@@ -292,7 +292,8 @@ def test_animate_options_and_from_file_equal_the_cli():
         pdw.animate(from_file=t, out=p)
         with open(c, "rb") as fa, open(p, "rb") as fb:
             assert fa.read() == fb.read()
-        for bad, says in [(dict(steps=0), "steps"), (dict(fps=60.0), "fps"),
+        for bad, says in [(dict(strides=0), "strides: 0 strides"), (dict(steps=0), "strides"),
+                          (dict(fps=60.0), "fps"),
                           (dict(size=(10, 10)), "size"),
                           (dict(from_file=os.path.join(d, "none.h5")), "none.h5"),
                           (dict(from_file=t, slope=0.01), "from_file")]:

@@ -17,7 +17,7 @@ def central(model, slope, s, h):
     n = len(s)
     pts = np.array([s + sgn * h * np.eye(n)[j] for j in range(n) for sgn in (1, -1)])
     nxt, codes, _ = pdw.stride_map(model, pts, slope=slope)
-    assert np.all(codes == 0)
+    assert np.all(codes == 13)  # heel_strike: every stride complete
     return np.array([(nxt[2 * j] - nxt[2 * j + 1]) / (2 * h) for j in range(n)]).T
 
 
@@ -136,29 +136,29 @@ def test_gait_sensitivity_of_an_unstable_gait_and_a_bad_indicator_raise():
 
 
 def test_mfpt_over_draws_from_the_named_distribution_as_the_single_runs_do(tmp_path):
-    r = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2, dist="uniform")
-    normal = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2)
+    r = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_strides=200, seed=2, dist="uniform")
+    normal = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_strides=200, seed=2)
     assert r["dist"].startswith("uniform") and normal["dist"].startswith("normal")
     assert list(r["mfpt"]) != list(normal["mfpt"])
     values = tmp_path / "xi.txt"
     values.write_text("# two slopes\n-1\n1\n")
-    f = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2, dist=f"file:{values}")
+    f = pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, max_strides=200, seed=2, dist=f"file:{values}")
     for i in (0, 1):
-        one = pdw.mfpt(model="compass", slope=r["values"][i], sd="1deg", walkers=30, max_steps=200, seed=2, dist="uniform")
+        one = pdw.mfpt(model="compass", slope=r["values"][i], sd="1deg", walkers=30, max_strides=200, seed=2, dist="uniform")
         assert one["mfpt"] == r["mfpt"][i]
-        one = pdw.mfpt(model="compass", slope=f["values"][i], sd="1deg", walkers=30, max_steps=200, seed=2, dist=f"file:{values}")
+        one = pdw.mfpt(model="compass", slope=f["values"][i], sd="1deg", walkers=30, max_strides=200, seed=2, dist=f"file:{values}")
         assert one["mfpt"] == f["mfpt"][i]
     with pytest.raises(ValueError, match="dist"):
         pdw.mfpt_over("slope=0.03:0.05:2", model="compass", sd="1deg", walkers=30, dist="cauchy")
 
 
 def test_mfpt_over_is_the_single_runs_and_marks_values_without_a_gait():
-    r = pdw.mfpt_over("slope=-0.02:0.06:3", model="compass", sd="1deg", walkers=30, max_steps=200, seed=2)
+    r = pdw.mfpt_over("slope=-0.02:0.06:3", model="compass", sd="1deg", walkers=30, max_strides=200, seed=2)
     assert list(r["values"]) == [-0.02, 0.02, 0.06]
     assert list(r["stable"]) == [False, True, True]
     assert np.isnan(r["mfpt"][0]) and np.isnan(r["gsn"][0])
     for i in (1, 2):
-        one = pdw.mfpt(model="compass", slope=r["values"][i], sd="1deg", walkers=30, max_steps=200, seed=2)
+        one = pdw.mfpt(model="compass", slope=r["values"][i], sd="1deg", walkers=30, max_strides=200, seed=2)
         assert one["mfpt"] == r["mfpt"][i]
         g = pdw.gait_sensitivity("compass", slope=r["values"][i])
         assert g["norm"] == r["gsn"][i]

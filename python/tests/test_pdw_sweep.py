@@ -112,10 +112,58 @@ def test_batched_stride_map_equals_one_at_a_time():
         assert c1[0] == codes[i] and t1[0] == times[i]
         np.testing.assert_array_equal(n1[0], nxt[i])
     legend = pdw.stride_outcomes("simplest")
-    assert legend[0] == "ok" and set(codes) <= set(legend)
+    assert legend[13] == "heel_strike" and set(codes) <= set(legend)
     # The Garcia gait maps onto itself.
     n, c, _ = pdw.stride_map("simplest", [[GARCIA_THETA, GARCIA_THETADOT]], slope=0.009)
-    assert c[0] == 0 and np.max(np.abs(n[0] - [GARCIA_THETA, GARCIA_THETADOT])) < 1e-9
+    assert c[0] == 13 and np.max(np.abs(n[0] - [GARCIA_THETA, GARCIA_THETADOT])) < 1e-9
+
+
+def test_stride_map_speaks_the_basin_files_codes():
+    """One table of ends: `stride_outcomes` names every code as a basin's legend does, a
+    complete stride is 13 `heel_strike` (a stride's end only, never a cell's), a cell whose
+    first stride falls has the code `stride_map` gives that stride, and a stride time budget
+    too short for any stride is 5 `fall_no_heel_strike` in both (not the basin's 7 `timeout`)."""
+    legend = pdw.stride_outcomes("simplest")
+    # the simplest walker falls backward or forward (its terminal guards)
+    assert legend == {2: "fall_forward", 3: "fall_backward", 5: "fall_no_heel_strike",
+                      8: "nonfinite", 9: "integrator_failure", 13: "heel_strike"}
+    # the basin's own grid values (a + (b - a) i / (n - 1), the last exactly b)
+    xs = [0.02 + (0.6 - 0.02) * i / 8 for i in range(8)] + [0.6]
+    ys = [-0.9 + (0.3 + 0.9) * i / 6 for i in range(6)] + [0.3]
+    outcome, basin_legend, _ = pdw.basin("simplest", slope=0.009, grid=(9, 7),
+                                         x=("theta", 0.02, 0.6), y=("thetadot", -0.9, 0.3),
+                                         max_strides=20)
+    for c, name in basin_legend.items():
+        if c in legend:
+            assert legend[c] == name
+    assert 13 not in basin_legend and 13 not in outcome
+    states = np.array([[x, y] for y in ys for x in xs])
+    _, codes, _ = pdw.stride_map("simplest", states, slope=0.009)
+    first = codes != 13
+    assert np.any(np.isin(codes, [2, 3])), codes
+    np.testing.assert_array_equal(outcome.ravel()[first], codes[first])
+    _, codes, _ = pdw.stride_map("simplest", [[0.2, -0.2]], slope=0.009, max_stride_time=0.3)
+    assert codes[0] == 5
+    outcome, basin_legend, _ = pdw.basin("simplest", slope=0.009, grid=(3, 3),
+                                         x=("theta", 0.19, 0.21), y=("thetadot", -0.21, -0.19),
+                                         max_stride_time=0.3)
+    assert np.all(outcome == 5) and basin_legend[5] == "fall_no_heel_strike"
+
+
+def test_old_keyword_spellings_still_work():
+    """`max_strides` (mfpt, mfpt_over) and `strides` (animate) count strides; the old keywords
+    `max_steps` and `steps` still work, and both spellings with different values are refused."""
+    kw = dict(sd="0.1deg", walkers=4, seed=1, slope=0.009)
+    new, old = pdw.mfpt(max_strides=7, **kw), pdw.mfpt(max_steps=7, **kw)
+    assert new["total_steps"] == old["total_steps"] and len(new["survival"]) <= 8
+    with pytest.raises(ValueError, match="max_steps is the old spelling of max_strides"):
+        pdw.mfpt(max_strides=7, max_steps=8, **kw)
+    with tempfile.TemporaryDirectory() as d:
+        a = pdw.animate("compass", out=os.path.join(d, "a.gif"), strides=1, size=(320, 240))
+        b = pdw.animate("compass", out=os.path.join(d, "b.gif"), steps=1, size=(320, 240))
+        assert open(a, "rb").read() == open(b, "rb").read()
+        with pytest.raises(ValueError, match="steps is the old spelling of strides"):
+            pdw.animate("compass", out=os.path.join(d, "c.gif"), strides=1, steps=3)
 
 
 def cli_basin(exe, h5py, args):
@@ -436,7 +484,7 @@ def test_ctrl_c_raises_keyboard_interrupt_at_once_and_the_next_call_works(which)
     # The signal comes at 0.5 s; the uninterrupted call takes minutes.
     assert float(first[1]) < 10.0, r.stdout
     after = lines[1].split()
-    assert after[0] == "AFTER" and after[1] == "0", r.stdout
+    assert after[0] == "AFTER" and after[1] == "13", r.stdout
     assert abs(float(after[2]) - GARCIA_THETA) < 1e-9, r.stdout
 
 
@@ -552,7 +600,7 @@ def test_basin_and_continuation_name_the_coordinates():
 
 
 def test_mfpt_survival_estimator_and_thread_count():
-    r = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=5000, seed=1)
+    r = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_strides=5000, seed=1)
     surv = r["survival"]
     # survival starts at 1, never rises; steps / falls is the estimate
     assert surv[0] == 1.0 and np.all(np.diff(surv) <= 0)
@@ -561,18 +609,18 @@ def test_mfpt_survival_estimator_and_thread_count():
     assert abs(r["restricted_mean"] - surv[1:].sum()) < 1e-9
     assert sum(r["failures"].values()) == r["falls"]
     # the same walkers on one thread (sd as radians: the same number as '0.5deg')
-    r1 = pdw.mfpt("rimless", sd=0.5 * np.pi / 180, walkers=300, max_steps=5000, seed=1, threads=1)
+    r1 = pdw.mfpt("rimless", sd=0.5 * np.pi / 180, walkers=300, max_strides=5000, seed=1, threads=1)
     assert r1["total_steps"] == r["total_steps"]
     with pytest.raises(ValueError, match="sd"):
         pdw.mfpt("rimless", sd="-1deg")
 
 
 def test_mfpt_curve_is_the_single_runs_at_each_sd():
-    c = pdw.mfpt("rimless", sd="0.4deg:0.6deg:3", walkers=150, max_steps=5000, seed=4)
+    c = pdw.mfpt("rimless", sd="0.4deg:0.6deg:3", walkers=150, max_strides=5000, seed=4)
     assert c["sd"].shape == (3,)
     assert abs(c["sd"][0] - np.deg2rad(0.4)) < 1e-15 and abs(c["sd"][2] - np.deg2rad(0.6)) < 1e-15
     for i, sd in enumerate(c["sd"]):
-        r = pdw.mfpt("rimless", sd=float(sd), walkers=150, max_steps=5000, seed=4)
+        r = pdw.mfpt("rimless", sd=float(sd), walkers=150, max_strides=5000, seed=4)
         assert r["total_steps"] == c["total_steps"][i] and r["falls"] == c["falls"][i]
         assert r["mfpt"] == c["mfpt"][i]
     assert c["mfpt"][0] > c["mfpt"][1] > c["mfpt"][2]
@@ -582,24 +630,24 @@ def test_mfpt_curve_is_the_single_runs_at_each_sd():
 
 def test_mfpt_on_step_heights():
     # stairs without spread: the wheel rolls down its own stairs gait and never falls
-    r0 = pdw.mfpt("rimless", terrain="step-down", sd=0.0, step_down=0.01, walkers=20, max_steps=200)
+    r0 = pdw.mfpt("rimless", terrain="step-down", sd=0.0, step_down=0.01, walkers=20, max_strides=200)
     assert r0["terrain"] == "step-down" and r0["mean"] == 0.01
     assert r0["falls"] == 0 and r0["censored"] == 20
-    r = pdw.mfpt("rimless", terrain="step-down", sd=0.01, walkers=300, max_steps=5000, seed=2)
+    r = pdw.mfpt("rimless", terrain="step-down", sd=0.01, walkers=300, max_strides=5000, seed=2)
     assert r["falls"] + r["censored"] == 300 and r["falls"] > 0
     assert r["mfpt"] == r["total_steps"] / r["falls"]
     # a wider spread loses walkers sooner (the same draws, scaled)
-    r2 = pdw.mfpt("rimless", terrain="step-down", sd=0.02, walkers=300, max_steps=5000, seed=2)
+    r2 = pdw.mfpt("rimless", terrain="step-down", sd=0.02, walkers=300, max_strides=5000, seed=2)
     assert r2["mfpt"] < r["mfpt"]
     with pytest.raises(ValueError, match="not a height"):
         pdw.mfpt("rimless", terrain="step-down", sd="1deg")
     # the chain's rule with a node at a step height of exactly 0 (odd, mean 0) is warned of
-    kw = dict(terrain="step-down", sd=0.01, walkers=50, max_steps=500, seed=2, chain=True, mesh=20)
+    kw = dict(terrain="step-down", sd=0.01, walkers=50, max_strides=500, seed=2, chain=True, mesh=20)
     odd = pdw.mfpt("rimless", nodes=5, **kw)["chain"]["node_warning"]
     assert odd.startswith("WARNING") and "nodes 5" in odd
     assert pdw.mfpt("rimless", nodes=6, **kw)["chain"]["node_warning"] is None
     # the compass walks on step heights; draws beyond its 1 m legs are refused
-    rc = pdw.mfpt("compass", terrain="step-down", sd=0.002, walkers=20, max_steps=30)
+    rc = pdw.mfpt("compass", terrain="step-down", sd=0.002, walkers=20, max_strides=30)
     assert rc["falls"] + rc["censored"] == 20
     with pytest.raises(ValueError, match="step_down"):
         pdw.mfpt("compass", terrain="step-down", sd=0.2)
@@ -610,18 +658,18 @@ def test_round_feet_walk_on_step_heights_and_on_slopes(tmp_path):
     spec = tmp_path / "round.toml"
     text = (Path(__file__).resolve().parents[2] / "models" / "compass.toml").read_text()
     spec.write_text(text.replace("[parameters]", "foot_radius = 0.1\n\n[parameters]", 1))
-    r = pdw.mfpt(str(spec), terrain="step-down", sd=0.004, walkers=300, max_steps=2000, seed=3)
+    r = pdw.mfpt(str(spec), terrain="step-down", sd=0.004, walkers=300, max_strides=2000, seed=3)
     assert r["falls"] + r["censored"] == 300 and r["falls"] > 150
     assert r["mfpt"] == r["total_steps"] / r["falls"]
     # random slopes: the Monte Carlo walk on tilted landing lines; no Markov chain
-    r = pdw.mfpt(str(spec), sd="0.5deg", walkers=100, max_steps=2000, seed=1)
+    r = pdw.mfpt(str(spec), sd="0.5deg", walkers=100, max_strides=2000, seed=1)
     assert r["falls"] + r["censored"] == 100 and r["falls"] > 50
     with pytest.raises(ValueError, match="foot_radius"):
         pdw.mfpt(str(spec), sd="0.2deg", walkers=2, chain=True)
 
 
 def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
-    r = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True, mesh=100)
+    r = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_strides=10000, seed=1, chain=True, mesh=100)
     c = r["chain"]
     assert r["censored"] == 0 and r["dist"] == "normal"
     assert list(c["mesh"]) == [100, 200] and c["nodes"] == 11 and c["quadrature"] == "Gauss-Hermite"
@@ -643,7 +691,7 @@ def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
     assert (c["quadrature_warning"] is None) == (q <= 0.005)
     # a quadrature of 4 nodes: the chain's 83.7 against the walkers' 115.8 ± 2.6 is flagged,
     # by the rule the docs give (3 standard errors plus the refinement's change)
-    r4 = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True,
+    r4 = pdw.mfpt("rimless", sd="0.5deg", walkers=2000, max_strides=10000, seed=1, chain=True,
                   mesh=100, nodes=4)
     c4 = r4["chain"]
     beyond = abs(c4["mfpt"][1] - r4["restricted_mean"]) - abs(c4["mfpt"][1] - c4["mfpt"][0])
@@ -655,7 +703,7 @@ def test_mfpt_chain_agrees_with_the_monte_carlo_and_reports_its_meshes():
 
 
 def test_mfpt_chain_at_mid_stance_agrees_with_the_landing_chain_and_the_walkers():
-    kw = dict(sd="0.5deg", walkers=2000, max_steps=10000, seed=1, chain=True, mesh=200)
+    kw = dict(sd="0.5deg", walkers=2000, max_strides=10000, seed=1, chain=True, mesh=200)
     land = pdw.mfpt("rimless", **kw)
     mid = pdw.mfpt("rimless", chain_section="mid-stance", **kw)
     a, b = land["chain"], mid["chain"]
@@ -688,7 +736,7 @@ def test_mfpt_chain_at_mid_stance_agrees_with_the_landing_chain_and_the_walkers(
 
 
 def test_mfpt_stride_map():
-    kw = dict(sd="2deg", slope="8deg", walkers=200, max_steps=500, seed=4)
+    kw = dict(sd="2deg", slope="8deg", walkers=200, max_strides=500, seed=4)
     auto = pdw.mfpt("rimless", **kw)
     integrated = pdw.mfpt("rimless", stride_map="integrated", **kw)
     assert auto["stride_map"] == "closed form" and integrated["stride_map"] == "integrated"
@@ -696,7 +744,7 @@ def test_mfpt_stride_map():
     assert auto["falls"] > 0 and (auto["survival"] == integrated["survival"]).all()
     curve = pdw.mfpt("rimless", **{**kw, "sd": "1deg:2deg:2"})
     assert curve["stride_map"] == "closed form" and curve["mfpt"][1] == auto["mfpt"]
-    assert pdw.mfpt("compass", sd="0.1deg", walkers=4, max_steps=5)["stride_map"] == "integrated"
+    assert pdw.mfpt("compass", sd="0.1deg", walkers=4, max_strides=5)["stride_map"] == "integrated"
     with pytest.raises(ValueError, match="stride_map: the model compass has no stride map in closed form"):
         pdw.mfpt("compass", sd="0.1deg", stride_map="closed-form")
     with pytest.raises(ValueError, match="stride_map: 'exact' is not one of auto, closed-form, integrated"):
@@ -704,15 +752,15 @@ def test_mfpt_stride_map():
 
 
 def test_mfpt_uniform_and_file_distributions():
-    u = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1, dist="uniform")
-    n = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_steps=20000, seed=1)
+    u = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_strides=20000, seed=1, dist="uniform")
+    n = pdw.mfpt("rimless", sd="0.5deg", walkers=300, max_strides=20000, seed=1)
     # bounded draws of the same spread make the wheel fall less often than normal ones
     assert u["dist"].startswith("uniform") and u["mfpt"] > n["mfpt"]
     with tempfile.TemporaryDirectory() as d:
         path = os.path.join(d, "xi.txt")
         with open(path, "w") as f:
             f.write("# two values\n-1\n1\n")
-        r = pdw.mfpt("rimless", sd="1deg", walkers=200, max_steps=1000, seed=1, dist="file:" + path)
+        r = pdw.mfpt("rimless", sd="1deg", walkers=200, max_strides=1000, seed=1, dist="file:" + path)
         assert r["dist"].startswith("file:" + path) and r["falls"] > 0
         with open(path, "w") as f:
             f.write("# nothing\n")

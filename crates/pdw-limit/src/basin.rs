@@ -27,7 +27,8 @@
 //!   guard's code through [`BasinProblem::fall_outcome`]: forward, backward, the swing knee bent
 //!   at the foot strike, a stance knee buckled, a rimless wheel rolling back, each its own class
 //!   by [`Outcome::of_fall`]), or no section event occurred within
-//!   the stride time budget [`Section::max_stride_time`] ([`Outcome::FallNoHeelStrike`]).
+//!   the stride time budget [`Section::max_stride_time`] ([`Outcome::FallNoHeelStrike`], the
+//!   end the stride map gives such a stride: [`StrideOutcome::NoHeelStrike`]).
 //! - **stands still** ([`Outcome::Fall`]) — where the cell would be labelled by a recurrence or
 //!   time out, the walk has died out ([`stands_still`]): its section state is within `tol_gait`
 //!   of the standing state `s = 0`, or its scale `a_k = ‖s_k‖∞` fell at each of the last
@@ -45,6 +46,9 @@
 //! - **nonfinite** — the state became non-finite (including a non-finite cell).
 //! - **integrator_failure** — the step size collapsed, the step budget ran out, or a stride had
 //!   more than [`MAX_EVENTS_PER_STRIDE`] intermediate events.
+//!
+//! The names and codes are the one vocabulary of [`crate::end`]; a stride's stop means what it
+//! means to the stride map ([`StrideStop::of`], [`StrideOutcome::end`]).
 //!
 //! `strides` is the number of completed strides (heel strikes) when the label was decided.
 //! [`crate::attractors`] finds every attractor before a basin is computed, passes the periodic
@@ -71,131 +75,30 @@
 //! states).
 
 use crate::error::LimitError;
-use crate::stride::MAX_EVENTS_PER_STRIDE;
+use crate::stride::{StrideOutcome, StrideStop, MAX_EVENTS_PER_STRIDE};
 use pdw_hybrid::{
-    run_batch_par, run_scalar_with, BatchOptions, Control, FallKind, GuardKind, Integrator,
-    LaneDriver, Options, Scratch, Section, StopReason,
+    run_batch_par, run_scalar_with, BatchOptions, Control, FallKind, Integrator, LaneDriver,
+    Options, Scratch, Section, StopReason,
 };
 
-/// Outcome of a cell. The `u8` codes are part of the file format and never change.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-#[repr(u8)]
-pub enum Outcome {
-    /// Converged to the selected fixed point.
-    Gait = 0,
-    /// Reached another attractor (a known one, or detected by recurrence).
-    Other = 1,
-    /// Fell forward (a terminal guard of the model).
-    FallForward = 2,
-    /// Fell backward (a terminal guard of the model).
-    FallBackward = 3,
-    /// The hip went below the ground (a terminal guard of the model).
-    FallHipBelowGround = 4,
-    /// No heel strike within the stride time budget.
-    FallNoHeelStrike = 5,
-    /// A fall of another kind (a terminal guard whose kind is none of the above, e.g. a rimless
-    /// wheel rolling back to rest), or a walk that died out: the walker comes to a stand
-    /// ([`stands_still`]; module docs).
-    Fall = 6,
-    /// Not classified within `max_strides` strides.
-    Timeout = 7,
-    /// The state became non-finite (or the cell itself was not finite).
-    NonFinite = 8,
-    /// The integrator failed (step size collapse, step budget, too many events per stride).
-    IntegratorFailure = 9,
-    /// The swing foot struck the ground before the swing knee locked ([`FallKind::KneeBent`]).
-    FallKneeBent = 10,
-    /// A stance knee buckled: its stop would have to pull, or its latch let go
-    /// ([`FallKind::KneeBuckled`]).
-    FallKneeBuckled = 11,
-    /// A rimless wheel rolled back, not reaching its next spoke ([`FallKind::RollsBack`]).
-    FallRollsBack = 12,
-}
-
-impl Outcome {
-    /// Every outcome, by code.
-    pub const ALL: [Outcome; 13] = [
-        Outcome::Gait,
-        Outcome::Other,
-        Outcome::FallForward,
-        Outcome::FallBackward,
-        Outcome::FallHipBelowGround,
-        Outcome::FallNoHeelStrike,
-        Outcome::Fall,
-        Outcome::Timeout,
-        Outcome::NonFinite,
-        Outcome::IntegratorFailure,
-        Outcome::FallKneeBent,
-        Outcome::FallKneeBuckled,
-        Outcome::FallRollsBack,
-    ];
-
-    /// Stable code (the value stored in `/basin/outcome`).
-    pub fn code(self) -> u8 {
-        self as u8
-    }
-
-    /// Outcome of a code, if it is one.
-    pub fn from_code(code: u8) -> Option<Outcome> {
-        Outcome::ALL.iter().copied().find(|o| o.code() == code)
-    }
-
-    /// Stable name, e.g. `"gait"`, `"fall_forward"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Outcome::Gait => "gait",
-            Outcome::Other => "other",
-            Outcome::FallForward => "fall_forward",
-            Outcome::FallBackward => "fall_backward",
-            Outcome::FallHipBelowGround => "fall_hip_below_ground",
-            Outcome::FallNoHeelStrike => "fall_no_heel_strike",
-            Outcome::Fall => "fall",
-            Outcome::Timeout => "timeout",
-            Outcome::NonFinite => "nonfinite",
-            Outcome::IntegratorFailure => "integrator_failure",
-            Outcome::FallKneeBent => "fall_knee_bent",
-            Outcome::FallKneeBuckled => "fall_knee_buckled",
-            Outcome::FallRollsBack => "fall_rolls_back",
-        }
-    }
-
-    /// True for every fall kind.
-    pub fn is_fall(self) -> bool {
-        matches!(
-            self,
-            Outcome::FallForward
-                | Outcome::FallBackward
-                | Outcome::FallHipBelowGround
-                | Outcome::FallNoHeelStrike
-                | Outcome::Fall
-                | Outcome::FallKneeBent
-                | Outcome::FallKneeBuckled
-                | Outcome::FallRollsBack
-        )
-    }
-
-    /// The outcome of a fall of `kind` (the kind a terminal guard carries): each kind its own
-    /// class, [`FallKind::Other`] the catch-all `fall`.
-    pub fn of_fall(kind: FallKind) -> Outcome {
-        match kind {
-            FallKind::Forward => Outcome::FallForward,
-            FallKind::Backward => Outcome::FallBackward,
-            FallKind::KneeBent => Outcome::FallKneeBent,
-            FallKind::KneeBuckled => Outcome::FallKneeBuckled,
-            FallKind::RollsBack => Outcome::FallRollsBack,
-            FallKind::Other => Outcome::Fall,
-        }
-    }
-}
+/// The end of a cell: the one vocabulary of strides and cells ([`crate::end::End`]), whose
+/// codes are those of `/basin/outcome`. A cell ends with one of [`Outcome::CELL_ENDS`], never at
+/// [`Outcome::HeelStrike`] (a stride's end).
+pub use crate::end::End as Outcome;
 
 /// First outcome code of the attractors found besides the selected gait (see
 /// [`crate::attractors`]): attractor `i` of them has code `ATTRACTOR_CODE_BASE + i`. Codes below
-/// are the fixed [`Outcome`] codes (0–12 used, 13–15 kept for fall kinds to come).
+/// are the fixed [`Outcome`] codes (0–12 a cell's ends, 13 a stride's `heel_strike`, 14–15
+/// kept for fall kinds to come).
 pub const ATTRACTOR_CODE_BASE: u8 = 16;
 
-/// `(code, name)` of every outcome, by code: the legend of a basin file.
+/// `(code, name)` of every end a cell can have ([`Outcome::CELL_ENDS`]), by code: the legend of a
+/// basin file.
 pub fn legend() -> Vec<(u8, &'static str)> {
-    Outcome::ALL.iter().map(|o| (o.code(), o.name())).collect()
+    Outcome::CELL_ENDS
+        .iter()
+        .map(|o| (o.code(), o.name()))
+        .collect()
 }
 
 /// Options of the basin engine.
@@ -687,50 +590,49 @@ impl<'a> LaneDriver<dyn Section + 'a> for BasinDriver<'_, 'a> {
         if lane.decided.is_some() {
             return Control::Finish;
         }
-        let outcome = match stop {
-            StopReason::Guard { guard } => match sys.guards(mode)[guard].kind {
-                GuardKind::Reset => {
-                    let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
-                    if (mode, guard) == self.section_guard {
-                        lane.events = 0;
-                        lane.strides = lane.strides.saturating_add(1);
-                        self.push(&mut lane.hist, &mut lane.head, &mut lane.count, &lane.buf);
-                        let ds = self.ds;
-                        let h = lane.head;
-                        sys.lift(&lane.hist[h * ds..(h + 1) * ds], x);
-                        if let Some(d) = self.classify(lane) {
-                            lane.decided = Some(d);
-                            return Control::Finish;
-                        }
-                        if lane.strides >= self.opts.max_strides {
-                            let o = if self.stands_still(lane) {
-                                Outcome::Fall
-                            } else {
-                                Outcome::Timeout
-                            };
-                            lane.decided = Some((o, 0, u8::MAX));
-                            return Control::Finish;
-                        }
-                        return Control::Continue {
-                            mode: self.start_mode,
-                            t_end: t + self.t_max,
-                        };
-                    } else if lane.events >= MAX_EVENTS_PER_STRIDE {
-                        Outcome::IntegratorFailure
-                    } else {
-                        lane.events += 1;
-                        x.copy_from_slice(&lane.buf);
-                        return Control::Continue {
-                            mode: new_mode,
-                            t_end: t + self.t_max,
-                        };
+        // The stride's stops as the stride map reads them ([`StrideStop::of`]); the cell's
+        // end is the stride's ([`StrideOutcome::end`]), a fall's through the problem's
+        // `fall_outcome`.
+        let outcome = match StrideStop::of(stop, sys.guards(mode)) {
+            StrideStop::Reset { guard } => {
+                let new_mode = sys.reset(ws, mode, guard, x, &mut lane.buf);
+                if (mode, guard) == self.section_guard {
+                    lane.events = 0;
+                    lane.strides = lane.strides.saturating_add(1);
+                    self.push(&mut lane.hist, &mut lane.head, &mut lane.count, &lane.buf);
+                    let ds = self.ds;
+                    let h = lane.head;
+                    sys.lift(&lane.hist[h * ds..(h + 1) * ds], x);
+                    if let Some(d) = self.classify(lane) {
+                        lane.decided = Some(d);
+                        return Control::Finish;
                     }
+                    if lane.strides >= self.opts.max_strides {
+                        let o = if self.stands_still(lane) {
+                            Outcome::Fall
+                        } else {
+                            Outcome::Timeout
+                        };
+                        lane.decided = Some((o, 0, u8::MAX));
+                        return Control::Finish;
+                    }
+                    return Control::Continue {
+                        mode: self.start_mode,
+                        t_end: t + self.t_max,
+                    };
+                } else if lane.events >= MAX_EVENTS_PER_STRIDE {
+                    StrideOutcome::TooManyEvents.end()
+                } else {
+                    lane.events += 1;
+                    x.copy_from_slice(&lane.buf);
+                    return Control::Continue {
+                        mode: new_mode,
+                        t_end: t + self.t_max,
+                    };
                 }
-                GuardKind::Terminal(code) => (self.problem.fall_outcome)(code),
-            },
-            StopReason::EndTime => Outcome::FallNoHeelStrike,
-            StopReason::NonFinite => Outcome::NonFinite,
-            StopReason::StepTooSmall | StopReason::MaxSteps => Outcome::IntegratorFailure,
+            }
+            StrideStop::End(StrideOutcome::Fall { kind, .. }) => (self.problem.fall_outcome)(kind),
+            StrideStop::End(o) => o.end(),
         };
         // Record where the fall happened (projection of the stop state).
         self.push(&mut lane.hist, &mut lane.head, &mut lane.count, x);
@@ -885,12 +787,12 @@ pub fn basin_metrics(
     for &o in outcomes {
         counts[o as usize] += 1;
     }
-    let mut fractions: Vec<(u8, &'static str, f64)> = Outcome::ALL
+    let mut fractions: Vec<(u8, &'static str, f64)> = Outcome::CELL_ENDS
         .iter()
         .map(|o| (o.code(), o.name(), counts[o.code() as usize] as f64 / n))
         .collect();
     for (c, &k) in counts.iter().enumerate() {
-        if k > 0 && Outcome::from_code(c as u8).is_none() {
+        if k > 0 && !Outcome::from_code(c as u8).is_some_and(Outcome::is_cell_end) {
             fractions.push((c as u8, "unknown", k as f64 / n));
         }
     }

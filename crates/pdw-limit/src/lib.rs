@@ -16,6 +16,7 @@ pub mod cloud;
 pub mod codim2;
 pub mod continuation;
 pub mod design;
+pub mod end;
 pub mod ensemble;
 pub mod error;
 pub mod family;
@@ -57,6 +58,7 @@ pub use continuation::{
     real_eigenvector, switch_period_doubling, Bifurcation, BifurcationKind, Branch, BranchEnd,
     BranchPoint, ContinuationMethod, ContinuationOptions, SampledPoint,
 };
+pub use end::End;
 pub use error::LimitError;
 pub use floquet::{is_stable, multipliers, Multiplier};
 pub use jacobian::{

@@ -6,12 +6,15 @@
 //! with `Π` = [`Section::project`]. `P` is a pure function of the model's parameters and `s`
 //! (and the integrator options). A stride that ends otherwise — a terminal guard (a fall), the
 //! time budget [`Section::max_stride_time`], a non-finite state, a step-size or step-count
-//! failure — is an outcome ([`StrideOutcome`]), not an error.
+//! failure — is an outcome ([`StrideOutcome`]), not an error; [`StrideOutcome::end`] names it
+//! in the vocabulary the basin, the walks and the files share ([`crate::end`]). "Stride" is
+//! heel strike to heel strike; "step" is the integrator's.
 //!
 //! The same [`EventDriver`] runs a stride through the scalar integrator
 //! ([`pdw_hybrid::run_scalar_with`]) and as one lane of a batch ([`pdw_hybrid::run_batch`]), so
 //! batched strides are bit-identical to scalar ones.
 
+use crate::end::End;
 use crate::error::LimitError;
 use pdw_hybrid::{
     run_batch, run_batch_par, run_scalar_with, BatchOptions, Control, FallKind, GuardKind,
@@ -23,15 +26,18 @@ use std::fmt;
 /// chattering sequence of events).
 pub const MAX_EVENTS_PER_STRIDE: usize = 64;
 
-/// How a stride ended.
+/// How a stride ended, with its detail (the fall's guard, which integrator failure);
+/// [`StrideOutcome::end`] names it in the one vocabulary of strides and cells ([`End`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum StrideOutcome {
     /// Reached the section: a complete stride.
     Ok,
     /// A terminal guard fired: a fall of model-defined kind `code` (guard index `guard`).
     Fall { kind: FallKind, guard: usize },
-    /// No section event within the stride time budget.
-    Timeout,
+    /// No heel strike (no section event) within the stride time budget
+    /// [`Section::max_stride_time`]. Not a basin cell's `timeout` (a cell not classified within
+    /// its stride budget): its end is [`End::FallNoHeelStrike`].
+    NoHeelStrike,
     /// The state became non-finite.
     NonFinite,
     /// The integrator's step size collapsed.
@@ -55,7 +61,8 @@ pub enum StrideStop {
 
 impl StrideStop {
     /// The meaning of `stop` in a mode whose guards are `guards`: a terminal guard is a fall of
-    /// its kind, the integrator's own stops are [`StrideOutcome::Timeout`],
+    /// its kind, the integrator's own stops are [`StrideOutcome::NoHeelStrike`] (the end time, the
+    /// stride time budget),
     /// [`StrideOutcome::NonFinite`], [`StrideOutcome::StepTooSmall`], [`StrideOutcome::MaxSteps`].
     pub fn of(stop: StopReason, guards: &[GuardSpec]) -> Self {
         StrideStop::End(match stop {
@@ -63,7 +70,7 @@ impl StrideStop {
                 GuardKind::Reset => return StrideStop::Reset { guard },
                 GuardKind::Terminal(kind) => StrideOutcome::Fall { kind, guard },
             },
-            StopReason::EndTime => StrideOutcome::Timeout,
+            StopReason::EndTime => StrideOutcome::NoHeelStrike,
             StopReason::NonFinite => StrideOutcome::NonFinite,
             StopReason::StepTooSmall => StrideOutcome::StepTooSmall,
             StopReason::MaxSteps => StrideOutcome::MaxSteps,
@@ -76,6 +83,23 @@ impl StrideOutcome {
     pub fn is_ok(&self) -> bool {
         matches!(self, StrideOutcome::Ok)
     }
+
+    /// The stride's end in the one vocabulary of strides and cells ([`crate::end`]): a
+    /// complete stride is [`End::HeelStrike`], a fall the end of its kind
+    /// ([`End::of_fall`]), no heel strike within the time budget [`End::FallNoHeelStrike`],
+    /// the three integrator failures (step size, step budget, too many events)
+    /// [`End::IntegratorFailure`]. A basin cell whose stride ends so ends the same way.
+    pub fn end(&self) -> End {
+        match *self {
+            StrideOutcome::Ok => End::HeelStrike,
+            StrideOutcome::Fall { kind, .. } => End::of_fall(kind),
+            StrideOutcome::NoHeelStrike => End::FallNoHeelStrike,
+            StrideOutcome::NonFinite => End::NonFinite,
+            StrideOutcome::StepTooSmall
+            | StrideOutcome::MaxSteps
+            | StrideOutcome::TooManyEvents => End::IntegratorFailure,
+        }
+    }
 }
 
 impl fmt::Display for StrideOutcome {
@@ -85,7 +109,9 @@ impl fmt::Display for StrideOutcome {
             // The fall by name ("fell backward"); the guard index is a model detail kept in the
             // value, not in the message.
             StrideOutcome::Fall { kind, .. } => write!(f, "{}", kind.name()),
-            StrideOutcome::Timeout => write!(f, "no heel strike within the stride time budget"),
+            StrideOutcome::NoHeelStrike => {
+                write!(f, "no heel strike within the stride time budget")
+            }
             StrideOutcome::NonFinite => write!(f, "non-finite state"),
             StrideOutcome::StepTooSmall => write!(f, "integrator step size too small"),
             StrideOutcome::MaxSteps => write!(f, "integrator step budget exhausted"),

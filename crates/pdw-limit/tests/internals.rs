@@ -86,6 +86,8 @@ mod attractors {
 mod outcomes {
     use pdw_hybrid::FallKind;
     use pdw_limit::basin::{legend, Outcome, ATTRACTOR_CODE_BASE};
+    use pdw_limit::end::{table, End};
+    use pdw_limit::StrideOutcome;
 
     /// Every fall kind a model's terminal guard can carry has its own basin class (the catch-all
     /// `fall` only for kinds without a name), every code maps back to its outcome, and every
@@ -112,12 +114,117 @@ mod outcomes {
             assert_eq!(Outcome::from_code(o.code()), Some(o));
             assert!(o.code() < ATTRACTOR_CODE_BASE);
         }
-        for c in [13, 14, 15, ATTRACTOR_CODE_BASE, 255] {
+        for c in [14, 15, ATTRACTOR_CODE_BASE, 255] {
             assert_eq!(Outcome::from_code(c), None, "{c}");
         }
+        assert_eq!(Outcome::from_code(13), Some(Outcome::HeelStrike));
         let l = legend();
-        assert_eq!(l.len(), Outcome::ALL.len());
+        assert_eq!(l.len(), Outcome::CELL_ENDS.len());
+        assert_eq!(l.len(), 13);
         assert_eq!(l[11], (11, "fall_knee_buckled"));
+        assert!(!l.iter().any(|&(c, _)| c == Outcome::HeelStrike.code()));
+    }
+
+    /// Every stride outcome, each fall kind once.
+    fn every_stride_outcome() -> Vec<StrideOutcome> {
+        let kinds = [
+            FallKind::Forward,
+            FallKind::Backward,
+            FallKind::KneeBent,
+            FallKind::KneeBuckled,
+            FallKind::RollsBack,
+            FallKind::Other,
+        ];
+        let mut v = vec![
+            StrideOutcome::Ok,
+            StrideOutcome::NoHeelStrike,
+            StrideOutcome::NonFinite,
+            StrideOutcome::StepTooSmall,
+            StrideOutcome::MaxSteps,
+            StrideOutcome::TooManyEvents,
+        ];
+        v.extend(
+            kinds
+                .iter()
+                .map(|&kind| StrideOutcome::Fall { kind, guard: 1 }),
+        );
+        v
+    }
+
+    /// The one table: codes 0..=13 in order, each with one name and back; every stride's end
+    /// is one entry of it, found again by its code and by its name; a complete stride is the
+    /// only `heel_strike` and no stride ends as a cell-only end (gait, other, timeout).
+    #[test]
+    fn every_stride_end_maps_to_exactly_one_code_and_name() {
+        for (i, e) in End::ALL.iter().enumerate() {
+            assert_eq!(usize::from(e.code()), i, "{e:?}");
+            assert_eq!(End::from_name(e.name()), Some(*e), "{e:?}");
+        }
+        let mut names: Vec<&str> = End::ALL.iter().map(|e| e.name()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), End::ALL.len(), "two ends share a name");
+        assert_eq!(table().len(), End::ALL.len());
+        assert_eq!(table()[13], (13, "heel_strike"));
+        assert!(End::ALL.iter().all(|e| e.code() < ATTRACTOR_CODE_BASE));
+        for o in every_stride_outcome() {
+            let e = o.end();
+            assert_eq!(End::from_code(e.code()), Some(e), "{o:?}");
+            assert_eq!(End::from_name(e.name()), Some(e), "{o:?}");
+            assert_eq!(e == End::HeelStrike, o.is_ok(), "{o:?}");
+            assert!(
+                !matches!(e, End::Gait | End::Other | End::Timeout),
+                "{o:?} ends as a cell-only {e:?}"
+            );
+            if let StrideOutcome::Fall { kind, .. } = o {
+                assert_eq!(e, Outcome::of_fall(kind));
+                assert!(e.is_fall());
+            }
+        }
+        assert_eq!(StrideOutcome::NoHeelStrike.end().code(), 5);
+        assert_eq!(
+            StrideOutcome::NoHeelStrike.end().name(),
+            "fall_no_heel_strike"
+        );
+        for o in [
+            StrideOutcome::StepTooSmall,
+            StrideOutcome::MaxSteps,
+            StrideOutcome::TooManyEvents,
+        ] {
+            assert_eq!(o.end(), End::IntegratorFailure, "{o:?}");
+        }
+        assert!(End::CELL_ENDS.iter().all(|e| e.is_cell_end()));
+        assert!(!End::HeelStrike.is_cell_end());
+    }
+
+    /// The integrator's stops mean one thing to every driver: the end time is no heel strike
+    /// (never a cell's `timeout`), a terminal guard the fall of its kind, a reset guard a reset.
+    #[test]
+    fn integrator_stops_name_one_stride_end() {
+        use pdw_hybrid::{Crossing, GuardKind, GuardSpec, StopReason};
+        use pdw_limit::stride::StrideStop;
+        let guards = [
+            GuardSpec {
+                name: "heel_strike",
+                crossing: Crossing::Falling,
+                kind: GuardKind::Reset,
+            },
+            GuardSpec {
+                name: "hip_below_ground",
+                crossing: Crossing::Falling,
+                kind: GuardKind::Terminal(FallKind::Forward),
+            },
+        ];
+        let end = |stop| match StrideStop::of(stop, &guards) {
+            StrideStop::End(o) => Some(o.end()),
+            StrideStop::Reset { .. } => None,
+        };
+        assert_eq!(end(StopReason::Guard { guard: 0 }), None);
+        assert_eq!(end(StopReason::Guard { guard: 1 }), Some(End::FallForward));
+        assert_eq!(end(StopReason::EndTime), Some(End::FallNoHeelStrike));
+        assert_eq!(end(StopReason::NonFinite), Some(End::NonFinite));
+        assert_eq!(end(StopReason::StepTooSmall), Some(End::IntegratorFailure));
+        assert_eq!(end(StopReason::MaxSteps), Some(End::IntegratorFailure));
     }
 }
 

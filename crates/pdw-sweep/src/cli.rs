@@ -395,8 +395,8 @@ pub struct AnimateArgs {
     #[command(flatten)]
     pub model: ModelOpts,
     /// Strides of the gait shown, 1 to 1000.
-    #[arg(long, default_value_t = pdw::animate::STRIDES, value_parser = parse_anim_steps)]
-    pub steps: usize,
+    #[arg(long = "strides", alias = "steps", default_value_t = pdw::animate::STRIDES, value_parser = parse_anim_strides)]
+    pub strides: usize,
     /// Frames per second, 0.5 to 50 (the GIF's delay is round(100/F) centiseconds). One second
     /// of the GIF is one model time unit: real time for models in seconds. Default: 16.7 (a
     /// 60 ms delay).
@@ -406,8 +406,8 @@ pub struct AnimateArgs {
     #[arg(long, default_value = "640x400", value_parser = parse_size)]
     pub size: (u32, u32),
     /// Animate a trajectory file written by `simulate` (HDF5) instead of a gait: its model is
-    /// rebuilt from the file, --model/--slope/--set/--steps are not used.
-    #[arg(long, value_name = "TRAJ.h5", conflicts_with_all = ["model", "slope", "set", "steps"])]
+    /// rebuilt from the file, --model/--slope/--set/--strides are not used.
+    #[arg(long, value_name = "TRAJ.h5", conflicts_with_all = ["model", "slope", "set", "strides"])]
     pub from: Option<PathBuf>,
     /// Output GIF.
     #[arg(long, default_value = "gait.gif")]
@@ -454,9 +454,10 @@ pub struct MfptArgs {
     /// Number of walkers.
     #[arg(long, default_value_t = 10000)]
     pub walkers: usize,
-    /// Steps at most per walker; a walker still walking then is censored (not a fall).
-    #[arg(long, default_value_t = 1000)]
-    pub max_steps: usize,
+    /// Strides (heel strikes) at most per walker; a walker still walking then is censored (not a
+    /// fall).
+    #[arg(long = "max-strides", alias = "max-steps", default_value_t = 1000)]
+    pub max_strides: usize,
     /// Seed of the terrain's random numbers (walker i, step k and the seed give the slope).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -731,9 +732,9 @@ fn parse_basin_box(s: &str) -> Result<[f64; 2], String> {
     pdw::design::check_basin_box(&v, s, "--basin-box").map_err(|e| e.0)
 }
 
-/// `animate --steps`: 1 to 1000 strides.
-fn parse_anim_steps(s: &str) -> Result<usize, String> {
-    pdw::animate::check_steps(integer(s)?, "--steps").map_err(|e| e.0)
+/// `animate --strides`: 1 to 1000 strides.
+fn parse_anim_strides(s: &str) -> Result<usize, String> {
+    pdw::animate::check_strides(integer(s)?, "--strides").map_err(|e| e.0)
 }
 
 /// `animate --fps`: 0.5 to 50 frames per second.

@@ -42,7 +42,7 @@ fn animate_draws_the_strides_at_the_frame_rate_and_size_asked() {
         "animate",
         "--model",
         "compass",
-        "--steps",
+        "--strides",
         "3",
         "--fps",
         "20",
@@ -53,7 +53,7 @@ fn animate_draws_the_strides_at_the_frame_rate_and_size_asked() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     // 20 fps: 5 cs per frame, 0.05 s of model time per frame (real time); a stride gets
-    // round(T / 0.05) frames, and the GIF steps · n + 1
+    // round(T / 0.05) frames, and the GIF strides · n + 1
     let n = (period / 0.05).round() as usize;
     assert_eq!(gif_info(&g), (320, 240, 5, 3 * n + 1));
     assert!(stderr(&o).contains("real time"), "{}", stderr(&o));
@@ -192,10 +192,14 @@ fn animate_refuses_bad_values_with_clear_messages() {
     let g = dir.path().join("x.gif");
     for (args, says) in [
         (
-            vec!["--steps", "0"],
-            "--steps: 0 strides is outside 1..=1000",
+            vec!["--strides", "0"],
+            "--strides: 0 strides is outside 1..=1000",
         ),
-        (vec!["--steps", "1001"], "outside 1..=1000"),
+        // the old spelling, a hidden alias, still parses
+        (
+            vec!["--steps", "1001"],
+            "--strides: 1001 strides is outside 1..=1000",
+        ),
         (
             vec!["--fps", "100"],
             "--fps: 100 frames per second is outside 0.5..=50",

@@ -19,7 +19,7 @@ fn library(walkers: usize, max_steps: usize) -> pdw::limit::terrain::MfptEstimat
             dist: Default::default(),
         },
         walkers,
-        max_steps,
+        max_strides: max_steps,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     };
@@ -47,7 +47,7 @@ fn the_mfpt_file_holds_the_library_estimate_with_units_and_provenance() {
             "0.1deg",
             "--walkers",
             "30",
-            "--max-steps",
+            "--max-strides",
             "50",
             "--seed",
             "3",
@@ -191,7 +191,7 @@ fn an_mfpt_curve_is_the_single_runs_at_each_standard_deviation() {
         "rimless",
         "--walkers",
         "200",
-        "--max-steps",
+        "--max-strides",
         "5000",
         "--seed",
         "3",
@@ -259,7 +259,7 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
         "0.01",
         "--walkers",
         "50",
-        "--max-steps",
+        "--max-strides",
         "500",
         "--quiet",
         "--out",
@@ -283,7 +283,7 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
             dist: Default::default(),
         },
         walkers: 50,
-        max_steps: 500,
+        max_strides: 500,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     };
@@ -317,7 +317,7 @@ fn a_step_down_mfpt_file_names_its_terrain_and_unit() {
         "0.002",
         "--walkers",
         "20",
-        "--max-steps",
+        "--max-strides",
         "30",
         "--quiet",
     ]);
@@ -407,7 +407,7 @@ fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
         "uniform",
         "--walkers",
         "40",
-        "--max-steps",
+        "--max-strides",
         "200",
         "--seed",
         "2",
@@ -431,7 +431,7 @@ fn a_uniform_mfpt_file_records_its_distribution_and_bad_names_are_refused() {
             dist: pdw::limit::terrain::TerrainDist::Uniform,
         },
         walkers: 40,
-        max_steps: 200,
+        max_strides: 200,
         integrator: pdw::mfpt::default_integrator(),
         stride_map: Default::default(),
     };
@@ -467,7 +467,7 @@ fn a_mid_stance_chain_file_names_its_section_and_holds_the_librarys_chain() {
             dist: Default::default(),
         },
         walkers: 50,
-        max_steps: 1000,
+        max_strides: 1000,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     };
@@ -590,7 +590,7 @@ fn the_stride_map_is_chosen_recorded_and_refused_clearly() {
             "slope=8deg",
             "--walkers",
             "40",
-            "--max-steps",
+            "--max-strides",
             "200",
             "--seed",
             "2",
@@ -664,7 +664,7 @@ fn the_zero_height_node_warning_is_printed_once_and_only_for_an_odd_rule() {
             "0.005",
             "--walkers",
             "100",
-            "--max-steps",
+            "--max-strides",
             "200",
             "--seed",
             "1",
@@ -809,4 +809,60 @@ fn the_chain_checks_its_quadrature_and_names_the_nodes_that_converge() {
         assert_eq!(change > mfpt::QUADRATURE_MAX, warns, "{change}");
         assert!(get("chain_quadrature_mfpt").is_finite());
     }
+}
+
+/// The flags that count strides say so: `mfpt --max-strides` and `animate --strides`. Their old
+/// spellings (`--max-steps`, `--steps`) still parse, as hidden aliases: the same run, the same
+/// message naming the new flag, and `--help` shows only the new spelling.
+#[test]
+fn old_spellings_of_the_stride_flags_still_parse_and_are_hidden() {
+    let go = |flag: &str, n: &str| {
+        run(&[
+            "mfpt",
+            "--model",
+            "simplest",
+            "--slope",
+            "0.009",
+            "--sd",
+            "0.1deg",
+            "--walkers",
+            "6",
+            flag,
+            n,
+            "--seed",
+            "1",
+            "--quiet",
+        ])
+    };
+    let (new, old) = (go("--max-strides", "20"), go("--max-steps", "20"));
+    assert!(new.status.success(), "{}", stderr(&new));
+    assert!(old.status.success(), "{}", stderr(&old));
+    // the same run: every line but the one timing it
+    let lines = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter(|l| !l.contains("walkers/s"))
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(lines(&new), lines(&old));
+    for flag in ["--max-strides", "--max-steps"] {
+        let o = go(flag, "0");
+        assert_eq!(o.status.code(), Some(2), "{flag}");
+        assert!(
+            stderr(&o).contains("--max-strides: 0 must be an integer >= 1"),
+            "{flag}: {}",
+            stderr(&o)
+        );
+    }
+    let help = String::from_utf8_lossy(&run(&["mfpt", "--help"]).stdout).into_owned();
+    assert!(
+        help.contains("--max-strides") && !help.contains("--max-steps"),
+        "{help}"
+    );
+    let help = String::from_utf8_lossy(&run(&["animate", "--help"]).stdout).into_owned();
+    assert!(
+        help.contains("--strides") && !help.contains("--steps"),
+        "{help}"
+    );
 }

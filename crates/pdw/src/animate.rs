@@ -15,7 +15,7 @@
 //! delay / 100 model time units apart. A gait's stride (period `T`) gets
 //! `n = max(2, round(T / frame_time))` frames spaced `T / n`, so that the animation loops on a
 //! whole stride: playback is real time to within `1 / (2n)` of the speed, and the GIF has
-//! `steps · n + 1` frames.
+//! `strides · n + 1` frames.
 
 use crate::gaits::Failed;
 use crate::input::InputError;
@@ -40,7 +40,7 @@ pub const MAX_FRAMES: usize = 20_000;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AnimOptions {
     /// Strides of the gait shown (1 to 1000; a trajectory is shown whole).
-    pub steps: usize,
+    pub strides: usize,
     /// Frames per second asked for (0.5 to 50); see [`AnimOptions::delay_cs`].
     pub fps: f64,
     /// Picture width and height (pixels).
@@ -50,7 +50,7 @@ pub struct AnimOptions {
 impl Default for AnimOptions {
     fn default() -> Self {
         Self {
-            steps: STRIDES,
+            strides: STRIDES,
             fps: DEFAULT_FPS,
             size: SIZE,
         }
@@ -77,7 +77,7 @@ impl AnimOptions {
 }
 
 /// Strides shown: 1 to 1000.
-pub fn check_steps(n: i64, flag: &str) -> Result<usize, InputError> {
+pub fn check_strides(n: i64, flag: &str) -> Result<usize, InputError> {
     if (1..=1000).contains(&n) {
         Ok(n as usize)
     } else {
@@ -283,7 +283,7 @@ pub(crate) fn frame(
 }
 
 /// The walker of `fp` at [`AnimOptions::frames_per_stride`] equally spaced times per stride
-/// over `opts.steps` strides (`steps · n + 1` frames), in world coordinates (the slope
+/// over `opts.strides` strides (`strides · n + 1` frames), in world coordinates (the slope
 /// descends to the right at angle γ; the stance foot advances by the swing foot's position at
 /// each heel strike), with the swing foot's trace.
 pub fn frames(
@@ -293,7 +293,7 @@ pub fn frames(
 ) -> Result<Vec<Frame>, AnimateError> {
     let w = m.walker.as_ref();
     let per_stride = opts.frames_per_stride(fp.metrics.period);
-    check_frames(opts.steps * per_stride + 1)?;
+    check_frames(opts.strides * per_stride + 1)?;
     let dt = fp.metrics.period / per_stride as f64;
     let mut integ = Integrator::new(w.dim(), Options::dop853(1e-10))
         .map_err(|e| AnimateError::Walk(e.to_string()))?;
@@ -306,7 +306,7 @@ pub fn frames(
     let mut frames = Vec::new();
     let section = w.section_guard();
     let mut strides_done = 0;
-    for k in 0..=opts.steps * per_stride {
+    for k in 0..=opts.strides * per_stride {
         let t_frame = k as f64 * dt;
         // Advance to the frame time, handling every event on the way.
         loop {

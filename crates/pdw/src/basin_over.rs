@@ -145,7 +145,7 @@ pub struct AtValue {
     /// `(column, kind, fraction)` in the order met; kind is `attractor`, `fall`, `timeout` or
     /// `other`.
     pub fractions: Vec<(String, &'static str, f64)>,
-    /// Fractions of the fixed outcome codes ([`Outcome::ALL`], before attractors are told
+    /// Fractions of the fixed outcome codes ([`Outcome::CELL_ENDS`], before attractors are told
     /// apart).
     pub outcomes: Vec<f64>,
     /// The attractors found at this value.
@@ -205,7 +205,7 @@ fn tally(mut res: Vec<CellResult>, set: &AttractorSet) -> AtValue {
         counts
     };
     let by_code = counts(&res);
-    let outcomes: Vec<f64> = Outcome::ALL
+    let outcomes: Vec<f64> = Outcome::CELL_ENDS
         .iter()
         .map(|o| by_code[o.code() as usize] as f64 / n)
         .collect();

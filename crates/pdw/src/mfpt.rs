@@ -31,13 +31,15 @@ pub const DISTS: &[&str] = &["normal", "uniform", "file:PATH"];
 /// The terrains `--terrain` names.
 pub const TERRAINS: &[&str] = &["slope", "step-down"];
 
-/// A Monte Carlo MFPT run: the terrain, how many walkers, how many steps at most, the
-/// integrator of the strides and whether they are integrated at all.
+/// A Monte Carlo MFPT run: the terrain, how many walkers, how many strides (heel strikes) at
+/// most per walker, the integrator of the strides and whether they are integrated at all.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MfptPlan {
     pub terrain: SlopeTerrain,
     pub walkers: usize,
-    pub max_steps: usize,
+    /// Strides at most per walker (the files' `max_steps`); a walker still walking then is
+    /// censored.
+    pub max_strides: usize,
     pub integrator: Options,
     pub stride_map: StrideMap,
 }
@@ -105,6 +107,7 @@ pub struct MfptFlags {
     pub sd: &'static str,
     pub mean: &'static str,
     pub walkers: &'static str,
+    /// The stride limit's name ([`MfptPlan::max_strides`]: `--max-strides`, `max_strides`).
     pub max_steps: &'static str,
     pub dist: &'static str,
 }
@@ -297,12 +300,12 @@ pub fn parse_sd_values_for(
     }
 }
 
-/// Refuses zero walkers or steps, and a terrain whose slopes could leave (−π/2, π/2) (the mean
+/// Refuses zero walkers or strides, and a terrain whose slopes could leave (−π/2, π/2) (the mean
 /// plus [`MAX_DRAW`] standard deviations).
 pub fn check_plan(plan: &MfptPlan, flags: &MfptFlags) -> Result<(), InputError> {
     for (v, flag) in [
         (plan.walkers, flags.walkers),
-        (plan.max_steps, flags.max_steps),
+        (plan.max_strides, flags.max_steps),
     ] {
         if v == 0 {
             return Err(InputError(format!("{flag}: 0 must be an integer >= 1")));
@@ -487,11 +490,11 @@ pub fn run(
         &plan.terrain,
         x0,
         plan.walkers,
-        plan.max_steps,
+        plan.max_strides,
         pool,
         progress,
     )?;
-    let est = terrain::estimate(&fates, plan.max_steps);
+    let est = terrain::estimate(&fates, plan.max_strides);
     Ok((fates, est))
 }
 
@@ -1083,8 +1086,8 @@ const MFPT_BASE_BYTES: u64 = 96 << 20;
 
 /// Estimated peak memory (bytes) of the Monte Carlo walkers of `plan`: every walker's fate is
 /// kept until the estimate is made; the lanes in flight are a fixed batch per thread. The
-/// survival curve is sized by the longest walk ([`terrain::estimate`]), not by the step limit,
-/// so `max_steps` does not enter.
+/// survival curve is sized by the longest walk ([`terrain::estimate`]), not by the stride limit,
+/// so `max_strides` does not enter.
 pub fn walkers_memory(plan: &MfptPlan) -> u64 {
     crate::memory::bytes(plan.walkers as u64, std::mem::size_of::<Fate>() as u64)
         .saturating_add(MFPT_BASE_BYTES)

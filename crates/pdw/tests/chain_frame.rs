@@ -26,7 +26,7 @@ fn the_principal_axes_mesh_resolves_the_simplest_walkers_band_where_the_axis_box
             dist: Default::default(),
         },
         walkers: 4000,
-        max_steps: 1000,
+        max_strides: 1000,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     };

@@ -25,7 +25,7 @@ fn plan(kind: TerrainKind, mean: f64, sd: f64, walkers: usize) -> MfptPlan {
             dist: Default::default(),
         },
         walkers,
-        max_steps: 20_000,
+        max_strides: 20_000,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     }
@@ -349,7 +349,7 @@ fn the_simplest_walkers_legs_together_map_is_its_walk_and_the_quadrature_its_exc
                 .into_par_iter()
                 .map(|i| {
                     first.strikes
-                        + mid_stance::walk_map(&walk, draw, &start, sense, i as u64, p.max_steps)
+                        + mid_stance::walk_map(&walk, draw, &start, sense, i as u64, p.max_strides)
                             .unwrap()
                 })
                 .collect()
@@ -358,7 +358,7 @@ fn the_simplest_walkers_legs_together_map_is_its_walk_and_the_quadrature_its_exc
     let t = &p.terrain;
     let exact = through(&|i, k| t.slope(i, k));
     let fates =
-        pdw_limit::terrain::monte_carlo(&walk, t, &x0, n, p.max_steps, &pool, &|_| {}).unwrap();
+        pdw_limit::terrain::monte_carlo(&walk, t, &x0, n, p.max_strides, &pool, &|_| {}).unwrap();
     let walkers: Vec<f64> = fates.iter().map(|f| f.steps as f64).collect();
     let differ = exact.iter().zip(&walkers).filter(|(a, b)| a != b).count();
     let ((me, se), (mw, sw)) = (mean_se(&exact), mean_se(&walkers));

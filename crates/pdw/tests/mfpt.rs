@@ -13,7 +13,7 @@ const FLAGS: MfptFlags = MfptFlags {
     sd: "--sd",
     mean: "--mean",
     walkers: "--walkers",
-    max_steps: "--max-steps",
+    max_steps: "--max-strides",
     dist: "--dist",
 };
 
@@ -186,7 +186,7 @@ fn the_walk_is_the_same_on_one_and_on_two_threads() {
             dist: Default::default(),
         },
         walkers: 24,
-        max_steps: 40,
+        max_strides: 40,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     };
@@ -216,7 +216,7 @@ fn the_estimator_recovers_a_known_geometric_mfpt() {
             match fall {
                 Some(j) if j < k => Fate {
                     steps: j,
-                    end: Some(StrideOutcome::Timeout),
+                    end: Some(StrideOutcome::NoHeelStrike),
                 },
                 _ => Fate {
                     steps: k,
@@ -249,7 +249,7 @@ fn the_estimator_recovers_a_known_geometric_mfpt() {
     assert!((sum - e.restricted_mean).abs() < 1e-9);
     assert_eq!(
         e.failures,
-        vec![(StrideOutcome::Timeout.to_string(), e.falls)]
+        vec![(StrideOutcome::NoHeelStrike.to_string(), e.falls)]
     );
 }
 
@@ -290,7 +290,7 @@ fn round_feet_and_bad_requests_are_refused_with_clear_messages() {
             dist: Default::default(),
         },
         walkers,
-        max_steps: 10,
+        max_strides: 10,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     };
@@ -353,7 +353,7 @@ fn the_markov_chain_agrees_with_the_monte_carlo_walkers() {
             dist: Default::default(),
         },
         walkers: 2000,
-        max_steps: 20_000,
+        max_strides: 20_000,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     };

@@ -241,7 +241,7 @@ fn the_plans_stride_map_chooses_the_walk() {
     let plan = |stride_map, mean| MfptPlan {
         terrain: terrain(TerrainKind::Slope, mean, 1f64.to_radians()),
         walkers: 200,
-        max_steps: 300,
+        max_strides: 300,
         integrator: mfpt::default_integrator(),
         stride_map,
     };

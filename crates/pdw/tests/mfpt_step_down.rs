@@ -10,7 +10,7 @@ const FLAGS: MfptFlags = MfptFlags {
     sd: "--sd",
     mean: "--mean",
     walkers: "--walkers",
-    max_steps: "--max-steps",
+    max_steps: "--max-strides",
     dist: "--dist",
 };
 
@@ -35,7 +35,7 @@ fn plan(mean: f64, sd: f64, walkers: usize, max_steps: usize) -> MfptPlan {
             dist: Default::default(),
         },
         walkers,
-        max_steps,
+        max_strides: max_steps,
         integrator: mfpt::default_integrator(),
         stride_map: Default::default(),
     }
@@ -83,7 +83,7 @@ fn the_rimless_walk_on_step_heights_is_the_closed_form_map_walker_by_walker() {
     assert!(est.falls > 300, "{est:?}");
     let mut differ = 0;
     for (i, f) in fates.iter().enumerate() {
-        let k = closed_form_steps(&p.terrain, i as u64, s0[0], p.max_steps);
+        let k = closed_form_steps(&p.terrain, i as u64, s0[0], p.max_strides);
         if k != f.steps {
             differ += 1;
         }

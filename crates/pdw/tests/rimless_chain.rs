@@ -406,7 +406,7 @@ fn plan() -> MfptPlan {
             dist: Default::default(),
         },
         walkers: 2000,
-        max_steps: 20_000,
+        max_strides: 20_000,
         integrator: mfpt::default_integrator(),
         // the walkers integrate their strides: the closed-form chain here checks the engine's
         // integrated walk (its own closed form is checked in `mfpt_closed_form`)
@@ -492,7 +492,7 @@ fn a_file_of_minus_one_and_one_is_the_two_point_distribution() {
         sd: "--sd",
         mean: "--mean",
         walkers: "--walkers",
-        max_steps: "--max-steps",
+        max_steps: "--max-strides",
         dist: "--dist",
     };
     let dist = mfpt::parse_dist(&format!("file:{}", path.display()), &flags).unwrap();

@@ -10,7 +10,7 @@ const FLAGS: MfptFlags = MfptFlags {
     sd: "--sd",
     mean: "--mean",
     walkers: "--walkers",
-    max_steps: "--max-steps",
+    max_steps: "--max-strides",
     dist: "--dist",
 };
 
@@ -101,7 +101,7 @@ fn uniform_and_list_walks_are_the_same_on_any_thread_count() {
                 dist,
             },
             walkers: 24,
-            max_steps: 40,
+            max_strides: 40,
             integrator: mfpt::default_integrator(),
             stride_map: Default::default(),
         };

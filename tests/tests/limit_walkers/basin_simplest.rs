@@ -434,3 +434,78 @@ fn basin_entropy_of_a_straight_two_basin_boundary_is_ln2_over_the_boundary_boxes
         .collect();
     assert_eq!(f, vec![0.3, 0.7]);
 }
+
+/// The basin and the stride map read a stride's end alike (one vocabulary, [`pdw_limit::End`]):
+/// a cell whose first stride does not reach the heel strike ends with the code of that
+/// stride's end, and a stride time budget too short for any stride makes every stride
+/// `fall_no_heel_strike` (5) in both — never the basin's `timeout` (7, a cell not classified
+/// within its stride budget).
+#[test]
+fn basin_and_stride_map_give_one_end_for_one_state() {
+    let m = simplest(0.009);
+    let (s, _) = fixed_point(&m, &[0.2003, -0.1998]);
+    let fall = Outcome::of_fall;
+    let opts = BasinOptions::default();
+    let map = StrideMap::new(&m, opts.integrator).unwrap();
+    // a wide window: falls in the first stride (both ways) beside strides that land
+    let cells = grid_cells(
+        &[0.0, 0.0],
+        0,
+        &linspace(0.02, 0.6, 15),
+        1,
+        &linspace(-0.9, 0.3, 15),
+    );
+    let res = classify_cells(
+        &BasinProblem::new(&m, s.clone(), &fall),
+        &cells,
+        &opts,
+        &pool(2),
+        &|_| {},
+    )
+    .unwrap();
+    let strides = map.strides(&cells, 16).unwrap();
+    let mut first_stride_ends = Vec::new();
+    for ((c, r), st) in cells.iter().zip(&res).zip(&strides) {
+        if st.outcome.is_ok() {
+            assert!(
+                r.strides >= 1,
+                "{c:?}: the stride landed, the cell says {r:?}"
+            );
+            continue;
+        }
+        assert_eq!(r.strides, 0, "{c:?}");
+        assert_eq!(
+            r.outcome,
+            st.outcome.end().code(),
+            "{c:?}: the basin says {}, the stride map {} ({})",
+            r.outcome().name(),
+            st.outcome.end().name(),
+            st.outcome
+        );
+        first_stride_ends.push(st.outcome.end());
+    }
+    assert!(
+        first_stride_ends
+            .iter()
+            .any(|e| e.is_fall() && *e != Outcome::FallNoHeelStrike),
+        "no cell fell in its first stride: {first_stride_ends:?}"
+    );
+    // A stride time budget of 0.3, far below the gait's period (3.8): no stride reaches its
+    // heel strike.
+    let short = Simplest::new(SimplestParams {
+        slope: 0.009,
+        max_stride_time: 0.3,
+        ..Default::default()
+    })
+    .unwrap();
+    let cells = window(5);
+    let res = classify_cells_scalar(&BasinProblem::new(&short, s, &fall), &cells, &opts).unwrap();
+    let map = StrideMap::new(&short, opts.integrator).unwrap();
+    for (c, r) in cells.iter().zip(&res) {
+        let st = map.stride(c).unwrap();
+        assert_eq!(st.outcome, pdw_limit::StrideOutcome::NoHeelStrike, "{c:?}");
+        assert_eq!(st.outcome.end(), Outcome::FallNoHeelStrike);
+        assert_eq!(r.outcome, 5, "{c:?}: {}", r.outcome().name());
+        assert_eq!(r.outcome().name(), "fall_no_heel_strike");
+    }
+}

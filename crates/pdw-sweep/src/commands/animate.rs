@@ -33,7 +33,7 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
         a.force,
     )?;
     let opts = AnimOptions {
-        steps: a.steps,
+        strides: a.strides,
         fps: a.fps.unwrap_or(pdw::animate::DEFAULT_FPS),
         size: a.size,
     };
@@ -57,8 +57,8 @@ pub fn run(a: &AnimateArgs) -> anyhow::Result<ExitCode> {
         "wrote {} ({} frames, {} stride{}, {:.4} frames per second, {})",
         a.out.display(),
         frames.len(),
-        opts.steps,
-        if opts.steps == 1 { "" } else { "s" },
+        opts.strides,
+        if opts.strides == 1 { "" } else { "s" },
         opts.effective_fps(),
         pdw::animate::time_scale(&m)
     );

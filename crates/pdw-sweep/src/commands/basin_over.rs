@@ -264,7 +264,10 @@ fn write(
         columns: columns.iter().map(|c| c.0.clone()).collect(),
         kinds: columns.iter().map(|c| c.1.to_string()).collect(),
         fractions: pdw::basin_over::fraction_table(results, &columns),
-        outcome_columns: Outcome::ALL.iter().map(|o| o.name().to_string()).collect(),
+        outcome_columns: Outcome::CELL_ENDS
+            .iter()
+            .map(|o| o.name().to_string())
+            .collect(),
         outcome_fractions: results.iter().map(|r| r.outcomes.clone()).collect(),
         attractors: results
             .iter()

@@ -19,7 +19,7 @@ const FLAGS: MfptFlags = MfptFlags {
     sd: "--sd",
     mean: "--mean",
     walkers: "--walkers",
-    max_steps: "--max-steps",
+    max_steps: "--max-strides",
     dist: "--dist",
 };
 
@@ -44,7 +44,7 @@ pub fn run(a: &MfptArgs) -> anyhow::Result<ExitCode> {
             dist,
         },
         walkers: a.walkers,
-        max_steps: a.max_steps,
+        max_strides: a.max_strides,
         integrator,
         stride_map,
     };
@@ -198,7 +198,7 @@ fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate,
     crate::outln!(
         "{} walkers, at most {} steps: {} fell, {} still walking (censored); {} steps in all",
         est.walkers,
-        plan.max_steps,
+        plan.max_strides,
         est.falls,
         est.censored,
         est.total_steps
@@ -221,7 +221,7 @@ fn summary(m: &BuiltModel, plan: &MfptPlan, section: &[f64], est: &MfptEstimate,
     }
     crate::outln!(
         "mean of min(T, {}) {:.4} ± {:.4} steps (survival-based, restricted to the step limit)",
-        plan.max_steps,
+        plan.max_strides,
         est.restricted_mean,
         est.restricted_stderr
     );
@@ -295,7 +295,7 @@ fn write(
         sd: t.sd,
         seed: t.seed,
         walkers: est.walkers as u64,
-        max_steps: plan.max_steps as u64,
+        max_steps: plan.max_strides as u64,
         falls: est.falls as u64,
         censored: est.censored as u64,
         total_steps: est.total_steps,
@@ -370,7 +370,7 @@ pub(super) fn provenance(m: &BuiltModel, plan: &MfptPlan) -> pdw::store::Provena
         "stride_map": plan.stride_map.describe(m),
         "integrator": super::integrator_json(&plan.integrator),
         "walkers": plan.walkers,
-        "max_steps": plan.max_steps,
+        "max_steps": plan.max_strides,
         "gait_newton_tol": mfpt::GAIT_TOL,
     }))
 }

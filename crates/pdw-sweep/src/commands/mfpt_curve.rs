@@ -100,7 +100,7 @@ fn table(m: &BuiltModel, plan: &MfptPlan, section: &[f64], rows: &[Row], secs: f
         t.seed,
         mfpt::dist_words(&t.dist),
         plan.walkers,
-        plan.max_steps,
+        plan.max_strides,
         section
             .iter()
             .map(|v| format!("{v:.6}"))
@@ -159,7 +159,7 @@ fn write(
         mean: plan.terrain.mean,
         seed: plan.terrain.seed,
         walkers: plan.walkers as u64,
-        max_steps: plan.max_steps as u64,
+        max_steps: plan.max_strides as u64,
         estimator: ESTIMATOR.into(),
         chain_mesh: mesh,
         sd: col(&|r| r.sd),

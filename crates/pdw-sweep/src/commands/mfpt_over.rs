@@ -88,7 +88,7 @@ fn table(name: &str, plan: &MfptPlan, rows: &[OverRow], rho: f64, secs: f64) {
         t.seed,
         pdw::mfpt::dist_words(&t.dist),
         plan.walkers,
-        plan.max_steps
+        plan.max_strides
     );
     crate::outln!(
         "{:>12} {:>10} {:>24} {:>7} {:>9} {:>12} {:>12} {:>12}",
@@ -169,7 +169,7 @@ fn write(
         sd: plan.terrain.sd,
         seed: plan.terrain.seed,
         walkers: plan.walkers as u64,
-        max_steps: plan.max_steps as u64,
+        max_steps: plan.max_strides as u64,
         estimator: ESTIMATOR.into(),
         indicators: "step-time,step-length".into(),
         chain_mesh: mesh,
