@@ -39,13 +39,17 @@ impl Spelling {
 }
 
 /// What a plan states before anything is computed: the files the run writes (derived pictures
-/// included) and the warnings its inputs call for.
+/// included), the warnings its inputs call for and the peak memory it expects.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Preview {
     /// Every file the run writes.
     pub outputs: Vec<PathBuf>,
     /// Warnings about the inputs (an integrator too coarse for the stride, …).
     pub warnings: Vec<String>,
+    /// The run's estimated peak memory in bytes, the figure its plan checked against the
+    /// memory available ([`crate::memory::check_memory`]); `None` where the run's memory does
+    /// not grow with its inputs beyond a few MiB.
+    pub memory_bytes: Option<u64>,
 }
 
 /// Where a run reports its progress and its warnings. Every method has a silent default.

@@ -570,6 +570,7 @@ impl SimulatePlan {
         Preview {
             outputs: self.out.iter().map(|(p, _)| p.clone()).collect(),
             warnings: Vec::new(),
+            memory_bytes: None,
         }
     }
 
