@@ -2,9 +2,7 @@
 //! the docs is the one generated from its declaration. `PDW_UPDATE_DOCS=1` rewrites the tables
 //! in place (then review and commit the diff).
 
-use pdw_store::format::{Format, Item, Unit, BASIN, DESIGN, MFPT, SWEEP, TRAJECTORY};
-
-const ALL: [&Format; 5] = [&BASIN, &SWEEP, &MFPT, &DESIGN, &TRAJECTORY];
+use pdw_store::format::{Format, Item, Unit, ALL};
 
 fn docs_path() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/hdf5.md")

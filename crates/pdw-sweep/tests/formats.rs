@@ -3,7 +3,9 @@
 //! every item declared as always present is there, and every dataset carries its `units`.
 
 use crate::common::run;
-use pdw::store::format::{inventory, Format, Unit, BASIN, DESIGN, MFPT, SWEEP, TRAJECTORY};
+use pdw::store::format::{
+    inventory, Format, Unit, BASIN, CURVE, DESIGN, MFPT, MFPT_CURVE, STABILITY, SWEEP, TRAJECTORY,
+};
 use std::path::Path;
 
 fn ok(args: &[&str]) {
@@ -146,4 +148,65 @@ fn trajectory_files_hold_exactly_the_declared_trajectory_items() {
     ]);
     let items = holds_exactly(&traj, &TRAJECTORY);
     assert!(items.iter().any(|i| i == "events/pre@units"));
+}
+
+#[test]
+fn curve_and_basin_stability_files_hold_exactly_their_declared_items() {
+    let dir = tempfile::tempdir().unwrap();
+    let curve = dir.path().join("pd.h5");
+    ok(&[
+        "fixedpoint",
+        "--model",
+        "compass",
+        "--follow",
+        "pd",
+        "--sweep",
+        "hip_mass=8:12:3",
+        "--free",
+        "slope",
+        "--map-grid",
+        "3x3",
+        "--png",
+        dir.path().join("pd.png").to_str().unwrap(),
+        "--quiet",
+        "--out",
+        curve.to_str().unwrap(),
+    ]);
+    let items = holds_exactly(&curve, &CURVE);
+    assert!(items.iter().any(|i| i == "map/region@legend"));
+    let over = dir.path().join("over.h5");
+    ok(&[
+        "basin",
+        "--over",
+        "slope=0.009:0.011:2",
+        "--grid",
+        "8x8",
+        "--quiet",
+        "--out",
+        over.to_str().unwrap(),
+    ]);
+    let items = holds_exactly(&over, &STABILITY);
+    assert!(items.iter().any(|i| i == "values/001@attractors"));
+}
+
+#[test]
+fn mfpt_curve_files_hold_exactly_the_declared_items() {
+    let dir = tempfile::tempdir().unwrap();
+    let curve = dir.path().join("curve.h5");
+    ok(&[
+        "mfpt",
+        "--model",
+        "simplest",
+        "--slope",
+        "0.009",
+        "--sd",
+        "0.05deg:0.1deg:2",
+        "--walkers",
+        "20",
+        "--max-strides",
+        "20",
+        "--out",
+        curve.to_str().unwrap(),
+    ]);
+    holds_exactly(&curve, &MFPT_CURVE);
 }

@@ -1,7 +1,8 @@
 //! Every file format declared once: for each dataset and attribute its path, type and shape,
 //! unit, meaning, and the checksum or digest that covers it ([`Format`], [`Item`]).
 //!
-//! The tables ([`BASIN`], [`SWEEP`], [`MFPT`], [`DESIGN`], [`TRAJECTORY`]) are what the rest
+//! The tables ([`ALL`]: [`BASIN`], [`SWEEP`], [`CURVE`], [`STABILITY`], [`TRAJECTORY`],
+//! [`MFPT`], [`MFPT_CURVE`], [`MFPT_OVER`], [`DESIGN`]) are what the rest
 //! reads: the `units` attribute of every dataset comes from [`Format::units`] (a unit that
 //! depends on the model is a [`Unit`] rule resolved against the run's [`UnitContext`], not a
 //! closure per command); the tables of `docs/hdf5.md` are [`Format::markdown`] (a test fails
@@ -18,9 +19,24 @@
 //! [`crate::provenance`]) and the `units` attribute of each dataset are declared once for all
 //! files ([`GENERIC_ATTRS`]); the `unit` column says what `units` holds.
 
+mod series;
 mod tables;
 
+pub use series::{CURVE, MFPT_CURVE, MFPT_OVER, STABILITY};
 pub use tables::{BASIN, DESIGN, MFPT, PROVENANCE, SWEEP, TRAJECTORY};
+
+/// Every declared format, in the order of `docs/hdf5.md`.
+pub const ALL: [&Format; 9] = [
+    &BASIN,
+    &SWEEP,
+    &CURVE,
+    &STABILITY,
+    &TRAJECTORY,
+    &MFPT,
+    &MFPT_CURVE,
+    &MFPT_OVER,
+    &DESIGN,
+];
 
 /// The attributes every file may carry on any dataset, declared here once rather than per item:
 /// the dataset's `units` (its value is the item's [`Unit`]) and the HDF5 dimension-scale
@@ -127,8 +143,17 @@ pub enum Unit {
     Model(Quantity),
     /// A JSON list of the units of the free parameters (a design's `params`).
     FreeParameters,
-    /// The unit of the swept parameter.
+    /// The unit of the swept parameter (a sweep's, `--over`'s, a curve's stepped one).
     Parameter,
+    /// The unit of the free parameter of a two-parameter curve (the first of the context's
+    /// free parameters).
+    FreeParameter,
+    /// The unit of the terrain's mean and spread: `rad` for slopes, the model's length unit
+    /// for step heights.
+    Terrain,
+    /// The maximum over the coordinates of the dataset named (a residual's `max over
+    /// /curve/section's coordinates ["rad","rad/s"]`).
+    MaxOverSection(&'static str),
     /// A JSON list of the units of the state components, in order.
     State,
     /// Written by the writer with the data (a trajectory column's own unit); not annotated.
@@ -161,8 +186,10 @@ pub struct UnitContext {
     pub torque: String,
     /// Units of the free parameters (design).
     pub free_parameters: Vec<String>,
-    /// Unit of the swept parameter (sweep).
+    /// Unit of the swept parameter (sweep, `--over`, a curve's stepped parameter).
     pub parameter: String,
+    /// Unit of the terrain's mean and spread (MFPT curve).
+    pub terrain: String,
     /// Unit of each state component, in order (trajectory).
     pub state: Vec<String>,
 }
@@ -189,6 +216,11 @@ impl Unit {
             }),
             Unit::FreeParameters => Some(list(&c.free_parameters)),
             Unit::Parameter => Some(c.parameter.clone()),
+            Unit::FreeParameter => Some(c.free_parameters.first().cloned().unwrap_or_default()),
+            Unit::Terrain => Some(c.terrain.clone()),
+            Unit::MaxOverSection(d) => {
+                Some(format!("max over /{d}'s coordinates {}", list(&c.section)))
+            }
             Unit::State => Some(list(&c.state)),
             Unit::Own => None,
         }
@@ -206,6 +238,9 @@ impl Unit {
             Unit::Model(q) => format!("model {}", format!("{q:?}").to_lowercase()),
             Unit::FreeParameters => "free parameters' units (JSON list)".into(),
             Unit::Parameter => "the swept parameter's".into(),
+            Unit::FreeParameter => "the free parameter's".into(),
+            Unit::Terrain => "the terrain's (`rad`, or the model's length)".into(),
+            Unit::MaxOverSection(d) => format!("max over `{d}`'s coordinates (their units)"),
             Unit::State => "state units (JSON list)".into(),
             Unit::Own => "its own (written with it)".into(),
         }

@@ -572,7 +572,7 @@ pub const SWEEP: Format = Format {
 };
 
 /// The root attributes every file but the basin and design files starts with.
-const RUN: &[Item] = &[
+pub(super) const RUN: &[Item] = &[
     Item::attr("@version", "str", "crate version that created the file"),
     Item::attr("@command", "str", "the command line that made the file"),
     Item::attr("@created", "str", "RFC 3339 UTC"),
